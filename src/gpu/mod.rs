@@ -1,0 +1,30 @@
+//! The Vulkan layer: context (owned or from a host engine), memory, resources, shaders,
+//! pipelines, barriers, timestamps and validation.
+
+pub mod barrier;
+pub mod buffer;
+pub mod context;
+pub mod device_select;
+pub mod error;
+pub mod features;
+pub mod image;
+pub mod pipeline;
+pub mod reflect;
+pub mod shader;
+pub mod timestamps;
+pub mod transfer;
+pub mod validation;
+
+pub use barrier::Access;
+pub use buffer::{Buffer, BufferDesc};
+pub use context::{ContextOptions, DeviceCaps, GpuContext, HostHandles};
+pub use device_select::DeviceSelector;
+pub use error::{GpuError, GpuResult};
+pub use features::{RequiredFeatures, REQUIRED_DEVICE_EXTENSIONS};
+pub use image::{Image, ImageDesc};
+pub use pipeline::{Bind, GraphicsDesc, Pipeline};
+pub use shader::{ShaderCompiler, ShaderError, ShaderRoot, Spirv};
+pub use timestamps::{GpuTimer, PassTiming};
+pub use transfer::UploadBatch;
+pub use validation::ValidationLog;
+pub use gpu_allocator::MemoryLocation;

@@ -1,0 +1,328 @@
+//! Compute and graphics pipelines whose layouts come from shader reflection, bound with push
+//! descriptors (set 0) so passes need no descriptor pools.
+
+use super::context::{DeviceShared, GpuContext};
+use super::error::{GpuError, GpuResult, VkResultExt};
+use super::reflect::{self, ShaderInterface};
+use super::shader::Spirv;
+use ash::vk;
+use std::sync::Arc;
+
+/// One resource bound to a binding of set 0 for the next dispatch or draw.
+#[derive(Clone, Copy, Debug)]
+pub enum Bind {
+    /// A storage or uniform buffer (whole range).
+    Buffer(u32, vk::Buffer),
+    /// A storage image view in `GENERAL` layout.
+    StorageImage(u32, vk::ImageView),
+    /// A sampled image with its sampler, in the given layout.
+    Sampled(u32, vk::ImageView, vk::Sampler, vk::ImageLayout),
+}
+
+/// Fixed-function state of a graphics pipeline (dynamic rendering, dynamic viewport/scissor).
+#[derive(Clone, Debug)]
+pub struct GraphicsDesc<'a> {
+    /// Vertex shader.
+    pub vertex: &'a Spirv,
+    /// Fragment shader, if any (depth-only passes have none).
+    pub fragment: Option<&'a Spirv>,
+    /// Vertex buffer stride in bytes (0: no vertex buffer).
+    pub vertex_stride: u32,
+    /// (location, format, offset) of each vertex attribute.
+    pub vertex_attributes: &'a [(u32, vk::Format, u32)],
+    /// Formats of the color attachments.
+    pub color_formats: &'a [vk::Format],
+    /// Depth attachment format (`UNDEFINED` for none).
+    pub depth_format: vk::Format,
+    /// Depth comparison (reversed-Z uses `GREATER_OR_EQUAL`).
+    pub depth_compare: vk::CompareOp,
+    /// Whether depth is written.
+    pub depth_write: bool,
+    /// Samples per pixel.
+    pub samples: vk::SampleCountFlags,
+    /// Face culling.
+    pub cull_mode: vk::CullModeFlags,
+}
+
+/// A pipeline with its reflected layout.
+pub struct Pipeline {
+    shared: Arc<DeviceShared>,
+    name: String,
+    pipeline: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    bind_point: vk::PipelineBindPoint,
+    stages: vk::ShaderStageFlags,
+    interface: ShaderInterface,
+}
+
+impl Pipeline {
+    /// A compute pipeline from one shader.
+    pub fn compute(ctx: &GpuContext, name: &str, spirv: &Spirv) -> GpuResult<Self> {
+        let interface = reflect_or_err(name, &[spirv])?;
+        let stages = vk::ShaderStageFlags::COMPUTE;
+        let (set_layout, layout) = create_layout(ctx, &interface, stages)?;
+        let mut p = Self::empty(ctx, name, set_layout, layout, vk::PipelineBindPoint::COMPUTE, stages, interface);
+        let module = ShaderModule::new(ctx, spirv)?;
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module.0)
+            .name(c"main");
+        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
+        // SAFETY: valid module and layout.
+        let result = unsafe { ctx.device().create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
+        module.destroy(ctx);
+        p.pipeline = result.map_err(|(_, r)| r).vk("vkCreateComputePipelines")?[0];
+        Ok(p)
+    }
+
+    /// A graphics pipeline for dynamic rendering.
+    pub fn graphics(ctx: &GpuContext, name: &str, desc: &GraphicsDesc<'_>) -> GpuResult<Self> {
+        let mut sources = vec![desc.vertex];
+        sources.extend(desc.fragment);
+        let interface = reflect_or_err(name, &sources)?;
+        let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        let (set_layout, layout) = create_layout(ctx, &interface, stages)?;
+        let mut p = Self::empty(ctx, name, set_layout, layout, vk::PipelineBindPoint::GRAPHICS, stages, interface);
+
+        let vs = ShaderModule::new(ctx, desc.vertex)?;
+        let fs = match desc.fragment.map(|f| ShaderModule::new(ctx, f)).transpose() {
+            Ok(fs) => fs,
+            Err(e) => {
+                vs.destroy(ctx);
+                return Err(e);
+            }
+        };
+        let mut stage_infos =
+            vec![vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs.0).name(c"main")];
+        if let Some(fs) = &fs {
+            stage_infos.push(
+                vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs.0).name(c"main"),
+            );
+        }
+        let bindings = [vk::VertexInputBindingDescription::default()
+            .binding(0)
+            .stride(desc.vertex_stride)
+            .input_rate(vk::VertexInputRate::VERTEX)];
+        let attributes: Vec<_> = desc
+            .vertex_attributes
+            .iter()
+            .map(|&(location, format, offset)| {
+                vk::VertexInputAttributeDescription::default().location(location).binding(0).format(format).offset(offset)
+            })
+            .collect();
+        let vertex_input = if desc.vertex_stride > 0 {
+            vk::PipelineVertexInputStateCreateInfo::default()
+                .vertex_binding_descriptions(&bindings)
+                .vertex_attribute_descriptions(&attributes)
+        } else {
+            vk::PipelineVertexInputStateCreateInfo::default()
+        };
+        let input_assembly =
+            vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(desc.cull_mode)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(desc.samples);
+        let has_depth = desc.depth_format != vk::Format::UNDEFINED;
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(has_depth)
+            .depth_write_enable(has_depth && desc.depth_write)
+            .depth_compare_op(desc.depth_compare);
+        let blend_attachments: Vec<_> = desc
+            .color_formats
+            .iter()
+            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
+            .collect();
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(desc.color_formats)
+            .depth_attachment_format(desc.depth_format);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stage_infos)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&input_assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .push_next(&mut rendering);
+        // SAFETY: every pointer lives on this stack frame.
+        let result = unsafe { ctx.device().create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
+        vs.destroy(ctx);
+        if let Some(fs) = fs {
+            fs.destroy(ctx);
+        }
+        p.pipeline = result.map_err(|(_, r)| r).vk("vkCreateGraphicsPipelines")?[0];
+        Ok(p)
+    }
+
+    fn empty(
+        ctx: &GpuContext,
+        name: &str,
+        set_layout: vk::DescriptorSetLayout,
+        layout: vk::PipelineLayout,
+        bind_point: vk::PipelineBindPoint,
+        stages: vk::ShaderStageFlags,
+        interface: ShaderInterface,
+    ) -> Self {
+        Self {
+            shared: ctx.shared.clone(),
+            name: name.into(),
+            pipeline: vk::Pipeline::null(),
+            layout,
+            set_layout,
+            bind_point,
+            stages,
+            interface,
+        }
+    }
+
+    /// What the shaders declare (bindings, push constants, workgroup size).
+    pub fn interface(&self) -> &ShaderInterface {
+        &self.interface
+    }
+
+    /// Debug name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Binds the pipeline.
+    pub fn bind(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: cmd recording (caller contract).
+        unsafe { self.shared.device.cmd_bind_pipeline(cmd, self.bind_point, self.pipeline) };
+    }
+
+    /// Pushes descriptors for set 0.
+    pub fn push_bindings(&self, cmd: vk::CommandBuffer, binds: &[Bind]) {
+        let mut buffer_infos = Vec::with_capacity(binds.len());
+        let mut image_infos = Vec::with_capacity(binds.len());
+        for b in binds {
+            match *b {
+                Bind::Buffer(_, buffer) => buffer_infos.push([vk::DescriptorBufferInfo::default().buffer(buffer).range(vk::WHOLE_SIZE)]),
+                Bind::StorageImage(_, view) => {
+                    image_infos.push([vk::DescriptorImageInfo::default().image_view(view).image_layout(vk::ImageLayout::GENERAL)])
+                }
+                Bind::Sampled(_, view, sampler, layout) => image_infos
+                    .push([vk::DescriptorImageInfo::default().image_view(view).sampler(sampler).image_layout(layout)]),
+            }
+        }
+        let (mut bi, mut ii) = (0, 0);
+        let writes: Vec<vk::WriteDescriptorSet> = binds
+            .iter()
+            .map(|b| {
+                let binding = match *b {
+                    Bind::Buffer(n, _) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) => n,
+                };
+                let kind = self.interface.bindings.get(&binding).map(|i| i.kind).unwrap_or(match b {
+                    Bind::Buffer(..) => vk::DescriptorType::STORAGE_BUFFER,
+                    Bind::StorageImage(..) => vk::DescriptorType::STORAGE_IMAGE,
+                    Bind::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                });
+                let w = vk::WriteDescriptorSet::default().dst_binding(binding).descriptor_type(kind);
+                match b {
+                    Bind::Buffer(..) => {
+                        bi += 1;
+                        w.buffer_info(&buffer_infos[bi - 1])
+                    }
+                    _ => {
+                        ii += 1;
+                        w.image_info(&image_infos[ii - 1])
+                    }
+                }
+            })
+            .collect();
+        // SAFETY: infos live until the call returns; cmd recording with this pipeline's layout.
+        unsafe { self.shared.push_descriptor.cmd_push_descriptor_set(cmd, self.bind_point, self.layout, 0, &writes) };
+    }
+
+    /// Sets push constants from a plain-old-data value.
+    pub fn push_constants<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, value: &T) {
+        // SAFETY: cmd recording; the range is covered by the layout (sized from reflection).
+        unsafe {
+            self.shared.device.cmd_push_constants(cmd, self.layout, self.stages, 0, bytemuck::bytes_of(value))
+        };
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        // SAFETY: the caller guarantees no pending command buffer uses the pipeline.
+        unsafe {
+            let d = &self.shared.device;
+            if self.pipeline != vk::Pipeline::null() {
+                d.destroy_pipeline(self.pipeline, None);
+            }
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+fn reflect_or_err(name: &str, sources: &[&Spirv]) -> GpuResult<ShaderInterface> {
+    let invalid = |e: reflect::ReflectError| GpuError::InvalidResource { name: name.into(), reason: e.to_string() };
+    let stages = sources.iter().map(|s| reflect::reflect(s)).collect::<Result<Vec<_>, _>>().map_err(invalid)?;
+    reflect::merge(&stages).map_err(invalid)
+}
+
+fn create_layout(
+    ctx: &GpuContext,
+    interface: &ShaderInterface,
+    stages: vk::ShaderStageFlags,
+) -> GpuResult<(vk::DescriptorSetLayout, vk::PipelineLayout)> {
+    let bindings: Vec<_> = interface
+        .bindings
+        .iter()
+        .map(|(&n, info)| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(n)
+                .descriptor_type(info.kind)
+                .descriptor_count(info.count)
+                .stage_flags(stages)
+        })
+        .collect();
+    let info = vk::DescriptorSetLayoutCreateInfo::default()
+        .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+        .bindings(&bindings);
+    let device = ctx.device();
+    // SAFETY: valid device and create info.
+    let set_layout = unsafe { device.create_descriptor_set_layout(&info, None) }.vk("vkCreateDescriptorSetLayout")?;
+    let ranges = [vk::PushConstantRange::default().stage_flags(stages).size(interface.push_constant_bytes)];
+    let set_layouts = [set_layout];
+    let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+    if interface.push_constant_bytes > 0 {
+        layout_info = layout_info.push_constant_ranges(&ranges);
+    }
+    // SAFETY: valid device and create info.
+    match unsafe { device.create_pipeline_layout(&layout_info, None) } {
+        Ok(layout) => Ok((set_layout, layout)),
+        Err(result) => {
+            // SAFETY: unused layout.
+            unsafe { device.destroy_descriptor_set_layout(set_layout, None) };
+            Err(GpuError::Vk { call: "vkCreatePipelineLayout", result })
+        }
+    }
+}
+
+struct ShaderModule(vk::ShaderModule);
+
+impl ShaderModule {
+    fn new(ctx: &GpuContext, spirv: &Spirv) -> GpuResult<Self> {
+        let info = vk::ShaderModuleCreateInfo::default().code(spirv);
+        // SAFETY: SPIR-V produced by shaderc.
+        unsafe { ctx.device().create_shader_module(&info, None) }.vk("vkCreateShaderModule").map(Self)
+    }
+    fn destroy(self, ctx: &GpuContext) {
+        // SAFETY: modules may be destroyed once pipelines are created.
+        unsafe { ctx.device().destroy_shader_module(self.0, None) };
+    }
+}

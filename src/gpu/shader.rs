@@ -1,0 +1,255 @@
+//! Runtime GLSL compilation with shaderc: `#include` of the headers in `shaders/`, defines, a
+//! cache, and compile errors that name the file and line.
+//!
+//! Shaders come either from the sources embedded at build time (so a binary carried to another
+//! machine works on its own) or from a directory on disk (for editing and hot reload).
+
+use std::collections::HashMap;
+use std::fmt;
+use std::path::{Component, Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+mod embedded {
+    include!(concat!(env!("OUT_DIR"), "/embedded_shaders.rs"));
+}
+
+/// Compiled SPIR-V words.
+pub type Spirv = Arc<[u32]>;
+
+/// One message of the GLSL compiler.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Diagnostic {
+    /// File the message is about (an included header where the error is in one).
+    pub file: String,
+    /// 1-based line, 0 when the compiler gave none.
+    pub line: u32,
+    /// `error` or `warning`.
+    pub severity: String,
+    /// The compiler's text.
+    pub message: String,
+}
+
+impl fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line > 0 {
+            write!(f, "{}:{}: {}: {}", self.file, self.line, self.severity, self.message)
+        } else {
+            write!(f, "{}: {}: {}", self.file, self.severity, self.message)
+        }
+    }
+}
+
+/// Why a shader could not be compiled.
+#[derive(Debug, thiserror::Error)]
+pub enum ShaderError {
+    /// The file is neither embedded nor on disk.
+    #[error("shader '{0}' not found")]
+    NotFound(String),
+    /// The extension does not say which stage the file is.
+    #[error("shader '{0}': unknown stage; use .comp, .vert or .frag")]
+    UnknownStage(String),
+    /// GLSL errors, each with file and line.
+    #[error("shader '{path}' failed to compile:\n{}", .diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))]
+    Compile {
+        /// The shader that was compiled.
+        path: String,
+        /// The compiler's messages.
+        diagnostics: Vec<Diagnostic>,
+    },
+    /// shaderc itself failed (initialisation, internal error).
+    #[error("shaderc: {0}")]
+    Internal(String),
+}
+
+/// Where shader sources are read from.
+#[derive(Clone, Debug)]
+pub enum ShaderRoot {
+    /// The copies embedded into the binary at build time.
+    Embedded,
+    /// A directory laid out like `shaders/`; sources are re-read on every compile that misses the cache.
+    Directory(PathBuf),
+}
+
+impl ShaderRoot {
+    /// `CULLGRAPH_SHADER_DIR` if set, otherwise the embedded sources.
+    pub fn from_env() -> Self {
+        match std::env::var_os("CULLGRAPH_SHADER_DIR") {
+            Some(dir) => ShaderRoot::Directory(dir.into()),
+            None => ShaderRoot::Embedded,
+        }
+    }
+
+    fn read(&self, rel: &str) -> Option<String> {
+        match self {
+            ShaderRoot::Embedded => embedded::EMBEDDED_SHADERS.iter().find(|(p, _)| *p == rel).map(|(_, s)| s.to_string()),
+            ShaderRoot::Directory(dir) => std::fs::read_to_string(dir.join(rel)).ok(),
+        }
+    }
+}
+
+/// A preprocessor define.
+pub type Define = (String, String);
+
+/// Compiles GLSL shaders to SPIR-V for Vulkan 1.3 and caches the results.
+pub struct ShaderCompiler {
+    compiler: shaderc::Compiler,
+    root: ShaderRoot,
+    cache: Mutex<HashMap<(String, Vec<Define>), Spirv>>,
+}
+
+impl ShaderCompiler {
+    /// A compiler reading sources from `root`.
+    pub fn new(root: ShaderRoot) -> Result<Self, ShaderError> {
+        let compiler = shaderc::Compiler::new().map_err(|e| ShaderError::Internal(e.to_string()))?;
+        Ok(Self { compiler, root, cache: Mutex::new(HashMap::new()) })
+    }
+
+    /// Where sources come from.
+    pub fn root(&self) -> &ShaderRoot {
+        &self.root
+    }
+
+    /// Forgets every compiled shader (after files changed on disk).
+    pub fn clear_cache(&self) {
+        self.cache.lock().unwrap_or_else(|p| p.into_inner()).clear();
+    }
+
+    /// Compiles the library shader at `path` (relative to `shaders/`, e.g. `lighting/deferred.comp`).
+    pub fn compile(&self, path: &str, defines: &[(&str, &str)]) -> Result<Spirv, ShaderError> {
+        let rel = normalize(Path::new(path)).ok_or_else(|| ShaderError::NotFound(path.into()))?;
+        let source = self.root.read(&rel).ok_or_else(|| ShaderError::NotFound(path.into()))?;
+        self.compile_source(&rel, &source, defines)
+    }
+
+    /// Compiles `source`, named `name` (its extension gives the stage); includes resolve relative
+    /// to `name`'s directory first (on disk when `name` is a real path), then against the library.
+    pub fn compile_source(&self, name: &str, source: &str, defines: &[(&str, &str)]) -> Result<Spirv, ShaderError> {
+        let mut defs: Vec<Define> = defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+        defs.sort();
+        let key = (format!("{name}\0{source}"), defs);
+        if let Some(hit) = self.cache.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
+            return Ok(hit.clone());
+        }
+        let kind = stage_of(name).ok_or_else(|| ShaderError::UnknownStage(name.into()))?;
+        let internal = |e: shaderc::Error| ShaderError::Internal(e.to_string());
+        let mut options = shaderc::CompileOptions::new().map_err(internal)?;
+        options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_3 as u32);
+        options.set_target_spirv(shaderc::SpirvVersion::V1_6);
+        options.set_optimization_level(shaderc::OptimizationLevel::Performance);
+        for (k, v) in &key.1 {
+            options.add_macro_definition(k, Some(v));
+        }
+        let root = self.root.clone();
+        options.set_include_callback(move |requested, kind, from, _depth| resolve_include(&root, requested, kind, from));
+        let result = self.compiler.compile_into_spirv(source, kind, name, "main", Some(&options));
+        let artifact = match result {
+            Ok(a) => a,
+            Err(shaderc::Error::CompilationError(_, text)) => {
+                return Err(ShaderError::Compile { path: name.into(), diagnostics: parse_diagnostics(name, &text) })
+            }
+            Err(e) => return Err(internal(e)),
+        };
+        let spirv: Spirv = artifact.as_binary().into();
+        self.cache.lock().unwrap_or_else(|p| p.into_inner()).insert(key, spirv.clone());
+        Ok(spirv)
+    }
+}
+
+/// The shader stage from the file extension.
+fn stage_of(name: &str) -> Option<shaderc::ShaderKind> {
+    match Path::new(name).extension()?.to_str()? {
+        "comp" => Some(shaderc::ShaderKind::Compute),
+        "vert" => Some(shaderc::ShaderKind::Vertex),
+        "frag" => Some(shaderc::ShaderKind::Fragment),
+        _ => None,
+    }
+}
+
+fn resolve_include(
+    root: &ShaderRoot,
+    requested: &str,
+    kind: shaderc::IncludeType,
+    from: &str,
+) -> shaderc::IncludeCallbackResult {
+    let mut candidates: Vec<PathBuf> = Vec::new();
+    if kind == shaderc::IncludeType::Relative {
+        let dir = Path::new(from).parent().unwrap_or(Path::new(""));
+        candidates.push(dir.join(requested));
+    }
+    candidates.push(PathBuf::from(requested));
+    for candidate in &candidates {
+        // A real file next to a user shader outside the library.
+        if candidate.is_absolute() || Path::new(from).is_absolute() {
+            if let Ok(content) = std::fs::read_to_string(candidate) {
+                return Ok(shaderc::ResolvedInclude { resolved_name: candidate.display().to_string(), content });
+            }
+        }
+        if let Some(rel) = normalize(candidate) {
+            if let Some(content) = root.read(&rel) {
+                return Ok(shaderc::ResolvedInclude { resolved_name: rel, content });
+            }
+        }
+    }
+    Err(format!("cannot find '{requested}' (included from '{from}')"))
+}
+
+/// `a/./b/../c` → `a/c`; `None` if the path climbs above the root.
+fn normalize(path: &Path) -> Option<String> {
+    let mut parts: Vec<String> = Vec::new();
+    for c in path.components() {
+        match c {
+            Component::Normal(p) => parts.push(p.to_string_lossy().into_owned()),
+            Component::ParentDir => {
+                parts.pop()?;
+            }
+            Component::CurDir => {}
+            Component::RootDir | Component::Prefix(_) => return None,
+        }
+    }
+    (!parts.is_empty()).then(|| parts.join("/"))
+}
+
+/// Splits shaderc's text (`file:line: error: message` per line) into diagnostics.
+fn parse_diagnostics(name: &str, text: &str) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    for line in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        let parsed = ["error", "warning"].iter().find_map(|sev| {
+            let marker = format!(": {sev}: ");
+            let at = line.find(&marker)?;
+            let (location, message) = (&line[..at], &line[at + marker.len()..]);
+            let (file, line_no) = match location.rsplit_once(':') {
+                Some((f, l)) if l.chars().all(|c| c.is_ascii_digit()) && !l.is_empty() => (f, l.parse().unwrap_or(0)),
+                _ => (location, 0),
+            };
+            Some(Diagnostic { file: file.into(), line: line_no, severity: sev.to_string(), message: message.trim().into() })
+        });
+        match parsed {
+            Some(d) => out.push(d),
+            // Summary lines like "2 errors generated." carry nothing new.
+            None if line.ends_with("generated.") => {}
+            None => out.push(Diagnostic { file: name.into(), line: 0, severity: "error".into(), message: line.into() }),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_shaderc_messages() {
+        let text = "cull/a.comp:12: error: 'x' : undeclared identifier\ncommon/h.glsl:3: warning: something\n1 error generated.";
+        let d = parse_diagnostics("cull/a.comp", text);
+        assert_eq!(d.len(), 2);
+        assert_eq!((d[0].file.as_str(), d[0].line, d[0].severity.as_str()), ("cull/a.comp", 12, "error"));
+        assert_eq!(d[0].message, "'x' : undeclared identifier");
+        assert_eq!((d[1].file.as_str(), d[1].line), ("common/h.glsl", 3));
+    }
+
+    #[test]
+    fn normalizes_paths() {
+        assert_eq!(normalize(Path::new("a/./b/../c.glsl")).as_deref(), Some("a/c.glsl"));
+        assert_eq!(normalize(Path::new("../x")), None);
+    }
+}

@@ -1,0 +1,136 @@
+//! Moving data between host and device: batched uploads that anyone can record, and readbacks.
+
+use super::barrier::{cmd_barriers, image_barrier, memory_barrier, Access};
+use super::buffer::{Buffer, BufferDesc};
+use super::context::GpuContext;
+use super::error::GpuResult;
+use super::image::Image;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+/// Uploads waiting to be recorded: device-local buffers plus the staging copies that fill them.
+///
+/// The batch does not submit anything itself: [`UploadBatch::record`] puts the copies into any
+/// command buffer (the host engine's, when embedded), and the batch must stay alive until that
+/// command buffer has executed. [`UploadBatch::submit_and_wait`] is the headless shortcut.
+#[derive(Default)]
+pub struct UploadBatch {
+    copies: Vec<(Buffer, vk::Buffer, u64)>,
+}
+
+impl UploadBatch {
+    /// Creates a device-local buffer of `data.len()` bytes and queues its upload.
+    pub fn buffer(
+        &mut self,
+        ctx: &GpuContext,
+        name: &str,
+        usage: vk::BufferUsageFlags,
+        data: &[u8],
+    ) -> GpuResult<Buffer> {
+        let size = data.len() as u64;
+        let dst = Buffer::new(
+            ctx,
+            &BufferDesc { name, size, usage: usage | vk::BufferUsageFlags::TRANSFER_DST, location: MemoryLocation::GpuOnly },
+        )?;
+        if size > 0 {
+            let staging = Buffer::with_data(ctx, &format!("{name} (staging)"), vk::BufferUsageFlags::TRANSFER_SRC, data)?;
+            self.copies.push((staging, dst.handle(), size));
+        }
+        Ok(dst)
+    }
+
+    /// True when nothing is queued.
+    pub fn is_empty(&self) -> bool {
+        self.copies.is_empty()
+    }
+
+    /// Bytes queued for upload.
+    pub fn bytes(&self) -> u64 {
+        self.copies.iter().map(|c| c.2).sum()
+    }
+
+    /// Records the copies and a barrier that makes them visible to every later shader, indirect
+    /// and vertex-input read.
+    pub fn record(&self, ctx: &GpuContext, cmd: vk::CommandBuffer) {
+        if self.copies.is_empty() {
+            return;
+        }
+        let device = ctx.device();
+        for (staging, dst, size) in &self.copies {
+            let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: *size };
+            // SAFETY: both buffers are live and large enough; cmd is recording.
+            unsafe { device.cmd_copy_buffer(cmd, staging.handle(), *dst, &[region]) };
+        }
+        let after = Access {
+            stage: vk::PipelineStageFlags2::ALL_COMMANDS,
+            access: vk::AccessFlags2::MEMORY_READ,
+            layout: vk::ImageLayout::UNDEFINED,
+        };
+        cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, after)], &[]);
+    }
+
+    /// Records, submits and waits (headless use only).
+    pub fn submit_and_wait(self, ctx: &GpuContext) -> GpuResult<()> {
+        if self.copies.is_empty() {
+            return Ok(());
+        }
+        ctx.submit_and_wait(|cmd| {
+            self.record(ctx, cmd);
+            Ok(())
+        })
+    }
+}
+
+/// Copies a device buffer back to the host, waiting for the GPU (headless and tests only).
+pub fn read_buffer(ctx: &GpuContext, buffer: &Buffer) -> GpuResult<Vec<u8>> {
+    let staging = Buffer::new(
+        ctx,
+        &BufferDesc {
+            name: "readback",
+            size: buffer.size(),
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuToCpu,
+        },
+    )?;
+    if buffer.size() > 0 {
+        ctx.submit_and_wait(|cmd| {
+            let device = ctx.device();
+            let all = Access {
+                stage: vk::PipelineStageFlags2::ALL_COMMANDS,
+                access: vk::AccessFlags2::MEMORY_WRITE,
+                layout: vk::ImageLayout::UNDEFINED,
+            };
+            cmd_barriers(device, cmd, &[memory_barrier(all, Access::TRANSFER_READ)], &[]);
+            let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: buffer.size() };
+            // SAFETY: both buffers live; cmd recording.
+            unsafe { device.cmd_copy_buffer(cmd, buffer.handle(), staging.handle(), &[region]) };
+            cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
+            Ok(())
+        })?;
+    }
+    Ok(staging.read_bytes()?.to_vec())
+}
+
+/// Records a copy of mip 0 of a color image (in `state`, left in `state`) into `dst`, tightly packed.
+pub fn record_image_to_buffer(ctx: &GpuContext, cmd: vk::CommandBuffer, image: &Image, state: Access, dst: &Buffer) {
+    let device = ctx.device();
+    cmd_barriers(device, cmd, &[], &[image_barrier(image, state, Access::TRANSFER_READ)]);
+    let region = vk::BufferImageCopy::default()
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: image.aspect(),
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        })
+        .image_extent(vk::Extent3D { width: image.extent().width, height: image.extent().height, depth: 1 });
+    // SAFETY: image in TRANSFER_SRC layout, dst large enough (caller contract).
+    unsafe {
+        device.cmd_copy_image_to_buffer(cmd, image.handle(), vk::ImageLayout::TRANSFER_SRC_OPTIMAL, dst.handle(), &[region])
+    };
+    cmd_barriers(
+        device,
+        cmd,
+        &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)],
+        &[image_barrier(image, Access::TRANSFER_READ, state)],
+    );
+}

@@ -1,0 +1,93 @@
+//! Validation-layer hookup: a debug-utils messenger that counts every message it receives.
+//!
+//! Tests run with the Khronos validation layer and synchronization validation on, and a single
+//! warning or error fails them: [`ValidationLog::count`] must stay 0.
+
+use ash::vk;
+use std::ffi::{c_void, CStr};
+use std::sync::{Arc, Mutex};
+
+/// Messages the validation layer (or the driver) reported through `VK_EXT_debug_utils`.
+///
+/// Shared between the context and the messenger callback; cheap to clone.
+#[derive(Clone, Default, Debug)]
+pub struct ValidationLog {
+    inner: Arc<Mutex<Vec<String>>>,
+}
+
+impl ValidationLog {
+    /// Number of warnings and errors received so far.
+    pub fn count(&self) -> usize {
+        self.lock().len()
+    }
+
+    /// The messages received so far, oldest first.
+    pub fn messages(&self) -> Vec<String> {
+        self.lock().clone()
+    }
+
+    fn push(&self, message: String) {
+        self.lock().push(message);
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<String>> {
+        // A panic while holding the lock only loses the Vec's consistency, which a list of strings keeps.
+        self.inner.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+}
+
+/// Severities that count as a validation failure.
+pub(crate) const COUNTED_SEVERITIES: vk::DebugUtilsMessageSeverityFlagsEXT =
+    vk::DebugUtilsMessageSeverityFlagsEXT::from_raw(
+        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING.as_raw()
+            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR.as_raw(),
+    );
+
+/// Builds the messenger description whose callback appends to `log`.
+///
+/// `log` must outlive the messenger: the context keeps a boxed clone alive for exactly that long.
+pub(crate) fn messenger_info(log: &ValidationLog) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+    vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(COUNTED_SEVERITIES | vk::DebugUtilsMessageSeverityFlagsEXT::INFO)
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback))
+        .user_data(log as *const ValidationLog as *mut c_void)
+}
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    kind: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user_data: *mut c_void,
+) -> vk::Bool32 {
+    if data.is_null() || user_data.is_null() {
+        return vk::FALSE;
+    }
+    // SAFETY: the layer passes a valid callback-data struct; user_data is the ValidationLog the
+    // context keeps alive for the messenger's lifetime.
+    let (data, log) = unsafe { (&*data, &*(user_data as *const ValidationLog)) };
+    let text = |p: *const std::ffi::c_char| {
+        if p.is_null() {
+            String::new()
+        } else {
+            // SAFETY: non-null strings from the layer are NUL-terminated.
+            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+        }
+    };
+    let id = text(data.p_message_id_name);
+    let message = text(data.p_message);
+    // Performance hints from the loader/driver at INFO level are noise; WARNING+ from any
+    // source counts, and so does every synchronization hazard whatever its severity.
+    let counted = severity.intersects(COUNTED_SEVERITIES) || id.starts_with("SYNC-HAZARD");
+    if counted {
+        tracing::error!(target: "vulkan", ?kind, id = %id, "{message}");
+        log.push(format!("[{id}] {message}"));
+    } else {
+        tracing::trace!(target: "vulkan", ?kind, id = %id, "{message}");
+    }
+    vk::FALSE
+}

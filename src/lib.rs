@@ -1,0 +1,8 @@
+//! # cullgraph
+//!
+//! GPU-driven culling and deferred rendering of huge scenes through Vulkan (`ash`), scheduled by a
+//! declarative render graph. See `README.md` for the quick start and `DESIGN` notes in `docs/`.
+#![warn(missing_docs)]
+
+pub mod gpu;
+pub mod scene;

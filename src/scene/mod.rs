@@ -1,0 +1,225 @@
+//! The scene model: one vertex/index pool, a mesh table with local bounds, materials, instances
+//! and lights; glTF import and procedural generators fill it.
+//!
+//! Instance translations are `f64` on the CPU so that worlds far from the origin keep their
+//! precision; the GPU receives them as hi/lo `f32` pairs and subtracts the eye position first.
+
+pub mod bounds;
+pub mod camera;
+pub mod error;
+pub mod gltf_import;
+pub mod mesh;
+pub mod procedural;
+pub mod source;
+pub mod validate;
+
+pub use bounds::{Aabb, Sphere};
+pub use camera::{Camera, Projection};
+pub use error::SceneError;
+pub use mesh::{encode_octahedral, decode_octahedral, MeshData, Vertex};
+pub use source::SceneSource;
+
+use glam::{DVec3, Mat3, Vec3};
+
+/// Instance flag: a large, cheap object that the occluder pre-pass may draw first.
+pub const FLAG_OCCLUDER: u32 = 1 << 0;
+/// Instance flag: render this object with one sample per pixel (selective anti-aliasing).
+pub const FLAG_NO_AA: u32 = 1 << 1;
+
+/// A range of the shared index pool with its local-space bounds; one draw group.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    /// Name for messages and stats (glTF mesh name plus primitive index, or generator kind).
+    pub name: String,
+    /// First index in [`Scene::indices`].
+    pub first_index: u32,
+    /// Number of indices (a multiple of 3).
+    pub index_count: u32,
+    /// Added to every index of this mesh to reach [`Scene::vertices`].
+    pub vertex_offset: u32,
+    /// Number of vertices this mesh owns, starting at `vertex_offset`.
+    pub vertex_count: u32,
+    /// Local-space axis-aligned bounds.
+    pub bounds: Aabb,
+    /// Local-space bounding sphere (contains `bounds`' vertices).
+    pub sphere: Sphere,
+}
+
+/// Surface parameters of the shading model (metallic-roughness, no textures).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name for messages.
+    pub name: String,
+    /// Linear base color.
+    pub albedo: Vec3,
+    /// Perceptual roughness in [0, 1].
+    pub roughness: f32,
+    /// Metalness in [0, 1].
+    pub metallic: f32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self { name: "default".into(), albedo: Vec3::splat(0.8), roughness: 0.6, metallic: 0.0 }
+    }
+}
+
+/// An affine transform with a double-precision translation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    /// Rotation and scale (may be mirrored or degenerate; validation decides).
+    pub linear: Mat3,
+    /// World-space translation.
+    pub translation: DVec3,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Self { linear: Mat3::IDENTITY, translation: DVec3::ZERO }
+    }
+}
+
+impl Transform {
+    /// Transform of a point (in double precision).
+    pub fn apply(&self, p: Vec3) -> DVec3 {
+        self.linear.mul_vec3(p).as_dvec3() + self.translation
+    }
+
+    /// `self` after `child` (parent * child).
+    pub fn then(&self, child: &Transform) -> Transform {
+        Transform {
+            linear: self.linear * child.linear,
+            translation: self.linear.as_dmat3() * child.translation + self.translation,
+        }
+    }
+
+    /// Whether every component is finite.
+    pub fn is_finite(&self) -> bool {
+        self.linear.is_finite() && self.translation.is_finite()
+    }
+}
+
+/// One placed copy of a mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Instance {
+    /// Local-to-world transform.
+    pub transform: Transform,
+    /// Index into [`Scene::meshes`].
+    pub mesh: u32,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+    /// `FLAG_*` bits.
+    pub flags: u32,
+}
+
+/// A point light with a finite range (its contribution is 0 beyond it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    /// World position.
+    pub position: DVec3,
+    /// Linear color times intensity.
+    pub color: Vec3,
+    /// Distance at which the light's contribution reaches zero.
+    pub range: f32,
+}
+
+/// A directional light (the sun).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectionalLight {
+    /// Direction the light travels (normalised).
+    pub direction: Vec3,
+    /// Linear color times intensity.
+    pub color: Vec3,
+}
+
+impl Default for DirectionalLight {
+    fn default() -> Self {
+        Self { direction: Vec3::new(-0.4, -1.0, -0.3).normalize(), color: Vec3::new(2.4, 2.3, 2.1) }
+    }
+}
+
+/// Everything that is drawn: geometry pool, mesh table, materials, instances, lights.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// Name for stats (file name or `builtin:...`).
+    pub name: String,
+    /// Shared vertex pool.
+    pub vertices: Vec<Vertex>,
+    /// Shared index pool; indices are relative to their mesh's `vertex_offset`.
+    pub indices: Vec<u32>,
+    /// Mesh table (draw groups).
+    pub meshes: Vec<Mesh>,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Instances.
+    pub instances: Vec<Instance>,
+    /// Point lights.
+    pub lights: Vec<PointLight>,
+    /// The sun.
+    pub sun: DirectionalLight,
+    /// A camera the source suggests (glTF camera), if any.
+    pub camera: Option<Camera>,
+}
+
+impl Scene {
+    /// Appends a mesh to the pools; validates indices and normals and computes bounds.
+    ///
+    /// `place` names the mesh in errors (e.g. `mesh 'wall' primitive 0 (accessor 3)`).
+    pub fn add_mesh(&mut self, name: &str, data: &MeshData, place: &str) -> Result<u32, SceneError> {
+        let (vertices, bounds, sphere) = data.validate(place)?;
+        let mesh = Mesh {
+            name: name.into(),
+            first_index: u32::try_from(self.indices.len()).map_err(|_| SceneError::too_large(place, "index pool"))?,
+            index_count: data.indices.len() as u32,
+            vertex_offset: u32::try_from(self.vertices.len()).map_err(|_| SceneError::too_large(place, "vertex pool"))?,
+            vertex_count: vertices.len() as u32,
+            bounds,
+            sphere,
+        };
+        self.vertices.extend_from_slice(&vertices);
+        self.indices.extend_from_slice(&data.indices);
+        self.meshes.push(mesh);
+        Ok(self.meshes.len() as u32 - 1)
+    }
+
+    /// Appends a material and returns its index.
+    pub fn add_material(&mut self, material: Material) -> u32 {
+        self.materials.push(material);
+        self.materials.len() as u32 - 1
+    }
+
+    /// World-space AABB of one instance (the transformed corners of its mesh's local AABB).
+    pub fn instance_bounds(&self, instance: &Instance) -> (DVec3, DVec3) {
+        let b = &self.meshes[instance.mesh as usize].bounds;
+        let center = instance.transform.apply(b.center());
+        // |M| * half-extent bounds the transformed box exactly for an affine map.
+        let abs = Mat3::from_cols(
+            instance.transform.linear.x_axis.abs(),
+            instance.transform.linear.y_axis.abs(),
+            instance.transform.linear.z_axis.abs(),
+        );
+        let half = abs.mul_vec3(b.half_extent()).as_dvec3();
+        (center - half, center + half)
+    }
+
+    /// World-space bounds of all instances (`None` for an empty scene).
+    pub fn world_bounds(&self) -> Option<(DVec3, DVec3)> {
+        self.instances.iter().map(|i| self.instance_bounds(i)).reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+    }
+
+    /// Total triangles over all instances.
+    pub fn instanced_triangles(&self) -> u64 {
+        self.instances.iter().map(|i| self.meshes[i.mesh as usize].index_count as u64 / 3).sum()
+    }
+
+    /// A camera that shows the whole scene: the source's own if it has one, else a framing view.
+    pub fn default_camera(&self, aspect: f32) -> Camera {
+        if let Some(c) = &self.camera {
+            return c.clone();
+        }
+        match self.world_bounds() {
+            Some((min, max)) => Camera::framing(min, max, aspect),
+            None => Camera::default(),
+        }
+    }
+}
