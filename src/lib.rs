@@ -6,3 +6,9 @@
 
 pub mod gpu;
 pub mod scene;
+pub mod error;
+pub mod passes;
+pub mod render;
+pub mod stats;
+
+pub use error::{Error, Result};

@@ -78,6 +78,8 @@ pub struct DeviceCaps {
 
 /// State shared by the context and every resource created from it; dropped last.
 pub(crate) struct DeviceShared {
+    /// Keeps libvulkan loaded for as long as any handle exists.
+    #[allow(dead_code)]
     pub entry: ash::Entry,
     pub instance: ash::Instance,
     pub physical_device: vk::PhysicalDevice,
@@ -277,7 +279,10 @@ impl GpuContext {
     }
 
     /// Records commands with `record`, submits them and waits until the GPU has finished.
-    pub fn submit_and_wait<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> GpuResult<R>) -> GpuResult<R> {
+    pub fn submit_and_wait<R, E: From<GpuError>>(
+        &self,
+        record: impl FnOnce(vk::CommandBuffer) -> Result<R, E>,
+    ) -> Result<R, E> {
         let device = &self.shared.device;
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(self.shared.queue_family)
@@ -285,7 +290,7 @@ impl GpuContext {
         // SAFETY: plain object creation on a valid device; everything is destroyed below.
         unsafe {
             let pool = device.create_command_pool(&pool_info, None).vk("vkCreateCommandPool")?;
-            let result = (|| {
+            let result = (|| -> Result<R, E> {
                 let alloc = vk::CommandBufferAllocateInfo::default()
                     .command_pool(pool)
                     .level(vk::CommandBufferLevel::PRIMARY)
@@ -301,7 +306,8 @@ impl GpuContext {
                 let submitted = self.submit(&vk::SubmitInfo2::default().command_buffer_infos(&cmd_info), fence);
                 let waited = submitted.and_then(|_| device.wait_for_fences(&[fence], true, u64::MAX).vk("vkWaitForFences"));
                 device.destroy_fence(fence, None);
-                waited.map(|_| value)
+                waited?;
+                Ok(value)
             })();
             device.destroy_command_pool(pool, None);
             result

@@ -81,7 +81,12 @@ pub fn reflect(spirv: &[u32]) -> Result<ShaderInterface, ReflectError> {
         }
     }
     for mode in &entry.exec_modes {
-        if mode.exec_mode == spirq::spirv::ExecutionMode::LocalSize && mode.operands.len() == 3 {
+        // SPIR-V 1.6 output uses LocalSizeId (constant ids); older output LocalSize (literals).
+        let is_local_size = matches!(
+            mode.exec_mode,
+            spirq::spirv::ExecutionMode::LocalSize | spirq::spirv::ExecutionMode::LocalSizeId
+        );
+        if is_local_size && mode.operands.len() == 3 {
             let v: Vec<u32> = mode
                 .operands
                 .iter()

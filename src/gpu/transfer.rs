@@ -49,8 +49,8 @@ impl UploadBatch {
         self.copies.iter().map(|c| c.2).sum()
     }
 
-    /// Records the copies and a barrier that makes them visible to every later shader, indirect
-    /// and vertex-input read.
+    /// Records the copies and a barrier that orders them before every later access (read or
+    /// write: an uploaded buffer may be a counter that shaders update).
     pub fn record(&self, ctx: &GpuContext, cmd: vk::CommandBuffer) {
         if self.copies.is_empty() {
             return;
@@ -63,7 +63,7 @@ impl UploadBatch {
         }
         let after = Access {
             stage: vk::PipelineStageFlags2::ALL_COMMANDS,
-            access: vk::AccessFlags2::MEMORY_READ,
+            access: vk::AccessFlags2::from_raw(vk::AccessFlags2::MEMORY_READ.as_raw() | vk::AccessFlags2::MEMORY_WRITE.as_raw()),
             layout: vk::ImageLayout::UNDEFINED,
         };
         cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, after)], &[]);
@@ -76,7 +76,7 @@ impl UploadBatch {
         }
         ctx.submit_and_wait(|cmd| {
             self.record(ctx, cmd);
-            Ok(())
+            GpuResult::Ok(())
         })
     }
 }
@@ -105,7 +105,7 @@ pub fn read_buffer(ctx: &GpuContext, buffer: &Buffer) -> GpuResult<Vec<u8>> {
             // SAFETY: both buffers live; cmd recording.
             unsafe { device.cmd_copy_buffer(cmd, buffer.handle(), staging.handle(), &[region]) };
             cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
-            Ok(())
+            GpuResult::Ok(())
         })?;
     }
     Ok(staging.read_bytes()?.to_vec())

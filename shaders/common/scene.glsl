@@ -1,0 +1,69 @@
+// Scene data shared by every pass. Layouts mirror src/render/gpu_types.rs (scalar block layout).
+#ifndef CULLGRAPH_SCENE_GLSL
+#define CULLGRAPH_SCENE_GLSL
+
+#extension GL_EXT_scalar_block_layout : require
+
+// One instance, 64 bytes. The translation is split into hi + lo floats so that
+// (hi - eye_hi) + (lo - eye_lo) keeps full precision 10^7 units from the origin.
+struct GpuInstance {
+    vec4 row0;            // xyz: first row of the 3x3 linear part, w: translation.x hi
+    vec4 row1;            // xyz: second row, w: translation.y hi
+    vec4 row2;            // xyz: third row, w: translation.z hi
+    vec3 translation_lo;  // translation - hi
+    uint material_flags;  // material index (low 24 bits) | flags << 24
+};
+
+struct GpuMaterial {
+    vec3 albedo;
+    float roughness;
+    float metallic;
+    float pad0;
+    float pad1;
+    float pad2;
+};
+
+// Per-frame constants, relative to the eye.
+struct FrameConstants {
+    mat4 view_proj;        // eye-relative world -> clip (rotation and projection only)
+    mat4 inv_view_proj;    // clip -> eye-relative world
+    vec4 eye_hi;           // xyz
+    vec4 eye_lo;           // xyz
+    vec4 sun_direction;    // xyz: direction light travels
+    vec4 sun_color;        // rgb: radiance
+    uvec4 size_lights;     // x: width, y: height, z: point light count, w: flags
+    vec4 ambient;          // rgb: sky ambient, a: exposure
+};
+
+// Point light relative to the eye: xyz position, w range; rgb color.
+struct GpuPointLight {
+    vec4 position_range;
+    vec4 color;
+};
+
+// Eye-relative position of a local-space point. Subtracting the eye before adding the
+// local offset keeps the big numbers out of the sum.
+vec3 instance_rel_eye(GpuInstance inst, vec3 local, vec3 eye_hi, vec3 eye_lo) {
+    vec3 t = (vec3(inst.row0.w, inst.row1.w, inst.row2.w) - eye_hi) + (inst.translation_lo - eye_lo);
+    mat3 m = transpose(mat3(inst.row0.xyz, inst.row1.xyz, inst.row2.xyz));
+    return m * local + t;
+}
+
+// Normal transform: the cofactor matrix (det * inverse-transpose) times the sign of the
+// determinant, so mirrored instances keep outward normals without a division.
+vec3 instance_normal(GpuInstance inst, vec3 n) {
+    vec3 r0 = inst.row0.xyz, r1 = inst.row1.xyz, r2 = inst.row2.xyz;
+    mat3 m = transpose(mat3(r0, r1, r2));
+    mat3 cof = mat3(cross(m[1], m[2]), cross(m[2], m[0]), cross(m[0], m[1]));
+    float det = dot(m[0], cross(m[1], m[2]));
+    return cof * n * (det < 0.0 ? -1.0 : 1.0);
+}
+
+bool instance_is_mirrored(GpuInstance inst) {
+    return dot(inst.row0.xyz, cross(inst.row1.xyz, inst.row2.xyz)) < 0.0;
+}
+
+uint instance_material(GpuInstance inst) { return inst.material_flags & 0xFFFFFFu; }
+uint instance_flags(GpuInstance inst) { return inst.material_flags >> 24; }
+
+#endif

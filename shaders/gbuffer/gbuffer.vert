@@ -1,0 +1,25 @@
+#version 460
+// G-buffer geometry pass, vertex stage: instances come from the draw group's slice of the
+// compacted instance list (gl_InstanceIndex includes firstInstance).
+#include "../common/scene.glsl"
+#include "../common/octahedral.glsl"
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec2 in_normal_oct;
+
+layout(set = 0, binding = 0, scalar) readonly buffer Instances { GpuInstance instances[]; };
+layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
+layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
+
+layout(location = 0) out vec3 out_normal;
+layout(location = 1) flat out uint out_material;
+layout(location = 2) flat out uint out_mirrored;
+
+void main() {
+    GpuInstance inst = instances[draw_instance_ids[gl_InstanceIndex]];
+    vec3 rel = instance_rel_eye(inst, in_position, frame.eye_hi.xyz, frame.eye_lo.xyz);
+    gl_Position = frame.view_proj * vec4(rel, 1.0);
+    out_normal = instance_normal(inst, oct_decode(in_normal_oct));
+    out_material = instance_material(inst);
+    out_mirrored = instance_is_mirrored(inst) ? 1u : 0u;
+}

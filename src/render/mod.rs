@@ -1,0 +1,9 @@
+//! The frame: scene buffers on the GPU, render targets, and the renderer that records a frame
+//! headlessly or into a host engine's command buffer.
+
+pub mod gpu_types;
+pub mod output;
+pub mod renderer;
+pub mod scene_buffers;
+
+pub use renderer::{RenderSettings, Renderer, FRAMES_IN_FLIGHT};

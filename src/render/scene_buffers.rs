@@ -1,0 +1,105 @@
+//! The scene on the GPU: vertex/index pools, instances, materials, and the draw list that the
+//! indirect draws consume.
+
+use super::gpu_types::{DrawIndexedIndirect, GpuInstance, GpuMaterial};
+use crate::gpu::{Buffer, GpuContext, UploadBatch};
+use crate::scene::Scene;
+use ash::vk;
+
+/// Scene buffers on the device.
+pub struct GpuScene {
+    /// Shared vertex pool ([`crate::scene::Vertex`]).
+    pub vertices: Buffer,
+    /// Shared index pool (u32).
+    pub indices: Buffer,
+    /// [`GpuInstance`] per scene instance, in scene order.
+    pub instances: Buffer,
+    /// [`GpuMaterial`] per material.
+    pub materials: Buffer,
+    /// Instance ids grouped by draw group (mesh), each group in instance order.
+    pub draw_instance_ids: Buffer,
+    /// One [`DrawIndexedIndirect`] per non-empty draw group.
+    pub draw_commands: Buffer,
+    /// The number of commands (read by `vkCmdDrawIndexedIndirectCount`).
+    pub draw_count: Buffer,
+    /// Number of instances.
+    pub instance_count: u32,
+    /// Number of non-empty draw groups (the most commands a frame can issue).
+    pub max_draws: u32,
+    /// Triangles over all instances.
+    pub triangles: u64,
+}
+
+/// The unculled draw list: instances grouped by mesh, preserving instance order in each group.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DrawList {
+    /// Instance ids, group after group.
+    pub instance_ids: Vec<u32>,
+    /// One command per non-empty group, `first_instance` pointing at its slice of `instance_ids`.
+    pub commands: Vec<DrawIndexedIndirect>,
+}
+
+impl DrawList {
+    /// Groups every instance of `scene` by mesh (a counting sort, so it is stable).
+    pub fn all_instances(scene: &Scene) -> Self {
+        let mut counts = vec![0u32; scene.meshes.len()];
+        for inst in &scene.instances {
+            counts[inst.mesh as usize] += 1;
+        }
+        let mut starts = Vec::with_capacity(counts.len());
+        let mut total = 0u32;
+        for &c in &counts {
+            starts.push(total);
+            total += c;
+        }
+        let mut cursor = starts.clone();
+        let mut instance_ids = vec![0u32; scene.instances.len()];
+        for (id, inst) in scene.instances.iter().enumerate() {
+            let slot = &mut cursor[inst.mesh as usize];
+            instance_ids[*slot as usize] = id as u32;
+            *slot += 1;
+        }
+        let commands = scene
+            .meshes
+            .iter()
+            .enumerate()
+            .filter(|(m, _)| counts[*m] > 0)
+            .map(|(m, mesh)| DrawIndexedIndirect {
+                index_count: mesh.index_count,
+                instance_count: counts[m],
+                first_index: mesh.first_index,
+                vertex_offset: mesh.vertex_offset as i32,
+                first_instance: starts[m],
+            })
+            .collect();
+        Self { instance_ids, commands }
+    }
+}
+
+impl GpuScene {
+    /// Creates the device buffers and queues their contents on `batch`.
+    pub fn upload(ctx: &GpuContext, scene: &Scene, batch: &mut UploadBatch) -> crate::Result<Self> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let instances: Vec<GpuInstance> = scene.instances.iter().map(GpuInstance::new).collect();
+        let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();
+        let draws = DrawList::all_instances(scene);
+        let count = [draws.commands.len() as u32];
+        Ok(Self {
+            vertices: batch.buffer(ctx, "vertices", vk::BufferUsageFlags::VERTEX_BUFFER | storage, bytemuck::cast_slice(&scene.vertices))?,
+            indices: batch.buffer(ctx, "indices", vk::BufferUsageFlags::INDEX_BUFFER | storage, bytemuck::cast_slice(&scene.indices))?,
+            instances: batch.buffer(ctx, "instances", storage, bytemuck::cast_slice(&instances))?,
+            materials: batch.buffer(ctx, "materials", storage, bytemuck::cast_slice(&materials))?,
+            draw_instance_ids: batch.buffer(ctx, "draw instance ids", storage, bytemuck::cast_slice(&draws.instance_ids))?,
+            draw_commands: batch.buffer(
+                ctx,
+                "draw commands",
+                vk::BufferUsageFlags::INDIRECT_BUFFER | storage,
+                bytemuck::cast_slice(&draws.commands),
+            )?,
+            draw_count: batch.buffer(ctx, "draw count", vk::BufferUsageFlags::INDIRECT_BUFFER | storage, bytemuck::cast_slice(&count))?,
+            instance_count: scene.instances.len() as u32,
+            max_draws: draws.commands.len() as u32,
+            triangles: scene.instanced_triangles(),
+        })
+    }
+}

@@ -1,0 +1,49 @@
+//! Statistics as plain data: per-frame counts and GPU timings, exported as JSON.
+
+use crate::gpu::PassTiming;
+use serde::{Deserialize, Serialize};
+
+/// What one frame did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct FrameStats {
+    /// Frame number, from 0.
+    pub frame: u64,
+    /// Instances in the scene (all tested, when culling runs).
+    pub instances: u32,
+    /// Indirect draw commands issued.
+    pub draws: u32,
+    /// Triangles submitted.
+    pub triangles: u64,
+    /// GPU milliseconds per pass, in execution order.
+    pub gpu_ms: Vec<PassTiming>,
+    /// GPU milliseconds of the whole frame (first begin to last end).
+    pub gpu_total_ms: f64,
+    /// CPU milliseconds spent recording the frame's commands.
+    pub cpu_record_ms: f64,
+}
+
+/// A whole run of `cullgraph render`, as written to `--stats`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunStats {
+    /// Vulkan device name.
+    pub device: String,
+    /// Scene name.
+    pub scene: String,
+    /// Output width.
+    pub width: u32,
+    /// Output height.
+    pub height: u32,
+    /// Instances in the scene.
+    pub instances: u32,
+    /// Distinct meshes (draw groups) in the scene.
+    pub meshes: u32,
+    /// Per-frame figures.
+    pub frames: Vec<FrameStats>,
+}
+
+impl RunStats {
+    /// Pretty JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+}

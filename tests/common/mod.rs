@@ -1,0 +1,111 @@
+//! Shared helpers of the GPU integration tests: every test runs on lavapipe (unless
+//! `CULLGRAPH_TEST_DEVICE` names another device) with the validation layer and synchronization
+//! validation on, and any validation message fails it.
+#![allow(dead_code)]
+
+use cullgraph::gpu::{ContextOptions, GpuContext, ShaderCompiler, ShaderRoot};
+use std::ops::Deref;
+
+/// A validated context; dropping it fails the test if the layer reported anything.
+pub struct GpuTest {
+    ctx: Option<GpuContext>,
+    log: cullgraph::gpu::ValidationLog,
+}
+
+impl GpuTest {
+    /// Creates the context (panics with a hint when Vulkan or the layer is missing).
+    pub fn new() -> Self {
+        let device = std::env::var("CULLGRAPH_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+        let options = ContextOptions { device: device.parse().unwrap(), validation: true, app_name: "cullgraph-test".into() };
+        let ctx = GpuContext::new(&options)
+            .unwrap_or_else(|e| panic!("cannot create a validated Vulkan context ({e}); run scripts/install-deps"));
+        let log = ctx.validation_log().clone();
+        Self { ctx: Some(ctx), log }
+    }
+
+    /// A shader compiler over the repository's `shaders/` directory.
+    pub fn shaders(&self) -> ShaderCompiler {
+        ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap()
+    }
+
+    /// Fails now if any validation message arrived so far.
+    pub fn assert_clean(&self) {
+        let messages = self.log.messages();
+        assert!(messages.is_empty(), "{} validation message(s):\n{}", messages.len(), messages.join("\n"));
+    }
+}
+
+impl Deref for GpuTest {
+    type Target = GpuContext;
+    fn deref(&self) -> &GpuContext {
+        self.ctx.as_ref().expect("context alive until drop")
+    }
+}
+
+impl Drop for GpuTest {
+    fn drop(&mut self) {
+        // Destroy the device first (if nothing else holds it) so that leaks reported by
+        // vkDestroyDevice count too.
+        drop(self.ctx.take());
+        if !std::thread::panicking() {
+            self.assert_clean();
+        }
+    }
+}
+
+/// A unit cube (-0.5..0.5) with per-face normals.
+pub fn cube_mesh() -> cullgraph::scene::MeshData {
+    use glam::Vec3;
+    let mut m = cullgraph::scene::MeshData::default();
+    let faces = [
+        (Vec3::X, Vec3::Y, Vec3::Z),
+        (-Vec3::X, Vec3::Y, -Vec3::Z),
+        (Vec3::Y, Vec3::Z, Vec3::X),
+        (-Vec3::Y, Vec3::Z, -Vec3::X),
+        (Vec3::Z, Vec3::X, Vec3::Y),
+        (-Vec3::Z, -Vec3::X, Vec3::Y),
+    ];
+    for (n, u, v) in faces {
+        // u x v == n, so (c-u-v, c+u-v, c+u+v, c-u+v) is counter-clockwise seen from outside.
+        let base = m.positions.len() as u32;
+        let c = n * 0.5;
+        for (a, b) in [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)] {
+            m.positions.push(c + u * a + v * b);
+            m.normals.push(n);
+        }
+        m.indices.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    m
+}
+
+/// A small scene: a ground slab and a few colored boxes, lit by the sun and one point light.
+pub fn boxes_scene() -> cullgraph::scene::Scene {
+    use cullgraph::scene::*;
+    use glam::{DVec3, Mat3, Vec3};
+    let mut scene = Scene { name: "test boxes".into(), ..Default::default() };
+    let cube = scene.add_mesh("cube", &cube_mesh(), "cube").unwrap();
+    let grey = scene.add_material(Material { name: "ground".into(), albedo: Vec3::splat(0.5), roughness: 0.9, metallic: 0.0 });
+    let red = scene.add_material(Material { name: "red".into(), albedo: Vec3::new(0.8, 0.1, 0.1), roughness: 0.4, metallic: 0.0 });
+    let blue = scene.add_material(Material { name: "blue".into(), albedo: Vec3::new(0.1, 0.2, 0.8), roughness: 0.3, metallic: 0.5 });
+    let place = |scale: Vec3, at: DVec3, material| Instance {
+        transform: Transform { linear: Mat3::from_diagonal(scale), translation: at },
+        mesh: cube,
+        material,
+        flags: 0,
+    };
+    scene.instances.push(place(Vec3::new(20.0, 0.2, 20.0), DVec3::new(0.0, -0.1, 0.0), grey));
+    scene.instances.push(place(Vec3::ONE, DVec3::new(-1.5, 0.5, 0.0), red));
+    scene.instances.push(place(Vec3::new(1.0, 2.0, 1.0), DVec3::new(1.5, 1.0, 0.0), blue));
+    scene.instances.push(place(Vec3::splat(0.5), DVec3::new(0.0, 0.25, 1.5), red));
+    scene.lights.push(PointLight { position: DVec3::new(0.0, 2.0, 2.0), color: Vec3::new(4.0, 3.0, 2.0), range: 8.0 });
+    scene
+}
+
+/// Camera looking at the boxes scene.
+pub fn boxes_camera() -> cullgraph::scene::Camera {
+    cullgraph::scene::Camera {
+        eye: glam::DVec3::new(3.0, 3.0, 6.0),
+        target: glam::DVec3::new(0.0, 0.5, 0.0),
+        ..Default::default()
+    }
+}
