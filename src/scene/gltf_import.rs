@@ -1,11 +1,299 @@
-//! glTF 2.0 import (stub: filled in by the scene work).
+//! glTF 2.0 import: every (mesh, primitive) pair becomes one cullgraph [`Mesh`](super::Mesh)
+//! shared by all nodes that use that mesh, every node with a mesh becomes one [`Instance`] per
+//! drawable primitive.
+//!
+//! Broken files give a [`SceneError`] whose place names the file, the node or the mesh,
+//! primitive and accessor; they never panic. What is dropped on the way (non-triangle
+//! primitives, textures, animations, unused meshes) is listed in an [`ImportReport`].
 
+mod accessor;
+mod buffers;
+mod materials;
+mod nodes;
+mod primitive;
+
+use super::camera::{Camera, Projection};
 use super::error::SceneError;
 use super::source::LoadOptions;
-use super::Scene;
+use super::{procedural, Instance, Material, Scene, Transform};
+use glam::Vec3;
+use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
-/// Loads a glTF 2.0 file.
-pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
-    Err(SceneError::Import { file: path.display().to_string(), message: "glTF import not implemented yet".into() })
+pub use primitive::{fan_to_list, strip_to_list};
+
+/// Point lights placed in a file that has none when [`LoadOptions::lights`] is `None`.
+pub const DEFAULT_FILE_LIGHTS: usize = 4;
+
+/// What an import left out, for the user to see (nothing is dropped silently).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ImportReport {
+    /// Primitives that were not drawn, each with its place and reason
+    /// (e.g. `a.gltf: mesh 'Lines' (#2) primitive 0: mode LINES cannot be drawn as triangles`).
+    pub skipped_primitives: Vec<String>,
+    /// Everything else that was ignored or assumed (textures, animations, extra scenes, ...).
+    pub notes: Vec<String>,
+}
+
+/// Loads a glTF 2.0 file (`.gltf` with its buffers, or `.glb`), logging what the import left
+/// out with `tracing::warn!`.
+pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
+    let (scene, report) = load_with_report(path, options)?;
+    for skipped in &report.skipped_primitives {
+        tracing::warn!("skipped primitive: {skipped}");
+    }
+    for note in &report.notes {
+        tracing::warn!("{}: {note}", scene.name);
+    }
+    Ok(scene)
+}
+
+/// Loads a glTF 2.0 file and returns the scene with the [`ImportReport`] of what was left out.
+///
+/// Adds point lights (`options.lights`, default [`DEFAULT_FILE_LIGHTS`]) above the scene,
+/// since glTF lights are not read.
+pub fn load_with_report(
+    path: &Path,
+    options: &LoadOptions,
+) -> Result<(Scene, ImportReport), SceneError> {
+    let file = path.display().to_string();
+    // The checks below are meant to leave the `gltf` crate nothing to panic on; this is the
+    // backstop so that a hostile file still ends as an error, never as an aborted host.
+    match catch_unwind(AssertUnwindSafe(|| import(path, options))) {
+        Ok(result) => result,
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            Err(SceneError::Import {
+                file,
+                message: format!("the glTF reader failed on this file: {what}"),
+            })
+        }
+    }
+}
+
+/// The (cullgraph mesh, material) of a drawable primitive, `None` for a skipped one.
+type DrawnPrimitive = Option<(u32, u32)>;
+
+fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), SceneError> {
+    let file = path.display().to_string();
+    let import_err = |message: String| SceneError::Import {
+        file: file.clone(),
+        message,
+    };
+    let short = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| file.clone());
+    let mut report = ImportReport::default();
+    let light_count = options.lights.unwrap_or(DEFAULT_FILE_LIGHTS);
+    if light_count > procedural::MAX_LIGHTS {
+        return Err(import_err(format!(
+            "lights = {light_count} is out of range (at most {})",
+            procedural::MAX_LIGHTS
+        )));
+    }
+
+    let bytes =
+        std::fs::read(path).map_err(|e| import_err(format!("cannot read the file: {e}")))?;
+    let gltf = buffers::parse(&bytes, &mut report.notes).map_err(import_err)?;
+    drop(bytes);
+    let document = gltf.document;
+    let base = path.parent().unwrap_or_else(|| Path::new("."));
+    let buffers = buffers::load_buffers(&document, base, gltf.blob).map_err(import_err)?;
+    note_ignored_features(&document, &mut report.notes);
+
+    let mut scene = Scene {
+        name: short.clone(),
+        ..Default::default()
+    };
+    for material in materials::convert(&document, &mut report.notes) {
+        scene.add_material(material);
+    }
+    let mut default_material = None;
+
+    let roots = nodes::roots(&document, &mut report.notes);
+    let placed = nodes::walk(&document, roots, &short, &mut report.notes)?;
+
+    // Per glTF mesh: the (cullgraph mesh, material) of each drawable primitive, once imported.
+    let mut imported: Vec<Option<Vec<DrawnPrimitive>>> = vec![None; document.meshes().len()];
+    let mut skinned = 0usize;
+    for p in &placed {
+        let Some(mesh) = p.node.mesh() else { continue };
+        skinned += usize::from(p.node.skin().is_some());
+        if imported[mesh.index()].is_none() {
+            let prims = import_mesh(
+                &mesh,
+                &short,
+                &buffers,
+                &mut scene,
+                &mut default_material,
+                &mut report,
+            )?;
+            imported[mesh.index()] = Some(prims);
+        }
+        for &(mesh, material) in imported[mesh.index()].iter().flatten().flatten() {
+            scene.instances.push(Instance {
+                transform: p.world,
+                mesh,
+                material,
+                flags: 0,
+            });
+        }
+    }
+    if skinned > 0 {
+        report.notes.push(format!(
+            "skins are ignored: {skinned} skinned nodes are drawn in their bind pose"
+        ));
+    }
+    let unused = imported.iter().filter(|m| m.is_none()).count();
+    if unused > 0 {
+        report.notes.push(format!(
+            "{unused} meshes are not used by any node of the drawn scene and were not imported"
+        ));
+    }
+    if scene.instances.is_empty() {
+        let why = match report.skipped_primitives.first() {
+            None => "no node of the drawn scene has a mesh".to_string(),
+            Some(first) => format!(
+                "{} primitive(s) skipped, the first: {first}",
+                report.skipped_primitives.len()
+            ),
+        };
+        return Err(import_err(format!("nothing to draw: {why}")));
+    }
+
+    scene.camera = placed.iter().find_map(|p| camera_of(p, &mut report.notes));
+    if let Some(bounds) = scene.world_bounds() {
+        let n = light_count;
+        scene.lights = procedural::lights::scatter(&bounds, n, options.seed);
+        if n > 0 {
+            report.notes.push(format!(
+                "glTF lights are not read; {n} point lights were placed above the scene"
+            ));
+        }
+    }
+    Ok((scene, report))
+}
+
+/// Adds the drawable primitives of `mesh` to the scene's pools (one cullgraph mesh each) and
+/// returns their (mesh, material) pairs; primitives that cannot be drawn go to the report.
+fn import_mesh(
+    mesh: &gltf::Mesh<'_>,
+    short: &str,
+    buffers: &[Vec<u8>],
+    scene: &mut Scene,
+    default_material: &mut Option<u32>,
+    report: &mut ImportReport,
+) -> Result<Vec<DrawnPrimitive>, SceneError> {
+    let label = match mesh.name() {
+        Some(name) => format!("mesh '{name}' (#{})", mesh.index()),
+        None => format!("mesh #{}", mesh.index()),
+    };
+    let base_name = mesh
+        .name()
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("mesh#{}", mesh.index()));
+    let mut prims = Vec::new();
+    for prim in mesh.primitives() {
+        let place = format!("{short}: {label} primitive {}", prim.index());
+        match primitive::convert(&prim, buffers, &place)? {
+            primitive::Converted::Skipped(why) => {
+                report.skipped_primitives.push(format!("{place}: {why}"));
+                prims.push(None);
+            }
+            primitive::Converted::Mesh(data, mesh_place, normal_note) => {
+                report.notes.extend(normal_note);
+                let id =
+                    scene.add_mesh(&format!("{base_name}/{}", prim.index()), &data, &mesh_place)?;
+                // glTF materials were added first, in file order, so their indices carry over.
+                let material = match prim.material().index() {
+                    Some(i) => i as u32,
+                    None => *default_material
+                        .get_or_insert_with(|| scene.add_material(Material::default())),
+                };
+                if prim.morph_targets().len() > 0 {
+                    report.notes.push(format!(
+                        "{place}: morph targets are ignored (base shape drawn)"
+                    ));
+                }
+                prims.push(Some((id, material)));
+            }
+        }
+    }
+    Ok(prims)
+}
+
+/// The camera of a node that has one, if it is usable.
+fn camera_of(placed: &nodes::Placed<'_>, notes: &mut Vec<String>) -> Option<Camera> {
+    let camera = placed.node.camera()?;
+    let w: &Transform = &placed.world;
+    let forward = w.linear.mul_vec3(Vec3::NEG_Z).try_normalize()?;
+    let up = w
+        .linear
+        .mul_vec3(Vec3::Y)
+        .try_normalize()
+        .unwrap_or(Vec3::Y);
+    let (projection, near) = match camera.projection() {
+        gltf::camera::Projection::Perspective(p) => (
+            Projection::Perspective {
+                fov_y_deg: p.yfov().to_degrees(),
+            },
+            p.znear(),
+        ),
+        gltf::camera::Projection::Orthographic(o) => (
+            Projection::Orthographic {
+                height: 2.0 * o.ymag().abs(),
+                far: o.zfar(),
+            },
+            o.znear().max(1e-3),
+        ),
+    };
+    let eye = w.translation;
+    let cam = Camera {
+        eye,
+        target: eye + forward.as_dvec3() * 10.0,
+        up,
+        projection,
+        near,
+    };
+    match cam.validate() {
+        Ok(()) => Some(cam),
+        Err(why) => {
+            notes.push(format!(
+                "{}: camera ignored: {why}",
+                nodes::node_label(&placed.node)
+            ));
+            None
+        }
+    }
+}
+
+/// Notes for parts of the file that cullgraph does not use.
+fn note_ignored_features(document: &gltf::Document, notes: &mut Vec<String>) {
+    let used: Vec<&str> = document.extensions_used().collect();
+    if !used.is_empty() {
+        notes.push(format!("extensions are ignored: {}", used.join(", ")));
+    }
+    if document.animations().len() > 0 {
+        notes.push(format!(
+            "{} animations are ignored (the rest pose is drawn)",
+            document.animations().len()
+        ));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn missing_file_is_an_import_error() {
+        let e = load(Path::new("/nonexistent/x.glb"), &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::Import { .. }), "{e}");
+        assert!(e.to_string().contains("cannot read the file"), "{e}");
+    }
 }

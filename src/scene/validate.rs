@@ -1,9 +1,329 @@
-//! Whole-scene checks run after every load (stub: filled in by the scene work).
+//! Whole-scene checks run after every load, and by engines that build or edit a [`Scene`]
+//! themselves before handing it to the GPU. Every error names the offending element
+//! (`instance #12: transform is not finite`).
 
 use super::error::SceneError;
-use super::Scene;
+use super::{Instance, Scene};
 
-/// Checks cross references and finiteness of a scene.
-pub fn validate_scene(_scene: &Scene) -> Result<(), SceneError> {
+/// Material indices the GPU instance record can hold (24 bits).
+pub const MAX_MATERIALS: usize = 1 << 24;
+/// Flag bits the GPU instance record keeps (8 bits).
+pub const MAX_FLAG_BITS: u32 = 8;
+
+/// Checks cross references and finiteness of a scene: a non-empty instance list, mesh ranges
+/// inside the pools, every index inside its mesh, instance mesh/material indices in range,
+/// finite transforms, materials, lights, sun and camera.
+pub fn validate_scene(scene: &Scene) -> Result<(), SceneError> {
+    if scene.instances.is_empty() {
+        return Err(SceneError::invalid(
+            scene_place(scene),
+            "scene has no instances",
+        ));
+    }
+    if scene.materials.len() > MAX_MATERIALS {
+        return Err(SceneError::invalid(
+            scene_place(scene),
+            format!(
+                "{} materials exceed the {MAX_MATERIALS} an instance can address",
+                scene.materials.len()
+            ),
+        ));
+    }
+    validate_meshes(scene)?;
+    for (i, m) in scene.materials.iter().enumerate() {
+        let place = || format!("material #{i} '{}'", m.name);
+        if !m.albedo.is_finite() || m.albedo.min_element() < 0.0 {
+            return Err(SceneError::invalid(
+                place(),
+                format!("albedo {} must be finite and non-negative", m.albedo),
+            ));
+        }
+        if !(m.roughness.is_finite() && m.metallic.is_finite()) {
+            return Err(SceneError::invalid(
+                place(),
+                "roughness and metallic must be finite",
+            ));
+        }
+    }
+    for i in 0..scene.instances.len() {
+        scene.validate_instance(i)?;
+    }
+    for (i, l) in scene.lights.iter().enumerate() {
+        let place = format!("light #{i}");
+        if !l.position.is_finite() || !l.position.as_vec3().is_finite() {
+            return Err(SceneError::invalid(
+                place,
+                format!("position {} is not finite", l.position),
+            ));
+        }
+        if !l.color.is_finite() || l.color.min_element() < 0.0 {
+            return Err(SceneError::invalid(
+                place,
+                format!("color {} must be finite and non-negative", l.color),
+            ));
+        }
+        if !(l.range.is_finite() && l.range > 0.0) {
+            return Err(SceneError::invalid(
+                place,
+                format!("range {} must be positive and finite", l.range),
+            ));
+        }
+    }
+    let sun = &scene.sun;
+    if !sun.direction.is_finite()
+        || sun.direction.length_squared() < 1e-12
+        || !sun.color.is_finite()
+    {
+        return Err(SceneError::invalid(
+            "sun",
+            "direction must be finite and non-zero, color finite",
+        ));
+    }
+    if let Some(camera) = &scene.camera {
+        camera
+            .validate()
+            .map_err(|m| SceneError::invalid("camera", m))?;
+    }
     Ok(())
+}
+
+impl Scene {
+    /// Checks one instance: mesh and material in range, transform finite (and its translation
+    /// within `f32` range, as the GPU splits it into two floats), flags within the bits the GPU
+    /// keeps. Errors name the instance: `instance #12: transform is not finite`.
+    pub fn validate_instance(&self, index: usize) -> Result<(), SceneError> {
+        let place = || format!("instance #{index}");
+        let Some(instance) = self.instances.get(index) else {
+            return Err(SceneError::invalid(
+                place(),
+                format!("does not exist (the scene has {})", self.instances.len()),
+            ));
+        };
+        check_instance(self, instance).map_err(|m| SceneError::invalid(place(), m))
+    }
+
+    /// Runs [`validate_scene`] on this scene.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        validate_scene(self)
+    }
+}
+
+fn check_instance(scene: &Scene, instance: &Instance) -> Result<(), String> {
+    if instance.mesh as usize >= scene.meshes.len() {
+        return Err(format!(
+            "mesh {} is out of range (the scene has {} meshes)",
+            instance.mesh,
+            scene.meshes.len()
+        ));
+    }
+    if instance.material as usize >= scene.materials.len() {
+        return Err(format!(
+            "material {} is out of range (the scene has {} materials)",
+            instance.material,
+            scene.materials.len()
+        ));
+    }
+    if !instance.transform.is_finite() {
+        return Err("transform is not finite".into());
+    }
+    if !instance.transform.translation.as_vec3().is_finite() {
+        return Err(format!(
+            "translation {} is beyond the range of f32",
+            instance.transform.translation
+        ));
+    }
+    if instance.flags >> MAX_FLAG_BITS != 0 {
+        return Err(format!(
+            "flags {:#x} use bits above the {MAX_FLAG_BITS} that the GPU keeps",
+            instance.flags
+        ));
+    }
+    Ok(())
+}
+
+fn validate_meshes(scene: &Scene) -> Result<(), SceneError> {
+    for (i, m) in scene.meshes.iter().enumerate() {
+        let place = || format!("mesh #{i} '{}'", m.name);
+        if m.index_count == 0 || m.index_count % 3 != 0 {
+            return Err(SceneError::invalid(
+                place(),
+                format!(
+                    "index count {} is not a positive multiple of 3",
+                    m.index_count
+                ),
+            ));
+        }
+        let first = m.first_index as usize;
+        let Some(indices) = scene.indices.get(first..first + m.index_count as usize) else {
+            return Err(SceneError::invalid(
+                place(),
+                format!(
+                    "indices {}..{} lie outside the index pool ({} entries)",
+                    first,
+                    first + m.index_count as usize,
+                    scene.indices.len()
+                ),
+            ));
+        };
+        let vertex_end = m.vertex_offset as usize + m.vertex_count as usize;
+        if vertex_end > scene.vertices.len() {
+            return Err(SceneError::invalid(
+                place(),
+                format!(
+                    "vertices {}..{vertex_end} lie outside the vertex pool ({} entries)",
+                    m.vertex_offset,
+                    scene.vertices.len()
+                ),
+            ));
+        }
+        if let Some((at, bad)) = indices
+            .iter()
+            .enumerate()
+            .find(|(_, &v)| v >= m.vertex_count)
+        {
+            return Err(SceneError::invalid(
+                place(),
+                format!(
+                    "index {bad} at element {at} is out of range (the mesh has {} vertices)",
+                    m.vertex_count
+                ),
+            ));
+        }
+        let b = &m.bounds;
+        if !(b.min.is_finite() && b.max.is_finite() && b.min.cmple(b.max).all()) {
+            return Err(SceneError::invalid(
+                place(),
+                format!("bounds {}..{} are not a finite box", b.min, b.max),
+            ));
+        }
+        if !(m.sphere.center.is_finite() && m.sphere.radius.is_finite() && m.sphere.radius >= 0.0) {
+            return Err(SceneError::invalid(
+                place(),
+                "bounding sphere is not finite",
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn scene_place(scene: &Scene) -> String {
+    if scene.name.is_empty() {
+        "scene".into()
+    } else {
+        format!("scene '{}'", scene.name)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::mesh::MeshData;
+    use crate::scene::{Material, PointLight, Transform};
+    use glam::{DVec3, Vec3};
+
+    fn one_triangle() -> Scene {
+        let mut s = Scene::default();
+        let data = MeshData {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: vec![],
+            indices: vec![0, 1, 2],
+        };
+        let mesh = s.add_mesh("tri", &data, "test").unwrap();
+        let material = s.add_material(Material::default());
+        s.instances.push(Instance {
+            transform: Transform::default(),
+            mesh,
+            material,
+            flags: 0,
+        });
+        s
+    }
+
+    #[test]
+    fn valid_scene_passes() {
+        one_triangle().validate().unwrap();
+    }
+
+    #[test]
+    fn empty_scene_is_refused() {
+        let e = validate_scene(&Scene::default()).unwrap_err().to_string();
+        assert!(e.contains("scene has no instances"), "{e}");
+    }
+
+    #[test]
+    fn errors_name_the_instance() {
+        let mut s = one_triangle();
+        s.instances.push(s.instances[0]);
+        s.instances[1].transform.translation.y = f64::NAN;
+        assert_eq!(
+            validate_scene(&s).unwrap_err().to_string(),
+            "instance #1: transform is not finite"
+        );
+        s.instances[1].transform = Transform::default();
+        s.instances[1].transform.linear.x_axis.x = f32::INFINITY;
+        assert_eq!(
+            validate_scene(&s).unwrap_err().to_string(),
+            "instance #1: transform is not finite"
+        );
+        s.instances[1].transform = Transform::default();
+        s.instances[1].mesh = 5;
+        assert!(validate_scene(&s)
+            .unwrap_err()
+            .to_string()
+            .starts_with("instance #1: mesh 5 is out of range"));
+        s.instances[1].mesh = 0;
+        s.instances[1].material = 9;
+        assert!(validate_scene(&s)
+            .unwrap_err()
+            .to_string()
+            .starts_with("instance #1: material 9 is out of range"));
+        s.instances[1].material = 0;
+        s.instances[1].flags = 1 << 9;
+        assert!(validate_scene(&s)
+            .unwrap_err()
+            .to_string()
+            .starts_with("instance #1: flags"));
+        s.instances[1].flags = 0;
+        s.instances[1].transform.translation.x = 1e300;
+        assert!(validate_scene(&s)
+            .unwrap_err()
+            .to_string()
+            .contains("beyond the range of f32"));
+        assert!(s.validate_instance(7).is_err());
+    }
+
+    #[test]
+    fn broken_pools_and_lights_are_refused() {
+        let mut s = one_triangle();
+        s.indices[2] = 7;
+        assert!(validate_scene(&s)
+            .unwrap_err()
+            .to_string()
+            .starts_with("mesh #0 'tri': index 7"));
+        let mut s = one_triangle();
+        s.meshes[0].first_index = 3;
+        assert!(validate_scene(&s)
+            .unwrap_err()
+            .to_string()
+            .contains("outside the index pool"));
+        let mut s = one_triangle();
+        s.lights.push(PointLight {
+            position: DVec3::ZERO,
+            color: Vec3::ONE,
+            range: 0.0,
+        });
+        assert!(validate_scene(&s)
+            .unwrap_err()
+            .to_string()
+            .starts_with("light #0: range"));
+        s.lights[0] = PointLight {
+            position: DVec3::NAN,
+            color: Vec3::ONE,
+            range: 1.0,
+        };
+        assert!(validate_scene(&s)
+            .unwrap_err()
+            .to_string()
+            .starts_with("light #0: position"));
+    }
 }

@@ -1,0 +1,188 @@
+//! Bounds-checked reads of glTF accessors (positions, normals, indices), sparse included.
+//!
+//! The `gltf` crate's own readers assume a well-formed file (they `debug_assert!` element sizes
+//! and subtract from a zero count); these checks turn every such case into an error message that
+//! names the accessor, the buffer view and the byte range instead.
+
+use gltf::accessor::{sparse::IndexType, DataType, Dimensions};
+use gltf::Accessor;
+
+/// Upper bound on the element count of an accessor that has no buffer view (all zeros plus
+/// sparse substitutions), so that a hostile `count` cannot trigger a huge allocation.
+const MAX_VIEWLESS_ELEMENTS: usize = 1 << 26;
+
+/// Reads a `VEC3` of `FLOAT` accessor.
+pub(super) fn read_vec3(
+    accessor: &Accessor<'_>,
+    buffers: &[Vec<u8>],
+) -> Result<Vec<[f32; 3]>, String> {
+    expect_type(
+        accessor,
+        Dimensions::Vec3,
+        &[DataType::F32],
+        "VEC3 of FLOAT",
+    )?;
+    read(accessor, buffers, 12, |b| {
+        [f32_at(b, 0), f32_at(b, 4), f32_at(b, 8)]
+    })
+}
+
+/// Reads a `SCALAR` accessor of `UNSIGNED_BYTE`, `UNSIGNED_SHORT` or `UNSIGNED_INT` as indices.
+pub(super) fn read_indices(
+    accessor: &Accessor<'_>,
+    buffers: &[Vec<u8>],
+) -> Result<Vec<u32>, String> {
+    expect_type(
+        accessor,
+        Dimensions::Scalar,
+        &[DataType::U8, DataType::U16, DataType::U32],
+        "SCALAR of an unsigned integer type",
+    )?;
+    match accessor.data_type() {
+        DataType::U8 => read(accessor, buffers, 1, |b| b[0] as u32),
+        DataType::U16 => read(accessor, buffers, 2, |b| {
+            u16::from_le_bytes([b[0], b[1]]) as u32
+        }),
+        _ => read(accessor, buffers, 4, |b| u32_at(b, 0)),
+    }
+}
+
+fn f32_at(b: &[u8], at: usize) -> f32 {
+    f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
+}
+
+fn u32_at(b: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
+}
+
+fn expect_type(
+    accessor: &Accessor<'_>,
+    dims: Dimensions,
+    types: &[DataType],
+    what: &str,
+) -> Result<(), String> {
+    if accessor.dimensions() != dims || !types.contains(&accessor.data_type()) {
+        return Err(format!(
+            "must be {what}, found {:?} of {:?}{}",
+            accessor.dimensions(),
+            accessor.data_type(),
+            if accessor.normalized() {
+                " (normalized)"
+            } else {
+                ""
+            }
+        ));
+    }
+    Ok(())
+}
+
+/// Reads `accessor.count()` elements of `size` bytes each, decoding them with `decode`.
+fn read<T: Copy + Default>(
+    accessor: &Accessor<'_>,
+    buffers: &[Vec<u8>],
+    size: usize,
+    decode: impl Fn(&[u8]) -> T,
+) -> Result<Vec<T>, String> {
+    let count = accessor.count();
+    if count == 0 {
+        return Err("has count 0".into());
+    }
+    let mut out = match accessor.view() {
+        Some(view) => {
+            let bytes = strided(&view, accessor.offset(), count, size, buffers)?;
+            let stride = view.stride().unwrap_or(size);
+            (0..count)
+                .map(|i| decode(&bytes[i * stride..i * stride + size]))
+                .collect::<Vec<T>>()
+        }
+        None if accessor.sparse().is_none() => {
+            return Err("has neither a buffer view nor sparse data".into())
+        }
+        None if count > MAX_VIEWLESS_ELEMENTS => {
+            return Err(format!(
+                "has no buffer view and a count of {count} (at most {MAX_VIEWLESS_ELEMENTS})"
+            ))
+        }
+        None => vec![T::default(); count],
+    };
+    if let Some(sparse) = accessor.sparse() {
+        let n = sparse.count();
+        if n == 0 {
+            return Err("sparse: count is 0".into());
+        }
+        let indices = sparse.indices();
+        let index_size = match indices.index_type() {
+            IndexType::U8 => 1,
+            IndexType::U16 => 2,
+            IndexType::U32 => 4,
+        };
+        let index_bytes = strided(&indices.view(), indices.offset(), n, index_size, buffers)
+            .map_err(|e| format!("sparse indices: {e}"))?;
+        let index_stride = indices.view().stride().unwrap_or(index_size);
+        let values = sparse.values();
+        let value_bytes = strided(&values.view(), values.offset(), n, size, buffers)
+            .map_err(|e| format!("sparse values: {e}"))?;
+        let value_stride = values.view().stride().unwrap_or(size);
+        for k in 0..n {
+            let b = &index_bytes[k * index_stride..];
+            let at = match index_size {
+                1 => b[0] as usize,
+                2 => u16::from_le_bytes([b[0], b[1]]) as usize,
+                _ => u32_at(b, 0) as usize,
+            };
+            let slot = out
+                .get_mut(at)
+                .ok_or_else(|| format!("sparse index {at} (entry {k}) is out of range (the accessor has {count} elements)"))?;
+            *slot = decode(&value_bytes[k * value_stride..k * value_stride + size]);
+        }
+    }
+    Ok(out)
+}
+
+/// The bytes of `count` elements of `size` bytes at `offset` in `view`, checked against the
+/// view and the buffer. The slice starts at the first element and ends after the last one.
+fn strided<'b>(
+    view: &gltf::buffer::View<'_>,
+    offset: usize,
+    count: usize,
+    size: usize,
+    buffers: &'b [Vec<u8>],
+) -> Result<&'b [u8], String> {
+    let buffer = view.buffer().index();
+    let data = buffers
+        .get(buffer)
+        .ok_or_else(|| format!("buffer {buffer} was not loaded"))?;
+    let view_start = view.offset();
+    let view_end = view_start
+        .checked_add(view.length())
+        .filter(|&end| end <= data.len())
+        .ok_or_else(|| {
+            format!(
+                "buffer view {} (bytes {view_start}..+{}) exceeds buffer {buffer}, which has {} bytes",
+                view.index(),
+                view.length(),
+                data.len()
+            )
+        })?;
+    let stride = view.stride().unwrap_or(size);
+    if stride < size {
+        return Err(format!(
+            "buffer view {} has byteStride {stride}, smaller than the element size {size}",
+            view.index()
+        ));
+    }
+    let needed = count
+        .checked_sub(1)
+        .and_then(|last| last.checked_mul(stride))
+        .and_then(|b| b.checked_add(size))
+        .and_then(|b| b.checked_add(offset))
+        .filter(|&end| end <= view_end - view_start)
+        .ok_or_else(|| {
+            format!(
+                "{count} elements of {size} bytes (stride {stride}) at offset {offset} do not fit in buffer view {}, which has {} bytes",
+                view.index(),
+                view.length()
+            )
+        })?;
+    Ok(&data[view_start + offset..view_start + needed])
+}

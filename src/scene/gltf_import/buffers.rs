@@ -1,0 +1,195 @@
+//! Reading a glTF/GLB file and its buffers (GLB `BIN` chunk, external `.bin` files, `data:` URIs).
+//!
+//! Images are never loaded: cullgraph ignores textures, and a missing texture must not stop a
+//! scene from loading.
+
+use gltf::buffer::Source;
+use gltf::{Document, Gltf};
+use std::path::Path;
+
+/// Parses the document (JSON and validation) from the file's bytes.
+///
+/// Validation is the `gltf` crate's (which guarantees that its own accessors cannot panic),
+/// with one deliberate leniency: a POSITION accessor without `min`/`max` is accepted with a note,
+/// because cullgraph computes bounds from the data; the data itself is then checked, and reports
+/// the real problem (non-finite positions, truncated buffers) instead.
+pub(super) fn parse(bytes: &[u8], notes: &mut Vec<String>) -> Result<Gltf, String> {
+    use gltf::json::validation::{Error, Validate};
+    let gltf = Gltf::from_slice_without_validation(bytes).map_err(describe_error)?;
+    let root = gltf.document.as_json();
+    let unsupported: Vec<&str> = root
+        .extensions_required
+        .iter()
+        .map(String::as_str)
+        .filter(|e| !gltf::json::extensions::ENABLED_EXTENSIONS.contains(e))
+        .collect();
+    if !unsupported.is_empty() {
+        let hint = if unsupported.iter().any(|e| e.contains("draco")) {
+            " (`assimp export in.glb out.glb -fglb2` decodes Draco)"
+        } else if unsupported
+            .iter()
+            .any(|e| e.contains("quantization") || e.contains("meshopt"))
+        {
+            " (`gltfpack -i in.glb -o out.glb -noq` writes unquantized meshes)"
+        } else {
+            ""
+        };
+        return Err(format!(
+            "the file requires the unsupported extension(s) {}; convert it to core glTF 2.0 first{hint}",
+            unsupported.join(", ")
+        ));
+    }
+    // gltf-json's validator itself indexes `accessors` with the POSITION index before checking
+    // it (gltf-json 1.4.1, mesh.rs), so that one index is checked first.
+    let positions = gltf::json::validation::Checked::Valid(gltf::json::mesh::Semantic::Positions);
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(index) = primitive.attributes.get(&positions) {
+                if index.value() >= root.accessors.len() {
+                    return Err(format!(
+                        "invalid glTF: meshes[{m}].primitives[{p}].attributes[\"POSITION\"]: accessor {} does not exist \
+                         (the file has {})",
+                        index.value(),
+                        root.accessors.len()
+                    ));
+                }
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    let mut missing_bounds = 0usize;
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let path = path().to_string();
+        let bound = path.ends_with("[\"POSITION\"].min") || path.ends_with("[\"POSITION\"].max");
+        if bound && error == Error::Missing {
+            missing_bounds += 1;
+        } else {
+            errors.push(format!("{path}: {error}"));
+        }
+    });
+    if !errors.is_empty() {
+        let more = if errors.len() > 8 {
+            format!(" (and {} more)", errors.len() - 8)
+        } else {
+            String::new()
+        };
+        errors.truncate(8);
+        return Err(format!("invalid glTF: {}{more}", errors.join("; ")));
+    }
+    if missing_bounds > 0 {
+        notes.push(format!(
+            "{} POSITION accessor min/max values are missing (the spec requires them); bounds are computed from the data",
+            missing_bounds
+        ));
+    }
+    Ok(gltf)
+}
+
+/// Loads every buffer of `document`; `base` is the directory that relative URIs start from.
+pub(super) fn load_buffers(
+    document: &Document,
+    base: &Path,
+    mut blob: Option<Vec<u8>>,
+) -> Result<Vec<Vec<u8>>, String> {
+    let mut out = Vec::with_capacity(document.buffers().len());
+    for buffer in document.buffers() {
+        let i = buffer.index();
+        let data = match buffer.source() {
+            Source::Bin => blob.take().ok_or_else(|| {
+                format!("buffer {i} refers to the GLB binary chunk, which the file does not have")
+            })?,
+            Source::Uri(uri) if uri.starts_with("data:") || uri.starts_with("file:") => {
+                gltf::buffer::Data::from_source(buffer.source(), Some(base))
+                    .map(|d| d.0)
+                    .map_err(|e| format!("buffer {i} ({}): {}", shorten(uri), describe_error(e)))?
+            }
+            Source::Uri(uri) if uri.contains(':') => {
+                return Err(format!(
+                    "buffer {i}: unsupported URI scheme in '{}'",
+                    shorten(uri)
+                ))
+            }
+            Source::Uri(uri) => {
+                let relative = percent_decode(uri)
+                    .ok_or_else(|| format!("buffer {i}: malformed URI '{uri}'"))?;
+                let path = base.join(&relative);
+                std::fs::read(&path).map_err(|e| {
+                    format!("buffer {i}: cannot read '{uri}' ({}): {e}", path.display())
+                })?
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(format!(
+                "buffer {i} has {} bytes, the file declares byteLength {}",
+                data.len(),
+                buffer.length()
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// A readable description of a `gltf` error (JSON, GLB container or schema validation).
+pub(super) fn describe_error(error: gltf::Error) -> String {
+    match error {
+        gltf::Error::Validation(errors) => {
+            let shown: Vec<String> = errors
+                .iter()
+                .take(8)
+                .map(|(path, e)| format!("{path}: {e}"))
+                .collect();
+            let more = if errors.len() > 8 {
+                format!(" (and {} more)", errors.len() - 8)
+            } else {
+                String::new()
+            };
+            format!("invalid glTF: {}{more}", shown.join("; "))
+        }
+        gltf::Error::Deserialize(e) => format!("not a valid glTF 2.0 document: {e}"),
+        gltf::Error::Binary(e) => format!("not a valid GLB container: {e}"),
+        gltf::Error::Io(e) => format!("I/O error: {e}"),
+        other => other.to_string(),
+    }
+}
+
+/// Decodes `%XX` escapes of a relative URI; `None` when an escape is malformed or the result is
+/// not UTF-8.
+fn percent_decode(uri: &str) -> Option<String> {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' {
+            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+/// A URI cut to a printable length (data URIs can be megabytes long).
+fn shorten(uri: &str) -> String {
+    match uri.char_indices().nth(48) {
+        Some((at, _)) => format!("{}...", &uri[..at]),
+        None => uri.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percent_decoding() {
+        assert_eq!(percent_decode("a%20b.bin").as_deref(), Some("a b.bin"));
+        assert_eq!(percent_decode("plain.bin").as_deref(), Some("plain.bin"));
+        assert_eq!(percent_decode("bad%2"), None);
+        assert_eq!(percent_decode("bad%zz"), None);
+        assert_eq!(percent_decode("%FF"), None);
+    }
+}
