@@ -26,6 +26,15 @@ impl ValidationLog {
         self.lock().clone()
     }
 
+    /// A messenger description whose callback appends to this log, for hosts that create their
+    /// own instance (chain it into `VkInstanceCreateInfo` and/or pass it to
+    /// `vkCreateDebugUtilsMessengerEXT`).
+    ///
+    /// The log must stay at the same address (e.g. in a `Box`) until the messenger is destroyed.
+    pub fn messenger_create_info(&self) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+        messenger_info(self)
+    }
+
     fn push(&self, message: String) {
         self.lock().push(message);
     }

@@ -1,0 +1,123 @@
+//! Argument definitions (clap derive) and value parsers.
+
+use clap::{Args, Parser, Subcommand};
+use glam::DVec3;
+use std::path::PathBuf;
+
+/// GPU-driven culling and deferred rendering of huge scenes, through Vulkan.
+#[derive(Parser, Debug)]
+#[command(name = "cullgraph", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene headlessly and write a PNG and (optionally) JSON stats.
+    Render(RenderArgs),
+    /// List the Vulkan devices the loader sees (index: name (type, API version)).
+    Devices,
+}
+
+/// `cullgraph render` flags.
+#[derive(Args, Debug, Clone)]
+pub struct RenderArgs {
+    /// Scene to render: `builtin:city`, `builtin:field`, or a glTF 2.0 file (.gltf/.glb).
+    #[arg(long, default_value = "builtin:city")]
+    pub scene: String,
+    /// Number of instances of a built-in scene (city: 1,000 to 1,000,000; default 10,000).
+    #[arg(long, value_name = "N")]
+    pub instances: Option<usize>,
+    /// Number of distinct mesh kinds of `builtin:field` (default 64).
+    #[arg(long, value_name = "N")]
+    pub kinds: Option<usize>,
+    /// Number of point lights (built-in scenes; files get them only when they have none).
+    #[arg(long, value_name = "N")]
+    pub lights: Option<usize>,
+    /// Seed of the built-in generators.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Camera position x,y,z (default: a view that frames the scene).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub eye: Option<DVec3>,
+    /// Point the camera looks at, x,y,z.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub target: Option<DVec3>,
+    /// Vertical field of view in degrees (perspective).
+    #[arg(long, value_name = "DEG")]
+    pub fov: Option<f32>,
+    /// Near-plane distance.
+    #[arg(long)]
+    pub near: Option<f32>,
+    /// Number of frames to render (stats are recorded for each; the image is the last frame).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub frames: u32,
+    /// Output image (PNG).
+    #[arg(long, default_value = "out/frame.png")]
+    pub out: PathBuf,
+    /// Write per-frame statistics as JSON to this file.
+    #[arg(long, value_name = "PATH")]
+    pub stats: Option<PathBuf>,
+    /// Vulkan device by name substring or index (see `cullgraph devices`); env CULLGRAPH_DEVICE.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub device: Option<String>,
+    /// Enable the Khronos validation layer with synchronization validation.
+    #[arg(long)]
+    pub validation: bool,
+    /// Read shaders from this directory instead of the copies built into the binary
+    /// (env CULLGRAPH_SHADER_DIR).
+    #[arg(long, value_name = "DIR")]
+    pub shader_dir: Option<PathBuf>,
+}
+
+/// Parses `WIDTHxHEIGHT`.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 1280x720)"))?;
+    let parse = |v: &str, what: &str| -> Result<u32, String> {
+        let n: u32 = v.trim().parse().map_err(|_| format!("{what} '{v}' in '{s}' is not a whole number"))?;
+        if n == 0 || n > 16384 {
+            return Err(format!("{what} {n} in '{s}' must be between 1 and 16384"));
+        }
+        Ok(n)
+    };
+    Ok((parse(w, "width")?, parse(h, "height")?))
+}
+
+/// Parses `x,y,z` into finite numbers.
+pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!("'{s}' is not x,y,z"));
+    }
+    let mut v = [0.0f64; 3];
+    for (slot, p) in v.iter_mut().zip(&parts) {
+        let x: f64 = p.trim().parse().map_err(|_| format!("'{p}' in '{s}' is not a number"))?;
+        if !x.is_finite() {
+            return Err(format!("'{p}' in '{s}' is not finite"));
+        }
+        *slot = x;
+    }
+    Ok(DVec3::from_array(v))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_sizes_and_vectors_with_clear_errors() {
+        assert_eq!(parse_size("1920x1080"), Ok((1920, 1080)));
+        assert!(parse_size("0x10").unwrap_err().contains("between 1 and 16384"));
+        assert!(parse_size("100").unwrap_err().contains("WIDTHxHEIGHT"));
+        assert!(parse_size("axb").unwrap_err().contains("not a whole number"));
+        assert_eq!(parse_vec3("1,-2.5,3e7"), Ok(DVec3::new(1.0, -2.5, 3e7)));
+        assert!(parse_vec3("1,2").is_err());
+        assert!(parse_vec3("1,nan,2").unwrap_err().contains("not finite"));
+    }
+}

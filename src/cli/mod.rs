@@ -1,0 +1,37 @@
+//! Command-line interface: argument definitions and dispatch.
+
+mod args;
+mod render;
+
+use clap::Parser;
+use std::process::ExitCode;
+
+/// Parses arguments, runs the command and turns errors into a message and exit code 1.
+pub fn main() -> ExitCode {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into());
+    tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
+    let cli = args::Cli::parse();
+    let result = match cli.command {
+        args::Command::Render(r) => render::run(&r),
+        args::Command::Devices => list_devices(),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            let mut source = std::error::Error::source(&e);
+            while let Some(s) = source {
+                eprintln!("  caused by: {s}");
+                source = s.source();
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn list_devices() -> cullgraph::Result<()> {
+    for d in cullgraph::gpu::context::list_devices()? {
+        println!("{d}");
+    }
+    Ok(())
+}

@@ -1,0 +1,167 @@
+//! Embedding: a host engine creates its own Vulkan instance, device and allocator with raw
+//! `ash`, hands them to cullgraph, and records cullgraph's frame into its own command buffer.
+
+mod common;
+
+use ash::vk;
+use common::{boxes_camera, boxes_scene, GpuTest};
+use cullgraph::gpu::transfer::record_image_to_buffer;
+use cullgraph::gpu::{
+    Buffer, BufferDesc, GpuContext, HostHandles, MemoryLocation, RequiredFeatures, ShaderCompiler, ShaderRoot, ValidationLog,
+    REQUIRED_DEVICE_EXTENSIONS,
+};
+use cullgraph::render::{RenderSettings, Renderer};
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::sync::{Arc, Mutex};
+
+/// What the "engine" owns.
+struct Host {
+    entry: ash::Entry,
+    instance: ash::Instance,
+    physical_device: vk::PhysicalDevice,
+    device: ash::Device,
+    family: u32,
+    queue: vk::Queue,
+    debug: (ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT),
+    log: Box<ValidationLog>,
+}
+
+impl Host {
+    fn new() -> Self {
+        let entry = unsafe { ash::Entry::load() }.unwrap();
+        let log = Box::new(ValidationLog::default());
+        let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
+        let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
+        let exts = [ash::ext::debug_utils::NAME.as_ptr(), ash::ext::validation_features::NAME.as_ptr()];
+        let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
+        let info = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&exts)
+            .push_next(&mut features);
+        let instance = unsafe { entry.create_instance(&info, None) }.unwrap();
+        let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+        let messenger = unsafe { loader.create_debug_utils_messenger(&log.messenger_create_info(), None) }.unwrap();
+
+        let physical_device = unsafe { instance.enumerate_physical_devices() }
+            .unwrap()
+            .into_iter()
+            .find(|&pd| {
+                let props = unsafe { instance.get_physical_device_properties(pd) };
+                props.device_name_as_c_str().unwrap().to_string_lossy().contains("llvmpipe")
+            })
+            .expect("lavapipe");
+        let family = unsafe { instance.get_physical_device_queue_family_properties(physical_device) }
+            .iter()
+            .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
+            .unwrap() as u32;
+        let priorities = [1.0];
+        let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+        let ext_names: Vec<_> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+        let mut required = RequiredFeatures::new();
+        let mut features2 = required.chain();
+        let info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_extension_names(&ext_names)
+            .push_next(&mut features2);
+        let device = unsafe { instance.create_device(physical_device, &info, None) }.unwrap();
+        let queue = unsafe { device.get_device_queue(family, 0) };
+        Self { entry, instance, physical_device, device, family, queue, debug: (loader, messenger), log }
+    }
+}
+
+impl Drop for Host {
+    fn drop(&mut self) {
+        unsafe {
+            self.device.destroy_device(None);
+            self.debug.0.destroy_debug_utils_messenger(self.debug.1, None);
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+#[test]
+fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
+    let (w, h) = (96, 64);
+    // Reference: the same frame through a context cullgraph owns.
+    let reference = {
+        let gpu = GpuTest::new();
+        let mut r = Renderer::new(&gpu, &gpu.shaders(), boxes_scene(), RenderSettings { width: w, height: h }).unwrap();
+        r.render_to_image(&boxes_camera()).unwrap().1
+    };
+
+    let host = Host::new();
+    let allocator = Allocator::new(&AllocatorCreateDesc {
+        instance: host.instance.clone(),
+        device: host.device.clone(),
+        physical_device: host.physical_device,
+        debug_settings: Default::default(),
+        buffer_device_address: false,
+        allocation_sizes: Default::default(),
+    })
+    .unwrap();
+    let allocator = Arc::new(Mutex::new(allocator));
+    {
+        let ctx = GpuContext::from_host(HostHandles {
+            entry: host.entry.clone(),
+            instance: host.instance.clone(),
+            physical_device: host.physical_device,
+            device: host.device.clone(),
+            queue_family_index: host.family,
+            queue: host.queue,
+            allocator: Some(allocator.clone()),
+            debug_utils: true,
+        })
+        .unwrap();
+        let shaders =
+            ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
+        let mut renderer = Renderer::new(&ctx, &shaders, boxes_scene(), RenderSettings { width: w, height: h }).unwrap();
+        let readback = Buffer::new(
+            &ctx,
+            &BufferDesc {
+                name: "host readback",
+                size: (w * h * 4) as u64,
+                usage: vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuToCpu,
+            },
+        )
+        .unwrap();
+
+        // The host's own command pool, command buffer, fence and submit.
+        let d = &host.device;
+        unsafe {
+            let pool = d
+                .create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(host.family), None)
+                .unwrap();
+            let cmd = d
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
+                )
+                .unwrap()[0];
+            d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
+            let frame = renderer.record(cmd, &boxes_camera()).unwrap();
+            assert_eq!(frame, 0);
+            let (output, state) = renderer.output();
+            record_image_to_buffer(&ctx, cmd, output, state, &readback);
+            d.end_command_buffer(cmd).unwrap();
+            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
+            let cmds = [cmd];
+            d.queue_submit(host.queue, &[vk::SubmitInfo::default().command_buffers(&cmds)], fence).unwrap();
+            d.wait_for_fences(&[fence], true, u64::MAX).unwrap();
+            d.destroy_fence(fence, None);
+            d.destroy_command_pool(pool, None);
+        }
+        let timings = renderer.completed_timings(0).unwrap();
+        assert!(timings.iter().any(|t| t.name == "gbuffer") && timings.iter().any(|t| t.name == "lighting"), "{timings:?}");
+        let pixels = readback.read_bytes().unwrap();
+        assert_eq!(pixels, reference.as_raw().as_slice(), "embedded frame differs from the owned-context frame");
+    }
+    // cullgraph released everything it made from the host's allocator and device.
+    drop(allocator);
+    // Leaks would be reported by vkDestroyDevice, which runs in the host's drop.
+    let log = (*host.log).clone();
+    drop(host);
+    let messages = log.messages();
+    assert!(messages.is_empty(), "validation: {messages:#?}");
+}
