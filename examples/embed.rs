@@ -1,0 +1,80 @@
+//! Embedding cullgraph in an engine that owns the Vulkan instance, device, queue and allocator.
+//!
+//! The "engine" below creates everything with raw `ash`, enabling what cullgraph needs
+//! ([`REQUIRED_DEVICE_EXTENSIONS`] and [`RequiredFeatures`]), hands the handles over, and records
+//! cullgraph's frame into its own command buffer, which it submits itself. cullgraph never
+//! submits or waits here; the output image is left in `GENERAL` for the engine to sample or copy.
+//!
+//! `cargo run --release --example embed`
+
+use ash::vk;
+use cullgraph::gpu::{GpuContext, HostHandles, RequiredFeatures, ShaderCompiler, ShaderRoot, REQUIRED_DEVICE_EXTENSIONS};
+use cullgraph::render::{RenderSettings, Renderer};
+use cullgraph::scene::source::LoadOptions;
+use cullgraph::scene::SceneSource;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    // --- the engine's own Vulkan setup ---
+    let entry = unsafe { ash::Entry::load()? };
+    let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
+    let instance = unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None)? };
+    let physical_device = unsafe { instance.enumerate_physical_devices()? }.into_iter().next().ok_or("no Vulkan device")?;
+    let family = unsafe { instance.get_physical_device_queue_family_properties(physical_device) }
+        .iter()
+        .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
+        .ok_or("no graphics+compute queue")? as u32;
+    let priorities = [1.0];
+    let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+    let extensions: Vec<_> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+    let mut features = RequiredFeatures::new();
+    let mut features2 = features.chain();
+    let device_info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queues)
+        .enabled_extension_names(&extensions)
+        .push_next(&mut features2);
+    let device = unsafe { instance.create_device(physical_device, &device_info, None)? };
+    let queue = unsafe { device.get_device_queue(family, 0) };
+
+    // --- hand it to cullgraph ---
+    {
+        let ctx = GpuContext::from_host(HostHandles {
+            entry: entry.clone(),
+            instance: instance.clone(),
+            physical_device,
+            device: device.clone(),
+            queue_family_index: family,
+            queue,
+            allocator: None, // or Some(the engine's Arc<Mutex<gpu_allocator::vulkan::Allocator>>)
+            debug_utils: false,
+        })?;
+        let scene = SceneSource::Builtin("city".into()).load(&LoadOptions::default())?;
+        let settings = RenderSettings { width: 640, height: 360 };
+        let camera = scene.default_camera(640.0 / 360.0);
+        let mut renderer = Renderer::new(&ctx, &ShaderCompiler::new(ShaderRoot::Embedded)?, scene, settings)?;
+
+        // --- the engine's frame: its command buffer, its submit ---
+        unsafe {
+            let pool = device.create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(family), None)?;
+            let cmd = device.allocate_command_buffers(
+                &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
+            )?[0];
+            device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())?;
+            let frame = renderer.record(cmd, &camera)?;
+            device.end_command_buffer(cmd)?;
+            let fence = device.create_fence(&vk::FenceCreateInfo::default(), None)?;
+            device.queue_submit(queue, &[vk::SubmitInfo::default().command_buffers(&[cmd])], fence)?;
+            device.wait_for_fences(&[fence], true, u64::MAX)?;
+            for t in renderer.completed_timings(frame)? {
+                println!("{:>10}: {:.3} ms", t.name, t.ms);
+            }
+            device.destroy_fence(fence, None);
+            device.destroy_command_pool(pool, None);
+        }
+    } // cullgraph's resources are released here, before the engine destroys its device.
+
+    unsafe {
+        device.destroy_device(None);
+        instance.destroy_instance(None);
+    }
+    Ok(())
+}
