@@ -35,7 +35,9 @@ fn main() {
 /// Writes `$OUT_DIR/embedded_shaders.rs`: every file under `shaders/` as `(relative path, source)`,
 /// so a binary carried to another machine compiles its shaders without the source tree.
 fn embed_shaders() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    // The manifest dir at run time of the script: env!() would freeze the dir it was compiled in.
+    let manifest = env::var("CARGO_MANIFEST_DIR").expect("CARGO_MANIFEST_DIR is set by cargo");
+    let root = Path::new(&manifest).join("shaders");
     println!("cargo:rerun-if-changed={}", root.display());
     let mut files = Vec::new();
     collect(&root, &root, &mut files);

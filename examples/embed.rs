@@ -8,7 +8,9 @@
 //! `cargo run --release --example embed`
 
 use ash::vk;
-use cullgraph::gpu::{GpuContext, HostHandles, RequiredFeatures, ShaderCompiler, ShaderRoot, REQUIRED_DEVICE_EXTENSIONS};
+use cullgraph::gpu::{
+    GpuContext, HostHandles, RequiredFeatures, ShaderCompiler, ShaderRoot, REQUIRED_DEVICE_EXTENSIONS,
+};
 use cullgraph::render::{RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::SceneSource;
@@ -18,7 +20,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let entry = unsafe { ash::Entry::load()? };
     let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
     let instance = unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None)? };
-    let physical_device = unsafe { instance.enumerate_physical_devices()? }.into_iter().next().ok_or("no Vulkan device")?;
+    let physical_device =
+        unsafe { instance.enumerate_physical_devices()? }.into_iter().next().ok_or("no Vulkan device")?;
     let family = unsafe { instance.get_physical_device_queue_family_properties(physical_device) }
         .iter()
         .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
@@ -48,13 +51,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             debug_utils: false,
         })?;
         let scene = SceneSource::Builtin("city".into()).load(&LoadOptions::default())?;
-        let settings = RenderSettings { width: 640, height: 360 };
+        let settings = RenderSettings::new(640, 360);
         let camera = scene.default_camera(640.0 / 360.0);
         let mut renderer = Renderer::new(&ctx, &ShaderCompiler::new(ShaderRoot::Embedded)?, scene, settings)?;
 
         // --- the engine's frame: its command buffer, its submit ---
         unsafe {
-            let pool = device.create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(family), None)?;
+            let pool =
+                device.create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(family), None)?;
             let cmd = device.allocate_command_buffers(
                 &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
             )?[0];

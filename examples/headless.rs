@@ -14,7 +14,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = args.next().unwrap_or_else(|| "out/headless.png".into());
 
     let scene = source.load(&LoadOptions::default())?;
-    let settings = RenderSettings { width: 960, height: 540 };
+    let settings = RenderSettings::new(960, 540);
     let camera = scene.default_camera(settings.width as f32 / settings.height as f32);
 
     let ctx = GpuContext::new(&ContextOptions::default())?;

@@ -4,11 +4,11 @@
 //! declarative render graph. See `README.md` for the quick start and `DESIGN` notes in `docs/`.
 #![warn(missing_docs)]
 
-pub mod gpu;
-pub mod scene;
 pub mod error;
+pub mod gpu;
 pub mod passes;
 pub mod render;
+pub mod scene;
 pub mod stats;
 
 pub use error::{Error, Result};

@@ -7,8 +7,8 @@ use ash::vk;
 use common::{boxes_camera, boxes_scene, GpuTest};
 use cullgraph::gpu::transfer::record_image_to_buffer;
 use cullgraph::gpu::{
-    Buffer, BufferDesc, GpuContext, HostHandles, MemoryLocation, RequiredFeatures, ShaderCompiler, ShaderRoot, ValidationLog,
-    REQUIRED_DEVICE_EXTENSIONS,
+    Buffer, BufferDesc, GpuContext, HostHandles, MemoryLocation, RequiredFeatures, ShaderCompiler, ShaderRoot,
+    ValidationLog, REQUIRED_DEVICE_EXTENSIONS,
 };
 use cullgraph::render::{RenderSettings, Renderer};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -87,7 +87,7 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
     // Reference: the same frame through a context cullgraph owns.
     let reference = {
         let gpu = GpuTest::new();
-        let mut r = Renderer::new(&gpu, &gpu.shaders(), boxes_scene(), RenderSettings { width: w, height: h }).unwrap();
+        let mut r = Renderer::new(&gpu, &gpu.shaders(), boxes_scene(), RenderSettings::new(w, h)).unwrap();
         r.render_to_image(&boxes_camera()).unwrap().1
     };
 
@@ -116,7 +116,8 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
         .unwrap();
         let shaders =
             ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
-        let mut renderer = Renderer::new(&ctx, &shaders, boxes_scene(), RenderSettings { width: w, height: h }).unwrap();
+        let mut renderer =
+            Renderer::new(&ctx, &shaders, boxes_scene(), RenderSettings::new(w, h)).unwrap();
         let readback = Buffer::new(
             &ctx,
             &BufferDesc {
@@ -153,7 +154,10 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
             d.destroy_command_pool(pool, None);
         }
         let timings = renderer.completed_timings(0).unwrap();
-        assert!(timings.iter().any(|t| t.name == "gbuffer") && timings.iter().any(|t| t.name == "lighting"), "{timings:?}");
+        assert!(
+            timings.iter().any(|t| t.name == "gbuffer") && timings.iter().any(|t| t.name == "lighting"),
+            "{timings:?}"
+        );
         let pixels = readback.read_bytes().unwrap();
         assert_eq!(pixels, reference.as_raw().as_slice(), "embedded frame differs from the owned-context frame");
     }

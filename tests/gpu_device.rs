@@ -4,7 +4,9 @@ mod common;
 
 use ash::vk;
 use common::GpuTest;
-use cullgraph::gpu::{transfer, Bind, Buffer, BufferDesc, GpuTimer, MemoryLocation, Pipeline, ShaderError, UploadBatch};
+use cullgraph::gpu::{
+    transfer, Bind, Buffer, BufferDesc, GpuTimer, MemoryLocation, Pipeline, ShaderError, UploadBatch,
+};
 
 #[test]
 fn creates_a_validated_device_on_lavapipe() {
@@ -34,7 +36,14 @@ fn compute_shader_round_trip_with_timestamps() {
 
     let input: Vec<u32> = (0..1000).collect();
     let mut batch = UploadBatch::default();
-    let data = batch.buffer(&gpu, "data", vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC, bytemuck::cast_slice(&input)).unwrap();
+    let data = batch
+        .buffer(
+            &gpu,
+            "data",
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+            bytemuck::cast_slice(&input),
+        )
+        .unwrap();
     let mut timer = GpuTimer::new(&gpu, 4).unwrap();
     gpu.submit_and_wait(|cmd| {
         batch.record(&gpu, cmd);
@@ -63,7 +72,12 @@ fn a_synchronization_hazard_is_counted() {
     let gpu = GpuTest::new();
     let buffer = Buffer::new(
         &gpu,
-        &BufferDesc { name: "hazard", size: 256, usage: vk::BufferUsageFlags::TRANSFER_DST, location: MemoryLocation::GpuOnly },
+        &BufferDesc {
+            name: "hazard",
+            size: 256,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuOnly,
+        },
     )
     .unwrap();
     gpu.submit_and_wait(|cmd| {

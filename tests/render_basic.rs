@@ -9,7 +9,7 @@ use cullgraph::render::{RenderSettings, Renderer};
 fn boxes_render_with_the_expected_colors() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
-    let mut renderer = Renderer::new(&gpu, &shaders, boxes_scene(), RenderSettings { width: 96, height: 64 }).unwrap();
+    let mut renderer = Renderer::new(&gpu, &shaders, boxes_scene(), RenderSettings::new(96, 64)).unwrap();
     let (stats, image) = renderer.render_to_image(&boxes_camera()).unwrap();
     assert_eq!((stats.instances, stats.draws), (4, 1));
     image.save(std::env::temp_dir().join("cullgraph_boxes.png")).unwrap();

@@ -30,10 +30,7 @@ fn assimp_dir() -> PathBuf {
 
 fn monastery() -> PathBuf {
     let path = PathBuf::from(MONASTERY);
-    assert!(
-        path.is_file(),
-        "{MONASTERY} is missing: the shared test assets are not available on this machine"
-    );
+    assert!(path.is_file(), "{MONASTERY} is missing: the shared test assets are not available on this machine");
     path
 }
 
@@ -43,11 +40,7 @@ fn load(path: &Path) -> Result<(Scene, ImportReport), SceneError> {
 
 fn load_err(path: &Path) -> String {
     match load(path) {
-        Ok((scene, _)) => panic!(
-            "{} loaded ({} instances) but should fail",
-            path.display(),
-            scene.instances.len()
-        ),
+        Ok((scene, _)) => panic!("{} loaded ({} instances) but should fail", path.display(), scene.instances.len()),
         Err(e) => e.to_string(),
     }
 }
@@ -67,10 +60,7 @@ fn monastery_has_the_expected_counts() {
     assert_eq!(scene.instanced_triangles(), 124_789);
     assert!(report.skipped_primitives.is_empty(), "{report:?}");
     let (min, max) = scene.world_bounds().unwrap();
-    assert!(
-        min.is_finite() && max.is_finite() && (max - min).min_element() > 1.0,
-        "{min} {max}"
-    );
+    assert!(min.is_finite() && max.is_finite() && (max - min).min_element() > 1.0, "{min} {max}");
     assert_eq!(scene.lights.len(), gltf_import::DEFAULT_FILE_LIGHTS);
     for light in &scene.lights {
         assert!(light.position.y > max.y && light.range as f64 > max.y - min.y);
@@ -83,28 +73,14 @@ fn monastery_has_the_expected_counts() {
 
 #[test]
 fn monastery_lights_follow_the_option() {
-    let options = LoadOptions {
-        lights: Some(9),
-        ..Default::default()
-    };
+    let options = LoadOptions { lights: Some(9), ..Default::default() };
     let scene = gltf_import::load(&monastery(), &options).unwrap();
     assert_eq!(scene.lights.len(), 9);
-    let options = LoadOptions {
-        lights: Some(0),
-        ..Default::default()
-    };
-    assert!(gltf_import::load(&monastery(), &options)
-        .unwrap()
-        .lights
-        .is_empty());
+    let options = LoadOptions { lights: Some(0), ..Default::default() };
+    assert!(gltf_import::load(&monastery(), &options).unwrap().lights.is_empty());
     // An absurd count is an error, not an allocation attempt.
-    let options = LoadOptions {
-        lights: Some(usize::MAX),
-        ..Default::default()
-    };
-    let e = gltf_import::load(&monastery(), &options)
-        .unwrap_err()
-        .to_string();
+    let options = LoadOptions { lights: Some(usize::MAX), ..Default::default() };
+    let e = gltf_import::load(&monastery(), &options).unwrap_err().to_string();
     assert!(e.contains("lights = ") && e.contains("out of range"), "{e}");
 }
 
@@ -115,28 +91,19 @@ fn engine_has_the_expected_counts() {
     // 29 glTF meshes with 34 primitives in all; 82 nodes, 67 of them with a mesh, which gives
     // 115 (node, primitive) instances. 75,730 distinct triangles, 121,496 drawn.
     assert_eq!(scene.meshes.len(), 34);
-    let gltf_meshes: std::collections::BTreeSet<&str> = scene
-        .meshes
-        .iter()
-        .map(|m| m.name.rsplit_once('/').map_or(m.name.as_str(), |(a, _)| a))
-        .collect();
+    let gltf_meshes: std::collections::BTreeSet<&str> =
+        scene.meshes.iter().map(|m| m.name.rsplit_once('/').map_or(m.name.as_str(), |(a, _)| a)).collect();
     assert_eq!(gltf_meshes.len(), 29);
     assert_eq!(scene.instances.len(), 115);
     assert_eq!(unique_triangles(&scene), 75_730);
     assert_eq!(scene.instanced_triangles(), 121_496);
     assert!(report.skipped_primitives.is_empty());
-    let camera = scene
-        .camera
-        .as_ref()
-        .expect("the engine file has a camera node");
+    let camera = scene.camera.as_ref().expect("the engine file has a camera node");
     camera.validate().unwrap();
     validate_scene(&scene).unwrap();
     // Shared meshes: every cullgraph mesh is used by at least one instance.
     for (i, _) in scene.meshes.iter().enumerate() {
-        assert!(
-            scene.instances.iter().any(|inst| inst.mesh as usize == i),
-            "mesh {i} unused"
-        );
+        assert!(scene.instances.iter().any(|inst| inst.mesh as usize == i), "mesh {i} unused");
     }
 }
 
@@ -145,10 +112,7 @@ fn gltf_files(dir: &Path, out: &mut Vec<PathBuf>) {
         let path = entry.unwrap().path();
         if path.is_dir() {
             gltf_files(&path, out);
-        } else if matches!(
-            path.extension().and_then(|e| e.to_str()),
-            Some("gltf" | "glb")
-        ) {
+        } else if matches!(path.extension().and_then(|e| e.to_str()), Some("gltf" | "glb")) {
             out.push(path);
         }
     }
@@ -160,27 +124,18 @@ const MUST_FAIL: &[(&str, &str)] = &[
     ("IndexOutOfRange/AllIndicesOutOfRange.gltf", "out of range"),
     ("MissingBin/BoxTextured.gltf", "BoxTextured0.bin"),
     ("RecursiveNodes/RecursiveNodes.gltf", "cycle"),
-    (
-        "BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb",
-        "non-finite position",
-    ),
+    ("BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb", "non-finite position"),
     ("IncorrectVertexArrays/Cube.gltf", "multiple of 3"),
     ("SchemaFailures/sceneWrongType.gltf", "not a valid glTF"),
     ("TestNoRootNode/NoScene.gltf", "scene: Index out of bounds"),
-    (
-        "TestNoRootNode/SceneWithoutNodes.gltf",
-        "missing field `nodes`",
-    ),
+    ("TestNoRootNode/SceneWithoutNodes.gltf", "missing field `nodes`"),
     ("wrongTypes/badArray.gltf", "invalid type"),
     ("wrongTypes/badNumber.gltf", "invalid type"),
     ("wrongTypes/badObject.gltf", "invalid type"),
     ("wrongTypes/badString.gltf", "invalid type"),
     ("wrongTypes/badUint.gltf", "invalid type"),
     ("draco/2CylinderEngine.gltf", "KHR_draco_mesh_compression"),
-    (
-        "BoxTextured-glTF-techniqueWebGL/BoxTextured.gltf",
-        "KHR_technique_webgl",
-    ),
+    ("BoxTextured-glTF-techniqueWebGL/BoxTextured.gltf", "KHR_technique_webgl"),
 ];
 
 #[test]
@@ -189,49 +144,27 @@ fn every_assimp_gltf2_file_loads_or_fails_cleanly() {
     let mut files = Vec::new();
     gltf_files(&dir, &mut files);
     files.sort();
-    assert!(
-        files.len() >= 40,
-        "only {} glTF files under {}",
-        files.len(),
-        dir.display()
-    );
+    assert!(files.len() >= 40, "only {} glTF files under {}", files.len(), dir.display());
     let (mut loaded, mut refused) = (0, 0);
     for path in &files {
-        let rel = path
-            .strip_prefix(&dir)
-            .unwrap()
-            .to_string_lossy()
-            .into_owned();
+        let rel = path.strip_prefix(&dir).unwrap().to_string_lossy().into_owned();
         let outcome = catch_unwind(AssertUnwindSafe(|| load(path)));
         match outcome {
             Err(_) => panic!("{rel}: the loader panicked"),
             Ok(Ok((scene, _))) => {
                 loaded += 1;
-                assert!(
-                    !MUST_FAIL.iter().any(|(f, _)| *f == rel),
-                    "{rel} loaded but is broken"
-                );
-                validate_scene(&scene)
-                    .unwrap_or_else(|e| panic!("{rel}: loaded scene fails validation: {e}"));
+                assert!(!MUST_FAIL.iter().any(|(f, _)| *f == rel), "{rel} loaded but is broken");
+                validate_scene(&scene).unwrap_or_else(|e| panic!("{rel}: loaded scene fails validation: {e}"));
             }
             Ok(Err(e)) => {
                 refused += 1;
                 let message = e.to_string();
-                assert!(
-                    !message.contains(BACKSTOP),
-                    "{rel}: the panic backstop fired: {message}"
-                );
-                assert!(
-                    message.contains(path.file_name().unwrap().to_str().unwrap()),
-                    "{rel}: {message}"
-                );
+                assert!(!message.contains(BACKSTOP), "{rel}: the panic backstop fired: {message}");
+                assert!(message.contains(path.file_name().unwrap().to_str().unwrap()), "{rel}: {message}");
             }
         }
     }
-    assert!(
-        loaded >= 20 && refused >= MUST_FAIL.len(),
-        "loaded {loaded}, refused {refused}"
-    );
+    assert!(loaded >= 20 && refused >= MUST_FAIL.len(), "loaded {loaded}, refused {refused}");
 }
 
 #[test]
@@ -239,10 +172,7 @@ fn broken_assimp_files_name_their_problem() {
     let dir = assimp_dir();
     for (file, fragment) in MUST_FAIL {
         let message = load_err(&dir.join(file));
-        assert!(
-            message.contains(fragment),
-            "{file}: expected '{fragment}' in: {message}"
-        );
+        assert!(message.contains(fragment), "{file}: expected '{fragment}' in: {message}");
     }
     // The places name file, mesh, primitive and accessor.
     let m = load_err(&dir.join("IndexOutOfRange/IndexOutOfRange.gltf"));
@@ -253,20 +183,11 @@ fn broken_assimp_files_name_their_problem() {
     let m = load_err(&dir.join("RecursiveNodes/RecursiveNodes.gltf"));
     assert!(m.contains("node #0") && m.contains("#0 -> #1 -> #0"), "{m}");
     let m = load_err(&dir.join("BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb"));
-    assert!(
-        m.contains("mesh 'Mesh' (#0) primitive 0, POSITION accessor 2: vertex 0"),
-        "{m}"
-    );
+    assert!(m.contains("mesh 'Mesh' (#0) primitive 0, POSITION accessor 2: vertex 0"), "{m}");
     let m = load_err(&dir.join("MissingBin/BoxTextured.gltf"));
-    assert!(
-        m.contains("buffer 0: cannot read 'BoxTextured0.bin'"),
-        "{m}"
-    );
+    assert!(m.contains("buffer 0: cannot read 'BoxTextured0.bin'"), "{m}");
     let m = load_err(&dir.join("IncorrectVertexArrays/Cube.gltf"));
-    assert!(
-        m.contains("mesh 'TruncatedCube' (#1) primitive 0, POSITION accessor 6"),
-        "{m}"
-    );
+    assert!(m.contains("mesh 'TruncatedCube' (#1) primitive 0, POSITION accessor 6"), "{m}");
 }
 
 #[test]
@@ -274,44 +195,18 @@ fn valid_assimp_oddities_load() {
     let dir = assimp_dir();
     // An extension value of the wrong type in an extension cullgraph ignores: still a valid scene.
     let (_, report) = load(&dir.join("wrongTypes/badExtension.gltf")).unwrap();
-    assert!(
-        report
-            .notes
-            .iter()
-            .any(|n| n.contains("KHR_texture_transform")),
-        "{report:?}"
-    );
+    assert!(report.notes.iter().any(|n| n.contains("KHR_texture_transform")), "{report:?}");
     // Skins, morph targets and animations are reported, the rest pose drawn.
     let (_, report) = load(&dir.join("simple_skin/simple_skin.gltf")).unwrap();
-    assert!(
-        report.notes.iter().any(|n| n.contains("skins are ignored")),
-        "{report:?}"
-    );
-    let (_, report) =
-        load(&dir.join("glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf"))
-            .unwrap();
-    assert!(
-        report.notes.iter().any(|n| n.contains("morph targets")),
-        "{report:?}"
-    );
+    assert!(report.notes.iter().any(|n| n.contains("skins are ignored")), "{report:?}");
+    let (_, report) = load(&dir.join("glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf")).unwrap();
+    assert!(report.notes.iter().any(|n| n.contains("morph targets")), "{report:?}");
     // Textures are reported as ignored.
     let (_, report) = load(&dir.join("BoxTextured-glTF-Binary/BoxTextured.glb")).unwrap();
-    assert!(
-        report
-            .notes
-            .iter()
-            .any(|n| n.contains("textures are ignored")),
-        "{report:?}"
-    );
+    assert!(report.notes.iter().any(|n| n.contains("textures are ignored")), "{report:?}");
     // Zero normals are recomputed from the faces (and reported); short ones are normalised.
     let (scene, report) = load(&dir.join("BoxBadNormals-glTF-Binary/BoxBadNormals.glb")).unwrap();
-    assert!(
-        report
-            .notes
-            .iter()
-            .any(|n| n.contains("NORMAL accessor 1: 4 of 24 normals are zero")),
-        "{report:?}"
-    );
+    assert!(report.notes.iter().any(|n| n.contains("NORMAL accessor 1: 4 of 24 normals are zero")), "{report:?}");
     let normal = |i: usize| cullgraph::scene::decode_octahedral(scene.vertices[i].normal);
     assert!(normal(0).dot(Vec3::Z) > 0.999, "{}", normal(0));
     assert!(normal(4).dot(-Vec3::Y) > 0.999, "{}", normal(4));
@@ -326,8 +221,7 @@ fn face_normals(scene: &Scene) -> Vec<Vec3> {
     let idx = &scene.indices[m.first_index as usize..(m.first_index + m.index_count) as usize];
     idx.chunks_exact(3)
         .map(|t| {
-            let p =
-                |i: u32| Vec3::from_array(scene.vertices[(m.vertex_offset + i) as usize].position);
+            let p = |i: u32| Vec3::from_array(scene.vertices[(m.vertex_offset + i) as usize].position);
             (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]))
         })
         .collect()
@@ -345,22 +239,11 @@ fn asset_generator_primitive_modes() {
         let normals = face_normals(&load(&dir.join(&file)).unwrap().0);
         assert_eq!(normals.len(), 2, "{file}");
         for f in &normals {
-            assert!(
-                f.normalize().dot(reference[0].normalize()) > 0.999,
-                "{file}: face {f} vs {}",
-                reference[0]
-            );
+            assert!(f.normalize().dot(reference[0].normalize()) > 0.999, "{file}: face {f} vs {}", reference[0]);
         }
     }
     // Points and lines: nothing drawable, and the message says why.
-    for (n, mode) in [
-        (0, "POINTS"),
-        (1, "LINES"),
-        (2, "LINE_LOOP"),
-        (3, "LINE_STRIP"),
-        (7, "POINTS"),
-        (8, "LINES"),
-    ] {
+    for (n, mode) in [(0, "POINTS"), (1, "LINES"), (2, "LINE_LOOP"), (3, "LINE_STRIP"), (7, "POINTS"), (8, "LINES")] {
         let m = load_err(&dir.join(format!("Mesh_PrimitiveMode_{n:02}.gltf")));
         assert!(m.contains("nothing to draw") && m.contains(mode), "{m}");
     }
@@ -370,21 +253,14 @@ fn asset_generator_primitive_modes() {
 
 /// A scratch directory for one test.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "cullgraph-scene-import-{}-{name}",
-        std::process::id()
-    ));
+    let dir = std::env::temp_dir().join(format!("cullgraph-scene-import-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
 
 /// Little-endian bytes of positions followed by u16 indices (padded to 4).
 fn geometry_bytes(positions: &[[f32; 3]], indices: &[u16]) -> Vec<u8> {
-    let mut bin: Vec<u8> = positions
-        .iter()
-        .flatten()
-        .flat_map(|v| v.to_le_bytes())
-        .collect();
+    let mut bin: Vec<u8> = positions.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
     bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
     while !bin.len().is_multiple_of(4) {
         bin.push(0);
@@ -403,24 +279,19 @@ fn document(prims: &[Prim], nodes: serde_json::Value) -> (serde_json::Value, Vec
         let start = bin.len();
         bin.extend(geometry_bytes(positions, &[]));
         views.push(json!({"buffer": 0, "byteOffset": start, "byteLength": positions.len() * 12}));
-        let (lo, hi) = positions
-            .iter()
-            .fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
-                (
-                    [lo[0].min(p[0]), lo[1].min(p[1]), lo[2].min(p[2])],
-                    [hi[0].max(p[0]), hi[1].max(p[1]), hi[2].max(p[2])],
-                )
-            });
-        accessors.push(
-            json!({"bufferView": views.len() - 1, "componentType": 5126, "count": positions.len(),
-                              "type": "VEC3", "min": lo, "max": hi}),
-        );
+        let (lo, hi) = positions.iter().fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
+            ([lo[0].min(p[0]), lo[1].min(p[1]), lo[2].min(p[2])], [hi[0].max(p[0]), hi[1].max(p[1]), hi[2].max(p[2])])
+        });
+        accessors.push(json!({"bufferView": views.len() - 1, "componentType": 5126, "count": positions.len(),
+                              "type": "VEC3", "min": lo, "max": hi}));
         let mut prim = json!({"attributes": {"POSITION": accessors.len() - 1}, "mode": mode});
         if !indices.is_empty() {
             let start = bin.len();
             bin.extend(geometry_bytes(&[], indices));
             views.push(json!({"buffer": 0, "byteOffset": start, "byteLength": indices.len() * 2}));
-            accessors.push(json!({"bufferView": views.len() - 1, "componentType": 5123, "count": indices.len(), "type": "SCALAR"}));
+            accessors.push(
+                json!({"bufferView": views.len() - 1, "componentType": 5123, "count": indices.len(), "type": "SCALAR"}),
+            );
             prim["indices"] = json!(accessors.len() - 1);
         }
         meshes.push(json!({"name": format!("m{i}"), "primitives": [prim]}));
@@ -446,11 +317,7 @@ fn write(dir: &Path, doc: &serde_json::Value, bin: &[u8]) -> PathBuf {
 }
 
 fn triangle() -> Prim {
-    (
-        4,
-        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-        vec![],
-    )
+    (4, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![])
 }
 
 #[test]
@@ -468,20 +335,14 @@ fn non_finite_node_transforms_name_the_node() {
         &[triangle()],
         json!([{"name": "m", "mesh": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, -1e39, 0, 1]}]),
     );
-    assert_eq!(
-        load_err(&write(&dir, &doc, &bin)),
-        "scene.gltf: node 'm' (#0): transform is not finite"
-    );
+    assert_eq!(load_err(&write(&dir, &doc, &bin)), "scene.gltf: node 'm' (#0): transform is not finite");
     // Finite locally, infinite once composed.
     let (doc, bin) = document(
         &[triangle()],
         json!([{"name": "big", "scale": [1e30, 1e30, 1e30], "children": [1]}, {"name": "bigger", "mesh": 0, "scale": [1e30, 1e30, 1e30]}]),
     );
     let m = load_err(&write(&dir, &doc, &bin));
-    assert!(
-        m.starts_with("scene.gltf: node 'bigger' (#1): world transform is not finite"),
-        "{m}"
-    );
+    assert!(m.starts_with("scene.gltf: node 'bigger' (#1): world transform is not finite"), "{m}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -489,42 +350,20 @@ fn non_finite_node_transforms_name_the_node() {
 fn strips_and_fans_become_triangle_lists() {
     let dir = scratch("strip");
     // A strip zig-zagging along +x in the z = 0 plane: 6 vertices, 4 triangles, all facing +z.
-    let strip: Vec<[f32; 3]> = (0..6)
-        .map(|i| [(i / 2) as f32, 1.0 - (i % 2) as f32, 0.0])
-        .collect();
+    let strip: Vec<[f32; 3]> = (0..6).map(|i| [(i / 2) as f32, 1.0 - (i % 2) as f32, 0.0]).collect();
     // A fan around the origin, counter-clockwise seen from +z: 5 vertices, 3 triangles.
-    let fan = vec![
-        [0.0, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [1.0, 1.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [-1.0, 1.0, 0.0],
-    ];
+    let fan = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [-1.0, 1.0, 0.0]];
     let (doc, bin) = document(
-        &[
-            (5, strip, vec![]),
-            (6, fan.clone(), vec![]),
-            (6, fan, vec![0, 1, 2, 3, 4]),
-        ],
+        &[(5, strip, vec![]), (6, fan.clone(), vec![]), (6, fan, vec![0, 1, 2, 3, 4])],
         json!([{"children": [1, 2, 3]}, {"mesh": 0}, {"mesh": 1}, {"mesh": 2}]),
     );
     let (scene, report) = load(&write(&dir, &doc, &bin)).unwrap();
     assert!(report.skipped_primitives.is_empty());
-    assert_eq!(
-        scene
-            .meshes
-            .iter()
-            .map(|m| m.index_count / 3)
-            .collect::<Vec<_>>(),
-        vec![4, 3, 3]
-    );
+    assert_eq!(scene.meshes.iter().map(|m| m.index_count / 3).collect::<Vec<_>>(), vec![4, 3, 3]);
     for (k, mesh) in scene.meshes.iter().enumerate() {
-        let idx = &scene.indices
-            [mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
+        let idx = &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
         for t in idx.chunks_exact(3) {
-            let p = |i: u32| {
-                Vec3::from_array(scene.vertices[(mesh.vertex_offset + i) as usize].position)
-            };
+            let p = |i: u32| Vec3::from_array(scene.vertices[(mesh.vertex_offset + i) as usize].position);
             let n = (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
             assert!(n.z > 0.0, "mesh {k}: triangle {t:?} faces {n}");
         }
@@ -546,38 +385,20 @@ fn hierarchy_composes_transforms_and_shares_meshes() {
         ]),
     );
     let (scene, _) = load(&write(&dir, &doc, &bin)).unwrap();
-    assert_eq!(
-        scene.meshes.len(),
-        1,
-        "one glTF mesh used three times is one cullgraph mesh"
-    );
+    assert_eq!(scene.meshes.len(), 1, "one glTF mesh used three times is one cullgraph mesh");
     assert_eq!(scene.instances.len(), 3);
     let child = &scene.instances[0].transform;
-    assert!(
-        (child.translation - DVec3::new(12.0, 4.0, 6.0)).length() < 1e-9,
-        "{}",
-        child.translation
-    );
+    assert!((child.translation - DVec3::new(12.0, 4.0, 6.0)).length() < 1e-9, "{}", child.translation);
     let expected = Mat3::from_rotation_y(std::f32::consts::FRAC_PI_2).mul_scalar(2.0);
-    assert!(
-        child.linear.abs_diff_eq(expected, 1e-5),
-        "{:?}",
-        child.linear
-    );
+    assert!(child.linear.abs_diff_eq(expected, 1e-5), "{:?}", child.linear);
     // The child's local +x lands on world -z, scaled by 2.
     assert!((child.linear * Vec3::X - Vec3::new(0.0, 0.0, -2.0)).length() < 1e-5);
     let grandchild = &scene.instances[1].transform;
     // Grandchild at child-local (0, 0, 1): the child maps +z to +x (times 2).
-    assert!(
-        (grandchild.translation - DVec3::new(14.0, 4.0, 6.0)).length() < 1e-5,
-        "{}",
-        grandchild.translation
-    );
+    assert!((grandchild.translation - DVec3::new(14.0, 4.0, 6.0)).length() < 1e-5, "{}", grandchild.translation);
     let sibling = &scene.instances[2].transform;
     assert!((sibling.translation - DVec3::new(10.0, 0.0, 0.0)).length() < 1e-12);
-    assert!(sibling
-        .linear
-        .abs_diff_eq(Mat3::from_diagonal(Vec3::splat(2.0)), 1e-6));
+    assert!(sibling.linear.abs_diff_eq(Mat3::from_diagonal(Vec3::splat(2.0)), 1e-6));
     validate_scene(&scene).unwrap();
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -591,21 +412,11 @@ fn broken_hierarchies_are_refused_without_recursion() {
         json!([{"name": "a", "children": [1, 2]}, {"name": "b", "children": [2]}, {"name": "c", "mesh": 0}]),
     );
     let m = load_err(&write(&dir, &doc, &bin));
-    assert!(
-        m.starts_with("scene.gltf: node 'c' (#2): the node is reached twice"),
-        "{m}"
-    );
+    assert!(m.starts_with("scene.gltf: node 'c' (#2): the node is reached twice"), "{m}");
     // A chain deeper than the limit: an error, not a stack overflow.
     let depth = 5000;
-    let nodes: Vec<serde_json::Value> = (0..depth)
-        .map(|i| {
-            if i + 1 < depth {
-                json!({"children": [i + 1]})
-            } else {
-                json!({"mesh": 0})
-            }
-        })
-        .collect();
+    let nodes: Vec<serde_json::Value> =
+        (0..depth).map(|i| if i + 1 < depth { json!({"children": [i + 1]}) } else { json!({"mesh": 0}) }).collect();
     doc["nodes"] = json!(nodes);
     let m = load_err(&write(&dir, &doc, &bin));
     assert!(m.contains("deeper than"), "{m}");
@@ -620,10 +431,8 @@ fn broken_hierarchies_are_refused_without_recursion() {
 fn non_triangle_primitives_are_reported_not_dropped_silently() {
     let dir = scratch("lines");
     let lines = (1, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], vec![]);
-    let (doc, bin) = document(
-        &[triangle(), lines],
-        json!([{"children": [1, 2]}, {"mesh": 0}, {"name": "wire", "mesh": 1}]),
-    );
+    let (doc, bin) =
+        document(&[triangle(), lines], json!([{"children": [1, 2]}, {"mesh": 0}, {"name": "wire", "mesh": 1}]));
     let (scene, report) = load(&write(&dir, &doc, &bin)).unwrap();
     assert_eq!(scene.instances.len(), 1);
     assert_eq!(
@@ -636,63 +445,36 @@ fn non_triangle_primitives_are_reported_not_dropped_silently() {
 #[test]
 fn bad_buffers_and_accessors_name_the_accessor() {
     let dir = scratch("buffers");
-    let (doc, bin) = document(
-        &[(
-            4,
-            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-            vec![0, 1, 2],
-        )],
-        json!([{"mesh": 0}]),
-    );
+    let (doc, bin) =
+        document(&[(4, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![0, 1, 2])], json!([{"mesh": 0}]));
     // The .bin is shorter than the declared byteLength.
     let m = load_err(&write(&dir, &doc, &bin[..20]));
-    assert!(
-        m.contains("buffer 0 has 20 bytes, the file declares byteLength"),
-        "{m}"
-    );
+    assert!(m.contains("buffer 0 has 20 bytes, the file declares byteLength"), "{m}");
     // An accessor that reaches past its view.
     let mut long = doc.clone();
     long["accessors"][0]["count"] = json!(4);
     let m = load_err(&write(&dir, &long, &bin));
-    assert!(
-        m.contains("POSITION accessor 0") && m.contains("do not fit in buffer view 0"),
-        "{m}"
-    );
+    assert!(m.contains("POSITION accessor 0") && m.contains("do not fit in buffer view 0"), "{m}");
     // A view that reaches past its buffer.
     let mut view = doc.clone();
     view["bufferViews"][1]["byteOffset"] = json!(4000);
     let m = load_err(&write(&dir, &view, &bin));
-    assert!(
-        m.contains("indices accessor 1") && m.contains("exceeds buffer 0"),
-        "{m}"
-    );
+    assert!(m.contains("indices accessor 1") && m.contains("exceeds buffer 0"), "{m}");
     // Wrong component type for positions.
     let mut ty = doc.clone();
     ty["accessors"][0]["componentType"] = json!(5123);
     let m = load_err(&write(&dir, &ty, &bin));
-    assert!(
-        m.contains("POSITION accessor 0: must be VEC3 of FLOAT"),
-        "{m}"
-    );
+    assert!(m.contains("POSITION accessor 0: must be VEC3 of FLOAT"), "{m}");
     // No POSITION.
     let mut nopos = doc.clone();
     nopos["meshes"][0]["primitives"][0]["attributes"] = json!({"NORMAL": 0});
     let m = load_err(&write(&dir, &nopos, &bin));
     assert!(m.contains("attributes[\"POSITION\"]: Missing data"), "{m}");
     // Zero-area triangles.
-    let (flat, flat_bin) = document(
-        &[(
-            4,
-            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
-            vec![],
-        )],
-        json!([{"mesh": 0}]),
-    );
+    let (flat, flat_bin) =
+        document(&[(4, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]], vec![])], json!([{"mesh": 0}]));
     let m = load_err(&write(&dir, &flat, &flat_bin));
-    assert!(
-        m.contains("mesh 'm0' (#0) primitive 0, POSITION accessor 0") && m.contains("zero area"),
-        "{m}"
-    );
+    assert!(m.contains("mesh 'm0' (#0) primitive 0, POSITION accessor 0") && m.contains("zero area"), "{m}");
     // Malformed URI escapes and unknown schemes are errors, not panics.
     let mut uri = doc.clone();
     uri["buffers"][0]["uri"] = json!("geo%FF.bin");
@@ -706,16 +488,7 @@ fn bad_buffers_and_accessors_name_the_accessor() {
 fn truncated_and_garbage_files_fail_cleanly() {
     let dir = scratch("garbage");
     let bytes = std::fs::read(monastery()).unwrap();
-    for cut in [
-        0usize,
-        3,
-        12,
-        20,
-        100,
-        5000,
-        bytes.len() / 2,
-        bytes.len() - 1,
-    ] {
+    for cut in [0usize, 3, 12, 20, 100, 5000, bytes.len() / 2, bytes.len() - 1] {
         let path = dir.join("cut.glb");
         std::fs::write(&path, &bytes[..cut]).unwrap();
         let m = load_err(&path);
@@ -801,16 +574,7 @@ const FUZZ_FIELDS: &[&str] = &[
 
 fn fuzz_seed() -> (serde_json::Value, Vec<u8>) {
     let (mut doc, bin) = document(
-        &[(
-            4,
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [1.0, 1.0, 0.0],
-            ],
-            vec![0, 1, 2, 2, 1, 3],
-        )],
+        &[(4, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]], vec![0, 1, 2, 2, 1, 3])],
         json!([{"mesh": 0, "translation": [1.0, 2.0, 3.0]}]),
     );
     doc["buffers"] = json!([{"byteLength": bin.len()}]);
@@ -859,9 +623,6 @@ fn the_fuzz_seed_document_is_valid() {
     std::fs::write(&path, glb(&doc, &bin)).unwrap();
     let (scene, _) = load(&path).unwrap();
     assert_eq!(scene.instanced_triangles(), 2);
-    assert_eq!(
-        scene.instances[0].transform.translation,
-        DVec3::new(1.0, 2.0, 3.0)
-    );
+    assert_eq!(scene.instances[0].transform.translation, DVec3::new(1.0, 2.0, 3.0));
     let _ = std::fs::remove_dir_all(&dir);
 }

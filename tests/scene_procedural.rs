@@ -10,12 +10,7 @@ use std::collections::{HashMap, HashSet};
 use std::time::Instant;
 
 fn options(instances: Option<usize>, kinds: Option<usize>, seed: u64) -> LoadOptions {
-    LoadOptions {
-        instances,
-        kinds,
-        lights: None,
-        seed,
-    }
+    LoadOptions { instances, kinds, lights: None, seed }
 }
 
 fn gen(name: &str, options: &LoadOptions) -> Scene {
@@ -26,16 +21,8 @@ fn gen(name: &str, options: &LoadOptions) -> Scene {
 
 /// Everything that defines a scene, for equality checks.
 fn fingerprint(s: &Scene) -> (usize, Vec<u8>, Vec<u32>, String) {
-    let instances = format!(
-        "{:?}{:?}{:?}{:?}",
-        s.instances, s.meshes, s.materials, s.lights
-    );
-    (
-        s.instances.len(),
-        bytemuck::cast_slice(&s.vertices).to_vec(),
-        s.indices.clone(),
-        instances,
-    )
+    let instances = format!("{:?}{:?}{:?}{:?}", s.instances, s.meshes, s.materials, s.lights);
+    (s.instances.len(), bytemuck::cast_slice(&s.vertices).to_vec(), s.indices.clone(), instances)
 }
 
 #[test]
@@ -43,16 +30,10 @@ fn generators_are_deterministic() {
     for name in ["builtin:city", "builtin:field"] {
         let a = gen(name, &options(Some(3000), None, 7));
         let b = gen(name, &options(Some(3000), None, 7));
-        assert!(
-            fingerprint(&a) == fingerprint(&b),
-            "{name}: same seed, different scenes"
-        );
+        assert!(fingerprint(&a) == fingerprint(&b), "{name}: same seed, different scenes");
         assert_eq!(a.camera, b.camera);
         let c = gen(name, &options(Some(3000), None, 8));
-        assert!(
-            a.instances != c.instances,
-            "{name}: different seeds, same instances"
-        );
+        assert!(a.instances != c.instances, "{name}: different seeds, same instances");
     }
 }
 
@@ -62,10 +43,7 @@ fn city_instance_counts_are_exact() {
         let scene = gen("builtin:city", &options(Some(n), None, 1));
         assert_eq!(scene.instances.len(), n, "instances = {n}");
     }
-    assert_eq!(
-        gen("city", &LoadOptions::default()).instances.len(),
-        city::DEFAULT_INSTANCES
-    );
+    assert_eq!(gen("city", &LoadOptions::default()).instances.len(), city::DEFAULT_INSTANCES);
 }
 
 #[test]
@@ -73,49 +51,25 @@ fn city_uses_many_mesh_kinds_and_shares_them() {
     let scene = gen("builtin:city", &options(Some(10_000), None, 1));
     let used: HashSet<u32> = scene.instances.iter().map(|i| i.mesh).collect();
     assert!(used.len() >= 16, "only {} mesh kinds used", used.len());
-    assert_eq!(
-        used.len(),
-        scene.meshes.len(),
-        "every city mesh is used at 10k instances"
-    );
+    assert_eq!(used.len(), scene.meshes.len(), "every city mesh is used at 10k instances");
     // Prop kinds (not ground, sidewalk/box or buildings) alone number at least 16.
-    let props = scene.meshes.iter().filter(|m| {
-        !m.name.contains("building") && m.name != "city/ground" && m.name != "city/box"
-    });
+    let props =
+        scene.meshes.iter().filter(|m| !m.name.contains("building") && m.name != "city/ground" && m.name != "city/box");
     assert!(props.count() >= 16);
     // Meshes stay few: instances share them.
     assert!(scene.meshes.len() < 64);
-    let materials: HashSet<u32> = scene
-        .instances
-        .iter()
-        .filter(|i| i.flags & FLAG_OCCLUDER != 0)
-        .map(|i| i.material)
-        .collect();
-    assert!(
-        materials.len() >= 4,
-        "buildings use {} colors",
-        materials.len()
-    );
+    let materials: HashSet<u32> =
+        scene.instances.iter().filter(|i| i.flags & FLAG_OCCLUDER != 0).map(|i| i.material).collect();
+    assert!(materials.len() >= 4, "buildings use {} colors", materials.len());
 }
 
 #[test]
 fn city_buildings_are_occluders() {
     let scene = gen("builtin:city", &options(Some(10_000), None, 3));
-    let occluders: Vec<_> = scene
-        .instances
-        .iter()
-        .filter(|i| i.flags & FLAG_OCCLUDER != 0)
-        .collect();
-    let blocks = scene
-        .instances
-        .iter()
-        .filter(|i| scene.meshes[i.mesh as usize].name == "city/box" && i.flags == 0)
-        .count();
-    assert!(
-        occluders.len() >= blocks,
-        "{} occluders for {blocks} blocks",
-        occluders.len()
-    );
+    let occluders: Vec<_> = scene.instances.iter().filter(|i| i.flags & FLAG_OCCLUDER != 0).collect();
+    let blocks =
+        scene.instances.iter().filter(|i| scene.meshes[i.mesh as usize].name == "city/box" && i.flags == 0).count();
+    assert!(occluders.len() >= blocks, "{} occluders for {blocks} blocks", occluders.len());
     for inst in &occluders {
         assert!(
             scene.meshes[inst.mesh as usize].name.starts_with("city/b"),
@@ -124,10 +78,7 @@ fn city_buildings_are_occluders() {
         );
         let (min, max) = scene.instance_bounds(inst);
         let size = max - min;
-        assert!(
-            size.y >= 8.0 && size.x >= 10.0 && size.z >= 10.0,
-            "building {size}"
-        );
+        assert!(size.y >= 8.0 && size.x >= 10.0 && size.z >= 10.0, "building {size}");
     }
     // Nothing that is not a building is flagged.
     assert!(scene
@@ -167,21 +118,11 @@ fn street_camera_sees_a_street_and_buildings_hide_most_of_the_city() {
     let scene = gen("builtin:city", &options(Some(10_000), None, 1));
     let camera = scene.camera.clone().expect("the city suggests a camera");
     camera.validate().unwrap();
-    assert!(
-        camera.eye.y > 1.0 && camera.eye.y < 3.0,
-        "eye at {}",
-        camera.eye
-    );
-    let occluders: Vec<(DVec3, DVec3)> = scene
-        .instances
-        .iter()
-        .filter(|i| i.flags & FLAG_OCCLUDER != 0)
-        .map(|i| scene.instance_bounds(i))
-        .collect();
+    assert!(camera.eye.y > 1.0 && camera.eye.y < 3.0, "eye at {}", camera.eye);
+    let occluders: Vec<(DVec3, DVec3)> =
+        scene.instances.iter().filter(|i| i.flags & FLAG_OCCLUDER != 0).map(|i| scene.instance_bounds(i)).collect();
     // The eye stands in the open, not inside a building.
-    assert!(!occluders
-        .iter()
-        .any(|(min, max)| camera.eye.cmpge(*min).all() && camera.eye.cmple(*max).all()));
+    assert!(!occluders.iter().any(|(min, max)| camera.eye.cmpge(*min).all() && camera.eye.cmple(*max).all()));
     // Most instances' centres are behind some building as seen from the eye.
     let mut hidden = 0;
     let mut total = 0;
@@ -192,17 +133,11 @@ fn street_camera_sees_a_street_and_buildings_hide_most_of_the_city() {
         let (min, max) = scene.instance_bounds(inst);
         let center = (min + max) * 0.5;
         total += 1;
-        if occluders
-            .iter()
-            .any(|(lo, hi)| segment_hits_box(camera.eye, center, *lo, *hi))
-        {
+        if occluders.iter().any(|(lo, hi)| segment_hits_box(camera.eye, center, *lo, *hi)) {
             hidden += 1;
         }
     }
-    assert!(
-        hidden * 10 >= total * 7,
-        "only {hidden} of {total} sampled instances are hidden from the street camera"
-    );
+    assert!(hidden * 10 >= total * 7, "only {hidden} of {total} sampled instances are hidden from the street camera");
 }
 
 #[test]
@@ -210,10 +145,7 @@ fn city_bounds_scale_with_the_instance_count() {
     // Bounds of everything but the ground plane (instance 0, which has a margin).
     let city_bounds = |n: usize| {
         let scene = gen("builtin:city", &options(Some(n), None, 1));
-        assert_eq!(
-            scene.meshes[scene.instances[0].mesh as usize].name,
-            "city/ground"
-        );
+        assert_eq!(scene.meshes[scene.instances[0].mesh as usize].name, "city/ground");
         let all = scene.world_bounds().unwrap();
         assert!(all.0.is_finite() && all.1.is_finite());
         scene.instances[1..]
@@ -233,10 +165,7 @@ fn city_bounds_scale_with_the_instance_count() {
     assert!((9.0..=11.5).contains(&ratio), "width ratio {ratio}");
     // Density: about 40 instances per block of BLOCK + STREET meters.
     let per_block = 100_000.0 / (width(large) / (city::BLOCK + city::STREET)).powi(2);
-    assert!(
-        per_block > 30.0 && per_block < 50.0,
-        "{per_block} per block"
-    );
+    assert!(per_block > 30.0 && per_block < 50.0, "{per_block} per block");
 }
 
 #[test]
@@ -251,42 +180,16 @@ fn city_lights_sit_at_street_lamps() {
         .collect();
     assert!(lamps.len() > 100);
     for light in &scene.lights {
-        assert!(
-            light.position.y > 4.0 && light.position.y < 7.0,
-            "{}",
-            light.position
-        );
-        let nearest = lamps
-            .iter()
-            .map(|p| (p.x - light.position.x).hypot(p.z - light.position.z))
-            .fold(f64::MAX, f64::min);
-        assert!(
-            nearest < 1.5,
-            "light {} is {nearest} m from the nearest lamp",
-            light.position
-        );
-        assert!(
-            light.color.x > light.color.z,
-            "lamp light should be warm: {}",
-            light.color
-        );
+        assert!(light.position.y > 4.0 && light.position.y < 7.0, "{}", light.position);
+        let nearest =
+            lamps.iter().map(|p| (p.x - light.position.x).hypot(p.z - light.position.z)).fold(f64::MAX, f64::min);
+        assert!(nearest < 1.5, "light {} is {nearest} m from the nearest lamp", light.position);
+        assert!(light.color.x > light.color.z, "lamp light should be warm: {}", light.color);
     }
-    let none = gen(
-        "builtin:city",
-        &LoadOptions {
-            lights: Some(0),
-            ..options(Some(1000), None, 1)
-        },
-    );
+    let none = gen("builtin:city", &LoadOptions { lights: Some(0), ..options(Some(1000), None, 1) });
     assert!(none.lights.is_empty());
     // More lights than lamps: topped up over the city.
-    let many = gen(
-        "builtin:city",
-        &LoadOptions {
-            lights: Some(500),
-            ..options(Some(1000), None, 1)
-        },
-    );
+    let many = gen("builtin:city", &LoadOptions { lights: Some(500), ..options(Some(1000), None, 1) });
     assert_eq!(many.lights.len(), 500);
     // The sun is kept.
     assert_eq!(scene.sun, Default::default());
@@ -299,10 +202,7 @@ fn city_of_a_million_instances_is_fast() {
     let elapsed = start.elapsed();
     assert_eq!(scene.instances.len(), 1_000_000);
     validate_scene(&scene).unwrap();
-    eprintln!(
-        "builtin:city with 10^6 instances: {elapsed:?} ({} meshes)",
-        scene.meshes.len()
-    );
+    eprintln!("builtin:city with 10^6 instances: {elapsed:?} ({} meshes)", scene.meshes.len());
     // Debug build of this crate; a release build is several times faster.
     assert!(elapsed.as_secs_f64() < 10.0, "took {elapsed:?}");
 }
@@ -320,28 +220,16 @@ fn field_counts_and_kinds() {
     assert_eq!(used.len(), 1000);
     let mut seen = HashMap::new();
     for (k, m) in scene.meshes.iter().enumerate() {
-        let vertices =
-            &scene.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
+        let vertices = &scene.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
         let key: Vec<u8> = bytemuck::cast_slice(vertices).to_vec();
         if let Some(other) = seen.insert(key, k) {
             panic!("kinds {other} and {k} are the same mesh");
         }
     }
     // Mirrored instances (negative determinant) are among them, and some are tilted.
-    let mirrored = scene
-        .instances
-        .iter()
-        .filter(|i| i.transform.linear.determinant() < 0.0)
-        .count();
-    assert!(
-        (4321 / 60..=4321 / 40).contains(&mirrored),
-        "{mirrored} mirrored"
-    );
-    let tilted = scene
-        .instances
-        .iter()
-        .filter(|i| (i.transform.linear.y_axis.normalize().y) < 0.99)
-        .count();
+    let mirrored = scene.instances.iter().filter(|i| i.transform.linear.determinant() < 0.0).count();
+    assert!((4321 / 60..=4321 / 40).contains(&mirrored), "{mirrored} mirrored");
+    let tilted = scene.instances.iter().filter(|i| (i.transform.linear.y_axis.normalize().y) < 0.99).count();
     assert!(tilted > 4321 / 10);
     let (min, max) = scene.world_bounds().unwrap();
     assert!(min.is_finite() && max.is_finite() && (max - min).x > 100.0 && (max - min).x < 1000.0);
@@ -353,59 +241,32 @@ fn field_supports_many_kinds() {
     let start = Instant::now();
     let scene = gen("builtin:field", &options(Some(20_000), Some(10_000), 2));
     assert_eq!(scene.meshes.len(), 10_000);
-    let families: HashSet<&str> = scene
-        .meshes
-        .iter()
-        .map(|m| m.name.split('#').next().unwrap())
-        .collect();
+    let families: HashSet<&str> = scene.meshes.iter().map(|m| m.name.split('#').next().unwrap()).collect();
     assert_eq!(families.len(), field::FAMILIES);
-    eprintln!(
-        "builtin:field with 10^4 kinds: {:?}, {} triangles",
-        start.elapsed(),
-        scene.indices.len() / 3
-    );
+    eprintln!("builtin:field with 10^4 kinds: {:?}, {} triangles", start.elapsed(), scene.indices.len() / 3);
 }
 
 #[test]
 fn absurd_parameters_are_refused_by_name() {
     let cases: [(&str, LoadOptions, &str); 7] = [
         ("city", options(Some(0), None, 1), "instances = 0"),
-        (
-            "city",
-            options(Some(50_000_001), None, 1),
-            "instances = 50000001",
-        ),
+        ("city", options(Some(50_000_001), None, 1), "instances = 50000001"),
         ("field", options(Some(0), None, 1), "instances = 0"),
         ("field", options(None, Some(0), 1), "kinds = 0"),
         ("field", options(None, Some(100_001), 1), "kinds = 100001"),
         ("field", options(Some(usize::MAX), None, 1), "instances"),
-        (
-            "city",
-            LoadOptions {
-                lights: Some(usize::MAX),
-                ..Default::default()
-            },
-            "lights",
-        ),
+        ("city", LoadOptions { lights: Some(usize::MAX), ..Default::default() }, "lights"),
     ];
     for (name, opts, fragment) in cases {
         match procedural::generate(name, &opts) {
             Err(SceneError::Builtin(m)) => {
-                assert!(
-                    m.contains(fragment) && m.contains(&format!("builtin:{name}")),
-                    "{m}"
-                )
+                assert!(m.contains(fragment) && m.contains(&format!("builtin:{name}")), "{m}")
             }
             other => panic!("{name} {opts:?}: expected a Builtin error, got {other:?}"),
         }
     }
-    let e = procedural::generate("x", &LoadOptions::default())
-        .unwrap_err()
-        .to_string();
-    assert_eq!(
-        e,
-        "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field"
-    );
+    let e = procedural::generate("x", &LoadOptions::default()).unwrap_err().to_string();
+    assert_eq!(e, "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field");
 }
 
 #[test]
@@ -414,14 +275,7 @@ fn scene_source_loads_builtins_end_to_end() {
     let scene = source.load(&options(Some(2000), None, 9)).unwrap();
     assert_eq!(scene.instances.len(), 2000);
     let source: SceneSource = "builtin:field".parse().unwrap();
-    assert_eq!(
-        source
-            .load(&options(Some(300), Some(30), 9))
-            .unwrap()
-            .meshes
-            .len(),
-        30
-    );
+    assert_eq!(source.load(&options(Some(300), Some(30), 9)).unwrap().meshes.len(), 30);
     let source: SceneSource = "builtin:nothing".parse().unwrap();
     assert!(source.load(&LoadOptions::default()).is_err());
 }

@@ -35,6 +35,12 @@ struct FrameConstants {
     vec4 ambient;          // rgb: sky ambient, a: exposure
 };
 
+// FrameConstants.size_lights.w: what the lighting pass shows.
+#define DEBUG_VIEW_NONE 0u
+#define DEBUG_VIEW_NORMALS 1u
+#define DEBUG_VIEW_ALBEDO 2u
+#define DEBUG_VIEW_DEPTH 3u
+
 // Point light relative to the eye: xyz position, w range; rgb color.
 struct GpuPointLight {
     vec4 position_range;

@@ -51,5 +51,12 @@ void main() {
         color = radiance;
     }
     color = tonemap_aces(color * frame.ambient.a);
+    uint debug_view = frame.size_lights.w;
+    if (debug_view != DEBUG_VIEW_NONE && depth > 0.0) {
+        if (debug_view == DEBUG_VIEW_NORMALS) color = normalize(texelFetch(normal_roughness_tex, pixel, 0).xyz) * 0.5 + 0.5;
+        if (debug_view == DEBUG_VIEW_ALBEDO) color = texelFetch(albedo_metallic_tex, pixel, 0).rgb;
+        if (debug_view == DEBUG_VIEW_DEPTH) color = vec3(fract(log2(depth) * 0.25));
+        color = pow(color, vec3(2.2)); // shown as-is after the sRGB encode below
+    }
     imageStore(out_color, pixel, vec4(linear_to_srgb(color), 1.0));
 }

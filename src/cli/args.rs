@@ -2,6 +2,7 @@
 
 use clap::{Args, Parser, Subcommand};
 use glam::DVec3;
+use cullgraph::render::gpu_types::DebugView;
 use std::path::PathBuf;
 
 /// GPU-driven culling and deferred rendering of huge scenes, through Vulkan.
@@ -17,7 +18,7 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Render a scene headlessly and write a PNG and (optionally) JSON stats.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// List the Vulkan devices the loader sees (index: name (type, API version)).
     Devices,
 }
@@ -67,6 +68,9 @@ pub struct RenderArgs {
     /// Vulkan device by name substring or index (see `cullgraph devices`); env CULLGRAPH_DEVICE.
     #[arg(long, value_name = "NAME|INDEX")]
     pub device: Option<String>,
+    /// Show a G-buffer channel instead of the lit image.
+    #[arg(long, value_enum, default_value_t = DebugView::None)]
+    pub debug_view: DebugView,
     /// Enable the Khronos validation layer with synchronization validation.
     #[arg(long)]
     pub validation: bool,

@@ -40,7 +40,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         meshes: scene.meshes.len() as u32,
         frames: Vec::new(),
     };
-    let mut renderer = Renderer::new(&ctx, &shaders, scene, RenderSettings { width, height })?;
+    let mut renderer = Renderer::new(&ctx, &shaders, scene, RenderSettings { width, height, debug_view: args.debug_view })?;
 
     let bar = progress(Some(args.frames as u64), "rendering");
     for frame in 0..args.frames {
@@ -63,7 +63,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|source| Error::Io { path: dir.display().to_string(), source })?;
         }
-        std::fs::write(path, stats.to_json()).map_err(|source| Error::Io { path: path.display().to_string(), source })?;
+        std::fs::write(path, stats.to_json())
+            .map_err(|source| Error::Io { path: path.display().to_string(), source })?;
     }
     let last = stats.frames.last().cloned().unwrap_or_default();
     println!(

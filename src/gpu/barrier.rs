@@ -16,8 +16,11 @@ pub struct Access {
 
 impl Access {
     /// Nothing happened yet: contents are undefined.
-    pub const NONE: Access =
-        Access { stage: vk::PipelineStageFlags2::NONE, access: vk::AccessFlags2::NONE, layout: vk::ImageLayout::UNDEFINED };
+    pub const NONE: Access = Access {
+        stage: vk::PipelineStageFlags2::NONE,
+        access: vk::AccessFlags2::NONE,
+        layout: vk::ImageLayout::UNDEFINED,
+    };
     /// Transfer destination.
     pub const TRANSFER_WRITE: Access = Access {
         stage: vk::PipelineStageFlags2::ALL_TRANSFER,
@@ -41,7 +44,8 @@ impl Access {
     /// Depth attachment tested and written by a draw.
     pub const DEPTH_ATTACHMENT: Access = Access {
         stage: vk::PipelineStageFlags2::from_raw(
-            vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS.as_raw() | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS.as_raw(),
+            vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS.as_raw()
+                | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS.as_raw(),
         ),
         access: vk::AccessFlags2::from_raw(
             vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE.as_raw()
@@ -86,8 +90,11 @@ impl Access {
         layout: vk::ImageLayout::UNDEFINED,
     };
     /// Read by the host after the GPU is done.
-    pub const HOST_READ: Access =
-        Access { stage: vk::PipelineStageFlags2::HOST, access: vk::AccessFlags2::HOST_READ, layout: vk::ImageLayout::UNDEFINED };
+    pub const HOST_READ: Access = Access {
+        stage: vk::PipelineStageFlags2::HOST,
+        access: vk::AccessFlags2::HOST_READ,
+        layout: vk::ImageLayout::UNDEFINED,
+    };
 }
 
 /// An image barrier moving `image` (all mips) from `before` to `after`.

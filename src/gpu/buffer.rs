@@ -47,10 +47,8 @@ impl Buffer {
         let device = &shared.device;
         // Vulkan forbids size 0; an empty scene array still needs a bindable buffer.
         let alloc_size = desc.size.max(16);
-        let info = vk::BufferCreateInfo::default()
-            .size(alloc_size)
-            .usage(desc.usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let info =
+            vk::BufferCreateInfo::default().size(alloc_size).usage(desc.usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: valid device and create info.
         let handle = unsafe { device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         // SAFETY: handle was just created.
@@ -72,14 +70,21 @@ impl Buffer {
         };
         // SAFETY: memory comes from a compatible allocation of sufficient size.
         let bound = unsafe { device.bind_buffer_memory(handle, allocation.memory(), allocation.offset()) };
-        let buffer = Self { shared: shared.clone(), handle, allocation: Some(allocation), size: desc.size, name: desc.name.into() };
+        let buffer = Self {
+            shared: shared.clone(),
+            handle,
+            allocation: Some(allocation),
+            size: desc.size,
+            name: desc.name.into(),
+        };
         bound.vk("vkBindBufferMemory")?;
         Ok(buffer)
     }
 
     /// A host-visible buffer filled with `data` (for small, per-frame or upload data).
     pub fn with_data(ctx: &GpuContext, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> GpuResult<Self> {
-        let mut buffer = Self::new(ctx, &BufferDesc { name, size: data.len() as u64, usage, location: MemoryLocation::CpuToGpu })?;
+        let mut buffer =
+            Self::new(ctx, &BufferDesc { name, size: data.len() as u64, usage, location: MemoryLocation::CpuToGpu })?;
         buffer.write_bytes(0, data)?;
         Ok(buffer)
     }
@@ -121,7 +126,9 @@ impl Buffer {
     pub fn read_bytes(&self) -> GpuResult<&[u8]> {
         match self.allocation.as_ref().and_then(|a| a.mapped_slice()) {
             Some(slice) => Ok(&slice[..self.size as usize]),
-            None => Err(GpuError::InvalidResource { name: self.name.clone(), reason: "buffer is not host-visible".into() }),
+            None => {
+                Err(GpuError::InvalidResource { name: self.name.clone(), reason: "buffer is not host-visible".into() })
+            }
         }
     }
 

@@ -154,7 +154,18 @@ impl GpuContext {
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
         let owned = OwnedParts { messenger, _log_anchor: log };
         let validation = (*owned._log_anchor).clone();
-        Self::assemble(entry, instance, chosen.handle, device, queue_family, queue, None, options.validation, validation, Some(owned))
+        Self::assemble(
+            entry,
+            instance,
+            chosen.handle,
+            device,
+            queue_family,
+            queue,
+            None,
+            options.validation,
+            validation,
+            Some(owned),
+        )
     }
 
     /// Wraps a host engine's instance and device; creates no instance or device and never destroys them.
@@ -274,8 +285,7 @@ impl GpuContext {
         let queue = self.shared.queue.lock().unwrap_or_else(|p| p.into_inner());
         // SAFETY: the queue is externally synchronised by the mutex; the caller keeps the
         // command buffers and semaphores alive until the fence signals.
-        unsafe { self.shared.device.queue_submit2(*queue, std::slice::from_ref(submit), fence) }
-            .vk("vkQueueSubmit2")
+        unsafe { self.shared.device.queue_submit2(*queue, std::slice::from_ref(submit), fence) }.vk("vkQueueSubmit2")
     }
 
     /// Records commands with `record`, submits them and waits until the GPU has finished.
@@ -296,15 +306,15 @@ impl GpuContext {
                     .level(vk::CommandBufferLevel::PRIMARY)
                     .command_buffer_count(1);
                 let cmd = device.allocate_command_buffers(&alloc).vk("vkAllocateCommandBuffers")?[0];
-                let begin =
-                    vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+                let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
                 device.begin_command_buffer(cmd, &begin).vk("vkBeginCommandBuffer")?;
                 let value = record(cmd)?;
                 device.end_command_buffer(cmd).vk("vkEndCommandBuffer")?;
                 let fence = device.create_fence(&vk::FenceCreateInfo::default(), None).vk("vkCreateFence")?;
                 let cmd_info = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
                 let submitted = self.submit(&vk::SubmitInfo2::default().command_buffer_infos(&cmd_info), fence);
-                let waited = submitted.and_then(|_| device.wait_for_fences(&[fence], true, u64::MAX).vk("vkWaitForFences"));
+                let waited =
+                    submitted.and_then(|_| device.wait_for_fences(&[fence], true, u64::MAX).vk("vkWaitForFences"));
                 device.destroy_fence(fence, None);
                 waited?;
                 Ok(value)
@@ -386,8 +396,8 @@ fn create_instance(
         return Err(GpuError::ValidationLayerMissing);
     }
     // SAFETY: querying the loader.
-    let exts = unsafe { entry.enumerate_instance_extension_properties(None) }
-        .vk("vkEnumerateInstanceExtensionProperties")?;
+    let exts =
+        unsafe { entry.enumerate_instance_extension_properties(None) }.vk("vkEnumerateInstanceExtensionProperties")?;
     let has_ext = |name: &CStr| exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name));
     let debug_utils = has_ext(ash::ext::debug_utils::NAME) || options.validation;
 

@@ -23,9 +23,7 @@ pub enum DeviceSelector {
 impl DeviceSelector {
     /// `explicit` if given, otherwise the [`DEVICE_ENV`] variable, otherwise [`DeviceSelector::Auto`].
     pub fn or_from_env(explicit: Option<DeviceSelector>) -> DeviceSelector {
-        explicit
-            .or_else(|| std::env::var(DEVICE_ENV).ok().and_then(|v| v.parse().ok()))
-            .unwrap_or_default()
+        explicit.or_else(|| std::env::var(DEVICE_ENV).ok().and_then(|v| v.parse().ok())).unwrap_or_default()
     }
 }
 
@@ -95,10 +93,7 @@ pub fn enumerate(instance: &ash::Instance) -> GpuResult<Vec<DeviceInfo>> {
             let props = unsafe { instance.get_physical_device_properties(handle) };
             DeviceInfo {
                 index,
-                name: props
-                    .device_name_as_c_str()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_default(),
+                name: props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
                 kind: props.device_type,
                 api_version: props.api_version,
                 handle,
@@ -116,14 +111,12 @@ pub fn select(devices: &[DeviceInfo], selector: &DeviceSelector) -> GpuResult<De
             let n = n.to_lowercase();
             devices.iter().find(|d| d.name.to_lowercase().contains(&n))
         }
-        DeviceSelector::Auto => devices
-            .iter()
-            .filter(|d| d.api_version >= vk::API_VERSION_1_3)
-            .min_by_key(|d| preference(d.kind)),
+        DeviceSelector::Auto => {
+            devices.iter().filter(|d| d.api_version >= vk::API_VERSION_1_3).min_by_key(|d| preference(d.kind))
+        }
     };
-    let chosen = chosen.ok_or_else(|| {
-        GpuError::NoDevice(format!("no device matches {selector}; devices: [{}]", listing()))
-    })?;
+    let chosen =
+        chosen.ok_or_else(|| GpuError::NoDevice(format!("no device matches {selector}; devices: [{}]", listing())))?;
     if chosen.api_version < vk::API_VERSION_1_3 {
         return Err(GpuError::NoDevice(format!("{chosen} does not support Vulkan 1.3")));
     }
@@ -146,7 +139,13 @@ mod tests {
     use super::*;
 
     fn dev(index: usize, name: &str, kind: vk::PhysicalDeviceType) -> DeviceInfo {
-        DeviceInfo { index, name: name.into(), kind, api_version: vk::API_VERSION_1_3, handle: vk::PhysicalDevice::null() }
+        DeviceInfo {
+            index,
+            name: name.into(),
+            kind,
+            api_version: vk::API_VERSION_1_3,
+            handle: vk::PhysicalDevice::null(),
+        }
     }
 
     #[test]

@@ -87,19 +87,12 @@ impl RequiredFeatures {
         let mut v11 = vk::PhysicalDeviceVulkan11Features::default();
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
         let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
-        let mut features2 = vk::PhysicalDeviceFeatures2::default()
-            .push_next(&mut v11)
-            .push_next(&mut v12)
-            .push_next(&mut v13);
+        let mut features2 =
+            vk::PhysicalDeviceFeatures2::default().push_next(&mut v11).push_next(&mut v12).push_next(&mut v13);
         // SAFETY: valid instance and physical device; the chain lives on this stack frame.
         unsafe { instance.get_physical_device_features2(physical_device, &mut features2) };
         let core = features2.features;
-        Self {
-            core,
-            v11: strip(v11),
-            v12: strip(v12),
-            v13: strip(v13),
-        }
+        Self { core, v11: strip(v11), v12: strip(v12), v13: strip(v13) }
     }
 
     /// Chains the 1.1/1.2/1.3 structs into `info`; the core struct goes into `features2`.

@@ -115,7 +115,8 @@ impl Image {
         };
         let allocation = image.allocation.as_ref().expect("set above");
         // SAFETY: memory comes from a compatible allocation.
-        unsafe { device.bind_image_memory(handle, allocation.memory(), allocation.offset()) }.vk("vkBindImageMemory")?;
+        unsafe { device.bind_image_memory(handle, allocation.memory(), allocation.offset()) }
+            .vk("vkBindImageMemory")?;
         image.view = image.create_view(0, desc.mip_levels)?;
         if desc.mip_levels > 1 {
             for level in 0..desc.mip_levels {

@@ -93,11 +93,16 @@ impl Pipeline {
                 return Err(e);
             }
         };
-        let mut stage_infos =
-            vec![vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs.0).name(c"main")];
+        let mut stage_infos = vec![vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(vs.0)
+            .name(c"main")];
         if let Some(fs) = &fs {
             stage_infos.push(
-                vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs.0).name(c"main"),
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::FRAGMENT)
+                    .module(fs.0)
+                    .name(c"main"),
             );
         }
         let bindings = [vk::VertexInputBindingDescription::default()
@@ -108,7 +113,11 @@ impl Pipeline {
             .vertex_attributes
             .iter()
             .map(|&(location, format, offset)| {
-                vk::VertexInputAttributeDescription::default().location(location).binding(0).format(format).offset(offset)
+                vk::VertexInputAttributeDescription::default()
+                    .location(location)
+                    .binding(0)
+                    .format(format)
+                    .offset(offset)
             })
             .collect();
         let vertex_input = if desc.vertex_stride > 0 {
@@ -208,10 +217,11 @@ impl Pipeline {
         let mut image_infos = Vec::with_capacity(binds.len());
         for b in binds {
             match *b {
-                Bind::Buffer(_, buffer) => buffer_infos.push([vk::DescriptorBufferInfo::default().buffer(buffer).range(vk::WHOLE_SIZE)]),
-                Bind::StorageImage(_, view) => {
-                    image_infos.push([vk::DescriptorImageInfo::default().image_view(view).image_layout(vk::ImageLayout::GENERAL)])
+                Bind::Buffer(_, buffer) => {
+                    buffer_infos.push([vk::DescriptorBufferInfo::default().buffer(buffer).range(vk::WHOLE_SIZE)])
                 }
+                Bind::StorageImage(_, view) => image_infos
+                    .push([vk::DescriptorImageInfo::default().image_view(view).image_layout(vk::ImageLayout::GENERAL)]),
                 Bind::Sampled(_, view, sampler, layout) => image_infos
                     .push([vk::DescriptorImageInfo::default().image_view(view).sampler(sampler).image_layout(layout)]),
             }
@@ -248,9 +258,7 @@ impl Pipeline {
     /// Sets push constants from a plain-old-data value.
     pub fn push_constants<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, value: &T) {
         // SAFETY: cmd recording; the range is covered by the layout (sized from reflection).
-        unsafe {
-            self.shared.device.cmd_push_constants(cmd, self.layout, self.stages, 0, bytemuck::bytes_of(value))
-        };
+        unsafe { self.shared.device.cmd_push_constants(cmd, self.layout, self.stages, 0, bytemuck::bytes_of(value)) };
     }
 }
 

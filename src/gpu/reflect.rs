@@ -63,16 +63,23 @@ pub fn reflect(spirv: &[u32]) -> Result<ShaderInterface, ReflectError> {
         .combine_img_samplers(true)
         .reflect()
         .map_err(|e| ReflectError::Parse(e.to_string()))?;
-    let entry = entries.into_iter().find(|e| e.name == "main").ok_or_else(|| ReflectError::Parse("no entry point 'main'".into()))?;
+    let entry = entries
+        .into_iter()
+        .find(|e| e.name == "main")
+        .ok_or_else(|| ReflectError::Parse("no entry point 'main'".into()))?;
     let mut out = ShaderInterface::default();
     for var in &entry.vars {
         match var {
             Variable::Descriptor { name, desc_bind, desc_ty, nbind, .. } => {
                 if desc_bind.set() != 0 {
-                    return Err(ReflectError::WrongSet { name: name.clone().unwrap_or_default(), set: desc_bind.set() });
+                    return Err(ReflectError::WrongSet {
+                        name: name.clone().unwrap_or_default(),
+                        set: desc_bind.set(),
+                    });
                 }
                 let (kind, writes) = descriptor_kind(desc_ty);
-                out.bindings.insert(desc_bind.bind(), BindingInfo { name: name.clone(), kind, count: (*nbind).max(1), writes });
+                out.bindings
+                    .insert(desc_bind.bind(), BindingInfo { name: name.clone(), kind, count: (*nbind).max(1), writes });
             }
             Variable::PushConstant { ty, .. } => {
                 out.push_constant_bytes = ty.nbyte().unwrap_or(0) as u32;
@@ -82,10 +89,8 @@ pub fn reflect(spirv: &[u32]) -> Result<ShaderInterface, ReflectError> {
     }
     for mode in &entry.exec_modes {
         // SPIR-V 1.6 output uses LocalSizeId (constant ids); older output LocalSize (literals).
-        let is_local_size = matches!(
-            mode.exec_mode,
-            spirq::spirv::ExecutionMode::LocalSize | spirq::spirv::ExecutionMode::LocalSizeId
-        );
+        let is_local_size =
+            matches!(mode.exec_mode, spirq::spirv::ExecutionMode::LocalSize | spirq::spirv::ExecutionMode::LocalSizeId);
         if is_local_size && mode.operands.len() == 3 {
             let v: Vec<u32> = mode
                 .operands

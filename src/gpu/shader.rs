@@ -81,7 +81,9 @@ impl ShaderRoot {
 
     fn read(&self, rel: &str) -> Option<String> {
         match self {
-            ShaderRoot::Embedded => embedded::EMBEDDED_SHADERS.iter().find(|(p, _)| *p == rel).map(|(_, s)| s.to_string()),
+            ShaderRoot::Embedded => {
+                embedded::EMBEDDED_SHADERS.iter().find(|(p, _)| *p == rel).map(|(_, s)| s.to_string())
+            }
             ShaderRoot::Directory(dir) => std::fs::read_to_string(dir.join(rel)).ok(),
         }
     }
@@ -140,7 +142,8 @@ impl ShaderCompiler {
             options.add_macro_definition(k, Some(v));
         }
         let root = self.root.clone();
-        options.set_include_callback(move |requested, kind, from, _depth| resolve_include(&root, requested, kind, from));
+        options
+            .set_include_callback(move |requested, kind, from, _depth| resolve_include(&root, requested, kind, from));
         let result = self.compiler.compile_into_spirv(source, kind, name, "main", Some(&options));
         let artifact = match result {
             Ok(a) => a,
@@ -221,7 +224,12 @@ fn parse_diagnostics(name: &str, text: &str) -> Vec<Diagnostic> {
                 Some((f, l)) if l.chars().all(|c| c.is_ascii_digit()) && !l.is_empty() => (f, l.parse().unwrap_or(0)),
                 _ => (location, 0),
             };
-            Some(Diagnostic { file: file.into(), line: line_no, severity: sev.to_string(), message: message.trim().into() })
+            Some(Diagnostic {
+                file: file.into(),
+                line: line_no,
+                severity: sev.to_string(),
+                message: message.trim().into(),
+            })
         });
         match parsed {
             Some(d) => out.push(d),

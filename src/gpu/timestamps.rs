@@ -70,7 +70,12 @@ impl GpuTimer {
         if self.enabled && index * 2 + 1 < self.capacity {
             // SAFETY: query index within the pool, reset this frame.
             unsafe {
-                self.shared.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, index * 2)
+                self.shared.device.cmd_write_timestamp2(
+                    cmd,
+                    vk::PipelineStageFlags2::ALL_COMMANDS,
+                    self.pool,
+                    index * 2,
+                )
             };
         }
     }
@@ -81,7 +86,12 @@ impl GpuTimer {
         if self.enabled && index * 2 + 1 < self.capacity {
             // SAFETY: as in begin.
             unsafe {
-                self.shared.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, index * 2 + 1)
+                self.shared.device.cmd_write_timestamp2(
+                    cmd,
+                    vk::PipelineStageFlags2::ALL_COMMANDS,
+                    self.pool,
+                    index * 2 + 1,
+                )
             };
         }
     }

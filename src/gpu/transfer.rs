@@ -30,10 +30,16 @@ impl UploadBatch {
         let size = data.len() as u64;
         let dst = Buffer::new(
             ctx,
-            &BufferDesc { name, size, usage: usage | vk::BufferUsageFlags::TRANSFER_DST, location: MemoryLocation::GpuOnly },
+            &BufferDesc {
+                name,
+                size,
+                usage: usage | vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuOnly,
+            },
         )?;
         if size > 0 {
-            let staging = Buffer::with_data(ctx, &format!("{name} (staging)"), vk::BufferUsageFlags::TRANSFER_SRC, data)?;
+            let staging =
+                Buffer::with_data(ctx, &format!("{name} (staging)"), vk::BufferUsageFlags::TRANSFER_SRC, data)?;
             self.copies.push((staging, dst.handle(), size));
         }
         Ok(dst)
@@ -63,7 +69,9 @@ impl UploadBatch {
         }
         let after = Access {
             stage: vk::PipelineStageFlags2::ALL_COMMANDS,
-            access: vk::AccessFlags2::from_raw(vk::AccessFlags2::MEMORY_READ.as_raw() | vk::AccessFlags2::MEMORY_WRITE.as_raw()),
+            access: vk::AccessFlags2::from_raw(
+                vk::AccessFlags2::MEMORY_READ.as_raw() | vk::AccessFlags2::MEMORY_WRITE.as_raw(),
+            ),
             layout: vk::ImageLayout::UNDEFINED,
         };
         cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, after)], &[]);
@@ -125,7 +133,13 @@ pub fn record_image_to_buffer(ctx: &GpuContext, cmd: vk::CommandBuffer, image: &
         .image_extent(vk::Extent3D { width: image.extent().width, height: image.extent().height, depth: 1 });
     // SAFETY: image in TRANSFER_SRC layout, dst large enough (caller contract).
     unsafe {
-        device.cmd_copy_image_to_buffer(cmd, image.handle(), vk::ImageLayout::TRANSFER_SRC_OPTIMAL, dst.handle(), &[region])
+        device.cmd_copy_image_to_buffer(
+            cmd,
+            image.handle(),
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            dst.handle(),
+            &[region],
+        )
     };
     cmd_barriers(
         device,

@@ -48,8 +48,7 @@ impl ValidationLog {
 /// Severities that count as a validation failure.
 pub(crate) const COUNTED_SEVERITIES: vk::DebugUtilsMessageSeverityFlagsEXT =
     vk::DebugUtilsMessageSeverityFlagsEXT::from_raw(
-        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING.as_raw()
-            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR.as_raw(),
+        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING.as_raw() | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR.as_raw(),
     );
 
 /// Builds the messenger description whose callback appends to `log`.

@@ -53,7 +53,14 @@ impl GbufferPass {
     }
 
     /// Records the pass. The targets must be in attachment layouts (see [`crate::gpu::Access`]).
-    pub fn record(&self, ctx: &GpuContext, cmd: vk::CommandBuffer, scene: &GpuScene, frame: &Buffer, targets: &GbufferTargets<'_>) {
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        cmd: vk::CommandBuffer,
+        scene: &GpuScene,
+        frame: &Buffer,
+        targets: &GbufferTargets<'_>,
+    ) {
         let device = ctx.device();
         let extent = targets.depth.extent();
         let color = |image: &Image| {

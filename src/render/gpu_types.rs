@@ -53,7 +53,12 @@ pub struct GpuMaterial {
 
 impl From<&Material> for GpuMaterial {
     fn from(m: &Material) -> Self {
-        Self { albedo: m.albedo.to_array(), roughness: m.roughness.clamp(0.0, 1.0), metallic: m.metallic.clamp(0.0, 1.0), pad: [0.0; 3] }
+        Self {
+            albedo: m.albedo.to_array(),
+            roughness: m.roughness.clamp(0.0, 1.0),
+            metallic: m.metallic.clamp(0.0, 1.0),
+            pad: [0.0; 3],
+        }
     }
 }
 
@@ -99,7 +104,7 @@ pub struct FrameConstants {
 
 impl FrameConstants {
     /// Constants for `camera` looking at `scene` on a `width` x `height` target.
-    pub fn new(scene: &Scene, camera: &Camera, width: u32, height: u32) -> Self {
+    pub fn new(scene: &Scene, camera: &Camera, width: u32, height: u32, debug_view: DebugView) -> Self {
         let aspect = width as f32 / height as f32;
         let vp: Mat4 = camera.view_projection_rel_eye(aspect);
         let (eye_hi, eye_lo) = split_hi_lo(camera.eye);
@@ -111,10 +116,25 @@ impl FrameConstants {
             eye_lo: eye_lo.extend(0.0).to_array(),
             sun_direction: sun.direction.normalize_or(Vec3::NEG_Y).extend(0.0).to_array(),
             sun_color: sun.color.extend(0.0).to_array(),
-            size_lights: [width, height, scene.lights.len() as u32, 0],
-            ambient: [0.30, 0.36, 0.46, 1.0],
+            size_lights: [width, height, scene.lights.len() as u32, debug_view as u32],
+            ambient: [0.22, 0.27, 0.35, 0.8],
         }
     }
+}
+
+/// What the lighting pass writes: the lit image or one G-buffer channel (`DEBUG_VIEW_*` in
+/// `scene.glsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+pub enum DebugView {
+    /// The lit, tone-mapped image.
+    #[default]
+    None = 0,
+    /// World-space normals as colors.
+    Normals = 1,
+    /// Albedo without lighting.
+    Albedo = 2,
+    /// Depth bands (each band is a factor of 16 in distance).
+    Depth = 3,
 }
 
 /// `VkDrawIndexedIndirectCommand` (20 bytes).

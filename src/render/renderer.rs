@@ -4,13 +4,15 @@
 //! Until the render graph drives the frame, the sequence is fixed: G-buffer geometry pass
 //! (indirect-count draws), then compute lighting into the output image.
 
-use super::gpu_types::{FrameConstants, GpuPointLight};
+use super::gpu_types::{DebugView, FrameConstants, GpuPointLight};
 use super::output::{rgba_from_bytes, RgbaImage};
 use super::scene_buffers::GpuScene;
 use crate::error::{Error, Result};
 use crate::gpu::barrier::{cmd_barriers, image_barrier};
 use crate::gpu::transfer::record_image_to_buffer;
-use crate::gpu::{Access, Buffer, BufferDesc, GpuContext, GpuTimer, Image, ImageDesc, MemoryLocation, ShaderCompiler, UploadBatch};
+use crate::gpu::{
+    Access, Buffer, BufferDesc, GpuContext, GpuTimer, Image, ImageDesc, MemoryLocation, ShaderCompiler, UploadBatch,
+};
 use crate::passes::gbuffer::{self, GbufferPass, GbufferTargets};
 use crate::passes::lighting::{self, LightingInputs, LightingPass};
 use crate::scene::{Camera, Scene};
@@ -29,6 +31,15 @@ pub struct RenderSettings {
     pub width: u32,
     /// Output height in pixels.
     pub height: u32,
+    /// Lit image or a G-buffer channel.
+    pub debug_view: DebugView,
+}
+
+impl RenderSettings {
+    /// The lit image at `width` x `height`.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self { width, height, debug_view: DebugView::None }
+    }
 }
 
 impl RenderSettings {
@@ -54,7 +65,13 @@ struct Target {
 }
 
 impl Target {
-    fn new(ctx: &GpuContext, name: &str, format: vk::Format, usage: vk::ImageUsageFlags, s: &RenderSettings) -> Result<Self> {
+    fn new(
+        ctx: &GpuContext,
+        name: &str,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        s: &RenderSettings,
+    ) -> Result<Self> {
         let image = Image::new(
             ctx,
             &ImageDesc {
@@ -118,7 +135,8 @@ impl Renderer {
         let normal = Target::new(ctx, "gbuffer normal", gbuffer::NORMAL_FORMAT, attachment, &settings)?;
         let depth_usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
         let depth = Target::new(ctx, "depth", gbuffer::DEPTH_FORMAT, depth_usage, &settings)?;
-        let output_usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED;
+        let output_usage =
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED;
         let output = Target::new(ctx, "output", lighting::OUTPUT_FORMAT, output_usage, &settings)?;
         let light_bytes = (scene.lights.len().max(1) * std::mem::size_of::<GpuPointLight>()) as u64;
         let slots = (0..FRAMES_IN_FLIGHT)
@@ -126,7 +144,12 @@ impl Renderer {
                 let host = |name: &str, size| {
                     Buffer::new(
                         ctx,
-                        &BufferDesc { name, size, usage: vk::BufferUsageFlags::STORAGE_BUFFER, location: MemoryLocation::CpuToGpu },
+                        &BufferDesc {
+                            name,
+                            size,
+                            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                            location: MemoryLocation::CpuToGpu,
+                        },
                     )
                 };
                 Ok(FrameSlot {
@@ -203,7 +226,8 @@ impl Renderer {
         cmd_barriers(&device, cmd, &[], &barriers);
         self.ctx.begin_label(cmd, "gbuffer");
         slot.timer.begin(cmd, "gbuffer");
-        let targets = GbufferTargets { albedo: &self.albedo.image, normal: &self.normal.image, depth: &self.depth.image };
+        let targets =
+            GbufferTargets { albedo: &self.albedo.image, normal: &self.normal.image, depth: &self.depth.image };
         self.gbuffer.record(&self.ctx, cmd, &self.gpu_scene, &slot.constants, &targets);
         slot.timer.end(cmd);
         self.ctx.end_label(cmd);
@@ -294,7 +318,7 @@ impl Renderer {
     }
 
     fn write_frame_data(&mut self, slot: usize, camera: &Camera) -> Result<()> {
-        let constants = FrameConstants::new(&self.scene, camera, self.settings.width, self.settings.height);
+        let constants = FrameConstants::new(&self.scene, camera, self.settings.width, self.settings.height, self.settings.debug_view);
         let lights: Vec<GpuPointLight> = self.scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();
         let slot = &mut self.slots[slot];
         slot.constants.write_bytes(0, bytemuck::bytes_of(&constants))?;

@@ -85,18 +85,38 @@ impl GpuScene {
         let draws = DrawList::all_instances(scene);
         let count = [draws.commands.len() as u32];
         Ok(Self {
-            vertices: batch.buffer(ctx, "vertices", vk::BufferUsageFlags::VERTEX_BUFFER | storage, bytemuck::cast_slice(&scene.vertices))?,
-            indices: batch.buffer(ctx, "indices", vk::BufferUsageFlags::INDEX_BUFFER | storage, bytemuck::cast_slice(&scene.indices))?,
+            vertices: batch.buffer(
+                ctx,
+                "vertices",
+                vk::BufferUsageFlags::VERTEX_BUFFER | storage,
+                bytemuck::cast_slice(&scene.vertices),
+            )?,
+            indices: batch.buffer(
+                ctx,
+                "indices",
+                vk::BufferUsageFlags::INDEX_BUFFER | storage,
+                bytemuck::cast_slice(&scene.indices),
+            )?,
             instances: batch.buffer(ctx, "instances", storage, bytemuck::cast_slice(&instances))?,
             materials: batch.buffer(ctx, "materials", storage, bytemuck::cast_slice(&materials))?,
-            draw_instance_ids: batch.buffer(ctx, "draw instance ids", storage, bytemuck::cast_slice(&draws.instance_ids))?,
+            draw_instance_ids: batch.buffer(
+                ctx,
+                "draw instance ids",
+                storage,
+                bytemuck::cast_slice(&draws.instance_ids),
+            )?,
             draw_commands: batch.buffer(
                 ctx,
                 "draw commands",
                 vk::BufferUsageFlags::INDIRECT_BUFFER | storage,
                 bytemuck::cast_slice(&draws.commands),
             )?,
-            draw_count: batch.buffer(ctx, "draw count", vk::BufferUsageFlags::INDIRECT_BUFFER | storage, bytemuck::cast_slice(&count))?,
+            draw_count: batch.buffer(
+                ctx,
+                "draw count",
+                vk::BufferUsageFlags::INDIRECT_BUFFER | storage,
+                bytemuck::cast_slice(&count),
+            )?,
             instance_count: scene.instances.len() as u32,
             max_draws: draws.commands.len() as u32,
             triangles: scene.instanced_triangles(),

@@ -51,22 +51,45 @@ impl Default for Camera {
 }
 
 impl Camera {
-    /// A perspective camera that sees the whole box `min..max`, from above and to the side.
+    /// A perspective camera that sees the whole box `min..max` from above and to the side, as
+    /// close as it can while every corner of the box stays inside the central 90% of the view.
     pub fn framing(min: DVec3, max: DVec3, aspect: f32) -> Self {
         let center = (min + max) * 0.5;
         let radius = ((max - min).length() * 0.5).max(1e-3);
         let fov_y_deg = 50.0f32;
-        let half = (fov_y_deg.to_radians() * 0.5).tan() as f64;
-        let half_min = half.min(half * aspect as f64);
-        let distance = radius / half_min.atan().sin();
         let dir = DVec3::new(0.55, 0.45, 0.7).normalize();
-        Self {
-            eye: center + dir * distance,
+        let mut camera = Self {
+            eye: center + dir * radius * 3.0,
             target: center,
             up: Vec3::Y,
             projection: Projection::Perspective { fov_y_deg },
-            near: ((distance - radius) * 0.5).clamp(1e-3, 1.0) as f32,
+            near: 0.1,
+        };
+        let corners: Vec<DVec3> =
+            (0..8).map(|i| DVec3::new(pick(i & 1, min.x, max.x), pick(i & 2, min.y, max.y), pick(i & 4, min.z, max.z))).collect();
+        let fits = |distance: f64| {
+            let cam = Self { eye: center + dir * distance, ..camera.clone() };
+            let vp = cam.view_projection_rel_eye(aspect).as_dmat4();
+            corners.iter().all(|c| {
+                let clip = vp * (*c - cam.eye).extend(1.0);
+                clip.w > 0.0 && (clip.x / clip.w).abs() <= 0.9 && (clip.y / clip.w).abs() <= 0.9
+            })
+        };
+        // Distance shrinks monotonically while the box still fits: bisect between a fitting
+        // distance (far enough that the bounding sphere fits) and the box's radius.
+        let half = (fov_y_deg.to_radians() as f64 * 0.5).tan().min((fov_y_deg.to_radians() as f64 * 0.5).tan() * aspect as f64);
+        let (mut lo, mut hi) = (radius, radius / (0.9 * half).atan().sin() + radius);
+        for _ in 0..48 {
+            let mid = 0.5 * (lo + hi);
+            if fits(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
         }
+        camera.eye = center + dir * hi;
+        camera.near = ((hi - radius) * 0.5).clamp(1e-3, 1.0) as f32;
+        camera
     }
 
     /// Unit forward vector.
@@ -79,7 +102,11 @@ impl Camera {
     pub fn view_rotation(&self) -> Mat3 {
         let f = self.forward();
         let up = if f.cross(self.up).length_squared() < 1e-8 {
-            if f.y.abs() < 0.9 { Vec3::Y } else { Vec3::Z }
+            if f.y.abs() < 0.9 {
+                Vec3::Y
+            } else {
+                Vec3::Z
+            }
         } else {
             self.up
         };
@@ -143,6 +170,14 @@ impl Camera {
     }
 }
 
+fn pick(bit: usize, a: f64, b: f64) -> f64 {
+    if bit == 0 {
+        a
+    } else {
+        b
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -161,6 +196,22 @@ mod tests {
         // +Y in view goes to -Y in NDC: Vulkan's y points down, the image is upright.
         let c = vp * Vec4::new(0.0, 1.0, -2.0, 1.0);
         assert!(c.y / c.w < 0.0);
+    }
+
+    #[test]
+    fn framing_keeps_every_corner_in_view_and_fills_it() {
+        let (min, max) = (DVec3::new(-70.0, 0.0, -60.0), DVec3::new(55.0, 30.0, 60.0));
+        let cam = Camera::framing(min, max, 16.0 / 9.0);
+        let vp = cam.view_projection_rel_eye(16.0 / 9.0).as_dmat4();
+        let mut extent: f64 = 0.0;
+        for i in 0..8 {
+            let c = DVec3::new(pick(i & 1, min.x, max.x), pick(i & 2, min.y, max.y), pick(i & 4, min.z, max.z));
+            let clip = vp * (c - cam.eye).extend(1.0);
+            let (x, y) = (clip.x / clip.w, clip.y / clip.w);
+            assert!(clip.w > 0.0 && x.abs() <= 0.9 + 1e-9 && y.abs() <= 0.9 + 1e-9, "corner {c} at {x},{y}");
+            extent = extent.max(x.abs()).max(y.abs());
+        }
+        assert!(extent > 0.85, "the box fills only {extent} of the view");
     }
 
     #[test]

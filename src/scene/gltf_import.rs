@@ -39,11 +39,19 @@ pub struct ImportReport {
 /// out with `tracing::warn!`.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let (scene, report) = load_with_report(path, options)?;
-    for skipped in &report.skipped_primitives {
-        tracing::warn!("skipped primitive: {skipped}");
+    // A file with a systematic problem repeats it per primitive: show a few, count the rest.
+    const SHOWN: usize = 4;
+    let lines: Vec<String> = report
+        .skipped_primitives
+        .iter()
+        .map(|s| format!("skipped primitive: {s}"))
+        .chain(report.notes.iter().map(|n| format!("{}: {n}", scene.name)))
+        .collect();
+    for line in lines.iter().take(SHOWN) {
+        tracing::warn!("{line}");
     }
-    for note in &report.notes {
-        tracing::warn!("{}: {note}", scene.name);
+    if lines.len() > SHOWN {
+        tracing::warn!("{}: {} more import notes like these (gltf_import::load_with_report lists them all)", scene.name, lines.len() - SHOWN);
     }
     Ok(scene)
 }
@@ -52,10 +60,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
 ///
 /// Adds point lights (`options.lights`, default [`DEFAULT_FILE_LIGHTS`]) above the scene,
 /// since glTF lights are not read.
-pub fn load_with_report(
-    path: &Path,
-    options: &LoadOptions,
-) -> Result<(Scene, ImportReport), SceneError> {
+pub fn load_with_report(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), SceneError> {
     let file = path.display().to_string();
     // The checks below are meant to leave the `gltf` crate nothing to panic on; this is the
     // backstop so that a hostile file still ends as an error, never as an aborted host.
@@ -67,10 +72,7 @@ pub fn load_with_report(
                 .map(|s| s.to_string())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown panic".into());
-            Err(SceneError::Import {
-                file,
-                message: format!("the glTF reader failed on this file: {what}"),
-            })
+            Err(SceneError::Import { file, message: format!("the glTF reader failed on this file: {what}") })
         }
     }
 }
@@ -80,25 +82,15 @@ type DrawnPrimitive = Option<(u32, u32)>;
 
 fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), SceneError> {
     let file = path.display().to_string();
-    let import_err = |message: String| SceneError::Import {
-        file: file.clone(),
-        message,
-    };
-    let short = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| file.clone());
+    let import_err = |message: String| SceneError::Import { file: file.clone(), message };
+    let short = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| file.clone());
     let mut report = ImportReport::default();
     let light_count = options.lights.unwrap_or(DEFAULT_FILE_LIGHTS);
     if light_count > procedural::MAX_LIGHTS {
-        return Err(import_err(format!(
-            "lights = {light_count} is out of range (at most {})",
-            procedural::MAX_LIGHTS
-        )));
+        return Err(import_err(format!("lights = {light_count} is out of range (at most {})", procedural::MAX_LIGHTS)));
     }
 
-    let bytes =
-        std::fs::read(path).map_err(|e| import_err(format!("cannot read the file: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| import_err(format!("cannot read the file: {e}")))?;
     let gltf = buffers::parse(&bytes, &mut report.notes).map_err(import_err)?;
     drop(bytes);
     let document = gltf.document;
@@ -106,10 +98,7 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
     let buffers = buffers::load_buffers(&document, base, gltf.blob).map_err(import_err)?;
     note_ignored_features(&document, &mut report.notes);
 
-    let mut scene = Scene {
-        name: short.clone(),
-        ..Default::default()
-    };
+    let mut scene = Scene { name: short.clone(), ..Default::default() };
     for material in materials::convert(&document, &mut report.notes) {
         scene.add_material(material);
     }
@@ -125,43 +114,24 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
         let Some(mesh) = p.node.mesh() else { continue };
         skinned += usize::from(p.node.skin().is_some());
         if imported[mesh.index()].is_none() {
-            let prims = import_mesh(
-                &mesh,
-                &short,
-                &buffers,
-                &mut scene,
-                &mut default_material,
-                &mut report,
-            )?;
+            let prims = import_mesh(&mesh, &short, &buffers, &mut scene, &mut default_material, &mut report)?;
             imported[mesh.index()] = Some(prims);
         }
         for &(mesh, material) in imported[mesh.index()].iter().flatten().flatten() {
-            scene.instances.push(Instance {
-                transform: p.world,
-                mesh,
-                material,
-                flags: 0,
-            });
+            scene.instances.push(Instance { transform: p.world, mesh, material, flags: 0 });
         }
     }
     if skinned > 0 {
-        report.notes.push(format!(
-            "skins are ignored: {skinned} skinned nodes are drawn in their bind pose"
-        ));
+        report.notes.push(format!("skins are ignored: {skinned} skinned nodes are drawn in their bind pose"));
     }
     let unused = imported.iter().filter(|m| m.is_none()).count();
     if unused > 0 {
-        report.notes.push(format!(
-            "{unused} meshes are not used by any node of the drawn scene and were not imported"
-        ));
+        report.notes.push(format!("{unused} meshes are not used by any node of the drawn scene and were not imported"));
     }
     if scene.instances.is_empty() {
         let why = match report.skipped_primitives.first() {
             None => "no node of the drawn scene has a mesh".to_string(),
-            Some(first) => format!(
-                "{} primitive(s) skipped, the first: {first}",
-                report.skipped_primitives.len()
-            ),
+            Some(first) => format!("{} primitive(s) skipped, the first: {first}", report.skipped_primitives.len()),
         };
         return Err(import_err(format!("nothing to draw: {why}")));
     }
@@ -171,9 +141,7 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
         let n = light_count;
         scene.lights = procedural::lights::scatter(&bounds, n, options.seed);
         if n > 0 {
-            report.notes.push(format!(
-                "glTF lights are not read; {n} point lights were placed above the scene"
-            ));
+            report.notes.push(format!("glTF lights are not read; {n} point lights were placed above the scene"));
         }
     }
     Ok((scene, report))
@@ -193,10 +161,7 @@ fn import_mesh(
         Some(name) => format!("mesh '{name}' (#{})", mesh.index()),
         None => format!("mesh #{}", mesh.index()),
     };
-    let base_name = mesh
-        .name()
-        .map(str::to_string)
-        .unwrap_or_else(|| format!("mesh#{}", mesh.index()));
+    let base_name = mesh.name().map(str::to_string).unwrap_or_else(|| format!("mesh#{}", mesh.index()));
     let mut prims = Vec::new();
     for prim in mesh.primitives() {
         let place = format!("{short}: {label} primitive {}", prim.index());
@@ -207,18 +172,14 @@ fn import_mesh(
             }
             primitive::Converted::Mesh(data, mesh_place, normal_note) => {
                 report.notes.extend(normal_note);
-                let id =
-                    scene.add_mesh(&format!("{base_name}/{}", prim.index()), &data, &mesh_place)?;
+                let id = scene.add_mesh(&format!("{base_name}/{}", prim.index()), &data, &mesh_place)?;
                 // glTF materials were added first, in file order, so their indices carry over.
                 let material = match prim.material().index() {
                     Some(i) => i as u32,
-                    None => *default_material
-                        .get_or_insert_with(|| scene.add_material(Material::default())),
+                    None => *default_material.get_or_insert_with(|| scene.add_material(Material::default())),
                 };
                 if prim.morph_targets().len() > 0 {
-                    report.notes.push(format!(
-                        "{place}: morph targets are ignored (base shape drawn)"
-                    ));
+                    report.notes.push(format!("{place}: morph targets are ignored (base shape drawn)"));
                 }
                 prims.push(Some((id, material)));
             }
@@ -232,41 +193,21 @@ fn camera_of(placed: &nodes::Placed<'_>, notes: &mut Vec<String>) -> Option<Came
     let camera = placed.node.camera()?;
     let w: &Transform = &placed.world;
     let forward = w.linear.mul_vec3(Vec3::NEG_Z).try_normalize()?;
-    let up = w
-        .linear
-        .mul_vec3(Vec3::Y)
-        .try_normalize()
-        .unwrap_or(Vec3::Y);
+    let up = w.linear.mul_vec3(Vec3::Y).try_normalize().unwrap_or(Vec3::Y);
     let (projection, near) = match camera.projection() {
-        gltf::camera::Projection::Perspective(p) => (
-            Projection::Perspective {
-                fov_y_deg: p.yfov().to_degrees(),
-            },
-            p.znear(),
-        ),
-        gltf::camera::Projection::Orthographic(o) => (
-            Projection::Orthographic {
-                height: 2.0 * o.ymag().abs(),
-                far: o.zfar(),
-            },
-            o.znear().max(1e-3),
-        ),
+        gltf::camera::Projection::Perspective(p) => {
+            (Projection::Perspective { fov_y_deg: p.yfov().to_degrees() }, p.znear())
+        }
+        gltf::camera::Projection::Orthographic(o) => {
+            (Projection::Orthographic { height: 2.0 * o.ymag().abs(), far: o.zfar() }, o.znear().max(1e-3))
+        }
     };
     let eye = w.translation;
-    let cam = Camera {
-        eye,
-        target: eye + forward.as_dvec3() * 10.0,
-        up,
-        projection,
-        near,
-    };
+    let cam = Camera { eye, target: eye + forward.as_dvec3() * 10.0, up, projection, near };
     match cam.validate() {
         Ok(()) => Some(cam),
         Err(why) => {
-            notes.push(format!(
-                "{}: camera ignored: {why}",
-                nodes::node_label(&placed.node)
-            ));
+            notes.push(format!("{}: camera ignored: {why}", nodes::node_label(&placed.node)));
             None
         }
     }
@@ -279,10 +220,7 @@ fn note_ignored_features(document: &gltf::Document, notes: &mut Vec<String>) {
         notes.push(format!("extensions are ignored: {}", used.join(", ")));
     }
     if document.animations().len() > 0 {
-        notes.push(format!(
-            "{} animations are ignored (the rest pose is drawn)",
-            document.animations().len()
-        ));
+        notes.push(format!("{} animations are ignored (the rest pose is drawn)", document.animations().len()));
     }
 }
 

@@ -58,7 +58,7 @@ impl MeshData {
         if self.indices.is_empty() || self.positions.is_empty() {
             return Err(err("mesh has no triangles".into()));
         }
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             return Err(err(format!("index count {} is not a multiple of 3", self.indices.len())));
         }
         let n = self.positions.len();
@@ -94,6 +94,33 @@ impl MeshData {
         Ok((vertices, bounds, sphere))
     }
 
+    /// The share of triangle area whose given vertex normals are nearly perpendicular to the
+    /// triangle (more than ~73 degrees off, either side): 0 for sound normals, close to 1 for
+    /// normals that ignore the geometry (an exporter that wrote +Y everywhere). `None` without normals.
+    pub fn normal_disagreement(&self) -> Option<f32> {
+        if self.normals.len() != self.positions.len() || self.positions.is_empty() {
+            return None;
+        }
+        let (mut bad, mut total) = (0.0f64, 0.0f64);
+        for t in self.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0] as usize, t[1] as usize, t[2] as usize];
+            if a.max(b).max(c) >= self.positions.len() {
+                continue;
+            }
+            let face = (self.positions[b] - self.positions[a]).cross(self.positions[c] - self.positions[a]);
+            let area = face.length() as f64;
+            let mean = self.normals[a] + self.normals[b] + self.normals[c];
+            if !(area > 0.0) || !mean.is_finite() || mean.length_squared() <= 1e-12 {
+                continue;
+            }
+            total += area;
+            if (face.normalize().dot(mean.normalize())).abs() < 0.3 {
+                bad += area;
+            }
+        }
+        Some(if total > 0.0 { (bad / total) as f32 } else { 0.0 })
+    }
+
     /// Per-vertex sums of adjacent face normals weighted by area (zero for isolated vertices).
     fn area_weighted_normals(&self) -> Vec<Vec3> {
         let mut normals = vec![Vec3::ZERO; self.positions.len()];
@@ -118,16 +145,31 @@ mod tests {
     fn octahedral_round_trip_is_accurate() {
         let mut worst = 1.0f32;
         for i in 0..2000 {
-            let t = i as f32 * 0.61803;
+            // Fibonacci sphere: evenly spread directions.
+            let t = i as f32 * 0.618034 * std::f32::consts::TAU;
             let z = 1.0 - 2.0 * (i as f32 + 0.5) / 2000.0;
             let r = (1.0 - z * z).sqrt();
-            let n = Vec3::new(r * t.cos() * 6.2831, r * t.sin(), z).normalize();
+            let n = Vec3::new(r * t.cos(), r * t.sin(), z).normalize();
             worst = worst.min(decode_octahedral(encode_octahedral(n)).dot(n));
         }
         assert!(worst > 0.99999, "worst cosine {worst}");
         for axis in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
             assert!(decode_octahedral(encode_octahedral(axis)).dot(axis) > 0.99999);
         }
+    }
+
+    #[test]
+    fn detects_normals_that_ignore_the_geometry() {
+        let mut wall = MeshData {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ZERO, Vec3::Z, Vec3::X],
+            normals: vec![Vec3::Z, Vec3::Z, Vec3::Z, -Vec3::Y, -Vec3::Y, -Vec3::Y],
+            indices: vec![0, 1, 2, 3, 4, 5],
+        };
+        assert_eq!(wall.normal_disagreement(), Some(0.0));
+        wall.normals = vec![Vec3::Y; 6]; // the floor triangle agrees (flipped), the wall does not
+        assert_eq!(wall.normal_disagreement(), Some(0.5));
+        wall.normals.clear();
+        assert_eq!(wall.normal_disagreement(), None);
     }
 
     #[test]

@@ -16,7 +16,7 @@ pub mod validate;
 pub use bounds::{Aabb, Sphere};
 pub use camera::{Camera, Projection};
 pub use error::SceneError;
-pub use mesh::{encode_octahedral, decode_octahedral, MeshData, Vertex};
+pub use mesh::{decode_octahedral, encode_octahedral, MeshData, Vertex};
 pub use source::SceneSource;
 
 use glam::{DVec3, Mat3, Vec3};
@@ -134,7 +134,8 @@ pub struct DirectionalLight {
 
 impl Default for DirectionalLight {
     fn default() -> Self {
-        Self { direction: Vec3::new(-0.4, -1.0, -0.3).normalize(), color: Vec3::new(2.4, 2.3, 2.1) }
+        // Low enough that walls facing it are lit and those facing away fall to the sky ambient.
+        Self { direction: Vec3::new(-0.55, -0.7, -0.45).normalize(), color: Vec3::new(2.0, 1.9, 1.75) }
     }
 }
 
@@ -171,7 +172,8 @@ impl Scene {
             name: name.into(),
             first_index: u32::try_from(self.indices.len()).map_err(|_| SceneError::too_large(place, "index pool"))?,
             index_count: data.indices.len() as u32,
-            vertex_offset: u32::try_from(self.vertices.len()).map_err(|_| SceneError::too_large(place, "vertex pool"))?,
+            vertex_offset: u32::try_from(self.vertices.len())
+                .map_err(|_| SceneError::too_large(place, "vertex pool"))?,
             vertex_count: vertices.len() as u32,
             bounds,
             sphere,

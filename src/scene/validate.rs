@@ -15,34 +15,22 @@ pub const MAX_FLAG_BITS: u32 = 8;
 /// finite transforms, materials, lights, sun and camera.
 pub fn validate_scene(scene: &Scene) -> Result<(), SceneError> {
     if scene.instances.is_empty() {
-        return Err(SceneError::invalid(
-            scene_place(scene),
-            "scene has no instances",
-        ));
+        return Err(SceneError::invalid(scene_place(scene), "scene has no instances"));
     }
     if scene.materials.len() > MAX_MATERIALS {
         return Err(SceneError::invalid(
             scene_place(scene),
-            format!(
-                "{} materials exceed the {MAX_MATERIALS} an instance can address",
-                scene.materials.len()
-            ),
+            format!("{} materials exceed the {MAX_MATERIALS} an instance can address", scene.materials.len()),
         ));
     }
     validate_meshes(scene)?;
     for (i, m) in scene.materials.iter().enumerate() {
         let place = || format!("material #{i} '{}'", m.name);
         if !m.albedo.is_finite() || m.albedo.min_element() < 0.0 {
-            return Err(SceneError::invalid(
-                place(),
-                format!("albedo {} must be finite and non-negative", m.albedo),
-            ));
+            return Err(SceneError::invalid(place(), format!("albedo {} must be finite and non-negative", m.albedo)));
         }
         if !(m.roughness.is_finite() && m.metallic.is_finite()) {
-            return Err(SceneError::invalid(
-                place(),
-                "roughness and metallic must be finite",
-            ));
+            return Err(SceneError::invalid(place(), "roughness and metallic must be finite"));
         }
     }
     for i in 0..scene.instances.len() {
@@ -51,38 +39,21 @@ pub fn validate_scene(scene: &Scene) -> Result<(), SceneError> {
     for (i, l) in scene.lights.iter().enumerate() {
         let place = format!("light #{i}");
         if !l.position.is_finite() || !l.position.as_vec3().is_finite() {
-            return Err(SceneError::invalid(
-                place,
-                format!("position {} is not finite", l.position),
-            ));
+            return Err(SceneError::invalid(place, format!("position {} is not finite", l.position)));
         }
         if !l.color.is_finite() || l.color.min_element() < 0.0 {
-            return Err(SceneError::invalid(
-                place,
-                format!("color {} must be finite and non-negative", l.color),
-            ));
+            return Err(SceneError::invalid(place, format!("color {} must be finite and non-negative", l.color)));
         }
         if !(l.range.is_finite() && l.range > 0.0) {
-            return Err(SceneError::invalid(
-                place,
-                format!("range {} must be positive and finite", l.range),
-            ));
+            return Err(SceneError::invalid(place, format!("range {} must be positive and finite", l.range)));
         }
     }
     let sun = &scene.sun;
-    if !sun.direction.is_finite()
-        || sun.direction.length_squared() < 1e-12
-        || !sun.color.is_finite()
-    {
-        return Err(SceneError::invalid(
-            "sun",
-            "direction must be finite and non-zero, color finite",
-        ));
+    if !sun.direction.is_finite() || sun.direction.length_squared() < 1e-12 || !sun.color.is_finite() {
+        return Err(SceneError::invalid("sun", "direction must be finite and non-zero, color finite"));
     }
     if let Some(camera) = &scene.camera {
-        camera
-            .validate()
-            .map_err(|m| SceneError::invalid("camera", m))?;
+        camera.validate().map_err(|m| SceneError::invalid("camera", m))?;
     }
     Ok(())
 }
@@ -110,11 +81,7 @@ impl Scene {
 
 fn check_instance(scene: &Scene, instance: &Instance) -> Result<(), String> {
     if instance.mesh as usize >= scene.meshes.len() {
-        return Err(format!(
-            "mesh {} is out of range (the scene has {} meshes)",
-            instance.mesh,
-            scene.meshes.len()
-        ));
+        return Err(format!("mesh {} is out of range (the scene has {} meshes)", instance.mesh, scene.meshes.len()));
     }
     if instance.material as usize >= scene.materials.len() {
         return Err(format!(
@@ -127,16 +94,10 @@ fn check_instance(scene: &Scene, instance: &Instance) -> Result<(), String> {
         return Err("transform is not finite".into());
     }
     if !instance.transform.translation.as_vec3().is_finite() {
-        return Err(format!(
-            "translation {} is beyond the range of f32",
-            instance.transform.translation
-        ));
+        return Err(format!("translation {} is beyond the range of f32", instance.transform.translation));
     }
     if instance.flags >> MAX_FLAG_BITS != 0 {
-        return Err(format!(
-            "flags {:#x} use bits above the {MAX_FLAG_BITS} that the GPU keeps",
-            instance.flags
-        ));
+        return Err(format!("flags {:#x} use bits above the {MAX_FLAG_BITS} that the GPU keeps", instance.flags));
     }
     Ok(())
 }
@@ -147,10 +108,7 @@ fn validate_meshes(scene: &Scene) -> Result<(), SceneError> {
         if m.index_count == 0 || m.index_count % 3 != 0 {
             return Err(SceneError::invalid(
                 place(),
-                format!(
-                    "index count {} is not a positive multiple of 3",
-                    m.index_count
-                ),
+                format!("index count {} is not a positive multiple of 3", m.index_count),
             ));
         }
         let first = m.first_index as usize;
@@ -176,31 +134,18 @@ fn validate_meshes(scene: &Scene) -> Result<(), SceneError> {
                 ),
             ));
         }
-        if let Some((at, bad)) = indices
-            .iter()
-            .enumerate()
-            .find(|(_, &v)| v >= m.vertex_count)
-        {
+        if let Some((at, bad)) = indices.iter().enumerate().find(|(_, &v)| v >= m.vertex_count) {
             return Err(SceneError::invalid(
                 place(),
-                format!(
-                    "index {bad} at element {at} is out of range (the mesh has {} vertices)",
-                    m.vertex_count
-                ),
+                format!("index {bad} at element {at} is out of range (the mesh has {} vertices)", m.vertex_count),
             ));
         }
         let b = &m.bounds;
         if !(b.min.is_finite() && b.max.is_finite() && b.min.cmple(b.max).all()) {
-            return Err(SceneError::invalid(
-                place(),
-                format!("bounds {}..{} are not a finite box", b.min, b.max),
-            ));
+            return Err(SceneError::invalid(place(), format!("bounds {}..{} are not a finite box", b.min, b.max)));
         }
         if !(m.sphere.center.is_finite() && m.sphere.radius.is_finite() && m.sphere.radius >= 0.0) {
-            return Err(SceneError::invalid(
-                place(),
-                "bounding sphere is not finite",
-            ));
+            return Err(SceneError::invalid(place(), "bounding sphere is not finite"));
         }
     }
     Ok(())
@@ -223,19 +168,10 @@ mod tests {
 
     fn one_triangle() -> Scene {
         let mut s = Scene::default();
-        let data = MeshData {
-            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
-            normals: vec![],
-            indices: vec![0, 1, 2],
-        };
+        let data = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
         let mesh = s.add_mesh("tri", &data, "test").unwrap();
         let material = s.add_material(Material::default());
-        s.instances.push(Instance {
-            transform: Transform::default(),
-            mesh,
-            material,
-            flags: 0,
-        });
+        s.instances.push(Instance { transform: Transform::default(), mesh, material, flags: 0 });
         s
     }
 
@@ -255,40 +191,22 @@ mod tests {
         let mut s = one_triangle();
         s.instances.push(s.instances[0]);
         s.instances[1].transform.translation.y = f64::NAN;
-        assert_eq!(
-            validate_scene(&s).unwrap_err().to_string(),
-            "instance #1: transform is not finite"
-        );
+        assert_eq!(validate_scene(&s).unwrap_err().to_string(), "instance #1: transform is not finite");
         s.instances[1].transform = Transform::default();
         s.instances[1].transform.linear.x_axis.x = f32::INFINITY;
-        assert_eq!(
-            validate_scene(&s).unwrap_err().to_string(),
-            "instance #1: transform is not finite"
-        );
+        assert_eq!(validate_scene(&s).unwrap_err().to_string(), "instance #1: transform is not finite");
         s.instances[1].transform = Transform::default();
         s.instances[1].mesh = 5;
-        assert!(validate_scene(&s)
-            .unwrap_err()
-            .to_string()
-            .starts_with("instance #1: mesh 5 is out of range"));
+        assert!(validate_scene(&s).unwrap_err().to_string().starts_with("instance #1: mesh 5 is out of range"));
         s.instances[1].mesh = 0;
         s.instances[1].material = 9;
-        assert!(validate_scene(&s)
-            .unwrap_err()
-            .to_string()
-            .starts_with("instance #1: material 9 is out of range"));
+        assert!(validate_scene(&s).unwrap_err().to_string().starts_with("instance #1: material 9 is out of range"));
         s.instances[1].material = 0;
         s.instances[1].flags = 1 << 9;
-        assert!(validate_scene(&s)
-            .unwrap_err()
-            .to_string()
-            .starts_with("instance #1: flags"));
+        assert!(validate_scene(&s).unwrap_err().to_string().starts_with("instance #1: flags"));
         s.instances[1].flags = 0;
         s.instances[1].transform.translation.x = 1e300;
-        assert!(validate_scene(&s)
-            .unwrap_err()
-            .to_string()
-            .contains("beyond the range of f32"));
+        assert!(validate_scene(&s).unwrap_err().to_string().contains("beyond the range of f32"));
         assert!(s.validate_instance(7).is_err());
     }
 
@@ -296,34 +214,14 @@ mod tests {
     fn broken_pools_and_lights_are_refused() {
         let mut s = one_triangle();
         s.indices[2] = 7;
-        assert!(validate_scene(&s)
-            .unwrap_err()
-            .to_string()
-            .starts_with("mesh #0 'tri': index 7"));
+        assert!(validate_scene(&s).unwrap_err().to_string().starts_with("mesh #0 'tri': index 7"));
         let mut s = one_triangle();
         s.meshes[0].first_index = 3;
-        assert!(validate_scene(&s)
-            .unwrap_err()
-            .to_string()
-            .contains("outside the index pool"));
+        assert!(validate_scene(&s).unwrap_err().to_string().contains("outside the index pool"));
         let mut s = one_triangle();
-        s.lights.push(PointLight {
-            position: DVec3::ZERO,
-            color: Vec3::ONE,
-            range: 0.0,
-        });
-        assert!(validate_scene(&s)
-            .unwrap_err()
-            .to_string()
-            .starts_with("light #0: range"));
-        s.lights[0] = PointLight {
-            position: DVec3::NAN,
-            color: Vec3::ONE,
-            range: 1.0,
-        };
-        assert!(validate_scene(&s)
-            .unwrap_err()
-            .to_string()
-            .starts_with("light #0: position"));
+        s.lights.push(PointLight { position: DVec3::ZERO, color: Vec3::ONE, range: 0.0 });
+        assert!(validate_scene(&s).unwrap_err().to_string().starts_with("light #0: range"));
+        s.lights[0] = PointLight { position: DVec3::NAN, color: Vec3::ONE, range: 1.0 };
+        assert!(validate_scene(&s).unwrap_err().to_string().starts_with("light #0: position"));
     }
 }

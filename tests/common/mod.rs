@@ -16,7 +16,8 @@ impl GpuTest {
     /// Creates the context (panics with a hint when Vulkan or the layer is missing).
     pub fn new() -> Self {
         let device = std::env::var("CULLGRAPH_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
-        let options = ContextOptions { device: device.parse().unwrap(), validation: true, app_name: "cullgraph-test".into() };
+        let options =
+            ContextOptions { device: device.parse().unwrap(), validation: true, app_name: "cullgraph-test".into() };
         let ctx = GpuContext::new(&options)
             .unwrap_or_else(|e| panic!("cannot create a validated Vulkan context ({e}); run scripts/install-deps"));
         let log = ctx.validation_log().clone();
@@ -84,9 +85,20 @@ pub fn boxes_scene() -> cullgraph::scene::Scene {
     use glam::{DVec3, Mat3, Vec3};
     let mut scene = Scene { name: "test boxes".into(), ..Default::default() };
     let cube = scene.add_mesh("cube", &cube_mesh(), "cube").unwrap();
-    let grey = scene.add_material(Material { name: "ground".into(), albedo: Vec3::splat(0.5), roughness: 0.9, metallic: 0.0 });
-    let red = scene.add_material(Material { name: "red".into(), albedo: Vec3::new(0.8, 0.1, 0.1), roughness: 0.4, metallic: 0.0 });
-    let blue = scene.add_material(Material { name: "blue".into(), albedo: Vec3::new(0.1, 0.2, 0.8), roughness: 0.3, metallic: 0.5 });
+    let grey =
+        scene.add_material(Material { name: "ground".into(), albedo: Vec3::splat(0.5), roughness: 0.9, metallic: 0.0 });
+    let red = scene.add_material(Material {
+        name: "red".into(),
+        albedo: Vec3::new(0.8, 0.1, 0.1),
+        roughness: 0.4,
+        metallic: 0.0,
+    });
+    let blue = scene.add_material(Material {
+        name: "blue".into(),
+        albedo: Vec3::new(0.1, 0.2, 0.8),
+        roughness: 0.3,
+        metallic: 0.5,
+    });
     let place = |scale: Vec3, at: DVec3, material| Instance {
         transform: Transform { linear: Mat3::from_diagonal(scale), translation: at },
         mesh: cube,

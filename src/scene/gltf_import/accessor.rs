@@ -12,26 +12,13 @@ use gltf::Accessor;
 const MAX_VIEWLESS_ELEMENTS: usize = 1 << 26;
 
 /// Reads a `VEC3` of `FLOAT` accessor.
-pub(super) fn read_vec3(
-    accessor: &Accessor<'_>,
-    buffers: &[Vec<u8>],
-) -> Result<Vec<[f32; 3]>, String> {
-    expect_type(
-        accessor,
-        Dimensions::Vec3,
-        &[DataType::F32],
-        "VEC3 of FLOAT",
-    )?;
-    read(accessor, buffers, 12, |b| {
-        [f32_at(b, 0), f32_at(b, 4), f32_at(b, 8)]
-    })
+pub(super) fn read_vec3(accessor: &Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<[f32; 3]>, String> {
+    expect_type(accessor, Dimensions::Vec3, &[DataType::F32], "VEC3 of FLOAT")?;
+    read(accessor, buffers, 12, |b| [f32_at(b, 0), f32_at(b, 4), f32_at(b, 8)])
 }
 
 /// Reads a `SCALAR` accessor of `UNSIGNED_BYTE`, `UNSIGNED_SHORT` or `UNSIGNED_INT` as indices.
-pub(super) fn read_indices(
-    accessor: &Accessor<'_>,
-    buffers: &[Vec<u8>],
-) -> Result<Vec<u32>, String> {
+pub(super) fn read_indices(accessor: &Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
     expect_type(
         accessor,
         Dimensions::Scalar,
@@ -40,9 +27,7 @@ pub(super) fn read_indices(
     )?;
     match accessor.data_type() {
         DataType::U8 => read(accessor, buffers, 1, |b| b[0] as u32),
-        DataType::U16 => read(accessor, buffers, 2, |b| {
-            u16::from_le_bytes([b[0], b[1]]) as u32
-        }),
+        DataType::U16 => read(accessor, buffers, 2, |b| u16::from_le_bytes([b[0], b[1]]) as u32),
         _ => read(accessor, buffers, 4, |b| u32_at(b, 0)),
     }
 }
@@ -55,22 +40,13 @@ fn u32_at(b: &[u8], at: usize) -> u32 {
     u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
 }
 
-fn expect_type(
-    accessor: &Accessor<'_>,
-    dims: Dimensions,
-    types: &[DataType],
-    what: &str,
-) -> Result<(), String> {
+fn expect_type(accessor: &Accessor<'_>, dims: Dimensions, types: &[DataType], what: &str) -> Result<(), String> {
     if accessor.dimensions() != dims || !types.contains(&accessor.data_type()) {
         return Err(format!(
             "must be {what}, found {:?} of {:?}{}",
             accessor.dimensions(),
             accessor.data_type(),
-            if accessor.normalized() {
-                " (normalized)"
-            } else {
-                ""
-            }
+            if accessor.normalized() { " (normalized)" } else { "" }
         ));
     }
     Ok(())
@@ -91,17 +67,11 @@ fn read<T: Copy + Default>(
         Some(view) => {
             let bytes = strided(&view, accessor.offset(), count, size, buffers)?;
             let stride = view.stride().unwrap_or(size);
-            (0..count)
-                .map(|i| decode(&bytes[i * stride..i * stride + size]))
-                .collect::<Vec<T>>()
+            (0..count).map(|i| decode(&bytes[i * stride..i * stride + size])).collect::<Vec<T>>()
         }
-        None if accessor.sparse().is_none() => {
-            return Err("has neither a buffer view nor sparse data".into())
-        }
+        None if accessor.sparse().is_none() => return Err("has neither a buffer view nor sparse data".into()),
         None if count > MAX_VIEWLESS_ELEMENTS => {
-            return Err(format!(
-                "has no buffer view and a count of {count} (at most {MAX_VIEWLESS_ELEMENTS})"
-            ))
+            return Err(format!("has no buffer view and a count of {count} (at most {MAX_VIEWLESS_ELEMENTS})"))
         }
         None => vec![T::default(); count],
     };
@@ -120,8 +90,8 @@ fn read<T: Copy + Default>(
             .map_err(|e| format!("sparse indices: {e}"))?;
         let index_stride = indices.view().stride().unwrap_or(index_size);
         let values = sparse.values();
-        let value_bytes = strided(&values.view(), values.offset(), n, size, buffers)
-            .map_err(|e| format!("sparse values: {e}"))?;
+        let value_bytes =
+            strided(&values.view(), values.offset(), n, size, buffers).map_err(|e| format!("sparse values: {e}"))?;
         let value_stride = values.view().stride().unwrap_or(size);
         for k in 0..n {
             let b = &index_bytes[k * index_stride..];
@@ -130,9 +100,9 @@ fn read<T: Copy + Default>(
                 2 => u16::from_le_bytes([b[0], b[1]]) as usize,
                 _ => u32_at(b, 0) as usize,
             };
-            let slot = out
-                .get_mut(at)
-                .ok_or_else(|| format!("sparse index {at} (entry {k}) is out of range (the accessor has {count} elements)"))?;
+            let slot = out.get_mut(at).ok_or_else(|| {
+                format!("sparse index {at} (entry {k}) is out of range (the accessor has {count} elements)")
+            })?;
             *slot = decode(&value_bytes[k * value_stride..k * value_stride + size]);
         }
     }
@@ -149,21 +119,16 @@ fn strided<'b>(
     buffers: &'b [Vec<u8>],
 ) -> Result<&'b [u8], String> {
     let buffer = view.buffer().index();
-    let data = buffers
-        .get(buffer)
-        .ok_or_else(|| format!("buffer {buffer} was not loaded"))?;
+    let data = buffers.get(buffer).ok_or_else(|| format!("buffer {buffer} was not loaded"))?;
     let view_start = view.offset();
-    let view_end = view_start
-        .checked_add(view.length())
-        .filter(|&end| end <= data.len())
-        .ok_or_else(|| {
-            format!(
-                "buffer view {} (bytes {view_start}..+{}) exceeds buffer {buffer}, which has {} bytes",
-                view.index(),
-                view.length(),
-                data.len()
-            )
-        })?;
+    let view_end = view_start.checked_add(view.length()).filter(|&end| end <= data.len()).ok_or_else(|| {
+        format!(
+            "buffer view {} (bytes {view_start}..+{}) exceeds buffer {buffer}, which has {} bytes",
+            view.index(),
+            view.length(),
+            data.len()
+        )
+    })?;
     let stride = view.stride().unwrap_or(size);
     if stride < size {
         return Err(format!(

@@ -26,10 +26,7 @@ pub(super) fn parse(bytes: &[u8], notes: &mut Vec<String>) -> Result<Gltf, Strin
     if !unsupported.is_empty() {
         let hint = if unsupported.iter().any(|e| e.contains("draco")) {
             " (`assimp export in.glb out.glb -fglb2` decodes Draco)"
-        } else if unsupported
-            .iter()
-            .any(|e| e.contains("quantization") || e.contains("meshopt"))
-        {
+        } else if unsupported.iter().any(|e| e.contains("quantization") || e.contains("meshopt")) {
             " (`gltfpack -i in.glb -o out.glb -noq` writes unquantized meshes)"
         } else {
             ""
@@ -68,11 +65,7 @@ pub(super) fn parse(bytes: &[u8], notes: &mut Vec<String>) -> Result<Gltf, Strin
         }
     });
     if !errors.is_empty() {
-        let more = if errors.len() > 8 {
-            format!(" (and {} more)", errors.len() - 8)
-        } else {
-            String::new()
-        };
+        let more = if errors.len() > 8 { format!(" (and {} more)", errors.len() - 8) } else { String::new() };
         errors.truncate(8);
         return Err(format!("invalid glTF: {}{more}", errors.join("; ")));
     }
@@ -95,27 +88,22 @@ pub(super) fn load_buffers(
     for buffer in document.buffers() {
         let i = buffer.index();
         let data = match buffer.source() {
-            Source::Bin => blob.take().ok_or_else(|| {
-                format!("buffer {i} refers to the GLB binary chunk, which the file does not have")
-            })?,
+            Source::Bin => blob
+                .take()
+                .ok_or_else(|| format!("buffer {i} refers to the GLB binary chunk, which the file does not have"))?,
             Source::Uri(uri) if uri.starts_with("data:") || uri.starts_with("file:") => {
                 gltf::buffer::Data::from_source(buffer.source(), Some(base))
                     .map(|d| d.0)
                     .map_err(|e| format!("buffer {i} ({}): {}", shorten(uri), describe_error(e)))?
             }
             Source::Uri(uri) if uri.contains(':') => {
-                return Err(format!(
-                    "buffer {i}: unsupported URI scheme in '{}'",
-                    shorten(uri)
-                ))
+                return Err(format!("buffer {i}: unsupported URI scheme in '{}'", shorten(uri)))
             }
             Source::Uri(uri) => {
-                let relative = percent_decode(uri)
-                    .ok_or_else(|| format!("buffer {i}: malformed URI '{uri}'"))?;
+                let relative = percent_decode(uri).ok_or_else(|| format!("buffer {i}: malformed URI '{uri}'"))?;
                 let path = base.join(&relative);
-                std::fs::read(&path).map_err(|e| {
-                    format!("buffer {i}: cannot read '{uri}' ({}): {e}", path.display())
-                })?
+                std::fs::read(&path)
+                    .map_err(|e| format!("buffer {i}: cannot read '{uri}' ({}): {e}", path.display()))?
             }
         };
         if data.len() < buffer.length() {
@@ -134,16 +122,8 @@ pub(super) fn load_buffers(
 pub(super) fn describe_error(error: gltf::Error) -> String {
     match error {
         gltf::Error::Validation(errors) => {
-            let shown: Vec<String> = errors
-                .iter()
-                .take(8)
-                .map(|(path, e)| format!("{path}: {e}"))
-                .collect();
-            let more = if errors.len() > 8 {
-                format!(" (and {} more)", errors.len() - 8)
-            } else {
-                String::new()
-            };
+            let shown: Vec<String> = errors.iter().take(8).map(|(path, e)| format!("{path}: {e}")).collect();
+            let more = if errors.len() > 8 { format!(" (and {} more)", errors.len() - 8) } else { String::new() };
             format!("invalid glTF: {}{more}", shown.join("; "))
         }
         gltf::Error::Deserialize(e) => format!("not a valid glTF 2.0 document: {e}"),

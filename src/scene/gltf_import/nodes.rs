@@ -29,16 +29,11 @@ pub(super) fn node_label(node: &Node<'_>) -> String {
 /// The root nodes to draw: the default scene's, else scene 0's, else every node without a parent.
 pub(super) fn roots<'a>(document: &'a Document, notes: &mut Vec<String>) -> Vec<Node<'a>> {
     let scene_count = document.scenes().len();
-    let scene = document
-        .default_scene()
-        .or_else(|| document.scenes().next());
+    let scene = document.default_scene().or_else(|| document.scenes().next());
     match scene {
         Some(scene) => {
             if scene_count > 1 {
-                notes.push(format!(
-                    "the file has {scene_count} scenes; only scene {} is drawn",
-                    scene.index()
-                ));
+                notes.push(format!("the file has {scene_count} scenes; only scene {} is drawn", scene.index()));
             }
             scene.nodes().collect()
         }
@@ -49,15 +44,9 @@ pub(super) fn roots<'a>(document: &'a Document, notes: &mut Vec<String>) -> Vec<
                     has_parent[child.index()] = true;
                 }
             }
-            let roots: Vec<Node<'a>> = document
-                .nodes()
-                .filter(|n| !has_parent[n.index()])
-                .collect();
+            let roots: Vec<Node<'a>> = document.nodes().filter(|n| !has_parent[n.index()]).collect();
             if !roots.is_empty() {
-                notes.push(format!(
-                    "the file has no scene; drawing its {} parentless nodes",
-                    roots.len()
-                ));
+                notes.push(format!("the file has no scene; drawing its {} parentless nodes", roots.len()));
             }
             roots
         }
@@ -77,27 +66,18 @@ pub(super) fn walk<'a>(
     let mut parent = vec![None::<usize>; count];
     let mut visited = vec![false; count];
     let mut out = Vec::new();
-    let mut stack: Vec<(Node<'a>, Transform, usize, Option<usize>)> = roots
-        .into_iter()
-        .rev()
-        .map(|n| (n, Transform::default(), 0, None))
-        .collect();
+    let mut stack: Vec<(Node<'a>, Transform, usize, Option<usize>)> =
+        roots.into_iter().rev().map(|n| (n, Transform::default(), 0, None)).collect();
     while let Some((node, parent_world, depth, from)) = stack.pop() {
         let i = node.index();
         let place = || format!("{file}: {}", node_label(&node));
         if visited[i] {
-            return Err(SceneError::invalid(
-                place(),
-                revisit_message(document, &parent, i, from),
-            ));
+            return Err(SceneError::invalid(place(), revisit_message(document, &parent, i, from)));
         }
         visited[i] = true;
         parent[i] = from;
         if depth >= MAX_DEPTH {
-            return Err(SceneError::invalid(
-                place(),
-                format!("the node hierarchy is deeper than {MAX_DEPTH} levels"),
-            ));
+            return Err(SceneError::invalid(place(), format!("the node hierarchy is deeper than {MAX_DEPTH} levels")));
         }
         let local = local_transform(&node, notes).map_err(|m| SceneError::invalid(place(), m))?;
         let world = parent_world.then(&local);
@@ -118,12 +98,7 @@ pub(super) fn walk<'a>(
 
 /// Why node `i` was reached a second time: a cycle when it is an ancestor of `from`, otherwise a
 /// node with two parents (or listed twice among the roots).
-fn revisit_message(
-    document: &Document,
-    parent: &[Option<usize>],
-    i: usize,
-    from: Option<usize>,
-) -> String {
+fn revisit_message(document: &Document, parent: &[Option<usize>], i: usize, from: Option<usize>) -> String {
     let mut chain = vec![i];
     let mut at = from;
     while let Some(p) = at {
@@ -131,10 +106,7 @@ fn revisit_message(
         if p == i {
             chain.reverse();
             let path: Vec<String> = chain.iter().map(|n| format!("#{n}")).collect();
-            return format!(
-                "the node hierarchy has a cycle ({}); glTF nodes must form a tree",
-                path.join(" -> ")
-            );
+            return format!("the node hierarchy has a cycle ({}); glTF nodes must form a tree", path.join(" -> "));
         }
         if chain.len() > parent.len() + 1 {
             break;
@@ -160,12 +132,7 @@ fn local_transform(node: &Node<'_>, notes: &mut Vec<String>) -> Result<Transform
                 return Err("transform is not finite".into());
             }
             let last_row = [m[0][3], m[1][3], m[2][3], m[3][3]];
-            if (last_row[0].abs()
-                + last_row[1].abs()
-                + last_row[2].abs()
-                + (last_row[3] - 1.0).abs())
-                > 1e-5
-            {
+            if (last_row[0].abs() + last_row[1].abs() + last_row[2].abs() + (last_row[3] - 1.0).abs()) > 1e-5 {
                 notes.push(format!(
                     "{}: matrix has the projective last row {last_row:?}; it is treated as [0, 0, 0, 1]",
                     node_label(node)
@@ -177,11 +144,7 @@ fn local_transform(node: &Node<'_>, notes: &mut Vec<String>) -> Result<Transform
                 translation: DVec3::new(m[3][0] as f64, m[3][1] as f64, m[3][2] as f64),
             })
         }
-        NodeTransform::Decomposed {
-            translation: t,
-            rotation: r,
-            scale: s,
-        } => {
+        NodeTransform::Decomposed { translation: t, rotation: r, scale: s } => {
             if t.iter().chain(&r).chain(&s).any(|v| !v.is_finite()) {
                 return Err("transform is not finite".into());
             }
@@ -191,10 +154,7 @@ fn local_transform(node: &Node<'_>, notes: &mut Vec<String>) -> Result<Transform
             }
             let linear = DMat3::from_quat(q.normalize())
                 * DMat3::from_diagonal(DVec3::new(s[0] as f64, s[1] as f64, s[2] as f64));
-            Ok(Transform {
-                linear: linear.as_mat3(),
-                translation: DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64),
-            })
+            Ok(Transform { linear: linear.as_mat3(), translation: DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64) })
         }
     }
 }

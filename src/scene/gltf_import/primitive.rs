@@ -19,20 +19,10 @@ pub(super) enum Converted {
 
 /// Reads `primitive`; `place` names file, mesh and primitive (e.g. `a.glb: mesh 'wall' (#3)
 /// primitive 0`) and is extended with the accessor in every error.
-pub(super) fn convert(
-    primitive: &Primitive<'_>,
-    buffers: &[Vec<u8>],
-    place: &str,
-) -> Result<Converted, SceneError> {
+pub(super) fn convert(primitive: &Primitive<'_>, buffers: &[Vec<u8>], place: &str) -> Result<Converted, SceneError> {
     let mode = primitive.mode();
-    if !matches!(
-        mode,
-        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-    ) {
-        return Ok(Converted::Skipped(format!(
-            "mode {} cannot be drawn as triangles",
-            mode_name(mode)
-        )));
+    if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+        return Ok(Converted::Skipped(format!("mode {} cannot be drawn as triangles", mode_name(mode))));
     }
     let positions_accessor = primitive
         .get(&Semantic::Positions)
@@ -44,10 +34,7 @@ pub(super) fn convert(
         .map(Vec3::from_array)
         .collect();
     if let Some((at, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
-        return Err(SceneError::invalid(
-            &pos_place,
-            format!("vertex {at} has a non-finite position {p}"),
-        ));
+        return Err(SceneError::invalid(&pos_place, format!("vertex {at} has a non-finite position {p}")));
     }
     let n = positions.len();
 
@@ -57,8 +44,7 @@ pub(super) fn convert(
         None => Vec::new(),
         Some(acc) => {
             let nrm_place = format!("{place}, NORMAL accessor {}", acc.index());
-            let normals = accessor::read_vec3(&acc, buffers)
-                .map_err(|m| SceneError::invalid(&nrm_place, m))?;
+            let normals = accessor::read_vec3(&acc, buffers).map_err(|m| SceneError::invalid(&nrm_place, m))?;
             if normals.len() != n {
                 return Err(SceneError::invalid(
                     &nrm_place,
@@ -71,10 +57,7 @@ pub(super) fn convert(
             }
             // Non-finite or zero normals are recomputed from the faces by `MeshData::validate`.
             let normals: Vec<Vec3> = normals.into_iter().map(Vec3::from_array).collect();
-            let bad = normals
-                .iter()
-                .filter(|v| !v.is_finite() || v.length_squared() <= 1e-12)
-                .count();
+            let bad = normals.iter().filter(|v| !v.is_finite() || v.length_squared() <= 1e-12).count();
             if bad > 0 {
                 normal_note = Some(format!(
                     "{nrm_place}: {bad} of {n} normals are zero or not finite; they are computed from the faces"
@@ -86,14 +69,12 @@ pub(super) fn convert(
 
     let raw_indices = match primitive.indices() {
         None => {
-            let count =
-                u32::try_from(n).map_err(|_| SceneError::too_large(&pos_place, "vertex count"))?;
+            let count = u32::try_from(n).map_err(|_| SceneError::too_large(&pos_place, "vertex count"))?;
             (0..count).collect()
         }
         Some(acc) => {
             let idx_place = format!("{place}, indices accessor {}", acc.index());
-            let indices = accessor::read_indices(&acc, buffers)
-                .map_err(|m| SceneError::invalid(&idx_place, m))?;
+            let indices = accessor::read_indices(&acc, buffers).map_err(|m| SceneError::invalid(&idx_place, m))?;
             if let Some((at, &bad)) = indices.iter().enumerate().find(|(_, &i)| i as usize >= n) {
                 return Err(SceneError::invalid(
                     &idx_place,
@@ -112,30 +93,31 @@ pub(super) fn convert(
         Mode::TriangleFan => fan_to_list(&raw_indices),
         _ => raw_indices,
     };
-    if indices.len() % 3 != 0 {
-        let what = if primitive.indices().is_some() {
-            "indices"
-        } else {
-            "vertices (it has no indices)"
-        };
+    if !indices.len().is_multiple_of(3) {
+        let what = if primitive.indices().is_some() { "indices" } else { "vertices (it has no indices)" };
         return Err(SceneError::invalid(
             &place_for_mesh,
-            format!(
-                "a TRIANGLES primitive needs a multiple of 3 {what}, it has {}",
-                indices.len()
-            ),
+            format!("a TRIANGLES primitive needs a multiple of 3 {what}, it has {}", indices.len()),
         ));
     }
-    Ok(Converted::Mesh(
-        MeshData {
-            positions,
-            normals,
-            indices,
-        },
-        place_for_mesh,
-        normal_note,
-    ))
+    let mut mesh = MeshData { positions, normals, indices };
+    // Normals that contradict the faces (all +Y on walls, say) would light the mesh as if it
+    // were flat; recompute them from the faces and say so.
+    if let Some(share) = mesh.normal_disagreement().filter(|&s| s > NORMAL_DISAGREEMENT_LIMIT) {
+        // Notes are printed after the file name already.
+        let within_file = place.split_once(": ").map_or(place, |(_, rest)| rest);
+        normal_note = Some(format!(
+            "{within_file}: the file's normals are nearly perpendicular to {:.0}% of the surface area; they are ignored and computed from the faces",
+            share * 100.0
+        ));
+        mesh.normals.clear();
+    }
+    Ok(Converted::Mesh(mesh, place_for_mesh, normal_note))
 }
+
+/// Share of surface area with contradicting normals above which a primitive's normals are
+/// recomputed. Sound smooth normals stay far below it (only sharp creases disagree that much).
+const NORMAL_DISAGREEMENT_LIMIT: f32 = 0.2;
 
 /// The glTF spelling of a primitive mode.
 pub(super) fn mode_name(mode: Mode) -> &'static str {
@@ -156,11 +138,7 @@ pub(super) fn mode_name(mode: Mode) -> &'static str {
 pub fn strip_to_list(strip: &[u32]) -> Vec<u32> {
     let mut out = Vec::with_capacity(strip.len().saturating_sub(2) * 3);
     for (i, w) in strip.windows(3).enumerate() {
-        let [a, b, c] = if i % 2 == 0 {
-            [w[0], w[1], w[2]]
-        } else {
-            [w[1], w[0], w[2]]
-        };
+        let [a, b, c] = if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] };
         if a != b && b != c && a != c {
             out.extend_from_slice(&[a, b, c]);
         }
@@ -188,10 +166,7 @@ mod tests {
 
     #[test]
     fn strips_alternate_winding() {
-        assert_eq!(
-            strip_to_list(&[0, 1, 2, 3, 4]),
-            vec![0, 1, 2, 2, 1, 3, 2, 3, 4]
-        );
+        assert_eq!(strip_to_list(&[0, 1, 2, 3, 4]), vec![0, 1, 2, 2, 1, 3, 2, 3, 4]);
         // Degenerate joint triangles are dropped.
         assert_eq!(strip_to_list(&[0, 1, 2, 2, 3, 4]), vec![0, 1, 2, 3, 2, 4]);
         assert!(strip_to_list(&[0, 1]).is_empty());

@@ -45,26 +45,9 @@ const LAMP_EVERY: usize = 8;
 
 /// Generates the city.
 pub fn generate(options: &LoadOptions) -> Result<Scene, SceneError> {
-    let n = count_option(
-        "city",
-        "instances",
-        options.instances,
-        DEFAULT_INSTANCES,
-        1,
-        MAX_INSTANCES,
-    )?;
-    let light_count = count_option(
-        "city",
-        "lights",
-        options.lights,
-        DEFAULT_LIGHTS,
-        0,
-        MAX_LIGHTS,
-    )?;
-    let mut scene = Scene {
-        name: "builtin:city".into(),
-        ..Default::default()
-    };
+    let n = count_option("city", "instances", options.instances, DEFAULT_INSTANCES, 1, MAX_INSTANCES)?;
+    let light_count = count_option("city", "lights", options.lights, DEFAULT_LIGHTS, 0, MAX_LIGHTS)?;
+    let mut scene = Scene { name: "builtin:city".into(), ..Default::default() };
     let palette = palette::palette(&mut scene)?;
     let mut rng = SmallRng::seed_from_u64(options.seed);
     scene.instances = instance_storage("city", n)?;
@@ -91,14 +74,7 @@ pub fn generate(options: &LoadOptions) -> Result<Scene, SceneError> {
     for b in 0..blocks {
         let quota = per_block + usize::from(b < extra);
         let corner = origin + DVec3::new((b % g) as f64 * PITCH, 0.0, (b / g) as f64 * PITCH);
-        block(
-            &mut scene.instances,
-            &mut lamps,
-            &palette,
-            &mut rng,
-            corner,
-            quota,
-        );
+        block(&mut scene.instances, &mut lamps, &palette, &mut rng, corner, quota);
     }
     debug_assert_eq!(scene.instances.len(), n);
 
@@ -120,26 +96,13 @@ fn block(
         return;
     }
     let center = corner + DVec3::new(BLOCK * 0.5, 0.0, BLOCK * 0.5);
-    push(
-        out,
-        &p.slab,
-        rng,
-        center,
-        0.0,
-        Vec3::new(BLOCK as f32, CURB as f32, BLOCK as f32),
-        0,
-    );
+    push(out, &p.slab, rng, center, 0.0, Vec3::new(BLOCK as f32, CURB as f32, BLOCK as f32), 0);
     let (lx, lz) = (rng.random_range(1..=3usize), rng.random_range(1..=3usize));
     let buildings = (lx * lz).min(quota - 1);
     let inner = BLOCK - 2.0 * SIDEWALK;
     let lot = DVec3::new(inner / lx as f64, 0.0, inner / lz as f64);
     for k in 0..buildings {
-        let lot_min = corner
-            + DVec3::new(
-                SIDEWALK + (k % lx) as f64 * lot.x,
-                CURB,
-                SIDEWALK + (k / lx) as f64 * lot.z,
-            );
+        let lot_min = corner + DVec3::new(SIDEWALK + (k % lx) as f64 * lot.x, CURB, SIDEWALK + (k / lx) as f64 * lot.z);
         building(out, p, rng, lot_min, lot);
     }
     let props = quota - 1 - buildings;
@@ -156,11 +119,8 @@ fn block(
             vehicle(out, p, rng, corner);
         } else {
             let kind = &p.props[rng.random_range(0..p.props.len())];
-            let (pos, yaw) = on_sidewalk(
-                corner,
-                rng.random_range(0.0..4.0 * BLOCK),
-                rng.random_range(0.6..SIDEWALK - 0.8),
-            );
+            let (pos, yaw) =
+                on_sidewalk(corner, rng.random_range(0.0..4.0 * BLOCK), rng.random_range(0.6..SIDEWALK - 0.8));
             let yaw = yaw + rng.random_range(-0.3f32..0.3);
             let s = rng.random_range(kind.scale.0..=kind.scale.1);
             push(out, kind, rng, pos, yaw, Vec3::splat(s), 0);
@@ -186,11 +146,7 @@ fn on_sidewalk(corner: DVec3, along: f64, inset: f64) -> (DVec3, f32) {
 /// One building on the lot `lot_min .. lot_min + lot`.
 fn building(out: &mut Vec<Instance>, p: &Palette, rng: &mut SmallRng, lot_min: DVec3, lot: DVec3) {
     let pick = rng.random::<f32>();
-    let b = p
-        .buildings
-        .iter()
-        .find(|b| pick < b.cumulative_weight)
-        .unwrap_or(&p.buildings[0]);
+    let b = p.buildings.iter().find(|b| pick < b.cumulative_weight).unwrap_or(&p.buildings[0]);
     let fx = lot.x * rng.random_range(0.78..0.96);
     let fz = lot.z * rng.random_range(0.78..0.96);
     let u: f64 = rng.random();
@@ -201,11 +157,7 @@ fn building(out: &mut Vec<Instance>, p: &Palette, rng: &mut SmallRng, lot_min: D
     let height = height.min(b.max_height);
     let x = lot_min.x + fx * 0.5 + rng.random_range(0.0..=lot.x - fx);
     let z = lot_min.z + fz * 0.5 + rng.random_range(0.0..=lot.z - fz);
-    let (fx, fz) = if b.square {
-        (fx.min(fz), fx.min(fz))
-    } else {
-        (fx, fz)
-    };
+    let (fx, fz) = if b.square { (fx.min(fz), fx.min(fz)) } else { (fx, fz) };
     push(
         out,
         &b.kind,
@@ -224,10 +176,7 @@ fn vehicle(out: &mut Vec<Instance>, p: &Palette, rng: &mut SmallRng, corner: DVe
     let along = rng.random_range(3.0..BLOCK - 3.0);
     let flip = if lane < 0.5 { 0.0 } else { PI };
     let (pos, yaw) = if rng.random::<bool>() {
-        (
-            corner + DVec3::new(BLOCK + lane * STREET, 0.0, along),
-            FRAC_PI_2 + flip,
-        )
+        (corner + DVec3::new(BLOCK + lane * STREET, 0.0, along), FRAC_PI_2 + flip)
     } else {
         (corner + DVec3::new(along, 0.0, BLOCK + lane * STREET), flip)
     };
@@ -236,65 +185,28 @@ fn vehicle(out: &mut Vec<Instance>, p: &Palette, rng: &mut SmallRng, corner: DVe
 }
 
 /// Appends an instance of `kind` at `pos`, turned by `yaw` about +y and scaled by `scale`.
-fn push(
-    out: &mut Vec<Instance>,
-    kind: &Kind,
-    rng: &mut SmallRng,
-    pos: DVec3,
-    yaw: f32,
-    scale: Vec3,
-    flags: u32,
-) {
+fn push(out: &mut Vec<Instance>, kind: &Kind, rng: &mut SmallRng, pos: DVec3, yaw: f32, scale: Vec3, flags: u32) {
     let material = match kind.materials.len() {
         1 => kind.materials[0],
         n => kind.materials[rng.random_range(0..n)],
     };
     let linear = Mat3::from_rotation_y(yaw) * Mat3::from_diagonal(scale);
-    out.push(Instance {
-        transform: Transform {
-            linear,
-            translation: pos,
-        },
-        mesh: kind.mesh,
-        material,
-        flags,
-    });
+    out.push(Instance { transform: Transform { linear, translation: pos }, mesh: kind.mesh, material, flags });
 }
 
 /// Lights at the `count` street lamps nearest to the city center (where the suggested camera
 /// stands), topped up with lights scattered over the city when there are too few lamps.
-fn street_lights(
-    lamps: &mut Vec<DVec3>,
-    count: usize,
-    seed: u64,
-    scene: &Scene,
-) -> Vec<PointLight> {
+fn street_lights(lamps: &mut Vec<DVec3>, count: usize, seed: u64, scene: &Scene) -> Vec<PointLight> {
     let mut chosen: Vec<(usize, DVec3)> = lamps.drain(..).enumerate().collect();
     let key = |(i, p): &(usize, DVec3)| (p.x * p.x + p.z * p.z, *i);
     if chosen.len() > count {
-        chosen.select_nth_unstable_by(count, |a, b| {
-            key(a)
-                .partial_cmp(&key(b))
-                .unwrap_or(std::cmp::Ordering::Equal)
-        });
+        chosen.select_nth_unstable_by(count, |a, b| key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal));
         chosen.truncate(count);
     }
-    chosen.sort_by(|a, b| {
-        key(a)
-            .partial_cmp(&key(b))
-            .unwrap_or(std::cmp::Ordering::Equal)
-    });
+    chosen.sort_by(|a, b| key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal));
     let mut out: Vec<PointLight> = chosen
         .into_iter()
-        .map(|(_, head)| {
-            lights::light(
-                head - DVec3::new(0.0, 0.3, 0.0),
-                lights::WARM,
-                1.2,
-                LAMP_HEIGHT,
-                24.0,
-            )
-        })
+        .map(|(_, head)| lights::light(head - DVec3::new(0.0, 0.3, 0.0), lights::WARM, 1.2, LAMP_HEIGHT, 24.0))
         .collect();
     if out.len() < count {
         if let Some(bounds) = scene.world_bounds() {

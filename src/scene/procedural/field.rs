@@ -8,9 +8,7 @@
 //! non-uniformly, since those are the hard cases of bounds transformation and culling.
 
 use super::shapes;
-use super::{
-    count_option, instance_storage, lights, material, MAX_INSTANCES, MAX_KINDS, MAX_LIGHTS,
-};
+use super::{count_option, instance_storage, lights, material, MAX_INSTANCES, MAX_KINDS, MAX_LIGHTS};
 use crate::scene::error::SceneError;
 use crate::scene::mesh::MeshData;
 use crate::scene::source::LoadOptions;
@@ -35,27 +33,10 @@ const MIRROR_EVERY: usize = 50;
 
 /// Generates the field.
 pub fn generate(options: &LoadOptions) -> Result<Scene, SceneError> {
-    let n = count_option(
-        "field",
-        "instances",
-        options.instances,
-        DEFAULT_INSTANCES,
-        1,
-        MAX_INSTANCES,
-    )?;
+    let n = count_option("field", "instances", options.instances, DEFAULT_INSTANCES, 1, MAX_INSTANCES)?;
     let kinds = count_option("field", "kinds", options.kinds, DEFAULT_KINDS, 1, MAX_KINDS)?;
-    let light_count = count_option(
-        "field",
-        "lights",
-        options.lights,
-        DEFAULT_LIGHTS,
-        0,
-        MAX_LIGHTS,
-    )?;
-    let mut scene = Scene {
-        name: "builtin:field".into(),
-        ..Default::default()
-    };
+    let light_count = count_option("field", "lights", options.lights, DEFAULT_LIGHTS, 0, MAX_LIGHTS)?;
+    let mut scene = Scene { name: "builtin:field".into(), ..Default::default() };
     let mut rng = SmallRng::seed_from_u64(options.seed);
     for m in 0..12 {
         let hue = m as f32 / 12.0;
@@ -69,42 +50,23 @@ pub fn generate(options: &LoadOptions) -> Result<Scene, SceneError> {
     }
     for k in 0..kinds {
         let (family, data) = kind(k, &mut rng);
-        scene.add_mesh(
-            &format!("field/{family}#{k}"),
-            &data,
-            &format!("builtin:field kind {k} ({family})"),
-        )?;
+        scene.add_mesh(&format!("field/{family}#{k}"), &data, &format!("builtin:field kind {k} ({family})"))?;
     }
 
     let side = SPACING * (n as f64).sqrt();
     scene.instances = instance_storage("field", n)?;
     for i in 0..n {
         let mesh = (i % kinds) as u32;
-        let translation = DVec3::new(
-            rng.random_range(-0.5..0.5) * side,
-            0.0,
-            rng.random_range(-0.5..0.5) * side,
-        );
+        let translation = DVec3::new(rng.random_range(-0.5..0.5) * side, 0.0, rng.random_range(-0.5..0.5) * side);
         let rotation = if rng.random::<f32>() < 0.2 {
-            let axis = Vec3::new(
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-            );
-            Quat::from_axis_angle(
-                axis.try_normalize().unwrap_or(Vec3::X),
-                rng.random_range(0.0..TAU),
-            )
+            let axis = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            Quat::from_axis_angle(axis.try_normalize().unwrap_or(Vec3::X), rng.random_range(0.0..TAU))
         } else {
             Quat::from_rotation_y(rng.random_range(0.0..TAU))
         };
         let s: f32 = rng.random_range(0.5..2.0);
         let mut scale = if rng.random::<f32>() < 0.15 {
-            Vec3::new(
-                s * rng.random_range(0.5..1.5),
-                s * rng.random_range(0.5..1.5),
-                s * rng.random_range(0.5..1.5),
-            )
+            Vec3::new(s * rng.random_range(0.5..1.5), s * rng.random_range(0.5..1.5), s * rng.random_range(0.5..1.5))
         } else {
             Vec3::splat(s)
         };
@@ -113,15 +75,7 @@ pub fn generate(options: &LoadOptions) -> Result<Scene, SceneError> {
         }
         let linear = Mat3::from_quat(rotation) * Mat3::from_diagonal(scale);
         let material = rng.random_range(0..12u32);
-        scene.instances.push(Instance {
-            transform: Transform {
-                linear,
-                translation,
-            },
-            mesh,
-            material,
-            flags: 0,
-        });
+        scene.instances.push(Instance { transform: Transform { linear, translation }, mesh, material, flags: 0 });
     }
     if let Some(bounds) = scene.world_bounds() {
         scene.lights = lights::scatter(&bounds, light_count, options.seed);
@@ -139,72 +93,27 @@ pub fn kind(k: usize, rng: &mut SmallRng) -> (&'static str, MeshData) {
     let mut r = |lo: f32, hi: f32| rng.random_range(lo..hi);
     let stretch = Mat4::from_scale(Vec3::new(r(0.8, 1.25), r(0.8, 1.25), r(0.8, 1.25)));
     let (family, data) = match k % FAMILIES {
-        0 => (
-            "box",
-            shapes::cuboid(Vec3::new(r(0.3, 2.0), r(0.3, 2.0), r(0.3, 2.0))),
-        ),
-        1 => (
-            "chamfered_box",
-            shapes::chamfered_box(
-                Vec3::new(r(0.5, 2.0), r(0.5, 2.0), r(0.5, 2.0)),
-                r(0.02, 0.2),
-            ),
-        ),
+        0 => ("box", shapes::cuboid(Vec3::new(r(0.3, 2.0), r(0.3, 2.0), r(0.3, 2.0)))),
+        1 => ("chamfered_box", shapes::chamfered_box(Vec3::new(r(0.5, 2.0), r(0.5, 2.0), r(0.5, 2.0)), r(0.02, 0.2))),
         2 => ("cylinder", shapes::cylinder(r(0.2, 1.0), r(0.3, 2.5), seg)),
         3 => ("cone", shapes::cone(r(0.2, 1.0), r(0.3, 2.5), seg)),
-        4 => (
-            "frustum",
-            shapes::frustum(r(0.3, 1.0), r(0.05, 0.9), r(0.3, 2.0), seg),
-        ),
-        5 => (
-            "uv_sphere",
-            shapes::uv_sphere(r(0.3, 1.2), seg.max(4), 2 + v % 10),
-        ),
+        4 => ("frustum", shapes::frustum(r(0.3, 1.0), r(0.05, 0.9), r(0.3, 2.0), seg)),
+        5 => ("uv_sphere", shapes::uv_sphere(r(0.3, 1.2), seg.max(4), 2 + v % 10)),
         6 => ("icosphere", shapes::icosphere(r(0.3, 1.2), v % 3)),
-        7 => (
-            "torus",
-            shapes::torus(r(0.6, 1.2), r(0.1, 0.4), seg.max(5), 3 + v % 9),
-        ),
-        8 => (
-            "capsule",
-            shapes::capsule(r(0.15, 0.5), r(1.0, 2.5), seg, 1 + v % 5),
-        ),
-        9 => (
-            "pyramid",
-            shapes::pyramid(r(0.4, 2.0), r(0.4, 2.0), r(0.3, 2.0)),
-        ),
+        7 => ("torus", shapes::torus(r(0.6, 1.2), r(0.1, 0.4), seg.max(5), 3 + v % 9)),
+        8 => ("capsule", shapes::capsule(r(0.15, 0.5), r(1.0, 2.5), seg, 1 + v % 5)),
+        9 => ("pyramid", shapes::pyramid(r(0.4, 2.0), r(0.4, 2.0), r(0.3, 2.0))),
         10 => ("prism", shapes::prism(3 + v % 14, r(0.3, 1.2), r(0.2, 2.0))),
-        11 => (
-            "tent_prism",
-            shapes::tent_prism(r(0.5, 2.0), r(0.3, 1.5), r(0.5, 3.0)),
-        ),
-        12 => (
-            "wedge",
-            shapes::wedge(Vec3::new(r(0.5, 2.0), r(0.2, 1.5), r(0.5, 2.5))),
-        ),
-        13 => (
-            "tube",
-            shapes::tube(r(0.2, 0.5), r(0.55, 1.0), r(0.2, 2.0), seg.max(5)),
-        ),
-        14 => (
-            "arch",
-            shapes::arch(r(1.5, 4.0), r(2.0, 4.0), r(0.3, 1.0), 2 + v % 12),
-        ),
-        15 => (
-            "stairs",
-            shapes::stairs(2 + v % 10, r(0.8, 2.0), r(0.1, 0.25), r(0.2, 0.4)),
-        ),
+        11 => ("tent_prism", shapes::tent_prism(r(0.5, 2.0), r(0.3, 1.5), r(0.5, 3.0))),
+        12 => ("wedge", shapes::wedge(Vec3::new(r(0.5, 2.0), r(0.2, 1.5), r(0.5, 2.5)))),
+        13 => ("tube", shapes::tube(r(0.2, 0.5), r(0.55, 1.0), r(0.2, 2.0), seg.max(5))),
+        14 => ("arch", shapes::arch(r(1.5, 4.0), r(2.0, 4.0), r(0.3, 1.0), 2 + v % 12)),
+        15 => ("stairs", shapes::stairs(2 + v % 10, r(0.8, 2.0), r(0.1, 0.25), r(0.2, 0.4))),
         16 => ("crate_stack", shapes::crate_stack(1 + v % 4)),
         17 => ("fence", shapes::fence(r(1.5, 4.0), 2 + v % 8)),
-        18 => (
-            "tree_conifer",
-            shapes::tree_conifer(r(2.0, 8.0), seg.max(4)),
-        ),
+        18 => ("tree_conifer", shapes::tree_conifer(r(2.0, 8.0), seg.max(4))),
         19 => ("kiosk", shapes::kiosk(5 + v % 8)),
-        20 => (
-            "car",
-            shapes::car(r(3.5, 6.0), r(1.6, 2.2), r(1.3, 2.4), seg.max(6)),
-        ),
+        20 => ("car", shapes::car(r(3.5, 6.0), r(1.6, 2.2), r(1.3, 2.4), seg.max(6))),
         21 => ("lamp_post", shapes::lamp_post(r(3.0, 8.0), seg.max(4))),
         22 => ("bench", shapes::bench(r(1.0, 2.5))),
         _ => ("building_stepped", shapes::building_stepped(1 + v % 6)),

@@ -14,11 +14,7 @@ pub const WARM: Vec3 = Vec3::new(1.0, 0.78, 0.52);
 /// A light whose radiance at distance `reach` (straight below it, say) is about `brightness`,
 /// and which fades out completely at `range`.
 pub fn light(position: DVec3, tint: Vec3, brightness: f32, reach: f32, range: f32) -> PointLight {
-    PointLight {
-        position,
-        color: tint * brightness * (reach * reach + 1.0),
-        range,
-    }
+    PointLight { position, color: tint * brightness * (reach * reach + 1.0), range }
 }
 
 /// `n` point lights spread over the box `bounds` (world min, max): a jittered grid over x/z,
@@ -44,17 +40,10 @@ pub fn scatter(bounds: &(DVec3, DVec3), n: usize, seed: u64) -> Vec<PointLight> 
             let (cx, cz) = ((i % cols) as f64, (i / cols) as f64);
             let jx = rng.random_range(0.25..0.75);
             let jz = rng.random_range(0.25..0.75);
-            let position = DVec3::new(
-                min.x + (cx + jx) * cell.x,
-                max.y + above,
-                min.z + (cz + jz) * cell.z,
-            );
-            let tint = Vec3::new(
-                1.0,
-                rng.random_range(0.82..0.95),
-                rng.random_range(0.68..0.85),
-            );
-            light(position, tint, 1.5, drop as f32, range)
+            let position = DVec3::new(min.x + (cx + jx) * cell.x, max.y + above, min.z + (cz + jz) * cell.z);
+            let tint = Vec3::new(1.0, rng.random_range(0.82..0.95), rng.random_range(0.68..0.85));
+            // Fill lights: the sun stays the main light, these add local variation.
+            light(position, tint, 0.5, drop as f32, range)
         })
         .collect()
 }
@@ -65,10 +54,7 @@ mod tests {
 
     #[test]
     fn scatter_is_deterministic_and_covers_the_box() {
-        let b = (
-            DVec3::new(-100.0, 0.0, -50.0),
-            DVec3::new(100.0, 20.0, 50.0),
-        );
+        let b = (DVec3::new(-100.0, 0.0, -50.0), DVec3::new(100.0, 20.0, 50.0));
         let a = scatter(&b, 10, 7);
         assert_eq!(a, scatter(&b, 10, 7));
         assert_ne!(a, scatter(&b, 10, 8));

@@ -61,22 +61,14 @@ pub(crate) fn count_option(
 /// Room for `n` instances, refused with an error instead of aborting when memory is short.
 pub(crate) fn instance_storage(scene: &str, n: usize) -> Result<Vec<Instance>, SceneError> {
     let mut v = Vec::new();
-    v.try_reserve_exact(n).map_err(|_| {
-        SceneError::Builtin(format!(
-            "builtin:{scene}: cannot allocate memory for {n} instances"
-        ))
-    })?;
+    v.try_reserve_exact(n)
+        .map_err(|_| SceneError::Builtin(format!("builtin:{scene}: cannot allocate memory for {n} instances")))?;
     Ok(v)
 }
 
 /// A material shorthand.
 pub(crate) fn material(name: &str, albedo: [f32; 3], roughness: f32, metallic: f32) -> Material {
-    Material {
-        name: name.into(),
-        albedo: Vec3::from_array(albedo),
-        roughness,
-        metallic,
-    }
+    Material { name: name.into(), albedo: Vec3::from_array(albedo), roughness, metallic }
 }
 
 #[cfg(test)]
@@ -85,16 +77,9 @@ mod tests {
 
     #[test]
     fn unknown_names_list_the_available_scenes() {
-        let e = generate("x", &LoadOptions::default())
-            .unwrap_err()
-            .to_string();
-        assert_eq!(
-            e,
-            "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field"
-        );
-        let e = generate("builtin:nope", &LoadOptions::default())
-            .unwrap_err()
-            .to_string();
+        let e = generate("x", &LoadOptions::default()).unwrap_err().to_string();
+        assert_eq!(e, "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field");
+        let e = generate("builtin:nope", &LoadOptions::default()).unwrap_err().to_string();
         assert!(e.contains("'builtin:nope'"), "{e}");
     }
 }

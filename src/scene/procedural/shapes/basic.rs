@@ -29,17 +29,7 @@ pub fn cuboid(size: Vec3) -> MeshData {
             )
         })
         .collect();
-    polyhedron(
-        &points,
-        &[
-            &[0, 2, 4, 6],
-            &[1, 3, 5, 7],
-            &[0, 1, 4, 5],
-            &[2, 3, 6, 7],
-            &[0, 1, 2, 3],
-            &[4, 5, 6, 7],
-        ],
-    )
+    polyhedron(&points, &[&[0, 2, 4, 6], &[1, 3, 5, 7], &[0, 1, 4, 5], &[2, 3, 6, 7], &[0, 1, 2, 3], &[4, 5, 6, 7]])
 }
 
 /// A box of `size` whose 12 edges are cut by flat bevels of width `bevel` (standing on y = 0).
@@ -97,11 +87,7 @@ pub fn chamfered_box(size: Vec3, bevel: f32) -> MeshData {
 
 /// A pyramid with a `width` x `depth` base and its apex `height` above the base center.
 pub fn pyramid(width: f32, depth: f32, height: f32) -> MeshData {
-    let (w, d, hgt) = (
-        width.max(1e-3) * 0.5,
-        depth.max(1e-3) * 0.5,
-        height.max(1e-3),
-    );
+    let (w, d, hgt) = (width.max(1e-3) * 0.5, depth.max(1e-3) * 0.5, height.max(1e-3));
     let points = [
         Vec3::new(-w, 0.0, -d),
         Vec3::new(w, 0.0, -d),
@@ -109,24 +95,14 @@ pub fn pyramid(width: f32, depth: f32, height: f32) -> MeshData {
         Vec3::new(-w, 0.0, d),
         Vec3::new(0.0, hgt, 0.0),
     ];
-    polyhedron(
-        &points,
-        &[
-            &[0, 1, 2, 3],
-            &[0, 1, 4],
-            &[1, 2, 4],
-            &[2, 3, 4],
-            &[3, 0, 4],
-        ],
-    )
+    polyhedron(&points, &[&[0, 1, 2, 3], &[0, 1, 4], &[1, 2, 4], &[2, 3, 4], &[3, 0, 4]])
 }
 
 /// A vertical prism over a regular polygon of `sides` (at least 3) with circumradius `radius`.
 pub fn prism(sides: u32, radius: f32, height: f32) -> MeshData {
     let sides = sides.max(3) as usize;
-    let outline: Vec<Vec2> = (0..sides)
-        .map(|i| Vec2::from_angle(TAU * i as f32 / sides as f32) * radius.max(1e-3))
-        .collect();
+    let outline: Vec<Vec2> =
+        (0..sides).map(|i| Vec2::from_angle(TAU * i as f32 / sides as f32) * radius.max(1e-3)).collect();
     extrude_up(&outline, height)
 }
 
@@ -138,9 +114,7 @@ fn extrude_up(outline: &[Vec2], height: f32) -> MeshData {
     points.extend(outline.iter().map(|p| Vec3::new(p.x, height, p.y)));
     let bottom: Vec<usize> = (0..n).collect();
     let top: Vec<usize> = (n..2 * n).collect();
-    let sides: Vec<[usize; 4]> = (0..n)
-        .map(|i| [i, (i + 1) % n, n + i, n + (i + 1) % n])
-        .collect();
+    let sides: Vec<[usize; 4]> = (0..n).map(|i| [i, (i + 1) % n, n + i, n + (i + 1) % n]).collect();
     let mut faces: Vec<&[usize]> = vec![&bottom, &top];
     faces.extend(sides.iter().map(|s| s.as_slice()));
     polyhedron(&points, &faces)
@@ -149,11 +123,7 @@ fn extrude_up(outline: &[Vec2], height: f32) -> MeshData {
 /// A triangular prism lying along z: a tent or gable roof, `width` wide, `height` tall,
 /// `length` long.
 pub fn tent_prism(width: f32, height: f32, length: f32) -> MeshData {
-    let (w, h, l) = (
-        width.max(1e-3) * 0.5,
-        height.max(1e-3),
-        length.max(1e-3) * 0.5,
-    );
+    let (w, h, l) = (width.max(1e-3) * 0.5, height.max(1e-3), length.max(1e-3) * 0.5);
     let points = [
         Vec3::new(-w, 0.0, -l),
         Vec3::new(w, 0.0, -l),
@@ -162,16 +132,7 @@ pub fn tent_prism(width: f32, height: f32, length: f32) -> MeshData {
         Vec3::new(w, 0.0, l),
         Vec3::new(0.0, h, l),
     ];
-    polyhedron(
-        &points,
-        &[
-            &[0, 1, 2],
-            &[3, 4, 5],
-            &[0, 1, 3, 4],
-            &[1, 2, 4, 5],
-            &[0, 2, 3, 5],
-        ],
-    )
+    polyhedron(&points, &[&[0, 1, 2], &[3, 4, 5], &[0, 1, 3, 4], &[1, 2, 4, 5], &[0, 2, 3, 5]])
 }
 
 /// A ramp: `size.x` wide, rising from y = 0 at +z to `size.y` at -z, `size.z` deep.
@@ -186,28 +147,14 @@ pub fn wedge(size: Vec3) -> MeshData {
         Vec3::new(-w, s.y, -d),
         Vec3::new(w, s.y, -d),
     ];
-    polyhedron(
-        &points,
-        &[
-            &[0, 1, 2, 3],
-            &[0, 1, 4, 5],
-            &[2, 3, 4, 5],
-            &[0, 2, 4],
-            &[1, 3, 5],
-        ],
-    )
+    polyhedron(&points, &[&[0, 1, 2, 3], &[0, 1, 4, 5], &[2, 3, 4, 5], &[0, 2, 4], &[1, 3, 5]])
 }
 
 /// A square of side `size` at y = 0 facing +Y (open; the only shape that is not closed).
 pub fn ground(size: f32) -> MeshData {
     let h = size.max(1e-3) * 0.5;
     MeshData {
-        positions: vec![
-            Vec3::new(-h, 0.0, -h),
-            Vec3::new(-h, 0.0, h),
-            Vec3::new(h, 0.0, h),
-            Vec3::new(h, 0.0, -h),
-        ],
+        positions: vec![Vec3::new(-h, 0.0, -h), Vec3::new(-h, 0.0, h), Vec3::new(h, 0.0, h), Vec3::new(h, 0.0, -h)],
         normals: vec![Vec3::Y; 4],
         indices: vec![0, 1, 2, 0, 2, 3],
     }

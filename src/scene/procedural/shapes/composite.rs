@@ -18,22 +18,13 @@ pub fn arch(width: f32, height: f32, depth: f32, segments: u32) -> MeshData {
     let depth = depth.max(0.01);
     let pillar = outer - inner;
     let mut parts = vec![
-        (
-            cuboid(Vec3::new(pillar, spring, depth)),
-            at(-(inner + pillar * 0.5), 0.0, 0.0),
-        ),
-        (
-            cuboid(Vec3::new(pillar, spring, depth)),
-            at(inner + pillar * 0.5, 0.0, 0.0),
-        ),
+        (cuboid(Vec3::new(pillar, spring, depth)), at(-(inner + pillar * 0.5), 0.0, 0.0)),
+        (cuboid(Vec3::new(pillar, spring, depth)), at(inner + pillar * 0.5, 0.0, 0.0)),
     ];
     let segments = segments.max(2);
     let mut b = Builder::default();
     for i in 0..segments {
-        let (a0, a1) = (
-            PI * i as f32 / segments as f32,
-            PI * (i + 1) as f32 / segments as f32,
-        );
+        let (a0, a1) = (PI * i as f32 / segments as f32, PI * (i + 1) as f32 / segments as f32);
         let mut corners = Vec::with_capacity(8);
         for a in [a0, a1] {
             for r in [inner, outer] {
@@ -44,14 +35,7 @@ pub fn arch(width: f32, height: f32, depth: f32, segments: u32) -> MeshData {
         }
         let inside = corners.iter().copied().sum::<Vec3>() / 8.0;
         // Faces: front, back, inner (intrados), outer (extrados), the two joints.
-        for face in [
-            [0, 2, 4, 6],
-            [1, 3, 5, 7],
-            [0, 1, 4, 5],
-            [2, 3, 6, 7],
-            [0, 1, 2, 3],
-            [4, 5, 6, 7],
-        ] {
+        for face in [[0, 2, 4, 6], [1, 3, 5, 7], [0, 1, 4, 5], [2, 3, 6, 7], [0, 1, 2, 3], [4, 5, 6, 7]] {
             b.convex_face(&face.map(|k| corners[k]), inside);
         }
     }
@@ -68,10 +52,7 @@ pub fn stairs(steps: u32, width: f32, rise: f32, run: f32) -> MeshData {
     let parts: Vec<(MeshData, Mat4)> = (0..steps)
         .map(|k| {
             let z = start - (k as f32 + 0.5) * run;
-            (
-                cuboid(Vec3::new(width, rise * (k + 1) as f32, run)),
-                at(0.0, 0.0, z),
-            )
+            (cuboid(Vec3::new(width, rise * (k + 1) as f32, run)), at(0.0, 0.0, z))
         })
         .collect();
     combine(&parts)
@@ -89,10 +70,7 @@ pub fn lamp_post(height: f32, segments: u32) -> MeshData {
         (frustum(0.2, 0.12, 0.5, segments), Mat4::IDENTITY),
         (cylinder(0.08, h, segments), Mat4::IDENTITY),
         (cuboid(Vec3::new(1.3, 0.08, 0.08)), at(0.6, h - 0.12, 0.0)),
-        (
-            chamfered_box(Vec3::new(0.55, 0.18, 0.3), 0.04),
-            at(1.1, h - 0.34, 0.0),
-        ),
+        (chamfered_box(Vec3::new(0.55, 0.18, 0.3), 0.04), at(1.1, h - 0.34, 0.0)),
     ])
 }
 
@@ -102,10 +80,7 @@ pub fn bollard(radius: f32, height: f32, segments: u32) -> MeshData {
     let h = height.max(3.0 * r);
     combine(&[
         (cylinder(r, h - r, segments), Mat4::IDENTITY),
-        (
-            uv_sphere(r, segments, segments / 2 + 2),
-            at(0.0, h - 2.0 * r, 0.0),
-        ),
+        (uv_sphere(r, segments, segments / 2 + 2), at(0.0, h - 2.0 * r, 0.0)),
     ])
 }
 
@@ -115,14 +90,8 @@ pub fn bench(length: f32) -> MeshData {
     combine(&[
         (cuboid(Vec3::new(l, 0.07, 0.45)), at(0.0, 0.42, 0.0)),
         (cuboid(Vec3::new(l, 0.4, 0.06)), at(0.0, 0.5, -0.2)),
-        (
-            cuboid(Vec3::new(0.06, 0.9, 0.5)),
-            at(-l * 0.5 + 0.1, 0.0, 0.0),
-        ),
-        (
-            cuboid(Vec3::new(0.06, 0.9, 0.5)),
-            at(l * 0.5 - 0.1, 0.0, 0.0),
-        ),
+        (cuboid(Vec3::new(0.06, 0.9, 0.5)), at(-l * 0.5 + 0.1, 0.0, 0.0)),
+        (cuboid(Vec3::new(0.06, 0.9, 0.5)), at(l * 0.5 - 0.1, 0.0, 0.0)),
     ])
 }
 
@@ -154,10 +123,7 @@ pub fn crate_stack(layers: u32) -> MeshData {
         let count = layers - l;
         for k in 0..count {
             let x = (k as f32 - (count - 1) as f32 * 0.5) * 0.85;
-            parts.push((
-                chamfered_box(Vec3::splat(0.8), 0.05),
-                at(x, l as f32 * 0.8, 0.0),
-            ));
+            parts.push((chamfered_box(Vec3::splat(0.8), 0.05), at(x, l as f32 * 0.8, 0.0)));
         }
     }
     combine(&parts)
@@ -186,18 +152,11 @@ pub fn car(length: f32, width: f32, height: f32, wheel_segments: u32) -> MeshDat
     let wheel_w = 0.12 * w;
     // A cylinder turned to roll along x (axis along z), centred on z.
     let wheel = |x: f32, z: f32| {
-        Mat4::from_translation(Vec3::new(x, wheel_r, z - wheel_w * 0.5))
-            * Mat4::from_rotation_x(FRAC_PI_2)
+        Mat4::from_translation(Vec3::new(x, wheel_r, z - wheel_w * 0.5)) * Mat4::from_rotation_x(FRAC_PI_2)
     };
     let mut parts = vec![
-        (
-            chamfered_box(Vec3::new(l, 0.45 * h, w), 0.08 * h),
-            at(0.0, 0.18 * h, 0.0),
-        ),
-        (
-            chamfered_box(Vec3::new(0.55 * l, 0.37 * h, 0.88 * w), 0.1 * h),
-            at(-0.05 * l, 0.63 * h, 0.0),
-        ),
+        (chamfered_box(Vec3::new(l, 0.45 * h, w), 0.08 * h), at(0.0, 0.18 * h, 0.0)),
+        (chamfered_box(Vec3::new(0.55 * l, 0.37 * h, 0.88 * w), 0.1 * h), at(-0.05 * l, 0.63 * h, 0.0)),
     ];
     for x in [-0.32 * l, 0.32 * l] {
         for z in [-(w * 0.5 - wheel_w * 0.5), w * 0.5 - wheel_w * 0.5] {
@@ -206,11 +165,7 @@ pub fn car(length: f32, width: f32, height: f32, wheel_segments: u32) -> MeshDat
     }
     // The wheels are polygons: set the lowest wheel vertex, not the ideal circle, on the ground.
     let mut car = combine(&parts);
-    let lowest = car
-        .positions
-        .iter()
-        .map(|p| p.y)
-        .fold(f32::INFINITY, f32::min);
+    let lowest = car.positions.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
     for p in &mut car.positions {
         p.y -= lowest;
     }
@@ -219,16 +174,11 @@ pub fn car(length: f32, width: f32, height: f32, wheel_segments: u32) -> MeshDat
 
 /// A fire hydrant: body, dome and two side outlets.
 pub fn hydrant(segments: u32) -> MeshData {
-    let outlet = |dir: f32| {
-        Mat4::from_translation(Vec3::new(0.0, 0.5, 0.0)) * Mat4::from_rotation_z(-dir * FRAC_PI_2)
-    };
+    let outlet = |dir: f32| Mat4::from_translation(Vec3::new(0.0, 0.5, 0.0)) * Mat4::from_rotation_z(-dir * FRAC_PI_2);
     combine(&[
         (cylinder(0.16, 0.06, segments), Mat4::IDENTITY),
         (cylinder(0.11, 0.62, segments), Mat4::IDENTITY),
-        (
-            uv_sphere(0.11, segments, segments / 2 + 2),
-            at(0.0, 0.52, 0.0),
-        ),
+        (uv_sphere(0.11, segments, segments / 2 + 2), at(0.0, 0.52, 0.0)),
         (cylinder(0.045, 0.2, segments), outlet(1.0)),
         (cylinder(0.045, 0.2, segments), outlet(-1.0)),
     ])
@@ -256,24 +206,17 @@ pub fn planter(size: f32, segments: u32) -> MeshData {
 /// A street sign: a pole `height` tall with a rectangular and a diamond plate.
 pub fn street_sign(height: f32) -> MeshData {
     let h = height.max(1.0);
-    let diamond =
-        Mat4::from_translation(Vec3::new(0.0, h - 0.95, 0.04)) * Mat4::from_rotation_z(PI * 0.25);
+    let diamond = Mat4::from_translation(Vec3::new(0.0, h - 0.95, 0.04)) * Mat4::from_rotation_z(PI * 0.25);
     combine(&[
         (cylinder(0.035, h, 8), Mat4::IDENTITY),
         (cuboid(Vec3::new(0.7, 0.22, 0.03)), at(0.0, h - 0.3, 0.04)),
-        (
-            cuboid(Vec3::new(0.4, 0.4, 0.03)),
-            diamond * Mat4::from_translation(Vec3::new(0.0, -0.2, 0.0)),
-        ),
+        (cuboid(Vec3::new(0.4, 0.4, 0.03)), diamond * Mat4::from_translation(Vec3::new(0.0, -0.2, 0.0))),
     ])
 }
 
 /// A traffic cone on a square foot.
 pub fn traffic_cone(segments: u32) -> MeshData {
-    combine(&[
-        (cuboid(Vec3::new(0.4, 0.04, 0.4)), Mat4::IDENTITY),
-        (cone(0.15, 0.7, segments), Mat4::IDENTITY),
-    ])
+    combine(&[(cuboid(Vec3::new(0.4, 0.04, 0.4)), Mat4::IDENTITY), (cone(0.15, 0.7, segments), Mat4::IDENTITY)])
 }
 
 /// A unit-footprint (1 x 1), unit-height building of `tiers` setback tiers; scale it per instance.
@@ -283,11 +226,7 @@ pub fn building_stepped(tiers: u32) -> MeshData {
     let mut y = 0.0;
     for t in 0..tiers {
         let f = 1.0 - 0.22 * t as f32;
-        let h = if t + 1 == tiers {
-            1.0 - y
-        } else {
-            (1.0 - y) * 0.6
-        };
+        let h = if t + 1 == tiers { 1.0 - y } else { (1.0 - y) * 0.6 };
         parts.push((cuboid(Vec3::new(f, h + 0.001, f)), at(0.0, y, 0.0)));
         y += h;
     }
@@ -298,10 +237,7 @@ pub fn building_stepped(tiers: u32) -> MeshData {
 pub fn building_roofed(roof: f32) -> MeshData {
     let roof = roof.clamp(0.05, 0.9);
     combine(&[
-        (
-            cuboid(Vec3::new(1.0, 1.0 - roof + 0.001, 1.0)),
-            Mat4::IDENTITY,
-        ),
+        (cuboid(Vec3::new(1.0, 1.0 - roof + 0.001, 1.0)), Mat4::IDENTITY),
         (tent_prism(1.04, roof, 1.04), at(0.0, 1.0 - roof, 0.0)),
     ])
 }
@@ -309,10 +245,7 @@ pub fn building_roofed(roof: f32) -> MeshData {
 /// A kiosk: a prism body of `sides` sides (5 to 12) with a pyramid roof.
 pub fn kiosk(sides: u32) -> MeshData {
     combine(&[
-        (
-            super::basic::prism(sides.clamp(5, 12), 1.0, 2.4),
-            Mat4::IDENTITY,
-        ),
+        (super::basic::prism(sides.clamp(5, 12), 1.0, 2.4), Mat4::IDENTITY),
         (pyramid(2.4, 2.4, 0.8), at(0.0, 2.4, 0.0)),
     ])
 }

@@ -12,9 +12,8 @@ mod round;
 
 pub use basic::{chamfered_box, cuboid, ground, prism, pyramid, tent_prism, wedge};
 pub use composite::{
-    arch, bench, bollard, building_roofed, building_stepped, car, crate_stack, fence, hydrant,
-    kiosk, lamp_head, lamp_post, planter, stairs, street_sign, traffic_cone, trash_can,
-    tree_conifer, tree_round,
+    arch, bench, bollard, building_roofed, building_stepped, car, crate_stack, fence, hydrant, kiosk, lamp_head,
+    lamp_post, planter, stairs, street_sign, traffic_cone, trash_can, tree_conifer, tree_round,
 };
 pub use round::{capsule, cone, cylinder, frustum, icosphere, torus, tube, uv_sphere};
 
@@ -82,9 +81,7 @@ impl Builder {
         for (i, p) in part.positions.iter().enumerate() {
             let n = part.normals.get(i).copied().unwrap_or(Vec3::Y);
             self.data.positions.push(m.transform_point3(*p));
-            self.data
-                .normals
-                .push(normal_matrix.mul_vec3(n).normalize_or_zero());
+            self.data.normals.push(normal_matrix.mul_vec3(n).normalize_or_zero());
         }
         let flip = linear.determinant() < 0.0;
         for t in part.indices.chunks_exact(3) {
@@ -123,9 +120,7 @@ pub type ShapeFn = fn() -> MeshData;
 pub fn catalogue() -> Vec<(&'static str, ShapeFn)> {
     vec![
         ("cuboid", || cuboid(Vec3::new(1.0, 2.0, 3.0))),
-        ("chamfered_box", || {
-            chamfered_box(Vec3::new(2.0, 1.0, 1.5), 0.15)
-        }),
+        ("chamfered_box", || chamfered_box(Vec3::new(2.0, 1.0, 1.5), 0.15)),
         ("cylinder", || cylinder(0.5, 2.0, 16)),
         ("cone", || cone(0.7, 1.5, 12)),
         ("frustum", || frustum(1.0, 0.4, 1.2, 10)),
@@ -184,10 +179,7 @@ mod tests {
             m.validate(name).unwrap_or_else(|e| panic!("{name}: {e}"));
             assert_eq!(m.normals.len(), m.positions.len(), "{name}");
             let volume = signed_volume(&m);
-            assert!(
-                volume > 0.0,
-                "{name}: signed volume {volume} (inward winding?)"
-            );
+            assert!(volume > 0.0, "{name}: signed volume {volume} (inward winding?)");
             // Every triangle's winding agrees with its vertices' normals.
             for (k, t) in m.indices.chunks_exact(3).enumerate() {
                 let [a, b, c] = [t[0], t[1], t[2]].map(|i| m.positions[i as usize]);
@@ -195,29 +187,13 @@ mod tests {
                 if face.length() < 1e-7 {
                     continue;
                 }
-                let n: Vec3 = [t[0], t[1], t[2]]
-                    .iter()
-                    .map(|&i| m.normals[i as usize])
-                    .sum();
-                assert!(
-                    face.dot(n) > 0.0,
-                    "{name}: triangle {k} faces against its normals"
-                );
+                let n: Vec3 = [t[0], t[1], t[2]].iter().map(|&i| m.normals[i as usize]).sum();
+                assert!(face.dot(n) > 0.0, "{name}: triangle {k} faces against its normals");
             }
-            let min_y = m
-                .positions
-                .iter()
-                .map(|p| p.y)
-                .fold(f32::INFINITY, f32::min);
-            assert!(
-                min_y.abs() < 1e-4,
-                "{name}: lowest point at y = {min_y}, not on the ground"
-            );
+            let min_y = m.positions.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+            assert!(min_y.abs() < 1e-4, "{name}: lowest point at y = {min_y}, not on the ground");
             for n in &m.normals {
-                assert!(
-                    (n.length() - 1.0).abs() < 1e-3,
-                    "{name}: normal {n} is not unit"
-                );
+                assert!((n.length() - 1.0).abs() < 1e-3, "{name}: normal {n} is not unit");
             }
         }
     }
@@ -233,10 +209,7 @@ mod tests {
 
     #[test]
     fn mirrored_append_keeps_outward_winding() {
-        let m = combine(&[(
-            cuboid(Vec3::ONE),
-            Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)),
-        )]);
+        let m = combine(&[(cuboid(Vec3::ONE), Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)))]);
         assert!(signed_volume(&m) > 0.0);
     }
 }

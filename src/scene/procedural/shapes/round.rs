@@ -15,9 +15,7 @@ type Run = Vec<(Vec2, Vec2)>;
 /// normal on the right of the direction of travel); runs meet at hard edges.
 fn lathe(runs: &[Run], segments: u32) -> MeshData {
     let segments = segments.max(3);
-    let angles: Vec<Vec2> = (0..segments)
-        .map(|i| Vec2::from_angle(TAU * i as f32 / segments as f32))
-        .collect();
+    let angles: Vec<Vec2> = (0..segments).map(|i| Vec2::from_angle(TAU * i as f32 / segments as f32)).collect();
     let mut b = Builder::default();
     for run in runs {
         let rows: Vec<Vec<u32>> = run
@@ -26,12 +24,7 @@ fn lathe(runs: &[Run], segments: u32) -> MeshData {
                 let n = n.normalize_or_zero();
                 angles
                     .iter()
-                    .map(|a| {
-                        b.vertex(
-                            Vec3::new(p.x * a.x, p.y, p.x * a.y),
-                            Vec3::new(n.x * a.x, n.y, n.x * a.y),
-                        )
-                    })
+                    .map(|a| b.vertex(Vec3::new(p.x * a.x, p.y, p.x * a.y), Vec3::new(n.x * a.x, n.y, n.x * a.y)))
                     .collect()
             })
             .collect();
@@ -63,10 +56,7 @@ fn segment(a: Vec2, b: Vec2) -> Run {
 /// and `height`, with flat caps.
 pub fn frustum(r_bottom: f32, r_top: f32, height: f32, segments: u32) -> MeshData {
     let (rb, rt, h) = (r_bottom.max(1e-3), r_top.max(0.0), height.max(1e-3));
-    let mut runs = vec![
-        segment(Vec2::ZERO, Vec2::new(rb, 0.0)),
-        segment(Vec2::new(rb, 0.0), Vec2::new(rt, h)),
-    ];
+    let mut runs = vec![segment(Vec2::ZERO, Vec2::new(rb, 0.0)), segment(Vec2::new(rb, 0.0), Vec2::new(rt, h))];
     if rt > 0.0 {
         runs.push(segment(Vec2::new(rt, h), Vec2::new(0.0, h)));
     }
@@ -97,16 +87,7 @@ fn arc(center: Vec2, radius: f32, from: f32, to: f32, steps: u32) -> Run {
 /// A UV sphere resting on y = 0 with `rings` latitude bands.
 pub fn uv_sphere(radius: f32, segments: u32, rings: u32) -> MeshData {
     let r = radius.max(1e-3);
-    lathe(
-        &[arc(
-            Vec2::new(0.0, r),
-            r,
-            -FRAC_PI_2,
-            FRAC_PI_2,
-            rings.max(2),
-        )],
-        segments,
-    )
+    lathe(&[arc(Vec2::new(0.0, r), r, -FRAC_PI_2, FRAC_PI_2, rings.max(2))], segments)
 }
 
 /// A capsule of total `height` (at least `2 * radius`): a cylinder with hemispherical ends of
@@ -123,16 +104,7 @@ pub fn capsule(radius: f32, height: f32, segments: u32, rings: u32) -> MeshData 
 pub fn torus(major: f32, minor: f32, segments: u32, tube_segments: u32) -> MeshData {
     let minor = minor.max(1e-3);
     let major = major.max(minor * 1.01);
-    lathe(
-        &[arc(
-            Vec2::new(major, minor),
-            minor,
-            -PI,
-            PI,
-            tube_segments.max(3),
-        )],
-        segments,
-    )
+    lathe(&[arc(Vec2::new(major, minor), minor, -PI, PI, tube_segments.max(3))], segments)
 }
 
 /// A hollow cylinder (pipe): radii `inner` < `outer`, capped with flat rings.
@@ -140,16 +112,8 @@ pub fn tube(inner: f32, outer: f32, height: f32, segments: u32) -> MeshData {
     let outer = outer.max(2e-3);
     let inner = inner.clamp(1e-3, outer * 0.98);
     let h = height.max(1e-3);
-    let (a, b, c, d) = (
-        Vec2::new(inner, 0.0),
-        Vec2::new(outer, 0.0),
-        Vec2::new(outer, h),
-        Vec2::new(inner, h),
-    );
-    lathe(
-        &[segment(a, b), segment(b, c), segment(c, d), segment(d, a)],
-        segments,
-    )
+    let (a, b, c, d) = (Vec2::new(inner, 0.0), Vec2::new(outer, 0.0), Vec2::new(outer, h), Vec2::new(inner, h));
+    lathe(&[segment(a, b), segment(b, c), segment(c, d), segment(d, a)], segments)
 }
 
 /// An icosphere resting on y = 0: an icosahedron subdivided `subdivisions` times (at most 5).
@@ -205,20 +169,13 @@ pub fn icosphere(radius: f32, subdivisions: u32) -> MeshData {
         };
         let mut next = Vec::with_capacity(faces.len() * 4);
         for [a, b, c] in faces {
-            let (ab, bc, ca) = (
-                mid(a, b, &mut points),
-                mid(b, c, &mut points),
-                mid(c, a, &mut points),
-            );
+            let (ab, bc, ca) = (mid(a, b, &mut points), mid(b, c, &mut points), mid(c, a, &mut points));
             next.extend_from_slice(&[[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
         }
         faces = next;
     }
     MeshData {
-        positions: points
-            .iter()
-            .map(|p| *p * r + Vec3::new(0.0, r, 0.0))
-            .collect(),
+        positions: points.iter().map(|p| *p * r + Vec3::new(0.0, r, 0.0)).collect(),
         normals: points,
         indices: faces.into_iter().flatten().collect(),
     }
