@@ -116,8 +116,7 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
         .unwrap();
         let shaders =
             ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
-        let mut renderer =
-            Renderer::new(&ctx, &shaders, boxes_scene(), RenderSettings::new(w, h)).unwrap();
+        let mut renderer = Renderer::new(&ctx, &shaders, boxes_scene(), RenderSettings::new(w, h)).unwrap();
         let readback = Buffer::new(
             &ctx,
             &BufferDesc {

@@ -11,7 +11,12 @@ use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{Scene, SceneSource};
 use glam::DVec3;
 
-fn render(gpu: &GpuTest, scene: Scene, settings: RenderSettings, camera: Option<cullgraph::scene::Camera>) -> RgbaImage {
+fn render(
+    gpu: &GpuTest,
+    scene: Scene,
+    settings: RenderSettings,
+    camera: Option<cullgraph::scene::Camera>,
+) -> RgbaImage {
     let camera = camera.unwrap_or_else(|| scene.default_camera(settings.width as f32 / settings.height as f32));
     let mut renderer = Renderer::new(gpu, &gpu.shaders(), scene, settings).unwrap();
     renderer.render_to_image(&camera).unwrap().1
@@ -33,13 +38,15 @@ fn difference(a: &RgbaImage, b: &RgbaImage, threshold: u8) -> (usize, f64) {
 #[test]
 fn city_frame_matches_the_checked_in_reference() {
     let gpu = GpuTest::new();
-    let scene = SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(2000), ..Default::default() }).unwrap();
+    let scene =
+        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(2000), ..Default::default() }).unwrap();
     let image = render(&gpu, scene, RenderSettings::new(128, 72), None);
 
     // Not blank: the street view has sky above, darker street below, and many colors.
     let distinct: std::collections::HashSet<[u8; 4]> = image.pixels().map(|p| p.0).collect();
     assert!(distinct.len() > 200, "only {} distinct colors", distinct.len());
-    let luma = |y: u32| (0..128).map(|x| image.get_pixel(x, y).0[..3].iter().map(|&c| c as u32).sum::<u32>()).sum::<u32>();
+    let luma =
+        |y: u32| (0..128).map(|x| image.get_pixel(x, y).0[..3].iter().map(|&c| c as u32).sum::<u32>()).sum::<u32>();
     assert!(luma(70) < luma(1), "the street should be darker than the sky");
 
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/reference/city_128x72.png");
@@ -73,7 +80,8 @@ fn monastery_draws_all_81_meshes_and_covers_the_view() {
 #[test]
 fn frames_are_deterministic() {
     let gpu = GpuTest::new();
-    let scene = SceneSource::Builtin("field".into()).load(&LoadOptions { instances: Some(500), ..Default::default() }).unwrap();
+    let scene =
+        SceneSource::Builtin("field".into()).load(&LoadOptions { instances: Some(500), ..Default::default() }).unwrap();
     let camera = scene.default_camera(80.0 / 60.0);
     let mut renderer = Renderer::new(&gpu, &gpu.shaders(), scene, RenderSettings::new(80, 60)).unwrap();
     let a = renderer.render_to_image(&camera).unwrap().1;

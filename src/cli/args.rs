@@ -1,8 +1,8 @@
 //! Argument definitions (clap derive) and value parsers.
 
 use clap::{Args, Parser, Subcommand};
-use glam::DVec3;
 use cullgraph::render::gpu_types::DebugView;
+use glam::DVec3;
 use std::path::PathBuf;
 
 /// GPU-driven culling and deferred rendering of huge scenes, through Vulkan.

@@ -40,7 +40,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         meshes: scene.meshes.len() as u32,
         frames: Vec::new(),
     };
-    let mut renderer = Renderer::new(&ctx, &shaders, scene, RenderSettings { width, height, debug_view: args.debug_view })?;
+    let mut renderer =
+        Renderer::new(&ctx, &shaders, scene, RenderSettings { width, height, debug_view: args.debug_view })?;
 
     let bar = progress(Some(args.frames as u64), "rendering");
     for frame in 0..args.frames {

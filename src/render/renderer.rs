@@ -318,7 +318,13 @@ impl Renderer {
     }
 
     fn write_frame_data(&mut self, slot: usize, camera: &Camera) -> Result<()> {
-        let constants = FrameConstants::new(&self.scene, camera, self.settings.width, self.settings.height, self.settings.debug_view);
+        let constants = FrameConstants::new(
+            &self.scene,
+            camera,
+            self.settings.width,
+            self.settings.height,
+            self.settings.debug_view,
+        );
         let lights: Vec<GpuPointLight> = self.scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();
         let slot = &mut self.slots[slot];
         slot.constants.write_bytes(0, bytemuck::bytes_of(&constants))?;

@@ -65,8 +65,9 @@ impl Camera {
             projection: Projection::Perspective { fov_y_deg },
             near: 0.1,
         };
-        let corners: Vec<DVec3> =
-            (0..8).map(|i| DVec3::new(pick(i & 1, min.x, max.x), pick(i & 2, min.y, max.y), pick(i & 4, min.z, max.z))).collect();
+        let corners: Vec<DVec3> = (0..8)
+            .map(|i| DVec3::new(pick(i & 1, min.x, max.x), pick(i & 2, min.y, max.y), pick(i & 4, min.z, max.z)))
+            .collect();
         let fits = |distance: f64| {
             let cam = Self { eye: center + dir * distance, ..camera.clone() };
             let vp = cam.view_projection_rel_eye(aspect).as_dmat4();
@@ -77,7 +78,9 @@ impl Camera {
         };
         // Distance shrinks monotonically while the box still fits: bisect between a fitting
         // distance (far enough that the bounding sphere fits) and the box's radius.
-        let half = (fov_y_deg.to_radians() as f64 * 0.5).tan().min((fov_y_deg.to_radians() as f64 * 0.5).tan() * aspect as f64);
+        let half = (fov_y_deg.to_radians() as f64 * 0.5)
+            .tan()
+            .min((fov_y_deg.to_radians() as f64 * 0.5).tan() * aspect as f64);
         let (mut lo, mut hi) = (radius, radius / (0.9 * half).atan().sin() + radius);
         for _ in 0..48 {
             let mid = 0.5 * (lo + hi);

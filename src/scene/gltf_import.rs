@@ -51,7 +51,11 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         tracing::warn!("{line}");
     }
     if lines.len() > SHOWN {
-        tracing::warn!("{}: {} more import notes like these (gltf_import::load_with_report lists them all)", scene.name, lines.len() - SHOWN);
+        tracing::warn!(
+            "{}: {} more import notes like these (gltf_import::load_with_report lists them all)",
+            scene.name,
+            lines.len() - SHOWN
+        );
     }
     Ok(scene)
 }
