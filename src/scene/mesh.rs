@@ -110,7 +110,7 @@ impl MeshData {
             let face = (self.positions[b] - self.positions[a]).cross(self.positions[c] - self.positions[a]);
             let area = face.length() as f64;
             let mean = self.normals[a] + self.normals[b] + self.normals[c];
-            if !(area > 0.0) || !mean.is_finite() || mean.length_squared() <= 1e-12 {
+            if area <= 0.0 || area.is_nan() || !mean.is_finite() || mean.length_squared() <= 1e-12 {
                 continue;
             }
             total += area;
