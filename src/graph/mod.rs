@@ -1,0 +1,26 @@
+//! The render graph: a RON file declares parameters, resources and passes; loading validates it
+//! with `file:line:col` positions; compiling prunes, orders, computes lifetimes, aliases
+//! transient memory and plans synchronization2 barriers; the executor records the plan.
+//!
+//! Semantics (see `graph/README.md` for the file format):
+//! - Passes are listed in a RON sequence. A pass that reads a resource sees the latest write
+//!   declared *before* it; if none is declared before it, the first write declared after it
+//!   (so independent passes may be listed in any order). Reading something nothing writes is an
+//!   error, except imported resources (the host fills them) and `name.prev` of history resources
+//!   (last frame's contents).
+//! - Writes to one resource happen in declaration order; reads stay between the writes they
+//!   see. Any other reordering is allowed: execution order is a topological order that prefers
+//!   declaration order. A dependency cycle is an error naming the passes on it.
+//! - Reading `name.prev` creates no edge: the graph of one frame stays acyclic even when a pass
+//!   uses last frame's Hi-Z.
+//! - Passes whose results reach no output and no later frame are pruned (and listed).
+
+pub mod env;
+pub mod kinds;
+pub mod plan;
+pub mod usage;
+
+pub use env::{Environment, NoDevice};
+pub use kinds::{builtin_kinds, PassKindInfo, SlotDecl};
+pub use plan::{CompiledGraph, PlannedBarrier, PlannedPass, PlannedResource, ResourceClass, ResourceId, Version};
+pub use usage::{Stages, Usage};

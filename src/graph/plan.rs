@@ -1,0 +1,185 @@
+//! The compiled graph: what the compiler hands the executor (and `cullgraph graph plan` prints).
+//!
+//! Positions in [`CompiledGraph::passes`] are the execution order. Resource sizes are resolved
+//! for one output size and scene; a change of either recompiles.
+
+use super::usage::Usage;
+use crate::gpu::Access;
+use ash::vk;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// Index into [`CompiledGraph::resources`].
+pub type ResourceId = usize;
+
+/// Which contents of a resource a binding sees.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Version {
+    /// This frame's contents.
+    Current,
+    /// Last frame's final contents (history resources only; `name.prev` in RON).
+    Previous,
+}
+
+/// How a resource lives across passes and frames.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ResourceClass {
+    /// Lives within one frame between its first and last use; may share memory with others.
+    Transient,
+    /// Two copies swapped every frame so that last frame's contents can be read (never aliased).
+    History,
+    /// Provided by the host each frame (never allocated or aliased by the graph).
+    Imported,
+    /// Read by the host after the frame (never aliased).
+    Output,
+}
+
+/// A resource with its size resolved.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ResolvedKind {
+    /// A 2D image.
+    Image {
+        /// Texel format.
+        format: vk::Format,
+        /// Size of mip 0.
+        extent: vk::Extent2D,
+        /// Mip levels.
+        mip_levels: u32,
+        /// Samples per texel.
+        samples: vk::SampleCountFlags,
+        /// Union of the usages of every pass that touches it (plus transfer source for outputs).
+        usage: vk::ImageUsageFlags,
+    },
+    /// A buffer.
+    Buffer {
+        /// Bytes.
+        size: u64,
+        /// Union of the usages of every pass that touches it.
+        usage: vk::BufferUsageFlags,
+    },
+}
+
+/// One resource of the compiled graph.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlannedResource {
+    /// Name in the RON file.
+    pub name: String,
+    /// Resolved description.
+    pub kind: ResolvedKind,
+    /// Lifetime class.
+    pub class: ResourceClass,
+    /// First and last position (in execution order) of a pass that uses the current version;
+    /// `None` when no kept pass uses it.
+    pub lifetime: Option<(usize, usize)>,
+}
+
+/// A resource bound to a slot of a pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Binding {
+    /// Slot name (for compute passes: the binding number as text).
+    pub slot: String,
+    /// The resource.
+    pub resource: ResourceId,
+    /// Which contents.
+    pub version: Version,
+    /// How the pass uses it.
+    pub usage: Usage,
+}
+
+/// A resolved pass setting.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SettingValue {
+    /// Boolean.
+    Bool(bool),
+    /// Whole number.
+    Int(i64),
+    /// Real number.
+    Float(f64),
+    /// One word of a fixed set.
+    Choice(String),
+}
+
+/// A barrier recorded before a pass (all of a pass's barriers go into one `vkCmdPipelineBarrier2`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlannedBarrier {
+    /// The resource.
+    pub resource: ResourceId,
+    /// Which copy (history resources).
+    pub version: Version,
+    /// The access that must complete first. `None` for the first use of the resource in the
+    /// frame: the executor fills it from what last touched that memory (previous frame, or an
+    /// aliased resource), which only it knows at run time.
+    pub src: Option<Access>,
+    /// The access that waits.
+    pub dst: Access,
+    /// Previous contents are not needed (images transition from `UNDEFINED`).
+    pub discard: bool,
+}
+
+/// A pass in execution order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlannedPass {
+    /// Name in the RON file.
+    pub name: String,
+    /// Kind name (`gbuffer`, `lighting`, `compute`, ...).
+    pub kind: String,
+    /// Resources bound to its slots.
+    pub bindings: Vec<Binding>,
+    /// Settings with defaults filled in.
+    pub settings: BTreeMap<String, SettingValue>,
+    /// The shader of a `compute` pass (resolved path).
+    pub shader: Option<PathBuf>,
+    /// Workgroup counts of a `compute` pass.
+    pub dispatch: Option<[u32; 3]>,
+    /// Barriers before the pass.
+    pub barriers: Vec<PlannedBarrier>,
+}
+
+/// A pass the compiler removed, with the reason.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PrunedPass {
+    /// Name in the RON file.
+    pub name: String,
+    /// Why (e.g. "nothing it writes reaches an output or a later frame").
+    pub reason: String,
+}
+
+/// Where a transient lives in memory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Placement {
+    /// Index of the heap.
+    pub heap: usize,
+    /// Byte offset in it.
+    pub offset: u64,
+}
+
+/// Transient memory: placements of resources that share heaps when their lifetimes do not overlap.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MemoryPlan {
+    /// Per resource (same indices as [`CompiledGraph::resources`]); `None` for non-transients.
+    pub placements: Vec<Option<Placement>>,
+    /// Size of each heap in bytes.
+    pub heaps: Vec<u64>,
+    /// Bytes of all transients if each had its own memory.
+    pub bytes_without_aliasing: u64,
+    /// Bytes of the heaps.
+    pub bytes_with_aliasing: u64,
+}
+
+/// A graph ready to execute.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompiledGraph {
+    /// Graph name.
+    pub name: String,
+    /// Passes in execution order.
+    pub passes: Vec<PlannedPass>,
+    /// Removed passes.
+    pub pruned: Vec<PrunedPass>,
+    /// Every declared resource.
+    pub resources: Vec<PlannedResource>,
+    /// Resources the frame produces for the host (the first is the image `cullgraph render` saves).
+    pub outputs: Vec<ResourceId>,
+    /// Transient memory, estimated from formats and sizes (the executor re-plans with the
+    /// device's real memory requirements through the same algorithm).
+    pub memory: MemoryPlan,
+}
