@@ -142,7 +142,7 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
             d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
             let frame = renderer.record(cmd, &boxes_camera()).unwrap();
             assert_eq!(frame, 0);
-            let (output, state) = renderer.output();
+            let (output, state) = renderer.output().expect("an image output after a recorded frame");
             record_image_to_buffer(&ctx, cmd, output, state, &readback);
             d.end_command_buffer(cmd).unwrap();
             let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();

@@ -4,9 +4,8 @@
 mod common;
 
 use common::{boxes_camera, boxes_scene, GpuTest};
-use cullgraph::render::gpu_types::DebugView;
 use cullgraph::render::output::RgbaImage;
-use cullgraph::render::{RenderSettings, Renderer};
+use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{Scene, SceneSource};
 use glam::DVec3;
@@ -70,8 +69,10 @@ fn monastery_draws_all_81_meshes_and_covers_the_view() {
     let (stats, _) = renderer.render_to_image(&camera).unwrap();
     assert_eq!((stats.instances, stats.draws, stats.triangles), (81, 81, 124_789));
     // The albedo view paints the uniform 0.64 grey of every monastery material: count it.
-    let settings = RenderSettings { debug_view: DebugView::Albedo, ..RenderSettings::new(96, 54) };
-    let albedo = render(&gpu, scene, settings, Some(camera));
+    let spec = GraphSpec::default_graph().with_overrides([("debug_view".to_string(), "albedo".to_string())]);
+    let mut albedo_renderer =
+        Renderer::with_graph(&gpu, &gpu.shaders(), scene, RenderSettings::new(96, 54), &spec).unwrap();
+    let albedo = albedo_renderer.render_to_image(&camera).unwrap().1;
     let grey = albedo.pixels().filter(|p| p[0] == p[1] && p[1] == p[2] && p[0].abs_diff(163) <= 1).count();
     let share = grey as f64 / (96.0 * 54.0);
     assert!((0.05..0.8).contains(&share), "monastery covers {share:.3} of the view");

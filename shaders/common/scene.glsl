@@ -31,11 +31,11 @@ struct FrameConstants {
     vec4 eye_lo;           // xyz
     vec4 sun_direction;    // xyz: direction light travels
     vec4 sun_color;        // rgb: radiance
-    uvec4 size_lights;     // x: width, y: height, z: point light count, w: flags
-    vec4 ambient;          // rgb: sky ambient, a: exposure
+    uvec4 size_lights;     // x: width, y: height, z: point light count, w: unused
+    vec4 ambient;          // rgb: sky ambient, a: unused
 };
 
-// FrameConstants.size_lights.w: what the lighting pass shows.
+// What the lighting pass shows (its `debug_view` setting).
 #define DEBUG_VIEW_NONE 0u
 #define DEBUG_VIEW_NORMALS 1u
 #define DEBUG_VIEW_ALBEDO 2u

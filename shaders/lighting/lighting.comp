@@ -13,6 +13,11 @@ layout(set = 0, binding = 3, scalar) readonly buffer Frame { FrameConstants fram
 layout(set = 0, binding = 4, scalar) readonly buffer Lights { GpuPointLight lights[]; };
 layout(set = 0, binding = 5, rgba8) uniform writeonly image2D out_color;
 
+layout(push_constant) uniform Settings {
+    float exposure;
+    uint debug_view;   // DEBUG_VIEW_*
+} settings;
+
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     uvec2 size = frame.size_lights.xy;
@@ -50,8 +55,8 @@ void main() {
         }
         color = radiance;
     }
-    color = tonemap_aces(color * frame.ambient.a);
-    uint debug_view = frame.size_lights.w;
+    color = tonemap_aces(color * settings.exposure);
+    uint debug_view = settings.debug_view;
     if (debug_view != DEBUG_VIEW_NONE && depth > 0.0) {
         if (debug_view == DEBUG_VIEW_NORMALS) color = normalize(texelFetch(normal_roughness_tex, pixel, 0).xyz) * 0.5 + 0.5;
         if (debug_view == DEBUG_VIEW_ALBEDO) color = texelFetch(albedo_metallic_tex, pixel, 0).rgb;

@@ -1,7 +1,6 @@
 //! Argument definitions (clap derive) and value parsers.
 
 use clap::{Args, Parser, Subcommand};
-use cullgraph::render::gpu_types::DebugView;
 use glam::DVec3;
 use std::path::PathBuf;
 
@@ -21,6 +20,95 @@ pub enum Command {
     Render(Box<RenderArgs>),
     /// List the Vulkan devices the loader sees (index: name (type, API version)).
     Devices,
+    /// Check a render graph (RON), print its compiled plan, or export it as graphviz.
+    Graph(GraphArgs),
+}
+
+/// `cullgraph graph` subcommands.
+#[derive(Args, Debug)]
+pub struct GraphArgs {
+    /// What to do with the graph.
+    #[command(subcommand)]
+    pub command: GraphCommand,
+}
+
+/// What `cullgraph graph` does.
+#[derive(Subcommand, Debug)]
+pub enum GraphCommand {
+    /// Validate a graph: prints `FILE: ok (N passes, M resources)`, or every error as
+    /// `file:line:col: message` and exits with status 1. Uses the Vulkan device when there is one.
+    Check(GraphCheckArgs),
+    /// Compile a graph for an output size and scene and print the plan: pass order, barriers,
+    /// pruned passes, resources, lifetimes and transient memory.
+    Plan(GraphPlanArgs),
+    /// Compile a graph and write it as graphviz (passes as boxes, resources as ellipses).
+    Dot(GraphDotArgs),
+}
+
+/// `cullgraph graph check` flags.
+#[derive(Args, Debug)]
+pub struct GraphCheckArgs {
+    /// The graph file.
+    pub file: PathBuf,
+    /// Override a graph parameter, NAME=VALUE (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
+    pub params: Vec<(String, String)>,
+    /// Vulkan device by name substring or index; env CULLGRAPH_DEVICE.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub device: Option<String>,
+}
+
+/// The output size and scene a graph is compiled for.
+#[derive(Args, Debug)]
+pub struct GraphFrameArgs {
+    /// Output size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Scene whose quantities (instances, meshes, lights, materials, triangles) size the graph:
+    /// `builtin:city`, `builtin:field` or a glTF file.
+    #[arg(long, default_value = "builtin:city")]
+    pub scene: String,
+    /// Number of instances of a built-in scene.
+    #[arg(long, value_name = "N")]
+    pub instances: Option<usize>,
+    /// Number of distinct mesh kinds of `builtin:field`.
+    #[arg(long, value_name = "N")]
+    pub kinds: Option<usize>,
+    /// Number of point lights.
+    #[arg(long, value_name = "N")]
+    pub lights: Option<usize>,
+    /// Seed of the built-in generators.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// `cullgraph graph plan` flags.
+#[derive(Args, Debug)]
+pub struct GraphPlanArgs {
+    /// The graph file.
+    pub file: PathBuf,
+    /// Override a graph parameter, NAME=VALUE (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
+    pub params: Vec<(String, String)>,
+    /// Size and scene.
+    #[command(flatten)]
+    pub frame: GraphFrameArgs,
+}
+
+/// `cullgraph graph dot` flags.
+#[derive(Args, Debug)]
+pub struct GraphDotArgs {
+    /// The graph file.
+    pub file: PathBuf,
+    /// Write here instead of standard output.
+    #[arg(short = 'o', long = "out", value_name = "FILE.dot")]
+    pub out: Option<PathBuf>,
+    /// Override a graph parameter, NAME=VALUE (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
+    pub params: Vec<(String, String)>,
+    /// Size and scene.
+    #[command(flatten)]
+    pub frame: GraphFrameArgs,
 }
 
 /// `cullgraph render` flags.
@@ -68,9 +156,22 @@ pub struct RenderArgs {
     /// Vulkan device by name substring or index (see `cullgraph devices`); env CULLGRAPH_DEVICE.
     #[arg(long, value_name = "NAME|INDEX")]
     pub device: Option<String>,
-    /// Show a G-buffer channel instead of the lit image.
-    #[arg(long, value_enum, default_value_t = DebugView::None)]
-    pub debug_view: DebugView,
+    /// Render graph (RON) to run (default: the built-in `graph/default.ron`).
+    #[arg(long, value_name = "FILE.ron")]
+    pub graph: Option<PathBuf>,
+    /// Override a graph parameter, NAME=VALUE (repeatable), e.g. `--param exposure=1.2`.
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_param)]
+    pub params: Vec<(String, String)>,
+    /// Shorthand for `--param debug_view=VIEW`: none, normals, albedo or depth.
+    #[arg(long, value_name = "VIEW")]
+    pub debug_view: Option<String>,
+    /// Keep rendering; recompile when the graph file or a shader changes (on error the last
+    /// good graph keeps running and the error is printed). Stop with Ctrl-C.
+    #[arg(long)]
+    pub watch: bool,
+    /// With --watch: stop after this many seconds.
+    #[arg(long, value_name = "SECONDS", requires = "watch")]
+    pub watch_for: Option<f64>,
     /// Enable the Khronos validation layer with synchronization validation.
     #[arg(long)]
     pub validation: bool,
@@ -91,6 +192,14 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
         Ok(n)
     };
     Ok((parse(w, "width")?, parse(h, "height")?))
+}
+
+/// Parses `NAME=VALUE`.
+pub fn parse_param(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
+        _ => Err(format!("'{s}' is not NAME=VALUE")),
+    }
 }
 
 /// Parses `x,y,z` into finite numbers.

@@ -1,7 +1,9 @@
 //! Command-line interface: argument definitions and dispatch.
 
 mod args;
+mod graph;
 mod render;
+mod watch;
 
 use clap::Parser;
 use std::process::ExitCode;
@@ -12,6 +14,7 @@ pub fn main() -> ExitCode {
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
     let cli = args::Cli::parse();
     let result = match cli.command {
+        args::Command::Graph(g) => return graph::run(&g),
         args::Command::Render(r) => render::run(&r),
         args::Command::Devices => list_devices(),
     };

@@ -1,19 +1,24 @@
-//! `cullgraph render`: load a scene, render frames headlessly, write the image and stats.
+//! `cullgraph render`: load a scene, render frames headlessly through a render graph, write the
+//! image and stats; with `--watch`, keep rendering and hot-reload the graph and its shaders.
 
 use super::args::RenderArgs;
+use super::watch::FileWatch;
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::render::output::save_png;
-use cullgraph::render::{RenderSettings, Renderer};
+use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{Camera, Projection, SceneSource};
 use cullgraph::stats::RunStats;
 use cullgraph::{Error, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 /// Runs the command.
 pub fn run(args: &RenderArgs) -> Result<()> {
     let (width, height) = args.size;
+    let spec = graph_spec(args)?;
     let source: SceneSource = args.scene.parse()?;
     let options = LoadOptions { instances: args.instances, kinds: args.kinds, lights: args.lights, seed: args.seed };
     let spinner = progress(None, "loading scene");
@@ -40,8 +45,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         meshes: scene.meshes.len() as u32,
         frames: Vec::new(),
     };
-    let mut renderer =
-        Renderer::new(&ctx, &shaders, scene, RenderSettings { width, height, debug_view: args.debug_view })?;
+    let mut renderer = Renderer::with_graph(&ctx, &shaders, scene, RenderSettings::new(width, height), &spec)?;
+    if args.watch {
+        return watch(args, &mut renderer, &shaders, spec, &camera);
+    }
 
     let bar = progress(Some(args.frames as u64), "rendering");
     for frame in 0..args.frames {
@@ -61,11 +68,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let validation_messages = ctx.validation_log().count();
 
     if let Some(path) = &args.stats {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|source| Error::Io { path: dir.display().to_string(), source })?;
-        }
-        std::fs::write(path, stats.to_json())
-            .map_err(|source| Error::Io { path: path.display().to_string(), source })?;
+        write_file(path, stats.to_json().as_bytes())?;
     }
     let last = stats.frames.last().cloned().unwrap_or_default();
     println!(
@@ -84,6 +87,87 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         return Err(Error::Invalid(format!("the validation layer reported {validation_messages} message(s)")));
     }
     Ok(())
+}
+
+/// The graph to run: `--graph FILE` or the built-in default, with `--param` and `--debug-view`.
+fn graph_spec(args: &RenderArgs) -> Result<GraphSpec> {
+    let spec = match &args.graph {
+        Some(path) => GraphSpec::from_file(path)?,
+        None => GraphSpec::default_graph(),
+    };
+    let mut overrides = args.params.clone();
+    if let Some(view) = &args.debug_view {
+        overrides.push(("debug_view".into(), view.clone()));
+    }
+    Ok(spec.with_overrides(overrides))
+}
+
+/// `--watch`: render, then poll the graph file and shaders; rebuild on change, keeping the last
+/// good graph when the new one has errors.
+fn watch(
+    args: &RenderArgs,
+    renderer: &mut Renderer,
+    shaders: &ShaderCompiler,
+    mut spec: GraphSpec,
+    camera: &Camera,
+) -> Result<()> {
+    let deadline = args.watch_for.map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
+    let render_once = |renderer: &mut Renderer| -> Result<()> {
+        let (stats, image) = renderer.render_to_image(camera)?;
+        save_png(&image, &args.out)?;
+        println!("rendered '{}' in {:.3} GPU ms -> {}", renderer.plan().name, stats.gpu_total_ms, args.out.display());
+        Ok(())
+    };
+    render_once(renderer)?;
+    let mut files = FileWatch::new(watched_paths(args, &spec, renderer));
+    println!("watching {} file(s); Ctrl-C stops", files.paths().count());
+    while deadline.is_none_or(|d| Instant::now() < d) {
+        std::thread::sleep(Duration::from_millis(200));
+        if !files.changed() {
+            continue;
+        }
+        shaders.clear_cache();
+        let reloaded = match &args.graph {
+            Some(path) => GraphSpec::from_file(path).map(|s| s.with_overrides(spec.overrides.clone())),
+            None => Ok(spec.clone()),
+        }
+        .and_then(|new_spec| renderer.reload_graph(shaders, &new_spec).map(|_| new_spec));
+        match reloaded {
+            Ok(new_spec) => {
+                spec = new_spec;
+                println!("reloaded '{}'", spec.file);
+                files = FileWatch::new(watched_paths(args, &spec, renderer));
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                eprintln!("(still running the last good graph)");
+            }
+        }
+        // The last good graph keeps producing frames either way.
+        render_once(renderer)?;
+    }
+    Ok(())
+}
+
+/// The graph file, the shaders its compute passes use, and the shader library on disk.
+fn watched_paths(args: &RenderArgs, spec: &GraphSpec, renderer: &Renderer) -> Vec<PathBuf> {
+    let mut paths: Vec<PathBuf> = args.graph.iter().cloned().collect();
+    for pass in &renderer.plan().passes {
+        if let Some(shader) = &pass.shader {
+            let resolved =
+                spec.dir.as_ref().map(|d| d.join(shader)).filter(|p| p.exists()).unwrap_or_else(|| shader.clone());
+            paths.push(resolved);
+        }
+    }
+    paths.extend(args.shader_dir.iter().cloned());
+    paths
+}
+
+fn write_file(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Io { path: dir.display().to_string(), source })?;
+    }
+    std::fs::write(path, bytes).map_err(|source| Error::Io { path: path.display().to_string(), source })
 }
 
 fn camera_from_args(args: &RenderArgs, default: Camera) -> Result<Camera> {

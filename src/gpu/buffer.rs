@@ -2,6 +2,7 @@
 
 use super::context::{DeviceShared, GpuContext};
 use super::error::{GpuError, GpuResult, VkResultExt};
+use super::memory::MemoryBlock;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
@@ -81,6 +82,32 @@ impl Buffer {
         Ok(buffer)
     }
 
+    /// Creates a device-local buffer inside `block` at `offset` (memory shared with resources
+    /// whose lifetimes do not overlap). The block must outlive the buffer.
+    pub fn new_in(ctx: &GpuContext, desc: &BufferDesc<'_>, block: &MemoryBlock, offset: u64) -> GpuResult<Self> {
+        check_size(desc)?;
+        let info = create_info(desc);
+        // SAFETY: valid device and create info.
+        let handle = unsafe { ctx.device().create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        let buffer =
+            Self { shared: ctx.shared.clone(), handle, allocation: None, size: desc.size, name: desc.name.into() };
+        // SAFETY: the caller placed the buffer where its requirements fit.
+        unsafe { ctx.device().bind_buffer_memory(handle, block.memory(), block.offset() + offset) }
+            .vk("vkBindBufferMemory")?;
+        Ok(buffer)
+    }
+
+    /// What a buffer of `desc` needs from memory, without creating one (Vulkan 1.3 maintenance4).
+    pub fn requirements(ctx: &GpuContext, desc: &BufferDesc<'_>) -> GpuResult<vk::MemoryRequirements> {
+        check_size(desc)?;
+        let info = create_info(desc);
+        let query = vk::DeviceBufferMemoryRequirements::default().create_info(&info);
+        let mut out = vk::MemoryRequirements2::default();
+        // SAFETY: valid create info.
+        unsafe { ctx.device().get_device_buffer_memory_requirements(&query, &mut out) };
+        Ok(out.memory_requirements)
+    }
+
     /// A host-visible buffer filled with `data` (for small, per-frame or upload data).
     pub fn with_data(ctx: &GpuContext, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> GpuResult<Self> {
         let mut buffer =
@@ -136,6 +163,21 @@ impl Buffer {
     pub fn descriptor(&self) -> vk::DescriptorBufferInfo {
         vk::DescriptorBufferInfo::default().buffer(self.handle).offset(0).range(vk::WHOLE_SIZE)
     }
+}
+
+fn check_size(desc: &BufferDesc<'_>) -> GpuResult<()> {
+    if desc.size > MAX_BUFFER_BYTES {
+        return Err(GpuError::InvalidResource {
+            name: desc.name.into(),
+            reason: format!("{} bytes exceeds the {} byte limit", desc.size, MAX_BUFFER_BYTES),
+        });
+    }
+    Ok(())
+}
+
+fn create_info<'a>(desc: &BufferDesc<'_>) -> vk::BufferCreateInfo<'a> {
+    // Vulkan forbids size 0; an empty scene array still needs a bindable buffer.
+    vk::BufferCreateInfo::default().size(desc.size.max(16)).usage(desc.usage).sharing_mode(vk::SharingMode::EXCLUSIVE)
 }
 
 impl Drop for Buffer {

@@ -2,6 +2,7 @@
 
 use super::context::{DeviceShared, GpuContext};
 use super::error::{GpuError, GpuResult, VkResultExt};
+use super::memory::MemoryBlock;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
@@ -51,80 +52,76 @@ pub fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
 }
 
 impl Image {
-    /// Creates the image, binds memory and creates its views.
+    /// Creates the image, binds memory of its own and creates its views.
     pub fn new(ctx: &GpuContext, desc: &ImageDesc<'_>) -> GpuResult<Self> {
-        let shared = ctx.shared.clone();
-        let limits = &shared.caps.limits;
-        let max_dim = limits.max_image_dimension2_d;
-        let bad = |reason: String| GpuError::InvalidResource { name: desc.name.into(), reason };
-        if desc.extent.width == 0 || desc.extent.height == 0 {
-            return Err(bad(format!("size {}x{} is empty", desc.extent.width, desc.extent.height)));
-        }
-        if desc.extent.width > max_dim || desc.extent.height > max_dim {
-            return Err(bad(format!(
-                "size {}x{} exceeds the device limit of {max_dim}",
-                desc.extent.width, desc.extent.height
-            )));
-        }
-        let full_chain = 32 - desc.extent.width.max(desc.extent.height).leading_zeros();
-        if desc.mip_levels == 0 || desc.mip_levels > full_chain {
-            return Err(bad(format!("{} mip levels requested, 1..={full_chain} possible", desc.mip_levels)));
-        }
-        let device = &shared.device;
-        let info = vk::ImageCreateInfo::default()
-            .image_type(vk::ImageType::TYPE_2D)
-            .format(desc.format)
-            .extent(vk::Extent3D { width: desc.extent.width, height: desc.extent.height, depth: 1 })
-            .mip_levels(desc.mip_levels)
-            .array_layers(1)
-            .samples(desc.samples)
-            .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(desc.usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE)
-            .initial_layout(vk::ImageLayout::UNDEFINED);
-        // SAFETY: valid device and create info.
-        let handle = unsafe { device.create_image(&info, None) }.vk("vkCreateImage")?;
+        let mut image = Self::unbound(ctx, desc)?;
         // SAFETY: handle was just created.
-        let requirements = unsafe { device.get_image_memory_requirements(handle) };
-        let allocation = shared.allocator().allocate(&AllocationCreateDesc {
+        let requirements = unsafe { ctx.device().get_image_memory_requirements(image.handle) };
+        let allocation = ctx.shared.allocator().allocate(&AllocationCreateDesc {
             name: desc.name,
             requirements,
             location: MemoryLocation::GpuOnly,
             linear: false,
             allocation_scheme: AllocationScheme::GpuAllocatorManaged,
         });
-        let allocation = match allocation {
-            Ok(a) => a,
-            Err(source) => {
-                // SAFETY: not bound, not used.
-                unsafe { device.destroy_image(handle, None) };
-                return Err(GpuError::Allocation { name: desc.name.into(), source });
-            }
-        };
-        let mut image = Self {
-            shared: shared.clone(),
+        let allocation = allocation.map_err(|source| GpuError::Allocation { name: desc.name.into(), source })?;
+        // SAFETY: the allocation stays alive in `image` for as long as the image.
+        let (memory, offset) = (unsafe { allocation.memory() }, allocation.offset());
+        image.allocation = Some(allocation);
+        image.bind(memory, offset)?;
+        Ok(image)
+    }
+
+    /// Creates the image inside `block` at `offset` (memory shared with other resources whose
+    /// lifetimes do not overlap). The block must outlive the image.
+    pub fn new_in(ctx: &GpuContext, desc: &ImageDesc<'_>, block: &MemoryBlock, offset: u64) -> GpuResult<Self> {
+        let mut image = Self::unbound(ctx, desc)?;
+        image.bind(block.memory(), block.offset() + offset)?;
+        Ok(image)
+    }
+
+    /// What an image of `desc` needs from memory, without creating one (Vulkan 1.3 maintenance4).
+    pub fn requirements(ctx: &GpuContext, desc: &ImageDesc<'_>) -> GpuResult<vk::MemoryRequirements> {
+        validate_desc(ctx, desc)?;
+        let info = create_info(desc);
+        let query = vk::DeviceImageMemoryRequirements::default().create_info(&info);
+        let mut out = vk::MemoryRequirements2::default();
+        // SAFETY: valid create info.
+        unsafe { ctx.device().get_device_image_memory_requirements(&query, &mut out) };
+        Ok(out.memory_requirements)
+    }
+
+    fn unbound(ctx: &GpuContext, desc: &ImageDesc<'_>) -> GpuResult<Self> {
+        validate_desc(ctx, desc)?;
+        let shared = ctx.shared.clone();
+        // SAFETY: valid device and create info.
+        let handle = unsafe { shared.device.create_image(&create_info(desc), None) }.vk("vkCreateImage")?;
+        Ok(Self {
+            shared,
             handle,
             view: vk::ImageView::null(),
             mip_views: Vec::new(),
-            allocation: Some(allocation),
+            allocation: None,
             format: desc.format,
             extent: desc.extent,
             mip_levels: desc.mip_levels,
             samples: desc.samples,
             name: desc.name.into(),
-        };
-        let allocation = image.allocation.as_ref().expect("set above");
-        // SAFETY: memory comes from a compatible allocation.
-        unsafe { device.bind_image_memory(handle, allocation.memory(), allocation.offset()) }
-            .vk("vkBindImageMemory")?;
-        image.view = image.create_view(0, desc.mip_levels)?;
-        if desc.mip_levels > 1 {
-            for level in 0..desc.mip_levels {
-                let view = image.create_view(level, 1)?;
-                image.mip_views.push(view);
+        })
+    }
+
+    /// Binds memory and creates the views.
+    fn bind(&mut self, memory: vk::DeviceMemory, offset: u64) -> GpuResult<()> {
+        // SAFETY: memory is compatible and large enough (caller contract: requirements honoured).
+        unsafe { self.shared.device.bind_image_memory(self.handle, memory, offset) }.vk("vkBindImageMemory")?;
+        self.view = self.create_view(0, self.mip_levels)?;
+        if self.mip_levels > 1 {
+            for level in 0..self.mip_levels {
+                let view = self.create_view(level, 1)?;
+                self.mip_views.push(view);
             }
         }
-        Ok(image)
+        Ok(())
     }
 
     fn create_view(&self, base_mip: u32, count: u32) -> GpuResult<vk::ImageView> {
@@ -185,6 +182,39 @@ impl Image {
             .base_array_layer(0)
             .layer_count(1)
     }
+}
+
+fn validate_desc(ctx: &GpuContext, desc: &ImageDesc<'_>) -> GpuResult<()> {
+    let max_dim = ctx.caps().limits.max_image_dimension2_d;
+    let bad = |reason: String| GpuError::InvalidResource { name: desc.name.into(), reason };
+    if desc.extent.width == 0 || desc.extent.height == 0 {
+        return Err(bad(format!("size {}x{} is empty", desc.extent.width, desc.extent.height)));
+    }
+    if desc.extent.width > max_dim || desc.extent.height > max_dim {
+        return Err(bad(format!(
+            "size {}x{} exceeds the device limit of {max_dim}",
+            desc.extent.width, desc.extent.height
+        )));
+    }
+    let full_chain = 32 - desc.extent.width.max(desc.extent.height).leading_zeros();
+    if desc.mip_levels == 0 || desc.mip_levels > full_chain {
+        return Err(bad(format!("{} mip levels requested, 1..={full_chain} possible", desc.mip_levels)));
+    }
+    Ok(())
+}
+
+fn create_info<'a>(desc: &ImageDesc<'_>) -> vk::ImageCreateInfo<'a> {
+    vk::ImageCreateInfo::default()
+        .image_type(vk::ImageType::TYPE_2D)
+        .format(desc.format)
+        .extent(vk::Extent3D { width: desc.extent.width, height: desc.extent.height, depth: 1 })
+        .mip_levels(desc.mip_levels)
+        .array_layers(1)
+        .samples(desc.samples)
+        .tiling(vk::ImageTiling::OPTIMAL)
+        .usage(desc.usage)
+        .sharing_mode(vk::SharingMode::EXCLUSIVE)
+        .initial_layout(vk::ImageLayout::UNDEFINED)
 }
 
 impl Drop for Image {

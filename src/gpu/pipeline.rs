@@ -257,8 +257,17 @@ impl Pipeline {
 
     /// Sets push constants from a plain-old-data value.
     pub fn push_constants<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, value: &T) {
-        // SAFETY: cmd recording; the range is covered by the layout (sized from reflection).
-        unsafe { self.shared.device.cmd_push_constants(cmd, self.layout, self.stages, 0, bytemuck::bytes_of(value)) };
+        self.push_constant_bytes(cmd, bytemuck::bytes_of(value));
+    }
+
+    /// Sets push constants from bytes (at most the shader's block size are used).
+    pub fn push_constant_bytes(&self, cmd: vk::CommandBuffer, bytes: &[u8]) {
+        let len = bytes.len().min(self.interface.push_constant_bytes as usize);
+        if len == 0 {
+            return;
+        }
+        // SAFETY: cmd recording; the range lies inside the layout's push-constant range.
+        unsafe { self.shared.device.cmd_push_constants(cmd, self.layout, self.stages, 0, &bytes[..len]) };
     }
 }
 

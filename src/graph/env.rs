@@ -46,10 +46,212 @@ impl Environment for NoDevice {
     }
 }
 
-/// Compiles the file at `path` (on disk) with `compiler` and reflects it.
+/// Compiles the shader at `path` with `compiler` and reflects it: the file on disk if it
+/// exists, otherwise `path` inside the compiler's shader library (e.g. `lighting/lighting.comp`).
 pub fn shader_interface_with(compiler: &crate::gpu::ShaderCompiler, path: &Path) -> Result<ShaderInterface, String> {
-    let source = std::fs::read_to_string(path).map_err(|e| format!("cannot read shader '{}': {e}", path.display()))?;
-    let name = path.display().to_string();
-    let spirv = compiler.compile_source(&name, &source, &[]).map_err(|e| e.to_string())?;
-    crate::gpu::reflect::reflect(&spirv).map_err(|e| e.to_string())
+    let spirv = if path.is_file() {
+        let source =
+            std::fs::read_to_string(path).map_err(|e| format!("cannot read shader '{}': {e}", path.display()))?;
+        compiler.compile_source(&path.display().to_string(), &source, &[]).map_err(|e| e.to_string())?
+    } else {
+        match compiler.compile(&path.to_string_lossy(), &[]) {
+            Err(crate::gpu::ShaderError::NotFound(_)) => {
+                return Err("not found (looked next to the graph file and in the shader library)".into())
+            }
+            other => other.map_err(|e| e.to_string())?,
+        }
+    };
+    let mut interface = crate::gpu::reflect::reflect(&spirv).map_err(|e| e.to_string())?;
+    // The optimizer strips variable names from the SPIR-V; take them from the source.
+    let source = if path.is_file() { std::fs::read_to_string(path).ok() } else { None };
+    if let Some(source) = source {
+        let names = binding_names(&source);
+        for (binding, info) in interface.bindings.iter_mut() {
+            if info.name.as_deref().is_none_or(str::is_empty) {
+                info.name = names.get(binding).cloned();
+            }
+        }
+    }
+    Ok(interface)
+}
+
+/// GLSL variable names of `layout(.. binding = N ..)` declarations in `source`: the variable
+/// name, or for a block without an instance name, the block name. Declarations in included
+/// files are not seen (their bindings can still be bound by number).
+pub fn binding_names(source: &str) -> std::collections::BTreeMap<u32, String> {
+    let text = strip_comments(source);
+    let mut out = std::collections::BTreeMap::new();
+    let mut rest = text.as_str();
+    while let Some(at) = rest.find("layout") {
+        let before_ok = at == 0 || !rest[..at].ends_with(|c: char| c.is_alphanumeric() || c == '_');
+        rest = &rest[at + "layout".len()..];
+        let Some(open) = rest.trim_start().strip_prefix('(') else { continue };
+        if !before_ok {
+            continue;
+        }
+        let Some(close) = open.find(')') else { break };
+        let qualifiers = &open[..close];
+        rest = &open[close + 1..];
+        let binding = qualifiers.split(',').find_map(|q| {
+            let (k, v) = q.split_once('=')?;
+            (k.trim() == "binding").then(|| v.trim().parse::<u32>().ok()).flatten()
+        });
+        let Some(binding) = binding else { continue };
+        let end = rest.find([';', '{']).unwrap_or(rest.len());
+        let name = if rest[end..].starts_with('{') {
+            let block = last_identifier(&rest[..end]);
+            let after = &rest[end..];
+            let instance = after.find('}').and_then(|c| {
+                let tail = &after[c + 1..];
+                let semi = tail.find(';')?;
+                last_identifier(&tail[..semi])
+            });
+            instance.or(block)
+        } else {
+            last_identifier(&rest[..end])
+        };
+        if let Some(name) = name {
+            out.insert(binding, name);
+        }
+    }
+    out
+}
+
+/// The last identifier in `s`, ignoring a trailing array size (`name[4]`).
+fn last_identifier(s: &str) -> Option<String> {
+    let s = match s.find('[') {
+        Some(i) => &s[..i],
+        None => s,
+    };
+    let word: String = s.trim_end().chars().rev().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+    let word: String = word.chars().rev().collect();
+    (!word.is_empty() && !word.starts_with(|c: char| c.is_ascii_digit())).then_some(word)
+}
+
+/// `source` without `//` and `/* */` comments.
+fn strip_comments(source: &str) -> String {
+    let mut out = String::with_capacity(source.len());
+    let mut chars = source.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, chars.peek()) {
+            ('/', Some('/')) => {
+                for c in chars.by_ref() {
+                    if c == '\n' {
+                        out.push('\n');
+                        break;
+                    }
+                }
+            }
+            ('/', Some('*')) => {
+                chars.next();
+                let mut prev = ' ';
+                for c in chars.by_ref() {
+                    if prev == '*' && c == '/' {
+                        break;
+                    }
+                    prev = c;
+                }
+                out.push(' ');
+            }
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// The real device: format support from `vkGetPhysicalDeviceImageFormatProperties`, shaders
+/// compiled and reflected like [`NoDevice`] does (with the caller's compiler and its cache).
+pub struct DeviceEnv<'a> {
+    ctx: &'a crate::gpu::GpuContext,
+    compiler: &'a crate::gpu::ShaderCompiler,
+}
+
+impl<'a> DeviceEnv<'a> {
+    /// Queries `ctx`'s physical device; compiles user shaders with `compiler`.
+    pub fn new(ctx: &'a crate::gpu::GpuContext, compiler: &'a crate::gpu::ShaderCompiler) -> Self {
+        Self { ctx, compiler }
+    }
+
+    /// The device's name.
+    pub fn device_name(&self) -> &str {
+        &self.ctx.caps().name
+    }
+}
+
+impl Environment for DeviceEnv<'_> {
+    fn check_image_format(
+        &self,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        samples: vk::SampleCountFlags,
+    ) -> Result<(), String> {
+        let query = |usage: vk::ImageUsageFlags| {
+            // SAFETY: a query on a valid physical device of a live instance.
+            unsafe {
+                self.ctx.instance().get_physical_device_image_format_properties(
+                    self.ctx.physical_device(),
+                    format,
+                    vk::ImageType::TYPE_2D,
+                    vk::ImageTiling::OPTIMAL,
+                    usage,
+                    vk::ImageCreateFlags::empty(),
+                )
+            }
+        };
+        match query(usage) {
+            Err(vk::Result::ERROR_FORMAT_NOT_SUPPORTED) => {
+                // Name the usages that fail on their own.
+                let failing: Vec<String> = (0..32)
+                    .map(|bit| vk::ImageUsageFlags::from_raw(1 << bit))
+                    .filter(|u| usage.contains(*u) && query(*u).is_err())
+                    .map(|u| format!("{u:?}"))
+                    .collect();
+                if failing.is_empty() {
+                    Err(format!("the combination of usages {usage:?} is not supported with optimal tiling"))
+                } else {
+                    Err(format!("{} is not supported for {format:?} with optimal tiling", failing.join(" | ")))
+                }
+            }
+            Err(e) => Err(format!("vkGetPhysicalDeviceImageFormatProperties failed: {e}")),
+            Ok(p) if !p.sample_counts.contains(samples) => {
+                let counts: Vec<String> = (0..7)
+                    .map(|b| 1u32 << b)
+                    .filter(|&n| p.sample_counts.as_raw() & n != 0)
+                    .map(|n| n.to_string())
+                    .collect();
+                Err(format!(
+                    "{} samples are not supported for this format and usage (supported: {})",
+                    samples.as_raw(),
+                    counts.join(", ")
+                ))
+            }
+            Ok(_) => Ok(()),
+        }
+    }
+
+    fn shader_interface(&self, path: &Path) -> Result<ShaderInterface, String> {
+        shader_interface_with(self.compiler, path)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finds_binding_names_in_glsl() {
+        let src = r#"#version 460
+// layout(binding = 9) uniform sampler2D commented;
+layout(local_size_x = 8) in;
+layout(set = 0, binding = 0) uniform sampler2D src;
+layout(set = 0, binding = 1, rgba8) uniform writeonly image2D dst;
+layout(std430, binding = 2) readonly buffer Counts { uint c[]; } counts;
+layout(binding = 3) uniform Params { float k; };
+layout(binding=4) uniform sampler2D many[4];
+layout(push_constant) uniform Push { uint n; } push;
+"#;
+        let names = binding_names(src);
+        let v: Vec<(u32, &str)> = names.iter().map(|(k, v)| (*k, v.as_str())).collect();
+        assert_eq!(v, vec![(0, "src"), (1, "dst"), (2, "counts"), (3, "Params"), (4, "many")]);
+    }
 }

@@ -14,13 +14,32 @@
 //! - Reading `name.prev` creates no edge: the graph of one frame stays acyclic even when a pass
 //!   uses last frame's Hi-Z.
 //! - Passes whose results reach no output and no later frame are pruned (and listed).
+//!
+//! Pipeline: [`schema`] (serde types of the RON file) -> [`validate`] (all errors at once, with
+//! positions from [`locate`]) -> [`ValidatedGraph`] -> [`compile()`] for one output size and scene
+//! -> [`CompiledGraph`] (printable through `Display`, [`report::to_dot`]).
 
+pub mod compile;
 pub mod env;
+pub mod error;
+pub mod executor;
+pub mod expr;
+pub mod formats;
 pub mod kinds;
+pub mod locate;
 pub mod plan;
+pub mod report;
+pub mod schema;
 pub mod usage;
+pub mod validate;
+pub mod validated;
 
-pub use env::{Environment, NoDevice};
+pub use compile::{compile, FrameInputs};
+pub use env::{DeviceEnv, Environment, NoDevice};
+pub use error::{GraphError, GraphErrors, Pos};
 pub use kinds::{builtin_kinds, PassKindInfo, SlotDecl};
 pub use plan::{CompiledGraph, PlannedBarrier, PlannedPass, PlannedResource, ResourceClass, ResourceId, Version};
+pub use report::to_dot;
 pub use usage::{Stages, Usage};
+pub use validate::{load, load_file, load_in, load_with_kinds, parse_param_override, ParamOverride};
+pub use validated::ValidatedGraph;

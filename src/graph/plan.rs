@@ -74,7 +74,7 @@ pub struct PlannedResource {
 }
 
 /// A resource bound to a slot of a pass.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Binding {
     /// Slot name (for compute passes: the binding number as text).
     pub slot: String,
@@ -140,8 +140,13 @@ pub struct PlannedPass {
 pub struct PrunedPass {
     /// Name in the RON file.
     pub name: String,
-    /// Why (e.g. "nothing it writes reaches an output or a later frame").
+    /// Kind name.
+    pub kind: String,
+    /// Why, per resource it writes (e.g. "'debug' is never read; 'tmp' is overwritten by 'b'
+    /// before anything reads it").
     pub reason: String,
+    /// What it would have bound (for reports and graphviz).
+    pub bindings: Vec<Binding>,
 }
 
 /// Where a transient lives in memory.

@@ -2,6 +2,7 @@
 //! albedo/metallic, normal/roughness and reversed-Z depth.
 
 use crate::gpu::{Bind, Buffer, GpuContext, GraphicsDesc, Image, Pipeline, ShaderCompiler};
+use crate::graph::executor::{PassContext, PassNode};
 use crate::render::scene_buffers::GpuScene;
 use ash::vk;
 
@@ -20,6 +21,30 @@ pub struct GbufferTargets<'a> {
     pub normal: &'a Image,
     /// [`DEPTH_FORMAT`] image.
     pub depth: &'a Image,
+}
+
+/// Where the draws come from: the scene's unculled list, or a culling pass's output.
+pub struct DrawSource<'a> {
+    /// `VkDrawIndexedIndirectCommand`s.
+    pub commands: &'a Buffer,
+    /// Their number (read by the GPU).
+    pub count: &'a Buffer,
+    /// Instance ids, one slice per command.
+    pub instance_ids: &'a Buffer,
+    /// The most commands the count may say.
+    pub max_draws: u32,
+}
+
+impl<'a> DrawSource<'a> {
+    /// Every instance of the scene.
+    pub fn unculled(scene: &'a GpuScene) -> Self {
+        Self {
+            commands: &scene.draw_commands,
+            count: &scene.draw_count,
+            instance_ids: &scene.draw_instance_ids,
+            max_draws: scene.max_draws,
+        }
+    }
 }
 
 /// The G-buffer geometry pass.
@@ -58,6 +83,7 @@ impl GbufferPass {
         ctx: &GpuContext,
         cmd: vk::CommandBuffer,
         scene: &GpuScene,
+        draws: &DrawSource<'_>,
         frame: &Buffer,
         targets: &GbufferTargets<'_>,
     ) {
@@ -102,25 +128,47 @@ impl GbufferPass {
                 cmd,
                 &[
                     Bind::Buffer(0, scene.instances.handle()),
-                    Bind::Buffer(1, scene.draw_instance_ids.handle()),
+                    Bind::Buffer(1, draws.instance_ids.handle()),
                     Bind::Buffer(2, frame.handle()),
                     Bind::Buffer(3, scene.materials.handle()),
                 ],
             );
             device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
             device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
-            if scene.max_draws > 0 {
+            if draws.max_draws > 0 {
                 device.cmd_draw_indexed_indirect_count(
                     cmd,
-                    scene.draw_commands.handle(),
+                    draws.commands.handle(),
                     0,
-                    scene.draw_count.handle(),
+                    draws.count.handle(),
                     0,
-                    scene.max_draws,
+                    draws.max_draws,
                     std::mem::size_of::<crate::render::gpu_types::DrawIndexedIndirect>() as u32,
                 );
             }
             device.cmd_end_rendering(cmd);
         }
+    }
+}
+
+impl PassNode for GbufferPass {
+    fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
+        let slots = &rec.slots;
+        let targets = GbufferTargets {
+            albedo: slots.required_image("albedo")?,
+            normal: slots.required_image("normal")?,
+            depth: slots.required_image("depth")?,
+        };
+        let scene = rec.frame.scene;
+        let mut draws = DrawSource::unculled(scene);
+        if let (Some(commands), Some(count), Some(ids)) =
+            (slots.buffer("draw_commands"), slots.buffer("draw_count"), slots.buffer("draw_instance_ids"))
+        {
+            let stride = std::mem::size_of::<crate::render::gpu_types::DrawIndexedIndirect>() as u64;
+            let max_draws = (commands.size() / stride).min(u32::MAX as u64) as u32;
+            draws = DrawSource { commands, count, instance_ids: ids, max_draws };
+        }
+        GbufferPass::record(self, rec.ctx, rec.cmd, scene, &draws, rec.frame.constants, &targets);
+        Ok(())
     }
 }

@@ -2,6 +2,8 @@
 //! mapped and written sRGB-encoded into an RGBA8 storage image.
 
 use crate::gpu::{Bind, Buffer, GpuContext, Image, Pipeline, Sampler, ShaderCompiler};
+use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::plan::{PlannedPass, SettingValue};
 use ash::vk;
 
 /// Format of the lit output (values are sRGB-encoded by the shader).
@@ -23,21 +25,69 @@ pub struct LightingInputs<'a> {
     pub output: &'a Image,
 }
 
+/// Push constants of `lighting.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct LightingSettings {
+    /// Scale applied before tone mapping.
+    pub exposure: f32,
+    /// 0 lit, 1 normals, 2 albedo, 3 depth (`DEBUG_VIEW_*` in `scene.glsl`).
+    pub debug_view: u32,
+}
+
+impl LightingSettings {
+    /// From the pass's graph settings (`exposure`, `debug_view`).
+    pub fn from_plan(pass: &PlannedPass) -> Self {
+        let exposure = match pass.settings.get("exposure") {
+            Some(SettingValue::Float(f)) => *f as f32,
+            Some(SettingValue::Int(i)) => *i as f32,
+            _ => 0.8,
+        };
+        let debug_view = match pass.settings.get("debug_view") {
+            Some(SettingValue::Choice(c)) => match c.as_str() {
+                "normals" => 1,
+                "albedo" => 2,
+                "depth" => 3,
+                _ => 0,
+            },
+            _ => 0,
+        };
+        Self { exposure, debug_view }
+    }
+}
+
 /// The lighting pass.
 pub struct LightingPass {
     pipeline: Pipeline,
     sampler: Sampler,
+    settings: LightingSettings,
 }
 
 impl LightingPass {
     /// Compiles the shader and creates the pipeline.
     pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler) -> crate::Result<Self> {
         let spirv = shaders.compile("lighting/lighting.comp", &[])?;
-        Ok(Self { pipeline: Pipeline::compute(ctx, "lighting", &spirv)?, sampler: Sampler::nearest_clamp(ctx)? })
+        let settings = LightingSettings { exposure: 0.8, debug_view: 0 };
+        Ok(Self {
+            pipeline: Pipeline::compute(ctx, "lighting", &spirv)?,
+            sampler: Sampler::nearest_clamp(ctx)?,
+            settings,
+        })
+    }
+
+    /// The pass configured by a graph node's settings.
+    pub fn for_plan(ctx: &GpuContext, shaders: &ShaderCompiler, pass: &PlannedPass) -> crate::Result<Self> {
+        Ok(Self { settings: LightingSettings::from_plan(pass), ..Self::new(ctx, shaders)? })
     }
 
     /// Records one dispatch over the output.
-    pub fn record(&self, cmd: vk::CommandBuffer, ctx: &GpuContext, io: &LightingInputs<'_>) {
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        ctx: &GpuContext,
+        io: &LightingInputs<'_>,
+        settings: &LightingSettings,
+    ) {
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let s = self.sampler.handle();
         self.pipeline.bind(cmd);
@@ -52,8 +102,25 @@ impl LightingPass {
                 Bind::StorageImage(5, io.output.view()),
             ],
         );
+        self.pipeline.push_constants(cmd, settings);
         let e = io.output.extent();
         // SAFETY: cmd recording with this pipeline bound.
         unsafe { ctx.device().cmd_dispatch(cmd, e.width.div_ceil(8), e.height.div_ceil(8), 1) };
+    }
+}
+
+impl PassNode for LightingPass {
+    fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
+        let slots = &rec.slots;
+        let io = LightingInputs {
+            depth: slots.required_image("depth")?,
+            albedo: slots.required_image("albedo")?,
+            normal: slots.required_image("normal")?,
+            frame: rec.frame.constants,
+            lights: rec.frame.lights,
+            output: slots.required_image("output")?,
+        };
+        LightingPass::record(self, rec.cmd, rec.ctx, &io, &self.settings);
+        Ok(())
     }
 }

@@ -1,5 +1,27 @@
-//! Built-in passes. Each records its own commands; the frame (and later the render graph)
-//! decides the order and the barriers between them.
+//! Built-in passes. Each records its own commands; the render graph decides their order and
+//! the barriers between them, and instantiates them by kind name.
 
+pub mod compute;
 pub mod gbuffer;
 pub mod lighting;
+
+use crate::gpu::{GpuContext, ShaderCompiler};
+use crate::graph::executor::PassNode;
+use crate::graph::plan::{CompiledGraph, PlannedPass};
+use std::path::Path;
+
+/// Creates the pass instance for a planned pass of kind `pass.kind`.
+pub fn create_node(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    pass: &PlannedPass,
+    _plan: &CompiledGraph,
+    graph_dir: Option<&Path>,
+) -> crate::Result<Box<dyn PassNode>> {
+    Ok(match pass.kind.as_str() {
+        "gbuffer" => Box::new(gbuffer::GbufferPass::new(ctx, shaders)?),
+        "lighting" => Box::new(lighting::LightingPass::for_plan(ctx, shaders, pass)?),
+        crate::graph::kinds::COMPUTE_KIND => Box::new(compute::ComputePass::new(ctx, shaders, pass, graph_dir)?),
+        other => return Err(crate::Error::Invalid(format!("pass '{}': no executor for kind '{other}'", pass.name))),
+    })
+}

@@ -96,15 +96,15 @@ pub struct FrameConstants {
     pub sun_direction: [f32; 4],
     /// Sun radiance.
     pub sun_color: [f32; 4],
-    /// Width, height, point light count, flags.
+    /// Width, height, point light count, unused.
     pub size_lights: [u32; 4],
-    /// Sky ambient rgb and exposure.
+    /// Sky ambient rgb, unused.
     pub ambient: [f32; 4],
 }
 
 impl FrameConstants {
     /// Constants for `camera` looking at `scene` on a `width` x `height` target.
-    pub fn new(scene: &Scene, camera: &Camera, width: u32, height: u32, debug_view: DebugView) -> Self {
+    pub fn new(scene: &Scene, camera: &Camera, width: u32, height: u32) -> Self {
         let aspect = width as f32 / height as f32;
         let vp: Mat4 = camera.view_projection_rel_eye(aspect);
         let (eye_hi, eye_lo) = split_hi_lo(camera.eye);
@@ -116,25 +116,10 @@ impl FrameConstants {
             eye_lo: eye_lo.extend(0.0).to_array(),
             sun_direction: sun.direction.normalize_or(Vec3::NEG_Y).extend(0.0).to_array(),
             sun_color: sun.color.extend(0.0).to_array(),
-            size_lights: [width, height, scene.lights.len() as u32, debug_view as u32],
-            ambient: [0.22, 0.27, 0.35, 0.8],
+            size_lights: [width, height, scene.lights.len() as u32, 0],
+            ambient: [0.22, 0.27, 0.35, 0.0],
         }
     }
-}
-
-/// What the lighting pass writes: the lit image or one G-buffer channel (`DEBUG_VIEW_*` in
-/// `scene.glsl`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
-pub enum DebugView {
-    /// The lit, tone-mapped image.
-    #[default]
-    None = 0,
-    /// World-space normals as colors.
-    Normals = 1,
-    /// Albedo without lighting.
-    Albedo = 2,
-    /// Depth bands (each band is a factor of 16 in distance).
-    Depth = 3,
 }
 
 /// `VkDrawIndexedIndirectCommand` (20 bytes).

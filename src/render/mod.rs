@@ -2,8 +2,11 @@
 //! headlessly or into a host engine's command buffer.
 
 pub mod gpu_types;
+pub mod graph_spec;
 pub mod output;
 pub mod renderer;
 pub mod scene_buffers;
 
-pub use renderer::{RenderSettings, Renderer, FRAMES_IN_FLIGHT};
+pub use crate::graph::executor::FRAMES_IN_FLIGHT;
+pub use graph_spec::GraphSpec;
+pub use renderer::{RenderSettings, Renderer};

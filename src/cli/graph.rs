@@ -1,0 +1,100 @@
+//! `cullgraph graph check|plan|dot`: validate a render graph, print its compiled plan, export it
+//! as graphviz. Graph errors are printed one per line as `file:line:col: message` with exit
+//! status 1.
+
+use super::args::{GraphArgs, GraphCommand, GraphFrameArgs};
+use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
+use cullgraph::graph::{self, CompiledGraph, DeviceEnv, Environment, FrameInputs, GraphErrors, NoDevice};
+use cullgraph::scene::source::LoadOptions;
+use cullgraph::scene::SceneSource;
+use std::path::Path;
+use std::process::ExitCode;
+
+/// Runs a `graph` subcommand.
+pub fn run(args: &GraphArgs) -> ExitCode {
+    let result = match &args.command {
+        GraphCommand::Check(a) => check(&a.file, &a.params, a.device.as_deref()),
+        GraphCommand::Plan(a) => compiled(&a.file, &a.params, &a.frame).map(|plan| {
+            println!("{plan}");
+        }),
+        GraphCommand::Dot(a) => compiled(&a.file, &a.params, &a.frame).and_then(|plan| {
+            let dot = graph::to_dot(&plan);
+            match &a.out {
+                None => {
+                    print!("{dot}");
+                    Ok(())
+                }
+                Some(path) => std::fs::write(path, dot)
+                    .map(|_| eprintln!("wrote {}", path.display()))
+                    .map_err(|e| Failure::Other(format!("{}: {e}", path.display()))),
+            }
+        }),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Graph(errors)) => {
+            for e in errors.iter() {
+                eprintln!("{e}");
+            }
+            ExitCode::FAILURE
+        }
+        Err(Failure::Other(message)) => {
+            eprintln!("error: {message}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+enum Failure {
+    /// Errors in the graph, each with its position.
+    Graph(GraphErrors),
+    /// Anything else (no shader compiler, scene failed to load, cannot write).
+    Other(String),
+}
+
+impl From<GraphErrors> for Failure {
+    fn from(e: GraphErrors) -> Self {
+        Failure::Graph(e)
+    }
+}
+
+fn shader_root() -> ShaderRoot {
+    ShaderRoot::from_env()
+}
+
+/// Loads against the real device when Vulkan is available (format support is then checked),
+/// otherwise without one.
+fn check(file: &Path, params: &[(String, String)], device: Option<&str>) -> Result<(), Failure> {
+    let options = ContextOptions {
+        device: DeviceSelector::or_from_env(device.map(|d| d.parse().unwrap_or_default())),
+        validation: false,
+        app_name: "cullgraph graph check".into(),
+    };
+    let graph = match GpuContext::new(&options) {
+        Ok(ctx) => {
+            let shaders = ShaderCompiler::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
+            let env = DeviceEnv::new(&ctx, &shaders);
+            graph::load_file(file, params, &env)?
+        }
+        Err(e) => {
+            eprintln!("note: no Vulkan device ({e}); image formats are not checked against a device");
+            let env = NoDevice::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
+            graph::load_file(file, params, &env as &dyn Environment)?
+        }
+    };
+    println!("{}: ok ({} passes, {} resources)", file.display(), graph.passes.len(), graph.resources.len());
+    Ok(())
+}
+
+/// Loads (without a device) and compiles for the requested size and scene.
+fn compiled(file: &Path, params: &[(String, String)], frame: &GraphFrameArgs) -> Result<CompiledGraph, Failure> {
+    let env = NoDevice::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
+    let graph = graph::load_file(file, params, &env)?;
+    let source: SceneSource =
+        frame.scene.parse().map_err(|e: cullgraph::scene::SceneError| Failure::Other(e.to_string()))?;
+    let options =
+        LoadOptions { instances: frame.instances, kinds: frame.kinds, lights: frame.lights, seed: frame.seed };
+    let scene = source.load(&options).map_err(|e| Failure::Other(e.to_string()))?;
+    let (width, height) = frame.size;
+    Ok(graph::compile(&graph, &FrameInputs::from_scene(&scene, width, height))?)
+}

@@ -1,0 +1,132 @@
+//! Transient memory aliasing: resources whose lifetimes do not overlap share memory.
+//!
+//! [`plan_memory`] is a pure function of sizes, alignments, lifetimes and heap classes, so the
+//! compiler uses it with estimates from formats and the executor again with the device's real
+//! memory requirements. Greedy placement: largest first (ties: larger alignment, then lower
+//! index), each at the lowest aligned offset that does not overlap, in memory, any already placed
+//! item of the same heap class whose lifetime overlaps its own.
+
+use super::resolve::Resolved;
+use crate::graph::formats;
+use crate::graph::plan::Placement;
+
+/// Alignment the compiler assumes for images (the executor uses the device's).
+pub const IMAGE_ALIGNMENT: u64 = 64 * 1024;
+/// Alignment the compiler assumes for buffers.
+pub const BUFFER_ALIGNMENT: u64 = 256;
+/// Heap class of images in the compiler's estimate.
+pub const IMAGE_HEAP_CLASS: u32 = 0;
+/// Heap class of buffers in the compiler's estimate.
+pub const BUFFER_HEAP_CLASS: u32 = 1;
+
+/// An item placed in a heap: offset, end, lifetime.
+type Placed = (u64, u64, (usize, usize));
+
+/// One resource to place.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemoryItem {
+    /// Bytes.
+    pub size: u64,
+    /// Required alignment of its offset (0 or 1: none).
+    pub alignment: u64,
+    /// First and last execution position that uses it (inclusive).
+    pub lifetime: (usize, usize),
+    /// Items of different classes never share a heap (images vs buffers, memory types).
+    pub heap_class: u32,
+}
+
+/// Places `items` (`None`: not placed, e.g. not transient). Returns one placement per item and
+/// the size of each heap; heap `i` holds the `i`-th smallest heap class that occurs.
+pub fn plan_memory(items: &[Option<MemoryItem>]) -> (Vec<Option<Placement>>, Vec<u64>) {
+    let mut classes: Vec<u32> = items.iter().flatten().map(|i| i.heap_class).collect();
+    classes.sort_unstable();
+    classes.dedup();
+    let mut order: Vec<usize> = (0..items.len()).filter(|&i| items[i].is_some()).collect();
+    let key = |i: usize| items[i].map_or((0, 0), |m| (m.size, m.alignment));
+    order.sort_by(|&a, &b| key(b).cmp(&key(a)).then(a.cmp(&b)));
+    let mut placements: Vec<Option<Placement>> = vec![None; items.len()];
+    let mut heaps = vec![0u64; classes.len()];
+    // Placed items per heap.
+    let mut placed: Vec<Vec<Placed>> = vec![Vec::new(); classes.len()];
+    for i in order {
+        let Some(item) = items[i] else { continue };
+        let heap = classes.binary_search(&item.heap_class).unwrap_or(0);
+        let align = item.alignment.max(1);
+        let mut conflicts: Vec<(u64, u64)> = placed[heap]
+            .iter()
+            .filter(|(_, _, l)| l.0 <= item.lifetime.1 && item.lifetime.0 <= l.1)
+            .map(|(o, e, _)| (*o, *e))
+            .collect();
+        conflicts.sort_unstable();
+        let mut offset = 0u64;
+        if item.size > 0 {
+            for (start, end) in conflicts {
+                if end <= offset || start == end {
+                    continue;
+                }
+                if offset.saturating_add(item.size) <= start {
+                    break;
+                }
+                offset = end.div_ceil(align).saturating_mul(align);
+            }
+        }
+        let end = offset.saturating_add(item.size);
+        placed[heap].push((offset, end, item.lifetime));
+        heaps[heap] = heaps[heap].max(end);
+        placements[i] = Some(Placement { heap, offset });
+    }
+    (placements, heaps)
+}
+
+/// The compiler's estimate of a resource's memory: texel bytes x width x height x samples,
+/// summed over the mip chain, for images (64 KiB aligned, heap class 0); the size for buffers
+/// (256-byte aligned, heap class 1).
+pub fn estimate(resource: &Resolved, lifetime: (usize, usize)) -> MemoryItem {
+    match *resource {
+        Resolved::Image { format, extent, mips, samples } => {
+            let texel = formats::info(format).map_or(4, |f| f.bytes) as u64;
+            let texels: u64 = (0..mips.max(1))
+                .map(|l| ((extent.width >> l).max(1) as u64) * ((extent.height >> l).max(1) as u64))
+                .sum();
+            MemoryItem {
+                size: texels * texel * samples.max(1) as u64,
+                alignment: IMAGE_ALIGNMENT,
+                lifetime,
+                heap_class: IMAGE_HEAP_CLASS,
+            }
+        }
+        Resolved::Buffer(size) => {
+            MemoryItem { size, alignment: BUFFER_ALIGNMENT, lifetime, heap_class: BUFFER_HEAP_CLASS }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn item(size: u64, lifetime: (usize, usize)) -> Option<MemoryItem> {
+        Some(MemoryItem { size, alignment: 256, lifetime, heap_class: 0 })
+    }
+
+    #[test]
+    fn disjoint_lifetimes_share_memory() {
+        let (p, heaps) = plan_memory(&[item(1000, (0, 1)), item(1000, (2, 3)), item(500, (1, 2)), None]);
+        assert_eq!(p[0], Some(Placement { heap: 0, offset: 0 }));
+        assert_eq!(p[1], Some(Placement { heap: 0, offset: 0 }));
+        assert_eq!(p[2], Some(Placement { heap: 0, offset: 1024 }));
+        assert_eq!(p[3], None);
+        assert_eq!(heaps, vec![1524]);
+    }
+
+    #[test]
+    fn fills_gaps_between_placed_items() {
+        let items = [item(4096, (0, 0)), item(1000, (1, 1)), item(1000, (1, 1)), item(1000, (0, 1))];
+        let (p, heaps) = plan_memory(&items);
+        assert_eq!(p[0].map(|p| p.offset), Some(0));
+        assert_eq!(p[3].map(|p| p.offset), Some(4096));
+        assert_eq!(p[1].map(|p| p.offset), Some(0));
+        assert_eq!(p[2].map(|p| p.offset), Some(1024));
+        assert_eq!(heaps, vec![5096]);
+    }
+}

@@ -1,0 +1,184 @@
+//! The compiler: a [`ValidatedGraph`] plus one frame configuration (output size, scene
+//! quantities, param overrides) becomes a [`CompiledGraph`]: pruned ([`prune`]), ordered
+//! ([`order`], from the dependencies of [`flow`]), with lifetimes ([`lifetimes`]), transient
+//! memory placed ([`memory`]) and barriers planned ([`barriers`]); values come from [`resolve`].
+
+pub mod barriers;
+pub mod flow;
+pub mod lifetimes;
+pub mod memory;
+pub mod order;
+pub mod prune;
+pub mod resolve;
+
+use super::error::{GraphErrors, Sink};
+use super::plan::{Binding, CompiledGraph, MemoryPlan, PlannedPass, PlannedResource, ResolvedKind, ResourceClass};
+use super::validate::{apply_overrides, ParamOverride};
+use super::validated::{ParamValue, ValidatedGraph};
+use crate::scene::Scene;
+use ash::vk;
+use resolve::Resolved;
+use std::collections::HashMap;
+
+/// What a compiled graph depends on besides the file: the output size, the scene's quantities
+/// (the variables of expressions) and param overrides on top of the ones given when loading.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FrameInputs {
+    /// Output width in pixels (`width`).
+    pub width: u32,
+    /// Output height in pixels (`height`).
+    pub height: u32,
+    /// Instances in the scene (`instances`).
+    pub instances: u64,
+    /// Meshes, i.e. draw groups (`meshes`).
+    pub meshes: u64,
+    /// Point lights (`lights`).
+    pub lights: u64,
+    /// Materials (`materials`).
+    pub materials: u64,
+    /// Triangles over all instances (`triangles`).
+    pub triangles: u64,
+    /// `name=value` param overrides (applied after the load-time ones).
+    pub params: Vec<ParamOverride>,
+}
+
+impl FrameInputs {
+    /// An output size with an empty scene.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self { width, height, ..Default::default() }
+    }
+
+    /// An output size with the quantities of `scene`.
+    pub fn from_scene(scene: &Scene, width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            instances: scene.instances.len() as u64,
+            meshes: scene.meshes.len() as u64,
+            lights: scene.lights.len() as u64,
+            materials: scene.materials.len() as u64,
+            triangles: scene.instanced_triangles(),
+            params: Vec::new(),
+        }
+    }
+}
+
+/// Compiles `graph` for one frame configuration. Errors (values out of range for this frame,
+/// bad overrides) carry file positions like load errors.
+pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGraph, GraphErrors> {
+    let mut sink = Sink::new(&graph.file);
+    if frame.width == 0 || frame.height == 0 || frame.width > 16384 || frame.height > 16384 {
+        sink.command_line(format!("output size {}x{} must be 1 to 16384 in each dimension", frame.width, frame.height));
+    }
+    let mut params = graph.params.clone();
+    apply_overrides(&mut params, &frame.params, &mut sink);
+    let vars = resolve::variables(&params, frame);
+    let mut errors = resolve::Errors { file: &graph.file, list: Vec::new() };
+    let resolved: Vec<Resolved> =
+        graph.resources.iter().map(|r| resolve::resource(&r.name, &r.desc, &vars, frame, &mut errors)).collect();
+    let samples: Vec<u32> = resolved
+        .iter()
+        .map(|r| match r {
+            Resolved::Image { samples, .. } => *samples,
+            Resolved::Buffer(_) => 1,
+        })
+        .collect();
+    for (pos, message) in super::validate::sample_errors(graph, &samples) {
+        sink.at(pos, message);
+    }
+
+    let pruning = prune::prune(graph);
+    let kept: Vec<usize> = (0..graph.passes.len()).filter(|&p| pruning.keep[p]).collect();
+    let flows = flow::flows(graph, &pruning.keep);
+    let deps = flow::dependencies(&flows);
+    let Some(order) = order::execution_order(&kept, &deps) else {
+        sink.at(graph.passes.first().map_or_else(Default::default, |p| p.pos), "cycle among the passes");
+        return Err(GraphErrors::sorted(sink.errors));
+    };
+    let lifetimes = lifetimes::lifetimes(graph, &order);
+
+    let param_values: HashMap<&str, &ParamValue> = params.iter().map(|p| (p.name.as_str(), &p.value)).collect();
+    let names: Vec<String> = graph.resources.iter().map(|r| r.name.clone()).collect();
+    let is_image: Vec<bool> = resolved.iter().map(|r| matches!(r, Resolved::Image { .. })).collect();
+    let barriers = barriers::plan_barriers(graph, &order, &is_image);
+    let mut passes = Vec::with_capacity(order.len());
+    for (pos, &p) in order.iter().enumerate() {
+        let pass = &graph.passes[p];
+        let declared = graph.kind(p).map(|k| k.settings.as_slice()).unwrap_or(&[]);
+        passes.push(PlannedPass {
+            name: pass.name.clone(),
+            kind: pass.kind.clone(),
+            bindings: pass
+                .bindings
+                .iter()
+                .map(|b| Binding { slot: b.slot.clone(), resource: b.resource, version: b.version, usage: b.usage })
+                .collect(),
+            settings: resolve::settings(pass, declared, &param_values, &vars, &mut errors),
+            shader: pass.shader.clone(),
+            dispatch: resolve::dispatch(pass, &resolved, &names, &vars, &mut errors),
+            barriers: barriers[pos].clone(),
+        });
+    }
+
+    let mut resources = Vec::with_capacity(graph.resources.len());
+    for (r, res) in graph.resources.iter().enumerate() {
+        let class = if res.imported {
+            ResourceClass::Imported
+        } else if res.history {
+            ResourceClass::History
+        } else if graph.outputs.contains(&r) {
+            ResourceClass::Output
+        } else {
+            ResourceClass::Transient
+        };
+        let users = order.iter().flat_map(|&p| &graph.passes[p].bindings).filter(|b| b.resource == r);
+        let kind = match resolved[r] {
+            Resolved::Image { format, extent, mips, samples } => {
+                let mut usage = users.fold(vk::ImageUsageFlags::empty(), |u, b| u | b.usage.image_usage());
+                if graph.outputs.contains(&r) {
+                    usage |= vk::ImageUsageFlags::TRANSFER_SRC;
+                }
+                ResolvedKind::Image { format, extent, mip_levels: mips, samples: resolve::sample_flags(samples), usage }
+            }
+            Resolved::Buffer(size) => {
+                let mut usage = users.fold(vk::BufferUsageFlags::empty(), |u, b| u | b.usage.buffer_usage());
+                if graph.outputs.contains(&r) {
+                    usage |= vk::BufferUsageFlags::TRANSFER_SRC;
+                }
+                ResolvedKind::Buffer { size, usage }
+            }
+        };
+        resources.push(PlannedResource { name: res.name.clone(), kind, class, lifetime: lifetimes[r] });
+    }
+
+    let items: Vec<Option<memory::MemoryItem>> = resources
+        .iter()
+        .zip(&resolved)
+        .map(|(r, res)| match (r.class, r.lifetime) {
+            (ResourceClass::Transient, Some(l)) => Some(memory::estimate(res, l)),
+            _ => None,
+        })
+        .collect();
+    let (placements, heaps) = memory::plan_memory(&items);
+    let memory = MemoryPlan {
+        placements,
+        // Each in memory of its own, at the same alignment.
+        bytes_without_aliasing: items
+            .iter()
+            .flatten()
+            .map(|i| i.size.div_ceil(i.alignment.max(1)) * i.alignment.max(1))
+            .sum(),
+        bytes_with_aliasing: heaps.iter().sum(),
+        heaps,
+    };
+
+    sink.errors.extend(errors.list);
+    sink.into_result(CompiledGraph {
+        name: graph.name.clone(),
+        passes,
+        pruned: pruning.pruned,
+        resources,
+        outputs: graph.outputs.clone(),
+        memory,
+    })
+}

@@ -1,0 +1,310 @@
+//! Resolving a validated graph for one frame configuration: expression values (sizes, mips,
+//! sample counts, settings, dispatch) and the range each must lie in.
+//!
+//! The range checks are shared with validation, which applies them as soon as an expression
+//! uses params only, so `cullgraph graph check` reports them without a scene.
+
+use super::FrameInputs;
+use crate::graph::error::Pos;
+use crate::graph::expr::Num;
+use crate::graph::kinds::SettingDefault;
+use crate::graph::plan::SettingValue;
+use crate::graph::validated::{
+    DispatchSpec, ImageSize, LocatedExpr, Mips, Param, ParamValue, Pass, ResourceDesc, SettingSource,
+};
+use ash::vk;
+use std::collections::{BTreeMap, HashMap};
+
+/// Largest buffer, in bytes.
+pub const MAX_BUFFER_BYTES: u64 = 1 << 40;
+/// Largest image width or height.
+pub const MAX_IMAGE_DIMENSION: u32 = 16384;
+/// Buffers sized 0 (e.g. `lights * 32` without lights) get this many bytes.
+pub const MIN_BUFFER_BYTES: u64 = 4;
+/// Most workgroups per dimension of a dispatch (the Vulkan minimum of `maxComputeWorkGroupCount`).
+pub const MAX_GROUPS: u64 = 65535;
+
+/// Evaluates `e`; an error carries its position.
+pub fn eval(e: &LocatedExpr, vars: &BTreeMap<String, Num>) -> Result<Num, (Pos, String)> {
+    e.expr.eval(vars).map_err(|err| (e.pos_at(err.offset), err.message))
+}
+
+fn whole(n: Num) -> Result<i64, String> {
+    match n {
+        Num::Float(f) if !f.is_finite() => Err(format!("is not finite ({f})")),
+        _ => n.as_whole().ok_or_else(|| format!("is not a whole number ({n})")),
+    }
+}
+
+/// Bytes of a buffer: whole, not negative, at most 2^40; 0 becomes [`MIN_BUFFER_BYTES`].
+pub fn buffer_bytes(n: Num) -> Result<u64, String> {
+    let v = whole(n)?;
+    if v < 0 {
+        return Err(format!("is negative ({v})"));
+    }
+    if v as u64 > MAX_BUFFER_BYTES {
+        return Err(format!("is {v} bytes, more than 2^40"));
+    }
+    Ok((v as u64).max(MIN_BUFFER_BYTES))
+}
+
+/// An image width or height: whole, 1 to 16384.
+pub fn image_dimension(n: Num) -> Result<u32, String> {
+    let v = whole(n)?;
+    if !(1..=MAX_IMAGE_DIMENSION as i64).contains(&v) {
+        return Err(format!("is {v} (must be 1 to {MAX_IMAGE_DIMENSION})"));
+    }
+    Ok(v as u32)
+}
+
+/// A `Scaled(..)` factor: finite and positive.
+pub fn scale(n: Num) -> Result<f64, String> {
+    let f = n.as_f64();
+    if !f.is_finite() || f <= 0.0 {
+        return Err(format!("must be a positive number, got {n}"));
+    }
+    Ok(f)
+}
+
+/// A mip count for a `width` x `height` image: whole, 1 to the full chain.
+pub fn mip_count(n: Num, width: u32, height: u32) -> Result<u32, String> {
+    let v = whole(n)?;
+    let full = full_mip_chain(width, height);
+    if v < 1 || v > full as i64 {
+        return Err(format!("is {v} (a {width}x{height} image has 1 to {full} levels)"));
+    }
+    Ok(v as u32)
+}
+
+/// Levels of a full mip chain down to 1x1.
+pub fn full_mip_chain(width: u32, height: u32) -> u32 {
+    32 - width.max(height).max(1).leading_zeros()
+}
+
+/// A sample count: 1, 2, 4 or 8.
+pub fn sample_count(n: Num) -> Result<u32, String> {
+    match n.as_whole() {
+        Some(v @ (1 | 2 | 4 | 8)) => Ok(v as u32),
+        _ => Err(format!("must be 1, 2, 4 or 8, got {n}")),
+    }
+}
+
+/// `vk::SampleCountFlags` of a count of 1, 2, 4 or 8.
+pub fn sample_flags(count: u32) -> vk::SampleCountFlags {
+    vk::SampleCountFlags::from_raw(count.max(1))
+}
+
+/// Variables of expressions for one frame: numeric params and the frame quantities.
+pub fn variables(params: &[Param], frame: &FrameInputs) -> BTreeMap<String, Num> {
+    let mut vars: BTreeMap<String, Num> =
+        params.iter().filter_map(|p| Some((p.name.clone(), p.value.as_num()?))).collect();
+    let q = |v: u64| Num::Int(v.min(i64::MAX as u64) as i64);
+    vars.insert("width".into(), Num::Int(frame.width as i64));
+    vars.insert("height".into(), Num::Int(frame.height as i64));
+    vars.insert("instances".into(), q(frame.instances));
+    vars.insert("meshes".into(), q(frame.meshes));
+    vars.insert("lights".into(), q(frame.lights));
+    vars.insert("materials".into(), q(frame.materials));
+    vars.insert("triangles".into(), q(frame.triangles));
+    vars
+}
+
+/// A resource resolved for one frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Resolved {
+    /// An image.
+    Image {
+        /// Format.
+        format: vk::Format,
+        /// Mip-0 size.
+        extent: vk::Extent2D,
+        /// Levels.
+        mips: u32,
+        /// Samples.
+        samples: u32,
+    },
+    /// A buffer of this many bytes.
+    Buffer(u64),
+}
+
+/// Collects errors while resolving.
+pub struct Errors<'a> {
+    /// File name for messages.
+    pub file: &'a str,
+    /// Found so far.
+    pub list: Vec<crate::graph::error::GraphError>,
+}
+
+impl Errors<'_> {
+    fn push(&mut self, pos: Pos, message: String) {
+        self.list.push(crate::graph::error::GraphError::new(self.file, pos, message));
+    }
+
+    /// Evaluates `e` and checks it with `check`; errors are recorded with `what` in front.
+    fn value<T>(
+        &mut self,
+        e: &LocatedExpr,
+        vars: &BTreeMap<String, Num>,
+        what: &str,
+        check: impl Fn(Num) -> Result<T, String>,
+    ) -> Option<T> {
+        match eval(e, vars) {
+            Ok(n) => match check(n) {
+                Ok(v) => Some(v),
+                Err(m) => {
+                    self.push(e.pos, format!("{what} {m}"));
+                    None
+                }
+            },
+            Err((pos, m)) => {
+                self.push(pos, format!("{what}: {m}"));
+                None
+            }
+        }
+    }
+}
+
+/// Resolves one resource description.
+pub fn resource(
+    name: &str,
+    desc: &ResourceDesc,
+    vars: &BTreeMap<String, Num>,
+    frame: &FrameInputs,
+    errors: &mut Errors<'_>,
+) -> Resolved {
+    match desc {
+        ResourceDesc::Buffer { size } => {
+            Resolved::Buffer(errors.value(size, vars, &format!("size of buffer '{name}'"), buffer_bytes).unwrap_or(4))
+        }
+        ResourceDesc::Image { format, size, mips, samples, .. } => {
+            let (w, h) = match size {
+                ImageSize::Output => (frame.width.max(1), frame.height.max(1)),
+                ImageSize::Scaled(f) => {
+                    let f = errors.value(f, vars, &format!("scale of image '{name}'"), scale).unwrap_or(1.0);
+                    let dim = |v: u32| ((v as f64 * f).ceil() as u64).clamp(1, MAX_IMAGE_DIMENSION as u64) as u32;
+                    (dim(frame.width), dim(frame.height))
+                }
+                ImageSize::Fixed(w, h) => (
+                    errors.value(w, vars, &format!("width of image '{name}'"), image_dimension).unwrap_or(1),
+                    errors.value(h, vars, &format!("height of image '{name}'"), image_dimension).unwrap_or(1),
+                ),
+            };
+            let mips = match mips {
+                Mips::All => full_mip_chain(w, h),
+                Mips::Count(e) => {
+                    errors.value(e, vars, &format!("mips of image '{name}'"), |n| mip_count(n, w, h)).unwrap_or(1)
+                }
+            };
+            let samples = errors.value(samples, vars, &format!("samples of image '{name}'"), sample_count).unwrap_or(1);
+            Resolved::Image { format: *format, extent: vk::Extent2D { width: w, height: h }, mips, samples }
+        }
+    }
+}
+
+/// Settings of a pass with defaults filled in.
+pub fn settings(
+    pass: &Pass,
+    declared: &[crate::graph::kinds::SettingDecl],
+    params: &HashMap<&str, &ParamValue>,
+    vars: &BTreeMap<String, Num>,
+    errors: &mut Errors<'_>,
+) -> BTreeMap<String, SettingValue> {
+    let mut out = BTreeMap::new();
+    for decl in declared {
+        let default = match &decl.default {
+            SettingDefault::Bool(b) => SettingValue::Bool(*b),
+            SettingDefault::Int(i) => SettingValue::Int(*i),
+            SettingDefault::Float(f) => SettingValue::Float(*f),
+            SettingDefault::Choice(c) => SettingValue::Choice(c.first().copied().unwrap_or("").to_string()),
+        };
+        out.insert(decl.name.to_string(), default);
+    }
+    for s in &pass.settings {
+        let what = format!("setting '{}' of pass '{}'", s.name, pass.name);
+        let value = match &s.source {
+            SettingSource::Value(v) => Some(v.clone()),
+            SettingSource::Param(p) => match (params.get(p.as_str()), &s.ty) {
+                (Some(ParamValue::Bool(b)), SettingDefault::Bool(_)) => Some(SettingValue::Bool(*b)),
+                (Some(ParamValue::Str(v)), SettingDefault::Choice(options)) => {
+                    if options.contains(&v.as_str()) {
+                        Some(SettingValue::Choice(v.clone()))
+                    } else {
+                        errors
+                            .push(s.pos, format!("{what}: param '{p}' is \"{v}\", not one of {}", options.join(", ")));
+                        None
+                    }
+                }
+                _ => None,
+            },
+            SettingSource::Expr(e) => match s.ty {
+                SettingDefault::Int(_) => errors.value(e, vars, &what, whole).map(SettingValue::Int),
+                _ => errors
+                    .value(e, vars, &what, |n| {
+                        let f = n.as_f64();
+                        if f.is_finite() {
+                            Ok(f)
+                        } else {
+                            Err(format!("is not finite ({f})"))
+                        }
+                    })
+                    .map(SettingValue::Float),
+            },
+        };
+        if let Some(v) = value {
+            out.insert(s.name.clone(), v);
+        }
+    }
+    out
+}
+
+/// Workgroup counts of a compute pass.
+pub fn dispatch(
+    pass: &Pass,
+    resolved: &[Resolved],
+    resource_names: &[String],
+    vars: &BTreeMap<String, Num>,
+    errors: &mut Errors<'_>,
+) -> Option<[u32; 3]> {
+    let spec = pass.dispatch.as_ref()?;
+    let ls = pass.local_size.map(|v| v.max(1) as u64);
+    let axes = ["x", "y", "z"];
+    let threads_to_groups = |t: [u64; 3]| [0, 1, 2].map(|i| t[i].div_ceil(ls[i]));
+    let groups: [u64; 3] = match spec {
+        DispatchSpec::PerPixel(r) => match resolved.get(*r) {
+            Some(Resolved::Image { extent, .. }) => threads_to_groups([extent.width as u64, extent.height as u64, 1]),
+            _ => {
+                let name = resource_names.get(*r).map_or("?", |s| s.as_str());
+                errors.push(pass.dispatch_pos, format!("dispatch of pass '{}': '{name}' is not an image", pass.name));
+                return None;
+            }
+        },
+        DispatchSpec::Threads(e) | DispatchSpec::Groups(e) => {
+            let mut v = [0u64; 3];
+            for i in 0..3 {
+                let what = format!("dispatch {} of pass '{}'", axes[i], pass.name);
+                v[i] = errors.value(&e[i], vars, &what, |n| {
+                    let w = whole(n)?;
+                    u64::try_from(w).map_err(|_| format!("is negative ({w})"))
+                })?;
+            }
+            if matches!(spec, DispatchSpec::Threads(_)) {
+                threads_to_groups(v)
+            } else {
+                v
+            }
+        }
+    };
+    for i in 0..3 {
+        if groups[i] > MAX_GROUPS {
+            errors.push(
+                pass.dispatch_pos,
+                format!(
+                    "dispatch of pass '{}' needs {} workgroups in {} (at most {MAX_GROUPS})",
+                    pass.name, groups[i], axes[i]
+                ),
+            );
+            return None;
+        }
+    }
+    Some(groups.map(|g| g as u32))
+}

@@ -1,0 +1,66 @@
+//! Which render graph a renderer runs: RON text with its file name (for error positions), the
+//! folder its user shaders resolve against, and parameter overrides.
+
+use crate::error::{Error, Result};
+use crate::gpu::{GpuContext, ShaderCompiler};
+use crate::graph::{builtin_kinds, compile, load_in, CompiledGraph, DeviceEnv, FrameInputs};
+use crate::scene::Scene;
+use std::path::{Path, PathBuf};
+
+/// The default graph shipped with the crate (`graph/default.ron`), embedded at build time.
+pub const DEFAULT_GRAPH: &str = include_str!("../../graph/default.ron");
+
+/// A render graph to load.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct GraphSpec {
+    /// RON source.
+    pub text: String,
+    /// Name used in `file:line:col` messages.
+    pub file: String,
+    /// Folder that relative shader paths of compute passes resolve against.
+    pub dir: Option<PathBuf>,
+    /// `name=value` parameter overrides (CLI `--param`, API).
+    pub overrides: Vec<(String, String)>,
+}
+
+impl GraphSpec {
+    /// The embedded default graph.
+    pub fn default_graph() -> Self {
+        Self { text: DEFAULT_GRAPH.into(), file: "graph/default.ron".into(), dir: None, overrides: Vec::new() }
+    }
+
+    /// A graph file on disk.
+    pub fn from_file(path: &Path) -> Result<Self> {
+        let text =
+            std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.display().to_string(), source })?;
+        Ok(Self {
+            text,
+            file: path.display().to_string(),
+            dir: path.parent().map(Path::to_path_buf),
+            overrides: Vec::new(),
+        })
+    }
+
+    /// The same graph with `overrides` added (later ones win).
+    pub fn with_overrides(mut self, overrides: impl IntoIterator<Item = (String, String)>) -> Self {
+        self.overrides.extend(overrides);
+        self
+    }
+}
+
+impl GraphSpec {
+    /// Loads, validates (against `ctx`'s device) and compiles the graph for `scene` at
+    /// `width` x `height`.
+    pub fn compile(
+        &self,
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        scene: &Scene,
+        width: u32,
+        height: u32,
+    ) -> Result<CompiledGraph> {
+        let env = DeviceEnv::new(ctx, shaders);
+        let graph = load_in(&self.text, &self.file, self.dir.as_deref(), &self.overrides, &env, builtin_kinds())?;
+        Ok(compile(&graph, &FrameInputs::from_scene(scene, width, height))?)
+    }
+}

@@ -1,0 +1,148 @@
+//! The `cullgraph render` command as a user runs it: bad input gives a clear message and a
+//! non-zero exit; `--watch` hot-reloads a graph, keeping the last good one on errors.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+fn cullgraph() -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_cullgraph"));
+    cmd.env("CULLGRAPH_DEVICE", std::env::var("CULLGRAPH_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into()));
+    cmd
+}
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let out = cullgraph().args(args).output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+#[test]
+fn bad_flags_and_files_are_reported_clearly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("x.png");
+    let out = out.to_str().unwrap();
+    let (code, _, err) = run(&["render", "--size", "0x10", "--out", out]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("between 1 and 16384"), "{err}");
+    let (code, _, err) = run(&["render", "--scene", "/no/such/scene.glb", "--out", out]);
+    assert_eq!(code, 1);
+    assert!(err.contains("/no/such/scene.glb"), "{err}");
+    let (code, _, err) = run(&["render", "--scene", "builtin:nowhere", "--out", out]);
+    assert_eq!(code, 1);
+    assert!(err.contains("unknown built-in scene 'builtin:nowhere'"), "{err}");
+    let (code, _, err) = run(&["render", "--eye", "1,2", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("not x,y,z"), "{err}");
+    let (code, _, err) = run(&["render", "--param", "nonsense", "--out", out]);
+    assert_eq!(code, 2, "{err}");
+    let bad = tmp.path().join("bad.ron");
+    std::fs::write(&bad, "Graph(name: \"x\", passes: [Pass(name: 1)])").unwrap();
+    let (code, _, err) = run(&["render", "--graph", bad.to_str().unwrap(), "--out", out]);
+    assert_eq!(code, 1);
+    assert!(err.contains("bad.ron:1:"), "{err}");
+    assert!(!std::path::Path::new(out).exists(), "nothing is written when the frame cannot be made");
+}
+
+#[test]
+fn renders_an_image_and_stats() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (png, json) = (tmp.path().join("f.png"), tmp.path().join("f.json"));
+    let (code, stdout, err) = run(&[
+        "render",
+        "--scene",
+        "builtin:field",
+        "--instances",
+        "300",
+        "--size",
+        "40x30",
+        "--frames",
+        "2",
+        "--validation",
+        "--out",
+        png.to_str().unwrap(),
+        "--stats",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}{err}");
+    let image = image::open(&png).unwrap();
+    assert_eq!((image.width(), image.height()), (40, 30));
+    let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(stats["frames"].as_array().unwrap().len(), 2);
+    assert_eq!(stats["frames"][1]["instances"], 300);
+    let passes: Vec<&str> =
+        stats["frames"][1]["gpu_ms"].as_array().unwrap().iter().map(|t| t["name"].as_str().unwrap()).collect();
+    assert_eq!(passes, ["gbuffer", "lighting"]);
+}
+
+#[test]
+fn watch_reloads_on_change_and_keeps_the_last_good_graph_on_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let graph = tmp.path().join("g.ron");
+    let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/graph/default.ron")).unwrap();
+    std::fs::write(&graph, &good).unwrap();
+    let png = tmp.path().join("w.png");
+    let mut child = cullgraph()
+        .args([
+            "render",
+            "--scene",
+            "builtin:field",
+            "--instances",
+            "100",
+            "--size",
+            "32x24",
+            "--watch",
+            "--watch-for",
+            "60",
+        ])
+        .arg("--graph")
+        .arg(&graph)
+        .arg("--out")
+        .arg(&png)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Merge stdout and stderr lines into one channel.
+    let (tx, rx) = mpsc::channel::<String>();
+    for stream in [
+        Box::new(child.stdout.take().unwrap()) as Box<dyn std::io::Read + Send>,
+        Box::new(child.stderr.take().unwrap()),
+    ] {
+        let tx = tx.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stream).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+    }
+    let mut seen = Vec::new();
+    let wait_for = |seen: &mut Vec<String>, needle: &str| {
+        let deadline = Instant::now() + Duration::from_secs(40);
+        while Instant::now() < deadline {
+            if let Ok(line) = rx.recv_timeout(Duration::from_millis(200)) {
+                seen.push(line.clone());
+                if line.contains(needle) {
+                    return true;
+                }
+            }
+        }
+        false
+    };
+    assert!(wait_for(&mut seen, "watching"), "no start: {seen:?}");
+    // Break the graph: an unknown resource, positioned.
+    std::fs::write(&graph, good.replace("writes: {\"output\": \"color\"}", "writes: {\"output\": \"colour\"}"))
+        .unwrap();
+    assert!(wait_for(&mut seen, "still running the last good graph"), "no error reported: {seen:?}");
+    assert!(seen.iter().any(|l| l.contains("g.ron:") && l.contains("colour")), "{seen:?}");
+    // Fix it with a visible change.
+    std::fs::write(&graph, good.replace("\"exposure\": 0.8", "\"exposure\": 1.6")).unwrap();
+    assert!(wait_for(&mut seen, "reloaded"), "no reload: {seen:?}");
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(png.exists());
+}

@@ -1,0 +1,85 @@
+//! Test-only pass kinds (no shaders, no device) for compiler tests and property tests: one slot
+//! per usage, all optional, any format.
+
+#![allow(dead_code)]
+
+use cullgraph::graph::kinds::{FormatRule, PassKindInfo, SlotDecl};
+use cullgraph::graph::{Stages, Usage};
+
+const fn slot(name: &'static str, usage: Usage) -> SlotDecl {
+    SlotDecl { name, usage, required: false, format: FormatRule::Any, multisample_ok: false, doc: "test slot" }
+}
+
+/// Image read slots of kind `img`.
+pub const IMAGE_READS: &[SlotDecl] = &[
+    slot("sampled", Usage::Sampled(Stages::Compute)),
+    slot("sampled_fs", Usage::Sampled(Stages::Fragment)),
+    slot("storage_read", Usage::StorageImageRead(Stages::Compute)),
+    slot("transfer_src", Usage::TransferSrc),
+];
+
+/// Image write slots of kind `img`.
+pub const IMAGE_WRITES: &[SlotDecl] = &[
+    slot("storage_write", Usage::StorageImageWrite(Stages::Compute)),
+    slot("storage_rw", Usage::StorageImageReadWrite(Stages::Compute)),
+    slot("color", Usage::ColorAttachment),
+    slot("color_load", Usage::ColorAttachmentLoad),
+    slot("transfer_dst", Usage::TransferDst),
+];
+
+/// Buffer read slots of kind `buf`.
+pub const BUFFER_READS: &[SlotDecl] = &[
+    slot("storage_read", Usage::StorageBufferRead(Stages::Compute)),
+    slot("storage_read_vs", Usage::StorageBufferRead(Stages::Vertex)),
+    slot("uniform", Usage::Uniform(Stages::Compute)),
+    slot("indirect", Usage::Indirect),
+];
+
+/// Buffer write slots of kind `buf`.
+pub const BUFFER_WRITES: &[SlotDecl] = &[
+    slot("storage_write", Usage::StorageBufferWrite(Stages::Compute)),
+    slot("storage_rw", Usage::StorageBufferReadWrite(Stages::Compute)),
+    slot("transfer_dst", Usage::TransferDst),
+];
+
+/// Kind `img` (image slots), `buf` (buffer slots) and `mix` (both, with prefixed names).
+pub fn test_kinds() -> Vec<PassKindInfo> {
+    vec![
+        PassKindInfo {
+            name: "img",
+            doc: "image slots",
+            reads: IMAGE_READS.to_vec(),
+            writes: IMAGE_WRITES.to_vec(),
+            settings: vec![],
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "buf",
+            doc: "buffer slots",
+            reads: BUFFER_READS.to_vec(),
+            writes: BUFFER_WRITES.to_vec(),
+            settings: vec![],
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "mix",
+            doc: "image and buffer slots",
+            reads: vec![
+                slot("i_sampled", Usage::Sampled(Stages::Compute)),
+                slot("i_sampled2", Usage::Sampled(Stages::Compute)),
+                slot("i_storage_read", Usage::StorageImageRead(Stages::Compute)),
+                slot("b_read", Usage::StorageBufferRead(Stages::Compute)),
+                slot("b_indirect", Usage::Indirect),
+            ],
+            writes: vec![
+                slot("i_write", Usage::StorageImageWrite(Stages::Compute)),
+                slot("i_write2", Usage::StorageImageWrite(Stages::Compute)),
+                slot("i_rw", Usage::StorageImageReadWrite(Stages::Compute)),
+                slot("b_write", Usage::StorageBufferWrite(Stages::Compute)),
+                slot("b_rw", Usage::StorageBufferReadWrite(Stages::Compute)),
+            ],
+            settings: vec![],
+            slots_from_shader: false,
+        },
+    ]
+}
