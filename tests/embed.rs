@@ -7,10 +7,11 @@ use ash::vk;
 use common::{boxes_camera, boxes_scene, GpuTest};
 use cullgraph::gpu::transfer::record_image_to_buffer;
 use cullgraph::gpu::{
-    Buffer, BufferDesc, GpuContext, HostHandles, MemoryLocation, RequiredFeatures, ShaderCompiler, ShaderRoot,
-    ValidationLog, REQUIRED_DEVICE_EXTENSIONS,
+    Access, Buffer, BufferDesc, GpuContext, HostHandles, HostImage, MemoryLocation, RequiredFeatures, ShaderCompiler,
+    ShaderRoot, ValidationLog, REQUIRED_DEVICE_EXTENSIONS,
 };
-use cullgraph::render::{RenderSettings, Renderer};
+use cullgraph::graph::executor::Imports;
+use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::sync::{Arc, Mutex};
 
@@ -167,4 +168,158 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
     drop(host);
     let messages = log.messages();
     assert!(messages.is_empty(), "validation: {messages:#?}");
+}
+
+#[test]
+fn the_graph_lights_straight_into_an_image_the_host_owns() {
+    let (w, h) = (80, 48);
+    let reference = {
+        let gpu = GpuTest::new();
+        let mut r = Renderer::new(&gpu, &gpu.shaders(), boxes_scene(), RenderSettings::new(w, h)).unwrap();
+        r.render_to_image(&boxes_camera()).unwrap().1
+    };
+    let host = Host::new();
+    let allocator = Arc::new(Mutex::new(
+        Allocator::new(&AllocatorCreateDesc {
+            instance: host.instance.clone(),
+            device: host.device.clone(),
+            physical_device: host.physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .unwrap(),
+    ));
+    // The engine's own image and view, made with its own allocator.
+    let d = host.device.clone();
+    let format = vk::Format::R8G8B8A8_UNORM;
+    let image = unsafe {
+        d.create_image(
+            &vk::ImageCreateInfo::default()
+                .image_type(vk::ImageType::TYPE_2D)
+                .format(format)
+                .extent(vk::Extent3D { width: w, height: h, depth: 1 })
+                .mip_levels(1)
+                .array_layers(1)
+                .samples(vk::SampleCountFlags::TYPE_1)
+                .usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC)
+                .initial_layout(vk::ImageLayout::UNDEFINED),
+            None,
+        )
+        .unwrap()
+    };
+    let requirements = unsafe { d.get_image_memory_requirements(image) };
+    let memory = allocator
+        .lock()
+        .unwrap()
+        .allocate(&gpu_allocator::vulkan::AllocationCreateDesc {
+            name: "host back buffer",
+            requirements,
+            location: MemoryLocation::GpuOnly,
+            linear: false,
+            allocation_scheme: gpu_allocator::vulkan::AllocationScheme::GpuAllocatorManaged,
+        })
+        .unwrap();
+    unsafe { d.bind_image_memory(image, memory.memory(), memory.offset()).unwrap() };
+    let range =
+        vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1);
+    let view = unsafe {
+        d.create_image_view(
+            &vk::ImageViewCreateInfo::default()
+                .image(image)
+                .view_type(vk::ImageViewType::TYPE_2D)
+                .format(format)
+                .subresource_range(range),
+            None,
+        )
+        .unwrap()
+    };
+    {
+        let ctx = GpuContext::from_host(HostHandles {
+            entry: host.entry.clone(),
+            instance: host.instance.clone(),
+            physical_device: host.physical_device,
+            device: host.device.clone(),
+            queue_family_index: host.family,
+            queue: host.queue,
+            allocator: Some(allocator.clone()),
+            debug_utils: true,
+        })
+        .unwrap();
+        let shaders =
+            ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
+        let spec = GraphSpec::from_file(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("graph/examples/host_target.ron"),
+        )
+        .unwrap();
+        let mut renderer =
+            Renderer::with_graph(&ctx, &shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
+        let readback = Buffer::new(
+            &ctx,
+            &BufferDesc {
+                name: "host readback",
+                size: (w * h * 4) as u64,
+                usage: vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuToCpu,
+            },
+        )
+        .unwrap();
+        let host_image = HostImage {
+            image,
+            view,
+            format,
+            extent: vk::Extent2D { width: w, height: h },
+            mip_levels: 1,
+            samples: vk::SampleCountFlags::TYPE_1,
+        };
+        // Missing imports are an error before anything is recorded.
+        ctx.submit_and_wait(|cmd| {
+            let err = renderer.record(cmd, &boxes_camera()).unwrap_err().to_string();
+            assert!(err.contains("imported resource 'color' was not provided"), "{err}");
+            cullgraph::gpu::GpuResult::Ok(())
+        })
+        .unwrap();
+        unsafe {
+            let pool = d
+                .create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(host.family), None)
+                .unwrap();
+            let cmd = d
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
+                )
+                .unwrap()[0];
+            d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
+            let imports = Imports::new().image("color", host_image, Access::NONE, Access::TRANSFER_READ);
+            renderer.record_with_imports(cmd, &boxes_camera(), &imports).unwrap();
+            // The engine copies its image, which cullgraph left in TRANSFER_SRC_OPTIMAL.
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+                )
+                .image_extent(vk::Extent3D { width: w, height: h, depth: 1 });
+            d.cmd_copy_image_to_buffer(cmd, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, readback.handle(), &[region]);
+            let to_host = vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ);
+            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[to_host]));
+            d.end_command_buffer(cmd).unwrap();
+            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
+            d.queue_submit(host.queue, &[vk::SubmitInfo::default().command_buffers(&[cmd])], fence).unwrap();
+            d.wait_for_fences(&[fence], true, u64::MAX).unwrap();
+            d.destroy_fence(fence, None);
+            d.destroy_command_pool(pool, None);
+        }
+        assert_eq!(readback.read_bytes().unwrap(), reference.as_raw().as_slice());
+    }
+    unsafe {
+        d.destroy_image_view(view, None);
+        d.destroy_image(image, None);
+    }
+    allocator.lock().unwrap().free(memory).unwrap();
+    drop(allocator);
+    let log = (*host.log).clone();
+    drop(host);
+    assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
 }

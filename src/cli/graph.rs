@@ -96,5 +96,21 @@ fn compiled(file: &Path, params: &[(String, String)], frame: &GraphFrameArgs) ->
         LoadOptions { instances: frame.instances, kinds: frame.kinds, lights: frame.lights, seed: frame.seed };
     let scene = source.load(&options).map_err(|e| Failure::Other(e.to_string()))?;
     let (width, height) = frame.size;
-    Ok(graph::compile(&graph, &FrameInputs::from_scene(&scene, width, height))?)
+    let inputs = FrameInputs::from_scene(&scene, width, height);
+    let started = std::time::Instant::now();
+    let plan = graph::compile(&graph, &inputs)?;
+    let compile_time = started.elapsed();
+    // Reload the same file to time loading and validation alone (the first load above also
+    // warmed the file cache and the shader compiler).
+    let started = std::time::Instant::now();
+    let reloaded = graph::load_file(file, params, &env)?;
+    let load_time = started.elapsed();
+    drop(reloaded);
+    eprintln!(
+        "load and validate: {:.3} ms, compile: {:.3} ms ({} passes)",
+        load_time.as_secs_f64() * 1e3,
+        compile_time.as_secs_f64() * 1e3,
+        plan.passes.len()
+    );
+    Ok(plan)
 }

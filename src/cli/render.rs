@@ -43,9 +43,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         height,
         instances: scene.instances.len() as u32,
         meshes: scene.meshes.len() as u32,
-        frames: Vec::new(),
+        ..Default::default()
     };
     let mut renderer = Renderer::with_graph(&ctx, &shaders, scene, RenderSettings::new(width, height), &spec)?;
+    let memory = renderer.runtime().memory();
+    stats.graph = renderer.plan().name.clone();
+    stats.transient_bytes = memory.bytes_with_aliasing;
+    stats.transient_bytes_without_aliasing = memory.bytes_without_aliasing;
     if args.watch {
         return watch(args, &mut renderer, &shaders, spec, &camera);
     }

@@ -33,9 +33,16 @@ pub struct Buffer {
     allocation: Option<Allocation>,
     size: u64,
     name: String,
+    /// Owned by a host engine: never destroyed here.
+    external: bool,
 }
 
 impl Buffer {
+    /// Wraps a host engine's buffer of `size` bytes without taking ownership.
+    pub fn from_host(ctx: &GpuContext, name: &str, buffer: vk::Buffer, size: u64) -> Self {
+        Self { shared: ctx.shared.clone(), handle: buffer, allocation: None, size, name: name.into(), external: true }
+    }
+
     /// Creates a buffer and binds fresh memory to it.
     pub fn new(ctx: &GpuContext, desc: &BufferDesc<'_>) -> GpuResult<Self> {
         if desc.size > MAX_BUFFER_BYTES {
@@ -77,6 +84,7 @@ impl Buffer {
             allocation: Some(allocation),
             size: desc.size,
             name: desc.name.into(),
+            external: false,
         };
         bound.vk("vkBindBufferMemory")?;
         Ok(buffer)
@@ -89,8 +97,14 @@ impl Buffer {
         let info = create_info(desc);
         // SAFETY: valid device and create info.
         let handle = unsafe { ctx.device().create_buffer(&info, None) }.vk("vkCreateBuffer")?;
-        let buffer =
-            Self { shared: ctx.shared.clone(), handle, allocation: None, size: desc.size, name: desc.name.into() };
+        let buffer = Self {
+            shared: ctx.shared.clone(),
+            handle,
+            allocation: None,
+            size: desc.size,
+            name: desc.name.into(),
+            external: false,
+        };
         // SAFETY: the caller placed the buffer where its requirements fit.
         unsafe { ctx.device().bind_buffer_memory(handle, block.memory(), block.offset() + offset) }
             .vk("vkBindBufferMemory")?;
@@ -182,6 +196,9 @@ fn create_info<'a>(desc: &BufferDesc<'_>) -> vk::BufferCreateInfo<'a> {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
+        if self.external {
+            return;
+        }
         if let Some(allocation) = self.allocation.take() {
             // Freeing only fails for foreign allocations, which cannot happen here.
             let _ = self.shared.allocator().free(allocation);

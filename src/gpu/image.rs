@@ -37,6 +37,25 @@ pub struct Image {
     mip_levels: u32,
     samples: vk::SampleCountFlags,
     name: String,
+    /// Owned by a host engine: never destroyed here.
+    external: bool,
+}
+
+/// A host engine's image as cullgraph should see it (see [`Image::from_host`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HostImage {
+    /// The image.
+    pub image: vk::Image,
+    /// A view of all its mips (2D, the image's format).
+    pub view: vk::ImageView,
+    /// Its format.
+    pub format: vk::Format,
+    /// Size of mip 0.
+    pub extent: vk::Extent2D,
+    /// Mip levels.
+    pub mip_levels: u32,
+    /// Samples per texel.
+    pub samples: vk::SampleCountFlags,
 }
 
 /// The aspect of a format: depth, depth+stencil or color.
@@ -107,7 +126,25 @@ impl Image {
             mip_levels: desc.mip_levels,
             samples: desc.samples,
             name: desc.name.into(),
+            external: false,
         })
+    }
+
+    /// Wraps a host engine's image without taking ownership: dropping the wrapper destroys nothing.
+    pub fn from_host(ctx: &GpuContext, name: &str, host: &HostImage) -> Self {
+        Self {
+            shared: ctx.shared.clone(),
+            handle: host.image,
+            view: host.view,
+            mip_views: Vec::new(),
+            allocation: None,
+            format: host.format,
+            extent: host.extent,
+            mip_levels: host.mip_levels.max(1),
+            samples: host.samples,
+            name: name.into(),
+            external: true,
+        }
     }
 
     /// Binds memory and creates the views.
@@ -219,6 +256,9 @@ fn create_info<'a>(desc: &ImageDesc<'_>) -> vk::ImageCreateInfo<'a> {
 
 impl Drop for Image {
     fn drop(&mut self) {
+        if self.external {
+            return;
+        }
         // SAFETY: the caller guarantees the GPU no longer uses the image.
         unsafe {
             for v in self.mip_views.drain(..) {

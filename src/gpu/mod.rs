@@ -24,7 +24,7 @@ pub use device_select::DeviceSelector;
 pub use error::{GpuError, GpuResult};
 pub use features::{RequiredFeatures, REQUIRED_DEVICE_EXTENSIONS};
 pub use gpu_allocator::MemoryLocation;
-pub use image::{Image, ImageDesc};
+pub use image::{HostImage, Image, ImageDesc};
 pub use memory::MemoryBlock;
 pub use pipeline::{Bind, GraphicsDesc, Pipeline};
 pub use sampler::Sampler;

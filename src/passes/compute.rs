@@ -65,7 +65,7 @@ impl PassNode for ComputePass {
                     self.sampler.handle(),
                     vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 )),
-                (None, _) => {}
+                (None | Some(Physical::Unbound), _) => {}
             }
         }
         self.pipeline.bind(rec.cmd);

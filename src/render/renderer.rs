@@ -13,7 +13,7 @@ use crate::gpu::transfer::record_image_to_buffer;
 use crate::gpu::{
     Access, Buffer, BufferDesc, GpuContext, Image, MemoryLocation, PassTiming, ShaderCompiler, UploadBatch,
 };
-use crate::graph::executor::{FrameData, GraphRuntime, FRAMES_IN_FLIGHT};
+use crate::graph::executor::{FrameData, GraphRuntime, Imports, FRAMES_IN_FLIGHT};
 use crate::graph::plan::CompiledGraph;
 use crate::scene::{Camera, Scene};
 use crate::stats::FrameStats;
@@ -162,6 +162,12 @@ impl Renderer {
     /// This is the embedding entry point: nothing is submitted. At most [`FRAMES_IN_FLIGHT`]
     /// recorded frames may be executing at once.
     pub fn record(&mut self, cmd: vk::CommandBuffer, camera: &Camera) -> Result<u64> {
+        self.record_with_imports(cmd, camera, &Imports::new())
+    }
+
+    /// Like [`Renderer::record`], with the host resources the graph imports (e.g. the engine's
+    /// back buffer as the lighting output).
+    pub fn record_with_imports(&mut self, cmd: vk::CommandBuffer, camera: &Camera, imports: &Imports) -> Result<u64> {
         camera.validate().map_err(|e| Error::Invalid(format!("camera: {e}")))?;
         let frame = self.frame_index;
         let slot_index = (frame % FRAMES_IN_FLIGHT as u64) as usize;
@@ -185,7 +191,7 @@ impl Renderer {
             frame,
             extent: vk::Extent2D { width: self.settings.width, height: self.settings.height },
         };
-        self.runtime.record(cmd, &inputs)?;
+        self.runtime.record(cmd, &inputs, imports)?;
         self.frame_index += 1;
         Ok(frame)
     }

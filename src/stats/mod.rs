@@ -37,6 +37,12 @@ pub struct RunStats {
     pub instances: u32,
     /// Distinct meshes (draw groups) in the scene.
     pub meshes: u32,
+    /// Render graph name.
+    pub graph: String,
+    /// Transient memory of the graph's resources, aliased (bytes of the heaps).
+    pub transient_bytes: u64,
+    /// Transient memory if no two transients shared memory.
+    pub transient_bytes_without_aliasing: u64,
     /// Per-frame figures.
     pub frames: Vec<FrameStats>,
 }

@@ -46,6 +46,7 @@ pub fn plan_memory(items: &[Option<MemoryItem>]) -> (Vec<Option<Placement>>, Vec
     order.sort_by(|&a, &b| key(b).cmp(&key(a)).then(a.cmp(&b)));
     let mut placements: Vec<Option<Placement>> = vec![None; items.len()];
     let mut heaps = vec![0u64; classes.len()];
+    let mut heap_align = vec![1u64; classes.len()];
     // Placed items per heap.
     let mut placed: Vec<Vec<Placed>> = vec![Vec::new(); classes.len()];
     for i in order {
@@ -73,7 +74,13 @@ pub fn plan_memory(items: &[Option<MemoryItem>]) -> (Vec<Option<Placement>>, Vec
         let end = offset.saturating_add(item.size);
         placed[heap].push((offset, end, item.lifetime));
         heaps[heap] = heaps[heap].max(end);
+        heap_align[heap] = heap_align[heap].max(align);
         placements[i] = Some(Placement { heap, offset });
+    }
+    // A heap is allocated in whole alignment units, as each resource alone would be: with
+    // nothing to alias, "with" and "without aliasing" then agree.
+    for (size, align) in heaps.iter_mut().zip(&heap_align) {
+        *size = size.div_ceil(*align).saturating_mul(*align);
     }
     (placements, heaps)
 }

@@ -2,10 +2,12 @@
 //! pass's planned barriers (filling first-use sources from what last touched the memory),
 //! a debug label and a timestamp pair, and the pass's commands.
 
+mod imports;
 mod node;
 mod resources;
 mod tracker;
 
+pub use imports::{Import, Imports};
 pub use node::{FrameData, PassContext, PassNode, SlotBindings};
 pub use resources::{Physical, RuntimeResources};
 
@@ -60,10 +62,13 @@ impl GraphRuntime {
         self.resources.memory()
     }
 
-    /// Records one frame into `cmd`; returns the frame number.
-    pub fn record(&mut self, cmd: vk::CommandBuffer, inputs: &FrameData<'_>) -> crate::Result<u64> {
+    /// Records one frame into `cmd`; returns the frame number. `imports` must hold every
+    /// resource the graph declares `Imported(..)` (and a kept pass uses); they are left in the
+    /// access each import asks for.
+    pub fn record(&mut self, cmd: vk::CommandBuffer, inputs: &FrameData<'_>, imports: &Imports) -> crate::Result<u64> {
         let frame = self.frame;
         let device = self.ctx.device().clone();
+        self.bind_imports(imports)?;
         if frame == 0 {
             self.clear_history(cmd);
         }
@@ -82,6 +87,7 @@ impl GraphRuntime {
                         images.push(image_barrier(image, Access { layout: old, ..src }, b.dst));
                     }
                     Physical::Buffer(_) => memory.push(memory_barrier(src, b.dst)),
+                    Physical::Unbound => {}
                 }
             }
             // One global barrier carries every buffer dependency of the pass.
@@ -115,8 +121,92 @@ impl GraphRuntime {
             }
         }
         timer.end(cmd);
+        self.release_imports(cmd, imports);
         self.frame += 1;
         Ok(frame)
+    }
+
+    /// Checks the host's resources against the graph's declarations and binds them for this frame.
+    fn bind_imports(&mut self, imports: &Imports) -> crate::Result<()> {
+        use crate::graph::plan::ResolvedKind;
+        let invalid = |m: String| crate::Error::Invalid(format!("graph '{}': {m}", self.plan.name));
+        for &(id, phys) in self.resources.imported().to_vec().iter() {
+            let declared = &self.plan.resources[id];
+            let name = &declared.name;
+            let given = imports.get(name).ok_or_else(|| {
+                invalid(format!(
+                    "imported resource '{name}' was not provided (provided: {})",
+                    imports.names().collect::<Vec<_>>().join(", ")
+                ))
+            })?;
+            let (resource, current) = match (given, &declared.kind) {
+                (
+                    Import::Image { host, current, .. },
+                    ResolvedKind::Image { format, extent, mip_levels, samples, .. },
+                ) => {
+                    if host.format != *format
+                        || host.extent != *extent
+                        || host.samples != *samples
+                        || host.mip_levels < *mip_levels
+                    {
+                        return Err(invalid(format!(
+                            "imported image '{name}' is declared {format:?} {}x{} x{} samples, {mip_levels} mips; the host gave {:?} {}x{} x{} samples, {} mips",
+                            extent.width,
+                            extent.height,
+                            samples.as_raw(),
+                            host.format,
+                            host.extent.width,
+                            host.extent.height,
+                            host.samples.as_raw(),
+                            host.mip_levels
+                        )));
+                    }
+                    (Physical::Image(Image::from_host(&self.ctx, name, host)), *current)
+                }
+                (Import::Buffer { buffer, size, current, .. }, ResolvedKind::Buffer { size: needed, .. }) => {
+                    if size < needed {
+                        return Err(invalid(format!(
+                            "imported buffer '{name}' needs {needed} bytes; the host gave {size}"
+                        )));
+                    }
+                    (Physical::Buffer(crate::gpu::Buffer::from_host(&self.ctx, name, *buffer, *size)), *current)
+                }
+                _ => {
+                    return Err(invalid(format!(
+                        "imported resource '{name}' is an image in one place and a buffer in the other"
+                    )))
+                }
+            };
+            self.resources.bind_import(phys, resource);
+            self.tracker.set_external(phys, current);
+        }
+        Ok(())
+    }
+
+    /// Leaves every imported resource in the access its host asked for.
+    fn release_imports(&mut self, cmd: vk::CommandBuffer, imports: &Imports) {
+        let mut memory = Vec::new();
+        let mut images = Vec::new();
+        for &(id, phys) in self.resources.imported() {
+            let after = match imports.get(&self.plan.resources[id].name) {
+                Some(Import::Image { after, .. } | Import::Buffer { after, .. }) => *after,
+                None => continue,
+            };
+            let state = self.tracker.state(phys);
+            let src = self.tracker.pending(&[phys]);
+            match self.resources.get(phys) {
+                Physical::Image(image) => {
+                    images.push(image_barrier(image, Access { layout: state.layout, ..src }, after))
+                }
+                _ => memory.push(memory_barrier(src, after)),
+            }
+            self.tracker.set_external(phys, after);
+        }
+        cmd_barriers(self.ctx.device(), cmd, &memory, &images);
+        for &(_, phys) in self.resources.imported().to_vec().iter() {
+            // The host's handles are only valid for this frame.
+            self.resources.bind_import(phys, Physical::Unbound);
+        }
     }
 
     /// Output `index` (see [`CompiledGraph::outputs`]) as left by the last recorded frame, with
@@ -136,7 +226,7 @@ impl GraphRuntime {
         let phys = self.resources.index(id, Version::Current, self.frame.checked_sub(1)?)?;
         match self.resources.get(phys) {
             Physical::Buffer(b) => Some(b),
-            Physical::Image(_) => None,
+            _ => None,
         }
     }
 
@@ -189,6 +279,7 @@ impl GraphRuntime {
                         }
                     }
                 }
+                Physical::Unbound => continue,
                 Physical::Buffer(buffer) => {
                     // SAFETY: buffer with TRANSFER_DST usage; cmd recording.
                     unsafe { device.cmd_fill_buffer(cmd, buffer.handle(), 0, vk::WHOLE_SIZE, 0) };

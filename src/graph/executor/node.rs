@@ -39,7 +39,7 @@ impl<'a> SlotBindings<'a> {
         let b = self.binding(slot)?;
         match self.resources.get(self.resources.index(b.resource, b.version, self.frame)?) {
             Physical::Image(i) => Some(i),
-            Physical::Buffer(_) => None,
+            _ => None,
         }
     }
 
@@ -48,7 +48,7 @@ impl<'a> SlotBindings<'a> {
         let b = self.binding(slot)?;
         match self.resources.get(self.resources.index(b.resource, b.version, self.frame)?) {
             Physical::Buffer(buf) => Some(buf),
-            Physical::Image(_) => None,
+            _ => None,
         }
     }
 

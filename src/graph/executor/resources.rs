@@ -13,6 +13,8 @@ pub enum Physical {
     Image(Image),
     /// A buffer.
     Buffer(Buffer),
+    /// An imported resource before the host has provided it for a frame.
+    Unbound,
 }
 
 /// Everything a compiled graph allocates. Field order matters: resources drop before the
@@ -25,6 +27,8 @@ pub struct RuntimeResources {
     alias_sets: Vec<Vec<usize>>,
     /// The history copies (to clear before their first use).
     history: Vec<usize>,
+    /// (planned resource, physical index) of every imported resource a kept pass uses.
+    imported: Vec<(ResourceId, usize)>,
     /// Memory as placed with the device's real requirements.
     memory: MemoryPlan,
     _blocks: Vec<MemoryBlock>,
@@ -72,13 +76,19 @@ impl RuntimeResources {
         let mut physical = Vec::new();
         let mut copies = vec![None; n];
         let mut history = Vec::new();
+        let mut imported = Vec::new();
         let mut placed_at: Vec<Option<(usize, u64, u64)>> = Vec::new();
         for (id, r) in plan.resources.iter().enumerate() {
             if r.lifetime.is_none() && r.class != ResourceClass::History {
                 continue;
             }
             match r.class {
-                ResourceClass::Imported => continue,
+                ResourceClass::Imported => {
+                    physical.push(Physical::Unbound);
+                    placed_at.push(None);
+                    imported.push((id, physical.len() - 1));
+                    copies[id] = Some([physical.len() - 1; 2]);
+                }
                 ResourceClass::Transient => {
                     let (Some(p), Some(req)) = (placements[id], requirements[id]) else { continue };
                     let block = &blocks[p.heap];
@@ -133,7 +143,7 @@ impl RuntimeResources {
             bytes_without_aliasing,
             bytes_with_aliasing: heap_sizes.iter().sum(),
         };
-        Ok(Self { physical, copies, alias_sets, history, memory, _blocks: blocks })
+        Ok(Self { physical, copies, alias_sets, history, imported, memory, _blocks: blocks })
     }
 
     /// Number of physical resources.
@@ -169,6 +179,16 @@ impl RuntimeResources {
     /// History copies (cleared before the first frame).
     pub fn history(&self) -> &[usize] {
         &self.history
+    }
+
+    /// (planned resource, physical index) of the imported resources.
+    pub fn imported(&self) -> &[(ResourceId, usize)] {
+        &self.imported
+    }
+
+    /// Puts the host's resource for this frame in an imported slot.
+    pub fn bind_import(&mut self, phys: usize, resource: Physical) {
+        self.physical[phys] = resource;
     }
 
     /// Transient memory as actually placed.

@@ -54,6 +54,15 @@ impl Tracker {
         s.layout = access.layout;
     }
 
+    /// Sets the state of `phys` to what a host says it last did with it.
+    pub fn set_external(&mut self, phys: usize, access: Access) {
+        self.states[phys] = PhysState {
+            layout: access.layout,
+            write: (access.stage, access.access & write_bits()),
+            read_stages: access.stage,
+        };
+    }
+
     /// The access everything in `phys_set` last did: what a new use of that memory waits for.
     pub fn pending(&self, phys_set: &[usize]) -> Access {
         let mut out = Access {
