@@ -7,6 +7,7 @@
 pub mod error;
 pub mod gpu;
 pub mod graph;
+pub mod oracle;
 pub mod passes;
 pub mod render;
 pub mod scene;
