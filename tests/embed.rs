@@ -72,6 +72,36 @@ impl Host {
     }
 }
 
+impl Host {
+    /// The engine's own gpu-allocator on its device.
+    fn allocator(&self) -> Arc<Mutex<Allocator>> {
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: self.instance.clone(),
+            device: self.device.clone(),
+            physical_device: self.physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .unwrap();
+        Arc::new(Mutex::new(allocator))
+    }
+
+    /// What the engine hands to cullgraph.
+    fn handles(&self, allocator: &Arc<Mutex<Allocator>>) -> HostHandles {
+        HostHandles {
+            entry: self.entry.clone(),
+            instance: self.instance.clone(),
+            physical_device: self.physical_device,
+            device: self.device.clone(),
+            queue_family_index: self.family,
+            queue: self.queue,
+            allocator: Some(allocator.clone()),
+            debug_utils: true,
+        }
+    }
+}
+
 impl Drop for Host {
     fn drop(&mut self) {
         unsafe {
@@ -93,28 +123,9 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
     };
 
     let host = Host::new();
-    let allocator = Allocator::new(&AllocatorCreateDesc {
-        instance: host.instance.clone(),
-        device: host.device.clone(),
-        physical_device: host.physical_device,
-        debug_settings: Default::default(),
-        buffer_device_address: false,
-        allocation_sizes: Default::default(),
-    })
-    .unwrap();
-    let allocator = Arc::new(Mutex::new(allocator));
+    let allocator = host.allocator();
     {
-        let ctx = GpuContext::from_host(HostHandles {
-            entry: host.entry.clone(),
-            instance: host.instance.clone(),
-            physical_device: host.physical_device,
-            device: host.device.clone(),
-            queue_family_index: host.family,
-            queue: host.queue,
-            allocator: Some(allocator.clone()),
-            debug_utils: true,
-        })
-        .unwrap();
+        let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
         let shaders =
             ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
         let mut renderer = Renderer::new(&ctx, &shaders, boxes_scene(), RenderSettings::new(w, h)).unwrap();
@@ -179,17 +190,7 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
         r.render_to_image(&boxes_camera()).unwrap().1
     };
     let host = Host::new();
-    let allocator = Arc::new(Mutex::new(
-        Allocator::new(&AllocatorCreateDesc {
-            instance: host.instance.clone(),
-            device: host.device.clone(),
-            physical_device: host.physical_device,
-            debug_settings: Default::default(),
-            buffer_device_address: false,
-            allocation_sizes: Default::default(),
-        })
-        .unwrap(),
-    ));
+    let allocator = host.allocator();
     // The engine's own image and view, made with its own allocator.
     let d = host.device.clone();
     let format = vk::Format::R8G8B8A8_UNORM;
@@ -235,17 +236,7 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
         .unwrap()
     };
     {
-        let ctx = GpuContext::from_host(HostHandles {
-            entry: host.entry.clone(),
-            instance: host.instance.clone(),
-            physical_device: host.physical_device,
-            device: host.device.clone(),
-            queue_family_index: host.family,
-            queue: host.queue,
-            allocator: Some(allocator.clone()),
-            debug_utils: true,
-        })
-        .unwrap();
+        let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
         let shaders =
             ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
         let spec = GraphSpec::from_file(

@@ -58,28 +58,49 @@ pub struct GraphCheckArgs {
     pub device: Option<String>,
 }
 
+/// Which scene to load and how to generate it.
+#[derive(Args, Debug, Clone)]
+pub struct SceneArgs {
+    /// Scene: `builtin:city`, `builtin:field`, or a glTF 2.0 file (.gltf/.glb).
+    #[arg(long, default_value = "builtin:city")]
+    pub scene: String,
+    /// Number of instances of a built-in scene (city: 1,000 to 1,000,000; default 10,000).
+    #[arg(long, value_name = "N")]
+    pub instances: Option<usize>,
+    /// Number of distinct mesh kinds of `builtin:field` (default 64).
+    #[arg(long, value_name = "N")]
+    pub kinds: Option<usize>,
+    /// Number of point lights (built-in scenes; files get them only when they have none).
+    #[arg(long, value_name = "N")]
+    pub lights: Option<usize>,
+    /// Seed of the built-in generators.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+impl SceneArgs {
+    /// Loads or generates the scene.
+    pub fn load(&self) -> cullgraph::Result<cullgraph::scene::Scene> {
+        let source: cullgraph::scene::SceneSource = self.scene.parse()?;
+        let options = cullgraph::scene::source::LoadOptions {
+            instances: self.instances,
+            kinds: self.kinds,
+            lights: self.lights,
+            seed: self.seed,
+        };
+        Ok(source.load(&options)?)
+    }
+}
+
 /// The output size and scene a graph is compiled for.
 #[derive(Args, Debug)]
 pub struct GraphFrameArgs {
     /// Output size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Scene whose quantities (instances, meshes, lights, materials, triangles) size the graph:
-    /// `builtin:city`, `builtin:field` or a glTF file.
-    #[arg(long, default_value = "builtin:city")]
-    pub scene: String,
-    /// Number of instances of a built-in scene.
-    #[arg(long, value_name = "N")]
-    pub instances: Option<usize>,
-    /// Number of distinct mesh kinds of `builtin:field`.
-    #[arg(long, value_name = "N")]
-    pub kinds: Option<usize>,
-    /// Number of point lights.
-    #[arg(long, value_name = "N")]
-    pub lights: Option<usize>,
-    /// Seed of the built-in generators.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// The scene whose quantities (instances, meshes, lights, materials, triangles) size the graph.
+    #[command(flatten)]
+    pub scene: SceneArgs,
 }
 
 /// `cullgraph graph plan` flags.
@@ -114,21 +135,9 @@ pub struct GraphDotArgs {
 /// `cullgraph render` flags.
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene to render: `builtin:city`, `builtin:field`, or a glTF 2.0 file (.gltf/.glb).
-    #[arg(long, default_value = "builtin:city")]
-    pub scene: String,
-    /// Number of instances of a built-in scene (city: 1,000 to 1,000,000; default 10,000).
-    #[arg(long, value_name = "N")]
-    pub instances: Option<usize>,
-    /// Number of distinct mesh kinds of `builtin:field` (default 64).
-    #[arg(long, value_name = "N")]
-    pub kinds: Option<usize>,
-    /// Number of point lights (built-in scenes; files get them only when they have none).
-    #[arg(long, value_name = "N")]
-    pub lights: Option<usize>,
-    /// Seed of the built-in generators.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// The scene.
+    #[command(flatten)]
+    pub scene: SceneArgs,
     /// Output size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),
@@ -160,7 +169,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE.ron")]
     pub graph: Option<PathBuf>,
     /// Override a graph parameter, NAME=VALUE (repeatable), e.g. `--param exposure=1.2`.
-    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_param)]
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
     pub params: Vec<(String, String)>,
     /// Shorthand for `--param debug_view=VIEW`: none, normals, albedo or depth.
     #[arg(long, value_name = "VIEW")]
@@ -192,14 +201,6 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
         Ok(n)
     };
     Ok((parse(w, "width")?, parse(h, "height")?))
-}
-
-/// Parses `NAME=VALUE`.
-pub fn parse_param(s: &str) -> Result<(String, String), String> {
-    match s.split_once('=') {
-        Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
-        _ => Err(format!("'{s}' is not NAME=VALUE")),
-    }
 }
 
 /// Parses `x,y,z` into finite numbers.

@@ -5,8 +5,6 @@
 use super::args::{GraphArgs, GraphCommand, GraphFrameArgs};
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::graph::{self, CompiledGraph, DeviceEnv, Environment, FrameInputs, GraphErrors, NoDevice};
-use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::SceneSource;
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -90,11 +88,7 @@ fn check(file: &Path, params: &[(String, String)], device: Option<&str>) -> Resu
 fn compiled(file: &Path, params: &[(String, String)], frame: &GraphFrameArgs) -> Result<CompiledGraph, Failure> {
     let env = NoDevice::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
     let graph = graph::load_file(file, params, &env)?;
-    let source: SceneSource =
-        frame.scene.parse().map_err(|e: cullgraph::scene::SceneError| Failure::Other(e.to_string()))?;
-    let options =
-        LoadOptions { instances: frame.instances, kinds: frame.kinds, lights: frame.lights, seed: frame.seed };
-    let scene = source.load(&options).map_err(|e| Failure::Other(e.to_string()))?;
+    let scene = frame.scene.load().map_err(|e| Failure::Other(e.to_string()))?;
     let (width, height) = frame.size;
     let inputs = FrameInputs::from_scene(&scene, width, height);
     let started = std::time::Instant::now();

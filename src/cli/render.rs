@@ -6,8 +6,7 @@ use super::watch::FileWatch;
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::render::output::save_png;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
-use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::{Camera, Projection, SceneSource};
+use cullgraph::scene::{Camera, Projection};
 use cullgraph::stats::RunStats;
 use cullgraph::{Error, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -19,10 +18,8 @@ use std::time::{Duration, Instant};
 pub fn run(args: &RenderArgs) -> Result<()> {
     let (width, height) = args.size;
     let spec = graph_spec(args)?;
-    let source: SceneSource = args.scene.parse()?;
-    let options = LoadOptions { instances: args.instances, kinds: args.kinds, lights: args.lights, seed: args.seed };
     let spinner = progress(None, "loading scene");
-    let scene = source.load(&options)?;
+    let scene = args.scene.load()?;
     spinner.finish_and_clear();
 
     let camera = camera_from_args(args, scene.default_camera(width as f32 / height as f32))?;
