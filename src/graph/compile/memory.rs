@@ -123,7 +123,7 @@ mod tests {
         assert_eq!(p[1], Some(Placement { heap: 0, offset: 0 }));
         assert_eq!(p[2], Some(Placement { heap: 0, offset: 1024 }));
         assert_eq!(p[3], None);
-        assert_eq!(heaps, vec![1524]);
+        assert_eq!(heaps, vec![1536], "1524 rounded up to whole 256-byte units");
     }
 
     #[test]
@@ -134,6 +134,6 @@ mod tests {
         assert_eq!(p[3].map(|p| p.offset), Some(4096));
         assert_eq!(p[1].map(|p| p.offset), Some(0));
         assert_eq!(p[2].map(|p| p.offset), Some(1024));
-        assert_eq!(heaps, vec![5096]);
+        assert_eq!(heaps, vec![5120], "5096 rounded up to whole 256-byte units");
     }
 }
