@@ -23,6 +23,8 @@ struct GpuMaterial {
     float pad2;
 };
 
+#include "cull_math.glsl"
+
 // Per-frame constants, relative to the eye.
 struct FrameConstants {
     mat4 view_proj;        // eye-relative world -> clip (rotation and projection only)
@@ -33,6 +35,10 @@ struct FrameConstants {
     vec4 sun_color;        // rgb: radiance
     uvec4 size_lights;     // x: width, y: height, z: point light count, w: unused
     vec4 ambient;          // rgb: sky ambient, a: unused
+    CullView cull_view;    // this frame's culling view
+    CullView prev_cull_view; // last frame's (tests against last frame's Hi-Z)
+    vec4 prev_eye_hi;      // last frame's eye, xyz
+    vec4 prev_eye_lo;
 };
 
 // What the lighting pass shows (its `debug_view` setting).

@@ -11,6 +11,8 @@ layout(set = 0, binding = 0, scalar) readonly buffer Instances { GpuInstance ins
 layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
 layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
 
+invariant gl_Position;  // the oracle (shaders/oracle/id.vert) and later passes must rasterize identically
+
 layout(location = 0) out vec3 out_normal;
 layout(location = 1) flat out uint out_material;
 layout(location = 2) flat out uint out_mirrored;

@@ -165,9 +165,23 @@ pub struct RenderArgs {
     /// Vulkan device by name substring or index (see `cullgraph devices`); env CULLGRAPH_DEVICE.
     #[arg(long, value_name = "NAME|INDEX")]
     pub device: Option<String>,
-    /// Render graph (RON) to run (default: the built-in `graph/default.ron`).
-    #[arg(long, value_name = "FILE.ron")]
-    pub graph: Option<PathBuf>,
+    /// Render graph to run: a RON file, or `builtin:NAME` for one shipped in `graph/`
+    /// (default, no_cull, frustum, ...). Default: `graph/default.ron`.
+    #[arg(long, value_name = "FILE.ron|builtin:NAME")]
+    pub graph: Option<String>,
+    /// Render without culling (the built-in `no_cull` graph).
+    #[arg(long, conflicts_with = "graph")]
+    pub no_cull: bool,
+    /// Check every frame against exact visibility (an unculled instance-id render) and report
+    /// visible instances, false negatives and false positives; fails if anything visible was culled.
+    #[arg(long)]
+    pub verify: bool,
+    /// Move the scene and the camera together by x,y,z (large-world precision check).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "x,y,z")]
+    pub world_offset: Option<DVec3>,
+    /// Move the camera over the frames: still, orbit, dolly or shake.
+    #[arg(long, default_value = "still", value_parser = parse_camera_path)]
+    pub camera_path: cullgraph::scene::CameraPath,
     /// Override a graph parameter, NAME=VALUE (repeatable), e.g. `--param exposure=1.2`.
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
     pub params: Vec<(String, String)>,
@@ -201,6 +215,11 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
         Ok(n)
     };
     Ok((parse(w, "width")?, parse(h, "height")?))
+}
+
+/// Parses a camera path name.
+pub fn parse_camera_path(s: &str) -> Result<cullgraph::scene::CameraPath, String> {
+    s.parse()
 }
 
 /// Parses `x,y,z` into finite numbers.

@@ -19,10 +19,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let (width, height) = args.size;
     let spec = graph_spec(args)?;
     let spinner = progress(None, "loading scene");
-    let scene = args.scene.load()?;
+    let mut scene = args.scene.load()?;
     spinner.finish_and_clear();
 
-    let camera = camera_from_args(args, scene.default_camera(width as f32 / height as f32))?;
+    let mut camera = camera_from_args(args, scene.default_camera(width as f32 / height as f32))?;
+    if let Some(offset) = args.world_offset {
+        scene.translate(offset);
+        camera.eye += offset;
+        camera.target += offset;
+    }
     let ctx = GpuContext::new(&ContextOptions {
         device: DeviceSelector::or_from_env(args.device.as_deref().map(|d| d.parse().unwrap_or_default())),
         validation: args.validation || ContextOptions::default().validation,
@@ -43,6 +48,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         ..Default::default()
     };
     let mut renderer = Renderer::with_graph(&ctx, &shaders, scene, RenderSettings::new(width, height), &spec)?;
+    if args.verify {
+        renderer.enable_verification(&shaders)?;
+    }
     let memory = renderer.runtime().memory();
     stats.graph = renderer.plan().name.clone();
     stats.transient_bytes = memory.bytes_with_aliasing;
@@ -54,6 +62,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let bar = progress(Some(args.frames as u64), "rendering");
     for frame in 0..args.frames {
         let last = frame + 1 == args.frames;
+        let camera = args.camera_path.camera_at(&camera, frame);
         let frame_stats = if last {
             let (frame_stats, image) = renderer.render_to_image(&camera)?;
             save_png(&image, &args.out)?;
@@ -61,6 +70,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         } else {
             renderer.render(&camera)?
         };
+        if let Some(v) = frame_stats.verify.as_ref().filter(|v| v.false_negatives > 0) {
+            eprintln!("frame {frame}: {} visible instance(s) culled, e.g. {:?}", v.false_negatives, v.missed);
+        }
         stats.frames.push(frame_stats);
         bar.inc(1);
     }
@@ -73,17 +85,34 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let last = stats.frames.last().cloned().unwrap_or_default();
     println!(
-        "{}: {}x{} on {}, {} instances, {} draws, {} triangles, GPU {:.3} ms -> {}",
+        "{} through '{}': {}x{} on {}, {} instances, {} drawn ({} frustum-culled, {} occlusion-culled), {} draws, {} triangles, GPU {:.3} ms -> {}",
         stats.scene,
+        stats.graph,
         width,
         height,
         stats.device,
         last.instances,
+        last.drawn,
+        last.frustum_culled,
+        last.occlusion_culled,
         last.draws,
         last.triangles,
         last.gpu_total_ms,
         args.out.display()
     );
+    if args.verify {
+        let checked: Vec<_> = stats.frames.iter().filter_map(|f| f.verify.as_ref()).collect();
+        let missed: u32 = checked.iter().map(|v| v.false_negatives).sum();
+        let extra: u32 = checked.iter().map(|v| v.false_positives).sum();
+        let visible: u32 = checked.iter().map(|v| v.visible).sum();
+        println!(
+            "verify: {} frame(s), {visible} visible instance-frames, {missed} false negatives, {extra} false positives",
+            checked.len()
+        );
+        if missed > 0 {
+            return Err(Error::Invalid(format!("culling removed {missed} visible instance-frame(s)")));
+        }
+    }
     if validation_messages > 0 {
         return Err(Error::Invalid(format!("the validation layer reported {validation_messages} message(s)")));
     }
@@ -92,9 +121,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
 /// The graph to run: `--graph FILE` or the built-in default, with `--param` and `--debug-view`.
 fn graph_spec(args: &RenderArgs) -> Result<GraphSpec> {
-    let spec = match &args.graph {
-        Some(path) => GraphSpec::from_file(path)?,
-        None => GraphSpec::default_graph(),
+    let spec = match (&args.graph, args.no_cull) {
+        (Some(arg), _) => GraphSpec::from_arg(arg)?,
+        (None, true) => GraphSpec::builtin("no_cull")?,
+        (None, false) => GraphSpec::default_graph(),
     };
     let mut overrides = args.params.clone();
     if let Some(view) = &args.debug_view {
@@ -128,8 +158,10 @@ fn watch(
             continue;
         }
         shaders.clear_cache();
-        let reloaded = match &args.graph {
-            Some(path) => GraphSpec::from_file(path).map(|s| s.with_overrides(spec.overrides.clone())),
+        let reloaded = match args.graph.as_deref().filter(|g| !g.starts_with("builtin:")) {
+            Some(path) => {
+                GraphSpec::from_file(std::path::Path::new(path)).map(|s| s.with_overrides(spec.overrides.clone()))
+            }
             None => Ok(spec.clone()),
         }
         .and_then(|new_spec| renderer.reload_graph(shaders, &new_spec).map(|_| new_spec));
@@ -152,7 +184,7 @@ fn watch(
 
 /// The graph file, the shaders its compute passes use, and the shader library on disk.
 fn watched_paths(args: &RenderArgs, spec: &GraphSpec, renderer: &Renderer) -> Vec<PathBuf> {
-    let mut paths: Vec<PathBuf> = args.graph.iter().cloned().collect();
+    let mut paths: Vec<PathBuf> = args.graph.iter().filter(|g| !g.starts_with("builtin:")).map(PathBuf::from).collect();
     for pass in &renderer.plan().passes {
         if let Some(shader) = &pass.shader {
             let resolved =

@@ -88,12 +88,18 @@ unsafe extern "system" fn debug_callback(
     };
     let id = text(data.p_message_id_name);
     let message = text(data.p_message);
-    // Performance hints from the loader/driver at INFO level are noise; WARNING+ from any
-    // source counts, and so does every synchronization hazard whatever its severity.
-    let counted = severity.intersects(COUNTED_SEVERITIES) || id.starts_with("SYNC-HAZARD");
+    // What counts: every validation-layer warning or error, every synchronization hazard, and
+    // errors from anywhere. Drivers' own GENERAL warnings (e.g. Mesa 22.3's SPIR-V front end
+    // warning about a valid `invariant gl_Position`) are logged, not counted.
+    let validation = kind.contains(vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION);
+    let counted = (validation && severity.intersects(COUNTED_SEVERITIES))
+        || severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+        || id.starts_with("SYNC-HAZARD");
     if counted {
         tracing::error!(target: "vulkan", ?kind, id = %id, "{message}");
         log.push(format!("[{id}] {message}"));
+    } else if severity.intersects(COUNTED_SEVERITIES) {
+        tracing::warn!(target: "vulkan", ?kind, id = %id, "{message}");
     } else {
         tracing::trace!(target: "vulkan", ?kind, id = %id, "{message}");
     }

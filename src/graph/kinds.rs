@@ -91,6 +91,8 @@ pub const COMPUTE_KIND: &str = "compute";
 pub const GBUFFER_ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 /// The G-buffer geometry pass's normal/roughness format.
 pub const GBUFFER_NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// Format of the Hi-Z pyramid (reversed-Z depth, minimum reduction).
+pub const HIZ_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 /// The lighting pass's output format (sRGB-encoded values in a UNORM image, so it can be storage).
 pub const LIT_OUTPUT_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 
@@ -145,6 +147,66 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
                     default: SettingDefault::Choice(&["none", "normals", "albedo", "depth"]),
                     doc: "show a G-buffer channel instead of the lit image",
                 },
+            ],
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "gbuffer_append",
+            doc: "like gbuffer, but draws into the existing albedo, normal and depth (the late phase of two-phase culling)",
+            reads: vec![
+                slot("draw_commands", Usage::Indirect, true, FormatRule::Any, "VkDrawIndexedIndirectCommand per draw group"),
+                slot("draw_count", Usage::Indirect, true, FormatRule::Any, "number of commands"),
+                slot(
+                    "draw_instance_ids",
+                    Usage::StorageBufferRead(Stages::Vertex),
+                    true,
+                    FormatRule::Any,
+                    "instance ids, one slice per draw group",
+                ),
+            ],
+            writes: vec![
+                slot("albedo", Usage::ColorAttachmentLoad, true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a"),
+                slot("normal", Usage::ColorAttachmentLoad, true, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a"),
+                slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Exact(vk::Format::D32_SFLOAT), "reversed-Z depth"),
+            ],
+            settings: vec![],
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "hiz_build",
+            doc: "builds the reversed-Z Hi-Z pyramid (minimum = farthest depth per footprint, conservative for every size) from (MSAA) depth",
+            reads: vec![SlotDecl { multisample_ok: true, ..slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "depth, reduced across samples first") }],
+            writes: vec![slot("hiz", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(HIZ_FORMAT), "the pyramid: mip 0 at the depth's size, every mip written")],
+            settings: vec![SettingDecl {
+                name: "method",
+                default: SettingDefault::Choice(&["single", "per_mip"]),
+                doc: "one dispatch for the whole pyramid, or one dispatch per mip (baseline)",
+            }],
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "instance_cull",
+            doc: "tests every instance's world bound (frustum, optionally Hi-Z occlusion) and compacts the survivors per draw group in instance order into draw commands for vkCmdDrawIndexedIndirectCount",
+            reads: vec![
+                slot("visibility_prev", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "last frame's visibility bits (early and late phases)"),
+                slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid to test against (none: frustum only)"),
+            ],
+            writes: vec![
+                slot("draw_commands", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "one command per draw group (size: meshes * 20)"),
+                slot("draw_count", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "number of commands (4 bytes)"),
+                slot("draw_instance_ids", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "survivors, one slice per draw group (size: instances * 4)"),
+                slot("visibility", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits (late phase)"),
+                slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "counters of this pass (size: 64)"),
+            ],
+            settings: vec![
+                SettingDecl { name: "phase", default: SettingDefault::Choice(&["all", "early", "late", "occluders", "rest"]), doc: "which instances the pass draws: all survivors; last frame's visible ones (early); newly visible ones (late); chosen occluders; all but the occluders" },
+                SettingDecl { name: "frustum", default: SettingDefault::Bool(true), doc: "test against the view frustum (false: keep everything, the no-cull baseline)" },
+                SettingDecl { name: "bound", default: SettingDefault::Choice(&["box", "sphere"]), doc: "world bound tested: axis-aligned box or sphere" },
+                SettingDecl { name: "hiz_test", default: SettingDefault::Choice(&["coarse", "finer"]), doc: "occlusion footprint: at most 2x2 texels, or up to 3x3 one level finer (culls more)" },
+                SettingDecl { name: "hiz_view", default: SettingDefault::Choice(&["current", "previous"]), doc: "project with this frame's camera, or last frame's (a test against last frame's pyramid)" },
+                SettingDecl { name: "compaction", default: SettingDefault::Choice(&["ordered", "atomic"]), doc: "prefix-sum compaction in instance order, or the thesis's atomic append (order varies, measured only)" },
+                SettingDecl { name: "occluder_distance", default: SettingDefault::Float(200.0), doc: "occluders phase: farthest distance of an occluder's bound" },
+                SettingDecl { name: "occluder_size", default: SettingDefault::Float(0.02), doc: "occluders phase: smallest projected radius, as a fraction of the view height" },
             ],
             slots_from_shader: false,
         },

@@ -40,6 +40,7 @@ pub mod cull_math;
 pub mod hiz;
 pub mod metrics;
 pub mod raycast;
+pub mod visibility;
 
 pub use cull_math::{CullView, PixelRect, ScreenBounds};
 pub use hiz::{HiZPyramid, HizVariant};

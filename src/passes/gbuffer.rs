@@ -50,6 +50,8 @@ impl<'a> DrawSource<'a> {
 /// The G-buffer geometry pass.
 pub struct GbufferPass {
     pipeline: Pipeline,
+    /// Keep what earlier passes drew (`gbuffer_append`) instead of clearing.
+    append: bool,
 }
 
 impl GbufferPass {
@@ -74,7 +76,12 @@ impl GbufferPass {
                 cull_mode: vk::CullModeFlags::NONE,
             },
         )?;
-        Ok(Self { pipeline })
+        Ok(Self { pipeline, append: false })
+    }
+
+    /// The pass that draws on top of what earlier passes left in the targets.
+    pub fn appending(ctx: &GpuContext, shaders: &ShaderCompiler) -> crate::Result<Self> {
+        Ok(Self { append: true, ..Self::new(ctx, shaders)? })
     }
 
     /// Records the pass. The targets must be in attachment layouts (see [`crate::gpu::Access`]).
@@ -89,11 +96,12 @@ impl GbufferPass {
     ) {
         let device = ctx.device();
         let extent = targets.depth.extent();
+        let load_op = if self.append { vk::AttachmentLoadOp::LOAD } else { vk::AttachmentLoadOp::CLEAR };
         let color = |image: &Image| {
             vk::RenderingAttachmentInfo::default()
                 .image_view(image.view())
                 .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .load_op(load_op)
                 .store_op(vk::AttachmentStoreOp::STORE)
                 .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
         };
@@ -101,7 +109,7 @@ impl GbufferPass {
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(targets.depth.view())
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .load_op(load_op)
             .store_op(vk::AttachmentStoreOp::STORE)
             .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } });
         let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };

@@ -3,6 +3,8 @@
 
 pub mod compute;
 pub mod gbuffer;
+pub mod hiz_build;
+pub mod instance_cull;
 pub mod lighting;
 
 use crate::gpu::{GpuContext, ShaderCompiler};
@@ -20,7 +22,10 @@ pub fn create_node(
 ) -> crate::Result<Box<dyn PassNode>> {
     Ok(match pass.kind.as_str() {
         "gbuffer" => Box::new(gbuffer::GbufferPass::new(ctx, shaders)?),
+        "gbuffer_append" => Box::new(gbuffer::GbufferPass::appending(ctx, shaders)?),
+        "instance_cull" => Box::new(instance_cull::InstanceCullPass::new(ctx, shaders, pass)?),
         "lighting" => Box::new(lighting::LightingPass::for_plan(ctx, shaders, pass)?),
+        "hiz_build" => Box::new(hiz_build::HizBuildPass::new(ctx, shaders, pass)?),
         crate::graph::kinds::COMPUTE_KIND => Box::new(compute::ComputePass::new(ctx, shaders, pass, graph_dir)?),
         other => return Err(crate::Error::Invalid(format!("pass '{}': no executor for kind '{other}'", pass.name))),
     })

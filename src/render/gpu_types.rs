@@ -80,6 +80,40 @@ impl GpuPointLight {
     }
 }
 
+/// The culling view of a frame as the shaders read it (`CullView` in `cull_math.glsl`,
+/// scalar layout, 64 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCullView {
+    /// World-to-view rotation, column-major.
+    pub rotation: [f32; 9],
+    /// NDC scale (see [`crate::oracle::cull_math::CullView::scale`]).
+    pub scale: [f32; 2],
+    /// Near-plane distance.
+    pub near: f32,
+    /// Orthographic far-plane distance.
+    pub far: f32,
+    /// 1 for orthographic.
+    pub orthographic: u32,
+    /// Viewport (Hi-Z level 0) size.
+    pub viewport: [u32; 2],
+}
+
+impl GpuCullView {
+    /// The culling view of `camera` on a `width` x `height` target.
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
+        let v = crate::oracle::cull_math::CullView::from_camera(camera, width, height);
+        Self {
+            rotation: v.rotation.to_cols_array(),
+            scale: v.scale.to_array(),
+            near: v.near,
+            far: v.far,
+            orthographic: v.orthographic as u32,
+            viewport: v.viewport.to_array(),
+        }
+    }
+}
+
 /// Per-frame constants (see `FrameConstants` in `scene.glsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -100,14 +134,24 @@ pub struct FrameConstants {
     pub size_lights: [u32; 4],
     /// Sky ambient rgb, unused.
     pub ambient: [f32; 4],
+    /// This frame's culling view.
+    pub cull_view: GpuCullView,
+    /// Last frame's culling view (for tests against last frame's Hi-Z).
+    pub prev_cull_view: GpuCullView,
+    /// Last frame's eye, hi part.
+    pub prev_eye_hi: [f32; 4],
+    /// Last frame's eye, lo part.
+    pub prev_eye_lo: [f32; 4],
 }
 
 impl FrameConstants {
-    /// Constants for `camera` looking at `scene` on a `width` x `height` target.
-    pub fn new(scene: &Scene, camera: &Camera, width: u32, height: u32) -> Self {
+    /// Constants for `camera` looking at `scene` on a `width` x `height` target, where
+    /// `previous` was last frame's camera (the same camera on the first frame).
+    pub fn new(scene: &Scene, camera: &Camera, previous: &Camera, width: u32, height: u32) -> Self {
         let aspect = width as f32 / height as f32;
         let vp: Mat4 = camera.view_projection_rel_eye(aspect);
         let (eye_hi, eye_lo) = split_hi_lo(camera.eye);
+        let (prev_eye_hi, prev_eye_lo) = split_hi_lo(previous.eye);
         let sun = scene.sun;
         Self {
             view_proj: vp.to_cols_array_2d(),
@@ -118,6 +162,10 @@ impl FrameConstants {
             sun_color: sun.color.extend(0.0).to_array(),
             size_lights: [width, height, scene.lights.len() as u32, 0],
             ambient: [0.22, 0.27, 0.35, 0.0],
+            cull_view: GpuCullView::new(camera, width, height),
+            prev_cull_view: GpuCullView::new(previous, width, height),
+            prev_eye_hi: prev_eye_hi.extend(0.0).to_array(),
+            prev_eye_lo: prev_eye_lo.extend(0.0).to_array(),
         }
     }
 }
@@ -155,7 +203,8 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuInstance>(), 64);
         assert_eq!(std::mem::size_of::<GpuMaterial>(), 32);
         assert_eq!(std::mem::size_of::<GpuPointLight>(), 32);
-        assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16);
+        assert_eq!(std::mem::size_of::<GpuCullView>(), 64);
+        assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16 + 2 * 64 + 2 * 16);
         assert_eq!(std::mem::size_of::<DrawIndexedIndirect>(), 20);
     }
 }

@@ -10,6 +10,17 @@ use std::path::{Path, PathBuf};
 /// The default graph shipped with the crate (`graph/default.ron`), embedded at build time.
 pub const DEFAULT_GRAPH: &str = include_str!("../../graph/default.ron");
 
+/// The graphs shipped in `graph/`, embedded so that a binary carried elsewhere has them:
+/// `builtin:NAME` on the command line.
+pub const BUILTIN_GRAPHS: &[(&str, &str)] = &[
+    ("default", DEFAULT_GRAPH),
+    ("no_cull", include_str!("../../graph/no_cull.ron")),
+    ("frustum", include_str!("../../graph/frustum.ron")),
+    ("two_phase", include_str!("../../graph/two_phase.ron")),
+    ("one_phase", include_str!("../../graph/one_phase.ron")),
+    ("occluder_prepass", include_str!("../../graph/occluder_prepass.ron")),
+];
+
 /// A render graph to load.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct GraphSpec {
@@ -27,6 +38,23 @@ impl GraphSpec {
     /// The embedded default graph.
     pub fn default_graph() -> Self {
         Self { text: DEFAULT_GRAPH.into(), file: "graph/default.ron".into(), dir: None, overrides: Vec::new() }
+    }
+
+    /// A graph shipped in `graph/` by name (`default`, `no_cull`, `frustum`, ...).
+    pub fn builtin(name: &str) -> Result<Self> {
+        let (_, text) = BUILTIN_GRAPHS.iter().find(|(n, _)| *n == name).ok_or_else(|| {
+            let names: Vec<&str> = BUILTIN_GRAPHS.iter().map(|(n, _)| *n).collect();
+            Error::Invalid(format!("unknown built-in graph '{name}' (built-in graphs: {})", names.join(", ")))
+        })?;
+        Ok(Self { text: text.to_string(), file: format!("graph/{name}.ron"), dir: None, overrides: Vec::new() })
+    }
+
+    /// `builtin:NAME` or a path.
+    pub fn from_arg(arg: &str) -> Result<Self> {
+        match arg.strip_prefix("builtin:") {
+            Some(name) => Self::builtin(name),
+            None => Self::from_file(Path::new(arg)),
+        }
     }
 
     /// A graph file on disk.

@@ -1,6 +1,7 @@
 //! The frame: scene buffers on the GPU, render targets, and the renderer that records a frame
 //! headlessly or into a host engine's command buffer.
 
+pub mod cull_data;
 pub mod gpu_types;
 pub mod graph_spec;
 pub mod output;

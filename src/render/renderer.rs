@@ -13,11 +13,14 @@ use crate::gpu::transfer::record_image_to_buffer;
 use crate::gpu::{
     Access, Buffer, BufferDesc, GpuContext, Image, MemoryLocation, PassTiming, ShaderCompiler, UploadBatch,
 };
+use crate::graph::executor::DrawnInstances;
 use crate::graph::executor::{FrameData, GraphRuntime, Imports, FRAMES_IN_FLIGHT};
-use crate::graph::plan::CompiledGraph;
+use crate::graph::plan::{CompiledGraph, ResolvedKind};
+use crate::oracle::visibility::VisibilityOracle;
 use crate::scene::{Camera, Scene};
-use crate::stats::FrameStats;
+use crate::stats::{CullCounters, CullPassStats, FrameStats, VerifyStats};
 use ash::vk;
+use std::collections::BTreeSet;
 use std::time::Instant;
 
 /// Output size.
@@ -66,6 +69,10 @@ pub struct Renderer {
     /// Upload batches recorded into frame N, kept until frame N + FRAMES_IN_FLIGHT is recorded.
     retiring_uploads: Vec<(u64, UploadBatch)>,
     settings: RenderSettings,
+    /// The camera of the last recorded frame.
+    previous_camera: Option<Camera>,
+    /// Exact-visibility oracle, when verification is on.
+    oracle: Option<VisibilityOracle>,
 }
 
 impl Renderer {
@@ -119,6 +126,8 @@ impl Renderer {
             pending_uploads: Some(uploads),
             retiring_uploads: Vec::new(),
             settings,
+            previous_camera: None,
+            oracle: None,
         })
     }
 
@@ -129,6 +138,16 @@ impl Renderer {
         self.retired.push((self.runtime_start, self.frame_index, old));
         self.runtime_start = self.frame_index;
         Ok(())
+    }
+
+    /// Checks every headless frame against exact visibility (an unculled instance-id render
+    /// at the frame's sample count): [`FrameStats::verify`] then reports false negatives and
+    /// false positives. Costs an extra render and readbacks per frame.
+    pub fn enable_verification(&mut self, shaders: &ShaderCompiler) -> Result<()> {
+        let samples = depth_samples(self.runtime.plan());
+        self.oracle =
+            Some(VisibilityOracle::new(&self.ctx, shaders, self.settings.width, self.settings.height, samples)?);
+        self.runtime.set_draw_capture(true)
     }
 
     /// The scene being rendered.
@@ -255,21 +274,78 @@ impl Renderer {
             }
             Ok::<(), Error>(())
         })?;
+        let mut stats = self.completed_stats(frame)?;
+        stats.cpu_record_ms = record_ms;
+        if self.oracle.is_some() {
+            stats.verify = Some(self.verify(frame)?);
+        }
+        Ok(stats)
+    }
+
+    /// Compares what `frame` (just completed) drew with exact visibility.
+    fn verify(&self, frame: u64) -> Result<VerifyStats> {
+        let Some(oracle) = &self.oracle else { return Ok(VerifyStats::default()) };
+        let constants = &self.slots[(frame % FRAMES_IN_FLIGHT as u64) as usize].constants;
+        let visible = oracle.render(&self.ctx, &self.gpu_scene, constants)?.visible;
+        let lists = self.runtime.drawn()?.unwrap_or_default();
+        let drawn: BTreeSet<u32> = if lists.contains(&DrawnInstances::All) {
+            (0..self.gpu_scene.instance_count).collect()
+        } else {
+            lists
+                .into_iter()
+                .flat_map(|l| match l {
+                    DrawnInstances::Some(ids) => ids,
+                    DrawnInstances::All => Vec::new(),
+                })
+                .collect()
+        };
+        let missed: Vec<u32> = visible.difference(&drawn).copied().collect();
+        Ok(VerifyStats {
+            visible: visible.len() as u32,
+            drawn: drawn.len() as u32,
+            false_negatives: missed.len() as u32,
+            false_positives: drawn.difference(&visible).count() as u32,
+            missed: missed.into_iter().take(16).collect(),
+        })
+    }
+
+    /// The figures of a recorded frame once it has completed on the GPU (counters and
+    /// timestamps come back through per-frame host buffers, a few frames late, never waited
+    /// on). Without culling passes everything is drawn.
+    pub fn completed_stats(&self, frame: u64) -> Result<FrameStats> {
         let timings = self.completed_timings(frame)?;
         let total = timings.iter().find(|t| t.name == "frame").map_or(0.0, |t| t.ms);
-        Ok(FrameStats {
+        let culling: Vec<CullPassStats> = if frame >= self.runtime_start {
+            self.runtime
+                .pass_counters(frame - self.runtime_start)?
+                .iter()
+                .map(|(name, bytes)| CullPassStats::new(name, bytemuck::from_bytes::<CullCounters>(bytes)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let mut stats = FrameStats {
             frame,
             instances: self.gpu_scene.instance_count,
+            drawn: self.gpu_scene.instance_count,
             draws: self.gpu_scene.max_draws,
             triangles: self.gpu_scene.triangles,
             gpu_ms: timings.into_iter().filter(|t| t.name != "frame").collect(),
             gpu_total_ms: total,
-            cpu_record_ms: record_ms,
-        })
+            ..Default::default()
+        };
+        if !culling.is_empty() {
+            (stats.frustum_culled, stats.occlusion_culled, stats.drawn, stats.draws, stats.triangles) =
+                crate::stats::cull::totals(&culling);
+        }
+        stats.culling = culling;
+        Ok(stats)
     }
 
     fn write_frame_data(&mut self, slot: usize, camera: &Camera) -> Result<()> {
-        let constants = FrameConstants::new(&self.scene, camera, self.settings.width, self.settings.height);
+        let previous = self.previous_camera.clone().unwrap_or_else(|| camera.clone());
+        let constants = FrameConstants::new(&self.scene, camera, &previous, self.settings.width, self.settings.height);
+        self.previous_camera = Some(camera.clone());
         let lights: Vec<GpuPointLight> = self.scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();
         let slot = &mut self.slots[slot];
         slot.constants.write_bytes(0, bytemuck::bytes_of(&constants))?;
@@ -278,6 +354,17 @@ impl Renderer {
         }
         Ok(())
     }
+}
+
+/// Samples of the graph's first depth image (what the oracle must match); 1 if none.
+fn depth_samples(plan: &CompiledGraph) -> vk::SampleCountFlags {
+    plan.resources
+        .iter()
+        .find_map(|r| match r.kind {
+            ResolvedKind::Image { format, samples, .. } if crate::graph::formats::is_depth(format) => Some(samples),
+            _ => None,
+        })
+        .unwrap_or(vk::SampleCountFlags::TYPE_1)
 }
 
 /// Loads, validates and compiles `spec` for this scene and size, and instantiates it.

@@ -22,6 +22,14 @@ pub struct GpuScene {
     pub draw_commands: Buffer,
     /// The number of commands (read by `vkCmdDrawIndexedIndirectCount`).
     pub draw_count: Buffer,
+    /// [`super::cull_data::GpuCullRecord`] per slot (draw-list order).
+    pub cull_records: Buffer,
+    /// [`super::cull_data::GpuDrawGroup`] per non-empty draw group.
+    pub draw_groups: Buffer,
+    /// Draw group of each slot.
+    pub slot_groups: Buffer,
+    /// Number of non-empty draw groups.
+    pub group_count: u32,
     /// Number of instances.
     pub instance_count: u32,
     /// Number of non-empty draw groups (the most commands a frame can issue).
@@ -83,6 +91,7 @@ impl GpuScene {
         let instances: Vec<GpuInstance> = scene.instances.iter().map(GpuInstance::new).collect();
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();
         let draws = DrawList::all_instances(scene);
+        let cull = super::cull_data::CullData::new(scene, &draws);
         let count = [draws.commands.len() as u32];
         Ok(Self {
             vertices: batch.buffer(
@@ -117,6 +126,10 @@ impl GpuScene {
                 vk::BufferUsageFlags::INDIRECT_BUFFER | storage,
                 bytemuck::cast_slice(&count),
             )?,
+            cull_records: batch.buffer(ctx, "cull records", storage, bytemuck::cast_slice(&cull.records))?,
+            draw_groups: batch.buffer(ctx, "draw groups", storage, bytemuck::cast_slice(&cull.groups))?,
+            slot_groups: batch.buffer(ctx, "slot groups", storage, bytemuck::cast_slice(&cull.slot_groups))?,
+            group_count: cull.groups.len() as u32,
             instance_count: scene.instances.len() as u32,
             max_draws: draws.commands.len() as u32,
             triangles: scene.instanced_triangles(),

@@ -6,6 +6,7 @@
 
 pub mod bounds;
 pub mod camera;
+pub mod camera_path;
 pub mod error;
 pub mod gltf_import;
 pub mod mesh;
@@ -15,6 +16,7 @@ pub mod validate;
 
 pub use bounds::{Aabb, Sphere};
 pub use camera::{Camera, Projection};
+pub use camera_path::CameraPath;
 pub use error::SceneError;
 pub use mesh::{decode_octahedral, encode_octahedral, MeshData, Vertex};
 pub use source::SceneSource;
@@ -207,6 +209,21 @@ impl Scene {
     /// World-space bounds of all instances (`None` for an empty scene).
     pub fn world_bounds(&self) -> Option<(DVec3, DVec3)> {
         self.instances.iter().map(|i| self.instance_bounds(i)).reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+    }
+
+    /// Moves every instance, light and the scene's own camera by `offset` (a large-world test:
+    /// the image must not change when the camera moves with it).
+    pub fn translate(&mut self, offset: DVec3) {
+        for instance in &mut self.instances {
+            instance.transform.translation += offset;
+        }
+        for light in &mut self.lights {
+            light.position += offset;
+        }
+        if let Some(camera) = &mut self.camera {
+            camera.eye += offset;
+            camera.target += offset;
+        }
     }
 
     /// Total triangles over all instances.

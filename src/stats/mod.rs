@@ -1,6 +1,10 @@
 //! Statistics as plain data: per-frame counts and GPU timings, exported as JSON.
 
+pub mod cull;
+
 use crate::gpu::PassTiming;
+pub use cull::{CullCounters, CullPassStats};
+
 use serde::{Deserialize, Serialize};
 
 /// What one frame did.
@@ -10,16 +14,42 @@ pub struct FrameStats {
     pub frame: u64,
     /// Instances in the scene (all tested, when culling runs).
     pub instances: u32,
-    /// Indirect draw commands issued.
+    /// Instances outside the frustum.
+    pub frustum_culled: u32,
+    /// Instances inside the frustum but occluded.
+    pub occlusion_culled: u32,
+    /// Instances drawn.
+    pub drawn: u32,
+    /// Indirect draw commands issued (non-empty ones, when culling compacts them).
     pub draws: u32,
     /// Triangles submitted.
     pub triangles: u64,
+    /// Per cull pass (empty without culling).
+    pub culling: Vec<CullPassStats>,
+    /// Exact-visibility check of this frame (with `--verify`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub verify: Option<VerifyStats>,
     /// GPU milliseconds per pass, in execution order.
     pub gpu_ms: Vec<PassTiming>,
     /// GPU milliseconds of the whole frame (first begin to last end).
     pub gpu_total_ms: f64,
     /// CPU milliseconds spent recording the frame's commands.
     pub cpu_record_ms: f64,
+}
+
+/// How a frame's culling compares with exact visibility (an unculled instance-id render).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct VerifyStats {
+    /// Instances visible at some sample.
+    pub visible: u32,
+    /// Instances drawn.
+    pub drawn: u32,
+    /// Visible but not drawn: culling removed something on screen. Must be 0.
+    pub false_negatives: u32,
+    /// Drawn but not visible: work culling could have saved.
+    pub false_positives: u32,
+    /// The first few false negatives (instance ids), for debugging.
+    pub missed: Vec<u32>,
 }
 
 /// A whole run of `cullgraph render`, as written to `--stats`.

@@ -2,21 +2,55 @@
 //! pass's planned barriers (filling first-use sources from what last touched the memory),
 //! a debug label and a timestamp pair, and the pass's commands.
 
+mod capture;
 mod imports;
 mod node;
 mod resources;
 mod tracker;
 
+pub use capture::DrawnInstances;
 pub use imports::{Import, Imports};
 pub use node::{FrameData, PassContext, PassNode, SlotBindings};
 pub use resources::{Physical, RuntimeResources};
 
 use crate::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
-use crate::gpu::{Access, GpuContext, GpuTimer, Image, PassTiming, ShaderCompiler};
+use crate::gpu::{Access, Buffer, BufferDesc, GpuContext, GpuTimer, Image, MemoryLocation, PassTiming, ShaderCompiler};
 use crate::graph::plan::{CompiledGraph, MemoryPlan, Version};
 use ash::vk;
 use std::path::Path;
 use tracker::Tracker;
+
+/// Slot name through which a pass exposes its counters (copied to the host every frame).
+pub const STATS_SLOT: &str = "stats";
+/// Bytes of counters a pass writes to its `stats` slot.
+pub const STATS_BYTES: usize = 64;
+
+/// Copies the buffer bound by `binding` in `frame` into the host buffer `dst` at `offset`, after
+/// whatever last touched it, and records the read so later writes wait for the copy. The caller
+/// makes the copy visible to the host (one barrier for all copies of a frame).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn copy_to_host(
+    ctx: &GpuContext,
+    cmd: vk::CommandBuffer,
+    resources: &RuntimeResources,
+    tracker: &mut Tracker,
+    frame: u64,
+    binding: &crate::graph::plan::Binding,
+    dst: &Buffer,
+    offset: u64,
+) {
+    let Some(phys) = resources.index(binding.resource, binding.version, frame) else { return };
+    let Physical::Buffer(src) = resources.get(phys) else { return };
+    let device = ctx.device();
+    cmd_barriers(device, cmd, &[memory_barrier(tracker.pending(&[phys]), Access::TRANSFER_READ)], &[]);
+    let size = src.size().min(dst.size().saturating_sub(offset));
+    if size > 0 {
+        let region = vk::BufferCopy { src_offset: 0, dst_offset: offset, size };
+        // SAFETY: both buffers live and large enough; cmd recording.
+        unsafe { device.cmd_copy_buffer(cmd, src.handle(), dst.handle(), &[region]) };
+    }
+    tracker.apply(phys, Access::TRANSFER_READ, false);
+}
 
 /// Frames of one runtime that may execute at once (timestamp pools are ringed this many times).
 pub const FRAMES_IN_FLIGHT: usize = 3;
@@ -29,6 +63,12 @@ pub struct GraphRuntime {
     resources: RuntimeResources,
     tracker: Tracker,
     timers: Vec<GpuTimer>,
+    /// Passes with a bound `stats` slot, and per frame in flight a host buffer their counters
+    /// are copied into (read a few frames later, never waited on).
+    stats_passes: Vec<usize>,
+    stats_ring: Vec<Buffer>,
+    /// Copies of the draw lists, when verification asked for them.
+    capture: Option<capture::DrawCapture>,
     frame: u64,
 }
 
@@ -49,7 +89,38 @@ impl GraphRuntime {
             .collect::<crate::Result<Vec<_>>>()?;
         let scopes = plan.passes.len() as u32 + 1;
         let timers = (0..FRAMES_IN_FLIGHT).map(|_| GpuTimer::new(ctx, scopes)).collect::<Result<Vec<_>, _>>()?;
-        Ok(Self { ctx: ctx.clone(), tracker: Tracker::new(resources.len()), plan, nodes, resources, timers, frame: 0 })
+        let stats_passes: Vec<usize> = plan
+            .passes
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.bindings.iter().any(|b| b.slot == STATS_SLOT))
+            .map(|(i, _)| i)
+            .collect();
+        let stats_ring = (0..FRAMES_IN_FLIGHT)
+            .map(|i| {
+                Buffer::new(
+                    ctx,
+                    &BufferDesc {
+                        name: &format!("pass counters readback {i}"),
+                        size: (stats_passes.len().max(1) * STATS_BYTES) as u64,
+                        usage: vk::BufferUsageFlags::TRANSFER_DST,
+                        location: MemoryLocation::GpuToCpu,
+                    },
+                )
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            ctx: ctx.clone(),
+            tracker: Tracker::new(resources.len()),
+            plan,
+            nodes,
+            resources,
+            timers,
+            stats_passes,
+            stats_ring,
+            capture: None,
+            frame: 0,
+        })
     }
 
     /// The plan being executed.
@@ -75,7 +146,7 @@ impl GraphRuntime {
         let timer = &mut self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
         timer.reset(cmd);
         timer.begin(cmd, "frame");
-        for (pass, node) in self.plan.passes.iter().zip(self.nodes.iter_mut()) {
+        for (index, (pass, node)) in self.plan.passes.iter().zip(self.nodes.iter_mut()).enumerate() {
             let mut memory = Vec::new();
             let mut images = Vec::new();
             for b in &pass.barriers {
@@ -119,6 +190,25 @@ impl GraphRuntime {
                     self.tracker.apply(phys, b.usage.access(), b.usage.writes());
                 }
             }
+            if let Some(capture) = &self.capture {
+                let copies: Vec<_> = capture.copies_of(index, pass).collect();
+                for &(binding, host) in &copies {
+                    copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, host, 0);
+                }
+                if !copies.is_empty() {
+                    cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
+                }
+            }
+            if let Some(k) = self.stats_passes.iter().position(|&i| i == index) {
+                let ring = &self.stats_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+                if let Some(b) = pass.bindings.iter().find(|b| b.slot == STATS_SLOT) {
+                    let offset = (k * STATS_BYTES) as u64;
+                    copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, b, ring, offset);
+                }
+            }
+        }
+        if !self.stats_passes.is_empty() {
+            cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
         }
         timer.end(cmd);
         self.release_imports(cmd, imports);
@@ -237,6 +327,39 @@ impl GraphRuntime {
         if let Some(phys) = self.resources.index(id, Version::Current, frame) {
             self.tracker.apply(phys, access, false);
         }
+    }
+
+    /// Starts or stops copying every draw pass's draw list to the host after it runs (for
+    /// verification; see [`GraphRuntime::drawn`]).
+    pub fn set_draw_capture(&mut self, on: bool) -> crate::Result<()> {
+        self.capture =
+            if on { Some(capture::DrawCapture::new(&self.ctx, &self.plan.passes, &self.resources)?) } else { None };
+        Ok(())
+    }
+
+    /// What each draw pass drew in the last recorded frame, once it has completed (`None`
+    /// without [`GraphRuntime::set_draw_capture`]). Read before recording the next frame.
+    pub fn drawn(&self) -> crate::Result<Option<Vec<DrawnInstances>>> {
+        self.capture.as_ref().map(|c| c.drawn()).transpose()
+    }
+
+    /// The counters each pass with a `stats` slot wrote in `frame`, once the frame has completed
+    /// (empty if its readback slot was reused since): (pass name, the 64 bytes it wrote).
+    pub fn pass_counters(&self, frame: u64) -> crate::Result<Vec<(String, [u8; STATS_BYTES])>> {
+        if frame >= self.frame || self.frame - frame > FRAMES_IN_FLIGHT as u64 {
+            return Ok(Vec::new());
+        }
+        let bytes = self.stats_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize].read_bytes()?;
+        Ok(self
+            .stats_passes
+            .iter()
+            .enumerate()
+            .map(|(k, &p)| {
+                let mut out = [0u8; STATS_BYTES];
+                out.copy_from_slice(&bytes[k * STATS_BYTES..(k + 1) * STATS_BYTES]);
+                (self.plan.passes[p].name.clone(), out)
+            })
+            .collect())
     }
 
     /// GPU time per pass of `frame`, once it has completed (empty if its timestamps were reused).

@@ -208,7 +208,8 @@ fn image_desc<'a>(name: &'a str, kind: &ResolvedKind, extra_transfer: bool) -> I
 
 fn buffer_desc<'a>(name: &'a str, kind: &ResolvedKind, extra_transfer: bool) -> BufferDesc<'a> {
     let ResolvedKind::Buffer { size, usage } = kind else { unreachable!("buffer kind") };
-    let mut usage = *usage;
+    // Any buffer may be copied out: counters, captured draw lists, host readbacks.
+    let mut usage = *usage | vk::BufferUsageFlags::TRANSFER_SRC;
     if extra_transfer {
         usage |= vk::BufferUsageFlags::TRANSFER_DST;
     }

@@ -35,6 +35,14 @@ pub const STREET: f64 = 14.0;
 pub const SIDEWALK: f64 = 4.5;
 /// Height of the sidewalk slab (m).
 pub const CURB: f64 = 0.15;
+/// How far every object sinks into what it stands on. Bottom faces are then never coplanar
+/// with the surface below them: coplanar faces z-fight, and which one wins would depend on
+/// draw order (which culling changes), not on the scene.
+pub const SINK: f64 = 0.02;
+/// Top of a sidewalk slab (the slab itself sinks into the ground).
+const SIDEWALK_TOP: f64 = CURB - SINK;
+/// Height at which objects on a sidewalk stand.
+const ON_SIDEWALK: f64 = SIDEWALK_TOP - SINK;
 /// Average instances per block that sizes the grid.
 pub const INSTANCES_PER_BLOCK: f64 = 40.0;
 const PITCH: f64 = BLOCK + STREET;
@@ -96,13 +104,14 @@ fn block(
         return;
     }
     let center = corner + DVec3::new(BLOCK * 0.5, 0.0, BLOCK * 0.5);
-    push(out, &p.slab, rng, center, 0.0, Vec3::new(BLOCK as f32, CURB as f32, BLOCK as f32), 0);
+    push(out, &p.slab, rng, center - DVec3::Y * SINK, 0.0, Vec3::new(BLOCK as f32, CURB as f32, BLOCK as f32), 0);
     let (lx, lz) = (rng.random_range(1..=3usize), rng.random_range(1..=3usize));
     let buildings = (lx * lz).min(quota - 1);
     let inner = BLOCK - 2.0 * SIDEWALK;
     let lot = DVec3::new(inner / lx as f64, 0.0, inner / lz as f64);
     for k in 0..buildings {
-        let lot_min = corner + DVec3::new(SIDEWALK + (k % lx) as f64 * lot.x, CURB, SIDEWALK + (k / lx) as f64 * lot.z);
+        let lot_min =
+            corner + DVec3::new(SIDEWALK + (k % lx) as f64 * lot.x, ON_SIDEWALK, SIDEWALK + (k / lx) as f64 * lot.z);
         building(out, p, rng, lot_min, lot);
     }
     let props = quota - 1 - buildings;
@@ -140,7 +149,7 @@ fn on_sidewalk(corner: DVec3, along: f64, inset: f64) -> (DVec3, f32) {
         2 => (BLOCK - a, BLOCK - inset, -FRAC_PI_2),
         _ => (inset, BLOCK - a, PI),
     };
-    (corner + DVec3::new(x, CURB, z), yaw)
+    (corner + DVec3::new(x, ON_SIDEWALK, z), yaw)
 }
 
 /// One building on the lot `lot_min .. lot_min + lot`.
@@ -176,9 +185,9 @@ fn vehicle(out: &mut Vec<Instance>, p: &Palette, rng: &mut SmallRng, corner: DVe
     let along = rng.random_range(3.0..BLOCK - 3.0);
     let flip = if lane < 0.5 { 0.0 } else { PI };
     let (pos, yaw) = if rng.random::<bool>() {
-        (corner + DVec3::new(BLOCK + lane * STREET, 0.0, along), FRAC_PI_2 + flip)
+        (corner + DVec3::new(BLOCK + lane * STREET, -SINK, along), FRAC_PI_2 + flip)
     } else {
-        (corner + DVec3::new(along, 0.0, BLOCK + lane * STREET), flip)
+        (corner + DVec3::new(along, -SINK, BLOCK + lane * STREET), flip)
     };
     let yaw = yaw + rng.random_range(-0.05f32..0.05);
     push(out, kind, rng, pos, yaw, Vec3::ONE, 0);

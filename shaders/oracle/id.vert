@@ -1,0 +1,22 @@
+#version 460
+// Exact-visibility oracle: draws every instance (no culling) exactly as the G-buffer pass
+// positions it, writing the instance id. Same transform code, so the same rasterization.
+#include "../common/scene.glsl"
+
+layout(location = 0) in vec3 in_position;
+
+layout(set = 0, binding = 0, scalar) readonly buffer Instances { GpuInstance instances[]; };
+layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
+layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
+
+invariant gl_Position;  // identical to shaders/gbuffer/gbuffer.vert
+
+layout(location = 0) flat out uint out_instance;
+
+void main() {
+    uint id = draw_instance_ids[gl_InstanceIndex];
+    GpuInstance inst = instances[id];
+    vec3 rel = instance_rel_eye(inst, in_position, frame.eye_hi.xyz, frame.eye_lo.xyz);
+    gl_Position = frame.view_proj * vec4(rel, 1.0);
+    out_instance = id;
+}

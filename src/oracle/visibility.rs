@@ -1,0 +1,189 @@
+//! Exact visibility on the GPU: every instance drawn without culling into an instance-id image
+//! at every sample, with the same vertex transform (`invariant gl_Position`) as the G-buffer
+//! pass. The instances whose id survives at some sample are the visible set; culling must draw
+//! all of them (no false negatives), and what it draws beyond them are false positives.
+
+use crate::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
+use crate::gpu::{
+    Access, Bind, Buffer, BufferDesc, GpuContext, GraphicsDesc, Image, ImageDesc, MemoryLocation, Pipeline, Sampler,
+    ShaderCompiler,
+};
+use crate::render::scene_buffers::GpuScene;
+use ash::vk;
+use std::collections::BTreeSet;
+
+/// Instance ids per sample of one frame, and the set of instances seen at some sample.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct VisibleIds {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub samples: u32,
+    /// `(y * width + x) * samples + s` -> instance id + 1 (0: nothing).
+    pub ids: Vec<u32>,
+    /// Instances visible at one sample or more.
+    pub visible: BTreeSet<u32>,
+}
+
+/// Renders instance ids without culling.
+pub struct VisibilityOracle {
+    draw: Pipeline,
+    readback: Pipeline,
+    sampler: Sampler,
+    ids: Image,
+    depth: Image,
+    out: Buffer,
+    extent: vk::Extent2D,
+    samples: vk::SampleCountFlags,
+}
+
+impl VisibilityOracle {
+    /// An oracle for `width` x `height` frames with `samples` samples per pixel (the sample
+    /// count of the frame it checks).
+    pub fn new(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        width: u32,
+        height: u32,
+        samples: vk::SampleCountFlags,
+    ) -> crate::Result<Self> {
+        let vertex = shaders.compile("oracle/id.vert", &[])?;
+        let fragment = shaders.compile("oracle/id.frag", &[])?;
+        let draw = Pipeline::graphics(
+            ctx,
+            "visibility oracle",
+            &GraphicsDesc {
+                vertex: &vertex,
+                fragment: Some(&fragment),
+                vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
+                vertex_attributes: &[(0, vk::Format::R32G32B32_SFLOAT, 0)],
+                color_formats: &[vk::Format::R32_UINT],
+                depth_format: vk::Format::D32_SFLOAT,
+                depth_compare: vk::CompareOp::GREATER,
+                depth_write: true,
+                samples,
+                cull_mode: vk::CullModeFlags::NONE,
+            },
+        )?;
+        let defines: &[(&str, &str)] =
+            if samples == vk::SampleCountFlags::TYPE_1 { &[] } else { &[("MULTISAMPLED", "1")] };
+        let readback =
+            Pipeline::compute(ctx, "visibility readback", &shaders.compile("oracle/id_readback.comp", defines)?)?;
+        let extent = vk::Extent2D { width, height };
+        let image =
+            |name, format, usage| Image::new(ctx, &ImageDesc { name, format, extent, mip_levels: 1, samples, usage });
+        let ids = image(
+            "visibility ids",
+            vk::Format::R32_UINT,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+        )?;
+        let depth = image("visibility depth", vk::Format::D32_SFLOAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?;
+        let count = width as u64 * height as u64 * samples.as_raw() as u64;
+        let out = Buffer::new(
+            ctx,
+            &BufferDesc {
+                name: "visibility ids readback",
+                size: count * 4,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                location: MemoryLocation::GpuToCpu,
+            },
+        )?;
+        Ok(Self { draw, readback, sampler: Sampler::nearest_clamp(ctx)?, ids, depth, out, extent, samples })
+    }
+
+    /// Draws every instance of `scene` as `constants` (a [`crate::render::gpu_types::FrameConstants`]
+    /// buffer) sees it, and reads the ids back. Submits and waits: a checking tool, not a frame pass.
+    pub fn render(&self, ctx: &GpuContext, scene: &GpuScene, constants: &Buffer) -> crate::Result<VisibleIds> {
+        let device = ctx.device();
+        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: self.extent };
+        ctx.submit_and_wait(|cmd| {
+            let to_draw = [
+                image_barrier(&self.ids, Access::NONE, Access::COLOR_ATTACHMENT),
+                image_barrier(&self.depth, Access::NONE, Access::DEPTH_ATTACHMENT),
+            ];
+            cmd_barriers(device, cmd, &[], &to_draw);
+            let color = [vk::RenderingAttachmentInfo::default()
+                .image_view(self.ids.view())
+                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .clear_value(vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } })];
+            let depth = vk::RenderingAttachmentInfo::default()
+                .image_view(self.depth.view())
+                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } });
+            let viewport = vk::Viewport {
+                x: 0.0,
+                y: 0.0,
+                width: self.extent.width as f32,
+                height: self.extent.height as f32,
+                min_depth: 0.0,
+                max_depth: 1.0,
+            };
+            // SAFETY: cmd recording; every handle outlives the submission (we wait below).
+            unsafe {
+                device.cmd_begin_rendering(
+                    cmd,
+                    &vk::RenderingInfo::default()
+                        .render_area(area)
+                        .layer_count(1)
+                        .color_attachments(&color)
+                        .depth_attachment(&depth),
+                );
+                device.cmd_set_viewport(cmd, 0, &[viewport]);
+                device.cmd_set_scissor(cmd, 0, &[area]);
+                self.draw.bind(cmd);
+                self.draw.push_bindings(
+                    cmd,
+                    &[
+                        Bind::Buffer(0, scene.instances.handle()),
+                        Bind::Buffer(1, scene.draw_instance_ids.handle()),
+                        Bind::Buffer(2, constants.handle()),
+                    ],
+                );
+                device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
+                device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
+                if scene.max_draws > 0 {
+                    device.cmd_draw_indexed_indirect_count(
+                        cmd,
+                        scene.draw_commands.handle(),
+                        0,
+                        scene.draw_count.handle(),
+                        0,
+                        scene.max_draws,
+                        20,
+                    );
+                }
+                device.cmd_end_rendering(cmd);
+            }
+            let sampled = Access { access: vk::AccessFlags2::SHADER_SAMPLED_READ, ..Access::COMPUTE_READ };
+            cmd_barriers(device, cmd, &[], &[image_barrier(&self.ids, Access::COLOR_ATTACHMENT, sampled)]);
+            self.readback.bind(cmd);
+            self.readback.push_bindings(
+                cmd,
+                &[
+                    Bind::Sampled(0, self.ids.view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+                    Bind::Buffer(1, self.out.handle()),
+                ],
+            );
+            self.readback.push_constants(cmd, &[self.extent.width, self.extent.height, self.samples.as_raw()]);
+            // SAFETY: as above.
+            unsafe { device.cmd_dispatch(cmd, self.extent.width.div_ceil(8), self.extent.height.div_ceil(8), 1) };
+            cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::HOST_READ)], &[]);
+            crate::gpu::GpuResult::Ok(())
+        })?;
+        let ids: Vec<u32> = bytemuck::cast_slice(self.out.read_bytes()?).to_vec();
+        let visible = ids.iter().filter(|&&id| id != 0).map(|&id| id - 1).collect();
+        Ok(VisibleIds {
+            width: self.extent.width,
+            height: self.extent.height,
+            samples: self.samples.as_raw(),
+            ids,
+            visible,
+        })
+    }
+}

@@ -1,0 +1,301 @@
+//! Hi-Z build (kind `hiz_build`): the reversed-Z min pyramid of a (multisampled) depth buffer, in
+//! compute, equal bit for bit to [`crate::oracle::hiz::HiZPyramid`].
+//!
+//! Level 0 has the depth's size and holds the minimum (farthest, reversed-Z) sample of each pixel;
+//! level `k + 1` is `max(1, size_k >> 1)` per axis and reduces the footprints of
+//! `shaders/common/hiz.glsl` (2×2, plus the odd last row/column: 2×3, 3×2, 3×3). Min of floats is
+//! exact, so any reduction order gives the oracle's bits.
+//!
+//! Two methods (setting `method`):
+//!
+//! - `single` (default, `shaders/hiz/hiz_build_single.comp`): one dispatch in the style of AMD's
+//!   single-pass downsampler. Every level is a min over an aligned block of level 0 — texel `x` of
+//!   level `k` covers columns `[x·2^k, (x+1)·2^k)`, except the last texel of a level, which
+//!   extends to the end of the row because halving folds the dropped column into it — so the
+//!   pyramid is a tree and the texels of level 6 cut it into independent subtrees. Workgroup `g`
+//!   (256 threads) owns the subtree of level-6 texel `g`: a 64×64 tile of level 0, except that the
+//!   last workgroup column (row) owns everything up to the right (bottom) edge, 64 to 127 texels.
+//!   The odd columns and rows that the halvings fold into edge texels therefore never leave the
+//!   tile that reduces them: no halo, no reads of a neighbour's texels, and the result is exactly
+//!   the oracle's (conservative by construction, for every size). A workgroup writes level 0 (min
+//!   over samples) and levels 1..=6 of its tile through shared memory, publishes its level-6 texel
+//!   and bumps a global atomic counter (acquire-release, device scope); the last of the `n.x·n.y`
+//!   workgroups (`n` = level-6 size) reduces levels 7.. from level 6 alone. The counter is a
+//!   4-byte buffer the pass owns, cleared with `vkCmdFillBuffer` before each dispatch (only when
+//!   the image has more than 7 levels). The cost of the NPOT fold is load imbalance: the last
+//!   column/row of workgroups does up to ~2× (corner ~4×) the work of the others. Threads are
+//!   16×16 and stride over each level of the tile (no division, no subgroup operations, so no
+//!   assumption on the subgroup size); interior level-1 texels take an unrolled 2×2 path.
+//!   On lavapipe `per_mip` is faster (about 1.6× at 1920×1080): there a workgroup barrier is a
+//!   switch between coroutines per 8-wide subgroup, while a dispatch boundary is cheap. Compare the
+//!   methods on the target GPU.
+//! - `per_mip` (baseline, `shaders/hiz/hiz_build_per_mip.comp`): one dispatch per level (level 0
+//!   from the depth, then level `k + 1` from level `k` through storage-image mip views), with a
+//!   barrier on the written mip between dispatches.
+//!
+//! The depth is read with `texelFetch` (a `sampler2D` or, for MSAA depth, `sampler2DMS`: two
+//! shader variants chosen by the depth image's sample count). The pipelines for a variant are
+//! created the first time a depth of that kind is recorded (a pass normally sees only one).
+//!
+//! In the graph, the `depth` slot arrives in `SHADER_READ_ONLY_OPTIMAL` and `hiz` in `GENERAL`
+//! (all mips); every mip is left written by compute in `GENERAL`. [`HizBuildPass::record_images`]
+//! records the same commands for images that the caller owns (tests, embedding).
+
+use crate::gpu::barrier::{cmd_barriers, image_barrier_raw, memory_barrier};
+use crate::gpu::{
+    Access, Bind, Buffer, BufferDesc, GpuContext, Image, MemoryLocation, Pipeline, Sampler, ShaderCompiler, Spirv,
+};
+use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::plan::{PlannedPass, SettingValue};
+use ash::vk;
+
+/// Format of the pyramid.
+pub const HIZ_FORMAT: vk::Format = crate::graph::kinds::HIZ_FORMAT;
+
+/// Most pyramid levels the pass writes (a 32768-texel axis).
+pub const MAX_LEVELS: u32 = 16;
+
+/// The level whose texels split the single-dispatch pyramid into workgroup tiles (64×64).
+pub const TILE_LEVEL: u32 = 6;
+
+/// How the pyramid is built.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum HizMethod {
+    /// One dispatch for the whole pyramid (tiles of 64×64 level-0 texels, last workgroup does the top).
+    #[default]
+    Single,
+    /// One dispatch per level with barriers between (baseline).
+    PerMip,
+}
+
+impl HizMethod {
+    /// From a graph node's `method` setting (`"single"` or `"per_mip"`).
+    pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
+        match pass.settings.get("method") {
+            None => Ok(Self::Single),
+            Some(SettingValue::Choice(c)) if c == "single" => Ok(Self::Single),
+            Some(SettingValue::Choice(c)) if c == "per_mip" => Ok(Self::PerMip),
+            Some(other) => Err(crate::Error::Invalid(format!(
+                "pass '{}': method must be \"single\" or \"per_mip\", not {other:?}",
+                pass.name
+            ))),
+        }
+    }
+}
+
+/// Push constants of `hiz_build_single.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct SinglePush {
+    base: [u32; 2],
+    levels: u32,
+    samples: u32,
+}
+
+/// Push constants of `hiz_build_per_mip.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct PerMipPush {
+    src_size: [u32; 2],
+    dst_size: [u32; 2],
+    samples: u32,
+}
+
+/// A shader compiled in `new`, its pipeline created on first use.
+struct Lazy {
+    spirv: Spirv,
+    pipeline: Option<Pipeline>,
+}
+
+impl Lazy {
+    fn get(&mut self, ctx: &GpuContext, name: &str) -> crate::Result<&Pipeline> {
+        if self.pipeline.is_none() {
+            self.pipeline = Some(Pipeline::compute(ctx, name, &self.spirv)?);
+        }
+        Ok(self.pipeline.as_ref().expect("created above"))
+    }
+}
+
+/// The Hi-Z build pass.
+pub struct HizBuildPass {
+    name: String,
+    method: HizMethod,
+    /// Single: the whole pyramid; per-mip: level 0. Index 0 single-sample depth, 1 multisampled.
+    from_depth: [Lazy; 2],
+    /// Per-mip: level `k + 1` from level `k`.
+    reduce: Option<Pipeline>,
+    sampler: Sampler,
+    /// Workgroups done (single method), cleared before each dispatch.
+    counter: Buffer,
+}
+
+impl HizBuildPass {
+    /// The pass of a graph node (setting `method`).
+    pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler, pass: &PlannedPass) -> crate::Result<Self> {
+        Self::with_method(ctx, shaders, &pass.name, HizMethod::from_plan(pass)?)
+    }
+
+    /// A pass named `name` (debug names) building the pyramid with `method`.
+    pub fn with_method(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        name: &str,
+        method: HizMethod,
+    ) -> crate::Result<Self> {
+        let (path, extra): (&str, &[(&str, &str)]) = match method {
+            HizMethod::Single => ("hiz/hiz_build_single.comp", &[]),
+            HizMethod::PerMip => ("hiz/hiz_build_per_mip.comp", &[("HIZ_FROM_DEPTH", "1")]),
+        };
+        let variant = |msaa: bool| -> crate::Result<Lazy> {
+            let mut defines = extra.to_vec();
+            if msaa {
+                defines.push(("HIZ_MSAA", "1"));
+            }
+            Ok(Lazy { spirv: shaders.compile(path, &defines)?, pipeline: None })
+        };
+        let from_depth = [variant(false)?, variant(true)?];
+        let reduce = match method {
+            HizMethod::Single => None,
+            HizMethod::PerMip => {
+                let spirv = shaders.compile("hiz/hiz_build_per_mip.comp", &[])?;
+                Some(Pipeline::compute(ctx, &format!("{name} (reduce)"), &spirv)?)
+            }
+        };
+        let counter = Buffer::new(
+            ctx,
+            &BufferDesc {
+                name: &format!("{name} (tile counter)"),
+                size: 4,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuOnly,
+            },
+        )?;
+        Ok(Self { name: name.into(), method, from_depth, reduce, sampler: Sampler::nearest_clamp(ctx)?, counter })
+    }
+
+    /// The method this pass uses.
+    pub fn method(&self) -> HizMethod {
+        self.method
+    }
+
+    /// Records the build of `hiz` from `depth`.
+    ///
+    /// `depth`: a depth image (any sample count) in `SHADER_READ_ONLY_OPTIMAL`, its writes visible
+    /// to compute-shader reads. `hiz`: an [`HIZ_FORMAT`] storage image of the depth's size (any
+    /// number of mips up to the full chain, at most [`MAX_LEVELS`]) in `GENERAL`, whose previous
+    /// accesses are ordered before compute-shader writes. Every mip is left written by compute
+    /// shaders in `GENERAL`: the caller's barrier to the next reader has source
+    /// [`Access::COMPUTE_WRITE`].
+    pub fn record_images(
+        &mut self,
+        ctx: &GpuContext,
+        cmd: vk::CommandBuffer,
+        depth: &Image,
+        hiz: &Image,
+    ) -> crate::Result<()> {
+        let invalid = |m: String| crate::Error::Invalid(format!("pass '{}': {m}", self.name));
+        let (e, he) = (depth.extent(), hiz.extent());
+        if (e.width, e.height) != (he.width, he.height) {
+            return Err(invalid(format!(
+                "the pyramid '{}' is {}x{}; it must have the depth's size {}x{}",
+                hiz.name(),
+                he.width,
+                he.height,
+                e.width,
+                e.height
+            )));
+        }
+        if hiz.format() != HIZ_FORMAT {
+            return Err(invalid(format!("the pyramid '{}' is {:?}, not {HIZ_FORMAT:?}", hiz.name(), hiz.format())));
+        }
+        if depth.aspect() != vk::ImageAspectFlags::DEPTH {
+            // A depth-stencil image's view has both aspects, which a sampled descriptor may not.
+            return Err(invalid(format!(
+                "'{}' is {:?}; the pass samples depth-only formats (D16_UNORM, X8_D24_UNORM_PACK32, D32_SFLOAT)",
+                depth.name(),
+                depth.format()
+            )));
+        }
+        let levels = hiz.mip_levels();
+        if levels > MAX_LEVELS {
+            return Err(invalid(format!("{levels} mips; the pass writes at most {MAX_LEVELS}")));
+        }
+        let samples = depth.samples().as_raw().max(1);
+        let base = [e.width, e.height];
+        let variant = usize::from(samples > 1);
+        let device = ctx.device();
+        let depth_bind =
+            Bind::Sampled(0, depth.view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
+        match self.method {
+            HizMethod::Single => {
+                let pipeline = self.from_depth[variant].get(ctx, &self.name)?;
+                if levels > TILE_LEVEL + 1 {
+                    // The previous build's atomics finish before the clear; the clear before this one.
+                    let counter_rw = Access {
+                        stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
+                        access: vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+                        layout: vk::ImageLayout::UNDEFINED,
+                    };
+                    cmd_barriers(device, cmd, &[memory_barrier(counter_rw, Access::TRANSFER_WRITE)], &[]);
+                    // SAFETY: cmd recording; the counter has TRANSFER_DST usage and 4 bytes.
+                    unsafe { device.cmd_fill_buffer(cmd, self.counter.handle(), 0, 4, 0) };
+                    cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, counter_rw)], &[]);
+                }
+                let mut binds = vec![depth_bind, Bind::Buffer(1, self.counter.handle())];
+                binds.extend((0..MAX_LEVELS).map(|l| Bind::StorageImage(2 + l, hiz.mip_view(l.min(levels - 1)))));
+                pipeline.bind(cmd);
+                pipeline.push_bindings(cmd, &binds);
+                pipeline.push_constants(cmd, &SinglePush { base, levels, samples });
+                let tiles = crate::oracle::hiz::level_size(glam::UVec2::from(base), TILE_LEVEL);
+                // SAFETY: cmd recording with the pipeline bound and every binding pushed.
+                unsafe { device.cmd_dispatch(cmd, tiles.x, tiles.y, 1) };
+            }
+            HizMethod::PerMip => {
+                let size = |k: u32| crate::oracle::hiz::level_size(glam::UVec2::from(base), k).to_array();
+                let dispatch = |pipeline: &Pipeline, binds: &[Bind], push: PerMipPush| {
+                    pipeline.bind(cmd);
+                    pipeline.push_bindings(cmd, binds);
+                    pipeline.push_constants(cmd, &push);
+                    let [w, h] = push.dst_size;
+                    // SAFETY: cmd recording with the pipeline bound and every binding pushed.
+                    unsafe { device.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1) };
+                };
+                let level0 = self.from_depth[variant].get(ctx, &self.name)?;
+                dispatch(
+                    level0,
+                    &[depth_bind, Bind::StorageImage(1, hiz.mip_view(0))],
+                    PerMipPush { src_size: base, dst_size: base, samples },
+                );
+                let reduce = self.reduce.as_ref().expect("per-mip passes have a reduce pipeline");
+                let storage_read = Access {
+                    stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
+                    access: vk::AccessFlags2::SHADER_STORAGE_READ,
+                    layout: vk::ImageLayout::GENERAL,
+                };
+                for k in 1..levels {
+                    let range = vk::ImageSubresourceRange::default()
+                        .aspect_mask(vk::ImageAspectFlags::COLOR)
+                        .base_mip_level(k - 1)
+                        .level_count(1)
+                        .layer_count(1);
+                    let barrier = image_barrier_raw(hiz.handle(), range, Access::COMPUTE_WRITE, storage_read);
+                    cmd_barriers(device, cmd, &[], &[barrier]);
+                    dispatch(
+                        reduce,
+                        &[Bind::StorageImage(0, hiz.mip_view(k - 1)), Bind::StorageImage(1, hiz.mip_view(k))],
+                        PerMipPush { src_size: size(k - 1), dst_size: size(k), samples },
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl PassNode for HizBuildPass {
+    fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
+        let depth = rec.slots.required_image("depth")?;
+        let hiz = rec.slots.required_image("hiz")?;
+        self.record_images(rec.ctx, rec.cmd, depth, hiz)
+    }
+}

@@ -1,0 +1,288 @@
+//! The instance-cull pass (ICR/HOCR in one): tests every instance's world bound against the
+//! frustum and, when a Hi-Z pyramid is bound, the conservative occlusion test, then compacts the
+//! survivors per draw group in instance order into `VkDrawIndexedIndirectCommand`s and a draw
+//! count for `vkCmdDrawIndexedIndirectCount`. No CPU readback anywhere.
+//!
+//! Three dispatches (`shaders/cull/`): `instance_cull.comp` (one thread per slot: decision bits
+//! and per-block counts), `cull_scan.comp` (one workgroup: block prefix sum, per-group survivor
+//! counts, commands compacted in group order, counters), `cull_scatter.comp` (survivors write
+//! their instance id into their group's slice). The thesis's atomic append (`compaction:
+//! "atomic"`) is kept as a measured variant: `cull_init.comp` then the test step appending with
+//! atomics; its order within a group varies from run to run.
+
+use crate::gpu::barrier::{cmd_barriers, memory_barrier};
+use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
+use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::plan::{PlannedPass, SettingValue};
+use ash::vk;
+
+/// Slots per block of the prefix sum (`CULL_BLOCK` in `cull_common.glsl`).
+pub const CULL_BLOCK: u32 = 256;
+
+/// The pass's settings, from the graph.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CullSettings {
+    /// `all`, `early`, `late`, `occluders` or `rest`.
+    pub phase: String,
+    /// Test the frustum.
+    pub frustum: bool,
+    /// Test boxes (true) or spheres.
+    pub boxes: bool,
+    /// The finer Hi-Z footprint.
+    pub finer: bool,
+    /// Project with last frame's camera.
+    pub previous_view: bool,
+    /// Atomic append instead of ordered compaction.
+    pub atomic: bool,
+    /// Occluder choice: farthest distance.
+    pub occluder_distance: f32,
+    /// Occluder choice: smallest projected radius over the view height.
+    pub occluder_size: f32,
+}
+
+impl CullSettings {
+    /// Reads the planned pass's settings (validation filled every default).
+    pub fn from_plan(pass: &PlannedPass) -> Self {
+        let choice = |k: &str, d: &str| match pass.settings.get(k) {
+            Some(SettingValue::Choice(c)) => c.clone(),
+            _ => d.to_string(),
+        };
+        let float = |k: &str, d: f32| match pass.settings.get(k) {
+            Some(SettingValue::Float(f)) => *f as f32,
+            Some(SettingValue::Int(i)) => *i as f32,
+            _ => d,
+        };
+        Self {
+            phase: choice("phase", "all"),
+            frustum: !matches!(pass.settings.get("frustum"), Some(SettingValue::Bool(false))),
+            boxes: choice("bound", "box") == "box",
+            finer: choice("hiz_test", "coarse") == "finer",
+            previous_view: choice("hiz_view", "current") == "previous",
+            atomic: choice("compaction", "ordered") == "atomic",
+            occluder_distance: float("occluder_distance", 200.0),
+            occluder_size: float("occluder_size", 0.02),
+        }
+    }
+}
+
+/// Scratch memory sized for one scene.
+struct Scratch {
+    slots: u32,
+    draw_bits: Buffer,
+    block_info: Buffer,
+    block_prefix: Buffer,
+    group_base: Buffer,
+    /// Where the counters go when the graph binds no `stats` buffer.
+    own_stats: Buffer,
+}
+
+/// The instance-cull pass.
+pub struct InstanceCullPass {
+    settings: CullSettings,
+    test: Pipeline,
+    scan: Option<Pipeline>,
+    scatter: Option<Pipeline>,
+    init: Option<Pipeline>,
+    sampler: Sampler,
+    scratch: Option<Scratch>,
+}
+
+impl InstanceCullPass {
+    /// Compiles the variant the pass's settings and bindings ask for.
+    pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler, pass: &PlannedPass) -> crate::Result<Self> {
+        let settings = CullSettings::from_plan(pass);
+        let bound = |slot: &str| pass.bindings.iter().any(|b| b.slot == slot);
+        let phase = format!("PHASE_{}", settings.phase.to_uppercase());
+        let mut defines: Vec<(&str, &str)> = vec![(phase.as_str(), "1")];
+        let flags = [
+            (!settings.frustum, "NO_FRUSTUM"),
+            (!settings.boxes, "BOUND_SPHERE"),
+            (settings.finer, "HIZ_FINER"),
+            (settings.previous_view, "HIZ_PREV_VIEW"),
+            (bound("hiz"), "HAS_HIZ"),
+            (bound("visibility_prev"), "HAS_VIS_PREV"),
+            (bound("visibility"), "WRITE_VIS"),
+            (settings.atomic, "ATOMIC_APPEND"),
+        ];
+        defines.extend(flags.iter().filter(|(on, _)| *on).map(|(_, name)| (*name, "1")));
+        let name = |step: &str| format!("{} ({step})", pass.name);
+        let test = Pipeline::compute(ctx, &name("test"), &shaders.compile("cull/instance_cull.comp", &defines)?)?;
+        let (scan, scatter, init) = if settings.atomic {
+            let init = Pipeline::compute(ctx, &name("init"), &shaders.compile("cull/cull_init.comp", &[])?)?;
+            (None, None, Some(init))
+        } else {
+            let scan = Pipeline::compute(ctx, &name("scan"), &shaders.compile("cull/cull_scan.comp", &[])?)?;
+            let scatter = Pipeline::compute(ctx, &name("scatter"), &shaders.compile("cull/cull_scatter.comp", &[])?)?;
+            (Some(scan), Some(scatter), None)
+        };
+        Ok(Self { settings, test, scan, scatter, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &CullSettings {
+        &self.settings
+    }
+
+    /// Scratch buffers for `slots` instances and `groups` draw groups (created on first use).
+    fn ensure_scratch(&mut self, ctx: &GpuContext, slots: u32, groups: u32) -> crate::Result<()> {
+        if self.scratch.as_ref().is_none_or(|s| s.slots != slots) {
+            let blocks = slots.div_ceil(CULL_BLOCK).max(1) as u64;
+            let storage = |name: &str, size: u64| {
+                Buffer::new(
+                    ctx,
+                    &BufferDesc {
+                        name,
+                        size,
+                        usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                        location: MemoryLocation::GpuOnly,
+                    },
+                )
+            };
+            self.scratch = Some(Scratch {
+                slots,
+                draw_bits: storage("cull draw bits", blocks * (CULL_BLOCK as u64 / 32) * 4)?,
+                block_info: storage("cull block info", blocks * 32)?,
+                block_prefix: storage("cull block prefix", blocks * 4)?,
+                group_base: storage("cull group base", groups.max(1) as u64 * 4)?,
+                own_stats: storage("cull stats (unbound)", 64)?,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Compute writes before compute reads and writes of the next step.
+fn step_barrier(ctx: &GpuContext, cmd: vk::CommandBuffer) {
+    cmd_barriers(ctx.device(), cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::COMPUTE_WRITE)], &[]);
+}
+
+impl PassNode for InstanceCullPass {
+    fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
+        let (ctx, cmd, frame) = (rec.ctx, rec.cmd, rec.frame);
+        let scene = frame.scene;
+        let slots = scene.instance_count;
+        let groups = scene.group_count;
+        let need = |slot: &str| {
+            rec.slots
+                .buffer(slot)
+                .ok_or_else(|| crate::Error::Invalid(format!("instance_cull: nothing bound to '{slot}'")))
+        };
+        let (commands, draw_count, draw_ids) =
+            (need("draw_commands")?, need("draw_count")?, need("draw_instance_ids")?);
+        let min_commands = groups as u64 * 20;
+        if commands.size() < min_commands || draw_ids.size() < slots as u64 * 4 {
+            return Err(crate::Error::Invalid(format!(
+                "instance_cull: draw_commands needs {min_commands} bytes (meshes * 20) and draw_instance_ids {} (instances * 4); got {} and {}",
+                slots as u64 * 4,
+                commands.size(),
+                draw_ids.size()
+            )));
+        }
+        let settings = self.settings.clone();
+        self.ensure_scratch(ctx, slots, groups)?;
+        let scratch = self.scratch.as_ref().expect("ensured above");
+        // Counters go to the bound buffer, or to the pass's own that nobody reads.
+        let stats = rec.slots.buffer("stats").unwrap_or(&scratch.own_stats);
+        let blocks = slots.div_ceil(CULL_BLOCK);
+
+        let mut test_binds =
+            vec![Bind::Buffer(0, scene.cull_records.handle()), Bind::Buffer(1, frame.constants.handle())];
+        if let Some(prev) = rec.slots.buffer("visibility_prev") {
+            test_binds.push(Bind::Buffer(5, prev.handle()));
+        }
+        if let Some(vis) = rec.slots.buffer("visibility") {
+            test_binds.push(Bind::Buffer(6, vis.handle()));
+        }
+        if let Some(hiz) = rec.slots.image("hiz") {
+            test_binds.push(Bind::Sampled(
+                7,
+                hiz.view(),
+                self.sampler.handle(),
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            ));
+        }
+        #[repr(C)]
+        #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+        struct TestPush {
+            slot_count: u32,
+            occluder_distance: f32,
+            occluder_size: f32,
+        }
+        let push = TestPush {
+            slot_count: slots,
+            occluder_distance: settings.occluder_distance,
+            occluder_size: settings.occluder_size,
+        };
+        let device = ctx.device();
+
+        if let Some(init) = &self.init {
+            init.bind(cmd);
+            init.push_bindings(
+                cmd,
+                &[
+                    Bind::Buffer(0, scene.draw_groups.handle()),
+                    Bind::Buffer(1, commands.handle()),
+                    Bind::Buffer(2, draw_count.handle()),
+                    Bind::Buffer(3, stats.handle()),
+                ],
+            );
+            init.push_constants(cmd, &groups);
+            // SAFETY: cmd recording with the pipeline bound.
+            unsafe { device.cmd_dispatch(cmd, groups.div_ceil(256).max(1), 1, 1) };
+            step_barrier(ctx, cmd);
+            test_binds.extend([
+                Bind::Buffer(2, commands.handle()),
+                Bind::Buffer(3, draw_ids.handle()),
+                Bind::Buffer(4, stats.handle()),
+                Bind::Buffer(8, scene.draw_groups.handle()),
+            ]);
+        } else {
+            test_binds
+                .extend([Bind::Buffer(2, scratch.draw_bits.handle()), Bind::Buffer(3, scratch.block_info.handle())]);
+        }
+        self.test.bind(cmd);
+        self.test.push_bindings(cmd, &test_binds);
+        self.test.push_constants(cmd, &push);
+        // SAFETY: as above.
+        unsafe { device.cmd_dispatch(cmd, blocks.max(1), 1, 1) };
+
+        if let (Some(scan), Some(scatter)) = (&self.scan, &self.scatter) {
+            step_barrier(ctx, cmd);
+            scan.bind(cmd);
+            scan.push_bindings(
+                cmd,
+                &[
+                    Bind::Buffer(0, scratch.draw_bits.handle()),
+                    Bind::Buffer(1, scratch.block_info.handle()),
+                    Bind::Buffer(2, scratch.block_prefix.handle()),
+                    Bind::Buffer(3, scene.draw_groups.handle()),
+                    Bind::Buffer(4, scratch.group_base.handle()),
+                    Bind::Buffer(5, commands.handle()),
+                    Bind::Buffer(6, draw_count.handle()),
+                    Bind::Buffer(7, stats.handle()),
+                ],
+            );
+            scan.push_constants(cmd, &[slots, blocks, groups]);
+            // SAFETY: as above.
+            unsafe { device.cmd_dispatch(cmd, 1, 1, 1) };
+            step_barrier(ctx, cmd);
+            scatter.bind(cmd);
+            scatter.push_bindings(
+                cmd,
+                &[
+                    Bind::Buffer(0, scratch.draw_bits.handle()),
+                    Bind::Buffer(1, scratch.block_prefix.handle()),
+                    Bind::Buffer(2, scene.slot_groups.handle()),
+                    Bind::Buffer(3, scene.draw_instance_ids.handle()),
+                    Bind::Buffer(4, scene.draw_groups.handle()),
+                    Bind::Buffer(5, scratch.group_base.handle()),
+                    Bind::Buffer(6, draw_ids.handle()),
+                ],
+            );
+            scatter.push_constants(cmd, &slots);
+            // SAFETY: as above.
+            unsafe { device.cmd_dispatch(cmd, blocks.max(1), 1, 1) };
+        }
+        Ok(())
+    }
+}
