@@ -14,7 +14,7 @@ build: deps
 	$(CARGO) build --release
 
 demo: deps
-	$(CARGO) run --release -- render --scene builtin:city --size 1280x720 --out out/demo.png --stats out/demo.json
+	$(CARGO) run --release -- render --scene builtin:city --size 1280x720 --frames 3 --out out/demo.png --stats out/demo.json
 
 test: deps
 	$(CARGO) test --all-targets

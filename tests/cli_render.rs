@@ -76,7 +76,11 @@ fn renders_an_image_and_stats() {
     assert_eq!(stats["frames"][1]["instances"], 300);
     let passes: Vec<&str> =
         stats["frames"][1]["gpu_ms"].as_array().unwrap().iter().map(|t| t["name"].as_str().unwrap()).collect();
-    assert_eq!(passes, ["gbuffer", "lighting"]);
+    assert_eq!(passes, ["cull_early", "draw_early", "hiz", "cull_late", "draw_late", "lighting"]);
+    // Two-phase culling: frame 1 draws early what frame 0 found visible.
+    let culling = stats["frames"][1]["culling"].as_array().unwrap();
+    assert_eq!(culling.len(), 2);
+    assert!(culling[0]["drawn"].as_u64().unwrap() > 0, "{culling:?}");
 }
 
 #[test]

@@ -166,7 +166,7 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
         }
         let timings = renderer.completed_timings(0).unwrap();
         assert!(
-            timings.iter().any(|t| t.name == "gbuffer") && timings.iter().any(|t| t.name == "lighting"),
+            timings.iter().any(|t| t.name == "draw_late") && timings.iter().any(|t| t.name == "lighting"),
             "{timings:?}"
         );
         let pixels = readback.read_bytes().unwrap();

@@ -141,13 +141,19 @@ mod never_panics {
 
     fn seeds() -> Vec<(String, String)> {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-        ["graph/default.ron", "graph/examples/tint.ron", "graph/examples/history.ron", "tests/graphs/bad/cycle.ron"]
-            .iter()
-            .map(|p| {
-                let path = root.join(p);
-                (path.display().to_string(), std::fs::read_to_string(&path).expect("seed graph"))
-            })
-            .collect()
+        [
+            "graph/default.ron",
+            "graph/no_cull.ron",
+            "graph/examples/tint.ron",
+            "graph/examples/history.ron",
+            "tests/graphs/bad/cycle.ron",
+        ]
+        .iter()
+        .map(|p| {
+            let path = root.join(p);
+            (path.display().to_string(), std::fs::read_to_string(&path).expect("seed graph"))
+        })
+        .collect()
     }
 
     /// One edit: delete a range, insert a snippet, or duplicate a line.
