@@ -4,6 +4,7 @@
 //! declarative render graph. See `README.md` for the quick start and `DESIGN` notes in `docs/`.
 #![warn(missing_docs)]
 
+pub mod bench;
 pub mod error;
 pub mod gpu;
 pub mod graph;

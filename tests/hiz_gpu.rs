@@ -1,6 +1,7 @@
 //! The Hi-Z build pass on the GPU (lavapipe, validation and synchronization validation on): every
-//! texel of every mip, for both methods (`single`, `per_mip`), equals the CPU oracle
-//! [`HiZPyramid`] computed from the depth read back from the GPU, bit for bit.
+//! texel of every stored mip, for both methods (`single`, `per_mip`), equals the CPU oracle
+//! [`HiZPyramid`] computed from the depth read back from the GPU, bit for bit: stored mip `m` is
+//! the oracle's level `m + 1` ([`HiZPyramid::stored_level`]; the single texel of a 1×1 depth).
 //!
 //! Depth comes from draws into a real depth attachment (1× or 4×): a full-screen triangle whose
 //! fragment shader writes a pattern into `gl_FragDepth` per sample (random, or descending /
@@ -16,7 +17,7 @@ use cullgraph::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
 use cullgraph::gpu::{
     Access, Bind, Buffer, BufferDesc, GraphicsDesc, Image, ImageDesc, MemoryLocation, Pipeline, Sampler, ShaderCompiler,
 };
-use cullgraph::oracle::hiz::{level_count, level_offset, level_size, HiZPyramid};
+use cullgraph::oracle::hiz::{level_offset, level_size, stored_mip_count, stored_size, HiZPyramid};
 use cullgraph::passes::hiz_build::{HizBuildPass, HizMethod, HIZ_FORMAT};
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use glam::UVec2;
@@ -126,7 +127,8 @@ struct Harness {
     tools: Tools,
 }
 
-/// A case's results: the depth as read back and each method's pyramid, flat (oracle layout).
+/// A case's results: the depth as read back and each method's pyramid, its mips flat one after
+/// another.
 struct Outcome {
     depth: Vec<f32>,
     single: Vec<f32>,
@@ -187,6 +189,7 @@ impl Tools {
     fn case(&self, w: u32, h: u32, samples: u32, mips: u32) -> Case {
         let gpu = &self.gpu;
         let extent = vk::Extent2D { width: w, height: h };
+        let pyramid = stored_size(UVec2::new(w, h));
         let depth = Image::new(
             gpu,
             &ImageDesc {
@@ -217,7 +220,7 @@ impl Tools {
                 &ImageDesc {
                     name: "test hiz",
                     format: HIZ_FORMAT,
-                    extent,
+                    extent: vk::Extent2D { width: pyramid.x, height: pyramid.y },
                     mip_levels: mips,
                     samples: vk::SampleCountFlags::TYPE_1,
                     usage: vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
@@ -225,7 +228,7 @@ impl Tools {
             )
             .unwrap()
         };
-        let flat_bytes = level_offset(UVec2::new(w, h), mips) as u64 * 4;
+        let flat_bytes = level_offset(pyramid, mips) as u64 * 4;
         Case {
             depth,
             depth_out: readback("depth readback", w as u64 * h as u64 * samples as u64 * 4),
@@ -343,8 +346,8 @@ impl Harness {
         }
     }
 
-    /// Fills a `w`×`h` depth buffer with `samples` samples, builds `mips` levels with both
-    /// methods (`repeat` times each, into the same image), reads everything back.
+    /// Fills a `w`×`h` depth buffer with `samples` samples, builds a pyramid of `mips` mips with
+    /// both methods (`repeat` times each, into the same image), reads everything back.
     fn run(
         &mut self,
         (w, h, samples): (u32, u32, u32),
@@ -379,10 +382,10 @@ impl Harness {
         Outcome { depth: floats(&case.depth_out), single: floats(&case.hiz_out[0]), per_mip: floats(&case.hiz_out[1]) }
     }
 
-    /// Runs a case and compares both methods with the oracle (the first `mips` levels; all when
-    /// `None`).
+    /// Runs a case and compares both methods with the oracle (the first `mips` stored mips; all
+    /// when `None`).
     fn check(&mut self, (w, h, samples): (u32, u32, u32), pattern: Pattern, seed: u32, mips: Option<u32>) {
-        let mips = mips.unwrap_or_else(|| level_count(UVec2::new(w, h)));
+        let mips = mips.unwrap_or_else(|| stored_mip_count(UVec2::new(w, h)));
         let out = self.run((w, h, samples), pattern, seed, mips, 1);
         // The data must exercise the reduction: varying depths, and per-sample values with MSAA.
         let varies = |d: &[f32]| d.iter().any(|&x| x.to_bits() != d[0].to_bits());
@@ -401,14 +404,15 @@ impl Harness {
     }
 }
 
-/// Every texel of the first `mips` levels of `gpu` (flat layout) equals the oracle's, bit for bit.
+/// Every texel of the first `mips` stored mips of `gpu` (one after another) equals the oracle's
+/// level `mip + 1`, bit for bit.
 fn assert_pyramid(oracle: &HiZPyramid, mips: u32, gpu: &[f32], what: &str) {
-    let (flat, offsets) = oracle.to_flat();
-    let end = offsets.get(mips as usize).copied().unwrap_or(flat.len() as u32) as usize;
-    assert_eq!(gpu.len(), end, "{what}: texel count");
+    let pyramid = stored_size(oracle.base_size());
+    assert_eq!(gpu.len(), level_offset(pyramid, mips) as usize, "{what}: texel count");
     for k in 0..mips {
-        let level = oracle.level(k);
-        let start = offsets[k as usize] as usize;
+        let level = oracle.stored_level(k);
+        assert_eq!(UVec2::new(level.width, level.height), level_size(pyramid, k), "{what}: mip {k} size");
+        let start = level_offset(pyramid, k) as usize;
         let mut wrong = Vec::new();
         for (i, (&want, &got)) in level.texels.iter().zip(&gpu[start..start + level.texels.len()]).enumerate() {
             if want.to_bits() != got.to_bits() {
@@ -417,7 +421,7 @@ fn assert_pyramid(oracle: &HiZPyramid, mips: u32, gpu: &[f32], what: &str) {
         }
         assert!(
             wrong.is_empty(),
-            "{what}: level {k} ({}x{}): {} texels differ, first (x, y, oracle, gpu): {:?}",
+            "{what}: mip {k} ({}x{}): {} texels differ, first (x, y, oracle, gpu): {:?}",
             level.width,
             level.height,
             wrong.len(),
@@ -426,8 +430,9 @@ fn assert_pyramid(oracle: &HiZPyramid, mips: u32, gpu: &[f32], what: &str) {
     }
 }
 
-/// Sizes that exercise every footprint shape: unit, thin and odd axes, a workgroup tile exactly,
-/// tiles plus folded remainders, and pyramids with levels above the tiles (more than 7 levels).
+/// Sizes that exercise every footprint shape: unit, thin and odd axes, depths under 4 pixels and
+/// 4..7-pixel edge blocks, a workgroup tile exactly, tiles plus folded remainders, and pyramids
+/// with levels above the tiles (more than 6 stored mips).
 const SIZES: &[(u32, u32)] = &[
     (1, 1),
     (1, 7),
@@ -435,11 +440,14 @@ const SIZES: &[(u32, u32)] = &[
     (2, 2),
     (3, 3),
     (5, 3),
+    (4, 6),
+    (15, 9),
     (64, 64),
     (65, 33),
     (127, 129),
     (128, 64),
     (191, 200),
+    (130, 67),
     (255, 1),
     (1, 300),
     (1023, 767),
@@ -481,9 +489,10 @@ fn random_triangles_give_the_oracle_pyramid() {
 fn partial_mip_chains_match_the_oracle_prefix() {
     let mut h = Harness::new();
     h.check((300, 200, 1), Pattern::Random, 1, Some(3));
-    h.check((129, 129, 1), Pattern::Descending, 2, Some(7));
-    h.check((1023, 767, 4), Pattern::Descending, 3, Some(8));
+    h.check((129, 129, 1), Pattern::Descending, 2, Some(6)); // up to the tile level: no counter
+    h.check((1023, 767, 4), Pattern::Descending, 3, Some(7)); // one level above the tiles
     h.check((257, 3, 1), Pattern::Random, 4, Some(1));
+    h.check((64, 9, 1), Pattern::Ascending, 5, Some(2));
 }
 
 #[test]
@@ -491,9 +500,9 @@ fn repeated_builds_into_one_image_reset_the_tile_counter() {
     let mut h = Harness::new();
     for (w, hh) in [(640u32, 480u32), (129, 1)] {
         for round in 0..2 {
-            let out = h.run((w, hh, 1), Pattern::Random, 50 + round, level_count(UVec2::new(w, hh)), 3);
+            let out = h.run((w, hh, 1), Pattern::Random, 50 + round, stored_mip_count(UVec2::new(w, hh)), 3);
             let oracle = HiZPyramid::from_depth(w, hh, &out.depth);
-            let mips = oracle.level_count();
+            let mips = stored_mip_count(oracle.base_size());
             assert_pyramid(&oracle, mips, &out.single, &format!("single {w}x{hh} round {round}"));
             assert_pyramid(&oracle, mips, &out.per_mip, &format!("per_mip {w}x{hh} round {round}"));
         }
@@ -507,7 +516,7 @@ const GRAPH: &str = r#"Graph(
         "albedo": Image(format: R8G8B8A8_UNORM),
         "normal": Image(format: R16G16B16A16_SFLOAT),
         "depth": Image(format: D32_SFLOAT),
-        "hiz": Image(format: R32_SFLOAT, mips: All),
+        "hiz": Image(format: R32_SFLOAT, size: Fixed("max(1, width / 2)", "max(1, height / 2)"), mips: All),
     },
     passes: [
         Pass(name: "gbuffer", kind: "gbuffer", writes: {"albedo": "albedo", "normal": "normal", "depth": "depth"}),
@@ -547,13 +556,15 @@ fn hiz_build_in_a_graph_reduces_the_gbuffer_depth() {
             )
             .unwrap()
         };
-        let hiz_out = readback("hiz readback", level_offset(base, level_count(base)) as u64 * 4);
+        let pyramid = stored_size(base);
+        let hiz_out = readback("hiz readback", level_offset(pyramid, stored_mip_count(base)) as u64 * 4);
         let depth_out = readback("depth readback", (w * h) as u64 * 4);
         let ctx: &cullgraph::gpu::GpuContext = gpu;
         ctx.submit_and_wait(|cmd| {
             renderer.record(cmd, &camera)?;
             let (hiz, hiz_state) = renderer.runtime().output_image(0).unwrap();
-            assert_eq!(hiz.mip_levels(), level_count(base));
+            assert_eq!(hiz.mip_levels(), stored_mip_count(base));
+            assert_eq!((hiz.extent().width, hiz.extent().height), (pyramid.x, pyramid.y));
             tools.record_read_hiz(cmd, hiz, hiz_state, &hiz_out);
             let (depth, depth_state) = renderer.runtime().output_image(1).unwrap();
             tools.record_read_hiz(cmd, depth, depth_state, &depth_out);
@@ -563,6 +574,41 @@ fn hiz_build_in_a_graph_reduces_the_gbuffer_depth() {
         let depth = floats(&depth_out);
         assert!(depth.iter().filter(|&&d| d > 0.0).count() > (w * h) as usize / 4, "the boxes cover the view");
         let oracle = HiZPyramid::from_depth(w, h, &depth);
-        assert_pyramid(&oracle, oracle.level_count(), &floats(&hiz_out), &format!("graph, method {method}"));
+        assert_pyramid(&oracle, stored_mip_count(base), &floats(&hiz_out), &format!("graph, method {method}"));
+    }
+}
+
+#[test]
+fn a_pyramid_of_the_wrong_size_is_rejected() {
+    let mut h = Harness::new();
+    let tools = &h.tools;
+    let ctx: &cullgraph::gpu::GpuContext = &tools.gpu;
+    let (w, hh) = (21u32, 11u32);
+    let depth = tools.case(w, hh, 1, 1).depth;
+    let hiz = |width, height, mips| {
+        Image::new(
+            ctx,
+            &ImageDesc {
+                name: "bad hiz",
+                format: HIZ_FORMAT,
+                extent: vk::Extent2D { width, height },
+                mip_levels: mips,
+                samples: vk::SampleCountFlags::TYPE_1,
+                usage: vk::ImageUsageFlags::STORAGE,
+            },
+        )
+        .unwrap()
+    };
+    // The depth's own size (the layout before level 0 was dropped), and half rounded up. (A
+    // pyramid of the right size cannot have too many mips: its own chain is the depth's minus 1.)
+    let cases = [(hiz(w, hh, 1), "it must be 10x5"), (hiz(11, 6, 1), "it must be 10x5")];
+    for (image, want) in &cases {
+        for pass in [&mut h.single, &mut h.per_mip] {
+            let err = ctx
+                .submit_and_wait(|cmd| pass.record_images(ctx, cmd, &depth, image))
+                .expect_err("the pass must reject the pyramid")
+                .to_string();
+            assert!(err.contains(want), "{err}");
+        }
     }
 }

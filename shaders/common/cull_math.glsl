@@ -268,13 +268,22 @@ uint cull_hiz_level(uvec4 rect) {
     return cull_ceil_log2(max(w, h));
 }
 
+// The finest chain level the pyramid holds. 0 for a full pyramid; the hiz_build pass stores
+// levels from HIZ_FIRST_LEVEL (hiz.glsl), and a shader reading that pyramid defines this to it.
+// A coarser level than the rectangle needs is still conservative: its texels cover more.
+#ifndef CULL_HIZ_MIN_LEVEL
+#define CULL_HIZ_MIN_LEVEL 0u
+#endif
+
 // Hi-Z occlusion test of a projected bound against a min (reversed-Z) pyramid whose level 0 is
 // `base_size`: occluded iff nearest_depth < every texel covering the rectangle. `finer` reads
-// level max(L - 1, 0) (at most 3x3 texels, culls at least as much) instead of L (at most 2x2).
+// level max(L - 1, 0) (at most 3x3 texels, culls at least as much) instead of L (at most 2x2);
+// neither goes below CULL_HIZ_MIN_LEVEL.
 bool cull_hiz_occluded(uvec4 rect, float nearest_depth, uvec2 base_size, bool finer) {
-    uint last = hiz_level_count(base_size) - 1u;
+    uint last = max(hiz_level_count(base_size) - 1u, CULL_HIZ_MIN_LEVEL);
     uint level = min(cull_hiz_level(rect), last);
     if (finer && level > 0u) level -= 1u;
+    level = max(level, CULL_HIZ_MIN_LEVEL);
     uvec2 size = hiz_level_size(base_size, level);
     uvec2 lo = hiz_texel_of_pixel(rect.xy, level, size);
     uvec2 hi = hiz_texel_of_pixel(rect.zw, level, size);

@@ -49,9 +49,34 @@ void hiz_footprint(uvec2 dst, uvec2 src_size, out uvec2 first, out uvec2 count) 
     count = uvec2(hiz_footprint_count(dst.x, src_size.x), hiz_footprint_count(dst.y, src_size.y));
 }
 
-// Reads one texel of the pyramid; defined by the shader that includes this header (an image mip
-// with imageLoad/texelFetch, or a flat buffer with hiz_level_offset). Needed by
-// cull_hiz_occluded in cull_math.glsl.
+// The stored pyramid (the `hiz` image the hiz_build pass writes) starts at chain level
+// HIZ_FIRST_LEVEL = 1, half the depth's size: stored mip m holds chain level m + 1, whose size is
+// hiz_level_size(depth_size, m + 1) and whose texels follow the rules above with level 0 = the
+// depth (min over samples). Level 0 itself is never stored (reading it would cost as much as the
+// depth). A 1x1 depth has no level 1: its pyramid is one 1x1 texel, the min of the depth (the
+// same rule: the last texel of a level covers everything to the edge, so "level 1" of a 1x1
+// depth is its single pixel). So a chain level L >= 1 lives in stored mip L - 1, and the usable
+// chain levels are 1 ..= hiz_stored_last_level(depth_size).
+#define HIZ_FIRST_LEVEL 1u
+
+// Stored mips of a full pyramid over a depth of size `base`: hiz_level_count(base) - 1, at least 1.
+uint hiz_stored_mip_count(uvec2 base) {
+    return max(hiz_level_count(base) - HIZ_FIRST_LEVEL, 1u);
+}
+
+// The last chain level a full stored pyramid holds: hiz_level_count(base) - 1, at least 1.
+uint hiz_stored_last_level(uvec2 base) {
+    return hiz_stored_mip_count(base) + HIZ_FIRST_LEVEL - 1u;
+}
+
+// The stored mip that holds chain level `level` (>= HIZ_FIRST_LEVEL).
+uint hiz_stored_mip(uint level) {
+    return level - HIZ_FIRST_LEVEL;
+}
+
+// Reads one texel of chain level `level` of the pyramid; defined by the shader that includes this
+// header (a stored image pyramid: mip hiz_stored_mip(level) with imageLoad/texelFetch; or a flat
+// buffer with hiz_level_offset). Needed by cull_hiz_occluded in cull_math.glsl.
 float hiz_load(uint level, uvec2 texel);
 
 #endif

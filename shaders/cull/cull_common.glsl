@@ -13,14 +13,25 @@
 #define CULL_BLOCK 256u
 #define CULL_WORDS_PER_BLOCK (CULL_BLOCK / 32u)
 
+// World bound of one slot, 32 bytes. The small quantities are half floats, rounded outward
+// on the CPU and widened by their own rounding error (src/render/cull_data.rs), so the bound
+// read here always contains the exact one.
 struct CullRecord {
-    vec3 center_hi;     // world center of the bound, hi part
-    float radius;       // bounding sphere radius
-    vec3 center_lo;     // world center, lo part
-    uint instance;      // scene instance id
-    vec3 half_extent;   // world axis-aligned box half extents
-    uint group_flags;   // draw group (24 bits) | instance flags << 24
+    vec3 center_hi;       // world center, hi part
+    uint group_flags;     // draw group (24 bits) | instance flags << 24 | CULL_HUGE
+    uint lo_xy;           // world center, lo part: f16 x, y
+    uint lo_z_radius;     // f16 lo z, f16 sphere radius
+    uint half_xy;         // f16 half extents x, y of the world box
+    uint half_z;          // f16 half extent z (high half unused)
 };
+
+// Set when a bound does not fit half floats (larger than 65504): always visible.
+#define CULL_HUGE 0x80000000u
+
+vec3 record_center_lo(CullRecord r) { return vec3(unpackHalf2x16(r.lo_xy), unpackHalf2x16(r.lo_z_radius).x); }
+float record_radius(CullRecord r) { return unpackHalf2x16(r.lo_z_radius).y; }
+vec3 record_half_extent(CullRecord r) { return vec3(unpackHalf2x16(r.half_xy), unpackHalf2x16(r.half_z).x); }
+uint record_group(CullRecord r) { return r.group_flags & 0xFFFFFFu; }
 
 struct DrawGroup {
     uint first_slot;
@@ -55,5 +66,20 @@ struct CullStats {
 };
 
 #define FLAG_OCCLUDER 1u
+
+// Blocks per superblock: a block's survivors-before is the sum of the superblock counts before
+// its superblock plus the block counts before it in its superblock, read from what the test
+// step finished writing (no workgroup ever waits for another, which Vulkan does not guarantee
+// to make progress).
+#define CULL_SUPERBLOCK 64u
+
+// The pass's scratch buffer: counters, then one count per superblock, then one per block.
+#define SCRATCH_TESTED 0
+#define SCRATCH_FRUSTUM 1
+#define SCRATCH_OCCLUSION 2
+#define SCRATCH_VISIBLE 3
+#define SCRATCH_HEADER 8u
+uint scratch_superblock(uint s) { return SCRATCH_HEADER + s; }
+uint scratch_block(uint superblocks, uint b) { return SCRATCH_HEADER + superblocks + b; }
 
 #endif

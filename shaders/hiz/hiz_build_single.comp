@@ -1,35 +1,50 @@
-// Hi-Z pyramid in one dispatch (AMD single-pass-downsampler style, conservative for any size).
+// Hi-Z pyramid in one dispatch (AMD single-pass-downsampler style, conservative for any size),
+// stored from chain level 1 (HIZ_FIRST_LEVEL): stored mip m = chain level m + 1, level 0 being
+// the depth (min over samples), which is read once and never written.
 //
-// Every level is a min over an axis-aligned block of level 0: texel x of level k covers level-0
-// columns [x << k, (x + 1) << k), except the last texel of a level, which runs to the end of the
-// row (the halving folds the dropped column into it, see common/hiz.glsl). So the pyramid is a
-// tree, and the level-6 texels split it into independent subtrees: workgroup g owns the subtree
-// of level-6 texel g, i.e. level-k texels [g << (6 - k), (g + 1) << (6 - k)) - a 64x64 level-0
-// tile - except that the last workgroup column/row owns up to the level's end (tiles of 64..127
-// texels: the folded columns/rows stay inside the tile that reduces them; no halo, no
-// neighbour reads). Each workgroup (16x16 threads striding over the tile's texels of a level)
-// writes levels 0..6 of its tile (level 0 from the depth, min over samples, on the way to level
-// 1; levels 2..6 through shared memory), and the last workgroup to finish (a global atomic
-// counter the pass clears before the dispatch) reduces levels 7.. from level 6.
+// Every level is a min over an axis-aligned block of the depth: texel x of level k covers columns
+// [x << k, (x + 1) << k), except the last texel of a level, which runs to the end of the row (the
+// halving folds the dropped column into it, see common/hiz.glsl). So the pyramid is a tree, and
+// the level-6 texels split it into independent subtrees: workgroup g owns the subtree of level-6
+// texel g, i.e. level-k texels [g << (6 - k), (g + 1) << (6 - k)) - a 64x64 tile of the depth -
+// except that the last workgroup column/row owns up to the level's end (tiles of 64..127
+// pixels: the folded columns/rows stay inside the tile that reduces them; no halo, no neighbour
+// reads). Workgroups are numbered from the far corner so that these heavier tiles start first.
+//
+// Levels 1 and 2 in registers: thread t of the 16x16 owns level-2 texel t of its tile (a 4x4
+// block of the depth, 4..7 pixels wide at the right/bottom edge of the depth) and reads the block
+// as 2x2 quads with textureGather (one instruction per level-1 texel; MSAA: texelFetch of every
+// sample). Each quad's min is a level-1 texel of the "padded" pyramid - the plain power-of-two
+// tree over the depth extended by clamp-to-edge - and the folded pyramid equals it except that
+// the last texel of a level is the min of the padded texels s - 1 and s (s = the level's size:
+// the padded texel s covers exactly the columns that the fold adds, and clamped duplicates only
+// repeat the last column, which that texel covers anyway). Interior blocks therefore need no
+// fold at all (4 gathers, 4 + 1 stores); the blocks on the last column/row of level 2 read a 8x8
+// (clamped) block and apply the fold. Levels 3..6 of the tile straight from its level 2 in shared
+// memory (one barrier; a texel per thread), then the last workgroup to finish (a device-scope
+// atomic counter) reduces levels 7.. from level 6, which it loads into shared memory once.
 //
 // Memory model (GLSL450 model, GL_KHR_memory_scope_semantics): a tile's level-6 texel is stored
-// to a coherent image, released at device scope by a control barrier and by the counter's
-// acquire-release atomicAdd; the last workgroup acquires through the same atomic and a control
-// barrier before its coherent loads of level 6.
+// to a coherent image by the invocation that then bumps the counter with an acquire-release
+// atomicAdd at device scope; the last workgroup acquires through the same atomic and a control
+// barrier (device scope) before its coherent loads of level 6, and puts the counter back to 0
+// for the next dispatch (the pass zeroes it once, when it is created, and orders dispatches with
+// a barrier).
 #version 460
 #extension GL_KHR_memory_scope_semantics : require
+#extension GL_EXT_control_flow_attributes : require
 #include "common/hiz.glsl"
 
-layout(local_size_x = 16, local_size_y = 16) in;  // 256 threads; any subgroup size
+layout(local_size_x = 16, local_size_y = 16) in;  // 256 threads; no subgroup operations
 
 #ifdef HIZ_MSAA
 layout(binding = 0) uniform sampler2DMS depth_tex;
 #else
-layout(binding = 0) uniform sampler2D depth_tex;
+layout(binding = 0) uniform sampler2D depth_tex;  // nearest, clamp to edge
 #endif
 layout(binding = 1) coherent buffer Counter { uint tiles_done; };
-// One storage image per mip (binding 2 + level); mips the image lacks are bound to its last mip
-// and never touched.
+// One storage image per stored mip (binding 2 + mip; mip m = chain level m + 1); mips the image
+// lacks are bound to its last mip and never touched.
 layout(binding = 2, r32f) uniform coherent image2D mip0;
 layout(binding = 3, r32f) uniform coherent image2D mip1;
 layout(binding = 4, r32f) uniform coherent image2D mip2;
@@ -48,23 +63,26 @@ layout(binding = 16, r32f) uniform coherent image2D mip14;
 layout(binding = 17, r32f) uniform coherent image2D mip15;
 
 layout(push_constant) uniform Push {
-    uvec2 base;    // level-0 size (the depth's)
-    uint levels;   // mips to write, 1 ..= hiz_level_count(base)
+    uvec2 base;    // chain level 0 size (the depth's)
+    uint levels;   // stored mips to write (chain levels 1 ..= levels), 1 ..= max(1, hiz_level_count(base) - 1)
     uint samples;  // depth samples per pixel
 };
 
-const uint SIDE = 16u;           // threads per axis
-const uint TILE_LEVEL = 6u;       // a workgroup owns the subtree of one level-6 texel
+const uint SIDE = 16u;         // threads per axis
+const uint TILE_LEVEL = 6u;    // chain level: a workgroup owns the subtree of one level-6 texel
+const uint TOP_CAP = 4096u;    // level-6 texels the last workgroup loads into shared memory at once
 #define FAR_INIT uintBitsToFloat(0x7F800000u)  // +inf: min identity
 
-// Levels 1..6 of the tile: odd levels in s_odd (level 1 <= 63x63, 3 <= 15x15, 5 <= 3x3), even
-// levels in s_even (2 <= 31x31, 4 <= 7x7, 6: 1x1). Level k is read while k + 1 is written.
-shared float s_odd[64 * 64];
-shared float s_even[32 * 32];
+// s_a: level 2 of the tile (<= 31x31, stride 32). The last workgroup reuses s_a and s_b, flat,
+// for the levels above the tiles (s_a: level 6, up to TOP_CAP texels).
+shared float s_a[TOP_CAP];
+shared float s_b[1024];
 shared bool s_last;
 
-void store_mip(uint level, ivec2 p, float v) {
-    switch (level) {
+vec2 inv_base;  // 1 / base, for gather coordinates
+
+void store_mip(uint mip, ivec2 p, float v) {
+    switch (mip) {
         case 0u: imageStore(mip0, p, vec4(v)); break;
         case 1u: imageStore(mip1, p, vec4(v)); break;
         case 2u: imageStore(mip2, p, vec4(v)); break;
@@ -84,9 +102,10 @@ void store_mip(uint level, ivec2 p, float v) {
     }
 }
 
-// Levels read back: 6 (written by every workgroup) and above (by the last one).
-float load_mip(uint level, ivec2 p) {
-    switch (level) {
+// Mips read back: 5 (chain level 6, written by every workgroup) and above (by the last one).
+float load_mip(uint mip, ivec2 p) {
+    switch (mip) {
+        case 5u: return imageLoad(mip5, p).r;
         case 6u: return imageLoad(mip6, p).r;
         case 7u: return imageLoad(mip7, p).r;
         case 8u: return imageLoad(mip8, p).r;
@@ -99,15 +118,76 @@ float load_mip(uint level, ivec2 p) {
     }
 }
 
-// Farthest (minimum) depth over the samples of pixel p.
-float depth_min(ivec2 p) {
-#ifdef HIZ_MSAA
-    float v = texelFetch(depth_tex, p, 0).r;
-    for (int s = 1; s < int(samples); ++s) v = min(v, texelFetch(depth_tex, p, s).r);
+// Texel q of padded chain level 1: the min over depth pixels 2q .. 2q + 1 per axis (clamped to
+// the depth, so that beyond the edge it repeats the last row/column), over every sample.
+float padded_l1(ivec2 q) {
+#ifdef HIZ_FETCH
+    ivec2 last = ivec2(base) - 1;
+    ivec2 p0 = min(2 * q, last);
+    ivec2 p1 = min(2 * q + 1, last);
+    float a = min(texelFetch(depth_tex, p0, 0).r, texelFetch(depth_tex, ivec2(p1.x, p0.y), 0).r);
+    float b = min(texelFetch(depth_tex, ivec2(p0.x, p1.y), 0).r, texelFetch(depth_tex, p1, 0).r);
+    return min(a, b);
+#elif defined(HIZ_MSAA)
+    ivec2 last = ivec2(base) - 1;
+    ivec2 p0 = min(2 * q, last);
+    ivec2 p1 = min(2 * q + 1, last);
+    float v = FAR_INIT;
+    for (int s = 0; s < int(samples); ++s) {
+        float a = min(texelFetch(depth_tex, p0, s).r, texelFetch(depth_tex, ivec2(p1.x, p0.y), s).r);
+        float b = min(texelFetch(depth_tex, ivec2(p0.x, p1.y), s).r, texelFetch(depth_tex, p1, s).r);
+        v = min(v, min(a, b));
+    }
     return v;
 #else
-    return texelFetch(depth_tex, p, 0).r;
+    // The corner shared by pixels 2q and 2q + 1 selects exactly that 2x2 quad (0.5 texel from any
+    // other choice; the rounding of the coordinate is below 0.01 texel up to 32768 pixels).
+    vec4 d = textureGather(depth_tex, (vec2(2 * q) + 1.0) * inv_base);
+    return min(min(d.x, d.y), min(d.z, d.w));
 #endif
+}
+
+// Level-2 texel t (s1, s2: sizes of chain levels 1 and 2): stores its level-1 texels (mip 0) and
+// itself (mip 1, when stored) and returns its value.
+//
+// One code path for every block (lavapipe runs both sides of every branch, masked): the block's
+// own 2x2 padded level-1 texels, then, on an axis where t is the last level-2 texel, the next 2
+// padded texels too (8 pixels, clamped), each folded into the block's owned level-1 texel
+// min(index, owned - 1). An interior block runs the loop once: 4 gathers, 4 stores.
+float reduce_block(uvec2 t, uvec2 s1, uvec2 s2) {
+    ivec2 q = ivec2(t * 2u);  // its first level-1 texel
+    bvec2 edge = equal(t, s2 - 1u);
+    // Level-1 texels the block owns per axis: 2, or up to the end of level 1 on the depth's last
+    // level-2 column/row (2 or 3; 1 on a depth under 4 pixels).
+    uvec2 owned = mix(uvec2(2u), s1 - 2u * t, edge);
+    uvec2 last = owned - 1u;
+    uvec2 parts = mix(uvec2(1u), uvec2(2u), edge);
+    float acc[3][3];  // owned texel (i, j) in acc[j][i]
+    [[unroll]] for (int j = 0; j < 3; ++j) {
+        [[unroll]] for (int i = 0; i < 3; ++i) acc[j][i] = FAR_INIT;
+    }
+    for (uint part = 0u; part < parts.x * parts.y; ++part) {
+        uvec2 o = 2u * uvec2(part % parts.x, part / parts.x);
+        float v[4] = float[4](padded_l1(q + ivec2(o)), padded_l1(q + ivec2(o) + ivec2(1, 0)),
+                              padded_l1(q + ivec2(o) + ivec2(0, 1)), padded_l1(q + ivec2(o) + ivec2(1, 1)));
+        [[unroll]] for (int d = 0; d < 4; ++d) {
+            uvec2 to = min(o + uvec2(d & 1, d >> 1), last);
+            [[unroll]] for (int j = 0; j < 3; ++j) {
+                [[unroll]] for (int i = 0; i < 3; ++i) {
+                    if (to == uvec2(i, j)) acc[j][i] = min(acc[j][i], v[d]);
+                }
+            }
+        }
+    }
+    float m = FAR_INIT;
+    [[unroll]] for (int j = 0; j < 3; ++j) {
+        [[unroll]] for (int i = 0; i < 3; ++i) {
+            if (uint(i) < owned.x && uint(j) < owned.y) imageStore(mip0, q + ivec2(i, j), vec4(acc[j][i]));
+            m = min(m, acc[j][i]);
+        }
+    }
+    if (levels > 1u) imageStore(mip1, ivec2(t), vec4(m));
+    return m;
 }
 
 // Level-k texels [tile_lo, tile_hi) of the subtree of level-6 texel g (n of them per axis).
@@ -118,113 +198,136 @@ uvec2 tile_hi(uvec2 g, uvec2 n, uint k) {
     return mix((g + 1u) << (TILE_LEVEL - k), hiz_level_size(base, k), equal(g, n - 1u));
 }
 
-// Level K of the tile from level K - 1 in shared array SRC (row stride SRC_STRIDE), into mip
-// image MIP and shared array DST (row stride DST_STRIDE). A macro so that the level, the image
-// and the arrays are constants (no switch on the level, no array copies).
-#define REDUCE_TILE_LEVEL(K, SRC, SRC_STRIDE, MIP, DST, DST_STRIDE)                                    \
-    if (K <= tile_top) {                                                                            \
-        barrier(); /* level K - 1 complete in shared memory, level K - 2 no longer read */          \
-        uvec2 src_lo = tile_lo(g, K - 1u);                                                          \
-        uvec2 src_size = hiz_level_size(base, K - 1u);                                              \
+// Chain level K (3..6) of the tile, straight from its level 2 in s_a (stride 32): level-K texel t
+// is the min of level-2 texels [t << (K - 2), (t + 1) << (K - 2)), or up to the end of level 2
+// for the last texel of level K (the tree property, between any two levels). At most 15x15
+// texels: one per thread. A macro so that the level and the image are constants.
+#define REDUCE_TILE_LEVEL(K, MIP)                                                                   \
+    if (K <= top) {                                                                                 \
         uvec2 lo = tile_lo(g, K);                                                                   \
         uvec2 cnt = tile_hi(g, n, K) - lo;                                                          \
-        for (uint ly = tid.y; ly < cnt.y; ly += SIDE) {                                             \
-            for (uint lx = tid.x; lx < cnt.x; lx += SIDE) {                                         \
-                uvec2 first, count;                                                                 \
-                hiz_footprint(lo + uvec2(lx, ly), src_size, first, count);                          \
-                first -= src_lo;                                                                    \
-                float v = FAR_INIT;                                                                 \
-                for (uint y = 0u; y < count.y; ++y) {                                               \
-                    for (uint x = 0u; x < count.x; ++x) {                                           \
-                        v = min(v, SRC[(first.y + y) * SRC_STRIDE + first.x + x]);                  \
-                    }                                                                               \
-                }                                                                                   \
-                imageStore(MIP, ivec2(lo + uvec2(lx, ly)), vec4(v));                                \
-                DST[ly * DST_STRIDE + lx] = v;                                                      \
+        if (all(lessThan(tid, cnt))) {                                                              \
+            uvec2 t = lo + tid;                                                                     \
+            uvec2 first = (t << (K - 2u)) - lo2;                                                    \
+            uvec2 end = mix((t + 1u) << (K - 2u), s2, equal(t, hiz_level_size(base, K) - 1u)) - lo2; \
+            float v = FAR_INIT;                                                                     \
+            for (uint y = first.y; y < end.y; ++y) {                                                \
+                for (uint x = first.x; x < end.x; ++x) v = min(v, s_a[y * 32u + x]);                \
             }                                                                                       \
+            imageStore(MIP, ivec2(t), vec4(v));                                                     \
+        }                                                                                           \
+    }
+
+// Loads the `total` texels of a level of size `src` from MIP, flat into s_a, 8 per thread at a
+// time (all issued before any is used; one round up to 2048 texels, a 3840x2160 depth).
+#define LOAD_TOP(MIP)                                                                               \
+    for (uint first = lid; first < total; first += 8u * SIDE * SIDE) {                              \
+        float vals[8];                                                                              \
+        [[unroll]] for (uint i = 0u; i < 8u; ++i) {                                                 \
+            uint idx = min(first + i * SIDE * SIDE, total - 1u);                                    \
+            vals[i] = imageLoad(MIP, ivec2(idx % src.x, idx / src.x)).r;                            \
+        }                                                                                           \
+        [[unroll]] for (uint i = 0u; i < 8u; ++i) {                                                 \
+            if (first + i * SIDE * SIDE < total) s_a[first + i * SIDE * SIDE] = vals[i];            \
         }                                                                                           \
     }
 
 void main() {
     uvec2 tid = gl_LocalInvocationID.xy;
+    uint lid = gl_LocalInvocationIndex;
     uvec2 n = hiz_level_size(base, TILE_LEVEL);
-    uvec2 g = gl_WorkGroupID.xy;
+    uvec2 g = n - 1u - gl_WorkGroupID.xy;  // edge tiles (up to 4x the pixels) first
+    uint top = min(TILE_LEVEL, levels);     // highest chain level stored inside the tile
+    inv_base = 1.0 / vec2(base);
 
-    // Level 1 of the tile straight from the depth; each level-1 footprint is a disjoint block
-    // of level 0, so level 0 is written on the way. (With a single level, the same loop writes
-    // level 0 alone.)
+    // Chain levels 1 and 2 from the depth; level 2 of the tile into s_a.
+    uvec2 s2 = hiz_level_size(base, 2u);
+    uvec2 lo2 = tile_lo(g, 2u);
     {
-        uvec2 lo = tile_lo(g, 1u);
-        uvec2 cnt = tile_hi(g, n, 1u) - lo;
+        uvec2 s1 = hiz_level_size(base, 1u);
+        uvec2 cnt = tile_hi(g, n, 2u) - lo2;  // 16, up to 31 on edge tiles
         for (uint ly = tid.y; ly < cnt.y; ly += SIDE) {
             for (uint lx = tid.x; lx < cnt.x; lx += SIDE) {
-                uvec2 first, count;
-                hiz_footprint(lo + uvec2(lx, ly), base, first, count);
-                float v;
-                if (count == uvec2(2u)) {  // all but the edge texels: a plain 2x2 block
-                    ivec2 p = ivec2(first);
-                    float d00 = depth_min(p), d10 = depth_min(p + ivec2(1, 0));
-                    float d01 = depth_min(p + ivec2(0, 1)), d11 = depth_min(p + ivec2(1, 1));
-                    imageStore(mip0, p, vec4(d00));
-                    imageStore(mip0, p + ivec2(1, 0), vec4(d10));
-                    imageStore(mip0, p + ivec2(0, 1), vec4(d01));
-                    imageStore(mip0, p + ivec2(1, 1), vec4(d11));
-                    v = min(min(d00, d10), min(d01, d11));
-                } else {
-                    v = FAR_INIT;
-                    for (uint y = 0u; y < count.y; ++y) {
-                        for (uint x = 0u; x < count.x; ++x) {
-                            ivec2 p = ivec2(first + uvec2(x, y));
-                            float d = depth_min(p);
-                            imageStore(mip0, p, vec4(d));
-                            v = min(v, d);
-                        }
-                    }
-                }
-                if (levels > 1u) imageStore(mip1, ivec2(lo + uvec2(lx, ly)), vec4(v));
-                s_odd[ly * 64u + lx] = v;
+                s_a[ly * 32u + lx] = reduce_block(lo2 + uvec2(lx, ly), s1, s2);
             }
         }
     }
 
-    // Levels 2..6 of the tile through shared memory.
-    uint tile_top = min(TILE_LEVEL, levels - 1u);
-    REDUCE_TILE_LEVEL(2u, s_odd, 64u, mip2, s_even, 32u)
-    REDUCE_TILE_LEVEL(3u, s_even, 32u, mip3, s_odd, 64u)
-    REDUCE_TILE_LEVEL(4u, s_odd, 64u, mip4, s_even, 32u)
-    REDUCE_TILE_LEVEL(5u, s_even, 32u, mip5, s_odd, 64u)
-    REDUCE_TILE_LEVEL(6u, s_odd, 64u, mip6, s_even, 32u)
-    if (levels <= TILE_LEVEL + 1u) return;  // no level above the tiles
+    // Chain levels 3..6 of the tile from its level 2: one barrier (a barrier per level costs more
+    // than the extra reads on lavapipe, where it switches between the workgroup's 32 subgroups).
+    if (top >= 3u) barrier();
+    REDUCE_TILE_LEVEL(3u, mip2)
+    REDUCE_TILE_LEVEL(4u, mip3)
+    REDUCE_TILE_LEVEL(5u, mip4)
+    REDUCE_TILE_LEVEL(6u, mip5)
+    if (levels <= TILE_LEVEL) return;  // no level above the tiles
 
-    // Publish this tile's level-6 texel; the last tile to arrive reduces the rest.
-    uint lid = gl_LocalInvocationIndex;
-    controlBarrier(gl_ScopeWorkgroup, gl_ScopeDevice, gl_StorageSemanticsImage, gl_SemanticsAcquireRelease);
+    // The thread that stored this tile's level-6 texel publishes it; the last tile to arrive
+    // reduces the rest.
     if (lid == 0u) {
         uint before = atomicAdd(tiles_done, 1u, gl_ScopeDevice, gl_StorageSemanticsBuffer | gl_StorageSemanticsImage,
                                 gl_SemanticsAcquireRelease);
         s_last = before == n.x * n.y - 1u;
+        if (s_last) atomicExchange(tiles_done, 0u);  // every tile has counted: ready for the next dispatch
     }
     controlBarrier(gl_ScopeWorkgroup, gl_ScopeDevice, gl_StorageSemanticsImage | gl_StorageSemanticsShared,
                    gl_SemanticsAcquireRelease);
     if (!s_last) return;
 
-    // Levels 7.. by this workgroup alone, through the (coherent) image.
-    for (uint k = TILE_LEVEL + 1u; k < levels; ++k) {
-        uvec2 src_size = hiz_level_size(base, k - 1u);
+    // Chain levels 7.. by this workgroup alone. Level k - 1 (size src) is read while k is written.
+    uint k = TILE_LEVEL + 1u;
+    uvec2 src = n;
+    // Sources too large for shared memory (a depth over ~8192 pixels), through the coherent image.
+    while (k <= levels && src.x * src.y > TOP_CAP) {
         uvec2 size = hiz_level_size(base, k);
         for (uint ty = tid.y; ty < size.y; ty += SIDE) {
             for (uint tx = tid.x; tx < size.x; tx += SIDE) {
                 uvec2 first, count;
-                hiz_footprint(uvec2(tx, ty), src_size, first, count);
+                hiz_footprint(uvec2(tx, ty), src, first, count);
                 float v = FAR_INIT;
                 for (uint y = 0u; y < count.y; ++y) {
                     for (uint x = 0u; x < count.x; ++x) {
-                        v = min(v, load_mip(k - 1u, ivec2(first + uvec2(x, y))));
+                        v = min(v, load_mip(k - 2u, ivec2(first + uvec2(x, y))));
                     }
                 }
-                store_mip(k, ivec2(tx, ty), v);
+                store_mip(k - 1u, ivec2(tx, ty), v);
             }
         }
         controlBarrier(gl_ScopeWorkgroup, gl_ScopeWorkgroup, gl_StorageSemanticsImage, gl_SemanticsAcquireRelease);
+        src = size;
+        ++k;
+    }
+    if (k > levels) return;
+    uint total = src.x * src.y;
+    if (k == TILE_LEVEL + 1u) {
+        LOAD_TOP(mip5)
+    } else {  // after image-only levels (a depth over ~8192 pixels): one load at a time
+        for (uint i = lid; i < total; i += SIDE * SIDE) s_a[i] = load_mip(k - 2u, ivec2(i % src.x, i / src.x));
+    }
+    barrier();
+    bool in_a = true;  // level k - 1 is in s_a (stride src.x), else in s_b
+    for (; k <= levels; ++k) {
+        uvec2 size = hiz_level_size(base, k);
+        for (uint i = lid; i < size.x * size.y; i += SIDE * SIDE) {
+            uvec2 t = uvec2(i % size.x, i / size.x);
+            uvec2 first, count;
+            hiz_footprint(t, src, first, count);
+            float v = FAR_INIT;
+            for (uint y = 0u; y < count.y; ++y) {
+                for (uint x = 0u; x < count.x; ++x) {
+                    uint j = (first.y + y) * src.x + first.x + x;
+                    v = min(v, in_a ? s_a[j] : s_b[j]);
+                }
+            }
+            store_mip(k - 1u, ivec2(t), v);
+            if (in_a) {
+                s_b[i] = v;
+            } else {
+                s_a[i] = v;
+            }
+        }
+        barrier();
+        in_a = !in_a;
+        src = size;
     }
 }

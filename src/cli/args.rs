@@ -20,6 +20,8 @@ pub enum Command {
     Render(Box<RenderArgs>),
     /// List the Vulkan devices the loader sees (index: name (type, API version)).
     Devices,
+    /// Measure culling and Hi-Z speed with timestamp queries; write bench.json and bench.md.
+    Bench(BenchArgs),
     /// Check a render graph (RON), print its compiled plan, or export it as graphviz.
     Graph(GraphArgs),
 }
@@ -53,6 +55,38 @@ pub struct GraphCheckArgs {
     /// Override a graph parameter, NAME=VALUE (repeatable).
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
     pub params: Vec<(String, String)>,
+    /// Vulkan device by name substring or index; env CULLGRAPH_DEVICE.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub device: Option<String>,
+}
+
+/// `cullgraph bench` flags.
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// City sizes to measure (instances), comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [10_000usize, 100_000, 1_000_000])]
+    pub instances: Vec<usize>,
+    /// Built-in graphs to compare, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = ["no_cull".to_string(), "frustum".into(), "two_phase".into(), "occluder_prepass".into(), "one_phase".into()])]
+    pub graphs: Vec<String>,
+    /// Output size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Hi-Z sizes, comma-separated WIDTHxHEIGHT.
+    #[arg(long, value_delimiter = ',', value_parser = parse_size, default_values = ["1920x1080", "3840x2160"])]
+    pub hiz_sizes: Vec<(u32, u32)>,
+    /// Frames before measuring.
+    #[arg(long, default_value_t = 5)]
+    pub warmup: u32,
+    /// Frames measured (medians are reported).
+    #[arg(long, default_value_t = 20)]
+    pub frames: u32,
+    /// Also check one frame per graph against exact visibility.
+    #[arg(long)]
+    pub verify: bool,
+    /// Folder for bench.json and bench.md.
+    #[arg(long, default_value = "out/bench")]
+    pub out: PathBuf,
     /// Vulkan device by name substring or index; env CULLGRAPH_DEVICE.
     #[arg(long, value_name = "NAME|INDEX")]
     pub device: Option<String>,
@@ -172,6 +206,15 @@ pub struct RenderArgs {
     /// Render without culling (the built-in `no_cull` graph).
     #[arg(long, conflicts_with = "graph")]
     pub no_cull: bool,
+    /// Draw the culling-stat overlay: this frame's counters, GPU milliseconds per pass (the built-in
+    /// `overlay` graph, i.e. the default graph plus an overlay pass).
+    #[arg(long, conflicts_with_all = ["graph", "no_cull"])]
+    pub overlay: bool,
+    /// What the overlay shows: stats (the panel), hiz (plus a Hi-Z mip in grey; `--param
+    /// hiz_level=N`) or culled (plus occlusion-culled instances tinted red). Implies
+    /// `--overlay` unless `--graph` names a graph with an `overlay_view` param.
+    #[arg(long, value_name = "VIEW", value_parser = ["stats", "hiz", "culled"], conflicts_with = "no_cull")]
+    pub overlay_view: Option<String>,
     /// Check every frame against exact visibility (an unculled instance-id render) and report
     /// visible instances, false negatives and false positives; fails if anything visible was culled.
     #[arg(long)]

@@ -1,6 +1,7 @@
 //! Command-line interface: argument definitions and dispatch.
 
 mod args;
+mod bench;
 mod graph;
 mod render;
 mod watch;
@@ -17,6 +18,7 @@ pub fn main() -> ExitCode {
         args::Command::Graph(g) => return graph::run(&g),
         args::Command::Render(r) => render::run(&r),
         args::Command::Devices => list_devices(),
+        args::Command::Bench(b) => bench::run(&b),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

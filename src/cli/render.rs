@@ -119,14 +119,20 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// The graph to run: `--graph FILE` or the built-in default, with `--param` and `--debug-view`.
+/// The graph to run: `--graph FILE`, the built-in default or (`--overlay`) the built-in overlay
+/// graph, with `--param`, `--overlay-view` and `--debug-view`.
 fn graph_spec(args: &RenderArgs) -> Result<GraphSpec> {
+    let overlay = args.overlay || args.overlay_view.is_some();
     let spec = match (&args.graph, args.no_cull) {
         (Some(arg), _) => GraphSpec::from_arg(arg)?,
         (None, true) => GraphSpec::builtin("no_cull")?,
+        (None, false) if overlay => GraphSpec::builtin("overlay")?,
         (None, false) => GraphSpec::default_graph(),
     };
     let mut overrides = args.params.clone();
+    if let Some(view) = &args.overlay_view {
+        overrides.insert(0, ("overlay_view".into(), view.clone()));
+    }
     if let Some(view) = &args.debug_view {
         overrides.push(("debug_view".into(), view.clone()));
     }

@@ -211,8 +211,23 @@ impl Pipeline {
         unsafe { self.shared.device.cmd_bind_pipeline(cmd, self.bind_point, self.pipeline) };
     }
 
-    /// Pushes descriptors for set 0.
+    /// Pushes descriptors for set 0. Bindings the shader does not use (declared in a variant but
+    /// optimized away, say) are skipped.
     pub fn push_bindings(&self, cmd: vk::CommandBuffer, binds: &[Bind]) {
+        let binds: Vec<Bind> = binds
+            .iter()
+            .copied()
+            .filter(|b| {
+                let n = match *b {
+                    Bind::Buffer(n, _) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) => n,
+                };
+                self.interface.bindings.contains_key(&n)
+            })
+            .collect();
+        let binds = binds.as_slice();
+        if binds.is_empty() {
+            return;
+        }
         let mut buffer_infos = Vec::with_capacity(binds.len());
         let mut image_infos = Vec::with_capacity(binds.len());
         for b in binds {

@@ -211,6 +211,36 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             slots_from_shader: false,
         },
         PassKindInfo {
+            name: "overlay",
+            doc: "draws this frame's culling counters (formatted on the GPU), per-pass GPU milliseconds and optional debug views (a Hi-Z mip, occlusion-culled instances) over the lit image",
+            reads: vec![
+                slot("stats0", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a cull pass (its `stats` buffer, 64 bytes)"),
+                slot("stats1", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a second cull pass"),
+                slot("stats2", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a third cull pass"),
+                slot("stats3", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a fourth cull pass"),
+                slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid (view \"hiz\")"),
+                slot("visibility", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits from the late cull pass (view \"culled\")"),
+            ],
+            writes: vec![slot(
+                "output",
+                Usage::StorageImageReadWrite(Stages::Compute),
+                true,
+                FormatRule::Exact(LIT_OUTPUT_FORMAT),
+                "the lit image, drawn on in place",
+            )],
+            settings: vec![
+                SettingDecl {
+                    name: "view",
+                    default: SettingDefault::Choice(&["stats", "hiz", "culled"]),
+                    doc: "the counter panel only; plus a Hi-Z mip in grey over the whole image; plus occlusion-culled instances tinted red",
+                },
+                SettingDecl { name: "hiz_level", default: SettingDefault::Int(0), doc: "mip of the Hi-Z pyramid shown by view \"hiz\" (clamped to the last)" },
+                SettingDecl { name: "scale", default: SettingDefault::Int(0), doc: "text size in pixels per font pixel (0: max(1, height / 720))" },
+                SettingDecl { name: "timings", default: SettingDefault::Bool(true), doc: "show GPU milliseconds per pass (of the newest completed frame)" },
+            ],
+            slots_from_shader: false,
+        },
+        PassKindInfo {
             name: COMPUTE_KIND,
             doc: "a user compute shader; its slots are the shader's bindings (by binding number or variable name)",
             reads: vec![],

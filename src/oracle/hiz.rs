@@ -18,6 +18,16 @@
 //!   coordinates; no sampler, no normalized coordinates.
 //! - The flat layout ([`HiZPyramid::to_flat`]) stores the levels one after another, each row-major;
 //!   level `k` starts at [`level_offset`].
+//!
+//! # The stored pyramid
+//!
+//! The GPU pyramid (the `hiz` image of the `hiz_build` pass) starts at chain level
+//! [`FIRST_STORED_LEVEL`] = 1, half the depth's size ([`stored_size`]): stored mip `m` holds
+//! level `m + 1` ([`HiZPyramid::stored_level`]), up to [`stored_mip_count`] mips. Level 0 would
+//! cost as much memory traffic as the depth itself, and the occlusion test only needs it for
+//! bounds under 2 pixels. A 1×1 depth has no level 1: its stored pyramid is one 1×1 texel, the
+//! minimum of the depth (level 0, which is then also the last level). GLSL: `HIZ_FIRST_LEVEL`,
+//! `hiz_stored_mip_count`, `hiz_stored_mip` in `shaders/common/hiz.glsl`.
 
 use super::cull_math::{hiz_level, PixelRect};
 use glam::UVec2;
@@ -40,6 +50,22 @@ pub fn level_size(base: UVec2, level: u32) -> UVec2 {
 /// Number of levels down to 1×1: `⌊log₂ max(w, h)⌋ + 1`. GLSL: `hiz_level_count`.
 pub fn level_count(base: UVec2) -> u32 {
     32 - base.x.max(base.y).max(1).leading_zeros()
+}
+
+/// The first chain level that the GPU pyramid stores (in its mip 0). GLSL: `HIZ_FIRST_LEVEL`.
+pub const FIRST_STORED_LEVEL: u32 = 1;
+
+/// Size of the stored pyramid's mip 0 (chain level 1) over a depth of size `base`:
+/// `max(1, base >> 1)` per axis (1×1 for a 1×1 depth).
+pub fn stored_size(base: UVec2) -> UVec2 {
+    level_size(base, FIRST_STORED_LEVEL)
+}
+
+/// Mips of a full stored pyramid over a depth of size `base`: `level_count(base) − 1`, at least 1
+/// (a 1×1 depth stores its single texel). Also `level_count(stored_size(base))`.
+/// GLSL: `hiz_stored_mip_count`.
+pub fn stored_mip_count(base: UVec2) -> u32 {
+    level_count(base).saturating_sub(FIRST_STORED_LEVEL).max(1)
 }
 
 /// First texel of `level` in the flat layout. GLSL: `hiz_level_offset`.
@@ -159,6 +185,16 @@ impl HiZPyramid {
         self.levels[k as usize].get(x, y)
     }
 
+    /// Stored mip `mip` of the GPU pyramid: chain level `mip + 1`, or level 0 (the whole
+    /// pyramid) for a 1×1 depth, which has no level 1.
+    ///
+    /// # Panics
+    /// If `mip >= stored_mip_count(base)`.
+    pub fn stored_level(&self, mip: u32) -> &HiZLevel {
+        assert!(mip < stored_mip_count(self.base_size()), "stored mip {mip} out of range");
+        &self.levels[((mip + FIRST_STORED_LEVEL) as usize).min(self.levels.len() - 1)]
+    }
+
     /// All levels one after another (each row-major) and the offset of each level.
     pub fn to_flat(&self) -> (Vec<f32>, Vec<u32>) {
         let mut data = Vec::new();
@@ -235,6 +271,25 @@ mod tests {
         let p = HiZPyramid::from_depth(5, 1, &[0.9, 0.8, 0.7, 0.6, 0.1]);
         assert_eq!(p.level(1).texels, vec![0.8, 0.1]);
         assert_eq!(p.level(2).texels, vec![0.1]);
+    }
+
+    #[test]
+    fn the_stored_pyramid_starts_at_level_one() {
+        for (w, h) in [(1, 1), (1, 7), (7, 1), (2, 2), (3, 3), (5, 3), (65, 33), (1023, 767), (1920, 1080)] {
+            let base = UVec2::new(w, h);
+            let mips = stored_mip_count(base);
+            assert_eq!(mips, level_count(stored_size(base)), "{w}x{h}");
+            assert_eq!(mips, level_count(base).max(2) - 1, "{w}x{h}");
+            for m in 0..mips {
+                assert_eq!(level_size(stored_size(base), m), level_size(base, m + 1), "{w}x{h} mip {m}");
+            }
+        }
+        let p = HiZPyramid::from_depth(1, 1, &[0.25]);
+        assert_eq!(stored_size(UVec2::ONE), UVec2::ONE);
+        assert_eq!(p.stored_level(0).texels, vec![0.25]);
+        let p = HiZPyramid::from_depth(5, 1, &[0.9, 0.8, 0.7, 0.6, 0.1]);
+        assert_eq!(p.stored_level(0).texels, vec![0.8, 0.1]);
+        assert_eq!(p.stored_level(1).texels, vec![0.1]);
     }
 
     #[test]

@@ -1,41 +1,49 @@
 //! Hi-Z build (kind `hiz_build`): the reversed-Z min pyramid of a (multisampled) depth buffer, in
-//! compute, equal bit for bit to [`crate::oracle::hiz::HiZPyramid`].
+//! compute, equal bit for bit to [`crate::oracle::hiz::HiZPyramid`] from chain level 1 on.
 //!
-//! Level 0 has the depth's size and holds the minimum (farthest, reversed-Z) sample of each pixel;
-//! level `k + 1` is `max(1, size_k >> 1)` per axis and reduces the footprints of
+//! Chain level 0 is the depth (the minimum, i.e. farthest reversed-Z, sample of each pixel); level
+//! `k + 1` is `max(1, size_k >> 1)` per axis and reduces the footprints of
 //! `shaders/common/hiz.glsl` (2×2, plus the odd last row/column: 2×3, 3×2, 3×3). Min of floats is
 //! exact, so any reduction order gives the oracle's bits.
+//!
+//! **The stored pyramid starts at chain level 1** ([`FIRST_STORED_LEVEL`], GLSL `HIZ_FIRST_LEVEL`):
+//! the `hiz` image is [`pyramid_size`] = `max(1, w >> 1)` × `max(1, h >> 1)` and its mip `m`
+//! holds chain level `m + 1`; it has at most [`pyramid_mip_count`] mips (chain length − 1). The
+//! pass reduces the depth straight into mip 0 and never writes level 0, which would cost as much
+//! traffic as reading the depth. A 1×1 depth has no level 1: its pyramid is one 1×1 texel holding
+//! the depth's minimum (conservative: the last texel of a level covers everything up to the edge).
+//! In a graph: `Image(format: R32_SFLOAT, size: Fixed("max(1, width / 2)", "max(1, height / 2)"),
+//! mips: All)`.
 //!
 //! Two methods (setting `method`):
 //!
 //! - `single` (default, `shaders/hiz/hiz_build_single.comp`): one dispatch in the style of AMD's
-//!   single-pass downsampler. Every level is a min over an aligned block of level 0 — texel `x` of
-//!   level `k` covers columns `[x·2^k, (x+1)·2^k)`, except the last texel of a level, which
+//!   single-pass downsampler. Every level is a min over an aligned block of the depth — texel `x`
+//!   of level `k` covers columns `[x·2^k, (x+1)·2^k)`, except the last texel of a level, which
 //!   extends to the end of the row because halving folds the dropped column into it — so the
 //!   pyramid is a tree and the texels of level 6 cut it into independent subtrees. Workgroup `g`
-//!   (256 threads) owns the subtree of level-6 texel `g`: a 64×64 tile of level 0, except that the
-//!   last workgroup column (row) owns everything up to the right (bottom) edge, 64 to 127 texels.
-//!   The odd columns and rows that the halvings fold into edge texels therefore never leave the
-//!   tile that reduces them: no halo, no reads of a neighbour's texels, and the result is exactly
-//!   the oracle's (conservative by construction, for every size). A workgroup writes level 0 (min
-//!   over samples) and levels 1..=6 of its tile through shared memory, publishes its level-6 texel
-//!   and bumps a global atomic counter (acquire-release, device scope); the last of the `n.x·n.y`
-//!   workgroups (`n` = level-6 size) reduces levels 7.. from level 6 alone. The counter is a
-//!   4-byte buffer the pass owns, cleared with `vkCmdFillBuffer` before each dispatch (only when
-//!   the image has more than 7 levels). The cost of the NPOT fold is load imbalance: the last
-//!   column/row of workgroups does up to ~2× (corner ~4×) the work of the others. Threads are
-//!   16×16 and stride over each level of the tile (no division, no subgroup operations, so no
-//!   assumption on the subgroup size); interior level-1 texels take an unrolled 2×2 path.
-//!   On lavapipe `per_mip` is faster (about 1.6× at 1920×1080): there a workgroup barrier is a
-//!   switch between coroutines per 8-wide subgroup, while a dispatch boundary is cheap. Compare the
-//!   methods on the target GPU.
-//! - `per_mip` (baseline, `shaders/hiz/hiz_build_per_mip.comp`): one dispatch per level (level 0
-//!   from the depth, then level `k + 1` from level `k` through storage-image mip views), with a
-//!   barrier on the written mip between dispatches.
+//!   (256 threads) owns the subtree of level-6 texel `g`: a 64×64 tile of the depth, except that
+//!   the last workgroup column (row) owns everything up to the right (bottom) edge, 64 to 127
+//!   pixels (these heavier tiles are scheduled first). The odd columns and rows that the halvings
+//!   fold into edge texels therefore never leave the tile that reduces them: no halo, no reads of
+//!   a neighbour's texels. Each thread reduces a 4×4 block of the depth in registers (four
+//!   `textureGather`s, one per level-1 texel; the blocks on the depth's last column/row of level 2
+//!   read 8×8 clamped pixels and apply the fold, see the shader), stores its 2×2 level-1 texels
+//!   and its level-2 texel, and levels 3..=6 of the tile go through shared memory (a barrier per
+//!   level, one texel per thread). The thread that stores the tile's level-6 texel bumps a global
+//!   atomic counter (acquire-release, device scope); the last of the `n.x·n.y` workgroups (`n` =
+//!   level-6 size) loads level 6 into shared memory once and reduces levels 7.. there, then puts
+//!   the counter back to 0. The counter is a 4-byte buffer the pass owns, zeroed when the pass
+//!   is created; a compute-to-compute barrier orders consecutive builds. No subgroup operations,
+//!   so no assumption on the subgroup size.
+//! - `per_mip` (baseline, `shaders/hiz/hiz_build_per_mip.comp`): one dispatch per level (level 1
+//!   from the depth's footprints, then level `k + 1` from level `k` through storage-image mip
+//!   views), with a barrier on the written mip between dispatches.
 //!
-//! The depth is read with `texelFetch` (a `sampler2D` or, for MSAA depth, `sampler2DMS`: two
-//! shader variants chosen by the depth image's sample count). The pipelines for a variant are
-//! created the first time a depth of that kind is recorded (a pass normally sees only one).
+//! The depth is read through a `sampler2D` (nearest, clamp to edge) or, for MSAA depth,
+//! `sampler2DMS` (`texelFetch` of every sample): two shader variants chosen by the depth image's
+//! sample count. The pipelines for a variant are created the first time a depth of that kind is
+//! recorded (a pass normally sees only one).
 //!
 //! In the graph, the `depth` slot arrives in `SHADER_READ_ONLY_OPTIMAL` and `hiz` in `GENERAL`
 //! (all mips); every mip is left written by compute in `GENERAL`. [`HizBuildPass::record_images`]
@@ -52,16 +60,30 @@ use ash::vk;
 /// Format of the pyramid.
 pub const HIZ_FORMAT: vk::Format = crate::graph::kinds::HIZ_FORMAT;
 
-/// Most pyramid levels the pass writes (a 32768-texel axis).
+/// Most pyramid mips the pass writes (chain levels 1..=16: a 65536-pixel axis).
 pub const MAX_LEVELS: u32 = 16;
 
-/// The level whose texels split the single-dispatch pyramid into workgroup tiles (64×64).
+/// The chain level whose texels split the single-dispatch pyramid into workgroup tiles (64×64).
 pub const TILE_LEVEL: u32 = 6;
+
+pub use crate::oracle::hiz::FIRST_STORED_LEVEL;
+
+/// Size of the pyramid (its mip 0, chain level 1) for a depth of size `depth`: `max(1, w >> 1)` ×
+/// `max(1, h >> 1)`.
+pub fn pyramid_size(depth: vk::Extent2D) -> vk::Extent2D {
+    let s = crate::oracle::hiz::stored_size(glam::UVec2::new(depth.width, depth.height));
+    vk::Extent2D { width: s.x, height: s.y }
+}
+
+/// Mips of a full pyramid for a depth of size `depth`: the chain length − 1, at least 1.
+pub fn pyramid_mip_count(depth: vk::Extent2D) -> u32 {
+    crate::oracle::hiz::stored_mip_count(glam::UVec2::new(depth.width, depth.height))
+}
 
 /// How the pyramid is built.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum HizMethod {
-    /// One dispatch for the whole pyramid (tiles of 64×64 level-0 texels, last workgroup does the top).
+    /// One dispatch for the whole pyramid (64×64-pixel tiles, the last workgroup does the top levels).
     #[default]
     Single,
     /// One dispatch per level with barriers between (baseline).
@@ -120,12 +142,13 @@ impl Lazy {
 pub struct HizBuildPass {
     name: String,
     method: HizMethod,
-    /// Single: the whole pyramid; per-mip: level 0. Index 0 single-sample depth, 1 multisampled.
+    /// Single: the whole pyramid; per-mip: chain level 1. Index 0 single-sample depth, 1 multisampled.
     from_depth: [Lazy; 2],
-    /// Per-mip: level `k + 1` from level `k`.
+    /// Per-mip: chain level `k + 1` from level `k`.
     reduce: Option<Pipeline>,
     sampler: Sampler,
-    /// Workgroups done (single method), cleared before each dispatch.
+    /// Workgroups done (single method): zeroed at creation, put back to 0 by each dispatch's last
+    /// workgroup.
     counter: Buffer,
 }
 
@@ -170,6 +193,11 @@ impl HizBuildPass {
                 location: MemoryLocation::GpuOnly,
             },
         )?;
+        ctx.submit_and_wait(|cmd| {
+            // SAFETY: cmd recording; the counter has TRANSFER_DST usage and 4 bytes.
+            unsafe { ctx.device().cmd_fill_buffer(cmd, counter.handle(), 0, 4, 0) };
+            Ok::<(), crate::Error>(())
+        })?;
         Ok(Self { name: name.into(), method, from_depth, reduce, sampler: Sampler::nearest_clamp(ctx)?, counter })
     }
 
@@ -181,11 +209,11 @@ impl HizBuildPass {
     /// Records the build of `hiz` from `depth`.
     ///
     /// `depth`: a depth image (any sample count) in `SHADER_READ_ONLY_OPTIMAL`, its writes visible
-    /// to compute-shader reads. `hiz`: an [`HIZ_FORMAT`] storage image of the depth's size (any
-    /// number of mips up to the full chain, at most [`MAX_LEVELS`]) in `GENERAL`, whose previous
-    /// accesses are ordered before compute-shader writes. Every mip is left written by compute
-    /// shaders in `GENERAL`: the caller's barrier to the next reader has source
-    /// [`Access::COMPUTE_WRITE`].
+    /// to compute-shader reads. `hiz`: an [`HIZ_FORMAT`] storage image of [`pyramid_size`] (half
+    /// the depth's size: mip `m` is chain level `m + 1`) with 1 to [`pyramid_mip_count`] mips (at
+    /// most [`MAX_LEVELS`]) in `GENERAL`, whose previous accesses are ordered before
+    /// compute-shader writes. Every mip is left written by compute shaders in `GENERAL`: the
+    /// caller's barrier to the next reader has source [`Access::COMPUTE_WRITE`].
     pub fn record_images(
         &mut self,
         ctx: &GpuContext,
@@ -195,12 +223,16 @@ impl HizBuildPass {
     ) -> crate::Result<()> {
         let invalid = |m: String| crate::Error::Invalid(format!("pass '{}': {m}", self.name));
         let (e, he) = (depth.extent(), hiz.extent());
-        if (e.width, e.height) != (he.width, he.height) {
+        let want = pyramid_size(vk::Extent2D { width: e.width, height: e.height });
+        if (want.width, want.height) != (he.width, he.height) {
             return Err(invalid(format!(
-                "the pyramid '{}' is {}x{}; it must have the depth's size {}x{}",
+                "the pyramid '{}' is {}x{}; it must be {}x{}, half the depth's size {}x{} (chain level 1: \
+                 size Fixed(\"max(1, width / 2)\", \"max(1, height / 2)\") for a full-screen depth)",
                 hiz.name(),
                 he.width,
                 he.height,
+                want.width,
+                want.height,
                 e.width,
                 e.height
             )));
@@ -217,6 +249,16 @@ impl HizBuildPass {
             )));
         }
         let levels = hiz.mip_levels();
+        let chain = pyramid_mip_count(vk::Extent2D { width: e.width, height: e.height });
+        if levels > chain {
+            return Err(invalid(format!(
+                "the pyramid '{}' has {levels} mips; a {}x{} depth has {chain} levels below its own \
+                 (chain levels 1..={chain}, down to 1x1)",
+                hiz.name(),
+                e.width,
+                e.height
+            )));
+        }
         if levels > MAX_LEVELS {
             return Err(invalid(format!("{levels} mips; the pass writes at most {MAX_LEVELS}")));
         }
@@ -229,17 +271,15 @@ impl HizBuildPass {
         match self.method {
             HizMethod::Single => {
                 let pipeline = self.from_depth[variant].get(ctx, &self.name)?;
-                if levels > TILE_LEVEL + 1 {
-                    // The previous build's atomics finish before the clear; the clear before this one.
+                if levels > TILE_LEVEL {
+                    // The previous build's atomics (the last of which put the counter back to 0)
+                    // finish before this one's.
                     let counter_rw = Access {
                         stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
                         access: vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
                         layout: vk::ImageLayout::UNDEFINED,
                     };
-                    cmd_barriers(device, cmd, &[memory_barrier(counter_rw, Access::TRANSFER_WRITE)], &[]);
-                    // SAFETY: cmd recording; the counter has TRANSFER_DST usage and 4 bytes.
-                    unsafe { device.cmd_fill_buffer(cmd, self.counter.handle(), 0, 4, 0) };
-                    cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, counter_rw)], &[]);
+                    cmd_barriers(device, cmd, &[memory_barrier(counter_rw, counter_rw)], &[]);
                 }
                 let mut binds = vec![depth_bind, Bind::Buffer(1, self.counter.handle())];
                 binds.extend((0..MAX_LEVELS).map(|l| Bind::StorageImage(2 + l, hiz.mip_view(l.min(levels - 1)))));
@@ -260,11 +300,11 @@ impl HizBuildPass {
                     // SAFETY: cmd recording with the pipeline bound and every binding pushed.
                     unsafe { device.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1) };
                 };
-                let level0 = self.from_depth[variant].get(ctx, &self.name)?;
+                let level1 = self.from_depth[variant].get(ctx, &self.name)?;
                 dispatch(
-                    level0,
+                    level1,
                     &[depth_bind, Bind::StorageImage(1, hiz.mip_view(0))],
-                    PerMipPush { src_size: base, dst_size: base, samples },
+                    PerMipPush { src_size: base, dst_size: size(1), samples },
                 );
                 let reduce = self.reduce.as_ref().expect("per-mip passes have a reduce pipeline");
                 let storage_read = Access {
@@ -280,10 +320,11 @@ impl HizBuildPass {
                         .layer_count(1);
                     let barrier = image_barrier_raw(hiz.handle(), range, Access::COMPUTE_WRITE, storage_read);
                     cmd_barriers(device, cmd, &[], &[barrier]);
+                    // Mip k holds chain level k + 1.
                     dispatch(
                         reduce,
                         &[Bind::StorageImage(0, hiz.mip_view(k - 1)), Bind::StorageImage(1, hiz.mip_view(k))],
-                        PerMipPush { src_size: size(k - 1), dst_size: size(k), samples },
+                        PerMipPush { src_size: size(k), dst_size: size(k + 1), samples },
                     );
                 }
             }

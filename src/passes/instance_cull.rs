@@ -3,12 +3,15 @@
 //! survivors per draw group in instance order into `VkDrawIndexedIndirectCommand`s and a draw
 //! count for `vkCmdDrawIndexedIndirectCount`. No CPU readback anywhere.
 //!
-//! Three dispatches (`shaders/cull/`): `instance_cull.comp` (one thread per slot: decision bits
-//! and per-block counts), `cull_scan.comp` (one workgroup: block prefix sum, per-group survivor
-//! counts, commands compacted in group order, counters), `cull_scatter.comp` (survivors write
-//! their instance id into their group's slice). The thesis's atomic append (`compaction:
-//! "atomic"`) is kept as a measured variant: `cull_init.comp` then the test step appending with
-//! atomics; its order within a group varies from run to run.
+//! Three dispatches (`shaders/cull/`): `instance_cull.comp` (one thread per slot decides; each
+//! block stores its decision bits and survivor count and adds it to its superblock's count),
+//! `cull_scatter.comp` (each block sums the counts before it, in parallel, and its survivors
+//! write their instance id into their group's slice in instance order) and
+//! `cull_commands.comp` (one workgroup: per-group counts, commands compacted in group order,
+//! counters). No workgroup ever waits for another: Vulkan does not promise that such waits make
+//! progress (a decoupled look-back hangs on lavapipe). The thesis's atomic append (`compaction: "atomic"`) is kept as a measured variant:
+//! `cull_init.comp` then the test step appending with atomics; its order within a group varies
+//! from run to run.
 
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
@@ -68,20 +71,24 @@ impl CullSettings {
 /// Scratch memory sized for one scene.
 struct Scratch {
     slots: u32,
+    /// Counters, one count per superblock, one per block.
+    scan: Buffer,
+    /// One bit per slot: drawn by this pass.
     draw_bits: Buffer,
-    block_info: Buffer,
-    block_prefix: Buffer,
+    /// Survivors before each draw group.
     group_base: Buffer,
     /// Where the counters go when the graph binds no `stats` buffer.
     own_stats: Buffer,
+    /// Whether the scan buffer still needs its first clear.
+    fresh: bool,
 }
 
 /// The instance-cull pass.
 pub struct InstanceCullPass {
     settings: CullSettings,
     test: Pipeline,
-    scan: Option<Pipeline>,
     scatter: Option<Pipeline>,
+    commands: Option<Pipeline>,
     init: Option<Pipeline>,
     sampler: Sampler,
     scratch: Option<Scratch>,
@@ -107,15 +114,19 @@ impl InstanceCullPass {
         defines.extend(flags.iter().filter(|(on, _)| *on).map(|(_, name)| (*name, "1")));
         let name = |step: &str| format!("{} ({step})", pass.name);
         let test = Pipeline::compute(ctx, &name("test"), &shaders.compile("cull/instance_cull.comp", &defines)?)?;
-        let (scan, scatter, init) = if settings.atomic {
-            let init = Pipeline::compute(ctx, &name("init"), &shaders.compile("cull/cull_init.comp", &[])?)?;
-            (None, None, Some(init))
-        } else {
-            let scan = Pipeline::compute(ctx, &name("scan"), &shaders.compile("cull/cull_scan.comp", &[])?)?;
-            let scatter = Pipeline::compute(ctx, &name("scatter"), &shaders.compile("cull/cull_scatter.comp", &[])?)?;
-            (Some(scan), Some(scatter), None)
+        let compute = |step: &str, file: &str| -> crate::Result<Pipeline> {
+            Ok(Pipeline::compute(ctx, &name(step), &shaders.compile(file, &[])?)?)
         };
-        Ok(Self { settings, test, scan, scatter, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
+        let (scatter, commands, init) = if settings.atomic {
+            (None, None, Some(compute("init", "cull/cull_init.comp")?))
+        } else {
+            (
+                Some(compute("scatter", "cull/cull_scatter.comp")?),
+                Some(compute("commands", "cull/cull_commands.comp")?),
+                None,
+            )
+        };
+        Ok(Self { settings, test, scatter, commands, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
     }
 
     /// The settings in use.
@@ -133,23 +144,29 @@ impl InstanceCullPass {
                     &BufferDesc {
                         name,
                         size,
-                        usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                        usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
                         location: MemoryLocation::GpuOnly,
                     },
                 )
             };
+            let superblocks = blocks.div_ceil(CULL_SUPERBLOCK as u64);
             self.scratch = Some(Scratch {
                 slots,
+                scan: storage("cull scan state", (SCAN_HEADER_WORDS + superblocks + blocks) * 4)?,
                 draw_bits: storage("cull draw bits", blocks * (CULL_BLOCK as u64 / 32) * 4)?,
-                block_info: storage("cull block info", blocks * 32)?,
-                block_prefix: storage("cull block prefix", blocks * 4)?,
                 group_base: storage("cull group base", groups.max(1) as u64 * 4)?,
                 own_stats: storage("cull stats (unbound)", 64)?,
+                fresh: true,
             });
         }
         Ok(())
     }
 }
+
+/// Words of counters before the superblock counts in the scan buffer (`SCRATCH_HEADER`).
+const SCAN_HEADER_WORDS: u64 = 8;
+/// Blocks per superblock (`CULL_SUPERBLOCK` in `cull_common.glsl`).
+pub const CULL_SUPERBLOCK: u32 = 64;
 
 /// Compute writes before compute reads and writes of the next step.
 fn step_barrier(ctx: &GpuContext, cmd: vk::CommandBuffer) {
@@ -162,6 +179,12 @@ impl PassNode for InstanceCullPass {
         let scene = frame.scene;
         let slots = scene.instance_count;
         let groups = scene.group_count;
+        if slots as usize > crate::render::cull_data::MAX_CULL_SLOTS {
+            return Err(crate::Error::Invalid(format!(
+                "instance_cull handles at most {} instances per pass; the scene has {slots}",
+                crate::render::cull_data::MAX_CULL_SLOTS
+            )));
+        }
         let need = |slot: &str| {
             rec.slots
                 .buffer(slot)
@@ -178,24 +201,38 @@ impl PassNode for InstanceCullPass {
                 draw_ids.size()
             )));
         }
-        let settings = self.settings.clone();
         self.ensure_scratch(ctx, slots, groups)?;
+        let device = ctx.device();
+        let scratch = self.scratch.as_mut().expect("ensured above");
+        if scratch.fresh {
+            // Zero counters and superblock counts: once, before the first run (each run's commands
+            // step leaves them at zero for the next).
+            // SAFETY: cmd recording; the buffer is the pass's own.
+            unsafe { device.cmd_fill_buffer(cmd, scratch.scan.handle(), 0, vk::WHOLE_SIZE, 0) };
+            cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::COMPUTE_WRITE)], &[]);
+            scratch.fresh = false;
+        }
+        // Last frame's run of this pass used the same scratch.
+        step_barrier(ctx, cmd);
         let scratch = self.scratch.as_ref().expect("ensured above");
-        // Counters go to the bound buffer, or to the pass's own that nobody reads.
         let stats = rec.slots.buffer("stats").unwrap_or(&scratch.own_stats);
         let blocks = slots.div_ceil(CULL_BLOCK);
+        let superblocks = blocks.div_ceil(CULL_SUPERBLOCK);
 
-        let mut test_binds =
-            vec![Bind::Buffer(0, scene.cull_records.handle()), Bind::Buffer(1, frame.constants.handle())];
+        let mut test_binds = vec![
+            Bind::Buffer(0, scene.cull_records.handle()),
+            Bind::Buffer(1, frame.constants.handle()),
+            Bind::Buffer(2, scene.draw_groups.handle()),
+        ];
         if let Some(prev) = rec.slots.buffer("visibility_prev") {
-            test_binds.push(Bind::Buffer(5, prev.handle()));
+            test_binds.push(Bind::Buffer(7, prev.handle()));
         }
         if let Some(vis) = rec.slots.buffer("visibility") {
-            test_binds.push(Bind::Buffer(6, vis.handle()));
+            test_binds.push(Bind::Buffer(8, vis.handle()));
         }
         if let Some(hiz) = rec.slots.image("hiz") {
             test_binds.push(Bind::Sampled(
-                7,
+                9,
                 hiz.view(),
                 self.sampler.handle(),
                 vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
@@ -205,15 +242,16 @@ impl PassNode for InstanceCullPass {
         #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
         struct TestPush {
             slot_count: u32,
+            superblocks: u32,
             occluder_distance: f32,
             occluder_size: f32,
         }
         let push = TestPush {
             slot_count: slots,
-            occluder_distance: settings.occluder_distance,
-            occluder_size: settings.occluder_size,
+            superblocks,
+            occluder_distance: self.settings.occluder_distance,
+            occluder_size: self.settings.occluder_size,
         };
-        let device = ctx.device();
 
         if let Some(init) = &self.init {
             init.bind(cmd);
@@ -231,14 +269,13 @@ impl PassNode for InstanceCullPass {
             unsafe { device.cmd_dispatch(cmd, groups.div_ceil(256).max(1), 1, 1) };
             step_barrier(ctx, cmd);
             test_binds.extend([
-                Bind::Buffer(2, commands.handle()),
-                Bind::Buffer(3, draw_ids.handle()),
-                Bind::Buffer(4, stats.handle()),
-                Bind::Buffer(8, scene.draw_groups.handle()),
+                Bind::Buffer(3, scene.draw_instance_ids.handle()),
+                Bind::Buffer(4, draw_ids.handle()),
+                Bind::Buffer(5, commands.handle()),
+                Bind::Buffer(6, stats.handle()),
             ]);
         } else {
-            test_binds
-                .extend([Bind::Buffer(2, scratch.draw_bits.handle()), Bind::Buffer(3, scratch.block_info.handle())]);
+            test_binds.extend([Bind::Buffer(5, scratch.scan.handle()), Bind::Buffer(6, scratch.draw_bits.handle())]);
         }
         self.test.bind(cmd);
         self.test.push_bindings(cmd, &test_binds);
@@ -246,42 +283,39 @@ impl PassNode for InstanceCullPass {
         // SAFETY: as above.
         unsafe { device.cmd_dispatch(cmd, blocks.max(1), 1, 1) };
 
-        if let (Some(scan), Some(scatter)) = (&self.scan, &self.scatter) {
-            step_barrier(ctx, cmd);
-            scan.bind(cmd);
-            scan.push_bindings(
-                cmd,
-                &[
-                    Bind::Buffer(0, scratch.draw_bits.handle()),
-                    Bind::Buffer(1, scratch.block_info.handle()),
-                    Bind::Buffer(2, scratch.block_prefix.handle()),
-                    Bind::Buffer(3, scene.draw_groups.handle()),
-                    Bind::Buffer(4, scratch.group_base.handle()),
-                    Bind::Buffer(5, commands.handle()),
-                    Bind::Buffer(6, draw_count.handle()),
-                    Bind::Buffer(7, stats.handle()),
-                ],
-            );
-            scan.push_constants(cmd, &[slots, blocks, groups]);
-            // SAFETY: as above.
-            unsafe { device.cmd_dispatch(cmd, 1, 1, 1) };
+        if let (Some(scatter), Some(build)) = (&self.scatter, &self.commands) {
             step_barrier(ctx, cmd);
             scatter.bind(cmd);
             scatter.push_bindings(
                 cmd,
                 &[
                     Bind::Buffer(0, scratch.draw_bits.handle()),
-                    Bind::Buffer(1, scratch.block_prefix.handle()),
-                    Bind::Buffer(2, scene.slot_groups.handle()),
+                    Bind::Buffer(1, scratch.scan.handle()),
+                    Bind::Buffer(2, scene.draw_groups.handle()),
                     Bind::Buffer(3, scene.draw_instance_ids.handle()),
-                    Bind::Buffer(4, scene.draw_groups.handle()),
+                    Bind::Buffer(4, draw_ids.handle()),
                     Bind::Buffer(5, scratch.group_base.handle()),
-                    Bind::Buffer(6, draw_ids.handle()),
                 ],
             );
-            scatter.push_constants(cmd, &slots);
+            scatter.push_constants(cmd, &[slots, groups, superblocks]);
             // SAFETY: as above.
             unsafe { device.cmd_dispatch(cmd, blocks.max(1), 1, 1) };
+            step_barrier(ctx, cmd);
+            build.bind(cmd);
+            build.push_bindings(
+                cmd,
+                &[
+                    Bind::Buffer(0, scene.draw_groups.handle()),
+                    Bind::Buffer(1, scratch.group_base.handle()),
+                    Bind::Buffer(2, scratch.scan.handle()),
+                    Bind::Buffer(3, commands.handle()),
+                    Bind::Buffer(4, draw_count.handle()),
+                    Bind::Buffer(5, stats.handle()),
+                ],
+            );
+            build.push_constants(cmd, &[groups, superblocks]);
+            // SAFETY: as above.
+            unsafe { device.cmd_dispatch(cmd, 1, 1, 1) };
         }
         Ok(())
     }

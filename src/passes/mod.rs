@@ -6,6 +6,7 @@ pub mod gbuffer;
 pub mod hiz_build;
 pub mod instance_cull;
 pub mod lighting;
+pub mod overlay;
 
 use crate::gpu::{GpuContext, ShaderCompiler};
 use crate::graph::executor::PassNode;
@@ -17,7 +18,7 @@ pub fn create_node(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
     pass: &PlannedPass,
-    _plan: &CompiledGraph,
+    plan: &CompiledGraph,
     graph_dir: Option<&Path>,
 ) -> crate::Result<Box<dyn PassNode>> {
     Ok(match pass.kind.as_str() {
@@ -26,6 +27,7 @@ pub fn create_node(
         "instance_cull" => Box::new(instance_cull::InstanceCullPass::new(ctx, shaders, pass)?),
         "lighting" => Box::new(lighting::LightingPass::for_plan(ctx, shaders, pass)?),
         "hiz_build" => Box::new(hiz_build::HizBuildPass::new(ctx, shaders, pass)?),
+        "overlay" => Box::new(overlay::OverlayPass::new(ctx, shaders, pass, plan)?),
         crate::graph::kinds::COMPUTE_KIND => Box::new(compute::ComputePass::new(ctx, shaders, pass, graph_dir)?),
         other => return Err(crate::Error::Invalid(format!("pass '{}': no executor for kind '{other}'", pass.name))),
     })

@@ -7,27 +7,80 @@ use super::scene_buffers::DrawList;
 use crate::scene::Scene;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat3, Vec3};
+use half::f16;
 
-/// World bound of one slot (48 bytes; `CullRecord` in `shaders/cull/cull_common.glsl`).
+/// World bound of one slot (32 bytes; `CullRecord` in `shaders/cull/cull_common.glsl`).
 ///
 /// The sphere and the box share their center (the mesh's local box center, transformed); the
 /// radius is widened to contain the local sphere around that center, then scaled by the
-/// largest axis scale, so both stay conservative for any affine transform.
+/// largest axis scale, so both stay conservative for any affine transform. The center's lo part,
+/// the radius and the half extents are half floats: rounded outward, and the radius and extents
+/// grow by the lo part's rounding error, so the bound the GPU reads contains the exact one.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct GpuCullRecord {
-    /// World center, hi part.
-    pub center_hi: [f32; 3],
-    /// Bounding-sphere radius.
-    pub radius: f32,
-    /// World center, lo part.
-    pub center_lo: [f32; 3],
-    /// Scene instance id (what the draw list stores).
-    pub instance: u32,
-    /// Half extents of the world axis-aligned box.
-    pub half_extent: [f32; 3],
-    /// Draw group (low 24 bits) | instance flags << 24.
+    /// World center, hi part (f32 bits).
+    pub center_hi: [u32; 3],
+    /// Draw group (low 24 bits) | instance flags (7 bits) << 24 | [`CULL_HUGE`].
     pub group_flags: u32,
+    /// f16 lo x, f16 lo y.
+    pub lo_xy: u32,
+    /// f16 lo z, f16 radius.
+    pub lo_z_radius: u32,
+    /// f16 half extents x, y.
+    pub half_xy: u32,
+    /// f16 half extent z.
+    pub half_z: u32,
+}
+
+/// Set on a record whose bound does not fit half floats: the GPU keeps it without testing.
+pub const CULL_HUGE: u32 = 0x8000_0000;
+
+/// The most slots a cull pass handles (its prefix sums count survivors in 24 bits).
+pub const MAX_CULL_SLOTS: usize = (1 << 24) - 1;
+
+impl GpuCullRecord {
+    /// Packs a bound: world center (hi + lo), radius, half extents.
+    pub fn new(hi: Vec3, lo: Vec3, radius: f32, half: Vec3, group: u32, flags: u32) -> Self {
+        let lo16 = lo.to_array().map(f16::from_f32);
+        // How far the stored lo part is from the true one: the bound grows by that much.
+        let err = lo.to_array().iter().zip(&lo16).map(|(l, h)| (l - h.to_f32()).abs()).fold(0.0f32, f32::max);
+        let radius16 = f16_up(radius + err);
+        let half16 = half.to_array().map(|h| f16_up(h + err));
+        let huge =
+            !radius16.is_finite() || half16.iter().any(|h| !h.is_finite()) || lo16.iter().any(|l| !l.is_finite());
+        let pack = |a: f16, b: f16| a.to_bits() as u32 | (b.to_bits() as u32) << 16;
+        Self {
+            center_hi: hi.to_array().map(f32::to_bits),
+            group_flags: (group & 0xFF_FFFF) | ((flags & 0x7F) << 24) | if huge { CULL_HUGE } else { 0 },
+            lo_xy: pack(lo16[0], lo16[1]),
+            lo_z_radius: pack(lo16[2], radius16),
+            half_xy: pack(half16[0], half16[1]),
+            half_z: pack(half16[2], f16::ZERO),
+        }
+    }
+
+    /// The bound as the GPU reads it: (center hi, center lo, radius, half extents).
+    pub fn unpack(&self) -> (Vec3, Vec3, f32, Vec3) {
+        let half =
+            |bits: u32, high: bool| f16::from_bits(if high { (bits >> 16) as u16 } else { bits as u16 }).to_f32();
+        (
+            Vec3::from_array(self.center_hi.map(f32::from_bits)),
+            Vec3::new(half(self.lo_xy, false), half(self.lo_xy, true), half(self.lo_z_radius, false)),
+            half(self.lo_z_radius, true),
+            Vec3::new(half(self.half_xy, false), half(self.half_xy, true), half(self.half_z, false)),
+        )
+    }
+}
+
+/// The smallest half float not below `x` (infinity past 65504).
+fn f16_up(x: f32) -> f16 {
+    let h = f16::from_f32(x);
+    if h.to_f32() >= x || !h.is_finite() {
+        h
+    } else {
+        f16::from_bits(h.to_bits() + 1)
+    }
 }
 
 /// One draw group (32 bytes; `DrawGroup` in `cull_common.glsl`).
@@ -54,8 +107,6 @@ pub struct CullData {
     pub records: Vec<GpuCullRecord>,
     /// One entry per non-empty draw group, in draw-list order.
     pub groups: Vec<GpuDrawGroup>,
-    /// The draw group of each slot (what the scatter step reads instead of whole records).
-    pub slot_groups: Vec<u32>,
 }
 
 impl CullData {
@@ -94,17 +145,10 @@ impl CullData {
                 let half = abs.mul_vec3(mesh.bounds.half_extent());
                 let max_scale = linear.x_axis.length().max(linear.y_axis.length()).max(linear.z_axis.length());
                 let local_radius = mesh.sphere.center.distance(mesh.bounds.center()) + mesh.sphere.radius;
-                GpuCullRecord {
-                    center_hi: hi.to_array(),
-                    radius: local_radius * max_scale,
-                    center_lo: lo.to_array(),
-                    instance: id,
-                    half_extent: widen(half).to_array(),
-                    group_flags: (group & 0xFF_FFFF) | (inst.flags << 24),
-                }
+                GpuCullRecord::new(hi, lo, local_radius * max_scale, widen(half), group, inst.flags)
             })
             .collect();
-        Self { records, groups, slot_groups: group_of_slot }
+        Self { records, groups }
     }
 }
 
@@ -118,6 +162,24 @@ mod tests {
     use super::*;
     use crate::scene::{Instance, MeshData, Transform};
     use glam::{DVec3, Quat};
+
+    #[test]
+    fn half_float_bounds_round_outward_and_flag_huge_ones() {
+        let r = GpuCullRecord::new(
+            Vec3::new(1.0e7, 0.0, 3.0),
+            Vec3::new(0.3333, -0.1, 0.0),
+            1.0001,
+            Vec3::new(0.1, 7.77, 1.0e-6),
+            5,
+            1,
+        );
+        let (_, lo, radius, half) = r.unpack();
+        let err = (lo - Vec3::new(0.3333, -0.1, 0.0)).abs().max_element();
+        assert!(radius >= 1.0001 + err && half.x >= 0.1 + err && half.y >= 7.77 + err && half.z >= 1.0e-6);
+        assert_eq!(r.group_flags, 5 | 1 << 24);
+        let huge = GpuCullRecord::new(Vec3::ZERO, Vec3::ZERO, 1.0e5, Vec3::splat(1.0e5), 0, 0);
+        assert_eq!(huge.group_flags & CULL_HUGE, CULL_HUGE);
+    }
 
     #[test]
     fn records_follow_the_draw_list_and_contain_every_vertex() {
@@ -134,17 +196,18 @@ mod tests {
         }
         let draws = DrawList::all_instances(&scene);
         let data = CullData::new(&scene, &draws);
-        assert_eq!(data.records.iter().map(|r| r.instance).collect::<Vec<_>>(), [1, 3, 0, 2]);
+        assert_eq!(draws.instance_ids, [1, 3, 0, 2]);
         assert_eq!(data.records.iter().map(|r| r.group_flags).collect::<Vec<_>>(), [0, 0, 1, 1 | 1 << 24]);
         assert_eq!((data.groups[1].first_slot, data.groups[1].slot_count), (2, 2));
-        for r in &data.records {
-            let inst = &scene.instances[r.instance as usize];
-            let c = DVec3::from_array(r.center_hi.map(f64::from)) + DVec3::from_array(r.center_lo.map(f64::from));
+        for (r, &id) in data.records.iter().zip(&draws.instance_ids) {
+            let inst = &scene.instances[id as usize];
+            let (hi, lo, radius, half) = r.unpack();
+            let c = hi.as_dvec3() + lo.as_dvec3();
             for p in &tri.positions {
                 let w = inst.transform.apply(*p);
                 let d = (w - c).abs();
-                assert!(d.cmple(DVec3::from_array(r.half_extent.map(f64::from))).all(), "{w} outside the box");
-                assert!((w - c).length() <= r.radius as f64, "{w} outside the sphere");
+                assert!(d.cmple(half.as_dvec3()).all(), "{w} outside the box");
+                assert!((w - c).length() <= radius as f64, "{w} outside the sphere");
             }
         }
     }

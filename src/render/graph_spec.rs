@@ -19,6 +19,7 @@ pub const BUILTIN_GRAPHS: &[(&str, &str)] = &[
     ("two_phase", include_str!("../../graph/two_phase.ron")),
     ("one_phase", include_str!("../../graph/one_phase.ron")),
     ("occluder_prepass", include_str!("../../graph/occluder_prepass.ron")),
+    ("overlay", include_str!("../../graph/overlay.ron")),
 ];
 
 /// A render graph to load.

@@ -17,6 +17,7 @@ use crate::graph::executor::DrawnInstances;
 use crate::graph::executor::{FrameData, GraphRuntime, Imports, FRAMES_IN_FLIGHT};
 use crate::graph::plan::{CompiledGraph, ResolvedKind};
 use crate::oracle::visibility::VisibilityOracle;
+use crate::passes::overlay::{GpuPassTimes, PASS_TIMES_BYTES};
 use crate::scene::{Camera, Scene};
 use crate::stats::{CullCounters, CullPassStats, FrameStats, VerifyStats};
 use ash::vk;
@@ -50,6 +51,8 @@ impl RenderSettings {
 struct FrameSlot {
     constants: Buffer,
     lights: Buffer,
+    /// The newest completed frame's GPU times, for an overlay pass.
+    pass_times: Buffer,
 }
 
 /// Renders a scene through a render graph.
@@ -108,9 +111,12 @@ impl Renderer {
                         },
                     )
                 };
+                let mut pass_times = host(&format!("pass times {i}"), PASS_TIMES_BYTES)?;
+                pass_times.write_bytes(0, bytemuck::bytes_of(&GpuPassTimes::none()))?;
                 Ok(FrameSlot {
                     constants: host(&format!("frame constants {i}"), std::mem::size_of::<FrameConstants>() as u64)?,
                     lights: host(&format!("lights {i}"), light_bytes)?,
+                    pass_times,
                 })
             })
             .collect::<Result<Vec<_>>>()?;
@@ -191,6 +197,7 @@ impl Renderer {
         let frame = self.frame_index;
         let slot_index = (frame % FRAMES_IN_FLIGHT as u64) as usize;
         self.write_frame_data(slot_index, camera)?;
+        self.write_pass_times(slot_index, frame)?;
 
         // Uploads and replaced graphs recorded FRAMES_IN_FLIGHT frames ago have executed by now.
         let in_flight = FRAMES_IN_FLIGHT as u64;
@@ -207,6 +214,7 @@ impl Renderer {
             scene: &self.gpu_scene,
             constants: &slot.constants,
             lights: &slot.lights,
+            pass_times: Some(&slot.pass_times),
             frame,
             extent: vk::Extent2D { width: self.settings.width, height: self.settings.height },
         };
@@ -340,6 +348,28 @@ impl Renderer {
         }
         stats.culling = culling;
         Ok(stats)
+    }
+
+    /// For a graph with an overlay pass: the newest completed frame's GPU times (of this graph),
+    /// without waiting (a frame still executing has no results yet and is skipped).
+    fn write_pass_times(&mut self, slot: usize, frame: u64) -> Result<()> {
+        let plan = self.runtime.plan();
+        if !plan.passes.iter().any(|p| p.kind == "overlay") {
+            return Ok(());
+        }
+        let newest = (1..=FRAMES_IN_FLIGHT as u64)
+            .filter_map(|back| frame.checked_sub(back))
+            .filter(|&f| f >= self.runtime_start)
+            .find_map(|f| match self.runtime.timings(f - self.runtime_start) {
+                Ok(t) if !t.is_empty() => Some((f, t)),
+                _ => None,
+            });
+        let times = match newest {
+            Some((f, timings)) => GpuPassTimes::from_timings(plan, f, &timings),
+            None => GpuPassTimes::none(),
+        };
+        self.slots[slot].pass_times.write_bytes(0, bytemuck::bytes_of(&times))?;
+        Ok(())
     }
 
     fn write_frame_data(&mut self, slot: usize, camera: &Camera) -> Result<()> {

@@ -26,8 +26,6 @@ pub struct GpuScene {
     pub cull_records: Buffer,
     /// [`super::cull_data::GpuDrawGroup`] per non-empty draw group.
     pub draw_groups: Buffer,
-    /// Draw group of each slot.
-    pub slot_groups: Buffer,
     /// Number of non-empty draw groups.
     pub group_count: u32,
     /// Number of instances.
@@ -128,7 +126,6 @@ impl GpuScene {
             )?,
             cull_records: batch.buffer(ctx, "cull records", storage, bytemuck::cast_slice(&cull.records))?,
             draw_groups: batch.buffer(ctx, "draw groups", storage, bytemuck::cast_slice(&cull.groups))?,
-            slot_groups: batch.buffer(ctx, "slot groups", storage, bytemuck::cast_slice(&cull.slot_groups))?,
             group_count: cull.groups.len() as u32,
             instance_count: scene.instances.len() as u32,
             max_draws: draws.commands.len() as u32,

@@ -30,8 +30,12 @@ pub struct DrawCapture {
 impl DrawCapture {
     /// Host buffers for every draw pass of `passes` (kinds that take a draw list).
     pub fn new(ctx: &GpuContext, passes: &[PlannedPass], resources: &RuntimeResources) -> crate::Result<Self> {
-        let draw_kinds: Vec<&str> =
-            builtin_kinds().into_iter().filter(|k| k.slot("draw_instance_ids").is_some()).map(|k| k.name).collect();
+        // Draw passes read a draw list (cull passes write one).
+        let draw_kinds: Vec<&str> = builtin_kinds()
+            .into_iter()
+            .filter(|k| k.reads.iter().any(|s| s.name == "draw_instance_ids"))
+            .map(|k| k.name)
+            .collect();
         let mut copies = Vec::new();
         for (i, pass) in passes.iter().enumerate() {
             if !draw_kinds.contains(&pass.kind.as_str()) {

@@ -15,6 +15,9 @@ pub struct FrameData<'a> {
     pub constants: &'a Buffer,
     /// This frame's point lights.
     pub lights: &'a Buffer,
+    /// GPU times of the newest completed frame, for passes that show them
+    /// ([`crate::passes::overlay::GpuPassTimes`], host-visible, one per frame in flight).
+    pub pass_times: Option<&'a Buffer>,
     /// Frame number.
     pub frame: u64,
     /// Output size.

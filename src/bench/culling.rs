@@ -1,0 +1,263 @@
+//! Culling benchmark: the shipped culling graphs on city scenes of growing size, in the city's
+//! street view (an occluded view), with the naive peer and copy bandwidth measured in the same run.
+
+use super::peer::{copy_ms, gbps, naive_frustum_ms};
+use super::{median, median_per_pass};
+use crate::gpu::{GpuContext, ShaderCompiler};
+use crate::render::{GraphSpec, RenderSettings, Renderer};
+use crate::scene::source::LoadOptions;
+use crate::scene::SceneSource;
+use serde::{Deserialize, Serialize};
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct CullingBench {
+    /// City sizes (instances).
+    pub instances: Vec<usize>,
+    /// Output size.
+    pub width: u32,
+    /// Output height.
+    pub height: u32,
+    /// Frames rendered before measuring (pipelines warm, history settled).
+    pub warmup: u32,
+    /// Frames measured (medians are reported).
+    pub frames: u32,
+    /// Graphs (built-in names) to run.
+    pub graphs: Vec<String>,
+    /// Also check one frame per graph against exact visibility.
+    pub verify: bool,
+}
+
+/// One pass of one graph.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PassFigure {
+    /// Pass name.
+    pub pass: String,
+    /// Median GPU milliseconds.
+    pub ms: f64,
+    /// Bytes the pass reads and writes by the estimate in [`cull_pass_bytes`] (culling passes only).
+    pub bytes: Option<u64>,
+    /// `bytes / ms`, GB/s.
+    pub gbps: Option<f64>,
+}
+
+/// One graph on one scene.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct GraphFigure {
+    /// Graph name.
+    pub graph: String,
+    /// Median GPU milliseconds of the whole frame.
+    pub frame_ms: f64,
+    /// Median GPU milliseconds of all culling work (instance_cull and hiz_build passes).
+    pub culling_ms: f64,
+    /// Per pass.
+    pub passes: Vec<PassFigure>,
+    /// Instances drawn in the last measured frame.
+    pub drawn: u32,
+    /// Triangles drawn in the last measured frame.
+    pub triangles: u64,
+    /// Exact visibility of one more frame (with `verify`): visible, false negatives, false positives.
+    pub visible: Option<u32>,
+    /// Visible instances the scheme did not draw.
+    pub false_negatives: Option<u32>,
+    /// Invisible instances it drew.
+    pub false_positives: Option<u32>,
+    /// Share of the invisible instances it culled.
+    pub invisible_culled: Option<f64>,
+}
+
+/// One scene size.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SceneFigure {
+    /// Instances.
+    pub instances: usize,
+    /// The naive frustum peer's median milliseconds.
+    pub naive_peer_ms: f64,
+    /// Its survivors.
+    pub naive_peer_survivors: u32,
+    /// Each graph.
+    pub graphs: Vec<GraphFigure>,
+}
+
+/// The whole run.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CullingReport {
+    /// Device name.
+    pub device: String,
+    /// Output size.
+    pub width: u32,
+    /// Output height.
+    pub height: u32,
+    /// Device-to-device copy bandwidth (read + write), GB/s.
+    pub copy_gbps: f64,
+    /// Per scene size.
+    pub scenes: Vec<SceneFigure>,
+}
+
+/// Bytes an instance_cull pass moves (unique bytes; repeated reads that hit the cache are not
+/// counted), from what its three steps read and write. Test: `tested` 32-byte records, last
+/// frame's and this frame's visibility bits and the draw bits, a count per block. Scatter: the
+/// draw bits, the block and superblock counts, the groups, and per survivor its instance id
+/// read and written. Commands: per group its record, base and 20-byte command.
+pub fn cull_pass_bytes(slots: u64, tested: u64, drawn: u64, groups: u64) -> u64 {
+    let blocks = slots.div_ceil(256);
+    let superblocks = blocks.div_ceil(64);
+    let bits = slots.div_ceil(32) * 4;
+    let test = tested * 32 + 3 * bits + blocks * 4 + superblocks * 4;
+    let scatter = bits + blocks * 4 + superblocks * 4 + groups * (32 + 4) + drawn * 8;
+    let commands = groups * (32 + 4 + 20);
+    test + scatter + commands
+}
+
+/// Runs the benchmark.
+pub fn run(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    bench: &CullingBench,
+    progress: &dyn Fn(&str),
+) -> crate::Result<CullingReport> {
+    let copy_bytes = 256u64 << 20;
+    let copy = copy_ms(ctx, shaders, copy_bytes, 9)?;
+    let mut report = CullingReport {
+        device: ctx.caps().name.clone(),
+        width: bench.width,
+        height: bench.height,
+        copy_gbps: gbps(2 * copy_bytes, copy),
+        scenes: Vec::new(),
+    };
+    let aspect = bench.width as f32 / bench.height as f32;
+    for &n in &bench.instances {
+        progress(&format!("city with {n} instances"));
+        let scene =
+            SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(n), ..Default::default() })?;
+        let camera = scene.default_camera(aspect);
+        let (naive_ms, naive_survivors) = naive_frustum_ms(ctx, shaders, &scene, &camera, aspect, 15)?;
+        let groups = scene.meshes.len() as u64;
+        let mut figure = SceneFigure {
+            instances: n,
+            naive_peer_ms: naive_ms,
+            naive_peer_survivors: naive_survivors,
+            graphs: Vec::new(),
+        };
+        for graph in &bench.graphs {
+            progress(&format!("city with {n} instances: {graph}"));
+            let spec = GraphSpec::builtin(graph)?;
+            let settings = RenderSettings::new(bench.width, bench.height);
+            let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
+            for _ in 0..bench.warmup {
+                renderer.render(&camera)?;
+            }
+            let mut timings = Vec::new();
+            let mut totals = Vec::new();
+            let mut last = None;
+            for _ in 0..bench.frames {
+                let stats = renderer.render(&camera)?;
+                timings.push(stats.gpu_ms.clone());
+                totals.push(stats.gpu_total_ms);
+                last = Some(stats);
+            }
+            let last = last.unwrap_or_default();
+            let kinds: Vec<(String, String)> =
+                renderer.plan().passes.iter().map(|p| (p.name.clone(), p.kind.clone())).collect();
+            let passes: Vec<PassFigure> = median_per_pass(&timings)
+                .into_iter()
+                .map(|(pass, ms)| {
+                    let bytes = last
+                        .culling
+                        .iter()
+                        .find(|c| c.pass == pass)
+                        .map(|c| cull_pass_bytes(n as u64, c.tested as u64, c.drawn as u64, groups));
+                    PassFigure { gbps: bytes.map(|b| gbps(b, ms)), pass, ms, bytes }
+                })
+                .collect();
+            let culling_ms = passes
+                .iter()
+                .filter(|p| {
+                    kinds.iter().any(|(name, kind)| *name == p.pass && (kind == "instance_cull" || kind == "hiz_build"))
+                })
+                .map(|p| p.ms)
+                .sum();
+            let mut g = GraphFigure {
+                graph: graph.clone(),
+                frame_ms: median(&mut totals),
+                culling_ms,
+                passes,
+                drawn: last.drawn,
+                triangles: last.triangles,
+                visible: None,
+                false_negatives: None,
+                false_positives: None,
+                invisible_culled: None,
+            };
+            if bench.verify {
+                renderer.enable_verification(shaders)?;
+                if let Some(v) = renderer.render(&camera)?.verify {
+                    let invisible = (n as u64).saturating_sub(v.visible as u64);
+                    g.visible = Some(v.visible);
+                    g.false_negatives = Some(v.false_negatives);
+                    g.false_positives = Some(v.false_positives);
+                    g.invisible_culled = (invisible > 0).then(|| 1.0 - v.false_positives as f64 / invisible as f64);
+                }
+            }
+            figure.graphs.push(g);
+        }
+        report.scenes.push(figure);
+    }
+    Ok(report)
+}
+
+impl CullingReport {
+    /// A Markdown summary: per scene, each graph's frame and culling time, ratios to no culling
+    /// and to the naive peer, drawn instances and invisible share culled; then the per-pass table.
+    pub fn markdown(&self) -> String {
+        let mut s = format!(
+            "# Culling benchmark\n\nDevice: {}. Output {}x{}. Copy bandwidth measured in the same run: {:.0} GB/s (read + write).\n\n",
+            self.device, self.width, self.height, self.copy_gbps
+        );
+        s.push_str("| instances | graph | frame ms | x no_cull | culling ms | culling / naive peer | drawn | triangles | visible | FN | invisible culled |\n");
+        s.push_str("|---|---|---|---|---|---|---|---|---|---|---|\n");
+        for scene in &self.scenes {
+            let base = scene.graphs.iter().find(|g| g.graph == "no_cull").map(|g| g.frame_ms);
+            for g in &scene.graphs {
+                let opt = |v: Option<u32>| v.map_or("-".to_string(), |v| v.to_string());
+                s.push_str(&format!(
+                    "| {} | {} | {:.3} | {} | {:.4} | {} | {} | {} | {} | {} | {} |\n",
+                    scene.instances,
+                    g.graph,
+                    g.frame_ms,
+                    base.filter(|b| *b > 0.0).map_or("-".into(), |b| format!("{:.2}", g.frame_ms / b)),
+                    g.culling_ms,
+                    if g.culling_ms > 0.0 && scene.naive_peer_ms > 0.0 {
+                        format!("{:.2}", g.culling_ms / scene.naive_peer_ms)
+                    } else {
+                        "-".into()
+                    },
+                    g.drawn,
+                    g.triangles,
+                    opt(g.visible),
+                    opt(g.false_negatives),
+                    g.invisible_culled.map_or("-".into(), |x| format!("{:.4}", x)),
+                ));
+            }
+        }
+        s.push_str("\n| instances | naive peer ms | graph | pass | ms | MB moved | GB/s | share of copy bandwidth |\n|---|---|---|---|---|---|---|---|\n");
+        for scene in &self.scenes {
+            for g in &scene.graphs {
+                for p in &g.passes {
+                    s.push_str(&format!(
+                        "| {} | {:.4} | {} | {} | {:.4} | {} | {} | {} |\n",
+                        scene.instances,
+                        scene.naive_peer_ms,
+                        g.graph,
+                        p.pass,
+                        p.ms,
+                        p.bytes.map_or("-".into(), |b| format!("{:.1}", b as f64 / 1e6)),
+                        p.gbps.map_or("-".into(), |x| format!("{x:.0}")),
+                        p.gbps.map_or("-".into(), |x| format!("{:.2}", x / self.copy_gbps.max(1e-9))),
+                    ));
+                }
+            }
+        }
+        s
+    }
+}

@@ -1,0 +1,78 @@
+//! Hi-Z benchmark: the pyramid of a real depth buffer (the city, unculled), single dispatch
+//! against one dispatch per mip, at several output sizes.
+
+use super::median_per_pass;
+use crate::gpu::{GpuContext, ShaderCompiler};
+use crate::render::{GraphSpec, RenderSettings, Renderer};
+use crate::scene::source::LoadOptions;
+use crate::scene::SceneSource;
+use serde::{Deserialize, Serialize};
+
+/// The graph: draw the scene's depth, build its pyramid.
+const GRAPH: &str = r#"Graph(
+    name: "hiz_bench",
+    params: {"method": "single"},
+    resources: {
+        "albedo": Image(format: R8G8B8A8_UNORM),
+        "normal": Image(format: R16G16B16A16_SFLOAT),
+        "depth": Image(format: D32_SFLOAT),
+        "hiz": Image(format: R32_SFLOAT, size: Fixed("max(1, width / 2)", "max(1, height / 2)"), mips: All),
+    },
+    passes: [
+        Pass(name: "gbuffer", kind: "gbuffer", writes: {"albedo": "albedo", "normal": "normal", "depth": "depth"}),
+        Pass(name: "hiz", kind: "hiz_build", reads: {"depth": "depth"}, writes: {"hiz": "hiz"}, settings: {"method": "method"}),
+    ],
+    outputs: ["hiz"],
+)"#;
+
+/// One size and method.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct HizFigure {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// `single` or `per_mip`.
+    pub method: String,
+    /// Median GPU milliseconds of the pyramid.
+    pub ms: f64,
+}
+
+/// Measures both methods at each size (`frames` measured after `warmup`).
+pub fn run(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    sizes: &[(u32, u32)],
+    warmup: u32,
+    frames: u32,
+) -> crate::Result<Vec<HizFigure>> {
+    let scene =
+        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(2000), ..Default::default() })?;
+    let mut out = Vec::new();
+    for &(width, height) in sizes {
+        let camera = scene.default_camera(width as f32 / height as f32);
+        for method in ["single", "per_mip"] {
+            let spec = GraphSpec { text: GRAPH.into(), file: "hiz_bench.ron".into(), dir: None, overrides: Vec::new() }
+                .with_overrides([("method".to_string(), method.to_string())]);
+            let mut renderer =
+                Renderer::with_graph(ctx, shaders, scene.clone(), RenderSettings::new(width, height), &spec)?;
+            for _ in 0..warmup {
+                renderer.render(&camera)?;
+            }
+            let timings =
+                (0..frames).map(|_| renderer.render(&camera).map(|s| s.gpu_ms)).collect::<crate::Result<Vec<_>>>()?;
+            let ms = median_per_pass(&timings).into_iter().find(|(p, _)| p == "hiz").map_or(0.0, |(_, ms)| ms);
+            out.push(HizFigure { width, height, method: method.into(), ms });
+        }
+    }
+    Ok(out)
+}
+
+/// A Markdown table of the figures.
+pub fn markdown(figures: &[HizFigure]) -> String {
+    let mut s = String::from("# Hi-Z pyramid\n\n| size | method | ms |\n|---|---|---|\n");
+    for f in figures {
+        s.push_str(&format!("| {}x{} | {} | {:.4} |\n", f.width, f.height, f.method, f.ms));
+    }
+    s
+}
