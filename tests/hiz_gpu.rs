@@ -178,6 +178,7 @@ impl Tools {
                 depth_write: true,
                 samples: vk::SampleCountFlags::from_raw(samples),
                 cull_mode: vk::CullModeFlags::NONE,
+                stencil: Default::default(),
             };
             [
                 Pipeline::graphics(gpu, "fill pattern", &desc(&vert, Some(&frag), vk::CompareOp::ALWAYS)).unwrap(),

@@ -46,6 +46,7 @@ struct FrameConstants {
 #define DEBUG_VIEW_NORMALS 1u
 #define DEBUG_VIEW_ALBEDO 2u
 #define DEBUG_VIEW_DEPTH 3u
+#define DEBUG_VIEW_SAMPLES 4u   // distinct surfaces (or shaded samples) per pixel, as a heatmap
 
 // Point light relative to the eye: xyz position, w range; rgb color.
 struct GpuPointLight {
@@ -77,5 +78,8 @@ bool instance_is_mirrored(GpuInstance inst) {
 
 uint instance_material(GpuInstance inst) { return inst.material_flags & 0xFFFFFFu; }
 uint instance_flags(GpuInstance inst) { return inst.material_flags >> 24; }
+
+// Instance flag: selective AA keeps this instance at one sample (src/scene/mod.rs FLAG_NO_AA).
+#define FLAG_NO_AA 2u
 
 #endif

@@ -16,6 +16,7 @@ invariant gl_Position;  // the oracle (shaders/oracle/id.vert) and later passes 
 layout(location = 0) out vec3 out_normal;
 layout(location = 1) flat out uint out_material;
 layout(location = 2) flat out uint out_mirrored;
+layout(location = 3) flat out uint out_flags;      // FLAG_* of the instance (selective AA reads FLAG_NO_AA)
 
 void main() {
     GpuInstance inst = instances[draw_instance_ids[gl_InstanceIndex]];
@@ -24,4 +25,5 @@ void main() {
     out_normal = instance_normal(inst, oct_decode(in_normal_oct));
     out_material = instance_material(inst);
     out_mirrored = instance_is_mirrored(inst) ? 1u : 0u;
+    out_flags = instance_flags(inst);
 }

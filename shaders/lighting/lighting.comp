@@ -1,67 +1,90 @@
 #version 460
-// Deferred lighting in compute: one thread per pixel reads the G-buffer and depth, shades the
-// sun, every point light and a sky ambient term, tone-maps and writes sRGB-encoded output.
+// Deferred lighting in compute over a G-buffer of images: sun, tile-culled point lights and a
+// sky ambient term, tone-mapped, written sRGB-encoded. With multisampled images (the per-sample
+// MSAA baseline) a pixel whose samples all hold the same surface is shaded once; otherwise every
+// sample is shaded and the tone-mapped results averaged.
 #include "../common/scene.glsl"
 #include "../common/shading.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = 16, local_size_y = 16) in;
 
+#if SAMPLES > 1
+layout(set = 0, binding = 0) uniform sampler2DMS depth_tex;
+layout(set = 0, binding = 1) uniform sampler2DMS albedo_metallic_tex;
+layout(set = 0, binding = 2) uniform sampler2DMS normal_roughness_tex;
+#define FETCH(tex, p, s) texelFetch(tex, p, int(s))
+#else
 layout(set = 0, binding = 0) uniform sampler2D depth_tex;
 layout(set = 0, binding = 1) uniform sampler2D albedo_metallic_tex;
 layout(set = 0, binding = 2) uniform sampler2D normal_roughness_tex;
+#define FETCH(tex, p, s) texelFetch(tex, p, 0)
+#endif
 layout(set = 0, binding = 3, scalar) readonly buffer Frame { FrameConstants frame; };
 layout(set = 0, binding = 4, scalar) readonly buffer Lights { GpuPointLight lights[]; };
 layout(set = 0, binding = 5, rgba8) uniform writeonly image2D out_color;
 
+#include "../lighting/light_tiles.glsl"
+
 layout(push_constant) uniform Settings {
     float exposure;
     uint debug_view;   // DEBUG_VIEW_*
+    uint light_tiles;
 } settings;
+
+// Tone-mapped color of sample `s` of `pixel`.
+vec3 shade_sample(ivec2 pixel, uint s, vec2 center) {
+    float depth = FETCH(depth_tex, pixel, s).r;
+    if (depth <= 0.0) return tonemap_aces(sky_color(view_direction(center)) * settings.exposure);
+    vec4 am = FETCH(albedo_metallic_tex, pixel, s);
+    vec4 nr = FETCH(normal_roughness_tex, pixel, s);
+    Surface surface;
+    surface.position = surface_position(center, depth);
+    surface.normal = normalize(nr.xyz);
+    surface.albedo = am.rgb;
+    surface.metallic = am.a;
+    surface.roughness = nr.a;
+    uint debug_view = settings.debug_view;
+    if (debug_view == DEBUG_VIEW_NORMALS) return pow(surface.normal * 0.5 + 0.5, vec3(2.2));
+    if (debug_view == DEBUG_VIEW_ALBEDO) return pow(am.rgb, vec3(2.2));
+    if (debug_view == DEBUG_VIEW_DEPTH) return pow(vec3(fract(log2(depth) * 0.25)), vec3(2.2));
+    return tonemap_aces(shade_tile_lights(surface) * settings.exposure);
+}
+
+// Whether every sample of `pixel` holds what sample 0 holds (one surface: shade once).
+bool single_surface(ivec2 pixel) {
+    vec4 a0 = FETCH(albedo_metallic_tex, pixel, 0u), n0 = FETCH(normal_roughness_tex, pixel, 0u);
+    bool bg0 = FETCH(depth_tex, pixel, 0u).r <= 0.0;
+    for (uint s = 1u; s < SAMPLES; ++s) {
+        bool bg = FETCH(depth_tex, pixel, s).r <= 0.0;
+        if (bg != bg0) return false;
+        if (!bg && (FETCH(albedo_metallic_tex, pixel, s) != a0 || FETCH(normal_roughness_tex, pixel, s) != n0)) return false;
+    }
+    return true;
+}
 
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     uvec2 size = frame.size_lights.xy;
-    if (any(greaterThanEqual(uvec2(pixel), size))) return;
-
-    vec2 ndc = (vec2(pixel) + 0.5) / vec2(size) * 2.0 - 1.0;
-    float depth = texelFetch(depth_tex, pixel, 0).r;
-    vec4 far_point = frame.inv_view_proj * vec4(ndc, 1e-6, 1.0);
-    vec3 view_dir = normalize(far_point.xyz / far_point.w);
-
-    vec3 color;
-    if (depth <= 0.0) {
-        color = sky_color(view_dir);
-    } else {
-        vec4 p = frame.inv_view_proj * vec4(ndc, depth, 1.0);
-        vec4 am = texelFetch(albedo_metallic_tex, pixel, 0);
-        vec4 nr = texelFetch(normal_roughness_tex, pixel, 0);
-        Surface s;
-        s.position = p.xyz / p.w;
-        s.normal = normalize(nr.xyz);
-        s.albedo = am.rgb;
-        s.metallic = am.a;
-        s.roughness = nr.a;
-        vec3 v = -normalize(s.position);
-        vec3 radiance = ambient_light(s, frame.ambient.rgb);
-        radiance += brdf_light(s, v, -frame.sun_direction.xyz, frame.sun_color.rgb);
-        uint light_count = frame.size_lights.z;
-        for (uint i = 0; i < light_count; ++i) {
-            vec3 to_light = lights[i].position_range.xyz - s.position;
-            float dist = length(to_light);
-            float range = lights[i].position_range.w;
-            if (dist >= range) continue;
-            vec3 l = to_light / max(dist, 1e-6);
-            radiance += brdf_light(s, v, l, lights[i].color.rgb * light_falloff(dist, range));
-        }
-        color = radiance;
+    bool inside = all(lessThan(uvec2(pixel), size));
+    vec2 center = vec2(pixel) + 0.5;
+    tile_begin();
+    if (inside) {
+        for (uint s = 0u; s < SAMPLES; ++s) tile_add_depth(FETCH(depth_tex, pixel, s).r);
     }
-    color = tonemap_aces(color * settings.exposure);
-    uint debug_view = settings.debug_view;
-    if (debug_view != DEBUG_VIEW_NONE && depth > 0.0) {
-        if (debug_view == DEBUG_VIEW_NORMALS) color = normalize(texelFetch(normal_roughness_tex, pixel, 0).xyz) * 0.5 + 0.5;
-        if (debug_view == DEBUG_VIEW_ALBEDO) color = texelFetch(albedo_metallic_tex, pixel, 0).rgb;
-        if (debug_view == DEBUG_VIEW_DEPTH) color = vec3(fract(log2(depth) * 0.25));
-        color = pow(color, vec3(2.2)); // shown as-is after the sRGB encode below
+    tile_cull_lights(settings.light_tiles != 0u);
+    if (!inside) return;
+    vec3 color;
+    uint shaded = 1u;
+    if (single_surface(pixel)) {
+        color = shade_sample(pixel, 0u, center);
+    } else {
+        color = vec3(0.0);
+        for (uint s = 0u; s < SAMPLES; ++s) color += shade_sample(pixel, s, center);
+        color /= float(SAMPLES);
+        shaded = SAMPLES;
+    }
+    if (settings.debug_view == DEBUG_VIEW_SAMPLES) {
+        color = shaded > 1u ? vec3(1.0, 0.0, 0.0) : vec3(0.003, 0.003, 0.05);
     }
     imageStore(out_color, pixel, vec4(linear_to_srgb(color), 1.0));
 }

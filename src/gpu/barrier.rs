@@ -99,7 +99,24 @@ impl Access {
 
 /// An image barrier moving `image` (all mips) from `before` to `after`.
 pub fn image_barrier(image: &Image, before: Access, after: Access) -> vk::ImageMemoryBarrier2<'static> {
+    let format = image.format();
+    let before = Access { layout: layout_for_format(before.layout, format), ..before };
+    let after = Access { layout: layout_for_format(after.layout, format), ..after };
     image_barrier_raw(image.handle(), image.subresource_range(), before, after)
+}
+
+/// The layout to use for an image of `format`: the depth-only attachment layouts become their
+/// depth+stencil forms for formats with stencil, so one layout covers both aspects (passes
+/// and the graph name layouts without knowing whether the depth image has stencil).
+pub fn layout_for_format(layout: vk::ImageLayout, format: vk::Format) -> vk::ImageLayout {
+    if !crate::gpu::image::aspect_of(format).contains(vk::ImageAspectFlags::STENCIL) {
+        return layout;
+    }
+    match layout {
+        vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL => vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+        vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL => vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+        other => other,
+    }
 }
 
 /// An image barrier on a raw handle and subresource range.

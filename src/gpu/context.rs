@@ -74,6 +74,8 @@ pub struct DeviceCaps {
     pub timestamp_valid_bits: u32,
     /// Subgroup size reported by the device (8 on lavapipe, 32 on NVIDIA).
     pub subgroup_size: u32,
+    /// `VK_EXT_post_depth_coverage` is supported (and enabled on a device cullgraph creates).
+    pub post_depth_coverage: bool,
 }
 
 /// State shared by the context and every resource created from it; dropped last.
@@ -472,7 +474,12 @@ fn create_device(instance: &ash::Instance, chosen: &DeviceInfo, queue_family: u3
     }
     let priorities = [1.0f32];
     let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-    let ext_names: Vec<*const c_char> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+    let mut ext_names: Vec<*const c_char> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+    for want in super::features::OPTIONAL_DEVICE_EXTENSIONS {
+        if exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == *want)) {
+            ext_names.push(want.as_ptr());
+        }
+    }
     let mut features2 = required.chain();
     let info = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queues)
@@ -496,6 +503,9 @@ fn query_caps(instance: &ash::Instance, pd: vk::PhysicalDevice, queue_family: u3
     let props = props2.properties;
     // SAFETY: valid handles.
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    // SAFETY: valid handles.
+    let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
+    let has = |name: &std::ffi::CStr| exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name));
     DeviceCaps {
         name: props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
         kind: props.device_type,
@@ -503,5 +513,6 @@ fn query_caps(instance: &ash::Instance, pd: vk::PhysicalDevice, queue_family: u3
         timestamp_period_ns: props.limits.timestamp_period as f64,
         timestamp_valid_bits: families.get(queue_family as usize).map_or(0, |f| f.timestamp_valid_bits),
         subgroup_size: subgroup.subgroup_size,
+        post_depth_coverage: has(ash::ext::post_depth_coverage::NAME),
     }
 }

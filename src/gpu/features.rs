@@ -9,6 +9,11 @@ use std::ffi::CStr;
 /// Device extensions cullgraph uses. All are present on NVIDIA drivers and on lavapipe (Mesa 22.3).
 pub const REQUIRED_DEVICE_EXTENSIONS: &[&CStr] = &[ash::khr::push_descriptor::NAME];
 
+/// Device extensions enabled when present; passes that need one refuse to run without it
+/// (`VK_EXT_post_depth_coverage`: the compressed G-buffer's per-sample coverage after the depth
+/// and stencil tests). A host engine that creates the device enables these too.
+pub const OPTIONAL_DEVICE_EXTENSIONS: &[&CStr] = &[ash::ext::post_depth_coverage::NAME];
+
 /// The feature structs cullgraph enables, ready to chain into `VkDeviceCreateInfo`.
 ///
 /// Everything here is core Vulkan 1.3 or earlier; the struct only exists so that the same list

@@ -31,6 +31,8 @@ pub struct Image {
     handle: vk::Image,
     view: vk::ImageView,
     mip_views: Vec<vk::ImageView>,
+    /// Depth aspect alone, for sampling a depth+stencil image (null otherwise).
+    depth_view: vk::ImageView,
     allocation: Option<Allocation>,
     format: vk::Format,
     extent: vk::Extent2D,
@@ -120,6 +122,7 @@ impl Image {
             handle,
             view: vk::ImageView::null(),
             mip_views: Vec::new(),
+            depth_view: vk::ImageView::null(),
             allocation: None,
             format: desc.format,
             extent: desc.extent,
@@ -137,6 +140,7 @@ impl Image {
             handle: host.image,
             view: host.view,
             mip_views: Vec::new(),
+            depth_view: vk::ImageView::null(),
             allocation: None,
             format: host.format,
             extent: host.extent,
@@ -152,6 +156,17 @@ impl Image {
         // SAFETY: memory is compatible and large enough (caller contract: requirements honoured).
         unsafe { self.shared.device.bind_image_memory(self.handle, memory, offset) }.vk("vkBindImageMemory")?;
         self.view = self.create_view(0, self.mip_levels)?;
+        if self.aspect() == vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL {
+            let info = vk::ImageViewCreateInfo::default()
+                .image(self.handle)
+                .view_type(vk::ImageViewType::TYPE_2D)
+                .format(self.format)
+                .subresource_range(
+                    self.subresource_range_mips(0, self.mip_levels).aspect_mask(vk::ImageAspectFlags::DEPTH),
+                );
+            // SAFETY: valid image with bound memory.
+            self.depth_view = unsafe { self.shared.device.create_image_view(&info, None) }.vk("vkCreateImageView")?;
+        }
         if self.mip_levels > 1 {
             for level in 0..self.mip_levels {
                 let view = self.create_view(level, 1)?;
@@ -178,6 +193,15 @@ impl Image {
     /// View of all mip levels.
     pub fn view(&self) -> vk::ImageView {
         self.view
+    }
+    /// The view to sample or read in shaders: for a depth+stencil image its depth aspect
+    /// (a sampled view may show one aspect only), otherwise [`Image::view`].
+    pub fn sampled_view(&self) -> vk::ImageView {
+        if self.depth_view == vk::ImageView::null() {
+            self.view
+        } else {
+            self.depth_view
+        }
     }
     /// View of one mip level (the full view when the image has a single level).
     pub fn mip_view(&self, level: u32) -> vk::ImageView {
@@ -264,8 +288,10 @@ impl Drop for Image {
             for v in self.mip_views.drain(..) {
                 self.shared.device.destroy_image_view(v, None);
             }
-            if self.view != vk::ImageView::null() {
-                self.shared.device.destroy_image_view(self.view, None);
+            for v in [self.view, self.depth_view] {
+                if v != vk::ImageView::null() {
+                    self.shared.device.destroy_image_view(v, None);
+                }
             }
             if let Some(allocation) = self.allocation.take() {
                 let _ = self.shared.allocator().free(allocation);

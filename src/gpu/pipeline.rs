@@ -42,6 +42,20 @@ pub struct GraphicsDesc<'a> {
     pub samples: vk::SampleCountFlags,
     /// Face culling.
     pub cull_mode: vk::CullModeFlags,
+    /// Stencil use (only with a depth format that has stencil).
+    pub stencil: StencilRule,
+}
+
+/// What a pipeline does with the stencil aspect.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StencilRule {
+    /// Stencil test off.
+    #[default]
+    Off,
+    /// Each sample is written by the first fragment that reaches it: the test passes where the
+    /// sample's stencil is 0 and sets it to 1. With depth EQUAL this keeps coplanar and
+    /// duplicate triangles from writing a sample twice (the stencil must be cleared to 0).
+    FirstFragmentWins,
 }
 
 /// A pipeline with its reflected layout.
@@ -137,10 +151,24 @@ impl Pipeline {
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(desc.samples);
         let has_depth = desc.depth_format != vk::Format::UNDEFINED;
+        // Passes while the sample's stencil is 0 and increments it, so only the first fragment
+        // that reaches a sample passes (the reference stays 0).
+        let first_wins = vk::StencilOpState::default()
+            .fail_op(vk::StencilOp::KEEP)
+            .pass_op(vk::StencilOp::INCREMENT_AND_CLAMP)
+            .depth_fail_op(vk::StencilOp::KEEP)
+            .compare_op(vk::CompareOp::EQUAL)
+            .compare_mask(0xFF)
+            .write_mask(0xFF)
+            .reference(0);
+        let stencil_on = desc.stencil == StencilRule::FirstFragmentWins;
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(has_depth)
             .depth_write_enable(has_depth && desc.depth_write)
-            .depth_compare_op(desc.depth_compare);
+            .depth_compare_op(desc.depth_compare)
+            .stencil_test_enable(stencil_on)
+            .front(first_wins)
+            .back(first_wins);
         let blend_attachments: Vec<_> = desc
             .color_formats
             .iter()
@@ -151,7 +179,14 @@ impl Pipeline {
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(desc.color_formats)
-            .depth_attachment_format(desc.depth_format);
+            .depth_attachment_format(desc.depth_format)
+            .stencil_attachment_format(
+                if crate::gpu::image::aspect_of(desc.depth_format).contains(vk::ImageAspectFlags::STENCIL) {
+                    desc.depth_format
+                } else {
+                    vk::Format::UNDEFINED
+                },
+            );
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stage_infos)
             .vertex_input_state(&vertex_input)

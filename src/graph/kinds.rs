@@ -100,38 +100,138 @@ const fn slot(name: &'static str, usage: Usage, required: bool, format: FormatRu
     SlotDecl { name, usage, required, format, multisample_ok: false, doc }
 }
 
+const fn ms(s: SlotDecl) -> SlotDecl {
+    SlotDecl { multisample_ok: true, ..s }
+}
+
+/// The draw list a geometry pass draws (`required`: the graph must bind it; otherwise the
+/// default is every instance).
+fn draw_list_slots(required: bool) -> Vec<SlotDecl> {
+    let default = if required { "" } else { " (default: every instance)" };
+    let _ = default;
+    vec![
+        slot(
+            "draw_commands",
+            Usage::Indirect,
+            required,
+            FormatRule::Any,
+            "VkDrawIndexedIndirectCommand per draw group",
+        ),
+        slot("draw_count", Usage::Indirect, required, FormatRule::Any, "number of commands"),
+        slot(
+            "draw_instance_ids",
+            Usage::StorageBufferRead(Stages::Vertex),
+            required,
+            FormatRule::Any,
+            "instance ids, one slice per draw group",
+        ),
+    ]
+}
+
+/// The lists a redraw pass draws: the first (default: every instance) and an optional `late_` one.
+fn redraw_list_slots() -> Vec<SlotDecl> {
+    let mut slots = draw_list_slots(false);
+    slots.extend([
+        slot(
+            "late_draw_commands",
+            Usage::Indirect,
+            false,
+            FormatRule::Any,
+            "a second list's commands (two-phase culling's late draw)",
+        ),
+        slot("late_draw_count", Usage::Indirect, false, FormatRule::Any, "its count"),
+        slot(
+            "late_draw_instance_ids",
+            Usage::StorageBufferRead(Stages::Vertex),
+            false,
+            FormatRule::Any,
+            "its instance ids",
+        ),
+    ]);
+    slots
+}
+
+fn lighting_settings() -> Vec<SettingDecl> {
+    vec![
+        SettingDecl { name: "exposure", default: SettingDefault::Float(0.8), doc: "scale applied before tone mapping" },
+        SettingDecl {
+            name: "debug_view",
+            default: SettingDefault::Choice(&["none", "normals", "albedo", "depth", "samples"]),
+            doc: "show a G-buffer channel instead of the lit image (samples: distinct surfaces per pixel as a heatmap)",
+        },
+        SettingDecl {
+            name: "light_tiles",
+            default: SettingDefault::Bool(true),
+            doc: "cull point lights per 16x16 tile (false: every light for every pixel, the thesis's loop)",
+        },
+    ]
+}
+
 /// The built-in pass kinds.
 pub fn builtin_kinds() -> Vec<PassKindInfo> {
     vec![
         PassKindInfo {
             name: "gbuffer",
-            doc: "draws the scene's draw groups with vkCmdDrawIndexedIndirectCount into albedo, normal and reversed-Z depth",
-            reads: vec![
-                slot("draw_commands", Usage::Indirect, false, FormatRule::Any, "VkDrawIndexedIndirectCommand per draw group (default: every instance)"),
-                slot("draw_count", Usage::Indirect, false, FormatRule::Any, "number of commands (default: every non-empty group)"),
-                slot(
-                    "draw_instance_ids",
-                    Usage::StorageBufferRead(Stages::Vertex),
-                    false,
-                    FormatRule::Any,
-                    "instance ids, one slice per draw group",
-                ),
-            ],
+            doc: "draws a draw list with vkCmdDrawIndexedIndirectCount into albedo, normal and reversed-Z depth (any sample count), or into depth alone when no color target is bound (an MSAA Z-prepass)",
+            reads: draw_list_slots(false),
             writes: vec![
-                slot("albedo", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a"),
-                slot("normal", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a"),
-                slot("depth", Usage::DepthAttachment, true, FormatRule::Exact(vk::Format::D32_SFLOAT), "reversed-Z depth"),
+                ms(slot("albedo", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
+                ms(slot("normal", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a")),
+                ms(slot("depth", Usage::DepthAttachment, true, FormatRule::Depth, "reversed-Z depth (cleared to 0, stencil to 0)")),
             ],
             settings: vec![],
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "gbuffer_equal",
+            doc: "the MSAA Z-prepass baseline: redraws the lists with depth EQUAL against finished depth, one stencil bit per sample (each sample written once), into cleared albedo and normal",
+            reads: redraw_list_slots(),
+            writes: vec![
+                ms(slot("albedo", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a")),
+                ms(slot("normal", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a")),
+                ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished depth, with stencil (its stencil is written)")),
+            ],
+            settings: vec![],
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "gbuffer_compressed",
+            doc: "the compressed G-buffer geometry pass: redraws the lists with depth EQUAL, stencil first-fragment-wins and post-depth coverage, writing one 14-byte block per pixel plus pooled blocks for the other distinct surfaces of edge pixels, in per-pixel linked lists",
+            reads: redraw_list_slots(),
+            writes: vec![
+                ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished MSAA depth, with stencil (its stencil is written)")),
+                slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header, width x height head blocks, then the pool (size: compressed_gbuffer_bytes(pool_blocks))"),
+            ],
+            settings: vec![
+                SettingDecl { name: "aa_region", default: SettingDefault::Choice(&["all", "ellipse", "rectangle"]), doc: "selective AA: only pixels inside this screen region (centered, aa_region_size of the screen) keep more than one block" },
+                SettingDecl { name: "aa_region_size", default: SettingDefault::Float(0.6), doc: "size of the AA region as a fraction of the screen's width and height" },
+                SettingDecl { name: "aa_max_depth_distance", default: SettingDefault::Float(0.0), doc: "selective AA: pixels farther than this distance keep one block (0: no limit)" },
+                SettingDecl { name: "aa_object_flags", default: SettingDefault::Bool(false), doc: "selective AA: instances flagged no-AA keep one block" },
+                SettingDecl { name: "aa_edges_only", default: SettingDefault::Bool(false), doc: "selective AA: only pixels on a depth edge (depth samples differ by more than 1%) keep more than one block" },
+            ],
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "lighting_compressed",
+            doc: "lights the compressed G-buffer in compute: every block shaded once with tile-culled point lights, tone-mapped, weighted by the samples it covers, averaged",
+            reads: vec![
+                ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the MSAA depth (positions are rebuilt from each block's sample)")),
+                slot("gbuffer", Usage::StorageBufferRead(Stages::Compute), true, FormatRule::Any, "the compressed G-buffer"),
+            ],
+            writes: vec![
+                slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image"),
+                slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "pool counters and a blocks-per-pixel histogram (size: 64)"),
+            ],
+            settings: lighting_settings(),
             slots_from_shader: false,
         },
         PassKindInfo {
             name: "lighting",
             doc: "deferred lighting in compute: sun, point lights and sky ambient, tone-mapped, sRGB-encoded",
             reads: vec![
-                slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "reversed-Z depth"),
-                slot("albedo", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo, metallic"),
-                slot("normal", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal, roughness"),
+                ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "reversed-Z depth (multisampled: every sample is lit)")),
+                ms(slot("albedo", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo, metallic")),
+                ms(slot("normal", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal, roughness")),
             ],
             writes: vec![slot(
                 "output",
@@ -140,34 +240,17 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
                 FormatRule::Exact(LIT_OUTPUT_FORMAT),
                 "lit image",
             )],
-            settings: vec![
-                SettingDecl { name: "exposure", default: SettingDefault::Float(0.8), doc: "scale applied before tone mapping" },
-                SettingDecl {
-                    name: "debug_view",
-                    default: SettingDefault::Choice(&["none", "normals", "albedo", "depth"]),
-                    doc: "show a G-buffer channel instead of the lit image",
-                },
-            ],
+            settings: lighting_settings(),
             slots_from_shader: false,
         },
         PassKindInfo {
             name: "gbuffer_append",
-            doc: "like gbuffer, but draws into the existing albedo, normal and depth (the late phase of two-phase culling)",
-            reads: vec![
-                slot("draw_commands", Usage::Indirect, true, FormatRule::Any, "VkDrawIndexedIndirectCommand per draw group"),
-                slot("draw_count", Usage::Indirect, true, FormatRule::Any, "number of commands"),
-                slot(
-                    "draw_instance_ids",
-                    Usage::StorageBufferRead(Stages::Vertex),
-                    true,
-                    FormatRule::Any,
-                    "instance ids, one slice per draw group",
-                ),
-            ],
+            doc: "like gbuffer, but draws on top of the existing targets (the late phase of two-phase culling)",
+            reads: draw_list_slots(true),
             writes: vec![
-                slot("albedo", Usage::ColorAttachmentLoad, true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a"),
-                slot("normal", Usage::ColorAttachmentLoad, true, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a"),
-                slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Exact(vk::Format::D32_SFLOAT), "reversed-Z depth"),
+                ms(slot("albedo", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
+                ms(slot("normal", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a")),
+                ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "reversed-Z depth")),
             ],
             settings: vec![],
             slots_from_shader: false,

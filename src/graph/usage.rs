@@ -15,6 +15,8 @@ pub enum Stages {
     Fragment,
     /// Vertex and fragment shaders.
     Graphics,
+    /// A compute dispatch and the fragment shader of the same pass (a clear, then a draw).
+    ComputeFragment,
 }
 
 impl Stages {
@@ -24,6 +26,9 @@ impl Stages {
             Stages::Vertex => vk::PipelineStageFlags2::VERTEX_SHADER,
             Stages::Fragment => vk::PipelineStageFlags2::FRAGMENT_SHADER,
             Stages::Graphics => vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            Stages::ComputeFragment => {
+                vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER
+            }
         }
     }
 }

@@ -65,6 +65,7 @@ impl VisibilityOracle {
                 depth_write: true,
                 samples,
                 cull_mode: vk::CullModeFlags::NONE,
+                stencil: Default::default(),
             },
         )?;
         let defines: &[(&str, &str)] =

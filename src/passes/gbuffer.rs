@@ -1,8 +1,19 @@
-//! G-buffer geometry pass: draws every draw group with `vkCmdDrawIndexedIndirectCount` into
-//! albedo/metallic, normal/roughness and reversed-Z depth.
+//! Geometry passes that draw the culled draw lists with `vkCmdDrawIndexedIndirectCount`:
+//!
+//! - `gbuffer`: clears and draws albedo/metallic, normal/roughness and reversed-Z depth, or depth
+//!   alone when no color target is bound (the MSAA Z-prepass of the compressed G-buffer);
+//! - `gbuffer_append`: the same on top of what an earlier pass drew (two-phase culling's late draw);
+//! - `gbuffer_equal`: the MSAA Z-prepass baseline: depth EQUAL against a finished depth buffer,
+//!   one stencil bit per sample so each sample is written once, colors cleared first.
+//!
+//! Formats and the sample count come from the bound images, so one pass serves no AA and every
+//! MSAA rate.
 
-use crate::gpu::{Bind, Buffer, GpuContext, GraphicsDesc, Image, Pipeline, ShaderCompiler};
+use crate::gpu::barrier::layout_for_format;
+use crate::gpu::{Bind, Buffer, GpuContext, GraphicsDesc, Image, Pipeline, ShaderCompiler, StencilRule};
 use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind};
+use crate::render::gpu_types::DrawIndexedIndirect;
 use crate::render::scene_buffers::GpuScene;
 use ash::vk;
 
@@ -12,16 +23,6 @@ pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// Reversed-Z depth: cleared to 0 (infinitely far), nearer is greater.
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
-
-/// The attachments the pass renders into.
-pub struct GbufferTargets<'a> {
-    /// [`ALBEDO_FORMAT`] image.
-    pub albedo: &'a Image,
-    /// [`NORMAL_FORMAT`] image.
-    pub normal: &'a Image,
-    /// [`DEPTH_FORMAT`] image.
-    pub depth: &'a Image,
-}
 
 /// Where the draws come from: the scene's unculled list, or a culling pass's output.
 pub struct DrawSource<'a> {
@@ -45,138 +46,233 @@ impl<'a> DrawSource<'a> {
             max_draws: scene.max_draws,
         }
     }
+
+    /// The list bound to `{prefix}draw_commands`, `{prefix}draw_count` and
+    /// `{prefix}draw_instance_ids`, if all three are bound.
+    pub fn bound(slots: &crate::graph::executor::SlotBindings<'a>, prefix: &str) -> Option<Self> {
+        let commands = slots.buffer(&format!("{prefix}draw_commands"))?;
+        let count = slots.buffer(&format!("{prefix}draw_count"))?;
+        let instance_ids = slots.buffer(&format!("{prefix}draw_instance_ids"))?;
+        let stride = std::mem::size_of::<DrawIndexedIndirect>() as u64;
+        let max_draws = (commands.size() / stride).min(u32::MAX as u64) as u32;
+        Some(Self { commands, count, instance_ids, max_draws })
+    }
+
+    /// The lists a redraw pass draws: the first list (or every instance when none is bound),
+    /// then the `late_` list when bound (two-phase culling draws in two lists).
+    pub fn redraw_lists(slots: &crate::graph::executor::SlotBindings<'a>, scene: &'a GpuScene) -> Vec<Self> {
+        let mut lists = vec![Self::bound(slots, "").unwrap_or_else(|| Self::unculled(scene))];
+        lists.extend(Self::bound(slots, "late_"));
+        lists
+    }
 }
 
-/// The G-buffer geometry pass.
+/// Format and samples of the image bound to `slot` of `pass`.
+pub fn bound_image(plan: &CompiledGraph, pass: &PlannedPass, slot: &str) -> Option<(vk::Format, vk::SampleCountFlags)> {
+    let binding = pass.bindings.iter().find(|b| b.slot == slot)?;
+    match &plan.resources.get(binding.resource)?.kind {
+        ResolvedKind::Image { format, samples, .. } => Some((*format, *samples)),
+        ResolvedKind::Buffer { .. } => None,
+    }
+}
+
+/// Creates a graphics pipeline over `gbuffer.vert` (whose invariant position every geometry
+/// pass shares, so depth EQUAL against another pass's depth holds exactly).
+pub fn geometry_pipeline(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    name: &str,
+    fragment: Option<(&str, &[(&str, &str)])>,
+    color_formats: &[vk::Format],
+    depth: (vk::Format, vk::SampleCountFlags),
+    equal: bool,
+) -> crate::Result<Pipeline> {
+    let vertex = shaders.compile("gbuffer/gbuffer.vert", &[])?;
+    let fragment = fragment.map(|(path, defines)| shaders.compile(path, defines)).transpose()?;
+    Ok(Pipeline::graphics(
+        ctx,
+        name,
+        &GraphicsDesc {
+            vertex: &vertex,
+            fragment: fragment.as_ref(),
+            vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
+            vertex_attributes: &[(0, vk::Format::R32G32B32_SFLOAT, 0), (1, vk::Format::R16G16_SNORM, 12)],
+            color_formats,
+            depth_format: depth.0,
+            depth_compare: if equal { vk::CompareOp::EQUAL } else { vk::CompareOp::GREATER },
+            depth_write: !equal,
+            samples: depth.1,
+            // Two-sided: open meshes and mirrored instances must not lose faces.
+            cull_mode: vk::CullModeFlags::NONE,
+            stencil: if equal { StencilRule::FirstFragmentWins } else { StencilRule::Off },
+        },
+    )?)
+}
+
+/// Records `lists` with `pipeline` inside dynamic rendering over `colors` and `depth`.
+/// `extra` bindings (binding 4 and up) are pushed after the shared ones; `push` is the
+/// pipeline's push-constant block (empty for none).
+#[allow(clippy::too_many_arguments)]
+pub fn record_geometry(
+    ctx: &GpuContext,
+    cmd: vk::CommandBuffer,
+    pipeline: &Pipeline,
+    scene: &GpuScene,
+    lists: &[DrawSource<'_>],
+    frame: &Buffer,
+    colors: &[vk::RenderingAttachmentInfo<'_>],
+    depth: &Image,
+    depth_load: vk::AttachmentLoadOp,
+    extra: &[Bind],
+    push: &[u8],
+) {
+    let device = ctx.device();
+    let extent = depth.extent();
+    let depth_layout = layout_for_format(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, depth.format());
+    let depth_info = vk::RenderingAttachmentInfo::default()
+        .image_view(depth.view())
+        .image_layout(depth_layout)
+        .load_op(depth_load)
+        .store_op(vk::AttachmentStoreOp::STORE)
+        .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } });
+    let has_stencil = depth.aspect().contains(vk::ImageAspectFlags::STENCIL);
+    let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+    let mut rendering = vk::RenderingInfo::default()
+        .render_area(area)
+        .layer_count(1)
+        .color_attachments(colors)
+        .depth_attachment(&depth_info);
+    if has_stencil {
+        rendering = rendering.stencil_attachment(&depth_info);
+    }
+    let viewport = vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: extent.width as f32,
+        height: extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    };
+    let stride = std::mem::size_of::<DrawIndexedIndirect>() as u32;
+    // SAFETY: cmd is recording; every handle is alive for the command buffer's execution.
+    unsafe {
+        device.cmd_begin_rendering(cmd, &rendering);
+        device.cmd_set_viewport(cmd, 0, &[viewport]);
+        device.cmd_set_scissor(cmd, 0, &[area]);
+        pipeline.bind(cmd);
+        pipeline.push_constant_bytes(cmd, push);
+        device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
+        device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
+        for list in lists {
+            let mut binds = vec![
+                Bind::Buffer(0, scene.instances.handle()),
+                Bind::Buffer(1, list.instance_ids.handle()),
+                Bind::Buffer(2, frame.handle()),
+                Bind::Buffer(3, scene.materials.handle()),
+            ];
+            binds.extend_from_slice(extra);
+            pipeline.push_bindings(cmd, &binds);
+            if list.max_draws > 0 {
+                device.cmd_draw_indexed_indirect_count(
+                    cmd,
+                    list.commands.handle(),
+                    0,
+                    list.count.handle(),
+                    0,
+                    list.max_draws,
+                    stride,
+                );
+            }
+        }
+        device.cmd_end_rendering(cmd);
+    }
+}
+
+/// How a geometry pass treats what is already in its targets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GeometryMode {
+    /// Clear everything, depth test GREATER with writes (`gbuffer`).
+    Clear,
+    /// Keep what earlier passes drew (`gbuffer_append`).
+    Append,
+    /// Clear the colors, test EQUAL against the finished depth, stencil first-fragment-wins (`gbuffer_equal`).
+    Equal,
+}
+
+/// The `gbuffer`, `gbuffer_append` and `gbuffer_equal` passes.
 pub struct GbufferPass {
     pipeline: Pipeline,
-    /// Keep what earlier passes drew (`gbuffer_append`) instead of clearing.
-    append: bool,
+    mode: GeometryMode,
 }
 
 impl GbufferPass {
-    /// Compiles the shaders and creates the pipeline.
-    pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler) -> crate::Result<Self> {
-        let vertex = shaders.compile("gbuffer/gbuffer.vert", &[])?;
-        let fragment = shaders.compile("gbuffer/gbuffer.frag", &[])?;
-        let pipeline = Pipeline::graphics(
-            ctx,
-            "gbuffer",
-            &GraphicsDesc {
-                vertex: &vertex,
-                fragment: Some(&fragment),
-                vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-                vertex_attributes: &[(0, vk::Format::R32G32B32_SFLOAT, 0), (1, vk::Format::R16G16_SNORM, 12)],
-                color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT],
-                depth_format: DEPTH_FORMAT,
-                depth_compare: vk::CompareOp::GREATER,
-                depth_write: true,
-                samples: vk::SampleCountFlags::TYPE_1,
-                // Two-sided: open meshes and mirrored instances must not lose faces.
-                cull_mode: vk::CullModeFlags::NONE,
-            },
-        )?;
-        Ok(Self { pipeline, append: false })
-    }
-
-    /// The pass that draws on top of what earlier passes left in the targets.
-    pub fn appending(ctx: &GpuContext, shaders: &ShaderCompiler) -> crate::Result<Self> {
-        Ok(Self { append: true, ..Self::new(ctx, shaders)? })
-    }
-
-    /// Records the pass. The targets must be in attachment layouts (see [`crate::gpu::Access`]).
-    pub fn record(
-        &self,
+    /// The pass for `pass`, with formats and samples from the images bound to it in `plan`.
+    pub fn for_plan(
         ctx: &GpuContext,
-        cmd: vk::CommandBuffer,
-        scene: &GpuScene,
-        draws: &DrawSource<'_>,
-        frame: &Buffer,
-        targets: &GbufferTargets<'_>,
-    ) {
-        let device = ctx.device();
-        let extent = targets.depth.extent();
-        let load_op = if self.append { vk::AttachmentLoadOp::LOAD } else { vk::AttachmentLoadOp::CLEAR };
-        let color = |image: &Image| {
-            vk::RenderingAttachmentInfo::default()
-                .image_view(image.view())
-                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(load_op)
-                .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
-        };
-        let colors = [color(targets.albedo), color(targets.normal)];
-        let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(targets.depth.view())
-            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(load_op)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } });
-        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
-        let rendering = vk::RenderingInfo::default()
-            .render_area(area)
-            .layer_count(1)
-            .color_attachments(&colors)
-            .depth_attachment(&depth);
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: extent.width as f32,
-            height: extent.height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
-        // SAFETY: cmd is recording; every handle is alive for the command buffer's execution.
-        unsafe {
-            device.cmd_begin_rendering(cmd, &rendering);
-            device.cmd_set_viewport(cmd, 0, &[viewport]);
-            device.cmd_set_scissor(cmd, 0, &[area]);
-            self.pipeline.bind(cmd);
-            self.pipeline.push_bindings(
-                cmd,
-                &[
-                    Bind::Buffer(0, scene.instances.handle()),
-                    Bind::Buffer(1, draws.instance_ids.handle()),
-                    Bind::Buffer(2, frame.handle()),
-                    Bind::Buffer(3, scene.materials.handle()),
-                ],
-            );
-            device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
-            device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
-            if draws.max_draws > 0 {
-                device.cmd_draw_indexed_indirect_count(
-                    cmd,
-                    draws.commands.handle(),
-                    0,
-                    draws.count.handle(),
-                    0,
-                    draws.max_draws,
-                    std::mem::size_of::<crate::render::gpu_types::DrawIndexedIndirect>() as u32,
-                );
-            }
-            device.cmd_end_rendering(cmd);
+        shaders: &ShaderCompiler,
+        pass: &PlannedPass,
+        plan: &CompiledGraph,
+        mode: GeometryMode,
+    ) -> crate::Result<Self> {
+        let invalid = |m: String| crate::Error::Invalid(format!("pass '{}': {m}", pass.name));
+        let depth = bound_image(plan, pass, "depth").ok_or_else(|| invalid("no depth image bound".into()))?;
+        let colors: Vec<vk::Format> =
+            ["albedo", "normal"].iter().filter_map(|s| bound_image(plan, pass, s).map(|(f, _)| f)).collect();
+        if colors.len() == 1 {
+            return Err(invalid("bind both albedo and normal, or neither (a depth-only pass)".into()));
         }
+        if mode == GeometryMode::Equal && !crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL)
+        {
+            return Err(invalid(format!(
+                "gbuffer_equal needs a depth format with stencil (one stencil bit per sample), not {:?}",
+                depth.0
+            )));
+        }
+        let fragment = (!colors.is_empty()).then_some(("gbuffer/gbuffer.frag", &[][..]));
+        let pipeline =
+            geometry_pipeline(ctx, shaders, &pass.name, fragment, &colors, depth, mode == GeometryMode::Equal)?;
+        Ok(Self { pipeline, mode })
     }
 }
 
 impl PassNode for GbufferPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let slots = &rec.slots;
-        let targets = GbufferTargets {
-            albedo: slots.required_image("albedo")?,
-            normal: slots.required_image("normal")?,
-            depth: slots.required_image("depth")?,
-        };
+        let depth = slots.required_image("depth")?;
+        let color_load =
+            if self.mode == GeometryMode::Append { vk::AttachmentLoadOp::LOAD } else { vk::AttachmentLoadOp::CLEAR };
+        let depth_load =
+            if self.mode == GeometryMode::Clear { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD };
+        let colors: Vec<vk::RenderingAttachmentInfo> = ["albedo", "normal"]
+            .iter()
+            .filter_map(|s| slots.image(s))
+            .map(|image| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(image.view())
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(color_load)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
+            })
+            .collect();
         let scene = rec.frame.scene;
-        let mut draws = DrawSource::unculled(scene);
-        if let (Some(commands), Some(count), Some(ids)) =
-            (slots.buffer("draw_commands"), slots.buffer("draw_count"), slots.buffer("draw_instance_ids"))
-        {
-            let stride = std::mem::size_of::<crate::render::gpu_types::DrawIndexedIndirect>() as u64;
-            let max_draws = (commands.size() / stride).min(u32::MAX as u64) as u32;
-            draws = DrawSource { commands, count, instance_ids: ids, max_draws };
-        }
-        GbufferPass::record(self, rec.ctx, rec.cmd, scene, &draws, rec.frame.constants, &targets);
+        let lists = match self.mode {
+            GeometryMode::Equal => DrawSource::redraw_lists(slots, scene),
+            _ => vec![DrawSource::bound(slots, "").unwrap_or_else(|| DrawSource::unculled(scene))],
+        };
+        record_geometry(
+            rec.ctx,
+            rec.cmd,
+            &self.pipeline,
+            scene,
+            &lists,
+            rec.frame.constants,
+            &colors,
+            depth,
+            depth_load,
+            &[],
+            &[],
+        );
         Ok(())
     }
 }

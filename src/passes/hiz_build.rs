@@ -240,14 +240,6 @@ impl HizBuildPass {
         if hiz.format() != HIZ_FORMAT {
             return Err(invalid(format!("the pyramid '{}' is {:?}, not {HIZ_FORMAT:?}", hiz.name(), hiz.format())));
         }
-        if depth.aspect() != vk::ImageAspectFlags::DEPTH {
-            // A depth-stencil image's view has both aspects, which a sampled descriptor may not.
-            return Err(invalid(format!(
-                "'{}' is {:?}; the pass samples depth-only formats (D16_UNORM, X8_D24_UNORM_PACK32, D32_SFLOAT)",
-                depth.name(),
-                depth.format()
-            )));
-        }
         let levels = hiz.mip_levels();
         let chain = pyramid_mip_count(vk::Extent2D { width: e.width, height: e.height });
         if levels > chain {
@@ -267,7 +259,7 @@ impl HizBuildPass {
         let variant = usize::from(samples > 1);
         let device = ctx.device();
         let depth_bind =
-            Bind::Sampled(0, depth.view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
+            Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
         match self.method {
             HizMethod::Single => {
                 let pipeline = self.from_depth[variant].get(ctx, &self.name)?;

@@ -3,7 +3,8 @@
 
 use crate::gpu::{Bind, Buffer, GpuContext, Image, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::{PassContext, PassNode};
-use crate::graph::plan::{PlannedPass, SettingValue};
+use crate::graph::plan::{CompiledGraph, PlannedPass, SettingValue};
+use crate::passes::gbuffer::bound_image;
 use ash::vk;
 
 /// Format of the lit output (values are sRGB-encoded by the shader).
@@ -31,8 +32,10 @@ pub struct LightingInputs<'a> {
 pub struct LightingSettings {
     /// Scale applied before tone mapping.
     pub exposure: f32,
-    /// 0 lit, 1 normals, 2 albedo, 3 depth (`DEBUG_VIEW_*` in `scene.glsl`).
+    /// 0 lit, 1 normals, 2 albedo, 3 depth, 4 samples (`DEBUG_VIEW_*` in `scene.glsl`).
     pub debug_view: u32,
+    /// 1: cull point lights per 16x16 tile; 0: every light for every pixel.
+    pub light_tiles: u32,
 }
 
 impl LightingSettings {
@@ -48,11 +51,13 @@ impl LightingSettings {
                 "normals" => 1,
                 "albedo" => 2,
                 "depth" => 3,
+                "samples" => 4,
                 _ => 0,
             },
             _ => 0,
         };
-        Self { exposure, debug_view }
+        let light_tiles = !matches!(pass.settings.get("light_tiles"), Some(SettingValue::Bool(false)));
+        Self { exposure, debug_view, light_tiles: light_tiles as u32 }
     }
 }
 
@@ -64,10 +69,11 @@ pub struct LightingPass {
 }
 
 impl LightingPass {
-    /// Compiles the shader and creates the pipeline.
-    pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler) -> crate::Result<Self> {
-        let spirv = shaders.compile("lighting/lighting.comp", &[])?;
-        let settings = LightingSettings { exposure: 0.8, debug_view: 0 };
+    /// Compiles the shader for G-buffer images of `samples` samples and creates the pipeline.
+    pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler, samples: vk::SampleCountFlags) -> crate::Result<Self> {
+        let samples = samples.as_raw().max(1).to_string();
+        let spirv = shaders.compile("lighting/lighting.comp", &[("SAMPLES", &samples)])?;
+        let settings = LightingSettings { exposure: 0.8, debug_view: 0, light_tiles: 1 };
         Ok(Self {
             pipeline: Pipeline::compute(ctx, "lighting", &spirv)?,
             sampler: Sampler::nearest_clamp(ctx)?,
@@ -75,9 +81,15 @@ impl LightingPass {
         })
     }
 
-    /// The pass configured by a graph node's settings.
-    pub fn for_plan(ctx: &GpuContext, shaders: &ShaderCompiler, pass: &PlannedPass) -> crate::Result<Self> {
-        Ok(Self { settings: LightingSettings::from_plan(pass), ..Self::new(ctx, shaders)? })
+    /// The pass configured by a graph node's settings, for the sample count of its bound depth.
+    pub fn for_plan(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        pass: &PlannedPass,
+        plan: &CompiledGraph,
+    ) -> crate::Result<Self> {
+        let samples = bound_image(plan, pass, "depth").map_or(vk::SampleCountFlags::TYPE_1, |(_, s)| s);
+        Ok(Self { settings: LightingSettings::from_plan(pass), ..Self::new(ctx, shaders, samples)? })
     }
 
     /// Records one dispatch over the output.
@@ -94,9 +106,9 @@ impl LightingPass {
         self.pipeline.push_bindings(
             cmd,
             &[
-                Bind::Sampled(0, io.depth.view(), s, read),
-                Bind::Sampled(1, io.albedo.view(), s, read),
-                Bind::Sampled(2, io.normal.view(), s, read),
+                Bind::Sampled(0, io.depth.sampled_view(), s, read),
+                Bind::Sampled(1, io.albedo.sampled_view(), s, read),
+                Bind::Sampled(2, io.normal.sampled_view(), s, read),
                 Bind::Buffer(3, io.frame.handle()),
                 Bind::Buffer(4, io.lights.handle()),
                 Bind::StorageImage(5, io.output.view()),
@@ -105,7 +117,7 @@ impl LightingPass {
         self.pipeline.push_constants(cmd, settings);
         let e = io.output.extent();
         // SAFETY: cmd recording with this pipeline bound.
-        unsafe { ctx.device().cmd_dispatch(cmd, e.width.div_ceil(8), e.height.div_ceil(8), 1) };
+        unsafe { ctx.device().cmd_dispatch(cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
     }
 }
 

@@ -19,7 +19,7 @@ use crate::graph::plan::{CompiledGraph, ResolvedKind};
 use crate::oracle::visibility::VisibilityOracle;
 use crate::passes::overlay::{GpuPassTimes, PASS_TIMES_BYTES};
 use crate::scene::{Camera, Scene};
-use crate::stats::{CullCounters, CullPassStats, FrameStats, VerifyStats};
+use crate::stats::{CullCounters, CullPassStats, FrameStats, GbufferCounters, GbufferPassStats, VerifyStats};
 use ash::vk;
 use std::collections::BTreeSet;
 use std::time::Instant;
@@ -323,15 +323,21 @@ impl Renderer {
     pub fn completed_stats(&self, frame: u64) -> Result<FrameStats> {
         let timings = self.completed_timings(frame)?;
         let total = timings.iter().find(|t| t.name == "frame").map_or(0.0, |t| t.ms);
-        let culling: Vec<CullPassStats> = if frame >= self.runtime_start {
-            self.runtime
-                .pass_counters(frame - self.runtime_start)?
-                .iter()
-                .map(|(name, bytes)| CullPassStats::new(name, bytemuck::from_bytes::<CullCounters>(bytes)))
-                .collect()
+        let counters = if frame >= self.runtime_start {
+            self.runtime.pass_counters(frame - self.runtime_start)?
         } else {
             Vec::new()
         };
+        let culling: Vec<CullPassStats> = counters
+            .iter()
+            .filter(|(_, kind, _)| kind == "instance_cull")
+            .map(|(name, _, bytes)| CullPassStats::new(name, bytemuck::from_bytes::<CullCounters>(bytes)))
+            .collect();
+        let gbuffer: Vec<GbufferPassStats> = counters
+            .iter()
+            .filter(|(_, kind, _)| kind == "lighting_compressed")
+            .map(|(name, _, bytes)| GbufferPassStats::new(name, bytemuck::from_bytes::<GbufferCounters>(bytes)))
+            .collect();
         let mut stats = FrameStats {
             frame,
             instances: self.gpu_scene.instance_count,
@@ -347,6 +353,7 @@ impl Renderer {
                 crate::stats::cull::totals(&culling);
         }
         stats.culling = culling;
+        stats.gbuffer = gbuffer;
         Ok(stats)
     }
 

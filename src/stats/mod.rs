@@ -1,9 +1,11 @@
 //! Statistics as plain data: per-frame counts and GPU timings, exported as JSON.
 
 pub mod cull;
+pub mod gbuffer;
 
 use crate::gpu::PassTiming;
 pub use cull::{CullCounters, CullPassStats};
+pub use gbuffer::{GbufferCounters, GbufferPassStats};
 
 use serde::{Deserialize, Serialize};
 
@@ -26,6 +28,9 @@ pub struct FrameStats {
     pub triangles: u64,
     /// Per cull pass (empty without culling).
     pub culling: Vec<CullPassStats>,
+    /// Per compressed G-buffer (empty without one).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub gbuffer: Vec<GbufferPassStats>,
     /// Exact-visibility check of this frame (with `--verify`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub verify: Option<VerifyStats>,

@@ -344,8 +344,8 @@ impl GraphRuntime {
     }
 
     /// The counters each pass with a `stats` slot wrote in `frame`, once the frame has completed
-    /// (empty if its readback slot was reused since): (pass name, the 64 bytes it wrote).
-    pub fn pass_counters(&self, frame: u64) -> crate::Result<Vec<(String, [u8; STATS_BYTES])>> {
+    /// (empty if its readback slot was reused since): (pass name, pass kind, the 64 bytes it wrote).
+    pub fn pass_counters(&self, frame: u64) -> crate::Result<Vec<(String, String, [u8; STATS_BYTES])>> {
         if frame >= self.frame || self.frame - frame > FRAMES_IN_FLIGHT as u64 {
             return Ok(Vec::new());
         }
@@ -357,7 +357,7 @@ impl GraphRuntime {
             .map(|(k, &p)| {
                 let mut out = [0u8; STATS_BYTES];
                 out.copy_from_slice(&bytes[k * STATS_BYTES..(k + 1) * STATS_BYTES]);
-                (self.plan.passes[p].name.clone(), out)
+                (self.plan.passes[p].name.clone(), self.plan.passes[p].kind.clone(), out)
             })
             .collect())
     }

@@ -1,0 +1,50 @@
+// The compressed G-buffer (thesis 000 section 5, paper 002): one storage buffer holding a
+// header, one 14-byte head block per pixel, then a pool of blocks for the other distinct
+// surfaces of edge pixels, linked per pixel. Layout mirrors src/passes/gbuffer_compressed.rs.
+#ifndef CULLGRAPH_COMPRESSED_GBUFFER_GLSL
+#define CULLGRAPH_COMPRESSED_GBUFFER_GLSL
+
+#extension GL_EXT_scalar_block_layout : require
+#extension GL_EXT_shader_8bit_storage : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int8 : require
+
+// Two 14-byte blocks interleaved in 28 bytes (thesis Fig. 5.3), so every field stays aligned:
+// albedo+metallic (RGBA8) x2, normal (two 16-bit octahedral coordinates) x2, roughness x2,
+// ambient occlusion x2, link x2. Roughness and AO are single bytes: 8-bit stores keep the two
+// blocks of a pair, written by different fragments at once, from racing on a shared word.
+struct BlockPair {
+    uint albedo_metallic[2];
+    uint normal[2];
+    uint8_t roughness[2];
+    uint8_t ao[2];
+    uint link[2];
+};
+
+// Header counters, then the blocks.
+#define GBUFFER_HEADER_WORDS 4u
+#define GBUFFER_HEADER_ALLOCATED 0u           // pool blocks asked for this frame (may exceed the pool)
+#define GBUFFER_HEADER_OVERFLOW_FRAGMENTS 1u  // fragments dropped because the pool was full
+#define GBUFFER_HEADER_OVERFLOW_SAMPLES 2u    // samples they covered (the head took their weight)
+
+// Link word: 26-bit block index | 3-bit sample count | 3-bit sample index, the last two of the
+// block pointed to. Index 0 is the null link: links only ever point into the pool, which
+// starts after the heads.
+#define LINK_INDEX_BITS 26u
+#define LINK_INDEX_MASK 0x3FFFFFFu
+#define LINK_NULL 0u
+#define MAX_BLOCKS 0x3FFFFFFu
+
+uint link_index(uint link) { return link & LINK_INDEX_MASK; }
+uint link_count(uint link) { return (link >> 26) & 7u; }
+uint link_sample(uint link) { return link >> 29; }
+uint make_link(uint index, uint count, uint sample_index) { return index | (count << 26) | (sample_index << 29); }
+
+struct Block {
+    vec3 albedo;
+    float metallic;
+    vec3 normal;
+    float roughness;
+    float ao;
+};
+
+#endif

@@ -1,0 +1,84 @@
+#version 460
+// Compressed G-buffer geometry pass (thesis 000 section 4.3): depth EQUAL against the MSAA
+// depth, one stencil bit per sample so each sample passes for exactly one fragment, and the
+// coverage after those tests (post-depth coverage). The fragment that owns sample 0 writes the
+// pixel's head block; every other fragment takes a pool block with an atomic and pushes it on
+// the pixel's list. A full pool drops the fragment: its samples fall to the head's weight.
+#extension GL_ARB_post_depth_coverage : require
+#include "../common/scene.glsl"
+#include "../common/octahedral.glsl"
+#include "compressed_gbuffer.glsl"
+
+layout(early_fragment_tests) in;
+layout(post_depth_coverage) in;
+
+layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
+layout(set = 0, binding = 3, scalar) readonly buffer Materials { GpuMaterial materials[]; };
+layout(set = 0, binding = 4, scalar) buffer Gbuffer {
+    uint header[GBUFFER_HEADER_WORDS];
+    BlockPair pairs[];
+} gb;
+
+layout(push_constant) uniform Push {
+    uint width;
+    uint height;
+    uint pool_blocks;        // usable pool blocks (clamped to the 26-bit index)
+    uint aa_region;          // 0 all, 1 ellipse, 2 rectangle
+    float aa_region_size;    // fraction of the screen's width and height
+    float aa_max_distance;   // 0: no limit
+    uint aa_object_flags;    // 1: FLAG_NO_AA instances keep one block
+} pc;
+
+layout(location = 0) in vec3 in_normal;
+layout(location = 1) flat in uint in_material;
+layout(location = 2) flat in uint in_mirrored;
+layout(location = 3) flat in uint in_flags;
+
+void write_block(uint index, GpuMaterial m, vec3 n) {
+    uint pair = index >> 1, k = index & 1u;
+    gb.pairs[pair].albedo_metallic[k] = packUnorm4x8(vec4(m.albedo, m.metallic));
+    gb.pairs[pair].normal[k] = packSnorm2x16(oct_encode(n));
+    gb.pairs[pair].roughness[k] = uint8_t(uint(clamp(m.roughness, 0.0, 1.0) * 255.0 + 0.5));
+    gb.pairs[pair].ao[k] = uint8_t(255u);
+}
+
+// Selective AA (paper 002 section 5): whether this fragment may take a pool block.
+bool may_allocate() {
+    vec2 ndc = gl_FragCoord.xy / vec2(pc.width, pc.height) * 2.0 - 1.0;
+    vec2 r = ndc / max(pc.aa_region_size, 1e-6);
+    if (pc.aa_region == 1u && dot(r, r) > 1.0) return false;
+    if (pc.aa_region == 2u && max(abs(r.x), abs(r.y)) > 1.0) return false;
+    if (pc.aa_object_flags != 0u && (in_flags & FLAG_NO_AA) != 0u) return false;
+    if (pc.aa_max_distance > 0.0) {
+        vec4 p = frame.inv_view_proj * vec4(ndc, gl_FragCoord.z, 1.0);
+        if (length(p.xyz / p.w) > pc.aa_max_distance) return false;
+    }
+    return true;
+}
+
+void main() {
+    uint mask = uint(gl_SampleMaskIn[0]);
+    if (mask == 0u) return;
+    GpuMaterial m = materials[in_material];
+    vec3 n = normalize(in_normal);
+    // Seen from behind (open meshes): light the side that faces the eye. A mirrored instance
+    // flips the winding, so its outside shows as a back face.
+    if (gl_FrontFacing == (in_mirrored != 0u)) n = -n;
+    uint pixel = uint(gl_FragCoord.y) * pc.width + uint(gl_FragCoord.x);
+    if ((mask & 1u) != 0u) {
+        write_block(pixel, m, n);   // the head; its link belongs to the list
+        return;
+    }
+    if (!may_allocate()) return;    // capped to one surface: the head takes these samples
+    uint slot = atomicAdd(gb.header[GBUFFER_HEADER_ALLOCATED], 1u);
+    if (slot >= pc.pool_blocks) {
+        atomicAdd(gb.header[GBUFFER_HEADER_OVERFLOW_FRAGMENTS], 1u);
+        atomicAdd(gb.header[GBUFFER_HEADER_OVERFLOW_SAMPLES], uint(bitCount(mask)));
+        return;
+    }
+    uint index = pc.width * pc.height + slot;
+    write_block(index, m, n);
+    uint link = make_link(index, uint(bitCount(mask)), uint(findLSB(mask)));
+    uint head_link = atomicExchange(gb.pairs[pixel >> 1].link[pixel & 1u], link);
+    gb.pairs[index >> 1].link[index & 1u] = head_link;
+}

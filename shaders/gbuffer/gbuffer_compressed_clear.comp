@@ -1,0 +1,23 @@
+#version 460
+// Start of the compressed G-buffer pass: zero the header counters and every head's link (an
+// empty list). Head attributes need no clearing: a head whose pixel has no surface at sample 0
+// is never read (the lighting pass sees the background in the depth).
+#include "compressed_gbuffer.glsl"
+
+layout(local_size_x = 256) in;
+
+layout(set = 0, binding = 0, scalar) buffer Gbuffer {
+    uint header[GBUFFER_HEADER_WORDS];
+    BlockPair pairs[];
+} gb;
+
+layout(push_constant) uniform Push { uint head_pairs; } pc;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i < GBUFFER_HEADER_WORDS) gb.header[i] = 0u;
+    if (i < pc.head_pairs) {
+        gb.pairs[i].link[0] = LINK_NULL;
+        gb.pairs[i].link[1] = LINK_NULL;
+    }
+}

@@ -1,0 +1,204 @@
+//! The compressed G-buffer geometry pass (thesis `000` §4.3, paper `002`): the culled lists are
+//! drawn again over the finished MSAA depth with depth EQUAL, a stencil bit per sample and
+//! post-depth coverage, and each fragment writes one 14-byte block: the pixel's head when it
+//! owns sample 0, otherwise a pool block pushed on the pixel's list.
+//!
+//! The `gbuffer` buffer: a 16-byte header (pool blocks asked for, fragments and samples dropped
+//! because the pool was full), then `width * height` head blocks, then the pool, all as 28-byte
+//! pairs of blocks (`shaders/gbuffer/compressed_gbuffer.glsl`). Its size sets the pool; block
+//! indices have 26 bits, so at most 2^26 blocks are used whatever the size.
+
+use super::gbuffer::{bound_image, geometry_pipeline, record_geometry, DrawSource};
+use crate::gpu::barrier::{cmd_barriers, memory_barrier};
+use crate::gpu::{Access, Bind, GpuContext, Pipeline, ShaderCompiler};
+use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::plan::{CompiledGraph, PlannedPass, SettingValue};
+use ash::vk;
+
+/// Bytes of the header before the blocks.
+pub const HEADER_BYTES: u64 = 16;
+/// Bytes of one pair of blocks.
+pub const PAIR_BYTES: u64 = 28;
+/// Blocks one link can address (26-bit index).
+pub const MAX_BLOCKS: u64 = 1 << 26;
+
+/// Bytes of a compressed G-buffer for `pixels` heads and `pool_blocks` pool blocks.
+pub fn buffer_bytes(pixels: u64, pool_blocks: u64) -> u64 {
+    HEADER_BYTES + (pixels + pool_blocks).div_ceil(2) * PAIR_BYTES
+}
+
+/// Pool blocks a buffer of `bytes` gives an image of `pixels`, within the 26-bit index; an
+/// error when even the heads do not fit.
+pub fn pool_blocks(bytes: u64, pixels: u64) -> Result<u64, String> {
+    if pixels >= MAX_BLOCKS {
+        return Err(format!(
+            "{pixels} pixels need more head blocks than a 26-bit link can address ({} at most); render smaller",
+            MAX_BLOCKS - 1
+        ));
+    }
+    let blocks = bytes.saturating_sub(HEADER_BYTES) / PAIR_BYTES * 2;
+    if blocks < pixels {
+        return Err(format!(
+            "the gbuffer buffer holds {blocks} blocks, fewer than the {pixels} heads (size it with at least {} bytes)",
+            buffer_bytes(pixels, 0)
+        ));
+    }
+    Ok(blocks.min(MAX_BLOCKS) - pixels)
+}
+
+/// Push constants of `gbuffer_compressed.frag`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct CompressedPush {
+    width: u32,
+    height: u32,
+    pool_blocks: u32,
+    aa_region: u32,
+    aa_region_size: f32,
+    aa_max_distance: f32,
+    aa_object_flags: u32,
+}
+
+/// Selective anti-aliasing (paper `002` §5): where pixels may keep more than one block.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SelectiveAa {
+    /// 0 everywhere, 1 inside a centered ellipse, 2 inside a centered rectangle.
+    pub region: u32,
+    /// The region's size as a fraction of the screen's width and height.
+    pub region_size: f32,
+    /// Pixels of surfaces farther than this keep one block (0: no limit).
+    pub max_distance: f32,
+    /// Instances flagged `FLAG_NO_AA` keep one block.
+    pub object_flags: bool,
+}
+
+impl SelectiveAa {
+    /// From a pass's settings.
+    pub fn from_plan(pass: &PlannedPass) -> Self {
+        let float = |name: &str, default: f64| match pass.settings.get(name) {
+            Some(SettingValue::Float(f)) => *f,
+            Some(SettingValue::Int(i)) => *i as f64,
+            _ => default,
+        };
+        let region = match pass.settings.get("aa_region") {
+            Some(SettingValue::Choice(c)) if c == "ellipse" => 1,
+            Some(SettingValue::Choice(c)) if c == "rectangle" => 2,
+            _ => 0,
+        };
+        Self {
+            region,
+            region_size: float("aa_region_size", 0.6) as f32,
+            max_distance: float("aa_max_depth_distance", 0.0) as f32,
+            object_flags: matches!(pass.settings.get("aa_object_flags"), Some(SettingValue::Bool(true))),
+        }
+    }
+}
+
+/// The `gbuffer_compressed` pass.
+pub struct GbufferCompressedPass {
+    draw: Pipeline,
+    clear: Pipeline,
+    aa: SelectiveAa,
+}
+
+impl GbufferCompressedPass {
+    /// Creates the pipelines for the depth image bound to `pass`.
+    pub fn new(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        pass: &PlannedPass,
+        plan: &CompiledGraph,
+    ) -> crate::Result<Self> {
+        let invalid = |m: String| crate::Error::Invalid(format!("pass '{}': {m}", pass.name));
+        if !ctx.caps().post_depth_coverage {
+            return Err(invalid(format!(
+                "gbuffer_compressed needs VK_EXT_post_depth_coverage, which {} does not support",
+                ctx.caps().name
+            )));
+        }
+        let depth = bound_image(plan, pass, "depth").ok_or_else(|| invalid("no depth image bound".into()))?;
+        if !crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL) {
+            return Err(invalid(format!(
+                "gbuffer_compressed needs a depth format with stencil (one stencil bit per sample), not {:?}",
+                depth.0
+            )));
+        }
+        let fragment = Some(("gbuffer/gbuffer_compressed.frag", &[][..]));
+        let draw = geometry_pipeline(ctx, shaders, &pass.name, fragment, &[], depth, true)?;
+        let clear = Pipeline::compute(
+            ctx,
+            &format!("{} clear", pass.name),
+            &shaders.compile("gbuffer/gbuffer_compressed_clear.comp", &[])?,
+        )?;
+        Ok(Self { draw, clear, aa: SelectiveAa::from_plan(pass) })
+    }
+}
+
+impl PassNode for GbufferCompressedPass {
+    fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
+        let slots = &rec.slots;
+        let depth = slots.required_image("depth")?;
+        let gbuffer = slots
+            .buffer("gbuffer")
+            .ok_or_else(|| crate::Error::Invalid("gbuffer_compressed: no gbuffer buffer bound".into()))?;
+        let extent = depth.extent();
+        let pixels = extent.width as u64 * extent.height as u64;
+        let pool = pool_blocks(gbuffer.size(), pixels)
+            .map_err(|m| crate::Error::Invalid(format!("gbuffer_compressed: {m}")))?;
+        let device = rec.ctx.device();
+        let head_pairs = pixels.div_ceil(2) as u32;
+        self.clear.bind(rec.cmd);
+        self.clear.push_bindings(rec.cmd, &[Bind::Buffer(0, gbuffer.handle())]);
+        self.clear.push_constants(rec.cmd, &head_pairs);
+        // SAFETY: cmd recording with the clear pipeline bound.
+        unsafe { device.cmd_dispatch(rec.cmd, head_pairs.div_ceil(256).max(1), 1, 1) };
+        let fragment_rw = Access {
+            stage: vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            access: vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            layout: vk::ImageLayout::UNDEFINED,
+        };
+        cmd_barriers(device, rec.cmd, &[memory_barrier(Access::COMPUTE_WRITE, fragment_rw)], &[]);
+        let push = CompressedPush {
+            width: extent.width,
+            height: extent.height,
+            pool_blocks: pool as u32,
+            aa_region: self.aa.region,
+            aa_region_size: self.aa.region_size,
+            aa_max_distance: self.aa.max_distance,
+            aa_object_flags: self.aa.object_flags as u32,
+        };
+        let scene = rec.frame.scene;
+        let lists = DrawSource::redraw_lists(slots, scene);
+        record_geometry(
+            rec.ctx,
+            rec.cmd,
+            &self.draw,
+            scene,
+            &lists,
+            rec.frame.constants,
+            &[],
+            depth,
+            vk::AttachmentLoadOp::LOAD,
+            &[Bind::Buffer(4, gbuffer.handle())],
+            bytemuck::bytes_of(&push),
+        );
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pool_sizes_respect_the_26_bit_index() {
+        assert_eq!(buffer_bytes(3, 0), 16 + 2 * 28);
+        assert_eq!(pool_blocks(buffer_bytes(100, 50), 100), Ok(50));
+        assert_eq!(pool_blocks(buffer_bytes(101, 50), 101), Ok(51)); // the odd pair's spare block
+        assert!(pool_blocks(buffer_bytes(100, 0) - 28, 100).is_err());
+        // 8K at 8x: the buffer could hold more, the index cannot.
+        let pixels = 7680 * 4320;
+        assert_eq!(pool_blocks(buffer_bytes(pixels, 7 * pixels), pixels), Ok(MAX_BLOCKS - pixels));
+        assert!(pool_blocks(u64::MAX / 2, MAX_BLOCKS).is_err());
+    }
+}

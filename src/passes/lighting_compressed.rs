@@ -1,0 +1,107 @@
+//! Lighting over the compressed G-buffer in compute (`lighting_compressed`): each block of a
+//! pixel's list is shaded once with the tile's lights and weighted by the samples it covers.
+//! With a `stats` slot it also reports the pool's counters and how many distinct surfaces the
+//! pixels hold (`GbufferCounters` in [`crate::stats::gbuffer`]).
+
+use super::gbuffer::bound_image;
+use super::gbuffer_compressed::pool_blocks;
+use super::lighting::LightingSettings;
+use crate::gpu::barrier::{cmd_barriers, memory_barrier};
+use crate::gpu::{Access, Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
+use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::plan::{CompiledGraph, PlannedPass};
+use ash::vk;
+
+/// Push constants of `lighting_compressed.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct Push {
+    settings: LightingSettings,
+    pool_blocks: u32,
+}
+
+/// The `lighting_compressed` pass.
+pub struct LightingCompressedPass {
+    pipeline: Pipeline,
+    stats_clear: Option<Pipeline>,
+    sampler: Sampler,
+    settings: LightingSettings,
+}
+
+impl LightingCompressedPass {
+    /// Compiles the shader for the sample count of the depth bound to `pass`.
+    pub fn new(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        pass: &PlannedPass,
+        plan: &CompiledGraph,
+    ) -> crate::Result<Self> {
+        let samples = bound_image(plan, pass, "depth").map_or(1, |(_, s)| s.as_raw().max(1)).to_string();
+        let with_stats = pass.bindings.iter().any(|b| b.slot == "stats");
+        let mut defines = vec![("SAMPLES", samples.as_str())];
+        if with_stats {
+            defines.push(("WRITE_STATS", "1"));
+        }
+        let pipeline =
+            Pipeline::compute(ctx, &pass.name, &shaders.compile("lighting/lighting_compressed.comp", &defines)?)?;
+        let stats_clear = with_stats
+            .then(|| -> crate::Result<Pipeline> {
+                let spirv = shaders.compile("lighting/stats_clear.comp", &[])?;
+                Ok(Pipeline::compute(ctx, &format!("{} stats clear", pass.name), &spirv)?)
+            })
+            .transpose()?;
+        Ok(Self {
+            pipeline,
+            stats_clear,
+            sampler: Sampler::nearest_clamp(ctx)?,
+            settings: LightingSettings::from_plan(pass),
+        })
+    }
+}
+
+impl PassNode for LightingCompressedPass {
+    fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
+        let slots = &rec.slots;
+        let depth = slots.required_image("depth")?;
+        let output = slots.required_image("output")?;
+        let gbuffer = slots
+            .buffer("gbuffer")
+            .ok_or_else(|| crate::Error::Invalid("lighting_compressed: no gbuffer buffer bound".into()))?;
+        let extent = depth.extent();
+        let pixels = extent.width as u64 * extent.height as u64;
+        let pool = pool_blocks(gbuffer.size(), pixels)
+            .map_err(|m| crate::Error::Invalid(format!("lighting_compressed: {m}")))?;
+        let device = rec.ctx.device();
+        let stats = slots.buffer("stats");
+        if let (Some(clear), Some(stats)) = (&self.stats_clear, stats) {
+            clear.bind(rec.cmd);
+            clear.push_bindings(rec.cmd, &[Bind::Buffer(0, stats.handle())]);
+            // SAFETY: cmd recording with the clear pipeline bound.
+            unsafe { device.cmd_dispatch(rec.cmd, 1, 1, 1) };
+            let rw = Access {
+                stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
+                access: vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+                layout: vk::ImageLayout::UNDEFINED,
+            };
+            cmd_barriers(device, rec.cmd, &[memory_barrier(Access::COMPUTE_WRITE, rw)], &[]);
+        }
+        let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let mut binds = vec![
+            Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), read),
+            Bind::Buffer(1, gbuffer.handle()),
+            Bind::Buffer(2, rec.frame.constants.handle()),
+            Bind::Buffer(3, rec.frame.lights.handle()),
+            Bind::StorageImage(4, output.view()),
+        ];
+        if let Some(stats) = stats {
+            binds.push(Bind::Buffer(5, stats.handle()));
+        }
+        self.pipeline.bind(rec.cmd);
+        self.pipeline.push_bindings(rec.cmd, &binds);
+        self.pipeline.push_constants(rec.cmd, &Push { settings: self.settings, pool_blocks: pool as u32 });
+        let e = output.extent();
+        // SAFETY: cmd recording with this pipeline bound.
+        unsafe { device.cmd_dispatch(rec.cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
+        Ok(())
+    }
+}

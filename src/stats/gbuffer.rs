@@ -1,0 +1,58 @@
+//! Counters of the compressed G-buffer (`Stats` in `shaders/lighting/lighting_compressed.comp`):
+//! how full the pool was, what overflowed, and how many distinct surfaces the pixels hold.
+
+use bytemuck::{Pod, Zeroable};
+use serde::{Deserialize, Serialize};
+
+/// The counters as the GPU writes them (64 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GbufferCounters {
+    /// Pool blocks fragments asked for (more than the pool when it overflowed).
+    pub allocated: u32,
+    /// Fragments dropped because the pool was full.
+    pub overflow_fragments: u32,
+    /// Samples those fragments covered (shaded with the pixel's head instead).
+    pub overflow_samples: u32,
+    /// Blocks in the pool.
+    pub pool_blocks: u32,
+    /// Pixels.
+    pub pixels: u32,
+    /// Distinct surfaces over all pixels (sky counts as one).
+    pub surfaces: u32,
+    /// Unused.
+    pub pad: [u32; 2],
+    /// Pixels with 1, 2, ... 8 distinct surfaces.
+    pub histogram: [u32; 8],
+}
+
+/// One compressed G-buffer's figures in a frame, as reported.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GbufferPassStats {
+    /// The lighting pass that read it.
+    pub pass: String,
+    /// Pool blocks available.
+    pub pool_blocks: u32,
+    /// Pool blocks used (at most `pool_blocks`).
+    pub pool_used: u32,
+    /// Fragments dropped because the pool was full (0 means every edge sample was kept).
+    pub overflow_fragments: u32,
+    /// Samples those fragments covered.
+    pub overflow_samples: u32,
+    /// Pixels with 1, 2, ... 8 distinct surfaces.
+    pub surfaces_per_pixel: [u32; 8],
+}
+
+impl GbufferPassStats {
+    /// From the counters of pass `pass`.
+    pub fn new(pass: &str, c: &GbufferCounters) -> Self {
+        Self {
+            pass: pass.into(),
+            pool_blocks: c.pool_blocks,
+            pool_used: c.allocated.min(c.pool_blocks),
+            overflow_fragments: c.overflow_fragments,
+            overflow_samples: c.overflow_samples,
+            surfaces_per_pixel: c.histogram,
+        }
+    }
+}
