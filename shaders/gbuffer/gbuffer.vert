@@ -17,9 +17,12 @@ layout(location = 0) out vec3 out_normal;
 layout(location = 1) flat out uint out_material;
 layout(location = 2) flat out uint out_mirrored;
 layout(location = 3) flat out uint out_flags;      // FLAG_* of the instance (selective AA reads FLAG_NO_AA)
+layout(location = 4) flat out uint out_instance;   // instance id (the visibility buffer stores it)
 
 void main() {
-    GpuInstance inst = instances[draw_instance_ids[gl_InstanceIndex]];
+    uint id = draw_instance_ids[gl_InstanceIndex];
+    GpuInstance inst = instances[id];
+    out_instance = id;
     vec3 rel = instance_rel_eye(inst, in_position, frame.eye_hi.xyz, frame.eye_lo.xyz);
     gl_Position = frame.view_proj * vec4(rel, 1.0);
     out_normal = instance_normal(inst, oct_decode(in_normal_oct));

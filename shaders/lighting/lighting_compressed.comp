@@ -10,6 +10,9 @@
 
 layout(local_size_x = 16, local_size_y = 16) in;
 
+#ifndef SAMPLES
+#define SAMPLES 1   // samples per pixel of the depth (and G-buffer) images
+#endif
 #if SAMPLES > 1
 layout(set = 0, binding = 0) uniform sampler2DMS depth_tex;
 #define DEPTH_AT(p, s) texelFetch(depth_tex, p, int(s)).r

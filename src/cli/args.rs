@@ -219,6 +219,11 @@ pub struct RenderArgs {
     /// visible instances, false negatives and false positives; fails if anything visible was culled.
     #[arg(long)]
     pub verify: bool,
+    /// Let the compressed G-buffer's pool follow the frames' needs (counters read back a few
+    /// frames late): grow when fragments were dropped, shrink after 30 mostly empty frames. It
+    /// starts from `--param pool_fraction=F` (blocks per pixel), or the graph's 0.5.
+    #[arg(long)]
+    pub pool_adapt: bool,
     /// Move the scene and the camera together by x,y,z (large-world precision check).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "x,y,z")]
     pub world_offset: Option<DVec3>,
@@ -228,7 +233,7 @@ pub struct RenderArgs {
     /// Override a graph parameter, NAME=VALUE (repeatable), e.g. `--param exposure=1.2`.
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
     pub params: Vec<(String, String)>,
-    /// Shorthand for `--param debug_view=VIEW`: none, normals, albedo or depth.
+    /// Shorthand for `--param debug_view=VIEW`: none, normals, albedo, depth or samples (distinct surfaces per pixel, MSAA graphs).
     #[arg(long, value_name = "VIEW")]
     pub debug_view: Option<String>,
     /// Keep rendering; recompile when the graph file or a shader changes (on error the last

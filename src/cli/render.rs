@@ -55,8 +55,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     stats.graph = renderer.plan().name.clone();
     stats.transient_bytes = memory.bytes_with_aliasing;
     stats.transient_bytes_without_aliasing = memory.bytes_without_aliasing;
+    stats.resources = renderer.runtime().resource_bytes();
     if args.watch {
         return watch(args, &mut renderer, &shaders, spec, &camera);
+    }
+    if args.pool_adapt {
+        let start = args.params.iter().rev().find(|(k, _)| k == "pool_fraction").and_then(|(_, v)| v.parse().ok());
+        renderer.enable_pool_adaptation(start.unwrap_or(0.5));
     }
 
     let bar = progress(Some(args.frames as u64), "rendering");
@@ -72,6 +77,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         };
         if let Some(v) = frame_stats.verify.as_ref().filter(|v| v.false_negatives > 0) {
             eprintln!("frame {frame}: {} visible instance(s) culled, e.g. {:?}", v.false_negatives, v.missed);
+        }
+        if let Some(fraction) = renderer.adapt_pool(&shaders, &frame_stats)? {
+            bar.println(format!("frame {frame}: compressed G-buffer pool re-planned at {fraction} blocks per pixel"));
         }
         stats.frames.push(frame_stats);
         bar.inc(1);

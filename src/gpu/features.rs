@@ -39,6 +39,8 @@ impl RequiredFeatures {
         f.core.fragment_stores_and_atomics = vk::TRUE;
         f.core.shader_int64 = vk::TRUE;
         f.core.sample_rate_shading = vk::TRUE;
+        // Fragment shaders read gl_PrimitiveID (the visibility buffer), which needs it.
+        f.core.geometry_shader = vk::TRUE;
         f.core.shader_storage_image_write_without_format = vk::TRUE;
         f.v11.shader_draw_parameters = vk::TRUE;
         f.v12.draw_indirect_count = vk::TRUE;
@@ -67,6 +69,7 @@ impl RequiredFeatures {
         check(w.fragment_stores_and_atomics, h.fragment_stores_and_atomics, "fragmentStoresAndAtomics");
         check(w.shader_int64, h.shader_int64, "shaderInt64");
         check(w.sample_rate_shading, h.sample_rate_shading, "sampleRateShading");
+        check(w.geometry_shader, h.geometry_shader, "geometryShader");
         check(
             w.shader_storage_image_write_without_format,
             h.shader_storage_image_write_without_format,

@@ -91,6 +91,8 @@ pub const COMPUTE_KIND: &str = "compute";
 pub const GBUFFER_ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 /// The G-buffer geometry pass's normal/roughness format.
 pub const GBUFFER_NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// The visibility buffer's format: instance id and triangle id per sample.
+pub const VISIBILITY_FORMAT: vk::Format = vk::Format::R32G32_UINT;
 /// Format of the Hi-Z pyramid (reversed-Z depth, minimum reduction).
 pub const HIZ_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 /// The lighting pass's output format (sRGB-encoded values in a UNORM image, so it can be storage).
@@ -177,6 +179,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             writes: vec![
                 ms(slot("albedo", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
                 ms(slot("normal", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a")),
+                ms(slot("ids", Usage::ColorAttachment, false, FormatRule::Exact(VISIBILITY_FORMAT), "visibility buffer: instance id, triangle id (instead of albedo and normal)")),
                 ms(slot("depth", Usage::DepthAttachment, true, FormatRule::Depth, "reversed-Z depth (cleared to 0, stencil to 0)")),
             ],
             settings: vec![],
@@ -209,6 +212,17 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
                 SettingDecl { name: "aa_object_flags", default: SettingDefault::Bool(false), doc: "selective AA: instances flagged no-AA keep one block" },
                 SettingDecl { name: "aa_edges_only", default: SettingDefault::Bool(false), doc: "selective AA: only pixels on a depth edge (depth samples differ by more than 1%) keep more than one block" },
             ],
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "lighting_visibility",
+            doc: "shades from a visibility buffer in compute (seed 003): each distinct (instance, triangle) id of a pixel's samples is rebuilt from the shared pools (barycentrics of the pixel-center ray) and shaded once, weighted by its samples",
+            reads: vec![
+                ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the depth the ids were drawn with")),
+                ms(slot("ids", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(VISIBILITY_FORMAT), "instance id, triangle id per sample")),
+            ],
+            writes: vec![slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image")],
+            settings: lighting_settings(),
             slots_from_shader: false,
         },
         PassKindInfo {
@@ -250,6 +264,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             writes: vec![
                 ms(slot("albedo", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
                 ms(slot("normal", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a")),
+                ms(slot("ids", Usage::ColorAttachmentLoad, false, FormatRule::Exact(VISIBILITY_FORMAT), "visibility buffer: instance id, triangle id")),
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "reversed-Z depth")),
             ],
             settings: vec![],

@@ -61,7 +61,7 @@ impl PassNode for ComputePass {
                 }
                 (Some(Physical::Image(img)), _) => binds.push(Bind::Sampled(
                     number,
-                    img.view(),
+                    img.sampled_view(),
                     self.sampler.handle(),
                     vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 )),

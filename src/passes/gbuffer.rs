@@ -218,8 +218,11 @@ impl GbufferPass {
         let depth = bound_image(plan, pass, "depth").ok_or_else(|| invalid("no depth image bound".into()))?;
         let colors: Vec<vk::Format> =
             ["albedo", "normal"].iter().filter_map(|s| bound_image(plan, pass, s).map(|(f, _)| f)).collect();
-        if colors.len() == 1 {
-            return Err(invalid("bind both albedo and normal, or neither (a depth-only pass)".into()));
+        let ids = bound_image(plan, pass, "ids");
+        if colors.len() == 1 || (ids.is_some() && !colors.is_empty()) {
+            return Err(invalid(
+                "bind both albedo and normal, or ids alone (a visibility buffer), or none (a depth-only pass)".into(),
+            ));
         }
         if mode == GeometryMode::Equal && !crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL)
         {
@@ -228,7 +231,10 @@ impl GbufferPass {
                 depth.0
             )));
         }
-        let fragment = (!colors.is_empty()).then_some(("gbuffer/gbuffer.frag", &[][..]));
+        let (fragment, colors) = match ids {
+            Some((format, _)) => (Some(("gbuffer/visibility.frag", &[][..])), vec![format]),
+            None => ((!colors.is_empty()).then_some(("gbuffer/gbuffer.frag", &[][..])), colors),
+        };
         let pipeline =
             geometry_pipeline(ctx, shaders, &pass.name, fragment, &colors, depth, mode == GeometryMode::Equal)?;
         Ok(Self { pipeline, mode })
@@ -243,7 +249,7 @@ impl PassNode for GbufferPass {
             if self.mode == GeometryMode::Append { vk::AttachmentLoadOp::LOAD } else { vk::AttachmentLoadOp::CLEAR };
         let depth_load =
             if self.mode == GeometryMode::Clear { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD };
-        let colors: Vec<vk::RenderingAttachmentInfo> = ["albedo", "normal"]
+        let colors: Vec<vk::RenderingAttachmentInfo> = ["albedo", "normal", "ids"]
             .iter()
             .filter_map(|s| slots.image(s))
             .map(|image| {

@@ -8,6 +8,7 @@ pub mod hiz_build;
 pub mod instance_cull;
 pub mod lighting;
 pub mod lighting_compressed;
+pub mod lighting_visibility;
 pub mod overlay;
 
 use crate::gpu::{GpuContext, ShaderCompiler};
@@ -30,6 +31,7 @@ pub fn create_node(
         "gbuffer_equal" => Box::new(gbuffer::GbufferPass::for_plan(ctx, shaders, pass, plan, GeometryMode::Equal)?),
         "gbuffer_compressed" => Box::new(gbuffer_compressed::GbufferCompressedPass::new(ctx, shaders, pass, plan)?),
         "lighting_compressed" => Box::new(lighting_compressed::LightingCompressedPass::new(ctx, shaders, pass, plan)?),
+        "lighting_visibility" => Box::new(lighting_visibility::LightingVisibilityPass::new(ctx, shaders, pass, plan)?),
         "instance_cull" => Box::new(instance_cull::InstanceCullPass::new(ctx, shaders, pass)?),
         "lighting" => Box::new(lighting::LightingPass::for_plan(ctx, shaders, pass, plan)?),
         "hiz_build" => Box::new(hiz_build::HizBuildPass::new(ctx, shaders, pass)?),

@@ -5,6 +5,7 @@ pub mod cull_data;
 pub mod gpu_types;
 pub mod graph_spec;
 pub mod output;
+pub mod pool_adapt;
 pub mod renderer;
 pub mod scene_buffers;
 

@@ -7,6 +7,7 @@
 use super::gpu_types::{FrameConstants, GpuPointLight};
 use super::graph_spec::GraphSpec;
 use super::output::{rgba_from_bytes, RgbaImage};
+use super::pool_adapt::PoolAdapter;
 use super::scene_buffers::GpuScene;
 use crate::error::{Error, Result};
 use crate::gpu::transfer::record_image_to_buffer;
@@ -76,6 +77,10 @@ pub struct Renderer {
     previous_camera: Option<Camera>,
     /// Exact-visibility oracle, when verification is on.
     oracle: Option<VisibilityOracle>,
+    /// The graph being run, for re-planning it with another pool size.
+    spec: GraphSpec,
+    /// Sizes the compressed G-buffer's pool, when enabled.
+    pool: Option<PoolAdapter>,
 }
 
 impl Renderer {
@@ -134,6 +139,8 @@ impl Renderer {
             settings,
             previous_camera: None,
             oracle: None,
+            spec: spec.clone(),
+            pool: None,
         })
     }
 
@@ -143,7 +150,27 @@ impl Renderer {
         let old = std::mem::replace(&mut self.runtime, runtime);
         self.retired.push((self.runtime_start, self.frame_index, old));
         self.runtime_start = self.frame_index;
+        self.spec = spec.clone();
         Ok(())
+    }
+
+    /// Lets the compressed G-buffer's pool follow what frames ask for (see
+    /// [`crate::render::pool_adapt`]), starting from `pool_fraction` blocks per pixel (the
+    /// graph's parameter of that name). Call [`Renderer::adapt_pool`] after each frame.
+    pub fn enable_pool_adaptation(&mut self, pool_fraction: f64) {
+        self.pool = Some(PoolAdapter::new(pool_fraction));
+    }
+
+    /// Feeds a completed frame's counters to the pool adapter; when the pool should change,
+    /// re-plans the graph with the new `pool_fraction` (frames in flight finish on the old one)
+    /// and returns it.
+    pub fn adapt_pool(&mut self, shaders: &ShaderCompiler, stats: &FrameStats) -> Result<Option<f64>> {
+        let pixels = self.settings.width as u64 * self.settings.height as u64;
+        let (Some(pool), Some(g)) = (self.pool.as_mut(), stats.gbuffer.first()) else { return Ok(None) };
+        let Some(fraction) = pool.observe(g, pixels) else { return Ok(None) };
+        let spec = self.spec.clone().with_overrides([("pool_fraction".to_string(), format!("{fraction}"))]);
+        self.reload_graph(shaders, &spec)?;
+        Ok(Some(fraction))
     }
 
     /// Checks every headless frame against exact visibility (an unculled instance-id render

@@ -26,6 +26,9 @@ pub struct GpuScene {
     pub cull_records: Buffer,
     /// [`super::cull_data::GpuDrawGroup`] per non-empty draw group.
     pub draw_groups: Buffer,
+    /// Per instance: its mesh's first index and vertex offset (`uvec2`), for passes that rebuild
+    /// a triangle from its id (the visibility buffer).
+    pub instance_triangles: Buffer,
     /// Number of non-empty draw groups.
     pub group_count: u32,
     /// Number of instances.
@@ -126,10 +129,28 @@ impl GpuScene {
             )?,
             cull_records: batch.buffer(ctx, "cull records", storage, bytemuck::cast_slice(&cull.records))?,
             draw_groups: batch.buffer(ctx, "draw groups", storage, bytemuck::cast_slice(&cull.groups))?,
+            instance_triangles: batch.buffer(
+                ctx,
+                "instance triangle bases",
+                storage,
+                bytemuck::cast_slice(&instance_triangle_bases(scene)),
+            )?,
             group_count: cull.groups.len() as u32,
             instance_count: scene.instances.len() as u32,
             max_draws: draws.commands.len() as u32,
             triangles: scene.instanced_triangles(),
         })
     }
+}
+
+/// Per instance: `[first_index, vertex_offset]` of its mesh in the shared pools.
+fn instance_triangle_bases(scene: &Scene) -> Vec<[u32; 2]> {
+    scene
+        .instances
+        .iter()
+        .map(|inst| {
+            let mesh = &scene.meshes[inst.mesh as usize];
+            [mesh.first_index, mesh.vertex_offset]
+        })
+        .collect()
 }

@@ -35,6 +35,8 @@ pub struct GbufferPassStats {
     pub pool_blocks: u32,
     /// Pool blocks used (at most `pool_blocks`).
     pub pool_used: u32,
+    /// Pool blocks fragments asked for (what an unbounded pool would have used).
+    pub pool_requested: u32,
     /// Fragments dropped because the pool was full (0 means every edge sample was kept).
     pub overflow_fragments: u32,
     /// Samples those fragments covered.
@@ -50,6 +52,7 @@ impl GbufferPassStats {
             pass: pass.into(),
             pool_blocks: c.pool_blocks,
             pool_used: c.allocated.min(c.pool_blocks),
+            pool_requested: c.allocated,
             overflow_fragments: c.overflow_fragments,
             overflow_samples: c.overflow_samples,
             surfaces_per_pixel: c.histogram,

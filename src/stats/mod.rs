@@ -9,6 +9,15 @@ pub use gbuffer::{GbufferCounters, GbufferPassStats};
 
 use serde::{Deserialize, Serialize};
 
+/// Device memory of one graph resource.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ResourceBytes {
+    /// Resource name in the graph.
+    pub name: String,
+    /// Bytes (both copies of a history resource).
+    pub bytes: u64,
+}
+
 /// What one frame did.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct FrameStats {
@@ -78,6 +87,9 @@ pub struct RunStats {
     pub transient_bytes: u64,
     /// Transient memory if no two transients shared memory.
     pub transient_bytes_without_aliasing: u64,
+    /// Device bytes of every resource the graph allocated (G-buffer images or the compressed
+    /// G-buffer, depth, ...), before aliasing.
+    pub resources: Vec<ResourceBytes>,
     /// Per-frame figures.
     pub frames: Vec<FrameStats>,
 }

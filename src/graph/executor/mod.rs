@@ -133,6 +133,18 @@ impl GraphRuntime {
         self.resources.memory()
     }
 
+    /// Device bytes of every resource the graph allocated (both copies of history resources),
+    /// in declaration order; aliasing is not subtracted.
+    pub fn resource_bytes(&self) -> Vec<crate::stats::ResourceBytes> {
+        self.plan
+            .resources
+            .iter()
+            .zip(self.resources.bytes_per_resource(&self.ctx))
+            .filter(|(_, bytes)| *bytes > 0)
+            .map(|(r, bytes)| crate::stats::ResourceBytes { name: r.name.clone(), bytes })
+            .collect()
+    }
+
     /// Records one frame into `cmd`; returns the frame number. `imports` must hold every
     /// resource the graph declares `Imported(..)` (and a kept pass uses); they are left in the
     /// access each import asks for.

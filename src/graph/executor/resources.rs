@@ -166,6 +166,27 @@ impl RuntimeResources {
         })
     }
 
+    /// Device bytes each planned resource occupies (both copies of a history resource; 0 for
+    /// imported and unused ones), as the device reports its memory requirements.
+    pub fn bytes_per_resource(&self, ctx: &GpuContext) -> Vec<u64> {
+        self.copies
+            .iter()
+            .map(|copies| {
+                let Some(copies) = copies else { return 0 };
+                let distinct: &[usize] = if copies[0] == copies[1] { &copies[..1] } else { &copies[..] };
+                distinct
+                    .iter()
+                    .map(|&phys| match &self.physical[phys] {
+                        // SAFETY: valid device and live image/buffer handles.
+                        Physical::Image(i) => unsafe { ctx.device().get_image_memory_requirements(i.handle()) }.size,
+                        Physical::Buffer(b) => b.size(),
+                        Physical::Unbound => 0,
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+
     /// The object at a physical index.
     pub fn get(&self, phys: usize) -> &Physical {
         &self.physical[phys]

@@ -104,8 +104,9 @@ fn format_errors(graph: &ValidatedGraph) -> Vec<(Pos, String)> {
     out
 }
 
-/// Attachments of one pass with different sample counts, and multisampled images in slots that
-/// take single-sampled ones.
+/// Attachments (and the multisampled inputs of a built-in pass, whose shader is compiled for one
+/// sample count) of one pass with different sample counts, and multisampled images in slots
+/// that take single-sampled ones.
 pub(crate) fn sample_errors(graph: &ValidatedGraph, samples: &[u32]) -> Vec<(Pos, String)> {
     let mut out = Vec::new();
     for pass in &graph.passes {
@@ -116,7 +117,9 @@ pub(crate) fn sample_errors(graph: &ValidatedGraph, samples: &[u32]) -> Vec<(Pos
                 continue;
             }
             let n = samples.get(b.resource).copied().unwrap_or(1);
-            if b.usage.is_attachment() {
+            let same_samples =
+                b.usage.is_attachment() || (b.multisample_ok && pass.kind != crate::graph::kinds::COMPUTE_KIND);
+            if same_samples {
                 match first {
                     None => first = Some((&res.name, n)),
                     Some((name, m)) if m != n => {
@@ -124,7 +127,7 @@ pub(crate) fn sample_errors(graph: &ValidatedGraph, samples: &[u32]) -> Vec<(Pos
                             b.pos,
                             format!(
                                 "pass '{}' mixes sample counts: '{name}' has {m}, '{}' has {n} \
-                                 (all attachments of a pass need the same)",
+                                 (all its attachments and multisampled inputs need the same)",
                                 pass.name, res.name
                             ),
                         ));

@@ -1,0 +1,129 @@
+#version 460
+// Shading from the visibility buffer (seed 003) with MSAA: per pixel, the distinct
+// (instance, triangle) ids among its samples are each shaded once: the triangle is fetched from
+// the shared pools, the camera ray through the pixel center gives its barycentrics (the
+// attributes a rasterizer interpolates at the pixel center), and the tone-mapped result is
+// weighted by the samples the id covers. The background is sky. The scenes have no textures,
+// so no UV gradients are rebuilt.
+#include "../common/scene.glsl"
+#include "../common/shading.glsl"
+#include "../common/octahedral.glsl"
+
+layout(local_size_x = 16, local_size_y = 16) in;
+
+#ifndef SAMPLES
+#define SAMPLES 1
+#endif
+#if SAMPLES > 1
+layout(set = 0, binding = 0) uniform sampler2DMS depth_tex;
+layout(set = 0, binding = 1) uniform usampler2DMS id_tex;
+#define FETCH(tex, p, s) texelFetch(tex, p, int(s))
+#else
+layout(set = 0, binding = 0) uniform sampler2D depth_tex;
+layout(set = 0, binding = 1) uniform usampler2D id_tex;
+#define FETCH(tex, p, s) texelFetch(tex, p, 0)
+#endif
+layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
+layout(set = 0, binding = 3, scalar) readonly buffer Lights { GpuPointLight lights[]; };
+layout(set = 0, binding = 4, rgba8) uniform writeonly image2D out_color;
+layout(set = 0, binding = 5, scalar) readonly buffer Instances { GpuInstance instances[]; };
+layout(set = 0, binding = 6, scalar) readonly buffer Materials { GpuMaterial materials[]; };
+struct PoolVertex { vec3 position; uint normal_oct; };
+layout(set = 0, binding = 7, scalar) readonly buffer Vertices { PoolVertex vertices[]; };
+layout(set = 0, binding = 8) readonly buffer Indices { uint indices[]; };
+layout(set = 0, binding = 9) readonly buffer TriangleBases { uvec2 triangle_bases[]; };
+
+#include "light_tiles.glsl"
+
+layout(push_constant) uniform Settings {
+    float exposure;
+    uint debug_view;
+    uint light_tiles;
+} settings;
+
+// The surface of triangle `prim` of instance `id` seen through `center`, at `depth`.
+Surface rebuild(uint id, uint prim, vec2 center, float depth) {
+    GpuInstance inst = instances[id];
+    uvec2 base = triangle_bases[id];
+    vec3 p[3];
+    vec3 n[3];
+    for (uint k = 0u; k < 3u; ++k) {
+        PoolVertex v = vertices[indices[base.x + 3u * prim + k] + base.y];
+        p[k] = instance_rel_eye(inst, v.position, frame.eye_hi.xyz, frame.eye_lo.xyz);
+        n[k] = instance_normal(inst, oct_decode(unpackSnorm2x16(v.normal_oct)));
+    }
+    // Moller-Trumbore without bounds: barycentrics of the ray's hit on the triangle's plane.
+    vec3 dir = view_direction(center);
+    vec3 e1 = p[1] - p[0], e2 = p[2] - p[0];
+    vec3 pv = cross(dir, e2);
+    float det = dot(e1, pv);
+    vec3 normal = n[0];
+    if (abs(det) > 1e-20) {
+        vec3 t = -p[0];
+        float u = dot(t, pv) / det;
+        float v = dot(dir, cross(t, e1)) / det;
+        normal = (1.0 - u - v) * n[0] + u * n[1] + v * n[2];
+    }
+    normal = normalize(normal);
+    // As gl_FrontFacing: the winding seen on screen, flipped by a mirroring transform.
+    bool front = (dot(cross(e1, e2), dir) < 0.0) != instance_is_mirrored(inst);
+    if (!front) normal = -normal;
+    GpuMaterial m = materials[instance_material(inst)];
+    Surface s;
+    s.position = surface_position(center, depth);
+    s.normal = normal;
+    s.albedo = m.albedo;
+    s.metallic = m.metallic;
+    s.roughness = m.roughness;
+    return s;
+}
+
+vec3 shade(Surface s) {
+    if (settings.debug_view == DEBUG_VIEW_NORMALS) return pow(s.normal * 0.5 + 0.5, vec3(2.2));
+    if (settings.debug_view == DEBUG_VIEW_ALBEDO) return pow(s.albedo, vec3(2.2));
+    return tonemap_aces(shade_tile_lights(s) * settings.exposure);
+}
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    uvec2 size = frame.size_lights.xy;
+    bool inside = all(lessThan(uvec2(pixel), size));
+    vec2 center = vec2(pixel) + 0.5;
+    tile_begin();
+    if (inside) {
+        for (uint s = 0u; s < SAMPLES; ++s) tile_add_depth(FETCH(depth_tex, pixel, s).r);
+    }
+    tile_cull_lights(settings.light_tiles != 0u);
+    if (!inside) return;
+    // Distinct ids among the samples, with the samples each covers and the first of them.
+    uvec2 ids[SAMPLES];
+    uint counts[SAMPLES];
+    uint firsts[SAMPLES];
+    uint distinct = 0u, background = 0u;
+    for (uint s = 0u; s < SAMPLES; ++s) {
+        if (FETCH(depth_tex, pixel, s).r <= 0.0) {
+            background += 1u;
+            continue;
+        }
+        uvec2 id = FETCH(id_tex, pixel, s).xy;
+        uint k = 0u;
+        while (k < distinct && ids[k] != id) ++k;
+        if (k == distinct) {
+            ids[k] = id;
+            counts[k] = 0u;
+            firsts[k] = s;
+            distinct += 1u;
+        }
+        counts[k] += 1u;
+    }
+    vec3 sum = tonemap_aces(sky_color(view_direction(center)) * settings.exposure) * float(background);
+    for (uint k = 0u; k < distinct; ++k) {
+        Surface s = rebuild(ids[k].x, ids[k].y, center, FETCH(depth_tex, pixel, firsts[k]).r);
+        sum += shade(s) * float(counts[k]);
+    }
+    vec3 color = sum / float(SAMPLES);
+    if (settings.debug_view == DEBUG_VIEW_SAMPLES) {
+        color = distinct + (background > 0u ? 1u : 0u) > 1u ? vec3(1.0, 0.0, 0.0) : vec3(0.003, 0.003, 0.05);
+    }
+    imageStore(out_color, pixel, vec4(linear_to_srgb(color), 1.0));
+}

@@ -1,0 +1,67 @@
+//! Shading from a visibility buffer in compute (`lighting_visibility`, seed `003`): the geometry
+//! pass stored only (instance id, triangle id) per sample; this pass rebuilds each distinct
+//! triangle of a pixel from the scene's pools and shades it once, like the compressed G-buffer
+//! shades each distinct surface once.
+
+use super::gbuffer::bound_image;
+use super::lighting::LightingSettings;
+use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
+use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::plan::{CompiledGraph, PlannedPass};
+use ash::vk;
+
+/// The `lighting_visibility` pass.
+pub struct LightingVisibilityPass {
+    pipeline: Pipeline,
+    sampler: Sampler,
+    settings: LightingSettings,
+}
+
+impl LightingVisibilityPass {
+    /// Compiles the shader for the sample count of the ids bound to `pass`.
+    pub fn new(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        pass: &PlannedPass,
+        plan: &CompiledGraph,
+    ) -> crate::Result<Self> {
+        let samples = bound_image(plan, pass, "ids").map_or(1, |(_, s)| s.as_raw().max(1)).to_string();
+        let spirv = shaders.compile("lighting/lighting_visibility.comp", &[("SAMPLES", &samples)])?;
+        Ok(Self {
+            pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
+            sampler: Sampler::nearest_clamp(ctx)?,
+            settings: LightingSettings::from_plan(pass),
+        })
+    }
+}
+
+impl PassNode for LightingVisibilityPass {
+    fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
+        let slots = &rec.slots;
+        let (depth, ids, output) =
+            (slots.required_image("depth")?, slots.required_image("ids")?, slots.required_image("output")?);
+        let scene = rec.frame.scene;
+        let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        self.pipeline.bind(rec.cmd);
+        self.pipeline.push_bindings(
+            rec.cmd,
+            &[
+                Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), read),
+                Bind::Sampled(1, ids.sampled_view(), self.sampler.handle(), read),
+                Bind::Buffer(2, rec.frame.constants.handle()),
+                Bind::Buffer(3, rec.frame.lights.handle()),
+                Bind::StorageImage(4, output.view()),
+                Bind::Buffer(5, scene.instances.handle()),
+                Bind::Buffer(6, scene.materials.handle()),
+                Bind::Buffer(7, scene.vertices.handle()),
+                Bind::Buffer(8, scene.indices.handle()),
+                Bind::Buffer(9, scene.instance_triangles.handle()),
+            ],
+        );
+        self.pipeline.push_constants(rec.cmd, &self.settings);
+        let e = output.extent();
+        // SAFETY: cmd recording with this pipeline bound.
+        unsafe { rec.ctx.device().cmd_dispatch(rec.cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
+        Ok(())
+    }
+}

@@ -1,0 +1,242 @@
+//! MSAA deferred shading on lavapipe at 4x (validation and synchronization validation on): the
+//! compressed G-buffer's lists against the MSAA depth, including intersecting and coplanar
+//! duplicate triangles and the background; pool overflow; the baselines (per-sample MSAA, MSAA
+//! with a Z-prepass, the visibility buffer); tile-culled lights; selective AA; memory.
+
+mod common;
+
+use common::{boxes_camera, boxes_scene, GpuTest};
+use cullgraph::render::output::RgbaImage;
+use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
+use cullgraph::scene::source::LoadOptions;
+use cullgraph::scene::{Camera, Instance, Material, Scene, SceneSource, Transform};
+use cullgraph::stats::FrameStats;
+use glam::{DVec3, Mat3, Quat, Vec3};
+use std::path::Path;
+
+fn spec(file: &str, params: &[(&str, &str)]) -> GraphSpec {
+    let spec = if let Some(name) = file.strip_prefix("builtin:") {
+        GraphSpec::builtin(name).unwrap()
+    } else {
+        GraphSpec::from_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join(file)).unwrap()
+    };
+    spec.with_overrides(params.iter().map(|(k, v)| (k.to_string(), v.to_string())))
+}
+
+/// Renders `frames` frames and returns the last image and the stats of the frames.
+fn render(
+    gpu: &GpuTest,
+    scene: &Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    spec: &GraphSpec,
+    frames: usize,
+) -> (RgbaImage, Vec<FrameStats>) {
+    let mut renderer =
+        Renderer::with_graph(gpu, &gpu.shaders(), scene.clone(), RenderSettings::new(size.0, size.1), spec).unwrap();
+    let mut image = None;
+    let mut stats = Vec::new();
+    for _ in 0..frames {
+        let (s, i) = renderer.render_to_image(camera).unwrap();
+        stats.push(s);
+        image = Some(i);
+    }
+    gpu.assert_clean();
+    (image.unwrap(), stats)
+}
+
+/// The boxes scene plus a box that intersects the tall blue one at an angle and an exact
+/// duplicate of the red cube in another material (coplanar in every sample).
+fn intersecting_scene() -> Scene {
+    let mut scene = boxes_scene();
+    let green = scene.add_material(Material {
+        name: "green".into(),
+        albedo: Vec3::new(0.1, 0.7, 0.2),
+        roughness: 0.5,
+        metallic: 0.0,
+    });
+    let cube = scene.instances[1].mesh;
+    let tilted =
+        Mat3::from_quat(Quat::from_euler(glam::EulerRot::XYZ, 0.5, 0.7, 0.3)) * Mat3::from_diagonal(Vec3::splat(1.3));
+    scene.instances.push(Instance {
+        transform: Transform { linear: tilted, translation: DVec3::new(1.2, 1.2, 0.3) },
+        mesh: cube,
+        material: green,
+        flags: 0,
+    });
+    let mut duplicate = scene.instances[1];
+    duplicate.material = green;
+    scene.instances.push(duplicate);
+    scene
+}
+
+fn city(instances: usize) -> (Scene, Camera) {
+    let scene = SceneSource::Builtin("city".into())
+        .load(&LoadOptions { instances: Some(instances), ..Default::default() })
+        .unwrap();
+    let camera = scene.default_camera(96.0 / 64.0);
+    (scene, camera)
+}
+
+/// Per-pixel results of `compressed_check.comp`: (errors, listed blocks, covered samples, listed samples).
+fn check_pixels(image: &RgbaImage) -> Vec<[u8; 4]> {
+    image.pixels().map(|p| p.0).collect()
+}
+
+#[test]
+fn compressed_lists_cover_each_sample_once_with_intersections_duplicates_and_background() {
+    let gpu = GpuTest::new();
+    let cases = [
+        (intersecting_scene(), boxes_camera(), "boxes with intersecting and duplicate cubes"),
+        (city(1500).0, city(1500).1, "city"),
+    ];
+    for (scene, camera, what) in cases {
+        // An unbounded pool: every distinct surface of every pixel gets its block.
+        let spec = spec("tests/graphs/gpu/compressed_check.ron", &[("pool_fraction", "3")]);
+        let (check, stats) = render(&gpu, &scene, &camera, (96, 64), &spec, 2);
+        let pixels = check_pixels(&check);
+        let bad: Vec<_> = pixels.iter().enumerate().filter(|(_, p)| p[0] != 0).take(5).collect();
+        assert!(bad.is_empty(), "{what}: pixels with broken lists (index, [errors, blocks, covered, listed]): {bad:?}");
+        let edge_pixels = pixels.iter().filter(|p| p[1] > 0).count();
+        let background = pixels.iter().filter(|p| p[2] == 0).count();
+        let partly_covered = pixels.iter().filter(|p| p[2] > 0 && p[2] < 4).count();
+        assert!(edge_pixels > 50, "{what}: edge pixels keep extra blocks ({edge_pixels})");
+        assert!(background > 0 && partly_covered > 20, "{what}: the view has background and silhouettes");
+        let g = &stats.last().unwrap().gbuffer[0];
+        assert_eq!(g.overflow_fragments, 0, "{what}: unbounded pool overflowed: {g:?}");
+        let listed: usize = pixels.iter().map(|p| p[1] as usize).sum();
+        assert_eq!(g.pool_used as usize, listed, "{what}: every pool block is on exactly one list");
+        assert_eq!(g.surfaces_per_pixel.iter().sum::<u32>(), 96 * 64);
+    }
+}
+
+#[test]
+fn a_full_pool_degrades_gracefully_and_counts_what_it_dropped() {
+    let gpu = GpuTest::new();
+    let (scene, camera) = city(1500);
+    let tiny = spec("tests/graphs/gpu/compressed_check.ron", &[("pool_fraction", "0.01")]);
+    let (check, stats) = render(&gpu, &scene, &camera, (96, 64), &tiny, 2);
+    let pixels = check_pixels(&check);
+    // Lists stay well formed: dropped fragments are simply not listed (errors 16 is allowed:
+    // a pixel without a head may lose listed samples to the overflow).
+    assert!(pixels.iter().all(|p| p[0] & !16 == 0), "overflow corrupted a list");
+    let g = &stats.last().unwrap().gbuffer[0];
+    assert_eq!(g.pool_used, g.pool_blocks, "the pool fills up: {g:?}");
+    assert!(g.overflow_fragments > 0 && g.overflow_samples >= g.overflow_fragments, "{g:?}");
+    // The image degrades towards no AA at the pixels that lost samples; it does not break.
+    let full =
+        render(&gpu, &scene, &camera, (96, 64), &spec("builtin:msaa_compressed", &[("pool_fraction", "3")]), 2).0;
+    let bounded =
+        render(&gpu, &scene, &camera, (96, 64), &spec("builtin:msaa_compressed", &[("pool_fraction", "0.01")]), 2).0;
+    let no_aa = render(&gpu, &scene, &camera, (96, 64), &spec("builtin:two_phase", &[]), 2).0;
+    let (mean, _) = mean_and_max_difference(&full, &bounded);
+    let (no_aa_mean, _) = mean_and_max_difference(&full, &no_aa);
+    assert!(mean > 0.0 && mean <= no_aa_mean, "starved pool differs by {mean}, no AA by {no_aa_mean}");
+}
+
+/// Mean and largest per-channel difference, in 8-bit units.
+fn mean_and_max_difference(a: &RgbaImage, b: &RgbaImage) -> (f64, u8) {
+    let mut sum = 0u64;
+    let mut max = 0u8;
+    for (p, q) in a.pixels().zip(b.pixels()) {
+        for c in 0..3 {
+            let d = p[c].abs_diff(q[c]);
+            sum += d as u64;
+            max = max.max(d);
+        }
+    }
+    (sum as f64 / (a.width() * a.height() * 3) as f64, max)
+}
+
+#[test]
+fn compressed_matches_per_sample_msaa_and_the_zprepass_baseline_is_identical() {
+    let gpu = GpuTest::new();
+    for (scene, camera, what) in [(intersecting_scene(), boxes_camera(), "boxes"), (city(1500).0, city(1500).1, "city")]
+    {
+        let size = (96, 64);
+        let per_sample = render(&gpu, &scene, &camera, size, &spec("builtin:msaa_per_sample", &[]), 2).0;
+        let zprepass = render(&gpu, &scene, &camera, size, &spec("builtin:msaa_zprepass", &[]), 2).0;
+        let compressed =
+            render(&gpu, &scene, &camera, size, &spec("builtin:msaa_compressed", &[("pool_fraction", "3")]), 2).0;
+        let visibility = render(&gpu, &scene, &camera, size, &spec("builtin:visibility_buffer", &[]), 2).0;
+        let no_aa = render(&gpu, &scene, &camera, size, &spec("builtin:two_phase", &[]), 2).0;
+        assert_eq!(mean_and_max_difference(&per_sample, &zprepass), (0.0, 0), "{what}: Z-prepass changes nothing");
+        // The visibility buffer rebuilds full-precision normals where the G-buffer stores halves.
+        let (vis_mean, vis_max) = mean_and_max_difference(&per_sample, &visibility);
+        assert!(
+            vis_mean < 1.0 && vis_max < 64,
+            "{what}: visibility buffer vs per-sample MSAA: mean {vis_mean}, max {vis_max}"
+        );
+        // The only difference: a surface is shaded once per pixel (at one of its samples, with
+        // 8-bit roughness and 16-bit octahedral normals) instead of at every sample.
+        let (mean, max) = mean_and_max_difference(&per_sample, &compressed);
+        let (aa_mean, _) = mean_and_max_difference(&per_sample, &no_aa);
+        assert!(mean < 0.25 && max < 64, "{what}: compressed vs per-sample MSAA: mean {mean}, max {max}");
+        assert!(mean * 4.0 < aa_mean, "{what}: compressed ({mean}) is much closer to MSAA than no AA is ({aa_mean})");
+        assert!(
+            vis_mean * 2.0 < aa_mean,
+            "{what}: the visibility buffer ({vis_mean}) is closer to MSAA than no AA ({aa_mean})"
+        );
+    }
+}
+
+#[test]
+fn light_tiles_change_nothing() {
+    let gpu = GpuTest::new();
+    let (scene, camera) = city(1500);
+    for graph in ["builtin:msaa_compressed", "builtin:two_phase"] {
+        let tiled = render(&gpu, &scene, &camera, (96, 64), &spec(graph, &[]), 1).0;
+        let all = render(&gpu, &scene, &camera, (96, 64), &spec(graph, &[("light_tiles", "false")]), 1).0;
+        assert_eq!(mean_and_max_difference(&tiled, &all), (0.0, 0), "{graph}");
+    }
+}
+
+#[test]
+fn selective_aa_keeps_one_block_where_it_is_capped() {
+    let gpu = GpuTest::new();
+    let (scene, camera) = city(1500);
+    let blocks = |params: &[(&str, &str)]| -> (u32, Vec<[u8; 4]>) {
+        let mut p = vec![("pool_fraction", "3")];
+        p.extend_from_slice(params);
+        let (check, stats) =
+            render(&gpu, &scene, &camera, (96, 64), &spec("tests/graphs/gpu/compressed_check.ron", &p), 1);
+        (stats.last().unwrap().gbuffer[0].pool_used, check_pixels(&check))
+    };
+    let (all, _) = blocks(&[]);
+    let (ellipse, pixels) = blocks(&[("aa_region", "ellipse"), ("aa_region_size", "0.5")]);
+    assert!(ellipse > 0 && ellipse < all, "ellipse {ellipse} of {all}");
+    for (i, p) in pixels.iter().enumerate() {
+        let (x, y) = ((i % 96) as f32 + 0.5, (i / 96) as f32 + 0.5);
+        let (nx, ny) = ((x / 96.0 * 2.0 - 1.0) / 0.5, (y / 64.0 * 2.0 - 1.0) / 0.5);
+        if nx * nx + ny * ny > 1.0 {
+            assert_eq!(p[1], 0, "pixel ({x}, {y}) outside the ellipse keeps extra blocks");
+        }
+    }
+    let (rectangle, _) = blocks(&[("aa_region", "rectangle"), ("aa_region_size", "0.5")]);
+    assert!(rectangle > 0 && rectangle < all && rectangle >= ellipse, "rectangle {rectangle}, ellipse {ellipse}");
+    let (near, _) = blocks(&[("aa_max_depth_distance", "30")]);
+    assert!(near < all, "distance cap {near} of {all}");
+}
+
+#[test]
+fn compressed_gbuffer_takes_less_memory_than_the_per_sample_gbuffer() {
+    let gpu = GpuTest::new();
+    let (scene, _) = city(1500);
+    let bytes = |graph: &str, resources: &[&str]| -> u64 {
+        let renderer =
+            Renderer::with_graph(&gpu, &gpu.shaders(), scene.clone(), RenderSettings::new(96, 64), &spec(graph, &[]))
+                .unwrap();
+        renderer
+            .runtime()
+            .resource_bytes()
+            .iter()
+            .filter(|r| resources.contains(&r.name.as_str()))
+            .map(|r| r.bytes)
+            .sum()
+    };
+    let compressed = bytes("builtin:msaa_compressed", &["gbuffer"]);
+    let per_sample = bytes("builtin:msaa_per_sample", &["albedo", "normal"]);
+    let visibility = bytes("builtin:visibility_buffer", &["ids"]);
+    assert!(compressed * 2 < per_sample, "compressed {compressed} bytes vs per-sample {per_sample}");
+    assert!(visibility < per_sample, "visibility buffer {visibility} bytes vs per-sample {per_sample}");
+}
