@@ -2,6 +2,7 @@
 //! the barriers between them, and instantiates them by kind name.
 
 pub mod compute;
+pub mod fxaa;
 pub mod gbuffer;
 pub mod gbuffer_compressed;
 pub mod hiz_build;
@@ -31,6 +32,7 @@ pub fn create_node(
         "gbuffer_compressed" => Box::new(gbuffer_compressed::GbufferCompressedPass::new(ctx, shaders, pass, plan)?),
         "lighting_compressed" => Box::new(lighting_compressed::LightingCompressedPass::new(ctx, shaders, pass, plan)?),
         "instance_cull" => Box::new(instance_cull::InstanceCullPass::new(ctx, shaders, pass)?),
+        "fxaa" => Box::new(fxaa::FxaaPass::new(ctx, shaders, pass)?),
         "lighting" => Box::new(lighting::LightingPass::for_plan(ctx, shaders, pass, plan)?),
         "hiz_build" => Box::new(hiz_build::HizBuildPass::new(ctx, shaders, pass)?),
         "overlay" => Box::new(overlay::OverlayPass::new(ctx, shaders, pass, plan)?),

@@ -20,6 +20,8 @@ pub const BUILTIN_GRAPHS: &[(&str, &str)] = &[
     ("one_phase", include_str!("../../graph/one_phase.ron")),
     ("occluder_prepass", include_str!("../../graph/occluder_prepass.ron")),
     ("overlay", include_str!("../../graph/overlay.ron")),
+    ("msaa_compressed", include_str!("../../graph/msaa_compressed.ron")),
+    ("fxaa", include_str!("../../graph/fxaa.ron")),
 ];
 
 /// A render graph to load.
