@@ -150,3 +150,30 @@ fn watch_reloads_on_change_and_keeps_the_last_good_graph_on_error() {
     let _ = child.wait();
     assert!(png.exists());
 }
+
+#[test]
+fn reference_reports_flip_and_psnr_and_refuses_what_the_device_cannot_render() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (png, json) = (tmp.path().join("r.png"), tmp.path().join("r.json"));
+    let (png, json) = (png.to_str().unwrap(), json.to_str().unwrap());
+    let base = ["render", "--scene", "builtin:field", "--instances", "200", "--out", png, "--stats", json];
+    let (code, stdout, err) =
+        run(&[&base[..], &["--size", "64x36", "--graph", "builtin:fxaa", "--reference", "2"]].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("reference (4 samples per pixel): mean FLIP"), "{stdout}");
+    let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    let reference = &stats["reference"];
+    assert_eq!(reference["samples_per_pixel"], 4, "{stats}");
+    let flip = reference["mean_flip"].as_f64().unwrap();
+    assert!((0.0..1.0).contains(&flip), "{reference}");
+    assert!(reference["psnr_db"].as_f64().unwrap() > 10.0, "{reference}");
+
+    // 16384 x 4 is over every device's maxImageDimension2D we run on: refused before rendering.
+    std::fs::remove_file(png).unwrap();
+    let (code, _, err) = run(&[&base[..], &["--size", "16384x4", "--reference"]].concat());
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("maxImageDimension2D"), "{err}");
+    assert!(!std::path::Path::new(png).exists());
+    let (code, _, err) = run(&[&base[..], &["--reference", "0"]].concat());
+    assert_eq!(code, 2, "{err}");
+}

@@ -224,6 +224,19 @@ pub struct RenderArgs {
     /// starts from `--param pool_fraction=F` (blocks per pixel), or the graph's 0.5.
     #[arg(long)]
     pub pool_adapt: bool,
+    /// Also render the last frame's supersampled reference: the same scene, camera and frame
+    /// through `builtin:no_cull` (no AA) at N times the size, box-filtered down in linear light
+    /// (N x N samples per pixel; N defaults to 4), and report the image's mean FLIP and PSNR
+    /// against it (stats JSON: `reference`).
+    #[arg(
+        long,
+        value_name = "N",
+        num_args = 0..=1,
+        default_missing_value = "4",
+        value_parser = clap::value_parser!(u32).range(1..=64),
+        conflicts_with = "watch"
+    )]
+    pub reference: Option<u32>,
     /// Move the scene and the camera together by x,y,z (large-world precision check).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "x,y,z")]
     pub world_offset: Option<DVec3>,

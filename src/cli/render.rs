@@ -5,6 +5,7 @@ use super::args::RenderArgs;
 use super::watch::FileWatch;
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::render::output::save_png;
+use cullgraph::render::reference::{image_reference_error, reference_render_size};
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::{Camera, Projection};
 use cullgraph::stats::RunStats;
@@ -38,6 +39,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         None => ShaderRoot::from_env(),
     };
     let shaders = ShaderCompiler::new(root)?;
+    if let Some(n) = args.reference {
+        // Refuse a reference the device cannot render before rendering anything.
+        reference_render_size(&ctx, (width, height), n)?;
+    }
     let mut stats = RunStats {
         device: ctx.caps().name.clone(),
         scene: scene.name.clone(),
@@ -65,12 +70,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
 
     let bar = progress(Some(args.frames as u64), "rendering");
+    let mut last_frame = None;
     for frame in 0..args.frames {
         let last = frame + 1 == args.frames;
         let camera = args.camera_path.camera_at(&camera, frame);
         let frame_stats = if last {
             let (frame_stats, image) = renderer.render_to_image(&camera)?;
             save_png(&image, &args.out)?;
+            last_frame = Some((camera, image));
             frame_stats
         } else {
             renderer.render(&camera)?
@@ -85,7 +92,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    let scene = args.reference.is_some().then(|| renderer.scene().clone());
     drop(renderer);
+    if let (Some(n), Some(scene), Some((camera, image))) = (args.reference, scene, &last_frame) {
+        let spinner = progress(None, "rendering the reference");
+        let error = image_reference_error(&ctx, &shaders, &scene, camera, image, n, &spec.overrides)?;
+        spinner.finish_and_clear();
+        stats.reference = Some(error);
+    }
     let validation_messages = ctx.validation_log().count();
 
     if let Some(path) = &args.stats {
@@ -108,6 +122,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         last.gpu_total_ms,
         args.out.display()
     );
+    if let Some(r) = &stats.reference {
+        println!(
+            "reference ({} samples per pixel): mean FLIP {:.4}, PSNR {:.2} dB",
+            r.samples_per_pixel, r.mean_flip, r.psnr_db
+        );
+    }
     if args.verify {
         let checked: Vec<_> = stats.frames.iter().filter_map(|f| f.verify.as_ref()).collect();
         let missed: u32 = checked.iter().map(|v| v.false_negatives).sum();

@@ -97,6 +97,10 @@ pub const VISIBILITY_FORMAT: vk::Format = vk::Format::R32G32_UINT;
 pub const HIZ_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 /// The lighting pass's output format (sRGB-encoded values in a UNORM image, so it can be storage).
 pub const LIT_OUTPUT_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+/// FXAA's search schedules (`FXAA_QUALITY__PRESET`), the `fxaa` kind's `preset` words; the first
+/// is the default (39, "extreme quality": twelve taps per direction, the first five one pixel
+/// apart).
+pub const FXAA_PRESETS: &[&str] = &["39", "29", "23", "15", "12", "10"];
 
 const fn slot(name: &'static str, usage: Usage, required: bool, format: FormatRule, doc: &'static str) -> SlotDecl {
     SlotDecl { name, usage, required, format, multisample_ok: false, doc }
@@ -255,6 +259,19 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
                 "lit image",
             )],
             settings: lighting_settings(),
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "fxaa",
+            doc: "FXAA 3.11 (PC quality) in compute over the lit image: luma from the sRGB-encoded value, edge search along the local edge, subpixel blend (the post-process AA baseline)",
+            reads: vec![slot("input", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "the lit image (sRGB-encoded), sampled bilinearly")],
+            writes: vec![slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "the anti-aliased image (same size as the input)")],
+            settings: vec![
+                SettingDecl { name: "preset", default: SettingDefault::Choice(FXAA_PRESETS), doc: "FXAA_QUALITY__PRESET: the edge search schedule (39: extreme quality, 12: FXAA's default)" },
+                SettingDecl { name: "subpix", default: SettingDefault::Float(0.75), doc: "amount of subpixel aliasing removal (0: off, 1: softest)" },
+                SettingDecl { name: "edge_threshold", default: SettingDefault::Float(0.166), doc: "minimum local contrast, relative to the local maximum luma, to process a pixel" },
+                SettingDecl { name: "edge_threshold_min", default: SettingDefault::Float(0.0833), doc: "minimum absolute local contrast (skips dark areas)" },
+            ],
             slots_from_shader: false,
         },
         PassKindInfo {

@@ -9,6 +9,8 @@
 //! - [`raycast`]: which instance each pixel sample sees, by casting primary rays through an
 //!   `obvhs` BVH of the scene's world-space triangles.
 //! - [`metrics`]: PSNR and mean absolute error of two RGBA8 images.
+//! - [`image_error`]: the linear-light box downsample of a supersampled reference, and mean FLIP
+//!   and PSNR of an image against it.
 //!
 //! # Conventions (shared with the shaders)
 //!
@@ -38,11 +40,13 @@
 
 pub mod cull_math;
 pub mod hiz;
+pub mod image_error;
 pub mod metrics;
 pub mod raycast;
 pub mod visibility;
 
 pub use cull_math::{CullView, PixelRect, ScreenBounds};
 pub use hiz::{HiZPyramid, HizVariant};
+pub use image_error::ImageError;
 pub use metrics::ImageDiff;
 pub use raycast::{RaycastOracle, SamplePattern, VisibilityImage};

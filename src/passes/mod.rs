@@ -2,6 +2,7 @@
 //! the barriers between them, and instantiates them by kind name.
 
 pub mod compute;
+pub mod fxaa;
 pub mod gbuffer;
 pub mod gbuffer_compressed;
 pub mod hiz_build;
@@ -33,6 +34,7 @@ pub fn create_node(
         "lighting_compressed" => Box::new(lighting_compressed::LightingCompressedPass::new(ctx, shaders, pass, plan)?),
         "lighting_visibility" => Box::new(lighting_visibility::LightingVisibilityPass::new(ctx, shaders, pass, plan)?),
         "instance_cull" => Box::new(instance_cull::InstanceCullPass::new(ctx, shaders, pass)?),
+        "fxaa" => Box::new(fxaa::FxaaPass::new(ctx, shaders, pass)?),
         "lighting" => Box::new(lighting::LightingPass::for_plan(ctx, shaders, pass, plan)?),
         "hiz_build" => Box::new(hiz_build::HizBuildPass::new(ctx, shaders, pass)?),
         "overlay" => Box::new(overlay::OverlayPass::new(ctx, shaders, pass, plan)?),

@@ -24,6 +24,7 @@ pub const BUILTIN_GRAPHS: &[(&str, &str)] = &[
     ("msaa_per_sample", include_str!("../../graph/msaa_per_sample.ron")),
     ("msaa_zprepass", include_str!("../../graph/msaa_zprepass.ron")),
     ("visibility_buffer", include_str!("../../graph/visibility_buffer.ron")),
+    ("fxaa", include_str!("../../graph/fxaa.ron")),
 ];
 
 /// A render graph to load.

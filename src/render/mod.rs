@@ -6,9 +6,11 @@ pub mod gpu_types;
 pub mod graph_spec;
 pub mod output;
 pub mod pool_adapt;
+pub mod reference;
 pub mod renderer;
 pub mod scene_buffers;
 
 pub use crate::graph::executor::FRAMES_IN_FLIGHT;
 pub use graph_spec::GraphSpec;
+pub use reference::{reference_error, render_reference, DEFAULT_REFERENCE_SCALE};
 pub use renderer::{RenderSettings, Renderer};

@@ -92,6 +92,10 @@ pub struct RunStats {
     pub resources: Vec<ResourceBytes>,
     /// Per-frame figures.
     pub frames: Vec<FrameStats>,
+    /// Error of the last frame (the saved image) against its supersampled reference (with
+    /// `--reference`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<crate::oracle::ImageError>,
 }
 
 impl RunStats {
