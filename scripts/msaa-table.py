@@ -4,7 +4,7 @@ after the first two, memory of the G-buffer-related resources, and ratios of the
 method to the per-sample and Z-prepass baselines. Usage: msaa-table.py DIR"""
 import json, statistics, sys, pathlib
 
-GBUFFER = {"albedo", "normal", "depth", "gbuffer"}
+GBUFFER = {"albedo", "normal", "depth", "gbuffer", "ids"}
 
 def load(path):
     d = json.loads(path.read_text())
@@ -17,7 +17,8 @@ def load(path):
     total = statistics.median([f["gpu_total_ms"] for f in frames])
     mem = {r["name"]: r["bytes"] for r in d.get("resources", []) if r["name"] in GBUFFER}
     g = frames[-1].get("gbuffer", [{}])
-    return ms, total, mem, (g[0] if g else {})
+    ref = d.get("reference") or {}
+    return ms, total, mem, (g[0] if g else {}), ref
 
 def mib(b):
     return b / 2**20
@@ -27,22 +28,25 @@ rows = []
 for p in sorted(root.glob("*.json")):
     scene, method, msaa, lights = p.stem.split("-")
     rows.append((scene, int(lights), int(msaa[:-1]), method, *load(p)))
-print("| scene | lights | MSAA | method | frame ms | geometry ms | lighting ms | G-buffer+depth MiB | pool used / blocks | overflow samples |")
-print("|---|---|---|---|---|---|---|---|---|---|")
-for scene, lights, msaa, method, ms, total, mem, g in sorted(rows):
+print("| scene | lights | MSAA | method | frame ms | geometry ms | lighting ms | G-buffer+depth MiB | pool used / blocks | overflow samples | mean FLIP | PSNR dB |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+for scene, lights, msaa, method, ms, total, mem, g, ref in sorted(rows):
     geometry = sum(v for k, v in ms.items() if k.startswith(("draw_", "depth_", "gbuffer")))
+    lighting = ms.get("lighting", 0)
     pool = f"{g.get('pool_used', '-')} / {g.get('pool_blocks', '-')}" if g else "-"
     print(f"| {scene} | {lights} | {msaa}x | {method} | {total:.3f} | {geometry:.3f} | {ms.get('lighting', 0):.3f} | "
-          f"{mib(sum(mem.values())):.1f} | {pool} | {g.get('overflow_samples', '-') if g else '-'} |")
+          f"{mib(sum(mem.values())):.1f} | {pool} | {g.get('overflow_samples', '-') if g else '-'} | "
+          f"{ref.get('mean_flip', float('nan')):.4f} | {ref.get('psnr_db') or float('nan'):.2f} |")
 print()
-print("| scene | lights | MSAA | memory compressed / per-sample | lighting compressed / per-sample | frame compressed / per-sample | frame compressed / Z-prepass |")
-print("|---|---|---|---|---|---|---|")
-index = {(s, l, m, meth): (ms, t, mem) for s, l, m, meth, ms, t, mem, _ in rows}
-for (s, l, m, meth), (ms, t, mem) in sorted(index.items()):
+print("| scene | lights | MSAA | memory compressed / per-sample | lighting compressed / per-sample | frame compressed / per-sample | frame compressed / Z-prepass | FLIP compressed - per-sample |")
+print("|---|---|---|---|---|---|---|---|")
+index = {(s, l, m, meth): (ms, t, mem, ref) for s, l, m, meth, ms, t, mem, _, ref in rows}
+for (s, l, m, meth), (ms, t, mem, ref) in sorted(index.items()):
     if meth != "msaa_compressed":
         continue
     ps, zp = index.get((s, l, m, "msaa_per_sample")), index.get((s, l, m, "msaa_zprepass"))
     if not ps or not zp:
         continue
     print(f"| {s} | {l} | {m}x | {sum(mem.values()) / max(1, sum(ps[2].values())):.2f} | "
-          f"{ms.get('lighting', 0) / max(1e-9, ps[0].get('lighting', 0)):.2f} | {t / ps[1]:.2f} | {t / zp[1]:.2f} |")
+          f"{ms.get('lighting', 0) / max(1e-9, ps[0].get('lighting', 0)):.2f} | {t / ps[1]:.2f} | {t / zp[1]:.2f} | "
+          f"{ref.get('mean_flip', float('nan')) - ps[3].get('mean_flip', float('nan')):+.4f} |")

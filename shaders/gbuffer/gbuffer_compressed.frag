@@ -19,6 +19,11 @@ layout(set = 0, binding = 4, scalar) buffer Gbuffer {
     BlockPair pairs[];
 } gb;
 
+#ifdef AA_MASK
+// Selective AA by depth edges (an aa_edges pass): 0 = this pixel keeps one block.
+layout(set = 0, binding = 5) uniform usampler2D aa_mask;
+#endif
+
 layout(push_constant) uniform Push {
     uint width;
     uint height;
@@ -49,6 +54,9 @@ bool may_allocate() {
     if (pc.aa_region == 1u && dot(r, r) > 1.0) return false;
     if (pc.aa_region == 2u && max(abs(r.x), abs(r.y)) > 1.0) return false;
     if (pc.aa_object_flags != 0u && (in_flags & FLAG_NO_AA) != 0u) return false;
+#ifdef AA_MASK
+    if (texelFetch(aa_mask, ivec2(gl_FragCoord.xy), 0).r == 0u) return false;
+#endif
     if (pc.aa_max_distance > 0.0) {
         vec4 p = frame.inv_view_proj * vec4(ndc, gl_FragCoord.z, 1.0);
         if (length(p.xyz / p.w) > pc.aa_max_distance) return false;

@@ -93,6 +93,8 @@ pub const GBUFFER_ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 pub const GBUFFER_NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// The visibility buffer's format: instance id and triangle id per sample.
 pub const VISIBILITY_FORMAT: vk::Format = vk::Format::R32G32_UINT;
+/// Format of the selective-AA mask (`aa_edges`): 1 where a pixel may keep several surfaces.
+pub const AA_MASK_FORMAT: vk::Format = vk::Format::R8_UINT;
 /// Format of the Hi-Z pyramid (reversed-Z depth, minimum reduction).
 pub const HIZ_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 /// The lighting pass's output format (sRGB-encoded values in a UNORM image, so it can be storage).
@@ -204,7 +206,11 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
         PassKindInfo {
             name: "gbuffer_compressed",
             doc: "the compressed G-buffer geometry pass: redraws the lists with depth EQUAL, stencil first-fragment-wins and post-depth coverage, writing one 14-byte block per pixel plus pooled blocks for the other distinct surfaces of edge pixels, in per-pixel linked lists",
-            reads: redraw_list_slots(),
+            reads: {
+                let mut reads = redraw_list_slots();
+                reads.push(slot("aa_mask", Usage::Sampled(Stages::Fragment), false, FormatRule::Exact(AA_MASK_FORMAT), "selective AA: only pixels whose mask is not 0 keep more than one block (an aa_edges pass makes it)"));
+                reads
+            },
             writes: vec![
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished MSAA depth, with stencil (its stencil is written)")),
                 slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header, width x height head blocks, then the pool (size: compressed_gbuffer_bytes(pool_blocks))"),
@@ -214,7 +220,6 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
                 SettingDecl { name: "aa_region_size", default: SettingDefault::Float(0.6), doc: "size of the AA region as a fraction of the screen's width and height" },
                 SettingDecl { name: "aa_max_depth_distance", default: SettingDefault::Float(0.0), doc: "selective AA: pixels farther than this distance keep one block (0: no limit)" },
                 SettingDecl { name: "aa_object_flags", default: SettingDefault::Bool(false), doc: "selective AA: instances flagged no-AA keep one block" },
-                SettingDecl { name: "aa_edges_only", default: SettingDefault::Bool(false), doc: "selective AA: only pixels on a depth edge (depth samples differ by more than 1%) keep more than one block" },
             ],
             slots_from_shader: false,
         },
@@ -227,6 +232,14 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             ],
             writes: vec![slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image")],
             settings: lighting_settings(),
+            slots_from_shader: false,
+        },
+        PassKindInfo {
+            name: "aa_edges",
+            doc: "selective AA by depth-edge detection: marks the pixels whose depth samples mix background and surface or differ by more than a relative threshold",
+            reads: vec![ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the finished MSAA depth"))],
+            writes: vec![slot("mask", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(AA_MASK_FORMAT), "1 on depth edges, 0 elsewhere")],
+            settings: vec![SettingDecl { name: "threshold", default: SettingDefault::Float(0.01), doc: "relative view-depth difference between a pixel's samples that makes it an edge" }],
             slots_from_shader: false,
         },
         PassKindInfo {

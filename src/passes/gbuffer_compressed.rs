@@ -99,6 +99,7 @@ pub struct GbufferCompressedPass {
     draw: Pipeline,
     clear: Pipeline,
     aa: SelectiveAa,
+    sampler: crate::gpu::Sampler,
 }
 
 impl GbufferCompressedPass {
@@ -123,14 +124,16 @@ impl GbufferCompressedPass {
                 depth.0
             )));
         }
-        let fragment = Some(("gbuffer/gbuffer_compressed.frag", &[][..]));
+        let masked = pass.bindings.iter().any(|b| b.slot == "aa_mask");
+        let defines: &[(&str, &str)] = if masked { &[("AA_MASK", "1")] } else { &[] };
+        let fragment = Some(("gbuffer/gbuffer_compressed.frag", defines));
         let draw = geometry_pipeline(ctx, shaders, &pass.name, fragment, &[], depth, true)?;
         let clear = Pipeline::compute(
             ctx,
             &format!("{} clear", pass.name),
             &shaders.compile("gbuffer/gbuffer_compressed_clear.comp", &[])?,
         )?;
-        Ok(Self { draw, clear, aa: SelectiveAa::from_plan(pass) })
+        Ok(Self { draw, clear, aa: SelectiveAa::from_plan(pass), sampler: crate::gpu::Sampler::nearest_clamp(ctx)? })
     }
 }
 
@@ -169,6 +172,15 @@ impl PassNode for GbufferCompressedPass {
         };
         let scene = rec.frame.scene;
         let lists = DrawSource::redraw_lists(slots, scene);
+        let mut extra = vec![Bind::Buffer(4, gbuffer.handle())];
+        if let Some(mask) = slots.image("aa_mask") {
+            extra.push(Bind::Sampled(
+                5,
+                mask.sampled_view(),
+                self.sampler.handle(),
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            ));
+        }
         record_geometry(
             rec.ctx,
             rec.cmd,
@@ -179,7 +191,7 @@ impl PassNode for GbufferCompressedPass {
             &[],
             depth,
             vk::AttachmentLoadOp::LOAD,
-            &[Bind::Buffer(4, gbuffer.handle())],
+            &extra,
             bytemuck::bytes_of(&push),
         );
         Ok(())

@@ -1,6 +1,7 @@
 //! Built-in passes. Each records its own commands; the render graph decides their order and
 //! the barriers between them, and instantiates them by kind name.
 
+pub mod aa_edges;
 pub mod compute;
 pub mod fxaa;
 pub mod gbuffer;
@@ -33,6 +34,7 @@ pub fn create_node(
         "gbuffer_compressed" => Box::new(gbuffer_compressed::GbufferCompressedPass::new(ctx, shaders, pass, plan)?),
         "lighting_compressed" => Box::new(lighting_compressed::LightingCompressedPass::new(ctx, shaders, pass, plan)?),
         "lighting_visibility" => Box::new(lighting_visibility::LightingVisibilityPass::new(ctx, shaders, pass, plan)?),
+        "aa_edges" => Box::new(aa_edges::AaEdgesPass::new(ctx, shaders, pass, plan)?),
         "instance_cull" => Box::new(instance_cull::InstanceCullPass::new(ctx, shaders, pass)?),
         "fxaa" => Box::new(fxaa::FxaaPass::new(ctx, shaders, pass)?),
         "lighting" => Box::new(lighting::LightingPass::for_plan(ctx, shaders, pass, plan)?),

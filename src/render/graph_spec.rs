@@ -21,6 +21,7 @@ pub const BUILTIN_GRAPHS: &[(&str, &str)] = &[
     ("occluder_prepass", include_str!("../../graph/occluder_prepass.ron")),
     ("overlay", include_str!("../../graph/overlay.ron")),
     ("msaa_compressed", include_str!("../../graph/msaa_compressed.ron")),
+    ("msaa_compressed_edges", include_str!("../../graph/msaa_compressed_edges.ron")),
     ("msaa_per_sample", include_str!("../../graph/msaa_per_sample.ron")),
     ("msaa_zprepass", include_str!("../../graph/msaa_zprepass.ron")),
     ("visibility_buffer", include_str!("../../graph/visibility_buffer.ron")),

@@ -1,0 +1,66 @@
+//! Selective AA by depth-edge detection (`aa_edges`, paper `002` §5): a compute pass over the
+//! finished MSAA depth that marks the pixels whose samples mix background and surface or span
+//! more than a relative depth difference. `gbuffer_compressed` reads the mask (`aa_mask`) and
+//! keeps one block on the unmarked pixels, so interior triangle edges of a continuous surface
+//! cost no pool blocks.
+
+use super::gbuffer::bound_image;
+use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
+use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::plan::{CompiledGraph, PlannedPass, SettingValue};
+use ash::vk;
+
+/// The `aa_edges` pass.
+pub struct AaEdgesPass {
+    pipeline: Pipeline,
+    sampler: Sampler,
+    threshold: f32,
+}
+
+impl AaEdgesPass {
+    /// Compiles the shader for the sample count of the depth bound to `pass`.
+    pub fn new(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        pass: &PlannedPass,
+        plan: &CompiledGraph,
+    ) -> crate::Result<Self> {
+        let samples = bound_image(plan, pass, "depth").map_or(1, |(_, s)| s.as_raw().max(1)).to_string();
+        let spirv = shaders.compile("aa/aa_edges.comp", &[("SAMPLES", &samples)])?;
+        let threshold = match pass.settings.get("threshold") {
+            Some(SettingValue::Float(f)) => *f as f32,
+            Some(SettingValue::Int(i)) => *i as f32,
+            _ => 0.01,
+        };
+        Ok(Self {
+            pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
+            sampler: Sampler::nearest_clamp(ctx)?,
+            threshold,
+        })
+    }
+}
+
+impl PassNode for AaEdgesPass {
+    fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
+        let depth = rec.slots.required_image("depth")?;
+        let mask = rec.slots.required_image("mask")?;
+        self.pipeline.bind(rec.cmd);
+        self.pipeline.push_bindings(
+            rec.cmd,
+            &[
+                Bind::Sampled(
+                    0,
+                    depth.sampled_view(),
+                    self.sampler.handle(),
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
+                Bind::StorageImage(1, mask.view()),
+            ],
+        );
+        self.pipeline.push_constants(rec.cmd, &self.threshold);
+        let e = mask.extent();
+        // SAFETY: cmd recording with this pipeline bound.
+        unsafe { rec.ctx.device().cmd_dispatch(rec.cmd, e.width.div_ceil(8), e.height.div_ceil(8), 1) };
+        Ok(())
+    }
+}
