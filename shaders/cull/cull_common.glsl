@@ -12,9 +12,6 @@
 // Threads (and slots) per block of the prefix sum; a multiple of 32 so blocks own whole words.
 #define CULL_BLOCK 256u
 #define CULL_WORDS_PER_BLOCK (CULL_BLOCK / 32u)
-// Blocks per workgroup of the test step: each thread has this many slots in flight, and fewer
-// workgroups end with the done-counter's round trip.
-#define CULL_TEST_BLOCKS 2u
 
 // World bound of one slot, 32 bytes. The small quantities are half floats, rounded outward
 // on the CPU and widened by their own rounding error (src/render/cull_data.rs), so the bound
@@ -70,28 +67,19 @@ struct CullStats {
 
 #define FLAG_OCCLUDER 1u
 
-// The pass's scratch buffer: a header of counters, then one word per block, then one more per
-// block. The test step stores each block's survivor count in the first and the draw group of its
-// first survivor in the second; the last test workgroup to finish replaces the counts by their
-// exclusive prefix sum. The scatter step reads both. No workgroup ever waits for another, which
-// Vulkan does not guarantee to make progress.
-//
-// Finding the last workgroup takes two levels of counters: workgroup w counts into lane
-// w % CULL_LANES, and the last of each lane into the top counter. Returning atomics on one
-// address are serialised in the L2 (several ns each: some 20 us for 4000 workgroups on an
-// H100), so each lane's counter and its share of the statistics live in their own 128-byte line.
-#define CULL_LANES 64u
-#define CULL_LINE 32u
-#define SCRATCH_DONE_TOP 0u
-// Words of lane l's line: done counter, then the statistics.
-#define LANE_DONE 0u
-#define LANE_TESTED 1u
-#define LANE_FRUSTUM 2u
-#define LANE_OCCLUSION 3u
-#define LANE_VISIBLE 4u
-uint scratch_lane(uint l, uint word) { return CULL_LINE * (1u + l) + word; }
-#define SCRATCH_HEADER (CULL_LINE * (1u + CULL_LANES))
-uint scratch_block(uint b) { return SCRATCH_HEADER + b; }
-uint scratch_block_group(uint blocks, uint b) { return SCRATCH_HEADER + blocks + b; }
+// Blocks per superblock: a block's survivors-before is the sum of the superblock counts before
+// its superblock plus the block counts before it in its superblock, read from what the test
+// step finished writing (no workgroup ever waits for another, which Vulkan does not guarantee
+// to make progress).
+#define CULL_SUPERBLOCK 64u
+
+// The pass's scratch buffer: counters, then one count per superblock, then one per block.
+#define SCRATCH_TESTED 0
+#define SCRATCH_FRUSTUM 1
+#define SCRATCH_OCCLUSION 2
+#define SCRATCH_VISIBLE 3
+#define SCRATCH_HEADER 8u
+uint scratch_superblock(uint s) { return SCRATCH_HEADER + s; }
+uint scratch_block(uint superblocks, uint b) { return SCRATCH_HEADER + superblocks + b; }
 
 #endif

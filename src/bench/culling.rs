@@ -95,17 +95,18 @@ pub struct CullingReport {
 }
 
 /// Bytes an instance_cull pass moves (unique bytes; repeated reads that hit the cache are not
-/// counted), from what its two steps read and write. Test: `tested` 32-byte records, last
-/// frame's and this frame's visibility bits and the draw bits, a count per block; its last
-/// workgroup reads and rewrites the block counts and per group its record, base and 20-byte
-/// command. Scatter: the draw bits, the block prefixes, the groups, and per survivor its
-/// instance id read and written.
+/// counted), from what its three steps read and write. Test: `tested` 32-byte records, last
+/// frame's and this frame's visibility bits and the draw bits, a count per block. Scatter: the
+/// draw bits, the block and superblock counts, the groups, and per survivor its instance id
+/// read and written. Commands: per group its record, base and 20-byte command.
 pub fn cull_pass_bytes(slots: u64, tested: u64, drawn: u64, groups: u64) -> u64 {
     let blocks = slots.div_ceil(256);
+    let superblocks = blocks.div_ceil(64);
     let bits = slots.div_ceil(32) * 4;
-    let test = tested * 32 + 3 * bits + 3 * blocks * 4 + groups * (32 + 4 + 20);
-    let scatter = bits + blocks * 4 + groups * (32 + 4) + drawn * 8;
-    test + scatter
+    let test = tested * 32 + 3 * bits + blocks * 4 + superblocks * 4;
+    let scatter = bits + blocks * 4 + superblocks * 4 + groups * (32 + 4) + drawn * 8;
+    let commands = groups * (32 + 4 + 20);
+    test + scatter + commands
 }
 
 /// Runs the benchmark.

@@ -3,17 +3,15 @@
 //! survivors per draw group in instance order into `VkDrawIndexedIndirectCommand`s and a draw
 //! count for `vkCmdDrawIndexedIndirectCount`. No CPU readback anywhere.
 //!
-//! Two dispatches (`shaders/cull/`): `instance_cull.comp` (one thread per slot decides; each
-//! block stores its decision bits and survivor count; the last workgroup to finish, found with
-//! an atomic done-counter, turns the counts into prefix sums and writes every group's base, the
-//! commands compacted in group order, the draw count and the counters) and `cull_scatter.comp`
-//! (the survivors of each block write their instance id into their group's slice in instance
-//! order). On a fast GPU each dispatch and barrier costs more than the work of a small scene, so
-//! the pass keeps to two. No workgroup ever waits for another: Vulkan does not promise that
-//! such waits make progress (a decoupled look-back hangs on lavapipe); the last workgroup only
-//! does work that nobody waits for. The thesis's atomic append (`compaction: "atomic"`) is kept
-//! as a measured variant: `cull_init.comp` then the test step appending with atomics; its order
-//! within a group varies from run to run.
+//! Three dispatches (`shaders/cull/`): `instance_cull.comp` (one thread per slot decides; each
+//! block stores its decision bits and survivor count and adds it to its superblock's count),
+//! `cull_scatter.comp` (each block sums the counts before it, in parallel, and its survivors
+//! write their instance id into their group's slice in instance order) and
+//! `cull_commands.comp` (one workgroup: per-group counts, commands compacted in group order,
+//! counters). No workgroup ever waits for another: Vulkan does not promise that such waits make
+//! progress (a decoupled look-back hangs on lavapipe). The thesis's atomic append (`compaction: "atomic"`) is kept as a measured variant:
+//! `cull_init.comp` then the test step appending with atomics; its order within a group varies
+//! from run to run.
 
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
@@ -23,8 +21,6 @@ use ash::vk;
 
 /// Slots per block of the prefix sum (`CULL_BLOCK` in `cull_common.glsl`).
 pub const CULL_BLOCK: u32 = 256;
-/// Blocks per workgroup of the test step (`CULL_TEST_BLOCKS` in `cull_common.glsl`).
-const CULL_TEST_BLOCKS: u32 = 2;
 
 /// The pass's settings, from the graph.
 #[derive(Clone, Debug, PartialEq)]
@@ -75,9 +71,7 @@ impl CullSettings {
 /// Scratch memory sized for one scene.
 struct Scratch {
     slots: u32,
-    /// Counters (and the done-counter), then one word per block: its survivor count, replaced
-    /// by the survivors before it by the test step's last workgroup; then one more per block: the
-    /// draw group of its first survivor.
+    /// Counters, one count per superblock, one per block.
     scan: Buffer,
     /// One bit per slot: drawn by this pass.
     draw_bits: Buffer,
@@ -94,6 +88,7 @@ pub struct InstanceCullPass {
     settings: CullSettings,
     test: Pipeline,
     scatter: Option<Pipeline>,
+    commands: Option<Pipeline>,
     init: Option<Pipeline>,
     sampler: Sampler,
     scratch: Option<Scratch>,
@@ -117,18 +112,21 @@ impl InstanceCullPass {
             (settings.atomic, "ATOMIC_APPEND"),
         ];
         defines.extend(flags.iter().filter(|(on, _)| *on).map(|(_, name)| (*name, "1")));
-
         let name = |step: &str| format!("{} ({step})", pass.name);
         let test = Pipeline::compute(ctx, &name("test"), &shaders.compile("cull/instance_cull.comp", &defines)?)?;
         let compute = |step: &str, file: &str| -> crate::Result<Pipeline> {
             Ok(Pipeline::compute(ctx, &name(step), &shaders.compile(file, &[])?)?)
         };
-        let (scatter, init) = if settings.atomic {
-            (None, Some(compute("init", "cull/cull_init.comp")?))
+        let (scatter, commands, init) = if settings.atomic {
+            (None, None, Some(compute("init", "cull/cull_init.comp")?))
         } else {
-            (Some(compute("scatter", "cull/cull_scatter.comp")?), None)
+            (
+                Some(compute("scatter", "cull/cull_scatter.comp")?),
+                Some(compute("commands", "cull/cull_commands.comp")?),
+                None,
+            )
         };
-        Ok(Self { settings, test, scatter, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
+        Ok(Self { settings, test, scatter, commands, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
     }
 
     /// The settings in use.
@@ -151,9 +149,10 @@ impl InstanceCullPass {
                     },
                 )
             };
+            let superblocks = blocks.div_ceil(CULL_SUPERBLOCK as u64);
             self.scratch = Some(Scratch {
                 slots,
-                scan: storage("cull scan state", (SCAN_HEADER_WORDS + 2 * blocks) * 4)?,
+                scan: storage("cull scan state", (SCAN_HEADER_WORDS + superblocks + blocks) * 4)?,
                 draw_bits: storage("cull draw bits", blocks * (CULL_BLOCK as u64 / 32) * 4)?,
                 group_base: storage("cull group base", groups.max(1) as u64 * 4)?,
                 own_stats: storage("cull stats (unbound)", 64)?,
@@ -164,9 +163,10 @@ impl InstanceCullPass {
     }
 }
 
-/// Words of counters before the block words in the scan buffer (`SCRATCH_HEADER`: a 32-word line
-/// for the top done-counter and one per counter lane, `CULL_LANES` = 64).
-const SCAN_HEADER_WORDS: u64 = 32 * (1 + 64);
+/// Words of counters before the superblock counts in the scan buffer (`SCRATCH_HEADER`).
+const SCAN_HEADER_WORDS: u64 = 8;
+/// Blocks per superblock (`CULL_SUPERBLOCK` in `cull_common.glsl`).
+pub const CULL_SUPERBLOCK: u32 = 64;
 
 /// Compute writes before compute reads and writes of the next step.
 fn step_barrier(ctx: &GpuContext, cmd: vk::CommandBuffer) {
@@ -205,8 +205,8 @@ impl PassNode for InstanceCullPass {
         let device = ctx.device();
         let scratch = self.scratch.as_mut().expect("ensured above");
         if scratch.fresh {
-            // Zero the counters and the done-counter: once, before the first run (each run's last
-            // test workgroup leaves them at zero for the next).
+            // Zero counters and superblock counts: once, before the first run (each run's commands
+            // step leaves them at zero for the next).
             // SAFETY: cmd recording; the buffer is the pass's own.
             unsafe { device.cmd_fill_buffer(cmd, scratch.scan.handle(), 0, vk::WHOLE_SIZE, 0) };
             cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::COMPUTE_WRITE)], &[]);
@@ -217,6 +217,7 @@ impl PassNode for InstanceCullPass {
         let scratch = self.scratch.as_ref().expect("ensured above");
         let stats = rec.slots.buffer("stats").unwrap_or(&scratch.own_stats);
         let blocks = slots.div_ceil(CULL_BLOCK);
+        let superblocks = blocks.div_ceil(CULL_SUPERBLOCK);
 
         let mut test_binds = vec![
             Bind::Buffer(0, scene.cull_records.handle()),
@@ -241,13 +242,13 @@ impl PassNode for InstanceCullPass {
         #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
         struct TestPush {
             slot_count: u32,
-            group_count: u32,
+            superblocks: u32,
             occluder_distance: f32,
             occluder_size: f32,
         }
         let push = TestPush {
             slot_count: slots,
-            group_count: groups,
+            superblocks,
             occluder_distance: self.settings.occluder_distance,
             occluder_size: self.settings.occluder_size,
         };
@@ -274,22 +275,15 @@ impl PassNode for InstanceCullPass {
                 Bind::Buffer(6, stats.handle()),
             ]);
         } else {
-            test_binds.extend([
-                Bind::Buffer(5, scratch.scan.handle()),
-                Bind::Buffer(6, scratch.draw_bits.handle()),
-                Bind::Buffer(10, scratch.group_base.handle()),
-                Bind::Buffer(11, commands.handle()),
-                Bind::Buffer(12, draw_count.handle()),
-                Bind::Buffer(13, stats.handle()),
-            ]);
+            test_binds.extend([Bind::Buffer(5, scratch.scan.handle()), Bind::Buffer(6, scratch.draw_bits.handle())]);
         }
         self.test.bind(cmd);
         self.test.push_bindings(cmd, &test_binds);
         self.test.push_constants(cmd, &push);
         // SAFETY: as above.
-        unsafe { device.cmd_dispatch(cmd, blocks.div_ceil(CULL_TEST_BLOCKS).max(1), 1, 1) };
+        unsafe { device.cmd_dispatch(cmd, blocks.max(1), 1, 1) };
 
-        if let Some(scatter) = &self.scatter {
+        if let (Some(scatter), Some(build)) = (&self.scatter, &self.commands) {
             step_barrier(ctx, cmd);
             scatter.bind(cmd);
             scatter.push_bindings(
@@ -303,9 +297,25 @@ impl PassNode for InstanceCullPass {
                     Bind::Buffer(5, scratch.group_base.handle()),
                 ],
             );
-            scatter.push_constants(cmd, &[slots, groups]);
+            scatter.push_constants(cmd, &[slots, groups, superblocks]);
             // SAFETY: as above.
             unsafe { device.cmd_dispatch(cmd, blocks.max(1), 1, 1) };
+            step_barrier(ctx, cmd);
+            build.bind(cmd);
+            build.push_bindings(
+                cmd,
+                &[
+                    Bind::Buffer(0, scene.draw_groups.handle()),
+                    Bind::Buffer(1, scratch.group_base.handle()),
+                    Bind::Buffer(2, scratch.scan.handle()),
+                    Bind::Buffer(3, commands.handle()),
+                    Bind::Buffer(4, draw_count.handle()),
+                    Bind::Buffer(5, stats.handle()),
+                ],
+            );
+            build.push_constants(cmd, &[groups, superblocks]);
+            // SAFETY: as above.
+            unsafe { device.cmd_dispatch(cmd, 1, 1, 1) };
         }
         Ok(())
     }
