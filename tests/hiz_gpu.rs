@@ -490,14 +490,14 @@ fn random_triangles_give_the_oracle_pyramid() {
 fn partial_mip_chains_match_the_oracle_prefix() {
     let mut h = Harness::new();
     h.check((300, 200, 1), Pattern::Random, 1, Some(3));
-    h.check((129, 129, 1), Pattern::Descending, 2, Some(6)); // up to the tile level: no counter
+    h.check((129, 129, 1), Pattern::Descending, 2, Some(6)); // up to the tile level: no top pass
     h.check((1023, 767, 4), Pattern::Descending, 3, Some(7)); // one level above the tiles
     h.check((257, 3, 1), Pattern::Random, 4, Some(1));
     h.check((64, 9, 1), Pattern::Ascending, 5, Some(2));
 }
 
 #[test]
-fn repeated_builds_into_one_image_reset_the_tile_counter() {
+fn repeated_builds_into_one_image_give_the_oracle_pyramid() {
     let mut h = Harness::new();
     for (w, hh) in [(640u32, 480u32), (129, 1)] {
         for round in 0..2 {
@@ -541,7 +541,7 @@ fn hiz_build_in_a_graph_reduces_the_gbuffer_depth() {
         let mut renderer =
             Renderer::with_graph(gpu, &tools.shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
         let mut camera = boxes_camera();
-        // Two frames: the second build reuses the pass (its tile counter) after a submit.
+        // Two frames: the second build reuses the pass (its tile-level buffer) after a submit.
         renderer.render(&camera).unwrap();
         camera.eye.x -= 0.7;
         let base = UVec2::new(w, h);

@@ -1,6 +1,7 @@
-// Hi-Z pyramid in one dispatch (AMD single-pass-downsampler style, conservative for any size),
-// stored from chain level 1 (HIZ_FIRST_LEVEL): stored mip m = chain level m + 1, level 0 being
-// the depth (min over samples), which is read once and never written.
+// Hi-Z pyramid in two dispatches of this shader (AMD single-pass-downsampler style tiles, then
+// one workgroup for the top; conservative for any size), stored from chain level 1
+// (HIZ_FIRST_LEVEL): stored mip m = chain level m + 1, level 0 being the depth (min over
+// samples), which is read once and never written.
 //
 // Every level is a min over an axis-aligned block of the depth: texel x of level k covers columns
 // [x << k, (x + 1) << k), except the last texel of a level, which runs to the end of the row (the
@@ -20,18 +21,19 @@
 // the padded texel s covers exactly the columns that the fold adds, and clamped duplicates only
 // repeat the last column, which that texel covers anyway). Interior blocks therefore need no
 // fold at all (4 gathers, 4 + 1 stores); the blocks on the last column/row of level 2 read a 8x8
-// (clamped) block and apply the fold. Levels 3..6 of the tile straight from its level 2 in shared
-// memory (one barrier; a texel per thread), then the last workgroup to finish (a device-scope
-// atomic counter) reduces levels 7.. from level 6, which it loads into shared memory once.
+// (clamped) block and apply the fold. Levels 3..6 of the tile level by level in shared memory
+// (ping-pong, a barrier per level, a texel per thread reading at most 3x3: reducing level 6
+// straight from level 2 made one thread read 256..961 values in a row, which cost more than
+// reading the depth on an H100). The tile's level-6 texel also goes to the buffer `top`.
 //
-// Memory model (GLSL450 model, GL_KHR_memory_scope_semantics): a tile's level-6 texel is stored
-// to a coherent image by the invocation that then bumps the counter with an acquire-release
-// atomicAdd at device scope; the last workgroup acquires through the same atomic and a control
-// barrier (device scope) before its coherent loads of level 6, and puts the counter back to 0
-// for the next dispatch (the pass zeroes it once, when it is created, and orders dispatches with
-// a barrier).
+// With HIZ_TOP_PASS, one workgroup (a second dispatch, after a barrier) loads level 6 from `top`
+// into shared memory and reduces levels 7.. there. Measured on an H100, this is faster than the
+// "last workgroup to finish does the top" pattern (3840x2160: 0.052 against 0.057 ms): the
+// device-scope release that each tile then needs before its done-counter atomic waits for the
+// tile's image stores under full memory load, which holds every workgroup's slot longer. Only
+// the mips above level 6, which the top workgroup reads back itself when a level does not fit
+// shared memory, are coherent images.
 #version 460
-#extension GL_KHR_memory_scope_semantics : require
 #extension GL_EXT_control_flow_attributes : require
 #include "common/hiz.glsl"
 
@@ -42,15 +44,16 @@ layout(binding = 0) uniform sampler2DMS depth_tex;
 #else
 layout(binding = 0) uniform sampler2D depth_tex;  // nearest, clamp to edge
 #endif
-layout(binding = 1) coherent buffer Counter { uint tiles_done; };
+// Level 6 (one texel per tile, row-major), for the top pass.
+layout(binding = 18) buffer Top { float top[]; };
 // One storage image per stored mip (binding 2 + mip; mip m = chain level m + 1); mips the image
 // lacks are bound to its last mip and never touched.
-layout(binding = 2, r32f) uniform coherent image2D mip0;
-layout(binding = 3, r32f) uniform coherent image2D mip1;
-layout(binding = 4, r32f) uniform coherent image2D mip2;
-layout(binding = 5, r32f) uniform coherent image2D mip3;
-layout(binding = 6, r32f) uniform coherent image2D mip4;
-layout(binding = 7, r32f) uniform coherent image2D mip5;
+layout(binding = 2, r32f) uniform writeonly image2D mip0;
+layout(binding = 3, r32f) uniform writeonly image2D mip1;
+layout(binding = 4, r32f) uniform writeonly image2D mip2;
+layout(binding = 5, r32f) uniform writeonly image2D mip3;
+layout(binding = 6, r32f) uniform writeonly image2D mip4;
+layout(binding = 7, r32f) uniform writeonly image2D mip5;
 layout(binding = 8, r32f) uniform coherent image2D mip6;
 layout(binding = 9, r32f) uniform coherent image2D mip7;
 layout(binding = 10, r32f) uniform coherent image2D mip8;
@@ -70,14 +73,14 @@ layout(push_constant) uniform Push {
 
 const uint SIDE = 16u;         // threads per axis
 const uint TILE_LEVEL = 6u;    // chain level: a workgroup owns the subtree of one level-6 texel
-const uint TOP_CAP = 4096u;    // level-6 texels the last workgroup loads into shared memory at once
+const uint TOP_CAP = 4096u;    // level-6 texels the top pass loads into shared memory at once
 #define FAR_INIT uintBitsToFloat(0x7F800000u)  // +inf: min identity
 
-// s_a: level 2 of the tile (<= 31x31, stride 32). The last workgroup reuses s_a and s_b, flat,
-// for the levels above the tiles (s_a: level 6, up to TOP_CAP texels).
+// s_a: level 2 of the tile (<= 31x31, stride 32), then levels 3..6 alternate between s_b and s_a
+// (same stride). The top pass reuses s_a and s_b, flat, for the levels above the tiles
+// (s_a: level 6, up to TOP_CAP texels).
 shared float s_a[TOP_CAP];
 shared float s_b[1024];
-shared bool s_last;
 
 vec2 inv_base;  // 1 / base, for gather coordinates
 
@@ -102,10 +105,11 @@ void store_mip(uint mip, ivec2 p, float v) {
     }
 }
 
-// Mips read back: 5 (chain level 6, written by every workgroup) and above (by the last one).
+// Mips read back by the top pass: above level 6 (written by itself), when a level does not
+// fit shared memory; level 6 comes from `top`.
 float load_mip(uint mip, ivec2 p) {
     switch (mip) {
-        case 5u: return imageLoad(mip5, p).r;
+        case 5u: return top[p.y * hiz_level_size(base, TILE_LEVEL).x + p.x];
         case 6u: return imageLoad(mip6, p).r;
         case 7u: return imageLoad(mip7, p).r;
         case 8u: return imageLoad(mip8, p).r;
@@ -198,35 +202,36 @@ uvec2 tile_hi(uvec2 g, uvec2 n, uint k) {
     return mix((g + 1u) << (TILE_LEVEL - k), hiz_level_size(base, k), equal(g, n - 1u));
 }
 
-// Chain level K (3..6) of the tile, straight from its level 2 in s_a (stride 32): level-K texel t
-// is the min of level-2 texels [t << (K - 2), (t + 1) << (K - 2)), or up to the end of level 2
-// for the last texel of level K (the tree property, between any two levels). At most 15x15
-// texels: one per thread. A macro so that the level and the image are constants.
-#define REDUCE_TILE_LEVEL(K, MIP)                                                                   \
-    if (K <= top) {                                                                                 \
+// Chain level K (3..6) of the tile from its level K - 1 in SRC into DST (both stride 32) and
+// mip MIP: the footprints of common/hiz.glsl in tile-local coordinates (the tile's level-K texels
+// start at half its level-(K - 1) ones, and a fold never leaves the tile). At most 15x15 texels:
+// one per thread. A macro so that the level, the arrays and the image are constants.
+#define REDUCE_TILE_LEVEL(K, SRC, DST, MIP)                                                        \
+    if (K <= top_level) {                                                                           \
+        barrier();                                                                                  \
         uvec2 lo = tile_lo(g, K);                                                                   \
         uvec2 cnt = tile_hi(g, n, K) - lo;                                                          \
-        if (all(lessThan(tid, cnt))) {                                                              \
-            uvec2 t = lo + tid;                                                                     \
-            uvec2 first = (t << (K - 2u)) - lo2;                                                    \
-            uvec2 end = mix((t + 1u) << (K - 2u), s2, equal(t, hiz_level_size(base, K) - 1u)) - lo2; \
+        uvec2 t = uvec2(lid % cnt.x, lid / cnt.x);                                                  \
+        if (t.y < cnt.y) {                                                                          \
+            uvec2 first, count;                                                                     \
+            hiz_footprint(lo + t, hiz_level_size(base, K - 1u), first, count);                      \
+            first -= 2u * lo;                                                                       \
             float v = FAR_INIT;                                                                     \
-            for (uint y = first.y; y < end.y; ++y) {                                                \
-                for (uint x = first.x; x < end.x; ++x) v = min(v, s_a[y * 32u + x]);                \
+            for (uint y = 0u; y < count.y; ++y) {                                                   \
+                for (uint x = 0u; x < count.x; ++x) v = min(v, SRC[(first.y + y) * 32u + first.x + x]); \
             }                                                                                       \
-            imageStore(MIP, ivec2(t), vec4(v));                                                     \
+            imageStore(MIP, ivec2(lo + t), vec4(v));                                                \
+            DST[t.y * 32u + t.x] = v;                                                               \
+            if (K < levels) top[g.y * n.x + g.x] = v;                                              \
         }                                                                                           \
     }
 
-// Loads the `total` texels of a level of size `src` from MIP, flat into s_a, 8 per thread at a
-// time (all issued before any is used; one round up to 2048 texels, a 3840x2160 depth).
-#define LOAD_TOP(MIP)                                                                               \
+// Loads the `total` texels of level 6 from `top`, flat into s_a, 8 per thread at a time (all
+// issued before any is used; one round up to 2048 texels, a 3840x2160 depth).
+#define LOAD_TOP_BUFFER()                                                                           \
     for (uint first = lid; first < total; first += 8u * SIDE * SIDE) {                              \
         float vals[8];                                                                              \
-        [[unroll]] for (uint i = 0u; i < 8u; ++i) {                                                 \
-            uint idx = min(first + i * SIDE * SIDE, total - 1u);                                    \
-            vals[i] = imageLoad(MIP, ivec2(idx % src.x, idx / src.x)).r;                            \
-        }                                                                                           \
+        [[unroll]] for (uint i = 0u; i < 8u; ++i) vals[i] = top[min(first + i * SIDE * SIDE, total - 1u)]; \
         [[unroll]] for (uint i = 0u; i < 8u; ++i) {                                                 \
             if (first + i * SIDE * SIDE < total) s_a[first + i * SIDE * SIDE] = vals[i];            \
         }                                                                                           \
@@ -237,9 +242,10 @@ void main() {
     uint lid = gl_LocalInvocationIndex;
     uvec2 n = hiz_level_size(base, TILE_LEVEL);
     uvec2 g = n - 1u - gl_WorkGroupID.xy;  // edge tiles (up to 4x the pixels) first
-    uint top = min(TILE_LEVEL, levels);     // highest chain level stored inside the tile
+    uint top_level = min(TILE_LEVEL, levels);  // highest chain level stored inside the tile
     inv_base = 1.0 / vec2(base);
 
+#ifndef HIZ_TOP_PASS
     // Chain levels 1 and 2 from the depth; level 2 of the tile into s_a.
     uvec2 s2 = hiz_level_size(base, 2u);
     uvec2 lo2 = tile_lo(g, 2u);
@@ -253,28 +259,15 @@ void main() {
         }
     }
 
-    // Chain levels 3..6 of the tile from its level 2: one barrier (a barrier per level costs more
-    // than the extra reads on lavapipe, where it switches between the workgroup's 32 subgroups).
-    if (top >= 3u) barrier();
-    REDUCE_TILE_LEVEL(3u, mip2)
-    REDUCE_TILE_LEVEL(4u, mip3)
-    REDUCE_TILE_LEVEL(5u, mip4)
-    REDUCE_TILE_LEVEL(6u, mip5)
-    if (levels <= TILE_LEVEL) return;  // no level above the tiles
+    // Chain levels 3..6 of the tile, level by level (each starts with a barrier).
+    REDUCE_TILE_LEVEL(3u, s_a, s_b, mip2)
+    REDUCE_TILE_LEVEL(4u, s_b, s_a, mip3)
+    REDUCE_TILE_LEVEL(5u, s_a, s_b, mip4)
+    REDUCE_TILE_LEVEL(6u, s_b, s_a, mip5)
+    // The top pass (HIZ_TOP_PASS, a second dispatch) reduces levels 7.., if any.
+#else
 
-    // The thread that stored this tile's level-6 texel publishes it; the last tile to arrive
-    // reduces the rest.
-    if (lid == 0u) {
-        uint before = atomicAdd(tiles_done, 1u, gl_ScopeDevice, gl_StorageSemanticsBuffer | gl_StorageSemanticsImage,
-                                gl_SemanticsAcquireRelease);
-        s_last = before == n.x * n.y - 1u;
-        if (s_last) atomicExchange(tiles_done, 0u);  // every tile has counted: ready for the next dispatch
-    }
-    controlBarrier(gl_ScopeWorkgroup, gl_ScopeDevice, gl_StorageSemanticsImage | gl_StorageSemanticsShared,
-                   gl_SemanticsAcquireRelease);
-    if (!s_last) return;
-
-    // Chain levels 7.. by this workgroup alone. Level k - 1 (size src) is read while k is written.
+    // Top pass: chain levels 7.. by this one workgroup. Level k - 1 (size src) is read while k is written.
     uint k = TILE_LEVEL + 1u;
     uvec2 src = n;
     // Sources too large for shared memory (a depth over ~8192 pixels), through the coherent image.
@@ -293,14 +286,15 @@ void main() {
                 store_mip(k - 1u, ivec2(tx, ty), v);
             }
         }
-        controlBarrier(gl_ScopeWorkgroup, gl_ScopeWorkgroup, gl_StorageSemanticsImage, gl_SemanticsAcquireRelease);
+        memoryBarrierImage();
+        barrier();
         src = size;
         ++k;
     }
     if (k > levels) return;
     uint total = src.x * src.y;
     if (k == TILE_LEVEL + 1u) {
-        LOAD_TOP(mip5)
+        LOAD_TOP_BUFFER()
     } else {  // after image-only levels (a depth over ~8192 pixels): one load at a time
         for (uint i = lid; i < total; i += SIDE * SIDE) s_a[i] = load_mip(k - 2u, ivec2(i % src.x, i / src.x));
     }
@@ -330,4 +324,5 @@ void main() {
         in_a = !in_a;
         src = size;
     }
+#endif
 }

@@ -1,5 +1,7 @@
 //! Hi-Z benchmark: the pyramid of a real depth buffer (the city, unculled), single dispatch
-//! against one dispatch per mip, at several output sizes.
+//! against one dispatch per mip, at several output sizes. The single dispatch is also timed with
+//! truncated pyramids (1, 2 and 6 mips) so that its cost splits into reading the depth, the
+//! in-tile levels and the last workgroup's top levels.
 
 use super::median_per_pass;
 use crate::gpu::{GpuContext, ShaderCompiler};
@@ -16,7 +18,7 @@ const GRAPH: &str = r#"Graph(
         "albedo": Image(format: R8G8B8A8_UNORM),
         "normal": Image(format: R16G16B16A16_SFLOAT),
         "depth": Image(format: D32_SFLOAT),
-        "hiz": Image(format: R32_SFLOAT, size: Fixed("max(1, width / 2)", "max(1, height / 2)"), mips: All),
+        "hiz": Image(format: R32_SFLOAT, size: Fixed("max(1, width / 2)", "max(1, height / 2)"), mips: MIPS),
     },
     passes: [
         Pass(name: "gbuffer", kind: "gbuffer", writes: {"albedo": "albedo", "normal": "normal", "depth": "depth"}),
@@ -34,6 +36,9 @@ pub struct HizFigure {
     pub height: u32,
     /// `single` or `per_mip`.
     pub method: String,
+    /// Stored mips built (`None`: the whole pyramid).
+    #[serde(default)]
+    pub mips: Option<u32>,
     /// Median GPU milliseconds of the pyramid.
     pub ms: f64,
 }
@@ -51,8 +56,11 @@ pub fn run(
     let mut out = Vec::new();
     for &(width, height) in sizes {
         let camera = scene.default_camera(width as f32 / height as f32);
-        for method in ["single", "per_mip"] {
-            let spec = GraphSpec { text: GRAPH.into(), file: "hiz_bench.ron".into(), dir: None, overrides: Vec::new() }
+        // The whole pyramid by both methods, then truncated single-dispatch pyramids.
+        let runs = [("single", None), ("per_mip", None), ("single", Some(1)), ("single", Some(2)), ("single", Some(6))];
+        for (method, mips) in runs {
+            let text = GRAPH.replace("MIPS", &mips.map_or("All".to_string(), |m: u32| m.to_string()));
+            let spec = GraphSpec { text, file: "hiz_bench.ron".into(), dir: None, overrides: Vec::new() }
                 .with_overrides([("method".to_string(), method.to_string())]);
             let mut renderer =
                 Renderer::with_graph(ctx, shaders, scene.clone(), RenderSettings::new(width, height), &spec)?;
@@ -62,7 +70,7 @@ pub fn run(
             let timings =
                 (0..frames).map(|_| renderer.render(&camera).map(|s| s.gpu_ms)).collect::<crate::Result<Vec<_>>>()?;
             let ms = median_per_pass(&timings).into_iter().find(|(p, _)| p == "hiz").map_or(0.0, |(_, ms)| ms);
-            out.push(HizFigure { width, height, method: method.into(), ms });
+            out.push(HizFigure { width, height, method: method.into(), mips, ms });
         }
     }
     Ok(out)
@@ -70,9 +78,10 @@ pub fn run(
 
 /// A Markdown table of the figures.
 pub fn markdown(figures: &[HizFigure]) -> String {
-    let mut s = String::from("# Hi-Z pyramid\n\n| size | method | ms |\n|---|---|---|\n");
+    let mut s = String::from("# Hi-Z pyramid\n\n| size | method | mips | ms |\n|---|---|---|---|\n");
     for f in figures {
-        s.push_str(&format!("| {}x{} | {} | {:.4} |\n", f.width, f.height, f.method, f.ms));
+        let mips = f.mips.map_or("all".to_string(), |m| m.to_string());
+        s.push_str(&format!("| {}x{} | {} | {mips} | {:.4} |\n", f.width, f.height, f.method, f.ms));
     }
     s
 }
