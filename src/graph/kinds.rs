@@ -112,11 +112,9 @@ const fn ms(s: SlotDecl) -> SlotDecl {
     SlotDecl { multisample_ok: true, ..s }
 }
 
-/// The draw list a geometry pass draws (`required`: the graph must bind it; otherwise the
-/// default is every instance).
+/// The draw list a geometry pass draws (`required`: the graph must bind it; otherwise an
+/// unbound list means every instance).
 fn draw_list_slots(required: bool) -> Vec<SlotDecl> {
-    let default = if required { "" } else { " (default: every instance)" };
-    let _ = default;
     vec![
         slot(
             "draw_commands",
