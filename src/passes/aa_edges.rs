@@ -4,7 +4,7 @@
 //! keeps one block on the unmarked pixels, so interior triangle edges of a continuous surface
 //! cost no pool blocks.
 
-use super::gbuffer::bound_image;
+use super::gbuffer::bound_samples;
 use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::{PassContext, PassNode};
 use crate::graph::plan::{CompiledGraph, PlannedPass, SettingValue};
@@ -25,7 +25,7 @@ impl AaEdgesPass {
         pass: &PlannedPass,
         plan: &CompiledGraph,
     ) -> crate::Result<Self> {
-        let samples = bound_image(plan, pass, "depth").map_or(1, |(_, s)| s.as_raw().max(1)).to_string();
+        let samples = bound_samples(plan, pass, "depth").to_string();
         let spirv = shaders.compile("aa/aa_edges.comp", &[("SAMPLES", &samples)])?;
         let threshold = match pass.settings.get("threshold") {
             Some(SettingValue::Float(f)) => *f as f32,

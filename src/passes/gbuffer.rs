@@ -76,6 +76,12 @@ pub fn bound_image(plan: &CompiledGraph, pass: &PlannedPass, slot: &str) -> Opti
     }
 }
 
+/// Samples per texel of the image bound to `slot` of `pass` (1 when none is bound): the
+/// `SAMPLES` define of the compute shaders that read multisampled images.
+pub fn bound_samples(plan: &CompiledGraph, pass: &PlannedPass, slot: &str) -> u32 {
+    bound_image(plan, pass, slot).map_or(1, |(_, s)| s.as_raw().max(1))
+}
+
 /// Creates a graphics pipeline over `gbuffer.vert` (whose invariant position every geometry
 /// pass shares, so depth EQUAL against another pass's depth holds exactly).
 pub fn geometry_pipeline(

@@ -3,7 +3,7 @@
 //! With a `stats` slot it also reports the pool's counters and how many distinct surfaces the
 //! pixels hold (`GbufferCounters` in [`crate::stats::gbuffer`]).
 
-use super::gbuffer::bound_image;
+use super::gbuffer::bound_samples;
 use super::gbuffer_compressed::pool_blocks;
 use super::lighting::LightingSettings;
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
@@ -36,7 +36,7 @@ impl LightingCompressedPass {
         pass: &PlannedPass,
         plan: &CompiledGraph,
     ) -> crate::Result<Self> {
-        let samples = bound_image(plan, pass, "depth").map_or(1, |(_, s)| s.as_raw().max(1)).to_string();
+        let samples = bound_samples(plan, pass, "depth").to_string();
         let with_stats = pass.bindings.iter().any(|b| b.slot == "stats");
         let mut defines = vec![("SAMPLES", samples.as_str())];
         if with_stats {

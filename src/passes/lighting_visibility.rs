@@ -3,7 +3,7 @@
 //! triangle of a pixel from the scene's pools and shades it once, like the compressed G-buffer
 //! shades each distinct surface once.
 
-use super::gbuffer::bound_image;
+use super::gbuffer::bound_samples;
 use super::lighting::LightingSettings;
 use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::{PassContext, PassNode};
@@ -25,7 +25,7 @@ impl LightingVisibilityPass {
         pass: &PlannedPass,
         plan: &CompiledGraph,
     ) -> crate::Result<Self> {
-        let samples = bound_image(plan, pass, "ids").map_or(1, |(_, s)| s.as_raw().max(1)).to_string();
+        let samples = bound_samples(plan, pass, "ids").to_string();
         let spirv = shaders.compile("lighting/lighting_visibility.comp", &[("SAMPLES", &samples)])?;
         Ok(Self {
             pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
