@@ -99,6 +99,34 @@ pub enum SettingValue {
     Choice(String),
 }
 
+impl PlannedPass {
+    /// The real-valued setting `name` (a whole number counts), or `default` when it is absent or
+    /// of another type (validation has already checked types against the kind).
+    pub fn float_setting(&self, name: &str, default: f64) -> f64 {
+        match self.settings.get(name) {
+            Some(SettingValue::Float(f)) => *f,
+            Some(SettingValue::Int(i)) => *i as f64,
+            _ => default,
+        }
+    }
+
+    /// The word chosen for setting `name`, or `default`.
+    pub fn choice_setting<'a>(&'a self, name: &str, default: &'a str) -> &'a str {
+        match self.settings.get(name) {
+            Some(SettingValue::Choice(c)) => c,
+            _ => default,
+        }
+    }
+
+    /// The boolean setting `name`, or `default`.
+    pub fn bool_setting(&self, name: &str, default: bool) -> bool {
+        match self.settings.get(name) {
+            Some(SettingValue::Bool(b)) => *b,
+            _ => default,
+        }
+    }
+}
+
 /// A barrier recorded before a pass (all of a pass's barriers go into one `vkCmdPipelineBarrier2`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PlannedBarrier {

@@ -7,7 +7,7 @@
 use super::gbuffer::bound_samples;
 use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::{PassContext, PassNode};
-use crate::graph::plan::{CompiledGraph, PlannedPass, SettingValue};
+use crate::graph::plan::{CompiledGraph, PlannedPass};
 use ash::vk;
 
 /// The `aa_edges` pass.
@@ -27,11 +27,7 @@ impl AaEdgesPass {
     ) -> crate::Result<Self> {
         let samples = bound_samples(plan, pass, "depth").to_string();
         let spirv = shaders.compile("aa/aa_edges.comp", &[("SAMPLES", &samples)])?;
-        let threshold = match pass.settings.get("threshold") {
-            Some(SettingValue::Float(f)) => *f as f32,
-            Some(SettingValue::Int(i)) => *i as f32,
-            _ => 0.01,
-        };
+        let threshold = pass.float_setting("threshold", 0.01) as f32;
         Ok(Self {
             pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
             sampler: Sampler::nearest_clamp(ctx)?,

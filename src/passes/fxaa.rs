@@ -31,11 +31,7 @@ impl FxaaSettings {
     /// From the pass's graph settings (`subpix`, `edge_threshold`, `edge_threshold_min`).
     pub fn from_plan(pass: &PlannedPass) -> Self {
         let d = Self::default();
-        let float = |name: &str, default: f32| match pass.settings.get(name) {
-            Some(SettingValue::Float(f)) => *f as f32,
-            Some(SettingValue::Int(i)) => *i as f32,
-            _ => default,
-        };
+        let float = |name: &str, default: f32| pass.float_setting(name, default as f64) as f32;
         Self {
             subpix: float("subpix", d.subpix),
             edge_threshold: float("edge_threshold", d.edge_threshold),

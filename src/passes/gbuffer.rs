@@ -24,6 +24,11 @@ pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// Reversed-Z depth: cleared to 0 (infinitely far), nearer is greater.
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
+/// Slots of a geometry pass's draw list.
+pub const LIST_SLOTS: [&str; 3] = ["draw_commands", "draw_count", "draw_instance_ids"];
+/// Slots of a redraw pass's second (late) list.
+pub const LATE_LIST_SLOTS: [&str; 3] = ["late_draw_commands", "late_draw_count", "late_draw_instance_ids"];
+
 /// Where the draws come from: the scene's unculled list, or a culling pass's output.
 pub struct DrawSource<'a> {
     /// `VkDrawIndexedIndirectCommand`s.
@@ -47,12 +52,11 @@ impl<'a> DrawSource<'a> {
         }
     }
 
-    /// The list bound to `{prefix}draw_commands`, `{prefix}draw_count` and
-    /// `{prefix}draw_instance_ids`, if all three are bound.
-    pub fn bound(slots: &crate::graph::executor::SlotBindings<'a>, prefix: &str) -> Option<Self> {
-        let commands = slots.buffer(&format!("{prefix}draw_commands"))?;
-        let count = slots.buffer(&format!("{prefix}draw_count"))?;
-        let instance_ids = slots.buffer(&format!("{prefix}draw_instance_ids"))?;
+    /// The list bound to the slots `names` (commands, count, instance ids), if all three are bound.
+    pub fn bound(slots: &crate::graph::executor::SlotBindings<'a>, names: [&str; 3]) -> Option<Self> {
+        let commands = slots.buffer(names[0])?;
+        let count = slots.buffer(names[1])?;
+        let instance_ids = slots.buffer(names[2])?;
         let stride = std::mem::size_of::<DrawIndexedIndirect>() as u64;
         let max_draws = (commands.size() / stride).min(u32::MAX as u64) as u32;
         Some(Self { commands, count, instance_ids, max_draws })
@@ -61,8 +65,8 @@ impl<'a> DrawSource<'a> {
     /// The lists a redraw pass draws: the first list (or every instance when none is bound),
     /// then the `late_` list when bound (two-phase culling draws in two lists).
     pub fn redraw_lists(slots: &crate::graph::executor::SlotBindings<'a>, scene: &'a GpuScene) -> Vec<Self> {
-        let mut lists = vec![Self::bound(slots, "").unwrap_or_else(|| Self::unculled(scene))];
-        lists.extend(Self::bound(slots, "late_"));
+        let mut lists = vec![Self::bound(slots, LIST_SLOTS).unwrap_or_else(|| Self::unculled(scene))];
+        lists.extend(Self::bound(slots, LATE_LIST_SLOTS));
         lists
     }
 }
@@ -270,7 +274,7 @@ impl PassNode for GbufferPass {
         let scene = rec.frame.scene;
         let lists = match self.mode {
             GeometryMode::Equal => DrawSource::redraw_lists(slots, scene),
-            _ => vec![DrawSource::bound(slots, "").unwrap_or_else(|| DrawSource::unculled(scene))],
+            _ => vec![DrawSource::bound(slots, LIST_SLOTS).unwrap_or_else(|| DrawSource::unculled(scene))],
         };
         record_geometry(
             rec.ctx,

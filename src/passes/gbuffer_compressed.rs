@@ -12,7 +12,7 @@ use super::gbuffer::{bound_image, geometry_pipeline, record_geometry, DrawSource
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, GpuContext, Pipeline, ShaderCompiler};
 use crate::graph::executor::{PassContext, PassNode};
-use crate::graph::plan::{CompiledGraph, PlannedPass, SettingValue};
+use crate::graph::plan::{CompiledGraph, PlannedPass};
 use ash::vk;
 
 /// Bytes of the header before the blocks.
@@ -46,6 +46,34 @@ pub fn pool_blocks(bytes: u64, pixels: u64) -> Result<u64, String> {
     Ok(blocks.min(MAX_BLOCKS) - pixels)
 }
 
+/// The compressed G-buffer bound to a pass's `gbuffer` slot, with the pool its size gives an
+/// image the size of `depth`.
+pub struct BoundGbuffer<'a> {
+    /// The buffer.
+    pub buffer: &'a crate::gpu::Buffer,
+    /// Pixels (head blocks).
+    pub pixels: u64,
+    /// Pool blocks, within the 26-bit index.
+    pub pool_blocks: u32,
+}
+
+impl<'a> BoundGbuffer<'a> {
+    /// Resolves the `gbuffer` slot of pass `kind` against `depth`; a clear error when the buffer
+    /// is missing or too small.
+    pub fn resolve(
+        slots: &crate::graph::executor::SlotBindings<'a>,
+        depth: &crate::gpu::Image,
+        kind: &str,
+    ) -> crate::Result<Self> {
+        let invalid = |m: String| crate::Error::Invalid(format!("{kind}: {m}"));
+        let buffer = slots.buffer("gbuffer").ok_or_else(|| invalid("no gbuffer buffer bound".into()))?;
+        let extent = depth.extent();
+        let pixels = extent.width as u64 * extent.height as u64;
+        let pool = pool_blocks(buffer.size(), pixels).map_err(invalid)?;
+        Ok(Self { buffer, pixels, pool_blocks: pool as u32 })
+    }
+}
+
 /// Push constants of `gbuffer_compressed.frag`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -75,21 +103,16 @@ pub struct SelectiveAa {
 impl SelectiveAa {
     /// From a pass's settings.
     pub fn from_plan(pass: &PlannedPass) -> Self {
-        let float = |name: &str, default: f64| match pass.settings.get(name) {
-            Some(SettingValue::Float(f)) => *f,
-            Some(SettingValue::Int(i)) => *i as f64,
-            _ => default,
-        };
-        let region = match pass.settings.get("aa_region") {
-            Some(SettingValue::Choice(c)) if c == "ellipse" => 1,
-            Some(SettingValue::Choice(c)) if c == "rectangle" => 2,
+        let region = match pass.choice_setting("aa_region", "all") {
+            "ellipse" => 1,
+            "rectangle" => 2,
             _ => 0,
         };
         Self {
             region,
-            region_size: float("aa_region_size", 0.6) as f32,
-            max_distance: float("aa_max_depth_distance", 0.0) as f32,
-            object_flags: matches!(pass.settings.get("aa_object_flags"), Some(SettingValue::Bool(true))),
+            region_size: pass.float_setting("aa_region_size", 0.6) as f32,
+            max_distance: pass.float_setting("aa_max_depth_distance", 0.0) as f32,
+            object_flags: pass.bool_setting("aa_object_flags", false),
         }
     }
 }
@@ -141,13 +164,8 @@ impl PassNode for GbufferCompressedPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let slots = &rec.slots;
         let depth = slots.required_image("depth")?;
-        let gbuffer = slots
-            .buffer("gbuffer")
-            .ok_or_else(|| crate::Error::Invalid("gbuffer_compressed: no gbuffer buffer bound".into()))?;
-        let extent = depth.extent();
-        let pixels = extent.width as u64 * extent.height as u64;
-        let pool = pool_blocks(gbuffer.size(), pixels)
-            .map_err(|m| crate::Error::Invalid(format!("gbuffer_compressed: {m}")))?;
+        let bound = BoundGbuffer::resolve(slots, depth, "gbuffer_compressed")?;
+        let (gbuffer, pixels, extent) = (bound.buffer, bound.pixels, depth.extent());
         let device = rec.ctx.device();
         let head_pairs = pixels.div_ceil(2) as u32;
         self.clear.bind(rec.cmd);
@@ -164,7 +182,7 @@ impl PassNode for GbufferCompressedPass {
         let push = CompressedPush {
             width: extent.width,
             height: extent.height,
-            pool_blocks: pool as u32,
+            pool_blocks: bound.pool_blocks,
             aa_region: self.aa.region,
             aa_region_size: self.aa.region_size,
             aa_max_distance: self.aa.max_distance,

@@ -50,11 +50,7 @@ impl CullSettings {
             Some(SettingValue::Choice(c)) => c.clone(),
             _ => d.to_string(),
         };
-        let float = |k: &str, d: f32| match pass.settings.get(k) {
-            Some(SettingValue::Float(f)) => *f as f32,
-            Some(SettingValue::Int(i)) => *i as f32,
-            _ => d,
-        };
+        let float = |k: &str, d: f32| pass.float_setting(k, d as f64) as f32;
         Self {
             phase: choice("phase", "all"),
             frustum: !matches!(pass.settings.get("frustum"), Some(SettingValue::Bool(false))),

@@ -3,7 +3,7 @@
 
 use crate::gpu::{Bind, Buffer, GpuContext, Image, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::{PassContext, PassNode};
-use crate::graph::plan::{CompiledGraph, PlannedPass, SettingValue};
+use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::passes::gbuffer::bound_image;
 use ash::vk;
 
@@ -41,22 +41,15 @@ pub struct LightingSettings {
 impl LightingSettings {
     /// From the pass's graph settings (`exposure`, `debug_view`).
     pub fn from_plan(pass: &PlannedPass) -> Self {
-        let exposure = match pass.settings.get("exposure") {
-            Some(SettingValue::Float(f)) => *f as f32,
-            Some(SettingValue::Int(i)) => *i as f32,
-            _ => 0.8,
-        };
-        let debug_view = match pass.settings.get("debug_view") {
-            Some(SettingValue::Choice(c)) => match c.as_str() {
-                "normals" => 1,
-                "albedo" => 2,
-                "depth" => 3,
-                "samples" => 4,
-                _ => 0,
-            },
+        let exposure = pass.float_setting("exposure", 0.8) as f32;
+        let debug_view = match pass.choice_setting("debug_view", "none") {
+            "normals" => 1,
+            "albedo" => 2,
+            "depth" => 3,
+            "samples" => 4,
             _ => 0,
         };
-        let light_tiles = !matches!(pass.settings.get("light_tiles"), Some(SettingValue::Bool(false)));
+        let light_tiles = pass.bool_setting("light_tiles", true);
         Self { exposure, debug_view, light_tiles: light_tiles as u32 }
     }
 }

@@ -4,7 +4,7 @@
 //! pixels hold (`GbufferCounters` in [`crate::stats::gbuffer`]).
 
 use super::gbuffer::bound_samples;
-use super::gbuffer_compressed::pool_blocks;
+use super::gbuffer_compressed::BoundGbuffer;
 use super::lighting::LightingSettings;
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
@@ -64,13 +64,8 @@ impl PassNode for LightingCompressedPass {
         let slots = &rec.slots;
         let depth = slots.required_image("depth")?;
         let output = slots.required_image("output")?;
-        let gbuffer = slots
-            .buffer("gbuffer")
-            .ok_or_else(|| crate::Error::Invalid("lighting_compressed: no gbuffer buffer bound".into()))?;
-        let extent = depth.extent();
-        let pixels = extent.width as u64 * extent.height as u64;
-        let pool = pool_blocks(gbuffer.size(), pixels)
-            .map_err(|m| crate::Error::Invalid(format!("lighting_compressed: {m}")))?;
+        let bound = BoundGbuffer::resolve(slots, depth, "lighting_compressed")?;
+        let gbuffer = bound.buffer;
         let device = rec.ctx.device();
         let stats = slots.buffer("stats");
         if let (Some(clear), Some(stats)) = (&self.stats_clear, stats) {
@@ -98,7 +93,7 @@ impl PassNode for LightingCompressedPass {
         }
         self.pipeline.bind(rec.cmd);
         self.pipeline.push_bindings(rec.cmd, &binds);
-        self.pipeline.push_constants(rec.cmd, &Push { settings: self.settings, pool_blocks: pool as u32 });
+        self.pipeline.push_constants(rec.cmd, &Push { settings: self.settings, pool_blocks: bound.pool_blocks });
         let e = output.extent();
         // SAFETY: cmd recording with this pipeline bound.
         unsafe { device.cmd_dispatch(rec.cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
