@@ -4,7 +4,7 @@ after the first two, memory of the G-buffer-related resources, and ratios of the
 method to the per-sample and Z-prepass baselines. Usage: msaa-table.py DIR"""
 import json, statistics, sys, pathlib
 
-GBUFFER = {"albedo", "normal", "depth", "gbuffer", "ids"}
+GBUFFER = {"albedo", "normal", "depth", "gbuffer", "head_samples", "ids"}
 
 def load(path):
     d = json.loads(path.read_text())

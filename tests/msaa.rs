@@ -191,6 +191,58 @@ fn light_tiles_change_nothing() {
     }
 }
 
+/// The lighting pass hands a tile's pool blocks to all its invocations through shared memory;
+/// past the list's capacity a pixel shades its own. Both paths, and the thesis's per-pixel loop
+/// (capacity 0), shade every block once with the same weight: same image, same counters.
+#[test]
+fn shared_block_shading_matches_the_per_pixel_loop() {
+    let gpu = GpuTest::new();
+    let (scene, camera) = city(1500);
+    let run = |capacity: &str| {
+        let (image, stats) = render(
+            &gpu,
+            &scene,
+            &camera,
+            (96, 64),
+            &spec("builtin:msaa_compressed", &[("shared_blocks", capacity), ("shared_min_blocks", "0")]),
+            1,
+        );
+        let g = stats.last().unwrap().gbuffer[0].clone();
+        (image, g.pool_used, g.surfaces_per_pixel)
+    };
+    let (loop_image, loop_used, loop_histogram) = run("0");
+    assert!(loop_used > 0, "the view has edge pixels with pool blocks");
+    for capacity in ["1", "512"] {
+        let (image, used, histogram) = run(capacity);
+        let (mean, max) = mean_and_max_difference(&image, &loop_image);
+        assert!(max <= 1 && mean < 0.01, "capacity {capacity}: mean {mean}, max {max}");
+        assert_eq!((used, histogram), (loop_used, loop_histogram), "capacity {capacity}");
+    }
+}
+
+/// With the geometry pass's head sample counts the lighting reads one depth sample per block;
+/// without them (the thesis) it reads every sample to find the background: same image. (With a
+/// full pool, which fragments get blocks depends on execution order, so two renders differ
+/// anyway; there `compressed_check.comp` asserts the counts add up, error 64.)
+#[test]
+fn head_sample_counts_give_the_image_of_scanning_every_depth_sample() {
+    let gpu = GpuTest::new();
+    let (scene, camera) = city(1500);
+    let source =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("graph/msaa_compressed.ron")).unwrap();
+    let with_counts = r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "head_samples": "head_samples"},"#;
+    assert!(source.contains(with_counts), "the lighting pass reads head_samples");
+    let scanning = Path::new(env!("CARGO_TARGET_TMPDIR")).join("msaa_compressed_scanning.ron");
+    std::fs::write(&scanning, source.replace(with_counts, r#"reads: {"depth": "depth", "gbuffer": "gbuffer"},"#))
+        .unwrap();
+    let counted = render(&gpu, &scene, &camera, (96, 64), &spec("builtin:msaa_compressed", &[]), 1);
+    let scanned = render(&gpu, &scene, &camera, (96, 64), &spec(scanning.to_str().unwrap(), &[]), 1);
+    assert_eq!(mean_and_max_difference(&counted.0, &scanned.0), (0.0, 0));
+    let (a, b) = (&counted.1.last().unwrap().gbuffer[0], &scanned.1.last().unwrap().gbuffer[0]);
+    assert!(a.pool_used > 0 && a.overflow_samples == 0);
+    assert_eq!(a.surfaces_per_pixel, b.surfaces_per_pixel);
+}
+
 #[test]
 fn selective_aa_keeps_one_block_where_it_is_capped() {
     let gpu = GpuTest::new();
@@ -200,7 +252,10 @@ fn selective_aa_keeps_one_block_where_it_is_capped() {
         p.extend_from_slice(params);
         let (check, stats) =
             render(&gpu, &scene, &camera, (96, 64), &spec("tests/graphs/gpu/compressed_check.ron", &p), 1);
-        (stats.last().unwrap().gbuffer[0].pool_used, check_pixels(&check))
+        let pixels = check_pixels(&check);
+        // Capped samples stand with the head, so head + listed still add up to the covered ones.
+        assert!(pixels.iter().all(|p| p[0] & 64 == 0), "{params:?}: head sample counts do not add up");
+        (stats.last().unwrap().gbuffer[0].pool_used, pixels)
     };
     let (all, _) = blocks(&[]);
     let (ellipse, pixels) = blocks(&[("aa_region", "ellipse"), ("aa_region_size", "0.5")]);

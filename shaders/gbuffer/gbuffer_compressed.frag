@@ -24,6 +24,16 @@ layout(set = 0, binding = 4, scalar) buffer Gbuffer {
 layout(set = 0, binding = 5) uniform usampler2D aa_mask;
 #endif
 
+#ifdef HEAD_SAMPLES
+// Samples each pixel's head stands for, one byte per pixel, four to a word (no carry between
+// bytes: at most 8 samples). The lighting pass derives the background from it instead of
+// reading every depth sample.
+layout(set = 0, binding = 6) buffer HeadSamples { uint head_samples[]; };
+void add_head_samples(uint pixel, uint mask) { atomicAdd(head_samples[pixel >> 2], uint(bitCount(mask)) << ((pixel & 3u) * 8u)); }
+#else
+void add_head_samples(uint pixel, uint mask) {}
+#endif
+
 layout(push_constant) uniform Push {
     uint width;
     uint height;
@@ -75,13 +85,18 @@ void main() {
     uint pixel = uint(gl_FragCoord.y) * pc.width + uint(gl_FragCoord.x);
     if ((mask & 1u) != 0u) {
         write_block(pixel, m, n);   // the head; its link belongs to the list
+        add_head_samples(pixel, mask);
         return;
     }
-    if (!may_allocate()) return;    // capped to one surface: the head takes these samples
+    if (!may_allocate()) {
+        add_head_samples(pixel, mask);   // capped to one surface: the head takes these samples
+        return;
+    }
     uint slot = atomicAdd(gb.header[GBUFFER_HEADER_ALLOCATED], 1u);
     if (slot >= pc.pool_blocks) {
         atomicAdd(gb.header[GBUFFER_HEADER_OVERFLOW_FRAGMENTS], 1u);
         atomicAdd(gb.header[GBUFFER_HEADER_OVERFLOW_SAMPLES], uint(bitCount(mask)));
+        add_head_samples(pixel, mask);
         return;
     }
     uint index = pc.width * pc.height + slot;

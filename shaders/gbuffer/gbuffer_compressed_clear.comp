@@ -1,6 +1,6 @@
 #version 460
-// Start of the compressed G-buffer pass: zero the header counters and every head's link (an
-// empty list). Head attributes need no clearing: a head whose pixel has no surface at sample 0
+// Start of the compressed G-buffer pass: zero the header counters, every head's link (an
+// empty list) and, when bound, the head sample counts. Head attributes need no clearing: a head whose pixel has no surface at sample 0
 // is never read (the lighting pass sees the background in the depth).
 #include "compressed_gbuffer.glsl"
 
@@ -11,7 +11,14 @@ layout(set = 0, binding = 0, scalar) buffer Gbuffer {
     BlockPair pairs[];
 } gb;
 
-layout(push_constant) uniform Push { uint head_pairs; } pc;
+#ifdef HEAD_SAMPLES
+layout(set = 0, binding = 1) buffer HeadSamples { uint head_samples[]; };
+#endif
+
+layout(push_constant) uniform Push {
+    uint head_pairs;
+    uint head_sample_words;   // ceil(pixels / 4): one byte per pixel
+} pc;
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
@@ -20,4 +27,7 @@ void main() {
         gb.pairs[i].link[0] = LINK_NULL;
         gb.pairs[i].link[1] = LINK_NULL;
     }
+#ifdef HEAD_SAMPLES
+    if (i < pc.head_sample_words) head_samples[i] = 0u;
+#endif
 }

@@ -9,6 +9,9 @@
 #ifndef CULLGRAPH_LIGHT_TILES_GLSL
 #define CULLGRAPH_LIGHT_TILES_GLSL
 
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+
 #define TILE_SIZE 16u
 #define TILE_LIGHT_WORDS 32u                       // up to 1024 lights are culled per tile
 #define TILE_MAX_LIGHTS (TILE_LIGHT_WORDS * 32u)
@@ -27,11 +30,32 @@ void tile_begin() {
     barrier();
 }
 
-// Adds one depth sample of the tile (0 = background, ignored). Positive floats order like uints.
-void tile_add_depth(float depth) {
+// A running depth range over one invocation's samples; background (0) is ignored.
+struct DepthRange {
+    float farthest;   // smallest reversed-Z depth with geometry
+    float nearest;    // largest; 0: no geometry yet
+};
+
+DepthRange depth_range_empty() { return DepthRange(1.0, 0.0); }
+
+void depth_range_add(inout DepthRange range, float depth) {
     if (depth > 0.0) {
-        atomicMin(tile_far_bits, floatBitsToUint(depth));
-        atomicMax(tile_near_bits, floatBitsToUint(depth));
+        range.farthest = min(range.farthest, depth);
+        range.nearest = max(range.nearest, depth);
+    }
+}
+
+// Adds one invocation's depth range to the tile. Every invocation of the workgroup calls it, in
+// uniform control flow: the subgroup reduces first, so the tile takes one shared atomic per
+// subgroup instead of two per sample (those serialised on two addresses). Positive floats order
+// like uints.
+void tile_add_depth_range(DepthRange range) {
+    bool any_geometry = range.nearest > 0.0;
+    uint far_bits = subgroupMin(any_geometry ? floatBitsToUint(range.farthest) : 0xFFFFFFFFu);
+    uint near_bits = subgroupMax(any_geometry ? floatBitsToUint(range.nearest) : 0u);
+    if (subgroupElect() && near_bits != 0u) {
+        atomicMin(tile_far_bits, far_bits);
+        atomicMax(tile_near_bits, near_bits);
     }
 }
 

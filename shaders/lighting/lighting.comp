@@ -71,9 +71,11 @@ void main() {
     bool inside = all(lessThan(uvec2(pixel), size));
     vec2 center = vec2(pixel) + 0.5;
     tile_begin();
+    DepthRange range = depth_range_empty();
     if (inside) {
-        for (uint s = 0u; s < SAMPLES; ++s) tile_add_depth(FETCH(depth_tex, pixel, s).r);
+        for (uint s = 0u; s < SAMPLES; ++s) depth_range_add(range, FETCH(depth_tex, pixel, s).r);
     }
+    tile_add_depth_range(range);
     tile_cull_lights(settings.light_tiles != 0u);
     if (!inside) return;
     vec3 color;

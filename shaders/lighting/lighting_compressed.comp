@@ -3,6 +3,11 @@
 // block of its list is shaded once with the tile's lights, tone-mapped, and weighted by the
 // samples it covers; the background samples (depth 0) are sky; the head takes the rest (its own
 // samples and any a full pool dropped). The weighted mean is written sRGB-encoded.
+//
+// A workgroup is a 16x16 tile. Its pixels' pool blocks are gathered into one shared list and
+// shaded by all 256 invocations together, so that an edge pixel's extra blocks do not make its
+// whole subgroup wait on a loop (the divergence the thesis notes in its resolve loop); every
+// block is still shaded exactly once and each pixel sums its own blocks in list order.
 #include "../common/scene.glsl"
 #include "../common/shading.glsl"
 #include "../common/octahedral.glsl"
@@ -35,12 +40,38 @@ layout(set = 0, binding = 5) buffer Stats {
     uint overflow_samples;
     uint pool_blocks;
     uint pixels;
-    uint surfaces;           // distinct surfaces over all pixels (sky counts as one)
-    uint pad[2];
-    uint histogram[8];       // pixels with 1..8 distinct surfaces (sky counts as one)
+    uint pad[3];
+    uint histogram[8];       // pixels with 2..8 distinct surfaces (sky counts as one); [0] is
+                             // left to the CPU (pixels minus the rest): counting only edge
+                             // pixels keeps the statistics nearly free
 } stats;
 shared uint local_histogram[8];
 #endif
+
+#ifdef HEAD_SAMPLES
+// Samples each pixel's head stands for, one byte per pixel (written by gbuffer_compressed): its
+// own and those of fragments that kept no block. With it the pass reads one depth sample per
+// block instead of all of them: background = SAMPLES - head samples - listed samples.
+layout(set = 0, binding = 6) readonly buffer HeadSamples { uint head_samples[]; };
+#endif
+
+// The tile's pool blocks, shaded by all its invocations together. Each pixel chains its own
+// entries in list order (`next`); a pixel whose blocks do not all fit shades its whole list
+// itself (correct, only slower). SHARED_BLOCKS 0 (the graph's shared_blocks setting) turns the
+// shared list off: every pixel loops over its own list, the thesis's resolve.
+#ifndef SHARED_BLOCKS
+#define SHARED_BLOCKS 512
+#endif
+#ifndef SHARED_MIN_BLOCKS
+#define SHARED_MIN_BLOCKS 32u   // fewer pool blocks in a tile: each pixel shades its own
+#endif
+#define ENTRY_NONE 0xFFFFu
+#if SHARED_BLOCKS > 0
+shared uint sh_block_link[SHARED_BLOCKS];    // the link that points at the block
+shared uint sh_block_meta[SHARED_BLOCKS];    // local pixel | next entry of the pixel << 8; ENTRY_NONE pixel: unused
+shared uvec2 sh_block_color[SHARED_BLOCKS];  // tone-mapped color, half floats (small shared use keeps occupancy up)
+#endif
+shared uint sh_block_total;
 
 #include "light_tiles.glsl"
 
@@ -81,43 +112,138 @@ vec3 heat(uint surfaces) {
     return pow(ramp[min(surfaces, 5u) - 1u], vec3(2.2));
 }
 
-// Shades and writes one pixel; returns its number of distinct surfaces (the sky counts as one).
-uint resolve_pixel(ivec2 pixel, vec2 center, uint background) {
-    uvec2 size = frame.size_lights.xy;
-    uint head = uint(pixel.y) * size.x + uint(pixel.x);
-    bool head_surface = DEPTH_AT(pixel, 0u) > 0.0;
-    vec3 sum = vec3(0.0);
-    uint listed = 0u;
-    uint surfaces = (background > 0u ? 1u : 0u) + (head_surface ? 1u : 0u);
-    vec3 first_listed = vec3(0.0);
+// One pixel's list, as gathered before the lights are culled.
+struct PixelList {
+    float head_depth;      // depth at sample 0; 0: background there, so no head block
+    uint kept;             // samples the head stands for (its own, and any dropped by a full pool or an AA cap)
+    uint blocks;           // pool blocks listed
+    uint listed;           // samples they cover
+    uint background;       // samples with no geometry
+    uint first_entry;      // first of its entries in the tile's shared list, or ENTRY_NONE
+};
+
+uint head_index(ivec2 pixel) { return uint(pixel.y) * frame.size_lights.x + uint(pixel.x); }
+
+uint entry_meta_pixel(uint meta) { return meta & 0xFFu; }
+uint entry_meta_next(uint meta) { return meta >> 8; }
+
+// Weight of the n-th listed block: its samples, plus the head's when there is no head block.
+uint listed_weight(PixelList list, uint link, uint n) {
+    return link_count(link) + (n == 0u && list.head_depth <= 0.0 ? list.kept : 0u);
+}
+
+PixelList gather_pixel(ivec2 pixel, inout DepthRange range) {
+    PixelList list;
+    list.head_depth = DEPTH_AT(pixel, 0u);
+    list.blocks = 0u;
+    list.listed = 0u;
+    list.first_entry = ENTRY_NONE;
+    depth_range_add(range, list.head_depth);
+    uint head = head_index(pixel);
     uint link = gb.pairs[head >> 1].link[head & 1u];
+    uint last_entry = ENTRY_NONE;
+    bool all_shared = true;
     // At most SAMPLES - 1 blocks can be listed (one per sample not owned by the head); the bound
     // also keeps a corrupted list from looping.
     for (uint n = 0u; n < SAMPLES && link_index(link) != LINK_NULL; ++n) {
+        list.blocks += 1u;
+        list.listed += link_count(link);
+        // Light culling must cover the depth each block is shaded at.
+        depth_range_add(range, DEPTH_AT(pixel, link_sample(link)));
+#if SHARED_BLOCKS > 0
+        uint entry = atomicAdd(sh_block_total, 1u);
+        if (entry < uint(SHARED_BLOCKS)) {
+            sh_block_link[entry] = link;
+            sh_block_meta[entry] = gl_LocalInvocationIndex | (ENTRY_NONE << 8);
+            if (last_entry == ENTRY_NONE) {
+                list.first_entry = entry;
+            } else {
+                sh_block_meta[last_entry] = (sh_block_meta[last_entry] & 0xFFu) | (entry << 8);
+            }
+            last_entry = entry;
+        } else {
+            all_shared = false;
+        }
+#endif
         uint index = link_index(link);
-        uint count = link_count(link);
-        vec3 c = shade_block(read_block(index), center, DEPTH_AT(pixel, link_sample(link)));
-        if (listed == 0u) first_listed = c;
-        sum += c * float(count);
-        listed += count;
-        surfaces += 1u;
         link = gb.pairs[index >> 1].link[index & 1u];
     }
-    vec3 sky = tonemap_aces(sky_color(view_direction(center)) * settings.exposure);
-    sum += sky * float(background);
-    // The rest: the head's own samples and any the full pool dropped.
-    uint rest = SAMPLES - min(SAMPLES, listed + background);
-    if (rest > 0u) {
-        if (head_surface) {
-            sum += shade_block(read_block(head), center, DEPTH_AT(pixel, 0u)) * float(rest);
-        } else {
-            sum += (listed > 0u ? first_listed : sky) * float(rest);
+#if SHARED_BLOCKS > 0
+    if (!all_shared) {
+        // Some blocks did not fit: this pixel shades its own list; release the entries it took.
+        for (uint e = list.first_entry; e != ENTRY_NONE;) {
+            uint next = entry_meta_next(sh_block_meta[e]);
+            sh_block_meta[e] = ENTRY_NONE;
+            e = next;
+        }
+        list.first_entry = ENTRY_NONE;
+    }
+#endif
+#ifdef HEAD_SAMPLES
+    list.kept = (head_samples[head >> 2] >> ((head & 3u) * 8u)) & 0xFFu;
+    list.background = SAMPLES - min(SAMPLES, list.kept + list.listed);
+#else
+    list.background = 0u;
+    for (uint s = 0u; s < SAMPLES; ++s) {
+        float d = DEPTH_AT(pixel, s);
+        depth_range_add(range, d);
+        if (d <= 0.0) list.background += 1u;
+    }
+    list.kept = SAMPLES - min(SAMPLES, list.listed + list.background);
+#endif
+    return list;
+}
+
+uvec2 pack_color(vec3 c) { return uvec2(packHalf2x16(c.rg), packHalf2x16(vec2(c.b, 0.0))); }
+vec3 unpack_color(uvec2 p) { return vec3(unpackHalf2x16(p.x), unpackHalf2x16(p.y).x); }
+
+// Shades the tile's shared entries, spread over all invocations.
+void shade_shared_blocks() {
+#if SHARED_BLOCKS > 0
+    uint total = min(sh_block_total, uint(SHARED_BLOCKS));
+    for (uint e = gl_LocalInvocationIndex; e < total; e += TILE_SIZE * TILE_SIZE) {
+        uint meta = sh_block_meta[e];
+        if (meta == ENTRY_NONE) continue;
+        uint local_pixel = entry_meta_pixel(meta);
+        ivec2 pixel = ivec2(gl_WorkGroupID.xy * TILE_SIZE + uvec2(local_pixel % TILE_SIZE, local_pixel / TILE_SIZE));
+        uint link = sh_block_link[e];
+        sh_block_color[e] = pack_color(shade_block(read_block(link_index(link)), vec2(pixel) + 0.5, DEPTH_AT(pixel, link_sample(link))));
+    }
+#endif
+}
+
+// Distinct surfaces of a pixel (the sky counts as one).
+uint pixel_surfaces(PixelList list) {
+    return max((list.background > 0u ? 1u : 0u) + (list.head_depth > 0.0 ? 1u : 0u) + list.blocks, 1u);
+}
+
+// Sums and writes one pixel, its head color already shaded.
+void resolve_pixel(ivec2 pixel, vec2 center, PixelList list, vec3 head_color) {
+    bool has_head = list.head_depth > 0.0;
+    vec3 sum = has_head ? head_color * float(list.kept) : vec3(0.0);
+    if (list.first_entry != ENTRY_NONE) {
+#if SHARED_BLOCKS > 0
+        uint n = 0u;
+        for (uint e = list.first_entry; e != ENTRY_NONE; e = entry_meta_next(sh_block_meta[e]), ++n) {
+            sum += unpack_color(sh_block_color[e]) * float(listed_weight(list, sh_block_link[e], n));
+        }
+#endif
+    } else if (list.blocks > 0u) {
+        uint head = head_index(pixel);
+        uint link = gb.pairs[head >> 1].link[head & 1u];
+        for (uint n = 0u; n < list.blocks; ++n) {
+            vec3 c = shade_block(read_block(link_index(link)), center, DEPTH_AT(pixel, link_sample(link)));
+            sum += c * float(listed_weight(list, link, n));
+            uint index = link_index(link);
+            link = gb.pairs[index >> 1].link[index & 1u];
         }
     }
+    // Sky: the background samples, and the head's when the pixel has no surface at all.
+    uint sky_weight = list.background + (!has_head && list.blocks == 0u ? list.kept : 0u);
+    if (sky_weight > 0u) sum += tonemap_aces(sky_color(view_direction(center)) * settings.exposure) * float(sky_weight);
     vec3 color = sum / float(SAMPLES);
-    if (settings.debug_view == DEBUG_VIEW_SAMPLES) color = heat(max(surfaces, 1u));
+    if (settings.debug_view == DEBUG_VIEW_SAMPLES) color = heat(pixel_surfaces(list));
     imageStore(out_color, pixel, vec4(linear_to_srgb(color), 1.0));
-    return max(surfaces, 1u);
 }
 
 void main() {
@@ -126,25 +252,46 @@ void main() {
     bool inside = all(lessThan(uvec2(pixel), size));
     vec2 center = vec2(pixel) + 0.5;
 
-    tile_begin();
+    if (gl_LocalInvocationIndex == 0u) sh_block_total = 0u;
 #ifdef WRITE_STATS
     if (gl_LocalInvocationIndex < 8u) local_histogram[gl_LocalInvocationIndex] = 0u;
 #endif
-    uint background = 0u;
-    if (inside) {
-        for (uint s = 0u; s < SAMPLES; ++s) {
-            float d = DEPTH_AT(pixel, s);
-            tile_add_depth(d);
-            if (d <= 0.0) background += 1u;
-        }
-    }
-    tile_cull_lights(settings.light_tiles != 0u);
-    uint surfaces = 0u;
-    if (inside) surfaces = resolve_pixel(pixel, center, background);
+    tile_begin();   // (its barrier also publishes the zeroed counters)
+    DepthRange range = depth_range_empty();
+    PixelList list;
+    if (inside) list = gather_pixel(pixel, range);
 #ifdef WRITE_STATS
-    if (inside) atomicAdd(local_histogram[clamp(surfaces, 1u, 8u) - 1u], 1u);
-    barrier();
-    if (gl_LocalInvocationIndex < 8u) atomicAdd(stats.histogram[gl_LocalInvocationIndex], local_histogram[gl_LocalInvocationIndex]);
+    // Pixels with more than one distinct surface, per tile in shared memory (few, so few atomics).
+    if (inside) {
+        uint surfaces = min(pixel_surfaces(list), 8u);
+        if (surfaces > 1u) atomicAdd(local_histogram[surfaces - 1u], 1u);
+    }
+#endif
+    tile_add_depth_range(range);
+    tile_cull_lights(settings.light_tiles != 0u);   // (its barriers publish the shared list)
+#if SHARED_BLOCKS > 0
+    // A tile with few pool blocks leaves them to their pixels: spreading them costs more than
+    // the divergence it saves.
+    bool distribute = sh_block_total > SHARED_MIN_BLOCKS;
+    if (!distribute) list.first_entry = ENTRY_NONE;
+#endif
+    // Heads and the tile's pool blocks are shaded in one step, spread over the invocations.
+    vec3 head_color = vec3(0.0);
+    if (inside && list.head_depth > 0.0 && list.kept > 0u) {
+        head_color = shade_block(read_block(head_index(pixel)), center, list.head_depth);
+    }
+#if SHARED_BLOCKS > 0
+    if (distribute) {
+        shade_shared_blocks();
+        barrier();
+    }
+#endif
+    if (inside) resolve_pixel(pixel, center, list, head_color);
+#ifdef WRITE_STATS
+    // The tile's counts were summed before the light culling's barriers: one global atomic per
+    // counter and tile.
+    uint lane = gl_LocalInvocationIndex;
+    if (lane > 0u && lane < 8u && local_histogram[lane] != 0u) atomicAdd(stats.histogram[lane], local_histogram[lane]);
     if (gl_GlobalInvocationID.xy == uvec2(0u)) {
         stats.allocated = gb.header[GBUFFER_HEADER_ALLOCATED];
         stats.overflow_fragments = gb.header[GBUFFER_HEADER_OVERFLOW_FRAGMENTS];
@@ -152,7 +299,5 @@ void main() {
         stats.pool_blocks = settings.pool_blocks;
         stats.pixels = size.x * size.y;
     }
-    if (inside) atomicAdd(stats.surfaces, surfaces);
 #endif
 }
-

@@ -212,6 +212,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             writes: vec![
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished MSAA depth, with stencil (its stencil is written)")),
                 slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header, width x height head blocks, then the pool (size: compressed_gbuffer_bytes(pool_blocks))"),
+                slot("head_samples", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "samples each pixel's head stands for, one byte per pixel (size: ceil_div(width * height, 4) * 4), so the lighting need not read every depth sample"),
             ],
             settings: vec![
                 SettingDecl { name: "aa_region", default: SettingDefault::Choice(&["all", "ellipse", "rectangle"]), doc: "selective AA: only pixels inside this screen region (centered, aa_region_size of the screen) keep more than one block" },
@@ -246,12 +247,26 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             reads: vec![
                 ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the MSAA depth (positions are rebuilt from each block's sample)")),
                 slot("gbuffer", Usage::StorageBufferRead(Stages::Compute), true, FormatRule::Any, "the compressed G-buffer"),
+                slot("head_samples", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "the geometry pass's head sample counts: one depth read per block instead of every sample"),
             ],
             writes: vec![
                 slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image"),
                 slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "pool counters and a blocks-per-pixel histogram (size: 64)"),
             ],
-            settings: lighting_settings(),
+            settings: {
+                let mut settings = lighting_settings();
+                settings.push(SettingDecl {
+                    name: "shared_blocks",
+                    default: SettingDefault::Int(512),
+                    doc: "pool blocks a 16x16 tile gathers and shades with all its invocations (0..=1024; 0: each pixel loops over its own list, the thesis's resolve)",
+                });
+                settings.push(SettingDecl {
+                    name: "shared_min_blocks",
+                    default: SettingDefault::Int(32),
+                    doc: "a tile with at most this many pool blocks leaves them to their pixels' own loops (spreading few blocks costs more than it saves)",
+                });
+                settings
+            },
             slots_from_shader: false,
         },
         PassKindInfo {

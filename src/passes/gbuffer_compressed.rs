@@ -46,8 +46,13 @@ pub fn pool_blocks(bytes: u64, pixels: u64) -> Result<u64, String> {
     Ok(blocks.min(MAX_BLOCKS) - pixels)
 }
 
+/// Bytes of the optional `head_samples` buffer: one byte per pixel, in whole words.
+pub fn head_samples_bytes(pixels: u64) -> u64 {
+    pixels.div_ceil(4) * 4
+}
+
 /// The compressed G-buffer bound to a pass's `gbuffer` slot, with the pool its size gives an
-/// image the size of `depth`.
+/// image the size of `depth`, and the optional `head_samples` counts.
 pub struct BoundGbuffer<'a> {
     /// The buffer.
     pub buffer: &'a crate::gpu::Buffer,
@@ -55,6 +60,8 @@ pub struct BoundGbuffer<'a> {
     pub pixels: u64,
     /// Pool blocks, within the 26-bit index.
     pub pool_blocks: u32,
+    /// Samples each head stands for (one byte per pixel), when the graph binds it.
+    pub head_samples: Option<&'a crate::gpu::Buffer>,
 }
 
 impl<'a> BoundGbuffer<'a> {
@@ -70,7 +77,17 @@ impl<'a> BoundGbuffer<'a> {
         let extent = depth.extent();
         let pixels = extent.width as u64 * extent.height as u64;
         let pool = pool_blocks(buffer.size(), pixels).map_err(invalid)?;
-        Ok(Self { buffer, pixels, pool_blocks: pool as u32 })
+        let head_samples = slots.buffer("head_samples");
+        if let Some(counts) = head_samples {
+            if counts.size() < head_samples_bytes(pixels) {
+                return Err(invalid(format!(
+                    "head_samples holds {} bytes; {pixels} pixels need {} (ceil_div(width * height, 4) * 4)",
+                    counts.size(),
+                    head_samples_bytes(pixels)
+                )));
+            }
+        }
+        Ok(Self { buffer, pixels, pool_blocks: pool as u32, head_samples })
     }
 }
 
@@ -147,14 +164,18 @@ impl GbufferCompressedPass {
                 depth.0
             )));
         }
-        let masked = pass.bindings.iter().any(|b| b.slot == "aa_mask");
-        let defines: &[(&str, &str)] = if masked { &[("AA_MASK", "1")] } else { &[] };
-        let fragment = Some(("gbuffer/gbuffer_compressed.frag", defines));
+        let bound = |slot: &str| pass.bindings.iter().any(|b| b.slot == slot);
+        let head_samples: &[(&str, &str)] = if bound("head_samples") { &[("HEAD_SAMPLES", "1")] } else { &[] };
+        let mut defines = head_samples.to_vec();
+        if bound("aa_mask") {
+            defines.push(("AA_MASK", "1"));
+        }
+        let fragment = Some(("gbuffer/gbuffer_compressed.frag", defines.as_slice()));
         let draw = geometry_pipeline(ctx, shaders, &pass.name, fragment, &[], depth, true)?;
         let clear = Pipeline::compute(
             ctx,
             &format!("{} clear", pass.name),
-            &shaders.compile("gbuffer/gbuffer_compressed_clear.comp", &[])?,
+            &shaders.compile("gbuffer/gbuffer_compressed_clear.comp", head_samples)?,
         )?;
         Ok(Self { draw, clear, aa: SelectiveAa::from_plan(pass), sampler: crate::gpu::Sampler::nearest_clamp(ctx)? })
     }
@@ -168,9 +189,14 @@ impl PassNode for GbufferCompressedPass {
         let (gbuffer, pixels, extent) = (bound.buffer, bound.pixels, depth.extent());
         let device = rec.ctx.device();
         let head_pairs = pixels.div_ceil(2) as u32;
+        let head_sample_words = pixels.div_ceil(4) as u32;
+        let mut clear_binds = vec![Bind::Buffer(0, gbuffer.handle())];
+        if let Some(counts) = bound.head_samples {
+            clear_binds.push(Bind::Buffer(1, counts.handle()));
+        }
         self.clear.bind(rec.cmd);
-        self.clear.push_bindings(rec.cmd, &[Bind::Buffer(0, gbuffer.handle())]);
-        self.clear.push_constants(rec.cmd, &head_pairs);
+        self.clear.push_bindings(rec.cmd, &clear_binds);
+        self.clear.push_constants(rec.cmd, &[head_pairs, head_sample_words]);
         // SAFETY: cmd recording with the clear pipeline bound.
         unsafe { device.cmd_dispatch(rec.cmd, head_pairs.div_ceil(256).max(1), 1, 1) };
         let fragment_rw = Access {
@@ -191,6 +217,9 @@ impl PassNode for GbufferCompressedPass {
         let scene = rec.frame.scene;
         let lists = DrawSource::redraw_lists(slots, scene);
         let mut extra = vec![Bind::Buffer(4, gbuffer.handle())];
+        if let Some(counts) = bound.head_samples {
+            extra.push(Bind::Buffer(6, counts.handle()));
+        }
         if let Some(mask) = slots.image("aa_mask") {
             extra.push(Bind::Sampled(
                 5,

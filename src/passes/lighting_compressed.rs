@@ -12,6 +12,17 @@ use crate::graph::executor::{PassContext, PassNode};
 use crate::graph::plan::{CompiledGraph, PlannedPass};
 use ash::vk;
 
+/// Pool blocks a tile shades together unless the graph says otherwise (`shared_blocks`).
+const DEFAULT_SHARED_BLOCKS: u32 = 512;
+/// Tiles with at most this many pool blocks leave them to their pixels (`shared_min_blocks`).
+const DEFAULT_SHARED_MIN_BLOCKS: u32 = 32;
+/// Most `shared_blocks` allowed.
+const MAX_SHARED_BLOCKS: u32 = 1024;
+/// Shared memory per shared block (link, owner and pixel, half-float color) and for the rest of
+/// the shader (light bits, depth range, counters), rounded up.
+const SHARED_BYTES_PER_BLOCK: u32 = 16;
+const SHARED_BYTES_OTHER: u32 = 1024;
+
 /// Push constants of `lighting_compressed.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -38,7 +49,39 @@ impl LightingCompressedPass {
     ) -> crate::Result<Self> {
         let samples = bound_samples(plan, pass, "depth").to_string();
         let with_stats = pass.bindings.iter().any(|b| b.slot == "stats");
-        let mut defines = vec![("SAMPLES", samples.as_str())];
+        let shared_blocks = pass.float_setting("shared_blocks", DEFAULT_SHARED_BLOCKS as f64);
+        if !(0.0..=MAX_SHARED_BLOCKS as f64).contains(&shared_blocks) {
+            return Err(crate::Error::Invalid(format!(
+                "pass '{}': shared_blocks must be between 0 and {MAX_SHARED_BLOCKS}, got {shared_blocks}",
+                pass.name
+            )));
+        }
+        let shared_blocks = shared_blocks as u32;
+        let shared_bytes = shared_blocks * SHARED_BYTES_PER_BLOCK + SHARED_BYTES_OTHER;
+        let limit = ctx.caps().limits.max_compute_shared_memory_size;
+        if shared_bytes > limit {
+            return Err(crate::Error::Invalid(format!(
+                "pass '{}': shared_blocks {shared_blocks} needs about {shared_bytes} bytes of shared memory; this device has {limit}",
+                pass.name
+            )));
+        }
+        let shared_blocks = shared_blocks.to_string();
+        let shared_min_blocks = pass.float_setting("shared_min_blocks", DEFAULT_SHARED_MIN_BLOCKS as f64);
+        if !(0.0..=MAX_SHARED_BLOCKS as f64).contains(&shared_min_blocks) {
+            return Err(crate::Error::Invalid(format!(
+                "pass '{}': shared_min_blocks must be between 0 and {MAX_SHARED_BLOCKS}, got {shared_min_blocks}",
+                pass.name
+            )));
+        }
+        let shared_min_blocks = format!("{}u", shared_min_blocks as u32);
+        let mut defines = vec![
+            ("SAMPLES", samples.as_str()),
+            ("SHARED_BLOCKS", shared_blocks.as_str()),
+            ("SHARED_MIN_BLOCKS", shared_min_blocks.as_str()),
+        ];
+        if pass.bindings.iter().any(|b| b.slot == "head_samples") {
+            defines.push(("HEAD_SAMPLES", "1"));
+        }
         if with_stats {
             defines.push(("WRITE_STATS", "1"));
         }
@@ -90,6 +133,9 @@ impl PassNode for LightingCompressedPass {
         ];
         if let Some(stats) = stats {
             binds.push(Bind::Buffer(5, stats.handle()));
+        }
+        if let Some(counts) = bound.head_samples {
+            binds.push(Bind::Buffer(6, counts.handle()));
         }
         self.pipeline.bind(rec.cmd);
         self.pipeline.push_bindings(rec.cmd, &binds);

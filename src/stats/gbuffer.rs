@@ -18,12 +18,22 @@ pub struct GbufferCounters {
     pub pool_blocks: u32,
     /// Pixels.
     pub pixels: u32,
-    /// Distinct surfaces over all pixels (sky counts as one).
-    pub surfaces: u32,
-    /// Unused.
-    pub pad: [u32; 2],
-    /// Pixels with 1, 2, ... 8 distinct surfaces.
+    /// Unused (the GPU leaves it 0).
+    pub pad: [u32; 3],
+    /// Pixels with 1, 2, ... 8 distinct surfaces. The GPU counts only the pixels with two or
+    /// more (the few edge pixels, so the count costs nearly nothing) and leaves entry 0 at 0:
+    /// [`GbufferCounters::surfaces_per_pixel`] completes it.
     pub histogram: [u32; 8],
+}
+
+impl GbufferCounters {
+    /// Pixels with 1, 2, ... 8 distinct surfaces, the single-surface count derived from the
+    /// pixel count.
+    pub fn surfaces_per_pixel(&self) -> [u32; 8] {
+        let mut h = self.histogram;
+        h[0] = self.pixels.saturating_sub(h[1..].iter().sum());
+        h
+    }
 }
 
 /// One compressed G-buffer's figures in a frame, as reported.
@@ -55,7 +65,18 @@ impl GbufferPassStats {
             pool_requested: c.allocated,
             overflow_fragments: c.overflow_fragments,
             overflow_samples: c.overflow_samples,
-            surfaces_per_pixel: c.histogram,
+            surfaces_per_pixel: c.surfaces_per_pixel(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn single_surface_pixels_are_the_rest() {
+        let c = GbufferCounters { pixels: 100, histogram: [0, 7, 2, 1, 0, 0, 0, 0], ..Default::default() };
+        assert_eq!(c.surfaces_per_pixel(), [90, 7, 2, 1, 0, 0, 0, 0]);
     }
 }

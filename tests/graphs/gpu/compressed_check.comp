@@ -7,6 +7,7 @@
 //   8: the listed blocks cover more samples than the pixel's covered ones not owned by the head
 //  16: a pixel without a surface at sample 0 (no head) has covered samples no block lists
 //  32: the list is longer than the samples allow
+//  64: the head's sample count (head_samples) plus the listed counts is not the covered samples
 #include "gbuffer/compressed_gbuffer.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -16,6 +17,7 @@ layout(set = 0, binding = 1, scalar) readonly buffer Gbuffer {
     BlockPair pairs[];
 } gbuffer;
 layout(set = 0, binding = 2, rgba8) uniform writeonly image2D check;
+layout(set = 0, binding = 3) readonly buffer HeadSamples { uint words[]; } head_samples;
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -46,5 +48,9 @@ void main() {
     if (sum + head_owned > uint(bitCount(covered))) errors |= 8u;
     if (head_owned == 0u && sum != uint(bitCount(covered))) errors |= 16u;
     if (listed >= samples) errors |= 32u;
+    // Every covered sample is listed or stands with the head (its own, or dropped by a full pool
+    // or an AA cap): the lighting derives the background from exactly this.
+    uint kept = (head_samples.words[head >> 2] >> ((head & 3u) * 8u)) & 0xFFu;
+    if (kept + sum != uint(bitCount(covered))) errors |= 64u;
     imageStore(check, p, vec4(float(errors), float(listed), float(bitCount(covered)), float(sum)) / 255.0);
 }
