@@ -26,6 +26,8 @@ pub struct CullingBench {
     pub graphs: Vec<String>,
     /// Also check one frame per graph against exact visibility.
     pub verify: bool,
+    /// Also time the steps of multi-dispatch passes (instance cull: test, scatter, commands).
+    pub step_times: bool,
 }
 
 /// One pass of one graph.
@@ -144,6 +146,7 @@ pub fn run(
             let spec = GraphSpec::builtin(graph)?;
             let settings = RenderSettings::new(bench.width, bench.height);
             let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
+            renderer.set_step_timing(bench.step_times);
             for _ in 0..bench.warmup {
                 renderer.render(&camera)?;
             }

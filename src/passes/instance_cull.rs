@@ -250,6 +250,7 @@ impl PassNode for InstanceCullPass {
         };
 
         if let Some(init) = &self.init {
+            rec.step("init");
             init.bind(cmd);
             init.push_bindings(
                 cmd,
@@ -273,6 +274,7 @@ impl PassNode for InstanceCullPass {
         } else {
             test_binds.extend([Bind::Buffer(5, scratch.scan.handle()), Bind::Buffer(6, scratch.draw_bits.handle())]);
         }
+        rec.step("test");
         self.test.bind(cmd);
         self.test.push_bindings(cmd, &test_binds);
         self.test.push_constants(cmd, &push);
@@ -281,6 +283,7 @@ impl PassNode for InstanceCullPass {
 
         if let (Some(scatter), Some(build)) = (&self.scatter, &self.commands) {
             step_barrier(ctx, cmd);
+            rec.step("scatter");
             scatter.bind(cmd);
             scatter.push_bindings(
                 cmd,
@@ -297,6 +300,7 @@ impl PassNode for InstanceCullPass {
             // SAFETY: as above.
             unsafe { device.cmd_dispatch(cmd, blocks.max(1), 1, 1) };
             step_barrier(ctx, cmd);
+            rec.step("commands");
             build.bind(cmd);
             build.push_bindings(
                 cmd,
