@@ -2,8 +2,9 @@
 // src/passes/instance_cull.rs (scalar block layout).
 //
 // Slots are instances sorted by draw group, each group in instance order (the unculled draw
-// list's order). Survivors are compacted per group in slot order by a prefix sum over one
-// survivor bit per slot, so draw order, and with it every depth tie, does not depend on timing.
+// list's order). Survivors are compacted in slot order by a prefix sum over one survivor bit
+// per slot, so each group's survivors form one slice in instance order and draw order, and with
+// it every depth tie, does not depend on timing.
 #ifndef CULLGRAPH_CULL_COMMON_GLSL
 #define CULLGRAPH_CULL_COMMON_GLSL
 
@@ -73,13 +74,26 @@ struct CullStats {
 // to make progress).
 #define CULL_SUPERBLOCK 64u
 
-// The pass's scratch buffer: counters, then one count per superblock, then one per block.
-#define SCRATCH_TESTED 0
-#define SCRATCH_FRUSTUM 1
-#define SCRATCH_OCCLUSION 2
-#define SCRATCH_VISIBLE 3
+// The pass's scratch buffer: a header, two halves of superblock records (one half per run,
+// alternating, so the compact step can zero the next run's half while its own is being read),
+// then one survivor count per block (overwritten by every run).
+//
+// The run number: the test step reads SCRATCH_TEST_RUN (its parity picks the half) and hands it
+// on in SCRATCH_PLACE_RUN; the compact step reads that and writes the next run's number into
+// SCRATCH_TEST_RUN. Each word is written only in the dispatch that does not read it.
+#define SCRATCH_TEST_RUN 0
+#define SCRATCH_PLACE_RUN 1
 #define SCRATCH_HEADER 8u
-uint scratch_superblock(uint s) { return SCRATCH_HEADER + s; }
-uint scratch_block(uint superblocks, uint b) { return SCRATCH_HEADER + superblocks + b; }
+// Words of one superblock record, and their meaning (atomic sums over its blocks).
+#define SUPER_WORDS 8u
+#define SUPER_SURVIVORS 0u      // instances drawn by this pass
+#define SUPER_TESTED 1u         // instances evaluated
+#define SUPER_FRUSTUM 2u        // of those, outside the frustum
+#define SUPER_OCCLUSION 3u      // inside the frustum, behind the Hi-Z
+#define SUPER_VISIBLE 4u        // visibility bits set (late phase)
+uint scratch_super(uint superblocks, uint run, uint s) {
+    return SCRATCH_HEADER + ((run & 1u) * superblocks + s) * SUPER_WORDS;
+}
+uint scratch_block(uint superblocks, uint b) { return SCRATCH_HEADER + 2u * superblocks * SUPER_WORDS + b; }
 
 #endif

@@ -1,8 +1,12 @@
 #version 460
-// Instance cull, step 1 of 3: each workgroup decides for its block of CULL_BLOCK slots whether
+// Instance cull, step 1 of 2: each workgroup decides for its block of CULL_BLOCK slots whether
 // this pass draws each (frustum, then optionally the Hi-Z occlusion test), and stores the
-// decisions as bits, the block's survivor count, and adds it to its superblock's count.
-// `cull_scatter.comp` then places the survivors, `cull_commands.comp` writes the commands.
+// decisions as bits and the block's survivor count, adds the count and the block's counters to
+// its superblock's record, and each draw group's survivors to the group's count.
+// `cull_compact.comp` then places the survivors and writes the commands.
+//
+// Subgroup operations only combine values (sums, ors), so nothing depends on the subgroup size
+// or on how invocations map to subgroups.
 //
 // Variants (defines) select the phase and tests so that nothing branches on settings or binds
 // unused resources. Phases: PHASE_ALL (every survivor), PHASE_EARLY (survivors among last
@@ -10,6 +14,10 @@
 // visibility bits), PHASE_OCCLUDERS (chosen occluders, frustum only), PHASE_REST (survivors
 // that are not occluders). ATOMIC_APPEND is the thesis's atomic append, measured only.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 // The hiz_build pass stores chain levels from HIZ_FIRST_LEVEL (1) on: never test below it.
 #define CULL_HIZ_MIN_LEVEL 1u
 #include "../common/scene.glsl"
@@ -18,7 +26,20 @@
 
 layout(local_size_x = 256) in;
 
-layout(set = 0, binding = 0, scalar) readonly buffer Records { CullRecord records[]; };
+// The records as 16-byte words, so each is read with two aligned vector loads.
+layout(set = 0, binding = 0) readonly buffer Records { uvec4 record_words[]; };
+CullRecord load_record(uint slot) {
+    uvec4 a = record_words[2u * slot];
+    uvec4 b = record_words[2u * slot + 1u];
+    CullRecord r;
+    r.center_hi = uintBitsToFloat(a.xyz);
+    r.group_flags = a.w;
+    r.lo_xy = b.x;
+    r.lo_z_radius = b.y;
+    r.half_xy = b.z;
+    r.half_z = b.w;
+    return r;
+}
 layout(set = 0, binding = 1, scalar) readonly buffer Frame { FrameConstants frame; };
 layout(set = 0, binding = 2, scalar) readonly buffer Groups { DrawGroup groups[]; };
 #ifdef ATOMIC_APPEND
@@ -27,6 +48,7 @@ layout(set = 0, binding = 4) writeonly buffer DrawIds { uint draw_ids[]; };
 layout(set = 0, binding = 5, scalar) buffer Commands { DrawCommand commands[]; };
 layout(set = 0, binding = 6, scalar) buffer Stats { CullStats stats; };
 #else
+layout(set = 0, binding = 4) buffer GroupCounts { uint group_counts[]; };
 layout(set = 0, binding = 5) buffer Scratch { uint scratch[]; };
 layout(set = 0, binding = 6) writeonly buffer DrawBits { uint draw_bits[]; };
 #endif
@@ -51,6 +73,36 @@ layout(push_constant) uniform Push {
 shared uint sh_draw[CULL_WORDS_PER_BLOCK];
 shared uint sh_vis[CULL_WORDS_PER_BLOCK];
 shared uint sh_counts[4];
+
+// ORs `bits` into the shared word `arr[word]`: one atomic per subgroup when the subgroup's
+// invocations share the word, one per invocation with bits otherwise (correct for any subgroup
+// size and layout). Call in subgroup-uniform control flow.
+#define OR_INTO_SHARED(arr, word, bits)                                   \
+    if (subgroupAllEqual(word)) {                                         \
+        uint or_bits_ = subgroupOr(bits);                                 \
+        if (subgroupElect() && or_bits_ != 0u) atomicOr(arr[word], or_bits_); \
+    } else if ((bits) != 0u) {                                            \
+        atomicOr(arr[word], bits);                                        \
+    }
+
+#ifndef ATOMIC_APPEND
+// Adds one survivor of `group` to its count, one atomic per distinct group in the subgroup:
+// each round, the invocations whose group is the first remaining one count themselves from one
+// ballot and the lowest of them adds the count. Exact however the implementation groups the
+// invocations that run a round together (each invocation is counted by exactly one ballot).
+void count_group_survivor(uint group) {
+    for (;;) {
+        uint first = subgroupBroadcastFirst(group);
+        if (first == group) {
+            uvec4 same = subgroupBallot(true);
+            if (gl_SubgroupInvocationID == subgroupBallotFindLSB(same)) {
+                atomicAdd(group_counts[group], subgroupBallotBitCount(same));
+            }
+            break;
+        }
+    }
+}
+#endif
 
 bool in_frustum(CullView view, vec3 c, float radius, vec3 half_extent) {
 #ifdef NO_FRUSTUM
@@ -100,81 +152,112 @@ bool is_occluder(CullRecord r, vec3 c, float radius) {
 }
 #endif
 
+// What the pass decided for one slot.
+struct Decision {
+    bool evaluated;
+    bool frustum_culled;
+    bool occlusion_culled;
+    bool draw;
+    bool visible_now;
+    uint group;
+};
+
+Decision decide(CullRecord r, bool evaluated, bool was_visible) {
+    Decision d;
+    d.evaluated = evaluated;
+    d.frustum_culled = false;
+    d.occlusion_culled = false;
+    d.draw = false;
+    d.visible_now = false;
+    d.group = 0u;
+    if (!evaluated) return d;
+    d.group = record_group(r);
+    float radius = record_radius(r);
+    vec3 half_extent = record_half_extent(r);
+    vec3 c = (r.center_hi - frame.eye_hi.xyz) + (record_center_lo(r) - frame.eye_lo.xyz);
+    bool huge = (r.group_flags & CULL_HUGE) != 0u;
+    bool inside = huge || in_frustum(frame.cull_view, c, radius, half_extent);
+    bool hidden = false;
+#if defined(HAS_HIZ) && !defined(PHASE_OCCLUDERS)
+    if (inside && !huge) hidden = occluded(r, radius, half_extent);
+#endif
+    d.frustum_culled = !inside;
+    d.occlusion_culled = inside && hidden;
+    bool visible = inside && !hidden;
+#if defined(PHASE_LATE)
+    d.draw = visible && !was_visible;
+    d.visible_now = visible;
+#elif defined(PHASE_OCCLUDERS)
+    d.draw = inside && is_occluder(r, c, radius);
+#elif defined(PHASE_REST)
+    d.draw = visible && !(inside && is_occluder(r, c, radius));
+#else
+    d.draw = visible;
+#endif
+    return d;
+}
+
 void main() {
     uint lane = gl_LocalInvocationIndex;
+    uint block = gl_WorkGroupID.x;
+    uint slot = block * CULL_BLOCK + lane;
     if (lane < CULL_WORDS_PER_BLOCK) {
         sh_draw[lane] = 0u;
         sh_vis[lane] = 0u;
     }
     if (lane < 4u) sh_counts[lane] = 0u;
-    barrier();
-    uint block = gl_WorkGroupID.x;
-    uint slot = block * CULL_BLOCK + lane;
+#ifndef ATOMIC_APPEND
+    uint run = scratch[SCRATCH_TEST_RUN];
+#endif
 
-    bool evaluated = false;
-    bool frustum_culled = false;
-    bool occlusion_culled = false;
-    bool draw = false;
-    bool visible_now = false;
-    uint group = 0u;
-    if (slot < pc.slot_count) {
+    // The loads and the decision come before the first barrier (it only orders the zeroing above
+    // before the shared atomics below), so they start as early as they can.
+    bool in_range = slot < pc.slot_count;
 #ifdef HAS_VIS_PREV
-        bool was_visible = ((vis_prev[slot >> 5] >> (slot & 31u)) & 1u) != 0u;
+    bool was_visible = in_range && ((vis_prev[slot >> 5] >> (slot & 31u)) & 1u) != 0u;
 #else
-        bool was_visible = false;
+    bool was_visible = false;
 #endif
 #ifdef PHASE_EARLY
-        evaluated = was_visible;
+    bool evaluated = was_visible;
 #else
-        evaluated = true;
+    bool evaluated = in_range;
 #endif
-        if (evaluated) {
-            CullRecord r = records[slot];
-            group = record_group(r);
-            float radius = record_radius(r);
-            vec3 half_extent = record_half_extent(r);
-            vec3 c = (r.center_hi - frame.eye_hi.xyz) + (record_center_lo(r) - frame.eye_lo.xyz);
-            bool huge = (r.group_flags & CULL_HUGE) != 0u;
-            bool inside = huge || in_frustum(frame.cull_view, c, radius, half_extent);
-            bool hidden = false;
-#if defined(HAS_HIZ) && !defined(PHASE_OCCLUDERS)
-            if (inside && !huge) hidden = occluded(r, radius, half_extent);
+    CullRecord r = CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u);
+    if (evaluated) r = load_record(slot);
+    Decision d = decide(r, evaluated, was_visible);
+    barrier();
+
+    // Decision bits and counters: one shared atomic per subgroup and word or counter.
+    uint word = lane >> 5u;
+    uint bit = 1u << (lane & 31u);
+#ifndef ATOMIC_APPEND
+    OR_INTO_SHARED(sh_draw, word, d.draw ? bit : 0u)
+    if (d.draw) count_group_survivor(d.group);
 #endif
-            frustum_culled = !inside;
-            occlusion_culled = inside && hidden;
-            bool visible = inside && !hidden;
-#if defined(PHASE_LATE)
-            draw = visible && !was_visible;
-            visible_now = visible;
-#elif defined(PHASE_OCCLUDERS)
-            draw = inside && is_occluder(r, c, radius);
-#elif defined(PHASE_REST)
-            draw = visible && !(inside && is_occluder(r, c, radius));
-#else
-            draw = visible;
+#ifdef WRITE_VIS
+    OR_INTO_SHARED(sh_vis, word, d.visible_now ? bit : 0u)
 #endif
+    uvec4 counts = subgroupAdd(uvec4(d.evaluated, d.frustum_culled, d.occlusion_culled, d.visible_now));
+    if (subgroupElect()) {
+        for (uint i = 0u; i < 4u; ++i) {
+            if (counts[i] != 0u) atomicAdd(sh_counts[i], counts[i]);
         }
     }
-    if (draw) atomicOr(sh_draw[lane >> 5], 1u << (lane & 31u));
-    if (visible_now) atomicOr(sh_vis[lane >> 5], 1u << (lane & 31u));
-    if (evaluated) atomicAdd(sh_counts[0], 1u);
-    if (frustum_culled) atomicAdd(sh_counts[1], 1u);
-    if (occlusion_culled) atomicAdd(sh_counts[2], 1u);
-    if (visible_now) atomicAdd(sh_counts[3], 1u);
     barrier();
 
 #ifdef WRITE_VIS
     if (lane < CULL_WORDS_PER_BLOCK) {
         // The visibility buffer holds ceil(slots / 32) words; the last block may run past it.
-        uint word = block * CULL_WORDS_PER_BLOCK + lane;
-        if (word < (pc.slot_count + 31u) / 32u) vis_now[word] = sh_vis[lane];
+        uint vis_word = block * CULL_WORDS_PER_BLOCK + lane;
+        if (vis_word < (pc.slot_count + 31u) / 32u) vis_now[vis_word] = sh_vis[lane];
     }
 #endif
 
 #ifdef ATOMIC_APPEND
-    if (draw) {
-        DrawGroup g = groups[group];
-        uint index = atomicAdd(commands[group].instance_count, 1u);
+    if (d.draw) {
+        DrawGroup g = groups[d.group];
+        uint index = atomicAdd(commands[d.group].instance_count, 1u);
         draw_ids[g.first_slot + index] = slot_instances[slot];
         uint tris = g.index_count / 3u;
         uint old = atomicAdd(stats.triangles_lo, tris);
@@ -193,11 +276,14 @@ void main() {
         uint count = 0u;
         for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) count += bitCount(sh_draw[w]);
         scratch[scratch_block(pc.superblocks, block)] = count;
-        if (count != 0u) atomicAdd(scratch[scratch_superblock(block / CULL_SUPERBLOCK)], count);
-        if (sh_counts[0] != 0u) atomicAdd(scratch[SCRATCH_TESTED], sh_counts[0]);
-        if (sh_counts[1] != 0u) atomicAdd(scratch[SCRATCH_FRUSTUM], sh_counts[1]);
-        if (sh_counts[2] != 0u) atomicAdd(scratch[SCRATCH_OCCLUSION], sh_counts[2]);
-        if (sh_counts[3] != 0u) atomicAdd(scratch[SCRATCH_VISIBLE], sh_counts[3]);
+        uint at = scratch_super(pc.superblocks, run, block / CULL_SUPERBLOCK);
+        if (count != 0u) atomicAdd(scratch[at + SUPER_SURVIVORS], count);
+        if (sh_counts[0] != 0u) atomicAdd(scratch[at + SUPER_TESTED], sh_counts[0]);
+        if (sh_counts[1] != 0u) atomicAdd(scratch[at + SUPER_FRUSTUM], sh_counts[1]);
+        if (sh_counts[2] != 0u) atomicAdd(scratch[at + SUPER_OCCLUSION], sh_counts[2]);
+        if (sh_counts[3] != 0u) atomicAdd(scratch[at + SUPER_VISIBLE], sh_counts[3]);
+        // Nothing reads this word in this dispatch: the compact step's copy of the run number.
+        if (block == 0u) scratch[SCRATCH_PLACE_RUN] = run;
     }
 #endif
 }

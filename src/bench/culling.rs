@@ -26,6 +26,8 @@ pub struct CullingBench {
     pub graphs: Vec<String>,
     /// Also check one frame per graph against exact visibility.
     pub verify: bool,
+    /// Also time the steps of multi-dispatch passes (instance cull: test, compact).
+    pub step_times: bool,
 }
 
 /// One pass of one graph.
@@ -95,18 +97,17 @@ pub struct CullingReport {
 }
 
 /// Bytes an instance_cull pass moves (unique bytes; repeated reads that hit the cache are not
-/// counted), from what its three steps read and write. Test: `tested` 32-byte records, last
-/// frame's and this frame's visibility bits and the draw bits, a count per block. Scatter: the
-/// draw bits, the block and superblock counts, the groups, and per survivor its instance id
-/// read and written. Commands: per group its record, base and 20-byte command.
+/// counted), from what its two steps read and write. Test: `tested` 32-byte records, last
+/// frame's and this frame's visibility bits and the draw bits, a count per block, the
+/// superblock records. Compact: the block counts, the draw bits, the superblock records, per
+/// survivor its instance id read and written, and per group its count, record and command.
 pub fn cull_pass_bytes(slots: u64, tested: u64, drawn: u64, groups: u64) -> u64 {
     let blocks = slots.div_ceil(256);
     let superblocks = blocks.div_ceil(64);
     let bits = slots.div_ceil(32) * 4;
-    let test = tested * 32 + 3 * bits + blocks * 4 + superblocks * 4;
-    let scatter = bits + blocks * 4 + superblocks * 4 + groups * (32 + 4) + drawn * 8;
-    let commands = groups * (32 + 4 + 20);
-    test + scatter + commands
+    let test = tested * 32 + 3 * bits + blocks * 4 + superblocks * 32;
+    let compact = blocks * 4 + bits + superblocks * 32 + drawn * 8 + groups * (4 + 32 + 20);
+    test + compact
 }
 
 /// Runs the benchmark.
@@ -144,6 +145,7 @@ pub fn run(
             let spec = GraphSpec::builtin(graph)?;
             let settings = RenderSettings::new(bench.width, bench.height);
             let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
+            renderer.set_step_timing(bench.step_times);
             for _ in 0..bench.warmup {
                 renderer.render(&camera)?;
             }

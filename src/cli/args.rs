@@ -84,6 +84,10 @@ pub struct BenchArgs {
     /// Also check one frame per graph against exact visibility.
     #[arg(long)]
     pub verify: bool,
+    /// Also time each step of multi-dispatch passes (`pass/step` rows; the timestamps between
+    /// steps may add a little time to those passes).
+    #[arg(long)]
+    pub step_times: bool,
     /// Folder for bench.json and bench.md.
     #[arg(long, default_value = "out/bench")]
     pub out: PathBuf,

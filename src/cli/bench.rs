@@ -28,6 +28,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             frames: args.frames,
             graphs: args.graphs.clone(),
             verify: args.verify,
+            step_times: args.step_times,
         },
         &progress,
     )?;

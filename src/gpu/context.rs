@@ -74,6 +74,8 @@ pub struct DeviceCaps {
     pub timestamp_valid_bits: u32,
     /// Subgroup size reported by the device (8 on lavapipe, 32 on NVIDIA).
     pub subgroup_size: u32,
+    /// Subgroup operations the device supports in compute shaders (empty if none there).
+    pub subgroup_compute_ops: vk::SubgroupFeatureFlags,
     /// `VK_EXT_post_depth_coverage` is supported (and enabled on a device cullgraph creates).
     pub post_depth_coverage: bool,
 }
@@ -513,6 +515,11 @@ fn query_caps(instance: &ash::Instance, pd: vk::PhysicalDevice, queue_family: u3
         timestamp_period_ns: props.limits.timestamp_period as f64,
         timestamp_valid_bits: families.get(queue_family as usize).map_or(0, |f| f.timestamp_valid_bits),
         subgroup_size: subgroup.subgroup_size,
+        subgroup_compute_ops: if subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE) {
+            subgroup.supported_operations
+        } else {
+            vk::SubgroupFeatureFlags::empty()
+        },
         post_depth_coverage: has(ash::ext::post_depth_coverage::NAME),
     }
 }

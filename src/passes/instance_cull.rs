@@ -1,15 +1,22 @@
 //! The instance-cull pass (ICR/HOCR in one): tests every instance's world bound against the
 //! frustum and, when a Hi-Z pyramid is bound, the conservative occlusion test, then compacts the
-//! survivors per draw group in instance order into `VkDrawIndexedIndirectCommand`s and a draw
-//! count for `vkCmdDrawIndexedIndirectCount`. No CPU readback anywhere.
+//! survivors in instance order into one slice per draw group, with a
+//! `VkDrawIndexedIndirectCommand` per non-empty group and a draw count for
+//! `vkCmdDrawIndexedIndirectCount`. No CPU readback anywhere.
 //!
-//! Three dispatches (`shaders/cull/`): `instance_cull.comp` (one thread per slot decides; each
-//! block stores its decision bits and survivor count and adds it to its superblock's count),
-//! `cull_scatter.comp` (each block sums the counts before it, in parallel, and its survivors
-//! write their instance id into their group's slice in instance order) and
-//! `cull_commands.comp` (one workgroup: per-group counts, commands compacted in group order,
-//! counters). No workgroup ever waits for another: Vulkan does not promise that such waits make
-//! progress (a decoupled look-back hangs on lavapipe). The thesis's atomic append (`compaction: "atomic"`) is kept as a measured variant:
+//! Two dispatches (`shaders/cull/`): `instance_cull.comp` (one thread per slot decides; each
+//! block stores its decision bits and survivor count, adds its counts to its superblock's record
+//! and each group's survivors to the group's count) and `cull_compact.comp` (workgroup 0 writes
+//! the commands from the group counts; every other workgroup sums the counts before its block and
+//! writes its survivors' instance ids in slot order). No workgroup ever waits for another: Vulkan
+//! does not promise that such waits make progress (a decoupled look-back hangs on lavapipe).
+//! Nothing is cleared between runs: the compact step zeroes the group counts and the next run's
+//! half of the superblock records (see `cull_common.glsl`).
+//!
+//! Both kernels combine values with subgroup operations (basic, vote, arithmetic and ballot in
+//! compute shaders, which Vulkan 1.3 devices commonly have), never assuming a subgroup size.
+//!
+//! The thesis's atomic append (`compaction: "atomic"`) is kept as a measured variant:
 //! `cull_init.comp` then the test step appending with atomics; its order within a group varies
 //! from run to run.
 
@@ -67,12 +74,13 @@ impl CullSettings {
 /// Scratch memory sized for one scene.
 struct Scratch {
     slots: u32,
-    /// Counters, one count per superblock, one per block.
+    groups: u32,
+    /// Run numbers, two halves of superblock records, one count per block (`cull_common.glsl`).
     scan: Buffer,
     /// One bit per slot: drawn by this pass.
     draw_bits: Buffer,
-    /// Survivors before each draw group.
-    group_base: Buffer,
+    /// Survivors of each draw group (zero between runs).
+    group_counts: Buffer,
     /// Where the counters go when the graph binds no `stats` buffer.
     own_stats: Buffer,
     /// Whether the scan buffer still needs its first clear.
@@ -83,8 +91,7 @@ struct Scratch {
 pub struct InstanceCullPass {
     settings: CullSettings,
     test: Pipeline,
-    scatter: Option<Pipeline>,
-    commands: Option<Pipeline>,
+    compact: Option<Pipeline>,
     init: Option<Pipeline>,
     sampler: Sampler,
     scratch: Option<Scratch>,
@@ -94,6 +101,17 @@ impl InstanceCullPass {
     /// Compiles the variant the pass's settings and bindings ask for.
     pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler, pass: &PlannedPass) -> crate::Result<Self> {
         let settings = CullSettings::from_plan(pass);
+        let ops = ctx.caps().subgroup_compute_ops;
+        let needed = vk::SubgroupFeatureFlags::BASIC
+            | vk::SubgroupFeatureFlags::VOTE
+            | vk::SubgroupFeatureFlags::ARITHMETIC
+            | vk::SubgroupFeatureFlags::BALLOT;
+        if !ops.contains(needed) {
+            return Err(crate::Error::Invalid(format!(
+                "pass '{}': instance_cull needs subgroup operations {needed:?} in compute shaders; the device has {ops:?}",
+                pass.name
+            )));
+        }
         let bound = |slot: &str| pass.bindings.iter().any(|b| b.slot == slot);
         let phase = format!("PHASE_{}", settings.phase.to_uppercase());
         let mut defines: Vec<(&str, &str)> = vec![(phase.as_str(), "1")];
@@ -113,16 +131,12 @@ impl InstanceCullPass {
         let compute = |step: &str, file: &str| -> crate::Result<Pipeline> {
             Ok(Pipeline::compute(ctx, &name(step), &shaders.compile(file, &[])?)?)
         };
-        let (scatter, commands, init) = if settings.atomic {
-            (None, None, Some(compute("init", "cull/cull_init.comp")?))
+        let (compact, init) = if settings.atomic {
+            (None, Some(compute("init", "cull/cull_init.comp")?))
         } else {
-            (
-                Some(compute("scatter", "cull/cull_scatter.comp")?),
-                Some(compute("commands", "cull/cull_commands.comp")?),
-                None,
-            )
+            (Some(compute("compact", "cull/cull_compact.comp")?), None)
         };
-        Ok(Self { settings, test, scatter, commands, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
+        Ok(Self { settings, test, compact, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
     }
 
     /// The settings in use.
@@ -132,8 +146,8 @@ impl InstanceCullPass {
 
     /// Scratch buffers for `slots` instances and `groups` draw groups (created on first use).
     fn ensure_scratch(&mut self, ctx: &GpuContext, slots: u32, groups: u32) -> crate::Result<()> {
-        if self.scratch.as_ref().is_none_or(|s| s.slots != slots) {
-            let blocks = slots.div_ceil(CULL_BLOCK).max(1) as u64;
+        if self.scratch.as_ref().is_none_or(|s| s.slots != slots || s.groups != groups) {
+            let blocks = blocks_of(slots) as u64;
             let storage = |name: &str, size: u64| {
                 Buffer::new(
                     ctx,
@@ -148,9 +162,13 @@ impl InstanceCullPass {
             let superblocks = blocks.div_ceil(CULL_SUPERBLOCK as u64);
             self.scratch = Some(Scratch {
                 slots,
-                scan: storage("cull scan state", (SCAN_HEADER_WORDS + superblocks + blocks) * 4)?,
+                groups,
+                scan: storage(
+                    "cull scan state",
+                    (SCAN_HEADER_WORDS + 2 * superblocks * SUPERBLOCK_WORDS + blocks) * 4,
+                )?,
                 draw_bits: storage("cull draw bits", blocks * (CULL_BLOCK as u64 / 32) * 4)?,
-                group_base: storage("cull group base", groups.max(1) as u64 * 4)?,
+                group_counts: storage("cull group counts", groups.max(1) as u64 * 4)?,
                 own_stats: storage("cull stats (unbound)", 64)?,
                 fresh: true,
             });
@@ -159,8 +177,17 @@ impl InstanceCullPass {
     }
 }
 
-/// Words of counters before the superblock counts in the scan buffer (`SCRATCH_HEADER`).
+/// Words before the superblock records in the scan buffer (`SCRATCH_HEADER`).
 const SCAN_HEADER_WORDS: u64 = 8;
+/// Words of one superblock record (`SUPER_WORDS`).
+const SUPERBLOCK_WORDS: u64 = 8;
+
+/// Blocks of `CULL_BLOCK` slots (test workgroups): at least one, so that an empty scene still
+/// writes an empty draw list.
+fn blocks_of(slots: u32) -> u32 {
+    slots.div_ceil(CULL_BLOCK).max(1)
+}
+
 /// Blocks per superblock (`CULL_SUPERBLOCK` in `cull_common.glsl`).
 pub const CULL_SUPERBLOCK: u32 = 64;
 
@@ -201,10 +228,13 @@ impl PassNode for InstanceCullPass {
         let device = ctx.device();
         let scratch = self.scratch.as_mut().expect("ensured above");
         if scratch.fresh {
-            // Zero counters and superblock counts: once, before the first run (each run's commands
-            // step leaves them at zero for the next).
-            // SAFETY: cmd recording; the buffer is the pass's own.
-            unsafe { device.cmd_fill_buffer(cmd, scratch.scan.handle(), 0, vk::WHOLE_SIZE, 0) };
+            // Run number, superblock records and group counts to zero: once, before the first
+            // run (each run's compact step leaves what the next one adds to at zero).
+            // SAFETY: cmd recording; the buffers are the pass's own.
+            unsafe {
+                device.cmd_fill_buffer(cmd, scratch.scan.handle(), 0, vk::WHOLE_SIZE, 0);
+                device.cmd_fill_buffer(cmd, scratch.group_counts.handle(), 0, vk::WHOLE_SIZE, 0);
+            }
             cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::COMPUTE_WRITE)], &[]);
             scratch.fresh = false;
         }
@@ -212,7 +242,7 @@ impl PassNode for InstanceCullPass {
         step_barrier(ctx, cmd);
         let scratch = self.scratch.as_ref().expect("ensured above");
         let stats = rec.slots.buffer("stats").unwrap_or(&scratch.own_stats);
-        let blocks = slots.div_ceil(CULL_BLOCK);
+        let blocks = blocks_of(slots);
         let superblocks = blocks.div_ceil(CULL_SUPERBLOCK);
 
         let mut test_binds = vec![
@@ -250,6 +280,7 @@ impl PassNode for InstanceCullPass {
         };
 
         if let Some(init) = &self.init {
+            rec.step("init");
             init.bind(cmd);
             init.push_bindings(
                 cmd,
@@ -271,18 +302,24 @@ impl PassNode for InstanceCullPass {
                 Bind::Buffer(6, stats.handle()),
             ]);
         } else {
-            test_binds.extend([Bind::Buffer(5, scratch.scan.handle()), Bind::Buffer(6, scratch.draw_bits.handle())]);
+            test_binds.extend([
+                Bind::Buffer(4, scratch.group_counts.handle()),
+                Bind::Buffer(5, scratch.scan.handle()),
+                Bind::Buffer(6, scratch.draw_bits.handle()),
+            ]);
         }
+        rec.step("test");
         self.test.bind(cmd);
         self.test.push_bindings(cmd, &test_binds);
         self.test.push_constants(cmd, &push);
         // SAFETY: as above.
-        unsafe { device.cmd_dispatch(cmd, blocks.max(1), 1, 1) };
+        unsafe { device.cmd_dispatch(cmd, blocks, 1, 1) };
 
-        if let (Some(scatter), Some(build)) = (&self.scatter, &self.commands) {
+        if let Some(compact) = &self.compact {
             step_barrier(ctx, cmd);
-            scatter.bind(cmd);
-            scatter.push_bindings(
+            rec.step("compact");
+            compact.bind(cmd);
+            compact.push_bindings(
                 cmd,
                 &[
                     Bind::Buffer(0, scratch.draw_bits.handle()),
@@ -290,28 +327,16 @@ impl PassNode for InstanceCullPass {
                     Bind::Buffer(2, scene.draw_groups.handle()),
                     Bind::Buffer(3, scene.draw_instance_ids.handle()),
                     Bind::Buffer(4, draw_ids.handle()),
-                    Bind::Buffer(5, scratch.group_base.handle()),
+                    Bind::Buffer(5, scratch.group_counts.handle()),
+                    Bind::Buffer(6, commands.handle()),
+                    Bind::Buffer(7, draw_count.handle()),
+                    Bind::Buffer(8, stats.handle()),
                 ],
             );
-            scatter.push_constants(cmd, &[slots, groups, superblocks]);
+            compact.push_constants(cmd, &[slots, groups, superblocks]);
+            // Workgroup 0 writes the commands, workgroup 1 + b places block b.
             // SAFETY: as above.
-            unsafe { device.cmd_dispatch(cmd, blocks.max(1), 1, 1) };
-            step_barrier(ctx, cmd);
-            build.bind(cmd);
-            build.push_bindings(
-                cmd,
-                &[
-                    Bind::Buffer(0, scene.draw_groups.handle()),
-                    Bind::Buffer(1, scratch.group_base.handle()),
-                    Bind::Buffer(2, scratch.scan.handle()),
-                    Bind::Buffer(3, commands.handle()),
-                    Bind::Buffer(4, draw_count.handle()),
-                    Bind::Buffer(5, stats.handle()),
-                ],
-            );
-            build.push_constants(cmd, &[groups, superblocks]);
-            // SAFETY: as above.
-            unsafe { device.cmd_dispatch(cmd, 1, 1, 1) };
+            unsafe { device.cmd_dispatch(cmd, blocks + 1, 1, 1) };
         }
         Ok(())
     }

@@ -146,7 +146,8 @@ impl Renderer {
 
     /// Replaces the graph. On error the current graph stays in place and keeps rendering.
     pub fn reload_graph(&mut self, shaders: &ShaderCompiler, spec: &GraphSpec) -> Result<()> {
-        let runtime = build_runtime(&self.ctx, shaders, &self.scene, &self.settings, spec)?;
+        let mut runtime = build_runtime(&self.ctx, shaders, &self.scene, &self.settings, spec)?;
+        runtime.set_step_timing(self.runtime.step_timing());
         let old = std::mem::replace(&mut self.runtime, runtime);
         self.retired.push((self.runtime_start, self.frame_index, old));
         self.runtime_start = self.frame_index;
@@ -171,6 +172,13 @@ impl Renderer {
         let spec = self.spec.clone().with_overrides([("pool_fraction".to_string(), format!("{fraction}"))]);
         self.reload_graph(shaders, &spec)?;
         Ok(Some(fraction))
+    }
+
+    /// Starts or stops timing the steps of multi-dispatch passes separately: each frame's
+    /// [`FrameStats::gpu_ms`] then also holds `pass/step` entries (see
+    /// [`GraphRuntime::set_step_timing`]).
+    pub fn set_step_timing(&mut self, on: bool) {
+        self.runtime.set_step_timing(on);
     }
 
     /// Checks every headless frame against exact visibility (an unculled instance-id render

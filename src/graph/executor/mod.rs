@@ -10,13 +10,14 @@ mod tracker;
 
 pub use capture::DrawnInstances;
 pub use imports::{Import, Imports};
-pub use node::{FrameData, PassContext, PassNode, SlotBindings};
+pub use node::{FrameData, PassContext, PassNode, SlotBindings, StepTimer};
 pub use resources::{Physical, RuntimeResources};
 
 use crate::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
 use crate::gpu::{Access, Buffer, BufferDesc, GpuContext, GpuTimer, Image, MemoryLocation, PassTiming, ShaderCompiler};
 use crate::graph::plan::{CompiledGraph, MemoryPlan, Version};
 use ash::vk;
+use std::cell::RefCell;
 use std::path::Path;
 use tracker::Tracker;
 
@@ -55,6 +56,9 @@ pub(crate) fn copy_to_host(
 /// Frames of one runtime that may execute at once (timestamp pools are ringed this many times).
 pub const FRAMES_IN_FLIGHT: usize = 3;
 
+/// Room per pass in the timestamp pool for the steps [`GraphRuntime::set_step_timing`] times.
+pub const MAX_TIMED_STEPS: u32 = 4;
+
 /// A compiled graph with its resources and pass instances, ready to record frames.
 pub struct GraphRuntime {
     ctx: GpuContext,
@@ -62,7 +66,9 @@ pub struct GraphRuntime {
     nodes: Vec<Box<dyn PassNode>>,
     resources: RuntimeResources,
     tracker: Tracker,
-    timers: Vec<GpuTimer>,
+    timers: Vec<RefCell<GpuTimer>>,
+    /// Whether passes time their steps separately.
+    step_timing: bool,
     /// Passes with a bound `stats` slot, and per frame in flight a host buffer their counters
     /// are copied into (read a few frames later, never waited on).
     stats_passes: Vec<usize>,
@@ -87,8 +93,11 @@ impl GraphRuntime {
             .iter()
             .map(|p| crate::passes::create_node(ctx, shaders, p, &plan, graph_dir))
             .collect::<crate::Result<Vec<_>>>()?;
-        let scopes = plan.passes.len() as u32 + 1;
-        let timers = (0..FRAMES_IN_FLIGHT).map(|_| GpuTimer::new(ctx, scopes)).collect::<Result<Vec<_>, _>>()?;
+        // The frame, each pass, and room for each pass's steps when step timing is on.
+        let scopes = plan.passes.len() as u32 * (1 + MAX_TIMED_STEPS) + 1;
+        let timers = (0..FRAMES_IN_FLIGHT)
+            .map(|_| GpuTimer::new(ctx, scopes).map(RefCell::new))
+            .collect::<Result<Vec<_>, _>>()?;
         let stats_passes: Vec<usize> = plan
             .passes
             .iter()
@@ -116,6 +125,7 @@ impl GraphRuntime {
             nodes,
             resources,
             timers,
+            step_timing: false,
             stats_passes,
             stats_ring,
             capture: None,
@@ -155,9 +165,9 @@ impl GraphRuntime {
         if frame == 0 {
             self.clear_history(cmd);
         }
-        let timer = &mut self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
-        timer.reset(cmd);
-        timer.begin(cmd, "frame");
+        let timer = &self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+        timer.borrow_mut().reset(cmd);
+        timer.borrow_mut().begin(cmd, "frame");
         for (index, (pass, node)) in self.plan.passes.iter().zip(self.nodes.iter_mut()).enumerate() {
             let mut memory = Vec::new();
             let mut images = Vec::new();
@@ -187,15 +197,17 @@ impl GraphRuntime {
             cmd_barriers(&device, cmd, &merged, &images);
 
             self.ctx.begin_label(cmd, &pass.name);
-            timer.begin(cmd, &pass.name);
+            timer.borrow_mut().begin(cmd, &pass.name);
             let rec = PassContext {
                 ctx: &self.ctx,
                 cmd,
                 frame: inputs,
                 slots: SlotBindings { pass, resources: &self.resources, frame },
+                steps: StepTimer::new(self.step_timing.then_some(timer), &pass.name),
             };
             node.record(&rec)?;
-            timer.end(cmd);
+            rec.steps.finish(cmd);
+            timer.borrow_mut().end(cmd);
             self.ctx.end_label(cmd);
             for b in &pass.bindings {
                 if let Some(phys) = self.resources.index(b.resource, b.version, frame) {
@@ -222,7 +234,7 @@ impl GraphRuntime {
         if !self.stats_passes.is_empty() {
             cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
         }
-        timer.end(cmd);
+        timer.borrow_mut().end(cmd);
         self.release_imports(cmd, imports);
         self.frame += 1;
         Ok(frame)
@@ -341,6 +353,19 @@ impl GraphRuntime {
         }
     }
 
+    /// Starts or stops timing the steps (dispatches) of passes that mark them
+    /// ([`PassContext::step`]) separately: [`GraphRuntime::timings`] then also holds a
+    /// `pass/step` scope per step, nested in the pass's own. The timestamps between steps may
+    /// cost a little time themselves.
+    pub fn set_step_timing(&mut self, on: bool) {
+        self.step_timing = on;
+    }
+
+    /// Whether step timing is on.
+    pub fn step_timing(&self) -> bool {
+        self.step_timing
+    }
+
     /// Starts or stops copying every draw pass's draw list to the host after it runs (for
     /// verification; see [`GraphRuntime::drawn`]).
     pub fn set_draw_capture(&mut self, on: bool) -> crate::Result<()> {
@@ -379,7 +404,7 @@ impl GraphRuntime {
         if frame >= self.frame || self.frame - frame > FRAMES_IN_FLIGHT as u64 {
             return Ok(Vec::new());
         }
-        Ok(self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize].results()?)
+        Ok(self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize].borrow().results()?)
     }
 
     /// Clears both copies of every history resource to zero (reversed-Z "far", empty bits), so

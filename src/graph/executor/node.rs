@@ -2,10 +2,11 @@
 //! resources bound to its slots and the frame's shared inputs.
 
 use super::resources::{Physical, RuntimeResources};
-use crate::gpu::{Buffer, GpuContext, Image};
+use crate::gpu::{Buffer, GpuContext, GpuTimer, Image};
 use crate::graph::plan::{Binding, PlannedPass};
 use crate::render::scene_buffers::GpuScene;
 use ash::vk;
+use std::cell::{Cell, RefCell};
 
 /// Inputs every pass of a frame may use, owned by the renderer.
 pub struct FrameData<'a> {
@@ -85,6 +86,48 @@ pub struct PassContext<'a> {
     pub frame: &'a FrameData<'a>,
     /// The resources bound to the pass's slots.
     pub slots: SlotBindings<'a>,
+    /// Timestamps between the pass's steps, when the runtime was asked for them.
+    pub steps: StepTimer<'a>,
+}
+
+impl PassContext<'_> {
+    /// Marks the start of step `name` of a pass with several dispatches (see [`StepTimer`]).
+    pub fn step(&self, name: &str) {
+        self.steps.step(self.cmd, name);
+    }
+}
+
+/// Times the steps of one pass separately ([`crate::graph::executor::GraphRuntime::set_step_timing`]):
+/// each [`StepTimer::step`] closes the previous step's scope and opens `pass/step`; the
+/// executor closes the last one. Does nothing unless step timing is on.
+pub struct StepTimer<'a> {
+    timer: Option<&'a RefCell<GpuTimer>>,
+    pass: &'a str,
+    open: Cell<bool>,
+}
+
+impl<'a> StepTimer<'a> {
+    /// A timer writing into `timer` (`None`: step timing off) for the pass named `pass`.
+    pub(super) fn new(timer: Option<&'a RefCell<GpuTimer>>, pass: &'a str) -> Self {
+        Self { timer, pass, open: Cell::new(false) }
+    }
+
+    /// Ends the open step, if any, and begins `name`.
+    pub fn step(&self, cmd: vk::CommandBuffer, name: &str) {
+        let Some(timer) = self.timer else { return };
+        let mut timer = timer.borrow_mut();
+        if self.open.replace(true) {
+            timer.end(cmd);
+        }
+        timer.begin(cmd, &format!("{}/{name}", self.pass));
+    }
+
+    /// Ends the open step, if any.
+    pub(super) fn finish(&self, cmd: vk::CommandBuffer) {
+        if let (Some(timer), true) = (self.timer, self.open.replace(false)) {
+            timer.borrow_mut().end(cmd);
+        }
+    }
 }
 
 /// A pass instance of a compiled graph (pipelines created, ready to record).
