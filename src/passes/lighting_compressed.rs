@@ -39,6 +39,18 @@ pub struct LightingCompressedPass {
     settings: LightingSettings,
 }
 
+/// Setting `name` of `pass`, a block count within 0..=MAX_SHARED_BLOCKS.
+fn block_count_setting(pass: &PlannedPass, name: &str, default: u32) -> crate::Result<u32> {
+    let value = pass.float_setting(name, default as f64);
+    if !(0.0..=MAX_SHARED_BLOCKS as f64).contains(&value) {
+        return Err(crate::Error::Invalid(format!(
+            "pass '{}': {name} must be between 0 and {MAX_SHARED_BLOCKS}, got {value}",
+            pass.name
+        )));
+    }
+    Ok(value as u32)
+}
+
 impl LightingCompressedPass {
     /// Compiles the shader for the sample count of the depth bound to `pass`.
     pub fn new(
@@ -49,14 +61,7 @@ impl LightingCompressedPass {
     ) -> crate::Result<Self> {
         let samples = bound_samples(plan, pass, "depth").to_string();
         let with_stats = pass.bindings.iter().any(|b| b.slot == "stats");
-        let shared_blocks = pass.float_setting("shared_blocks", DEFAULT_SHARED_BLOCKS as f64);
-        if !(0.0..=MAX_SHARED_BLOCKS as f64).contains(&shared_blocks) {
-            return Err(crate::Error::Invalid(format!(
-                "pass '{}': shared_blocks must be between 0 and {MAX_SHARED_BLOCKS}, got {shared_blocks}",
-                pass.name
-            )));
-        }
-        let shared_blocks = shared_blocks as u32;
+        let shared_blocks = block_count_setting(pass, "shared_blocks", DEFAULT_SHARED_BLOCKS)?;
         let shared_bytes = shared_blocks * SHARED_BYTES_PER_BLOCK + SHARED_BYTES_OTHER;
         let limit = ctx.caps().limits.max_compute_shared_memory_size;
         if shared_bytes > limit {
@@ -66,14 +71,8 @@ impl LightingCompressedPass {
             )));
         }
         let shared_blocks = shared_blocks.to_string();
-        let shared_min_blocks = pass.float_setting("shared_min_blocks", DEFAULT_SHARED_MIN_BLOCKS as f64);
-        if !(0.0..=MAX_SHARED_BLOCKS as f64).contains(&shared_min_blocks) {
-            return Err(crate::Error::Invalid(format!(
-                "pass '{}': shared_min_blocks must be between 0 and {MAX_SHARED_BLOCKS}, got {shared_min_blocks}",
-                pass.name
-            )));
-        }
-        let shared_min_blocks = format!("{}u", shared_min_blocks as u32);
+        let shared_min_blocks =
+            format!("{}u", block_count_setting(pass, "shared_min_blocks", DEFAULT_SHARED_MIN_BLOCKS)?);
         let mut defines = vec![
             ("SAMPLES", samples.as_str()),
             ("SHARED_BLOCKS", shared_blocks.as_str()),
