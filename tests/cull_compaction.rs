@@ -99,3 +99,69 @@ fn frustum_lists_equal_the_cpu_reference_exactly() {
     }
     let _ = Vec3::ZERO;
 }
+
+/// Ids of the instances whose bound the frustum graph keeps for `camera` (the CPU reference).
+fn in_frustum(scene: &cullgraph::scene::Scene, camera: &Camera, w: u32, h: u32) -> std::collections::HashSet<u32> {
+    expected(scene, camera, w, h).into_iter().collect()
+}
+
+fn draw_lists(renderer: &Renderer) -> Vec<Vec<u32>> {
+    renderer
+        .runtime()
+        .drawn()
+        .unwrap()
+        .unwrap()
+        .into_iter()
+        .map(|d| match d {
+            DrawnInstances::Some(ids) => ids,
+            DrawnInstances::All => panic!("two-phase graphs cull"),
+        })
+        .collect()
+}
+
+/// The two-phase graph's early phase draws last frame's visible list as it is (the late
+/// phase's `visible_ids` and `visible_groups`). Against the earlier early phase, which tested
+/// every slot's visibility bit and the frustum, on a camera moving fast enough that part of
+/// last frame's visible set leaves the view: the early lists agree exactly (same ids, same
+/// order) inside the frustum, the late lists are identical, the early and late lists never
+/// share an instance, and neither misses anything visible.
+#[test]
+fn early_phase_from_last_frames_list_matches_the_tested_early_phase() {
+    let gpu = GpuTest::new();
+    let (w, h) = (64, 48);
+    for (source, instances, kinds) in [("field", 5003usize, Some(1000usize)), ("city", 3000, None)] {
+        let options = LoadOptions { instances: Some(instances), kinds, ..Default::default() };
+        let scene = SceneSource::Builtin(source.into()).load(&options).unwrap();
+        // Close in, so that turning around the scene moves instances out of view.
+        let mut base = scene.default_camera(w as f32 / h as f32);
+        base.eye = base.target + (base.eye - base.target) * 0.3;
+        let renderer_for = |spec: &GraphSpec| {
+            let mut r =
+                Renderer::with_graph(&gpu, &gpu.shaders(), scene.clone(), RenderSettings::new(w, h), spec).unwrap();
+            r.enable_verification(&gpu.shaders()).unwrap();
+            r
+        };
+        let mut from_list = renderer_for(&GraphSpec::builtin("two_phase").unwrap());
+        let bits_graph = std::path::Path::new("tests/graphs/gpu/two_phase_bits.ron");
+        let mut tested = renderer_for(&GraphSpec::from_file(bits_graph).unwrap());
+        let mut left_view = 0;
+        for frame in 0..8 {
+            let camera = CameraPath::Orbit.camera_at(&base, frame * 12);
+            let a = from_list.render(&camera).unwrap();
+            let b = tested.render(&camera).unwrap();
+            let (la, lb) = (draw_lists(&from_list), draw_lists(&tested));
+            let inside = in_frustum(&scene, &camera, w, h);
+            let (early_inside, early_outside): (Vec<u32>, Vec<u32>) = la[0].iter().partition(|id| inside.contains(id));
+            assert_eq!(early_inside, lb[0], "{source}, frame {frame}: early lists inside the frustum");
+            assert_eq!(la[1], lb[1], "{source}, frame {frame}: late lists");
+            left_view += early_outside.len();
+            let early: std::collections::HashSet<u32> = la[0].iter().copied().collect();
+            assert_eq!(early.len(), la[0].len(), "{source}, frame {frame}: an instance twice in the early list");
+            assert!(la[1].iter().all(|id| !early.contains(id)), "{source}, frame {frame}: drawn early and late");
+            let (va, vb) = (a.verify.unwrap(), b.verify.unwrap());
+            assert_eq!((va.false_negatives, vb.false_negatives), (0, 0), "{source}, frame {frame}");
+            assert_eq!(va.visible, vb.visible, "{source}, frame {frame}");
+        }
+        assert!(left_view > 0, "{source}: the camera path never moved a visible instance out of view");
+    }
+}

@@ -76,7 +76,8 @@ struct CullStats {
 
 // The pass's scratch buffer: a header, two halves of superblock records (one half per run,
 // alternating, so the compact step can zero the next run's half while its own is being read),
-// then one survivor count per block (overwritten by every run).
+// then one survivor count per block, then one visible count per block (both overwritten by
+// every run).
 //
 // The run number: the test step reads SCRATCH_TEST_RUN (its parity picks the half) and hands it
 // on in SCRATCH_PLACE_RUN; the compact step reads that and writes the next run's number into
@@ -95,5 +96,11 @@ uint scratch_super(uint superblocks, uint run, uint s) {
     return SCRATCH_HEADER + ((run & 1u) * superblocks + s) * SUPER_WORDS;
 }
 uint scratch_block(uint superblocks, uint b) { return SCRATCH_HEADER + 2u * superblocks * SUPER_WORDS + b; }
+// After the block counts: one count of visibility bits set per block (late phase), for the list
+// of visible slots that the next frame's early phase tests.
+uint scratch_visible_block(uint superblocks, uint slot_count, uint b) {
+    uint blocks = max(1u, (slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
+    return scratch_block(superblocks, blocks + b);
+}
 
 #endif

@@ -8,6 +8,11 @@
 // the superblock + bits before it in the block). Slots are sorted by draw group, so each group's
 // survivors form one slice, in instance order, every run; the group's command starts there
 // (first instance = the survivors of the groups before it, summed from the group counts).
+//
+// VISIBLE_OUT (late phase): each block also places the instance ids of its visible slots, the
+// same way, and workgroup 0 stores each group's visible count: the draw list that the next
+// frame's early phase draws as it is. EARLY_FROM_LIST (early phase, one workgroup): only the
+// commands, from those counts (the ids are already in place, in last frame's list).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -27,51 +32,90 @@ layout(set = 0, binding = 6, scalar) writeonly buffer Commands { DrawCommand com
 layout(set = 0, binding = 7) writeonly buffer DrawCount { uint draw_count; };
 layout(set = 0, binding = 8, scalar) writeonly buffer Stats { CullStats stats; };
 
+#ifdef VISIBLE_OUT
+layout(set = 0, binding = 9) readonly buffer VisNow { uint vis_now[]; };
+layout(set = 0, binding = 10) writeonly buffer VisibleIds { uint visible_ids[]; };
+layout(set = 0, binding = 11) writeonly buffer VisibleGroups { uint visible_groups[]; };
+#endif
+#ifdef EARLY_FROM_LIST
+layout(set = 0, binding = 12) readonly buffer VisibleGroupsPrev { uint visible_groups_prev[]; };
+#endif
+
 layout(push_constant) uniform Push {
     uint slot_count;
     uint group_count;
     uint superblocks;
 } pc;
 
-// Placing a block.
-shared uint sh_words[CULL_WORDS_PER_BLOCK];
-shared uint sh_before;
+// Placing a block: its draw bits [0] and visibility bits [1], and the survivors / visible slots
+// before it.
+shared uint sh_words[2][CULL_WORDS_PER_BLOCK];
+shared uint sh_before[2];
 // Writing the commands.
 shared uvec2 sh_scan[THREADS];
 shared uint sh_totals[8];
 
-// Survivors among this block's bits below slot offset `k` (0..CULL_BLOCK).
-uint local_before(uint k) {
+// Bits of `sh_words[which]` below bit `k` of the block (0..CULL_BLOCK).
+uint local_before(uint which, uint k) {
     uint count = 0u;
-    for (uint w = 0u; w < (k >> 5u); ++w) count += bitCount(sh_words[w]);
+    for (uint w = 0u; w < (k >> 5u); ++w) count += bitCount(sh_words[which][w]);
     uint bit = k & 31u;
-    if (bit != 0u) count += bitCount(sh_words[k >> 5u] & ((1u << bit) - 1u));
+    if (bit != 0u) count += bitCount(sh_words[which][k >> 5u] & ((1u << bit) - 1u));
     return count;
 }
 
-void place_block(uint block) {
+bool bit_set(uint which, uint k) { return ((sh_words[which][k >> 5u] >> (k & 31u)) & 1u) != 0u; }
+
+// Places block `block`'s survivors (and with VISIBLE_OUT its visible slots). Called in uniform
+// control flow.
+void place_block(uint block, uint run) {
     uint lane = gl_LocalInvocationIndex;
-    // Nothing to place (every invocation reads the same word, so all return together).
-    if (scratch[scratch_block(pc.superblocks, block)] == 0u) return;
-    uint run = scratch[SCRATCH_PLACE_RUN];
-    if (lane < CULL_WORDS_PER_BLOCK) sh_words[lane] = draw_bits[block * CULL_WORDS_PER_BLOCK + lane];
-    if (lane == 0u) sh_before = 0u;
+    uint drawn = scratch[scratch_block(pc.superblocks, block)];
+#ifdef VISIBLE_OUT
+    uint visible = scratch[scratch_visible_block(pc.superblocks, pc.slot_count, block)];
+#else
+    uint visible = 0u;
+#endif
+    // Nothing to place (every invocation reads the same words, so all return together).
+    if (drawn == 0u && visible == 0u) return;
+    if (lane < CULL_WORDS_PER_BLOCK) {
+        sh_words[0][lane] = drawn != 0u ? draw_bits[block * CULL_WORDS_PER_BLOCK + lane] : 0u;
+        sh_words[1][lane] = 0u;
+#ifdef VISIBLE_OUT
+        // The visibility buffer holds ceil(slots / 32) words; the last block may run past it.
+        uint vis_word = block * CULL_WORDS_PER_BLOCK + lane;
+        if (visible != 0u && vis_word < (pc.slot_count + 31u) / 32u) sh_words[1][lane] = vis_now[vis_word];
+#endif
+    }
+    if (lane < 2u) sh_before[lane] = 0u;
     uint super_index = block / CULL_SUPERBLOCK;
-    uint sum = 0u;
+    uvec2 sum = uvec2(0u);
     for (uint s = lane; s < super_index; s += THREADS) {
-        sum += scratch[scratch_super(pc.superblocks, run, s) + SUPER_SURVIVORS];
+        uint at = scratch_super(pc.superblocks, run, s);
+        sum.x += scratch[at + SUPER_SURVIVORS];
+#ifdef VISIBLE_OUT
+        sum.y += scratch[at + SUPER_VISIBLE];
+#endif
     }
     for (uint k = super_index * CULL_SUPERBLOCK + lane; k < block; k += THREADS) {
-        sum += scratch[scratch_block(pc.superblocks, k)];
+        sum.x += scratch[scratch_block(pc.superblocks, k)];
+#ifdef VISIBLE_OUT
+        sum.y += scratch[scratch_visible_block(pc.superblocks, pc.slot_count, k)];
+#endif
     }
     barrier();
     sum = subgroupAdd(sum);
-    if (subgroupElect() && sum != 0u) atomicAdd(sh_before, sum);
+    if (subgroupElect()) {
+        if (sum.x != 0u) atomicAdd(sh_before[0], sum.x);
+        if (sum.y != 0u) atomicAdd(sh_before[1], sum.y);
+    }
     barrier();
     // Bits past the last slot are never set.
-    if (((sh_words[lane >> 5u] >> (lane & 31u)) & 1u) != 0u) {
-        draw_ids[sh_before + local_before(lane)] = slot_instances[block * CULL_BLOCK + lane];
-    }
+    uint slot = block * CULL_BLOCK + lane;
+    if (bit_set(0u, lane)) draw_ids[sh_before[0] + local_before(0u, lane)] = slot_instances[slot];
+#ifdef VISIBLE_OUT
+    if (bit_set(1u, lane)) visible_ids[sh_before[1] + local_before(1u, lane)] = slot_instances[slot];
+#endif
 }
 
 // Inclusive scan of one pair per invocation in invocation order; returns the invocation's
@@ -99,12 +143,25 @@ uvec2 workgroup_exclusive_scan(uvec2 value, out uvec2 total) {
 #define TOTAL_VISIBLE 3
 #define TOTAL_TRIANGLES 5   // three words: triangle count bits 0-23, 24-47, 48-63
 
+// A group's survivors: this run's count, zeroed for the next run (EARLY_FROM_LIST: last frame's
+// visible count, read only).
+uint take_group_count(uint g) {
+#ifdef EARLY_FROM_LIST
+    return visible_groups_prev[g];
+#else
+    uint count = group_counts[g];
+    if (count != 0u) group_counts[g] = 0u;
+    return count;
+#endif
+}
+
 void write_commands() {
     uint lane = gl_LocalInvocationIndex;
-    uint run = scratch[SCRATCH_PLACE_RUN];
     if (lane < 8u) sh_totals[lane] = 0u;
     barrier();
     uvec4 counters = uvec4(0u);
+#ifndef EARLY_FROM_LIST
+    uint run = scratch[SCRATCH_PLACE_RUN];
     for (uint s = lane; s < pc.superblocks; s += THREADS) {
         uint at = scratch_super(pc.superblocks, run, s);
         counters += uvec4(scratch[at + SUPER_TESTED], scratch[at + SUPER_FRUSTUM], scratch[at + SUPER_OCCLUSION],
@@ -113,6 +170,15 @@ void write_commands() {
     // The next run's half back to zero (its last readers finished in the previous run).
     uint next = scratch_super(pc.superblocks, run + 1u, 0u);
     for (uint i = lane; i < pc.superblocks * SUPER_WORDS; i += THREADS) scratch[next + i] = 0u;
+#endif
+#ifdef VISIBLE_OUT
+    // Each group's visible count, for the next frame's early draw list, back to zero here.
+    for (uint g = lane; g < pc.group_count; g += THREADS) {
+        uint visible = group_counts[pc.group_count + g];
+        visible_groups[g] = visible;
+        if (visible != 0u) group_counts[pc.group_count + g] = 0u;
+    }
+#endif
 
     // One command per non-empty group, in group order; each group's count back to zero.
     uint written = 0u;
@@ -123,11 +189,8 @@ void write_commands() {
         uint count = 0u;
         DrawGroup group;
         if (g < pc.group_count) {
-            count = group_counts[g];
-            if (count != 0u) {
-                group = groups[g];
-                group_counts[g] = 0u;
-            }
+            count = take_group_count(g);
+            if (count != 0u) group = groups[g];
         }
         uvec2 total;
         uvec2 before = workgroup_exclusive_scan(uvec2(count, count != 0u ? 1u : 0u), total);
@@ -168,16 +231,22 @@ void write_commands() {
         s.triangles_hi = uint(sum >> 32);
         s.survivors = sh_totals[TOTAL_VISIBLE];
         for (uint i = 0u; i < 8u; ++i) s.pad[i] = 0u;
-        stats = s;
+#ifdef EARLY_FROM_LIST
+        s.tested = 0u;   // last frame's visible instances are drawn without a test
+#else
         // Nothing reads this word in this dispatch: the next run's test step does.
         scratch[SCRATCH_TEST_RUN] = run + 1u;
+#endif
+        stats = s;
     }
 }
 
 void main() {
     if (gl_WorkGroupID.x == 0u) {
         write_commands();
-    } else {
-        place_block(gl_WorkGroupID.x - 1u);
+        return;
     }
+#ifndef EARLY_FROM_LIST
+    place_block(gl_WorkGroupID.x - 1u, scratch[SCRATCH_PLACE_RUN]);
+#endif
 }

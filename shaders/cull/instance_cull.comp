@@ -13,6 +13,8 @@
 // frame's visible), PHASE_LATE (survivors that were not visible last frame; writes this frame's
 // visibility bits), PHASE_OCCLUDERS (chosen occluders, frustum only), PHASE_REST (survivors
 // that are not occluders). ATOMIC_APPEND is the thesis's atomic append, measured only.
+// VISIBLE_OUT (late phase): also counts each block's and each draw group's visible slots, from
+// which the compact step writes the list that the next frame's early phase draws.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_vote : require
@@ -66,6 +68,7 @@ float hiz_load(uint level, uvec2 texel) { return texelFetch(hiz_tex, ivec2(texel
 layout(push_constant) uniform Push {
     uint slot_count;
     uint superblocks;          // ceil(blocks / CULL_SUPERBLOCK)
+    uint group_count;          // VISIBLE_OUT: visible counts follow the survivor counts
     float occluder_distance;   // PHASE_OCCLUDERS/REST: farthest occluder center distance
     float occluder_size;       // smallest projected radius / view height
 } pc;
@@ -90,13 +93,14 @@ shared uint sh_counts[4];
 // each round, the invocations whose group is the first remaining one count themselves from one
 // ballot and the lowest of them adds the count. Exact however the implementation groups the
 // invocations that run a round together (each invocation is counted by exactly one ballot).
-void count_group_survivor(uint group) {
+// `counts` is the offset of the counts array in group_counts.
+void count_group_survivor(uint group, uint counts) {
     for (;;) {
         uint first = subgroupBroadcastFirst(group);
         if (first == group) {
             uvec4 same = subgroupBallot(true);
             if (gl_SubgroupInvocationID == subgroupBallotFindLSB(same)) {
-                atomicAdd(group_counts[group], subgroupBallotBitCount(same));
+                atomicAdd(group_counts[counts + group], subgroupBallotBitCount(same));
             }
             break;
         }
@@ -233,7 +237,10 @@ void main() {
     uint bit = 1u << (lane & 31u);
 #ifndef ATOMIC_APPEND
     OR_INTO_SHARED(sh_draw, word, d.draw ? bit : 0u)
-    if (d.draw) count_group_survivor(d.group);
+    if (d.draw) count_group_survivor(d.group, 0u);
+#endif
+#ifdef VISIBLE_OUT
+    if (d.visible_now) count_group_survivor(d.group, pc.group_count);
 #endif
 #ifdef WRITE_VIS
     OR_INTO_SHARED(sh_vis, word, d.visible_now ? bit : 0u)
@@ -276,6 +283,11 @@ void main() {
         uint count = 0u;
         for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) count += bitCount(sh_draw[w]);
         scratch[scratch_block(pc.superblocks, block)] = count;
+#ifdef VISIBLE_OUT
+        uint visible = 0u;
+        for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) visible += bitCount(sh_vis[w]);
+        scratch[scratch_visible_block(pc.superblocks, pc.slot_count, block)] = visible;
+#endif
         uint at = scratch_super(pc.superblocks, run, block / CULL_SUPERBLOCK);
         if (count != 0u) atomicAdd(scratch[at + SUPER_SURVIVORS], count);
         if (sh_counts[0] != 0u) atomicAdd(scratch[at + SUPER_TESTED], sh_counts[0]);

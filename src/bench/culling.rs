@@ -101,7 +101,13 @@ pub struct CullingReport {
 /// frame's and this frame's visibility bits and the draw bits, a count per block, the
 /// superblock records. Compact: the block counts, the draw bits, the superblock records, per
 /// survivor its instance id read and written, and per group its count, record and command.
-pub fn cull_pass_bytes(slots: u64, tested: u64, drawn: u64, groups: u64) -> u64 {
+/// An early phase drawing last frame's list (`from_list`) moves only the per-group part. Not
+/// counted: the late phase's list of visible ids for the next frame (visible slots are few in
+/// the occluded views measured).
+pub fn cull_pass_bytes(slots: u64, tested: u64, drawn: u64, groups: u64, from_list: bool) -> u64 {
+    if from_list {
+        return groups * (4 + 32 + 20);
+    }
     let blocks = slots.div_ceil(256);
     let superblocks = blocks.div_ceil(64);
     let bits = slots.div_ceil(32) * 4;
@@ -161,14 +167,20 @@ pub fn run(
             let last = last.unwrap_or_default();
             let kinds: Vec<(String, String)> =
                 renderer.plan().passes.iter().map(|p| (p.name.clone(), p.kind.clone())).collect();
+            let from_list = |pass: &str| {
+                renderer
+                    .plan()
+                    .passes
+                    .iter()
+                    .any(|p| p.name == pass && p.bindings.iter().any(|b| b.slot == "visible_groups_prev"))
+            };
             let passes: Vec<PassFigure> = median_per_pass(&timings)
                 .into_iter()
                 .map(|(pass, ms)| {
-                    let bytes = last
-                        .culling
-                        .iter()
-                        .find(|c| c.pass == pass)
-                        .map(|c| cull_pass_bytes(n as u64, c.tested as u64, c.drawn as u64, groups));
+                    let bytes =
+                        last.culling.iter().find(|c| c.pass == pass).map(|c| {
+                            cull_pass_bytes(n as u64, c.tested as u64, c.drawn as u64, groups, from_list(&pass))
+                        });
                     PassFigure { gbps: bytes.map(|b| gbps(b, ms)), pass, ms, bytes }
                 })
                 .collect();

@@ -16,6 +16,15 @@
 //! Both kernels combine values with subgroup operations (basic, vote, arithmetic and ballot in
 //! compute shaders, which Vulkan 1.3 devices commonly have), never assuming a subgroup size.
 //!
+//! Last frame's visible set as the early draw list: with `visible_ids` and `visible_groups`
+//! bound, the late phase also compacts its visible slots' instance ids per group (in slot order)
+//! and stores each group's count. The next frame's early phase, with `visible_groups_prev`
+//! bound, then tests nothing: one workgroup writes the commands for that list, and the early
+//! draw reads last frame's `visible_ids` as its instance ids. This is the two-phase scheme as
+//! stated (draw last frame's visible set); it saves the early test over every slot, whose cost
+//! is mostly the fixed latency of two dispatches. Instances that left the frustum since last
+//! frame are drawn and clipped: they cannot change the image.
+//!
 //! The thesis's atomic append (`compaction: "atomic"`) is kept as a measured variant:
 //! `cull_init.comp` then the test step appending with atomics; its order within a group varies
 //! from run to run.
@@ -75,11 +84,12 @@ impl CullSettings {
 struct Scratch {
     slots: u32,
     groups: u32,
-    /// Run numbers, two halves of superblock records, one count per block (`cull_common.glsl`).
+    /// Run numbers, two halves of superblock records, survivors and visible slots per block
+    /// (`cull_common.glsl`).
     scan: Buffer,
     /// One bit per slot: drawn by this pass.
     draw_bits: Buffer,
-    /// Survivors of each draw group (zero between runs).
+    /// Survivors of each draw group, then visible slots of each (zero between runs).
     group_counts: Buffer,
     /// Where the counters go when the graph binds no `stats` buffer.
     own_stats: Buffer,
@@ -93,6 +103,8 @@ pub struct InstanceCullPass {
     test: Pipeline,
     compact: Option<Pipeline>,
     init: Option<Pipeline>,
+    /// Early phase drawing last frame's visible list: only the commands are written.
+    from_list: bool,
     sampler: Sampler,
     scratch: Option<Scratch>,
 }
@@ -113,6 +125,31 @@ impl InstanceCullPass {
             )));
         }
         let bound = |slot: &str| pass.bindings.iter().any(|b| b.slot == slot);
+        let invalid = |m: &str| crate::Error::Invalid(format!("pass '{}': {m}", pass.name));
+        let from_list = bound("visible_groups_prev");
+        let visible_out = bound("visible_ids") || bound("visible_groups");
+        if from_list && (settings.phase != "early" || settings.atomic) {
+            return Err(invalid("`visible_groups_prev` is read by the early phase only, with ordered compaction"));
+        }
+        if from_list && bound("draw_instance_ids") {
+            return Err(invalid(
+                "an early phase that reads `visible_groups_prev` writes no instance ids: bind the draw pass's `draw_instance_ids` to last frame's `visible_ids` (e.g. \"visible_ids.prev\")",
+            ));
+        }
+        if !from_list && !bound("draw_instance_ids") {
+            return Err(invalid("nothing bound to `draw_instance_ids`"));
+        }
+        if visible_out
+            && (settings.phase != "late"
+                || !bound("visible_ids")
+                || !bound("visible_groups")
+                || !bound("visibility")
+                || settings.atomic)
+        {
+            return Err(invalid(
+                "`visible_ids` and `visible_groups` are written together, by the late phase, with `visibility` bound and ordered compaction",
+            ));
+        }
         let phase = format!("PHASE_{}", settings.phase.to_uppercase());
         let mut defines: Vec<(&str, &str)> = vec![(phase.as_str(), "1")];
         let flags = [
@@ -124,19 +161,22 @@ impl InstanceCullPass {
             (bound("visibility_prev"), "HAS_VIS_PREV"),
             (bound("visibility"), "WRITE_VIS"),
             (settings.atomic, "ATOMIC_APPEND"),
+            (visible_out, "VISIBLE_OUT"),
         ];
         defines.extend(flags.iter().filter(|(on, _)| *on).map(|(_, name)| (*name, "1")));
         let name = |step: &str| format!("{} ({step})", pass.name);
         let test = Pipeline::compute(ctx, &name("test"), &shaders.compile("cull/instance_cull.comp", &defines)?)?;
-        let compute = |step: &str, file: &str| -> crate::Result<Pipeline> {
-            Ok(Pipeline::compute(ctx, &name(step), &shaders.compile(file, &[])?)?)
+        let compute = |step: &str, file: &str, defines: &[(&str, &str)]| -> crate::Result<Pipeline> {
+            Ok(Pipeline::compute(ctx, &name(step), &shaders.compile(file, defines)?)?)
         };
         let (compact, init) = if settings.atomic {
-            (None, Some(compute("init", "cull/cull_init.comp")?))
+            (None, Some(compute("init", "cull/cull_init.comp", &[])?))
         } else {
-            (Some(compute("compact", "cull/cull_compact.comp")?), None)
+            let modes = [(visible_out, "VISIBLE_OUT"), (from_list, "EARLY_FROM_LIST")];
+            let defines: Vec<(&str, &str)> = modes.iter().filter(|(on, _)| *on).map(|(_, name)| (*name, "1")).collect();
+            (Some(compute("compact", "cull/cull_compact.comp", &defines)?), None)
         };
-        Ok(Self { settings, test, compact, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
+        Ok(Self { settings, test, compact, init, from_list, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
     }
 
     /// The settings in use.
@@ -165,10 +205,10 @@ impl InstanceCullPass {
                 groups,
                 scan: storage(
                     "cull scan state",
-                    (SCAN_HEADER_WORDS + 2 * superblocks * SUPERBLOCK_WORDS + blocks) * 4,
+                    (SCAN_HEADER_WORDS + 2 * superblocks * SUPERBLOCK_WORDS + 2 * blocks) * 4,
                 )?,
                 draw_bits: storage("cull draw bits", blocks * (CULL_BLOCK as u64 / 32) * 4)?,
-                group_counts: storage("cull group counts", groups.max(1) as u64 * 4)?,
+                group_counts: storage("cull group counts", 2 * groups.max(1) as u64 * 4)?,
                 own_stats: storage("cull stats (unbound)", 64)?,
                 fresh: true,
             });
@@ -213,16 +253,24 @@ impl PassNode for InstanceCullPass {
                 .buffer(slot)
                 .ok_or_else(|| crate::Error::Invalid(format!("instance_cull: nothing bound to '{slot}'")))
         };
-        let (commands, draw_count, draw_ids) =
-            (need("draw_commands")?, need("draw_count")?, need("draw_instance_ids")?);
-        let min_commands = groups as u64 * 20;
-        if commands.size() < min_commands || draw_ids.size() < slots as u64 * 4 {
-            return Err(crate::Error::Invalid(format!(
-                "instance_cull: draw_commands needs {min_commands} bytes (meshes * 20) and draw_instance_ids {} (instances * 4); got {} and {}",
-                slots as u64 * 4,
-                commands.size(),
-                draw_ids.size()
-            )));
+        let (commands, draw_count) = (need("draw_commands")?, need("draw_count")?);
+        // The early phase from a list writes no ids; its compact step never touches binding 4.
+        let draw_ids = rec.slots.buffer("draw_instance_ids").unwrap_or(&scene.draw_instance_ids);
+        let (ids_bytes, groups_bytes) = (slots as u64 * 4, groups as u64 * 4);
+        let sizes = [
+            ("draw_commands", Some(commands), groups as u64 * 20, "meshes * 20"),
+            ("draw_instance_ids", rec.slots.buffer("draw_instance_ids"), ids_bytes, "instances * 4"),
+            ("visible_ids", rec.slots.buffer("visible_ids"), ids_bytes, "instances * 4"),
+            ("visible_groups", rec.slots.buffer("visible_groups"), groups_bytes, "meshes * 4"),
+            ("visible_groups_prev", rec.slots.buffer("visible_groups_prev"), groups_bytes, "meshes * 4"),
+        ];
+        for (slot, buffer, need, rule) in sizes {
+            if let Some(buffer) = buffer.filter(|b| b.size() < need) {
+                return Err(crate::Error::Invalid(format!(
+                    "instance_cull: {slot} needs {need} bytes ({rule}); got {}",
+                    buffer.size()
+                )));
+            }
         }
         self.ensure_scratch(ctx, slots, groups)?;
         let device = ctx.device();
@@ -238,8 +286,11 @@ impl PassNode for InstanceCullPass {
             cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::COMPUTE_WRITE)], &[]);
             scratch.fresh = false;
         }
-        // Last frame's run of this pass used the same scratch.
-        step_barrier(ctx, cmd);
+        // Last frame's run of this pass used the same scratch (an early phase from a list uses
+        // none: its only writes are graph resources, which the graph's barriers order).
+        if !self.from_list {
+            step_barrier(ctx, cmd);
+        }
         let scratch = self.scratch.as_ref().expect("ensured above");
         let stats = rec.slots.buffer("stats").unwrap_or(&scratch.own_stats);
         let blocks = blocks_of(slots);
@@ -269,12 +320,14 @@ impl PassNode for InstanceCullPass {
         struct TestPush {
             slot_count: u32,
             superblocks: u32,
+            group_count: u32,
             occluder_distance: f32,
             occluder_size: f32,
         }
         let push = TestPush {
             slot_count: slots,
             superblocks,
+            group_count: groups,
             occluder_distance: self.settings.occluder_distance,
             occluder_size: self.settings.occluder_size,
         };
@@ -308,35 +361,46 @@ impl PassNode for InstanceCullPass {
                 Bind::Buffer(6, scratch.draw_bits.handle()),
             ]);
         }
-        rec.step("test");
-        self.test.bind(cmd);
-        self.test.push_bindings(cmd, &test_binds);
-        self.test.push_constants(cmd, &push);
-        // SAFETY: as above.
-        unsafe { device.cmd_dispatch(cmd, blocks, 1, 1) };
+        if !self.from_list {
+            rec.step("test");
+            self.test.bind(cmd);
+            self.test.push_bindings(cmd, &test_binds);
+            self.test.push_constants(cmd, &push);
+            // SAFETY: as above.
+            unsafe { device.cmd_dispatch(cmd, blocks, 1, 1) };
+            if self.compact.is_some() {
+                step_barrier(ctx, cmd);
+            }
+        }
 
         if let Some(compact) = &self.compact {
-            step_barrier(ctx, cmd);
             rec.step("compact");
             compact.bind(cmd);
-            compact.push_bindings(
-                cmd,
-                &[
-                    Bind::Buffer(0, scratch.draw_bits.handle()),
-                    Bind::Buffer(1, scratch.scan.handle()),
-                    Bind::Buffer(2, scene.draw_groups.handle()),
-                    Bind::Buffer(3, scene.draw_instance_ids.handle()),
-                    Bind::Buffer(4, draw_ids.handle()),
-                    Bind::Buffer(5, scratch.group_counts.handle()),
-                    Bind::Buffer(6, commands.handle()),
-                    Bind::Buffer(7, draw_count.handle()),
-                    Bind::Buffer(8, stats.handle()),
-                ],
-            );
+            let mut compact_binds = vec![
+                Bind::Buffer(0, scratch.draw_bits.handle()),
+                Bind::Buffer(1, scratch.scan.handle()),
+                Bind::Buffer(2, scene.draw_groups.handle()),
+                Bind::Buffer(3, scene.draw_instance_ids.handle()),
+                Bind::Buffer(4, draw_ids.handle()),
+                Bind::Buffer(5, scratch.group_counts.handle()),
+                Bind::Buffer(6, commands.handle()),
+                Bind::Buffer(7, draw_count.handle()),
+                Bind::Buffer(8, stats.handle()),
+            ];
+            let optional = [
+                (9, rec.slots.buffer("visibility").filter(|_| rec.slots.buffer("visible_ids").is_some())),
+                (10, rec.slots.buffer("visible_ids")),
+                (11, rec.slots.buffer("visible_groups")),
+                (12, rec.slots.buffer("visible_groups_prev")),
+            ];
+            compact_binds.extend(optional.iter().filter_map(|(b, buf)| buf.map(|buf| Bind::Buffer(*b, buf.handle()))));
+            compact.push_bindings(cmd, &compact_binds);
             compact.push_constants(cmd, &[slots, groups, superblocks]);
-            // Workgroup 0 writes the commands, workgroup 1 + b places block b.
+            // Workgroup 0 writes the commands, workgroup 1 + b places block b (from a list: the
+            // commands only).
+            let workgroups = if self.from_list { 1 } else { blocks + 1 };
             // SAFETY: as above.
-            unsafe { device.cmd_dispatch(cmd, blocks + 1, 1, 1) };
+            unsafe { device.cmd_dispatch(cmd, workgroups, 1, 1) };
         }
         Ok(())
     }
