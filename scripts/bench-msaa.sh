@@ -20,7 +20,7 @@ for scene in ${SCENES:-city monastery}; do
         --reference 4 --out "$out/$scene-$method-1x-$lights.png" --stats "$out/$scene-$method-1x-$lights.json" >/dev/null
     done
     for msaa in ${SAMPLES:-2 4 8}; do
-      for method in msaa_per_sample msaa_zprepass msaa_compressed visibility_buffer; do
+      for method in msaa_per_sample msaa_zprepass msaa_compressed msaa_compressed_claim visibility_buffer; do
         "$bin" render --scene "$src" --lights "$lights" --size "$size" --frames "$frames" --graph "builtin:$method" \
           --param "msaa=$msaa" --reference 4 --out "$out/$scene-$method-${msaa}x-$lights.png" \
           --stats "$out/$scene-$method-${msaa}x-$lights.json" >/dev/null

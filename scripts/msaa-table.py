@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Markdown tables from scripts/bench-msaa.sh's JSON: median GPU ms per pass over the frames
 after the first two, memory of the G-buffer-related resources, and ratios of the compressed
-method to the per-sample and Z-prepass baselines. Usage: msaa-table.py DIR"""
+methods (stencil and sample-claim) to the per-sample and Z-prepass baselines.
+Usage: msaa-table.py DIR"""
 import json, statistics, sys, pathlib
 
-GBUFFER = {"albedo", "normal", "depth", "gbuffer", "head_samples", "ids"}
+GBUFFER = {"albedo", "normal", "depth", "gbuffer", "head_samples", "sample_claim", "ids"}
 
 def load(path):
     d = json.loads(path.read_text())
@@ -38,15 +39,18 @@ for scene, lights, msaa, method, ms, total, mem, g, ref in sorted(rows):
           f"{mib(sum(mem.values())):.1f} | {pool} | {g.get('overflow_samples', '-') if g else '-'} | "
           f"{ref.get('mean_flip', float('nan')):.4f} | {ref.get('psnr_db') or float('nan'):.2f} |")
 print()
-print("| scene | lights | MSAA | memory compressed / per-sample | lighting compressed / per-sample | frame compressed / per-sample | frame compressed / Z-prepass | FLIP compressed - per-sample |")
-print("|---|---|---|---|---|---|---|---|")
+# One row per compressed method: with stencil (msaa_compressed) and with sample claims
+# (msaa_compressed_claim, a depth without stencil).
+COMPRESSED = {"msaa_compressed": "stencil", "msaa_compressed_claim": "claim"}
+print("| scene | lights | MSAA | compressed | memory / per-sample | lighting / per-sample | frame / per-sample | frame / Z-prepass | FLIP - per-sample |")
+print("|---|---|---|---|---|---|---|---|---|")
 index = {(s, l, m, meth): (ms, t, mem, ref) for s, l, m, meth, ms, t, mem, _, ref in rows}
 for (s, l, m, meth), (ms, t, mem, ref) in sorted(index.items()):
-    if meth != "msaa_compressed":
+    if meth not in COMPRESSED:
         continue
     ps, zp = index.get((s, l, m, "msaa_per_sample")), index.get((s, l, m, "msaa_zprepass"))
     if not ps or not zp:
         continue
-    print(f"| {s} | {l} | {m}x | {sum(mem.values()) / max(1, sum(ps[2].values())):.2f} | "
+    print(f"| {s} | {l} | {m}x | {COMPRESSED[meth]} | {sum(mem.values()) / max(1, sum(ps[2].values())):.2f} | "
           f"{ms.get('lighting', 0) / max(1e-9, ps[0].get('lighting', 0)):.2f} | {t / ps[1]:.2f} | {t / zp[1]:.2f} | "
           f"{ref.get('mean_flip', float('nan')) - ps[3].get('mean_flip', float('nan')):+.4f} |")

@@ -1,7 +1,8 @@
 //! MSAA deferred shading on lavapipe at 4x (validation and synchronization validation on): the
 //! compressed G-buffer's lists against the MSAA depth, including intersecting and coplanar
-//! duplicate triangles and the background; pool overflow; the baselines (per-sample MSAA, MSAA
-//! with a Z-prepass, the visibility buffer); tile-culled lights; selective AA; memory.
+//! duplicate triangles and the background, with samples decided by the stencil or by atomic
+//! claims (no stencil); pool overflow; the baselines (per-sample MSAA, MSAA with a Z-prepass,
+//! the visibility buffer); tile-culled lights; selective AA; memory.
 
 mod common;
 
@@ -13,6 +14,52 @@ use cullgraph::scene::{Camera, Instance, Material, Scene, SceneSource, Transform
 use cullgraph::stats::FrameStats;
 use glam::{DVec3, Mat3, Quat, Vec3};
 use std::path::Path;
+
+/// How `gbuffer_compressed` decides each sample's fragment: one stencil bit per sample
+/// (`msaa_compressed`, the default), or atomic claims on a byte per pixel with a depth without
+/// stencil (`msaa_compressed_claim`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Owner {
+    Stencil,
+    Claim,
+}
+
+const OWNERS: [Owner; 2] = [Owner::Stencil, Owner::Claim];
+
+/// A graph written like `graph/msaa_compressed.ron` with the given owner: for `Claim`, a
+/// D32_SFLOAT depth and a `sample_claim` buffer written by the compressed pass.
+fn with_owner(text: &str, owner: Owner) -> String {
+    if owner == Owner::Stencil {
+        return text.to_string();
+    }
+    let claim = r#""sample_claim": Buffer(size: "ceil_div(width * height, 4) * 4"),"#;
+    let edits = [
+        (r#""depth": Image(format: D32_SFLOAT_S8_UINT,"#, r#""depth": Image(format: D32_SFLOAT,"#.to_string()),
+        (
+            r#""head_samples": Buffer(size: "ceil_div(width * height, 4) * 4"),"#,
+            format!("{}\n        {claim}", r#""head_samples": Buffer(size: "ceil_div(width * height, 4) * 4"),"#),
+        ),
+        (
+            r#"writes: {"depth": "depth", "gbuffer": "gbuffer", "head_samples": "head_samples"}"#,
+            r#"writes: {"depth": "depth", "gbuffer": "gbuffer", "head_samples": "head_samples", "sample_claim": "sample_claim"}"#
+                .to_string(),
+        ),
+    ];
+    let mut text = text.to_string();
+    for (from, to) in edits {
+        assert_eq!(text.matches(from).count(), 1, "the graph has `{from}` once");
+        text = text.replace(from, &to);
+    }
+    text
+}
+
+/// `spec(file, params)` with `owner` (the check graph's claim variant keeps its folder, where
+/// its shader is).
+fn owner_spec(file: &str, owner: Owner, params: &[(&str, &str)]) -> GraphSpec {
+    let mut spec = spec(file, params);
+    spec.text = with_owner(&spec.text, owner);
+    spec
+}
 
 fn spec(file: &str, params: &[(&str, &str)]) -> GraphSpec {
     let spec = if let Some(name) = file.strip_prefix("builtin:") {
@@ -43,6 +90,17 @@ fn render(
     }
     gpu.assert_clean();
     (image.unwrap(), stats)
+}
+
+/// `intersecting_scene` with the materials of the red cube and its green duplicate swapped, so
+/// that the stencil (first in draw order wins) shows the other one.
+fn intersecting_scene_green_first() -> Scene {
+    let mut scene = intersecting_scene();
+    let last = scene.instances.len() - 1;
+    let (red, green) = (scene.instances[1].material, scene.instances[last].material);
+    scene.instances[1].material = green;
+    scene.instances[last].material = red;
+    scene
 }
 
 /// The boxes scene plus a box that intersects the tall blue one at an angle and an exact
@@ -90,10 +148,11 @@ fn compressed_lists_cover_each_sample_once_with_intersections_duplicates_and_bac
         (intersecting_scene(), boxes_camera(), "boxes with intersecting and duplicate cubes"),
         (city(1500).0, city(1500).1, "city"),
     ];
-    for (scene, camera, what) in cases {
+    for ((scene, camera, what), owner) in cases.iter().flat_map(|c| OWNERS.map(|o| (c, o))) {
+        let what = format!("{what}, {owner:?}");
         // An unbounded pool: every distinct surface of every pixel gets its block.
-        let spec = spec("tests/graphs/gpu/compressed_check.ron", &[("pool_fraction", "3")]);
-        let (check, stats) = render(&gpu, &scene, &camera, (96, 64), &spec, 2);
+        let spec = owner_spec("tests/graphs/gpu/compressed_check.ron", owner, &[("pool_fraction", "3")]);
+        let (check, stats) = render(&gpu, scene, camera, (96, 64), &spec, 2);
         let pixels = check_pixels(&check);
         let bad: Vec<_> = pixels.iter().enumerate().filter(|(_, p)| p[0] != 0).take(5).collect();
         assert!(bad.is_empty(), "{what}: pixels with broken lists (index, [errors, blocks, covered, listed]): {bad:?}");
@@ -114,15 +173,17 @@ fn compressed_lists_cover_each_sample_once_with_intersections_duplicates_and_bac
 fn a_full_pool_degrades_gracefully_and_counts_what_it_dropped() {
     let gpu = GpuTest::new();
     let (scene, camera) = city(1500);
-    let tiny = spec("tests/graphs/gpu/compressed_check.ron", &[("pool_fraction", "0.01")]);
-    let (check, stats) = render(&gpu, &scene, &camera, (96, 64), &tiny, 2);
-    let pixels = check_pixels(&check);
-    // Lists stay well formed: dropped fragments are simply not listed (errors 16 is allowed:
-    // a pixel without a head may lose listed samples to the overflow).
-    assert!(pixels.iter().all(|p| p[0] & !16 == 0), "overflow corrupted a list");
-    let g = &stats.last().unwrap().gbuffer[0];
-    assert_eq!(g.pool_used, g.pool_blocks, "the pool fills up: {g:?}");
-    assert!(g.overflow_fragments > 0 && g.overflow_samples >= g.overflow_fragments, "{g:?}");
+    for owner in OWNERS {
+        let tiny = owner_spec("tests/graphs/gpu/compressed_check.ron", owner, &[("pool_fraction", "0.01")]);
+        let (check, stats) = render(&gpu, &scene, &camera, (96, 64), &tiny, 2);
+        let pixels = check_pixels(&check);
+        // Lists stay well formed: dropped fragments are simply not listed (errors 16 is allowed:
+        // a pixel without a head may lose listed samples to the overflow).
+        assert!(pixels.iter().all(|p| p[0] & !16 == 0), "{owner:?}: overflow corrupted a list");
+        let g = &stats.last().unwrap().gbuffer[0];
+        assert_eq!(g.pool_used, g.pool_blocks, "{owner:?}: the pool fills up: {g:?}");
+        assert!(g.overflow_fragments > 0 && g.overflow_samples >= g.overflow_fragments, "{owner:?}: {g:?}");
+    }
     // The image degrades towards no AA at the pixels that lost samples; it does not break.
     let full =
         render(&gpu, &scene, &camera, (96, 64), &spec("builtin:msaa_compressed", &[("pool_fraction", "3")]), 2).0;
@@ -177,6 +238,44 @@ fn compressed_matches_per_sample_msaa_and_the_zprepass_baseline_is_identical() {
             vis_mean * 2.0 < aa_mean,
             "{what}: the visibility buffer ({vis_mean}) is closer to MSAA than no AA ({aa_mean})"
         );
+    }
+}
+
+/// Claiming samples with atomics instead of the stencil changes nothing where no two fragments
+/// tie exactly (depth EQUAL then passes each sample for one fragment either way). Where the red
+/// cube and its green duplicate tie, the claim may give a sample to either, not to the first in
+/// draw order: only pixels where the stencil's choice shows (the images with red or green drawn
+/// first differ) may differ.
+#[test]
+fn claimed_samples_give_the_stencils_image_except_at_coplanar_ties() {
+    let gpu = GpuTest::new();
+    let size = (96, 64);
+    let (city_scene, city_camera) = city(1500);
+    let run = |scene: &Scene, camera: &Camera, graph: &str| {
+        render(&gpu, scene, camera, size, &spec(graph, &[("pool_fraction", "3")]), 2).0
+    };
+    let stencil = run(&city_scene, &city_camera, "builtin:msaa_compressed");
+    let claim = run(&city_scene, &city_camera, "builtin:msaa_compressed_claim");
+    assert_eq!(mean_and_max_difference(&stencil, &claim), (0.0, 0), "city: no coplanar ties, same image");
+
+    let scene = intersecting_scene();
+    let red_first = run(&scene, &boxes_camera(), "builtin:msaa_compressed");
+    let green_first = run(&intersecting_scene_green_first(), &boxes_camera(), "builtin:msaa_compressed");
+    let claim = run(&scene, &boxes_camera(), "builtin:msaa_compressed_claim");
+    let ties = red_first.pixels().zip(green_first.pixels()).filter(|(r, g)| r != g).count();
+    assert!(ties > 50, "the duplicate cube is in view ({ties} pixels)");
+    let mut differing = 0;
+    for (i, ((c, r), g)) in claim.pixels().zip(red_first.pixels()).zip(green_first.pixels()).enumerate() {
+        if c != r {
+            assert_ne!(r, g, "pixel {i} differs from the stencil's image ({c:?} vs {r:?}) without a coplanar tie");
+            differing += 1;
+        }
+    }
+    // Lavapipe runs a tile's fragments in draw order, so its claims match the stencil's; other
+    // devices may pick the other cube at tie pixels.
+    println!("claim vs stencil: {differing} of {ties} tie pixels differ");
+    if gpu.caps().name.contains("llvmpipe") {
+        assert_eq!(differing, 0, "lavapipe claims in draw order");
     }
 }
 
@@ -306,5 +405,30 @@ fn compressed_gbuffer_takes_less_memory_than_the_per_sample_gbuffer() {
         let visibility = bytes("builtin:visibility_buffer", &["ids", "depth"]);
         assert!(compressed < per_sample * 3 / 4, "{what}: compressed {compressed} bytes vs per-sample {per_sample}");
         assert!(visibility < per_sample, "{what}: visibility buffer {visibility} bytes vs per-sample {per_sample}");
+        // Without stencil the depth takes half (lavapipe, like NVIDIA, stores D32_SFLOAT_S8_UINT
+        // in 8 bytes per sample); the claim bytes cost a byte per pixel.
+        let all = ["gbuffer", "depth", "head_samples", "sample_claim"];
+        let (stencil, claim) = (bytes("builtin:msaa_compressed", &all), bytes("builtin:msaa_compressed_claim", &all));
+        let (stencil_depth, claim_depth) =
+            (bytes("builtin:msaa_compressed", &["depth"]), bytes("builtin:msaa_compressed_claim", &["depth"]));
+        assert!(
+            claim_depth * 2 <= stencil_depth,
+            "{what}: depth {claim_depth} bytes without stencil, {stencil_depth} with"
+        );
+        assert_eq!(bytes("builtin:msaa_compressed_claim", &["sample_claim"]), 96 * 64, "{what}: a byte per pixel");
+        assert!(claim < stencil, "{what}: claim graph {claim} bytes vs stencil graph {stencil}");
     }
+}
+
+/// `graph/msaa_compressed_claim.ron` is `msaa_compressed.ron` with the owner changed and
+/// nothing else (comments and layout aside): the two stay comparable.
+#[test]
+fn the_claim_graph_is_the_stencil_graph_with_claims() {
+    let read = |f: &str| std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(f)).unwrap();
+    let tokens = |text: &str| -> String {
+        text.lines().map(|l| l.split("//").next().unwrap_or("")).flat_map(str::split_whitespace).collect()
+    };
+    let derived = with_owner(&read("graph/msaa_compressed.ron"), Owner::Claim)
+        .replace(r#"name: "msaa_compressed","#, r#"name: "msaa_compressed_claim","#);
+    assert_eq!(tokens(&derived), tokens(&read("graph/msaa_compressed_claim.ron")));
 }

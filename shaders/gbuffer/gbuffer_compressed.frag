@@ -1,7 +1,8 @@
 #version 460
 // Compressed G-buffer geometry pass (thesis 000 section 4.3): depth EQUAL against the MSAA
 // depth, one stencil bit per sample so each sample passes for exactly one fragment, and the
-// coverage after those tests (post-depth coverage). The fragment that owns sample 0 writes the
+// coverage after those tests (post-depth coverage). Without stencil (SAMPLE_CLAIM) fragments
+// claim their samples with an atomic OR instead. The fragment that owns sample 0 writes the
 // pixel's head block; every other fragment takes a pool block with an atomic and pushes it on
 // the pixel's list. A full pool drops the fragment: its samples fall to the head's weight.
 #extension GL_ARB_post_depth_coverage : require
@@ -32,6 +33,23 @@ layout(set = 0, binding = 6) buffer HeadSamples { uint head_samples[]; };
 void add_head_samples(uint pixel, uint mask) { atomicAdd(head_samples[pixel >> 2], uint(bitCount(mask)) << ((pixel & 3u) * 8u)); }
 #else
 void add_head_samples(uint pixel, uint mask) {}
+#endif
+
+#ifdef SAMPLE_CLAIM
+// Stencil-free ownership (graph/msaa_compressed_claim.ron): a byte per pixel, four to a word,
+// of the samples already claimed (at most 8 samples). A fragment keeps the samples of its
+// post-depth coverage that no other fragment claimed before it. Depth EQUAL still settles
+// intersecting triangles; exactly coplanar fragments go to whichever claims first, which is
+// not draw order and may change from run to run, but every covered sample still belongs to
+// exactly one fragment.
+layout(set = 0, binding = 7) buffer SampleClaim { uint sample_claim[]; };
+uint claim_samples(uint pixel, uint mask) {
+    uint shift = (pixel & 3u) * 8u;
+    uint old = atomicOr(sample_claim[pixel >> 2], mask << shift);
+    return mask & ~(old >> shift) & 0xFFu;
+}
+#else
+uint claim_samples(uint pixel, uint mask) { return mask; }   // the stencil already decided
 #endif
 
 layout(push_constant) uniform Push {
@@ -77,12 +95,14 @@ bool may_allocate() {
 void main() {
     uint mask = uint(gl_SampleMaskIn[0]);
     if (mask == 0u) return;
+    uint pixel = uint(gl_FragCoord.y) * pc.width + uint(gl_FragCoord.x);
+    mask = claim_samples(pixel, mask);
+    if (mask == 0u) return;
     GpuMaterial m = materials[in_material];
     vec3 n = normalize(in_normal);
     // Seen from behind (open meshes): light the side that faces the eye. A mirrored instance
     // flips the winding, so its outside shows as a back face.
     if (gl_FrontFacing == (in_mirrored != 0u)) n = -n;
-    uint pixel = uint(gl_FragCoord.y) * pc.width + uint(gl_FragCoord.x);
     if ((mask & 1u) != 0u) {
         write_block(pixel, m, n);   // the head; its link belongs to the list
         add_head_samples(pixel, mask);

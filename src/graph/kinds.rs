@@ -203,16 +203,17 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
         },
         PassKindInfo {
             name: "gbuffer_compressed",
-            doc: "the compressed G-buffer geometry pass: redraws the lists with depth EQUAL, stencil first-fragment-wins and post-depth coverage, writing one 14-byte block per pixel plus pooled blocks for the other distinct surfaces of edge pixels, in per-pixel linked lists",
+            doc: "the compressed G-buffer geometry pass: redraws the lists with depth EQUAL, stencil first-fragment-wins (or, without stencil, atomic sample claims) and post-depth coverage, writing one 14-byte block per pixel plus pooled blocks for the other distinct surfaces of edge pixels, in per-pixel linked lists",
             reads: {
                 let mut reads = redraw_list_slots();
                 reads.push(slot("aa_mask", Usage::Sampled(Stages::Fragment), false, FormatRule::Exact(AA_MASK_FORMAT), "selective AA: only pixels whose mask is not 0 keep more than one block (an aa_edges pass makes it)"));
                 reads
             },
             writes: vec![
-                ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished MSAA depth, with stencil (its stencil is written)")),
+                ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished MSAA depth: with stencil (its stencil is written), or without stencil and a sample_claim buffer")),
                 slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header, width x height head blocks, then the pool (size: compressed_gbuffer_bytes(pool_blocks))"),
                 slot("head_samples", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "samples each pixel's head stands for, one byte per pixel (size: ceil_div(width * height, 4) * 4), so the lighting need not read every depth sample"),
+                slot("sample_claim", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "with a depth format without stencil: the samples already claimed, one byte per pixel (size: ceil_div(width * height, 4) * 4; at most 8 samples)"),
             ],
             settings: vec![
                 SettingDecl { name: "aa_region", default: SettingDefault::Choice(&["all", "ellipse", "rectangle"]), doc: "selective AA: only pixels inside this screen region (centered, aa_region_size of the screen) keep more than one block" },

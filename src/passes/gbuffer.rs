@@ -87,7 +87,8 @@ pub fn bound_samples(plan: &CompiledGraph, pass: &PlannedPass, slot: &str) -> u3
 }
 
 /// Creates a graphics pipeline over `gbuffer.vert` (whose invariant position every geometry
-/// pass shares, so depth EQUAL against another pass's depth holds exactly).
+/// pass shares, so depth EQUAL against another pass's depth holds exactly). `equal`: depth
+/// EQUAL without writes and, where the format has stencil, stencil first-fragment-wins.
 pub fn geometry_pipeline(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
@@ -114,7 +115,13 @@ pub fn geometry_pipeline(
             samples: depth.1,
             // Two-sided: open meshes and mirrored instances must not lose faces.
             cull_mode: vk::CullModeFlags::NONE,
-            stencil: if equal { StencilRule::FirstFragmentWins } else { StencilRule::Off },
+            // EQUAL redraws without stencil decide each sample otherwise (gbuffer_compressed's
+            // sample_claim); the passes refuse that combination where they have no other way.
+            stencil: if equal && crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL) {
+                StencilRule::FirstFragmentWins
+            } else {
+                StencilRule::Off
+            },
         },
     )?)
 }

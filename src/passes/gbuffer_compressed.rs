@@ -3,6 +3,11 @@
 //! post-depth coverage, and each fragment writes one 14-byte block: the pixel's head when it
 //! owns sample 0, otherwise a pool block pushed on the pixel's list.
 //!
+//! With a depth format without stencil and a `sample_claim` buffer ([`SampleOwner::Claim`])
+//! the fragments claim their samples with an atomic OR on a byte per pixel instead of the
+//! stencil test: the depth takes 4 instead of 8 bytes per sample on NVIDIA, and coplanar ties
+//! go to whichever fragment claims first instead of the first in draw order.
+//!
 //! The `gbuffer` buffer: a 16-byte header (pool blocks asked for, fragments and samples dropped
 //! because the pool was full), then `width * height` head blocks, then the pool, all as 28-byte
 //! pairs of blocks (`shaders/gbuffer/compressed_gbuffer.glsl`). Its size sets the pool; block
@@ -46,9 +51,51 @@ pub fn pool_blocks(bytes: u64, pixels: u64) -> Result<u64, String> {
     Ok(blocks.min(MAX_BLOCKS) - pixels)
 }
 
-/// Bytes of the optional `head_samples` buffer: one byte per pixel, in whole words.
+/// Bytes of the optional `head_samples` and `sample_claim` buffers: one byte per pixel, in
+/// whole words.
 pub fn head_samples_bytes(pixels: u64) -> u64 {
     pixels.div_ceil(4) * 4
+}
+
+/// Most samples per pixel the `sample_claim` byte can hold.
+pub const MAX_CLAIM_SAMPLES: u32 = 8;
+
+/// How `gbuffer_compressed` makes each covered sample pass for exactly one fragment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleOwner {
+    /// A stencil bit per sample, tested `== 0` and incremented: the first fragment in draw
+    /// order wins (deterministic). Needs a depth format with stencil.
+    Stencil,
+    /// An atomic OR on the `sample_claim` buffer (a byte per pixel): the first fragment to
+    /// claim wins, so coplanar ties are not decided in draw order. Needs a depth format
+    /// without stencil and at most [`MAX_CLAIM_SAMPLES`] samples.
+    Claim,
+}
+
+impl SampleOwner {
+    /// The rule for a depth image of `format` with `samples` samples, with or without a
+    /// `sample_claim` buffer bound; an error (without the pass's name) for the combinations
+    /// that would leave samples undecided or decide them twice.
+    pub fn for_depth(format: vk::Format, samples: u32, claim_bound: bool) -> Result<Self, String> {
+        let stencil = crate::gpu::image::aspect_of(format).contains(vk::ImageAspectFlags::STENCIL);
+        let name = crate::graph::formats::name(format);
+        match (stencil, claim_bound) {
+            (true, false) => Ok(Self::Stencil),
+            (true, true) => Err(format!(
+                "\"sample_claim\" is bound but the depth format {name} has stencil, which already decides each sample's \
+                 fragment: remove sample_claim, or use a depth format without stencil (D32_SFLOAT)"
+            )),
+            (false, false) => Err(format!(
+                "the depth format {name} has no stencil to decide each sample's fragment: bind a \"sample_claim\" \
+                 buffer in writes (size: ceil_div(width * height, 4) * 4) or use a depth format with stencil \
+                 (D32_SFLOAT_S8_UINT)"
+            )),
+            (false, true) if samples > MAX_CLAIM_SAMPLES => Err(format!(
+                "\"sample_claim\" keeps one byte per pixel, so at most {MAX_CLAIM_SAMPLES} samples; the depth has {samples}"
+            )),
+            (false, true) => Ok(Self::Claim),
+        }
+    }
 }
 
 /// The compressed G-buffer bound to a pass's `gbuffer` slot, with the pool its size gives an
@@ -138,6 +185,8 @@ impl SelectiveAa {
 pub struct GbufferCompressedPass {
     draw: Pipeline,
     clear: Pipeline,
+    /// Samples are claimed in `sample_claim` (no stencil).
+    claim: bool,
     aa: SelectiveAa,
     sampler: crate::gpu::Sampler,
 }
@@ -158,15 +207,17 @@ impl GbufferCompressedPass {
             )));
         }
         let depth = bound_image(plan, pass, "depth").ok_or_else(|| invalid("no depth image bound".into()))?;
-        if !crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL) {
-            return Err(invalid(format!(
-                "gbuffer_compressed needs a depth format with stencil (one stencil bit per sample), not {:?}",
-                depth.0
-            )));
-        }
         let bound = |slot: &str| pass.bindings.iter().any(|b| b.slot == slot);
-        let head_samples: &[(&str, &str)] = if bound("head_samples") { &[("HEAD_SAMPLES", "1")] } else { &[] };
-        let mut defines = head_samples.to_vec();
+        // Graph loading checks this too; a plan built another way gets the same error here.
+        let owner = SampleOwner::for_depth(depth.0, depth.1.as_raw(), bound("sample_claim")).map_err(invalid)?;
+        let mut buffers = Vec::new();
+        if bound("head_samples") {
+            buffers.push(("HEAD_SAMPLES", "1"));
+        }
+        if owner == SampleOwner::Claim {
+            buffers.push(("SAMPLE_CLAIM", "1"));
+        }
+        let mut defines = buffers.clone();
         if bound("aa_mask") {
             defines.push(("AA_MASK", "1"));
         }
@@ -175,9 +226,15 @@ impl GbufferCompressedPass {
         let clear = Pipeline::compute(
             ctx,
             &format!("{} clear", pass.name),
-            &shaders.compile("gbuffer/gbuffer_compressed_clear.comp", head_samples)?,
+            &shaders.compile("gbuffer/gbuffer_compressed_clear.comp", &buffers)?,
         )?;
-        Ok(Self { draw, clear, aa: SelectiveAa::from_plan(pass), sampler: crate::gpu::Sampler::nearest_clamp(ctx)? })
+        Ok(Self {
+            draw,
+            clear,
+            claim: owner == SampleOwner::Claim,
+            aa: SelectiveAa::from_plan(pass),
+            sampler: crate::gpu::Sampler::nearest_clamp(ctx)?,
+        })
     }
 }
 
@@ -190,9 +247,29 @@ impl PassNode for GbufferCompressedPass {
         let device = rec.ctx.device();
         let head_pairs = pixels.div_ceil(2) as u32;
         let head_sample_words = pixels.div_ceil(4) as u32;
+        let claim = if self.claim {
+            let claim = slots.buffer("sample_claim").ok_or_else(|| {
+                crate::Error::Invalid(
+                    "gbuffer_compressed: no sample_claim buffer bound (the depth has no stencil)".into(),
+                )
+            })?;
+            if claim.size() < head_samples_bytes(pixels) {
+                return Err(crate::Error::Invalid(format!(
+                    "gbuffer_compressed: sample_claim holds {} bytes; {pixels} pixels need {} (ceil_div(width * height, 4) * 4)",
+                    claim.size(),
+                    head_samples_bytes(pixels)
+                )));
+            }
+            Some(claim)
+        } else {
+            None
+        };
         let mut clear_binds = vec![Bind::Buffer(0, gbuffer.handle())];
         if let Some(counts) = bound.head_samples {
             clear_binds.push(Bind::Buffer(1, counts.handle()));
+        }
+        if let Some(claim) = claim {
+            clear_binds.push(Bind::Buffer(2, claim.handle()));
         }
         self.clear.bind(rec.cmd);
         self.clear.push_bindings(rec.cmd, &clear_binds);
@@ -219,6 +296,9 @@ impl PassNode for GbufferCompressedPass {
         let mut extra = vec![Bind::Buffer(4, gbuffer.handle())];
         if let Some(counts) = bound.head_samples {
             extra.push(Bind::Buffer(6, counts.handle()));
+        }
+        if let Some(claim) = claim {
+            extra.push(Bind::Buffer(7, claim.handle()));
         }
         if let Some(mask) = slots.image("aa_mask") {
             extra.push(Bind::Sampled(
@@ -259,5 +339,15 @@ mod tests {
         let pixels = 7680 * 4320;
         assert_eq!(pool_blocks(buffer_bytes(pixels, 7 * pixels), pixels), Ok(MAX_BLOCKS - pixels));
         assert!(pool_blocks(u64::MAX / 2, MAX_BLOCKS).is_err());
+    }
+
+    #[test]
+    fn stencil_or_claim_decides_each_sample_never_both_nor_neither() {
+        let (d32s8, d32) = (vk::Format::D32_SFLOAT_S8_UINT, vk::Format::D32_SFLOAT);
+        assert_eq!(SampleOwner::for_depth(d32s8, 8, false), Ok(SampleOwner::Stencil));
+        assert_eq!(SampleOwner::for_depth(d32, 8, true), Ok(SampleOwner::Claim));
+        assert!(SampleOwner::for_depth(d32, 4, false).unwrap_err().contains("bind a \"sample_claim\" buffer"));
+        assert!(SampleOwner::for_depth(d32s8, 4, true).unwrap_err().contains("has stencil"));
+        assert!(SampleOwner::for_depth(d32, 16, true).unwrap_err().contains("at most 8 samples"));
     }
 }

@@ -22,6 +22,7 @@ pub const BUILTIN_GRAPHS: &[(&str, &str)] = &[
     ("overlay", include_str!("../../graph/overlay.ron")),
     ("msaa_compressed", include_str!("../../graph/msaa_compressed.ron")),
     ("msaa_compressed_edges", include_str!("../../graph/msaa_compressed_edges.ron")),
+    ("msaa_compressed_claim", include_str!("../../graph/msaa_compressed_claim.ron")),
     ("msaa_per_sample", include_str!("../../graph/msaa_per_sample.ron")),
     ("msaa_zprepass", include_str!("../../graph/msaa_zprepass.ron")),
     ("visibility_buffer", include_str!("../../graph/visibility_buffer.ron")),
