@@ -56,11 +56,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.verify {
         renderer.enable_verification(&shaders)?;
     }
-    let memory = renderer.runtime().memory();
     stats.graph = renderer.plan().name.clone();
-    stats.transient_bytes = memory.bytes_with_aliasing;
-    stats.transient_bytes_without_aliasing = memory.bytes_without_aliasing;
-    stats.resources = renderer.runtime().resource_bytes();
     if args.watch {
         return watch(args, &mut renderer, &shaders, spec, &camera);
     }
@@ -92,6 +88,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    // Memory as planned for the last frame: `--pool-adapt` may have re-planned the graph.
+    let memory = renderer.runtime().memory();
+    stats.transient_bytes = memory.bytes_with_aliasing;
+    stats.transient_bytes_without_aliasing = memory.bytes_without_aliasing;
+    stats.resources = renderer.runtime().resource_bytes();
     let scene = args.reference.is_some().then(|| renderer.scene().clone());
     drop(renderer);
     if let (Some(n), Some(scene), Some((camera, image))) = (args.reference, scene, &last_frame) {
