@@ -126,28 +126,18 @@ impl InstanceCullPass {
         }
         let bound = |slot: &str| pass.bindings.iter().any(|b| b.slot == slot);
         let invalid = |m: &str| crate::Error::Invalid(format!("pass '{}': {m}", pass.name));
+        if let Some((_, message)) = list_binding_error(bound) {
+            return Err(invalid(message));
+        }
         let from_list = bound("visible_groups_prev");
-        let visible_out = bound("visible_ids") || bound("visible_groups");
+        let visible_out = bound("visible_ids");
+        // What the bindings cannot say (a setting may come from a parameter): checked here.
         if from_list && (settings.phase != "early" || settings.atomic) {
             return Err(invalid("`visible_groups_prev` is read by the early phase only, with ordered compaction"));
         }
-        if from_list && bound("draw_instance_ids") {
+        if visible_out && (settings.phase != "late" || settings.atomic) {
             return Err(invalid(
-                "an early phase that reads `visible_groups_prev` writes no instance ids: bind the draw pass's `draw_instance_ids` to last frame's `visible_ids` (e.g. \"visible_ids.prev\")",
-            ));
-        }
-        if !from_list && !bound("draw_instance_ids") {
-            return Err(invalid("nothing bound to `draw_instance_ids`"));
-        }
-        if visible_out
-            && (settings.phase != "late"
-                || !bound("visible_ids")
-                || !bound("visible_groups")
-                || !bound("visibility")
-                || settings.atomic)
-        {
-            return Err(invalid(
-                "`visible_ids` and `visible_groups` are written together, by the late phase, with `visibility` bound and ordered compaction",
+                "`visible_ids` and `visible_groups` are written by the late phase, with ordered compaction",
             ));
         }
         let phase = format!("PHASE_{}", settings.phase.to_uppercase());
@@ -215,6 +205,37 @@ impl InstanceCullPass {
         }
         Ok(())
     }
+}
+
+/// What is wrong with an instance_cull pass's draw-list bindings, if anything: the slot to point
+/// at (empty: the pass itself) and the message. Graph loading reports it at that binding; the
+/// pass checks it again when it is built.
+pub fn list_binding_error(bound: impl Fn(&str) -> bool) -> Option<(&'static str, &'static str)> {
+    let (from_list, ids) = (bound("visible_groups_prev"), bound("draw_instance_ids"));
+    if from_list && ids {
+        return Some((
+            "draw_instance_ids",
+            "an early phase that reads `visible_groups_prev` writes no instance ids: bind the draw pass's `draw_instance_ids` to last frame's `visible_ids` (e.g. \"visible_ids.prev\")",
+        ));
+    }
+    if !from_list && !ids {
+        return Some((
+            "",
+            "nothing bound to `draw_instance_ids` (an early phase that draws last frame's visible list binds `visible_groups_prev` instead)",
+        ));
+    }
+    let (visible_ids, visible_groups) = (bound("visible_ids"), bound("visible_groups"));
+    if visible_ids != visible_groups {
+        let slot = if visible_ids { "visible_ids" } else { "visible_groups" };
+        return Some((
+            slot,
+            "`visible_ids` and `visible_groups` are written together (the next frame's early draw list)",
+        ));
+    }
+    if visible_ids && !bound("visibility") {
+        return Some(("visible_ids", "`visible_ids` needs `visibility` bound: the late phase that writes this frame's visibility writes the list"));
+    }
+    None
 }
 
 /// Words before the superblock records in the scan buffer (`SCRATCH_HEADER`).

@@ -10,6 +10,7 @@
 //! usage and sample count, sample counts within a pass).
 
 mod compute;
+mod cull_lists;
 mod dataflow;
 mod images;
 mod passes;
@@ -121,6 +122,7 @@ pub fn load_in(
     };
     dataflow::check(&mut v, &graph, &parsed);
     images::check(&mut v, &graph, &samples);
+    cull_lists::check(&mut v, &graph);
     v.sink.into_result(graph)
 }
 
