@@ -37,18 +37,23 @@ fn expected(scene: &cullgraph::scene::Scene, camera: &Camera, w: u32, h: u32) ->
     out
 }
 
-fn drawn(renderer: &Renderer) -> Vec<u32> {
+/// What each draw pass of the last frame drew (the graphs here all cull).
+fn draw_lists(renderer: &Renderer) -> Vec<Vec<u32>> {
     renderer
         .runtime()
         .drawn()
         .unwrap()
         .unwrap()
         .into_iter()
-        .flat_map(|d| match d {
+        .map(|d| match d {
             DrawnInstances::Some(ids) => ids,
-            DrawnInstances::All => panic!("the frustum graph culls"),
+            DrawnInstances::All => panic!("the graph culls"),
         })
         .collect()
+}
+
+fn drawn(renderer: &Renderer) -> Vec<u32> {
+    draw_lists(renderer).concat()
 }
 
 #[test]
@@ -103,20 +108,6 @@ fn frustum_lists_equal_the_cpu_reference_exactly() {
 /// Ids of the instances whose bound the frustum graph keeps for `camera` (the CPU reference).
 fn in_frustum(scene: &cullgraph::scene::Scene, camera: &Camera, w: u32, h: u32) -> std::collections::HashSet<u32> {
     expected(scene, camera, w, h).into_iter().collect()
-}
-
-fn draw_lists(renderer: &Renderer) -> Vec<Vec<u32>> {
-    renderer
-        .runtime()
-        .drawn()
-        .unwrap()
-        .unwrap()
-        .into_iter()
-        .map(|d| match d {
-            DrawnInstances::Some(ids) => ids,
-            DrawnInstances::All => panic!("two-phase graphs cull"),
-        })
-        .collect()
 }
 
 /// The two-phase graph's early phase draws last frame's visible list as it is (the late
