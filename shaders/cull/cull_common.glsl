@@ -96,8 +96,9 @@ uint scratch_super(uint superblocks, uint run, uint s) {
     return SCRATCH_HEADER + ((run & 1u) * superblocks + s) * SUPER_WORDS;
 }
 uint scratch_block(uint superblocks, uint b) { return SCRATCH_HEADER + 2u * superblocks * SUPER_WORDS + b; }
-// After the block counts: one count of visibility bits set per block (late phase), for the list
-// of visible slots that the next frame's early phase tests.
+// After the block counts: one count of visibility bits set per block (late phase, VISIBLE_OUT),
+// from which the compact step places the visible instances that the next frame's early phase
+// draws.
 uint scratch_visible_block(uint superblocks, uint slot_count, uint b) {
     uint blocks = max(1u, (slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
     return scratch_block(superblocks, blocks + b);
