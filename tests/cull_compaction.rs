@@ -111,7 +111,7 @@ fn in_frustum(scene: &cullgraph::scene::Scene, camera: &Camera, w: u32, h: u32) 
 }
 
 /// The two-phase graph's early phase draws last frame's visible list as it is (the late
-/// phase's `visible_ids` and `visible_groups`). Against the earlier early phase, which tested
+/// phase's `visible_ids` with its commands; no early cull pass). Against the earlier early phase, which tested
 /// every slot's visibility bit and the frustum, on a camera moving fast enough that part of
 /// last frame's visible set leaves the view: the early lists agree exactly (same ids, same
 /// order) inside the frustum, the late lists are identical, the early and late lists never
@@ -149,10 +149,23 @@ fn early_phase_from_last_frames_list_matches_the_tested_early_phase() {
             let early: std::collections::HashSet<u32> = la[0].iter().copied().collect();
             assert_eq!(early.len(), la[0].len(), "{source}, frame {frame}: an instance twice in the early list");
             assert!(la[1].iter().all(|id| !early.contains(id)), "{source}, frame {frame}: drawn early and late");
+            // The early list's counters (written by last frame's late phase) are what was drawn.
+            let early_stats = &a.culling[0];
+            let early_triangles: u64 = la[0].iter().map(|&id| triangles_of(&scene, id)).sum();
+            assert_eq!(
+                (early_stats.pass.as_str(), early_stats.tested, early_stats.drawn as usize, early_stats.triangles),
+                ("draw_early", 0, la[0].len(), early_triangles),
+                "{source}, frame {frame}: the early draw's counters"
+            );
             let (va, vb) = (a.verify.unwrap(), b.verify.unwrap());
             assert_eq!((va.false_negatives, vb.false_negatives), (0, 0), "{source}, frame {frame}");
             assert_eq!(va.visible, vb.visible, "{source}, frame {frame}");
         }
         assert!(left_view > 0, "{source}: the camera path never moved a visible instance out of view");
     }
+}
+
+/// Triangles one instance draws.
+fn triangles_of(scene: &cullgraph::scene::Scene, id: u32) -> u64 {
+    scene.meshes[scene.instances[id as usize].mesh as usize].index_count as u64 / 3
 }

@@ -76,10 +76,10 @@ fn default_graph_compiles_to_the_fixed_frame() {
 fn shipped_graphs_load_and_compile() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     for (file, passes) in [
-        ("graph/default.ron", 6),
+        ("graph/default.ron", 5),
         ("graph/no_cull.ron", 2),
         ("graph/frustum.ron", 3),
-        ("graph/two_phase.ron", 6),
+        ("graph/two_phase.ron", 5),
         ("graph/one_phase.ron", 4),
         ("graph/occluder_prepass.ron", 6),
         ("graph/examples/tint.ron", 3),

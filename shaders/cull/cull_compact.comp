@@ -10,9 +10,8 @@
 // (first instance = the survivors of the groups before it, summed from the group counts).
 //
 // VISIBLE_OUT (late phase): each block also places the instance ids of its visible slots, the
-// same way, and workgroup 0 stores each group's visible count: the draw list that the next
-// frame's early phase draws as it is. EARLY_FROM_LIST (early phase, one workgroup): only the
-// commands, from those counts (the ids are already in place, in last frame's list).
+// same way, and workgroup 0 writes the commands, the count and the counters of that list too:
+// the draw list that the next frame's early draw draws as it is, with no cull pass of its own.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -35,10 +34,11 @@ layout(set = 0, binding = 8, scalar) writeonly buffer Stats { CullStats stats; }
 #ifdef VISIBLE_OUT
 layout(set = 0, binding = 9) readonly buffer VisNow { uint vis_now[]; };
 layout(set = 0, binding = 10) writeonly buffer VisibleIds { uint visible_ids[]; };
-layout(set = 0, binding = 11) writeonly buffer VisibleGroups { uint visible_groups[]; };
-#endif
-#ifdef EARLY_FROM_LIST
-layout(set = 0, binding = 12) readonly buffer VisibleGroupsPrev { uint visible_groups_prev[]; };
+// The next frame's early draw list: its commands, their count, and its counters (CullStats,
+// tested 0), all history buffers the next frame reads as `.prev`.
+layout(set = 0, binding = 11, scalar) writeonly buffer ListCommands { DrawCommand list_commands[]; };
+layout(set = 0, binding = 12) writeonly buffer ListCount { uint list_count; };
+layout(set = 0, binding = 13, scalar) writeonly buffer ListStats { CullStats list_stats; };
 #endif
 
 layout(push_constant) uniform Push {
@@ -52,7 +52,7 @@ layout(push_constant) uniform Push {
 shared uint sh_words[2][CULL_WORDS_PER_BLOCK];
 shared uint sh_before[2];
 // Writing the commands.
-shared uvec2 sh_scan[THREADS];
+shared uvec4 sh_scan[THREADS];
 shared uint sh_totals[8];
 
 // Bits of `sh_words[which]` below bit `k` of the block (0..CULL_BLOCK).
@@ -118,19 +118,19 @@ void place_block(uint block, uint run) {
 #endif
 }
 
-// Inclusive scan of one pair per invocation in invocation order; returns the invocation's
-// exclusive prefix, and the pair's total over the workgroup in `total`.
-uvec2 workgroup_exclusive_scan(uvec2 value, out uvec2 total) {
+// Scan of one value per invocation in invocation order (four sums at once); returns the
+// invocation's exclusive prefix, and the total over the workgroup in `total`.
+uvec4 workgroup_exclusive_scan(uvec4 value, out uvec4 total) {
     uint lane = gl_LocalInvocationIndex;
     sh_scan[lane] = value;
     barrier();
     for (uint offset = 1u; offset < THREADS; offset <<= 1u) {
-        uvec2 add = lane >= offset ? sh_scan[lane - offset] : uvec2(0u);
+        uvec4 add = lane >= offset ? sh_scan[lane - offset] : uvec4(0u);
         barrier();
         sh_scan[lane] += add;
         barrier();
     }
-    uvec2 inclusive = sh_scan[lane];
+    uvec4 inclusive = sh_scan[lane];
     total = sh_scan[THREADS - 1u];
     barrier();
     return inclusive - value;
@@ -143,16 +143,94 @@ uvec2 workgroup_exclusive_scan(uvec2 value, out uvec2 total) {
 #define TOTAL_VISIBLE 3
 #define TOTAL_TRIANGLES 5   // three words: triangle count bits 0-23, 24-47, 48-63
 
-// A group's survivors: this run's count, zeroed for the next run (EARLY_FROM_LIST: last frame's
-// visible count, read only).
-uint take_group_count(uint g) {
-#ifdef EARLY_FROM_LIST
-    return visible_groups_prev[g];
-#else
-    uint count = group_counts[g];
-    if (count != 0u) group_counts[g] = 0u;
+// A group's count in `group_counts` (survivors at g, visible slots at `group_count + g`),
+// zeroed for the next run.
+uint take_group_count(uint at) {
+    uint count = group_counts[at];
+    if (count != 0u) group_counts[at] = 0u;
     return count;
+}
+
+// What one draw list's commands add up to.
+struct ListTotals {
+    uint placed;         // instances
+    uint written;        // commands
+    uint64_t triangles;  // this invocation's share
+};
+
+// A group's command for `count` instances from `first_instance` on; adds its triangles to `t`.
+DrawCommand group_command(DrawGroup group, uint count, uint first_instance, inout ListTotals t) {
+    DrawCommand cmd;
+    cmd.index_count = group.index_count;
+    cmd.instance_count = count;
+    cmd.first_index = group.first_index;
+    cmd.vertex_offset = group.vertex_offset;
+    cmd.first_instance = first_instance;
+    t.triangles += uint64_t(group.index_count / 3u) * uint64_t(count);
+    return cmd;
+}
+
+// One command per non-empty group, in group order, for this run's survivors (`commands`) and,
+// with VISIBLE_OUT, for the visible list (`list_commands`), from one scan of both counts; every
+// count back to zero. Called in uniform control flow.
+void write_group_commands(out ListTotals drawn, out ListTotals listed) {
+    uint lane = gl_LocalInvocationIndex;
+    drawn = ListTotals(0u, 0u, 0ul);
+    listed = ListTotals(0u, 0u, 0ul);
+    for (uint chunk = 0u; chunk < pc.group_count; chunk += THREADS) {
+        uint g = chunk + lane;
+        uint count = 0u, visible = 0u;
+        DrawGroup group;
+        if (g < pc.group_count) {
+            count = take_group_count(g);
+#ifdef VISIBLE_OUT
+            visible = take_group_count(pc.group_count + g);
 #endif
+            if (count != 0u || visible != 0u) group = groups[g];
+        }
+        uvec4 total;
+        uvec4 before = workgroup_exclusive_scan(
+            uvec4(count, count != 0u ? 1u : 0u, visible, visible != 0u ? 1u : 0u), total);
+        if (count != 0u) commands[drawn.written + before.y] = group_command(group, count, drawn.placed + before.x, drawn);
+#ifdef VISIBLE_OUT
+        if (visible != 0u) {
+            list_commands[listed.written + before.w] = group_command(group, visible, listed.placed + before.z, listed);
+        }
+#endif
+        drawn.placed += total.x;
+        drawn.written += total.y;
+        listed.placed += total.z;
+        listed.written += total.w;
+    }
+}
+
+// The workgroup's triangle total (each part is below 2^24 per invocation, so a sum over 256
+// fits), from the subgroups' sums added into `sh_totals[TOTAL_TRIANGLES..]`; `sh_totals` zeroed
+// before. Called in uniform control flow.
+uint64_t workgroup_triangles(uint64_t triangles) {
+    uvec3 parts = subgroupAdd(uvec3(uint(triangles) & 0xFFFFFFu, uint(triangles >> 24) & 0xFFFFFFu,
+                                    uint(triangles >> 48)));
+    if (subgroupElect()) {
+        for (uint i = 0u; i < 3u; ++i) atomicAdd(sh_totals[TOTAL_TRIANGLES + i], parts[i]);
+    }
+    barrier();
+    return uint64_t(sh_totals[TOTAL_TRIANGLES]) + (uint64_t(sh_totals[TOTAL_TRIANGLES + 1]) << 24)
+        + (uint64_t(sh_totals[TOTAL_TRIANGLES + 2]) << 48);
+}
+
+CullStats stats_record(uint tested, uint frustum, uint occlusion, uint drawn, uint draws, uint64_t triangles,
+                       uint survivors) {
+    CullStats s;
+    s.tested = tested;
+    s.frustum_culled = frustum;
+    s.occlusion_culled = occlusion;
+    s.drawn = drawn;
+    s.draws = draws;
+    s.triangles_lo = uint(triangles);
+    s.triangles_hi = uint(triangles >> 32);
+    s.survivors = survivors;
+    for (uint i = 0u; i < 8u; ++i) s.pad[i] = 0u;
+    return s;
 }
 
 void write_commands() {
@@ -160,7 +238,6 @@ void write_commands() {
     if (lane < 8u) sh_totals[lane] = 0u;
     barrier();
     uvec4 counters = uvec4(0u);
-#ifndef EARLY_FROM_LIST
     uint run = scratch[SCRATCH_PLACE_RUN];
     for (uint s = lane; s < pc.superblocks; s += THREADS) {
         uint at = scratch_super(pc.superblocks, run, s);
@@ -170,75 +247,33 @@ void write_commands() {
     // The next run's half back to zero (its last readers finished in the previous run).
     uint next = scratch_super(pc.superblocks, run + 1u, 0u);
     for (uint i = lane; i < pc.superblocks * SUPER_WORDS; i += THREADS) scratch[next + i] = 0u;
-#endif
-#ifdef VISIBLE_OUT
-    // Each group's visible count, for the next frame's early draw list, back to zero here.
-    for (uint g = lane; g < pc.group_count; g += THREADS) {
-        uint visible = group_counts[pc.group_count + g];
-        visible_groups[g] = visible;
-        if (visible != 0u) group_counts[pc.group_count + g] = 0u;
-    }
-#endif
 
-    // One command per non-empty group, in group order; each group's count back to zero.
-    uint written = 0u;
-    uint placed = 0u;
-    uint64_t triangles = 0ul;
-    for (uint chunk = 0u; chunk < pc.group_count; chunk += THREADS) {
-        uint g = chunk + lane;
-        uint count = 0u;
-        DrawGroup group;
-        if (g < pc.group_count) {
-            count = take_group_count(g);
-            if (count != 0u) group = groups[g];
-        }
-        uvec2 total;
-        uvec2 before = workgroup_exclusive_scan(uvec2(count, count != 0u ? 1u : 0u), total);
-        if (count != 0u) {
-            DrawCommand cmd;
-            cmd.index_count = group.index_count;
-            cmd.instance_count = count;
-            cmd.first_index = group.first_index;
-            cmd.vertex_offset = group.vertex_offset;
-            cmd.first_instance = placed + before.x;
-            commands[written + before.y] = cmd;
-            triangles += uint64_t(group.index_count / 3u) * uint64_t(count);
-        }
-        placed += total.x;
-        written += total.y;
-    }
-
-    // Sums over the workgroup: each part is below 2^24 per invocation, so a sum over 256 fits.
+    ListTotals drawn, listed;
+    write_group_commands(drawn, listed);
     counters = subgroupAdd(counters);
-    uvec3 parts = subgroupAdd(uvec3(uint(triangles) & 0xFFFFFFu, uint(triangles >> 24) & 0xFFFFFFu,
-                                    uint(triangles >> 48)));
     if (subgroupElect()) {
         for (uint i = 0u; i < 4u; ++i) atomicAdd(sh_totals[TOTAL_TESTED + i], counters[i]);
-        for (uint i = 0u; i < 3u; ++i) atomicAdd(sh_totals[TOTAL_TRIANGLES + i], parts[i]);
     }
-    barrier();
+    uint64_t triangles = workgroup_triangles(drawn.triangles);
     if (lane == 0u) {
-        uint64_t sum = uint64_t(sh_totals[TOTAL_TRIANGLES]) + (uint64_t(sh_totals[TOTAL_TRIANGLES + 1]) << 24)
-            + (uint64_t(sh_totals[TOTAL_TRIANGLES + 2]) << 48);
-        draw_count = written;
-        CullStats s;
-        s.tested = sh_totals[TOTAL_TESTED];
-        s.frustum_culled = sh_totals[TOTAL_FRUSTUM];
-        s.occlusion_culled = sh_totals[TOTAL_OCCLUSION];
-        s.drawn = placed;
-        s.draws = written;
-        s.triangles_lo = uint(sum);
-        s.triangles_hi = uint(sum >> 32);
-        s.survivors = sh_totals[TOTAL_VISIBLE];
-        for (uint i = 0u; i < 8u; ++i) s.pad[i] = 0u;
-#ifdef EARLY_FROM_LIST
-        s.tested = 0u;   // last frame's visible instances are drawn without a test
-#else
+        draw_count = drawn.written;
+        stats = stats_record(sh_totals[TOTAL_TESTED], sh_totals[TOTAL_FRUSTUM], sh_totals[TOTAL_OCCLUSION], drawn.placed,
+                             drawn.written, triangles, sh_totals[TOTAL_VISIBLE]);
         // Nothing reads this word in this dispatch: the next run's test step does.
         scratch[SCRATCH_TEST_RUN] = run + 1u;
-#endif
-        stats = s;
     }
+#ifdef VISIBLE_OUT
+    // The next frame's early draw list: this frame's visible slots, per group, placed by the
+    // other workgroups into `visible_ids`.
+    barrier();
+    if (lane >= TOTAL_TRIANGLES && lane < TOTAL_TRIANGLES + 3u) sh_totals[lane] = 0u;
+    barrier();
+    uint64_t list_triangles = workgroup_triangles(listed.triangles);
+    if (lane == 0u) {
+        list_count = listed.written;
+        list_stats = stats_record(0u, 0u, 0u, listed.placed, listed.written, list_triangles, 0u);
+    }
+#endif
 }
 
 void main() {
@@ -246,7 +281,5 @@ void main() {
         write_commands();
         return;
     }
-#ifndef EARLY_FROM_LIST
     place_block(gl_WorkGroupID.x - 1u, scratch[SCRATCH_PLACE_RUN]);
-#endif
 }

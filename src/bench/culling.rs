@@ -101,19 +101,17 @@ pub struct CullingReport {
 /// frame's and this frame's visibility bits and the draw bits, a count per block, the
 /// superblock records. Compact: the block counts, the draw bits, the superblock records, per
 /// survivor its instance id read and written, and per group its count, record and command.
-/// An early phase drawing last frame's list (`from_list`) moves only the per-group part. Not
-/// counted: the late phase's list of visible ids for the next frame (visible slots are few in
-/// the occluded views measured).
-pub fn cull_pass_bytes(slots: u64, tested: u64, drawn: u64, groups: u64, from_list: bool) -> u64 {
-    if from_list {
-        return groups * (4 + 32 + 20);
-    }
+/// A late phase that writes the next frame's early draw list (`list`) also writes per group its
+/// visible count's command. Not counted: that list's visible ids (visible slots are few in the
+/// occluded views measured).
+pub fn cull_pass_bytes(slots: u64, tested: u64, drawn: u64, groups: u64, list: bool) -> u64 {
     let blocks = slots.div_ceil(256);
     let superblocks = blocks.div_ceil(64);
     let bits = slots.div_ceil(32) * 4;
     let test = tested * 32 + 3 * bits + blocks * 4 + superblocks * 32;
     let compact = blocks * 4 + bits + superblocks * 32 + drawn * 8 + groups * (4 + 32 + 20);
-    test + compact
+    let list_commands = if list { groups * (4 + 20) } else { 0 };
+    test + compact + list_commands
 }
 
 /// Runs the benchmark.
@@ -167,20 +165,18 @@ pub fn run(
             let last = last.unwrap_or_default();
             let kinds: Vec<(String, String)> =
                 renderer.plan().passes.iter().map(|p| (p.name.clone(), p.kind.clone())).collect();
-            let from_list = |pass: &str| {
-                renderer
-                    .plan()
-                    .passes
-                    .iter()
-                    .any(|p| p.name == pass && p.bindings.iter().any(|b| b.slot == "visible_groups_prev"))
-            };
+            // Cull passes only (a late phase's early draw list is reported under the draw pass).
+            let cull_pass =
+                |pass: &str| renderer.plan().passes.iter().find(|p| p.name == pass && p.kind == "instance_cull");
             let passes: Vec<PassFigure> = median_per_pass(&timings)
                 .into_iter()
                 .map(|(pass, ms)| {
-                    let bytes =
-                        last.culling.iter().find(|c| c.pass == pass).map(|c| {
-                            cull_pass_bytes(n as u64, c.tested as u64, c.drawn as u64, groups, from_list(&pass))
-                        });
+                    let writes_list = |p: &crate::graph::plan::PlannedPass| {
+                        p.bindings.iter().any(|b| b.slot == crate::graph::executor::LIST_STATS_SLOT)
+                    };
+                    let bytes = cull_pass(&pass).zip(last.culling.iter().find(|c| c.pass == pass)).map(|(p, c)| {
+                        cull_pass_bytes(n as u64, c.tested as u64, c.drawn as u64, groups, writes_list(p))
+                    });
                     PassFigure { gbps: bytes.map(|b| gbps(b, ms)), pass, ms, bytes }
                 })
                 .collect();

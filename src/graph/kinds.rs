@@ -332,15 +332,16 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             reads: vec![
                 slot("visibility_prev", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "last frame's visibility bits (early and late phases)"),
                 slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid to test against (none: frustum only)"),
-                slot("visible_groups_prev", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "early phase: last frame's visible count per draw group (the late phase's `visible_groups`); the pass then only writes the commands for last frame's visible list, whose ids the draw reads from `visible_ids`"),
             ],
             writes: vec![
                 slot("draw_commands", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "one command per draw group (size: meshes * 20)"),
                 slot("draw_count", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "number of commands (4 bytes)"),
-                slot("draw_instance_ids", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "survivors, one slice per draw group (size: instances * 4); every pass but an early phase from `visible_groups_prev` needs it"),
+                slot("draw_instance_ids", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "survivors, one slice per draw group (size: instances * 4)"),
                 slot("visibility", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits (late phase)"),
-                slot("visible_ids", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group, for the next frame's early draw (size: instances * 4, history)"),
-                slot("visible_groups", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: visible instances per draw group (size: meshes * 4, history)"),
+                slot("visible_ids", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group: the next frame's early draw list, which that frame draws as it is with no cull pass (size: instances * 4, history; the draw binds `.prev`)"),
+                slot("list_commands", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: the commands of that list (size: meshes * 20, history)"),
+                slot("list_count", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: their number (size: 4, history)"),
+                slot("list_stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: that list's counters, reported as the next frame's early draw (size: 64, history)"),
                 slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "counters of this pass (size: 64)"),
             ],
             settings: vec![

@@ -16,14 +16,14 @@
 //! Both kernels combine values with subgroup operations (basic, vote, arithmetic and ballot in
 //! compute shaders, which Vulkan 1.3 devices commonly have), never assuming a subgroup size.
 //!
-//! Last frame's visible set as the early draw list: with `visible_ids` and `visible_groups`
-//! bound, the late phase also compacts its visible slots' instance ids per group (in slot order)
-//! and stores each group's count. The next frame's early phase, with `visible_groups_prev`
-//! bound, then tests nothing: one workgroup writes the commands for that list, and the early
-//! draw reads last frame's `visible_ids` as its instance ids. This is the two-phase scheme as
-//! stated (draw last frame's visible set); it saves the early test over every slot, whose cost
-//! is mostly the fixed latency of two dispatches. Instances that left the frustum since last
-//! frame are drawn and clipped: they cannot change the image.
+//! Last frame's visible set as the early draw list: with `visible_ids`, `list_commands`,
+//! `list_count` and `list_stats` bound, the late phase also compacts its visible slots' instance
+//! ids per group (in slot order) and writes that list's commands, count and counters. The next
+//! frame's early draw reads them as they are (`.prev` of those history buffers): there is no
+//! early cull pass at all. This is the two-phase scheme as stated (draw last frame's visible
+//! set); it saves the early test over every slot and then the early pass's own dispatch, whose
+//! cost is mostly fixed latency. Instances that left the frustum since last frame are drawn and
+//! clipped: they cannot change the image.
 //!
 //! The thesis's atomic append (`compaction: "atomic"`) is kept as a measured variant:
 //! `cull_init.comp` then the test step appending with atomics; its order within a group varies
@@ -103,8 +103,6 @@ pub struct InstanceCullPass {
     test: Pipeline,
     compact: Option<Pipeline>,
     init: Option<Pipeline>,
-    /// Early phase drawing last frame's visible list: only the commands are written.
-    from_list: bool,
     sampler: Sampler,
     scratch: Option<Scratch>,
 }
@@ -127,17 +125,13 @@ impl InstanceCullPass {
         let bound = |slot: &str| pass.bindings.iter().any(|b| b.slot == slot);
         let invalid = |m: &str| crate::Error::Invalid(format!("pass '{}': {m}", pass.name));
         if let Some((_, message)) = list_binding_error(bound) {
-            return Err(invalid(message));
+            return Err(invalid(&message));
         }
-        let from_list = bound("visible_groups_prev");
         let visible_out = bound("visible_ids");
         // What the bindings cannot say (a setting may come from a parameter): checked here.
-        if from_list && (settings.phase != "early" || settings.atomic) {
-            return Err(invalid("`visible_groups_prev` is read by the early phase only, with ordered compaction"));
-        }
         if visible_out && (settings.phase != "late" || settings.atomic) {
             return Err(invalid(
-                "`visible_ids` and `visible_groups` are written by the late phase, with ordered compaction",
+                "the next frame's early draw list (`visible_ids`, `list_*`) is written by the late phase, with ordered compaction",
             ));
         }
         let phase = format!("PHASE_{}", settings.phase.to_uppercase());
@@ -162,11 +156,10 @@ impl InstanceCullPass {
         let (compact, init) = if settings.atomic {
             (None, Some(compute("init", "cull/cull_init.comp", &[])?))
         } else {
-            let modes = [(visible_out, "VISIBLE_OUT"), (from_list, "EARLY_FROM_LIST")];
-            let defines: Vec<(&str, &str)> = modes.iter().filter(|(on, _)| *on).map(|(_, name)| (*name, "1")).collect();
-            (Some(compute("compact", "cull/cull_compact.comp", &defines)?), None)
+            let defines: &[(&str, &str)] = if visible_out { &[("VISIBLE_OUT", "1")] } else { &[] };
+            (Some(compute("compact", "cull/cull_compact.comp", defines)?), None)
         };
-        Ok(Self { settings, test, compact, init, from_list, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
+        Ok(Self { settings, test, compact, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
     }
 
     /// The settings in use.
@@ -207,33 +200,29 @@ impl InstanceCullPass {
     }
 }
 
+/// The late phase's bindings for the next frame's early draw list, written together.
+pub const LIST_SLOTS: [&str; 4] = ["visible_ids", "list_commands", "list_count", "list_stats"];
+
 /// What is wrong with an instance_cull pass's draw-list bindings, if anything: the slot to point
 /// at (empty: the pass itself) and the message. Graph loading reports it at that binding; the
 /// pass checks it again when it is built.
-pub fn list_binding_error(bound: impl Fn(&str) -> bool) -> Option<(&'static str, &'static str)> {
-    let (from_list, ids) = (bound("visible_groups_prev"), bound("draw_instance_ids"));
-    if from_list && ids {
+pub fn list_binding_error(bound: impl Fn(&str) -> bool) -> Option<(&'static str, String)> {
+    let first_bound = LIST_SLOTS.iter().copied().find(|s| bound(s))?;
+    if let Some(missing) = LIST_SLOTS.iter().find(|s| !bound(s)) {
         return Some((
-            "draw_instance_ids",
-            "an early phase that reads `visible_groups_prev` writes no instance ids: bind the draw pass's `draw_instance_ids` to last frame's `visible_ids` (e.g. \"visible_ids.prev\")",
+            first_bound,
+            format!(
+                "the next frame's early draw list is written whole: `{missing}` is missing (bind {} together)",
+                LIST_SLOTS.map(|s| format!("`{s}`")).join(", ")
+            ),
         ));
     }
-    if !from_list && !ids {
+    if !bound("visibility") {
         return Some((
-            "",
-            "nothing bound to `draw_instance_ids` (an early phase that draws last frame's visible list binds `visible_groups_prev` instead)",
+            "visible_ids",
+            "`visible_ids` needs `visibility` bound: the late phase that writes this frame's visibility writes the list"
+                .into(),
         ));
-    }
-    let (visible_ids, visible_groups) = (bound("visible_ids"), bound("visible_groups"));
-    if visible_ids != visible_groups {
-        let slot = if visible_ids { "visible_ids" } else { "visible_groups" };
-        return Some((
-            slot,
-            "`visible_ids` and `visible_groups` are written together (the next frame's early draw list)",
-        ));
-    }
-    if visible_ids && !bound("visibility") {
-        return Some(("visible_ids", "`visible_ids` needs `visibility` bound: the late phase that writes this frame's visibility writes the list"));
     }
     None
 }
@@ -275,15 +264,15 @@ impl PassNode for InstanceCullPass {
                 .ok_or_else(|| crate::Error::Invalid(format!("instance_cull: nothing bound to '{slot}'")))
         };
         let (commands, draw_count) = (need("draw_commands")?, need("draw_count")?);
-        // The early phase from a list writes no ids; its compact step never touches binding 4.
-        let draw_ids = rec.slots.buffer("draw_instance_ids").unwrap_or(&scene.draw_instance_ids);
-        let (ids_bytes, groups_bytes) = (slots as u64 * 4, groups as u64 * 4);
+        let draw_ids = need("draw_instance_ids")?;
+        let (ids_bytes, commands_bytes) = (slots as u64 * 4, groups as u64 * 20);
         let sizes = [
-            ("draw_commands", Some(commands), groups as u64 * 20, "meshes * 20"),
-            ("draw_instance_ids", rec.slots.buffer("draw_instance_ids"), ids_bytes, "instances * 4"),
+            ("draw_commands", Some(commands), commands_bytes, "meshes * 20"),
+            ("draw_instance_ids", Some(draw_ids), ids_bytes, "instances * 4"),
             ("visible_ids", rec.slots.buffer("visible_ids"), ids_bytes, "instances * 4"),
-            ("visible_groups", rec.slots.buffer("visible_groups"), groups_bytes, "meshes * 4"),
-            ("visible_groups_prev", rec.slots.buffer("visible_groups_prev"), groups_bytes, "meshes * 4"),
+            ("list_commands", rec.slots.buffer("list_commands"), commands_bytes, "meshes * 20"),
+            ("list_count", rec.slots.buffer("list_count"), 4, "4"),
+            ("list_stats", rec.slots.buffer("list_stats"), 64, "64"),
         ];
         for (slot, buffer, need, rule) in sizes {
             if let Some(buffer) = buffer.filter(|b| b.size() < need) {
@@ -307,11 +296,8 @@ impl PassNode for InstanceCullPass {
             cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::COMPUTE_WRITE)], &[]);
             scratch.fresh = false;
         }
-        // Last frame's run of this pass used the same scratch (an early phase from a list uses
-        // none: its only writes are graph resources, which the graph's barriers order).
-        if !self.from_list {
-            step_barrier(ctx, cmd);
-        }
+        // Last frame's run of this pass used the same scratch.
+        step_barrier(ctx, cmd);
         let scratch = self.scratch.as_ref().expect("ensured above");
         let stats = rec.slots.buffer("stats").unwrap_or(&scratch.own_stats);
         let blocks = blocks_of(slots);
@@ -382,16 +368,14 @@ impl PassNode for InstanceCullPass {
                 Bind::Buffer(6, scratch.draw_bits.handle()),
             ]);
         }
-        if !self.from_list {
-            rec.step("test");
-            self.test.bind(cmd);
-            self.test.push_bindings(cmd, &test_binds);
-            self.test.push_constants(cmd, &push);
-            // SAFETY: as above.
-            unsafe { device.cmd_dispatch(cmd, blocks, 1, 1) };
-            if self.compact.is_some() {
-                step_barrier(ctx, cmd);
-            }
+        rec.step("test");
+        self.test.bind(cmd);
+        self.test.push_bindings(cmd, &test_binds);
+        self.test.push_constants(cmd, &push);
+        // SAFETY: as above.
+        unsafe { device.cmd_dispatch(cmd, blocks, 1, 1) };
+        if self.compact.is_some() {
+            step_barrier(ctx, cmd);
         }
 
         if let Some(compact) = &self.compact {
@@ -411,17 +395,16 @@ impl PassNode for InstanceCullPass {
             let optional = [
                 (9, rec.slots.buffer("visibility").filter(|_| rec.slots.buffer("visible_ids").is_some())),
                 (10, rec.slots.buffer("visible_ids")),
-                (11, rec.slots.buffer("visible_groups")),
-                (12, rec.slots.buffer("visible_groups_prev")),
+                (11, rec.slots.buffer("list_commands")),
+                (12, rec.slots.buffer("list_count")),
+                (13, rec.slots.buffer("list_stats")),
             ];
             compact_binds.extend(optional.iter().filter_map(|(b, buf)| buf.map(|buf| Bind::Buffer(*b, buf.handle()))));
             compact.push_bindings(cmd, &compact_binds);
             compact.push_constants(cmd, &[slots, groups, superblocks]);
-            // Workgroup 0 writes the commands, workgroup 1 + b places block b (from a list: the
-            // commands only).
-            let workgroups = if self.from_list { 1 } else { blocks + 1 };
+            // Workgroup 0 writes the commands, workgroup 1 + b places block b.
             // SAFETY: as above.
-            unsafe { device.cmd_dispatch(cmd, workgroups, 1, 1) };
+            unsafe { device.cmd_dispatch(cmd, blocks + 1, 1, 1) };
         }
         Ok(())
     }

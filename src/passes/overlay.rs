@@ -29,7 +29,7 @@ use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{
     Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, PassTiming, Pipeline, Sampler, ShaderCompiler,
 };
-use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::executor::{PassContext, PassNode, LIST_STATS_SLOT};
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind, SettingValue, Version};
 use ash::vk;
 
@@ -377,22 +377,33 @@ fn hiz_info(plan: &CompiledGraph, pass: &PlannedPass, level: u32) -> (u32, u32, 
 }
 
 /// Labels of the cull passes whose counters are bound, in slot order: each writer's `phase`
-/// when that tells them apart, else its name.
+/// when that tells them apart, else its name. Last frame's `list_stats` (the early draw list a
+/// late phase wrote for this frame) is the early phase.
 fn stats_labels(plan: &CompiledGraph, pass: &PlannedPass) -> Vec<String> {
     let position = plan.passes.iter().position(|p| p.name == pass.name).unwrap_or(plan.passes.len());
-    let writers: Vec<Option<&PlannedPass>> = STATS_SLOTS
+    // (writer, whether it is last frame's early draw list)
+    let writers: Vec<(Option<&PlannedPass>, bool)> = STATS_SLOTS
         .iter()
         .filter_map(|slot| pass.bindings.iter().find(|b| b.slot == *slot))
         .map(|b| {
-            plan.passes[..position].iter().rev().find(|p| {
+            let writes_it = |p: &&PlannedPass| {
                 p.bindings.iter().any(|w| w.resource == b.resource && w.version == Version::Current && w.usage.writes())
-            })
+            };
+            if b.version == Version::Previous {
+                let writer = plan.passes.iter().find(writes_it);
+                let list = writer
+                    .is_some_and(|w| w.bindings.iter().any(|l| l.slot == LIST_STATS_SLOT && l.resource == b.resource));
+                (writer, list)
+            } else {
+                (plan.passes[..position].iter().rev().find(writes_it), false)
+            }
         })
         .collect();
     let phases: Vec<Option<String>> = writers
         .iter()
-        .map(|w| match w.and_then(|w| w.settings.get("phase")) {
-            Some(SettingValue::Choice(c)) if c != "all" => Some(c.clone()),
+        .map(|(w, list)| match (list, w.and_then(|w| w.settings.get("phase"))) {
+            (true, _) => Some("early".to_string()),
+            (false, Some(SettingValue::Choice(c))) if c != "all" => Some(c.clone()),
             _ => None,
         })
         .collect();
@@ -402,7 +413,7 @@ fn stats_labels(plan: &CompiledGraph, pass: &PlannedPass) -> Vec<String> {
         .iter()
         .zip(&phases)
         .enumerate()
-        .map(|(k, (w, phase))| {
+        .map(|(k, ((w, _), phase))| {
             let label = match (distinct, phase, w) {
                 (true, Some(phase), _) => phase.clone(),
                 (_, _, Some(w)) => w.name.clone(),

@@ -25,6 +25,46 @@ use tracker::Tracker;
 pub const STATS_SLOT: &str = "stats";
 /// Bytes of counters a pass writes to its `stats` slot.
 pub const STATS_BYTES: usize = 64;
+/// Slot through which a late cull phase writes the counters of the next frame's early draw
+/// list; the frame that draws the list reports them (the `.prev` copy).
+pub const LIST_STATS_SLOT: &str = "list_stats";
+
+/// Counters copied to the host every frame: whose they are and where they come from.
+struct StatsSource {
+    /// The pass whose binding is copied (after it has run).
+    pass: usize,
+    /// That binding, with the version whose contents are this frame's figures.
+    binding: crate::graph::plan::Binding,
+    /// The name reported with them.
+    label: String,
+}
+
+/// The counters a frame reports, in pass order: each `stats` binding, and for a late cull phase
+/// that writes the next frame's early draw list, that list as this frame drew it (last frame's
+/// `list_stats`), reported under the name of the pass that draws it and placed at that pass.
+fn stats_sources(plan: &CompiledGraph) -> Vec<StatsSource> {
+    let mut sources: Vec<(usize, StatsSource)> = Vec::new();
+    for (index, pass) in plan.passes.iter().enumerate() {
+        if let Some(b) = pass.bindings.iter().find(|b| b.slot == STATS_SLOT) {
+            sources.push((index, StatsSource { pass: index, binding: b.clone(), label: pass.name.clone() }));
+        }
+        let Some(list) = pass.bindings.iter().find(|b| b.slot == LIST_STATS_SLOT) else { continue };
+        let count = pass.bindings.iter().find(|b| b.slot == "list_count");
+        let drawer = plan.passes.iter().position(|p| {
+            p.bindings.iter().any(|d| {
+                d.slot == "draw_count"
+                    && Some(d.resource) == count.map(|c| c.resource)
+                    && d.version == Version::Previous
+            })
+        });
+        let label =
+            drawer.map_or_else(|| format!("{} (last frame's list)", pass.name), |d| plan.passes[d].name.clone());
+        let binding = crate::graph::plan::Binding { version: Version::Previous, ..list.clone() };
+        sources.push((drawer.unwrap_or(index), StatsSource { pass: index, binding, label }));
+    }
+    sources.sort_by_key(|(at, _)| *at);
+    sources.into_iter().map(|(_, s)| s).collect()
+}
 
 /// Copies the buffer bound by `binding` in `frame` into the host buffer `dst` at `offset`, after
 /// whatever last touched it, and records the read so later writes wait for the copy. The caller
@@ -71,7 +111,7 @@ pub struct GraphRuntime {
     step_timing: bool,
     /// Passes with a bound `stats` slot, and per frame in flight a host buffer their counters
     /// are copied into (read a few frames later, never waited on).
-    stats_passes: Vec<usize>,
+    stats_sources: Vec<StatsSource>,
     stats_ring: Vec<Buffer>,
     /// Copies of the draw lists, when verification asked for them.
     capture: Option<capture::DrawCapture>,
@@ -98,20 +138,14 @@ impl GraphRuntime {
         let timers = (0..FRAMES_IN_FLIGHT)
             .map(|_| GpuTimer::new(ctx, scopes).map(RefCell::new))
             .collect::<Result<Vec<_>, _>>()?;
-        let stats_passes: Vec<usize> = plan
-            .passes
-            .iter()
-            .enumerate()
-            .filter(|(_, p)| p.bindings.iter().any(|b| b.slot == STATS_SLOT))
-            .map(|(i, _)| i)
-            .collect();
+        let stats_sources = stats_sources(&plan);
         let stats_ring = (0..FRAMES_IN_FLIGHT)
             .map(|i| {
                 Buffer::new(
                     ctx,
                     &BufferDesc {
                         name: &format!("pass counters readback {i}"),
-                        size: (stats_passes.len().max(1) * STATS_BYTES) as u64,
+                        size: (stats_sources.len().max(1) * STATS_BYTES) as u64,
                         usage: vk::BufferUsageFlags::TRANSFER_DST,
                         location: MemoryLocation::GpuToCpu,
                     },
@@ -126,7 +160,7 @@ impl GraphRuntime {
             resources,
             timers,
             step_timing: false,
-            stats_passes,
+            stats_sources,
             stats_ring,
             capture: None,
             frame: 0,
@@ -223,15 +257,13 @@ impl GraphRuntime {
                     cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
                 }
             }
-            if let Some(k) = self.stats_passes.iter().position(|&i| i == index) {
-                let ring = &self.stats_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize];
-                if let Some(b) = pass.bindings.iter().find(|b| b.slot == STATS_SLOT) {
-                    let offset = (k * STATS_BYTES) as u64;
-                    copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, b, ring, offset);
-                }
+            let ring = &self.stats_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+            for (k, source) in self.stats_sources.iter().enumerate().filter(|(_, s)| s.pass == index) {
+                let offset = (k * STATS_BYTES) as u64;
+                copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, &source.binding, ring, offset);
             }
         }
-        if !self.stats_passes.is_empty() {
+        if !self.stats_sources.is_empty() {
             cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
         }
         timer.borrow_mut().end(cmd);
@@ -382,19 +414,21 @@ impl GraphRuntime {
 
     /// The counters each pass with a `stats` slot wrote in `frame`, once the frame has completed
     /// (empty if its readback slot was reused since): (pass name, pass kind, the 64 bytes it wrote).
+    /// An early draw list written by last frame's late cull phase comes under the name of the
+    /// pass that drew it, with the cull pass's kind.
     pub fn pass_counters(&self, frame: u64) -> crate::Result<Vec<(String, String, [u8; STATS_BYTES])>> {
         if frame >= self.frame || self.frame - frame > FRAMES_IN_FLIGHT as u64 {
             return Ok(Vec::new());
         }
         let bytes = self.stats_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize].read_bytes()?;
         Ok(self
-            .stats_passes
+            .stats_sources
             .iter()
             .enumerate()
-            .map(|(k, &p)| {
+            .map(|(k, source)| {
                 let mut out = [0u8; STATS_BYTES];
                 out.copy_from_slice(&bytes[k * STATS_BYTES..(k + 1) * STATS_BYTES]);
-                (self.plan.passes[p].name.clone(), self.plan.passes[p].kind.clone(), out)
+                (source.label.clone(), self.plan.passes[source.pass].kind.clone(), out)
             })
             .collect())
     }

@@ -1,6 +1,6 @@
-//! Draw-list bindings of `instance_cull` passes: whether they fit together (an early phase that
-//! draws last frame's visible list writes no ids; the late phase writes that list's ids and
-//! counts together, with the visibility). The rule is
+//! Draw-list bindings of `instance_cull` passes: whether they fit together (the late phase
+//! writes the next frame's early draw list whole, ids, commands, count and counters, with the
+//! visibility). The rule is
 //! [`crate::passes::instance_cull::list_binding_error`]; here it is reported at the binding.
 
 use super::Validator;
