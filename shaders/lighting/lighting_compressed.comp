@@ -82,17 +82,37 @@ layout(push_constant) uniform Settings {
     uint pool_blocks;
 } settings;
 
-Block read_block(uint index) {
+// A block's words as loaded: albedo + metallic, normal, and the word holding the pair's
+// roughness and AO bytes.
+struct BlockWords {
+    uint albedo_metallic;
+    uint normal;
+    uint roughness_ao;   // the pair's roughness[2], ao[2] bytes
+    uint k;              // which block of the pair
+};
+
+BlockWords load_block(uint index) {
     uint pair = index >> 1, k = index & 1u;
-    vec4 am = unpackUnorm4x8(gb.pairs[pair].albedo_metallic[k]);
+    BlockWords w;
+    w.albedo_metallic = gb.pairs[pair].albedo_metallic[k];
+    w.normal = gb.pairs[pair].normal[k];
+    w.roughness_ao = uint(gb.pairs[pair].roughness[k]) | (uint(gb.pairs[pair].ao[k]) << 8);
+    w.k = k;
+    return w;
+}
+
+Block decode_block(BlockWords w) {
+    vec4 am = unpackUnorm4x8(w.albedo_metallic);
     Block b;
     b.albedo = am.rgb;
     b.metallic = am.a;
-    b.normal = oct_decode(unpackSnorm2x16(gb.pairs[pair].normal[k]));
-    b.roughness = float(uint(gb.pairs[pair].roughness[k])) / 255.0;
-    b.ao = float(uint(gb.pairs[pair].ao[k])) / 255.0;
+    b.normal = oct_decode(unpackSnorm2x16(w.normal));
+    b.roughness = float(w.roughness_ao & 0xFFu) / 255.0;
+    b.ao = float((w.roughness_ao >> 8) & 0xFFu) / 255.0;
     return b;
 }
+
+Block read_block(uint index) { return decode_block(load_block(index)); }
 
 vec3 shade_block(Block b, vec2 center, float depth) {
     Surface s;
@@ -132,15 +152,38 @@ uint listed_weight(PixelList list, uint link, uint n) {
     return link_count(link) + (n == 0u && list.head_depth <= 0.0 ? list.kept : 0u);
 }
 
-PixelList gather_pixel(ivec2 pixel, inout DepthRange range) {
+// What a pixel's head holds, loaded before anything waits on it (so that the loads' latencies
+// overlap each other and the tile's first barrier instead of forming a chain).
+struct HeadLoads {
+    float depth;         // depth at sample 0
+    uint link;           // the head's link
+    uint samples_word;   // the word of `head_samples` holding its byte
+    BlockWords block;
+};
+
+HeadLoads load_head(ivec2 pixel) {
+    uint head = head_index(pixel);
+    HeadLoads h;
+    h.depth = DEPTH_AT(pixel, 0u);
+    h.link = gb.pairs[head >> 1].link[head & 1u];
+#ifdef HEAD_SAMPLES
+    h.samples_word = head_samples[head >> 2];
+#else
+    h.samples_word = 0u;
+#endif
+    h.block = load_block(head);
+    return h;
+}
+
+PixelList gather_pixel(ivec2 pixel, HeadLoads h, inout DepthRange range) {
     PixelList list;
-    list.head_depth = DEPTH_AT(pixel, 0u);
+    list.head_depth = h.depth;
     list.blocks = 0u;
     list.listed = 0u;
     list.first_entry = ENTRY_NONE;
     depth_range_add(range, list.head_depth);
     uint head = head_index(pixel);
-    uint link = gb.pairs[head >> 1].link[head & 1u];
+    uint link = h.link;
     uint last_entry = ENTRY_NONE;
     bool all_shared = true;
     // At most SAMPLES - 1 blocks can be listed (one per sample not owned by the head); the bound
@@ -180,7 +223,7 @@ PixelList gather_pixel(ivec2 pixel, inout DepthRange range) {
     }
 #endif
 #ifdef HEAD_SAMPLES
-    list.kept = (head_samples[head >> 2] >> ((head & 3u) * 8u)) & 0xFFu;
+    list.kept = (h.samples_word >> ((head & 3u) * 8u)) & 0xFFu;
     list.background = SAMPLES - min(SAMPLES, list.kept + list.listed);
 #else
     list.background = 0u;
@@ -252,6 +295,8 @@ void main() {
     bool inside = all(lessThan(uvec2(pixel), size));
     vec2 center = vec2(pixel) + 0.5;
 
+    HeadLoads head;
+    if (inside) head = load_head(pixel);
     if (gl_LocalInvocationIndex == 0u) sh_block_total = 0u;
 #ifdef WRITE_STATS
     if (gl_LocalInvocationIndex < 8u) local_histogram[gl_LocalInvocationIndex] = 0u;
@@ -259,7 +304,7 @@ void main() {
     tile_begin();   // (its barrier also publishes the zeroed counters)
     DepthRange range = depth_range_empty();
     PixelList list;
-    if (inside) list = gather_pixel(pixel, range);
+    if (inside) list = gather_pixel(pixel, head, range);
 #ifdef WRITE_STATS
     // Pixels with more than one distinct surface, per tile in shared memory (few, so few atomics).
     if (inside) {
@@ -278,7 +323,7 @@ void main() {
     // Heads and the tile's pool blocks are shaded in one step, spread over the invocations.
     vec3 head_color = vec3(0.0);
     if (inside && list.head_depth > 0.0 && list.kept > 0u) {
-        head_color = shade_block(read_block(head_index(pixel)), center, list.head_depth);
+        head_color = shade_block(decode_block(head.block), center, list.head_depth);
     }
 #if SHARED_BLOCKS > 0
     if (distribute) {
