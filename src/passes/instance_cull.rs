@@ -31,7 +31,7 @@
 
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
-use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::executor::{PassContext, PassNode, LIST_COUNT_SLOT, LIST_STATS_SLOT};
 use crate::graph::plan::{PlannedPass, SettingValue};
 use ash::vk;
 
@@ -201,7 +201,7 @@ impl InstanceCullPass {
 }
 
 /// The late phase's bindings for the next frame's early draw list, written together.
-pub const LIST_SLOTS: [&str; 4] = ["visible_ids", "list_commands", "list_count", "list_stats"];
+pub const LIST_SLOTS: [&str; 4] = ["visible_ids", "list_commands", LIST_COUNT_SLOT, LIST_STATS_SLOT];
 
 /// What is wrong with an instance_cull pass's draw-list bindings, if anything: the slot to point
 /// at (empty: the pass itself) and the message. Graph loading reports it at that binding; the

@@ -28,6 +28,8 @@ pub const STATS_BYTES: usize = 64;
 /// Slot through which a late cull phase writes the counters of the next frame's early draw
 /// list; the frame that draws the list reports them (the `.prev` copy).
 pub const LIST_STATS_SLOT: &str = "list_stats";
+/// Slot through which that phase writes the list's draw count (its drawer binds the `.prev`).
+pub const LIST_COUNT_SLOT: &str = "list_count";
 
 /// Counters copied to the host every frame: whose they are and where they come from.
 struct StatsSource {
@@ -49,7 +51,7 @@ fn stats_sources(plan: &CompiledGraph) -> Vec<StatsSource> {
             sources.push((index, StatsSource { pass: index, binding: b.clone(), label: pass.name.clone() }));
         }
         let Some(list) = pass.bindings.iter().find(|b| b.slot == LIST_STATS_SLOT) else { continue };
-        let count = pass.bindings.iter().find(|b| b.slot == "list_count");
+        let count = pass.bindings.iter().find(|b| b.slot == LIST_COUNT_SLOT);
         let drawer = plan.passes.iter().position(|p| {
             p.bindings.iter().any(|d| {
                 d.slot == "draw_count"
