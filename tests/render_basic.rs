@@ -19,3 +19,38 @@ fn boxes_render_with_the_expected_colors() {
     let distinct: std::collections::HashSet<[u8; 4]> = image.pixels().map(|p| p.0).collect();
     assert!(distinct.len() > 50, "image looks flat: {} colors", distinct.len());
 }
+
+/// The G-buffer's color targets are not cleared by default: readers tell background by depth.
+/// Whatever earlier frames left in background texels must never reach the image, with or
+/// without MSAA (the per-sample lighting compares samples, background ones included).
+#[test]
+fn uncleared_gbuffer_colors_never_reach_the_image() {
+    use cullgraph::render::GraphSpec;
+    use cullgraph::scene::CameraPath;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    for (graph, msaa) in [("two_phase", None), ("msaa_per_sample", Some("4")), ("msaa_zprepass", Some("4"))] {
+        let render = |clear: bool| {
+            let mut spec = GraphSpec::builtin(graph).unwrap();
+            if clear {
+                let pass = ["kind: \"gbuffer\",", "kind: \"gbuffer_equal\","];
+                for kind in pass {
+                    spec.text = spec.text.replace(kind, &format!("{kind} settings: {{\"clear_colors\": true}},"));
+                }
+                assert!(spec.text.contains("clear_colors"), "{graph}: no gbuffer pass found");
+            }
+            if let Some(samples) = msaa {
+                spec = spec.with_overrides([("msaa".to_string(), samples.to_string())]);
+            }
+            let mut r =
+                Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(48, 32), &spec).unwrap();
+            // The orbit moves geometry over texels that were background and back.
+            (0..4).map(|f| r.render_to_image(&CameraPath::Orbit.camera_at(&boxes_camera(), f * 2)).unwrap().1).collect()
+        };
+        let (cleared, uncleared): (Vec<_>, Vec<_>) = (render(true), render(false));
+        for (f, (a, b)) in cleared.iter().zip(&uncleared).enumerate() {
+            assert!(a.as_raw() == b.as_raw(), "{graph}, frame {f}: clearing the colors changes the image");
+        }
+    }
+    gpu.assert_clean();
+}

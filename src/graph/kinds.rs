@@ -173,6 +173,14 @@ fn lighting_settings() -> Vec<SettingDecl> {
     ]
 }
 
+fn clear_colors_setting() -> SettingDecl {
+    SettingDecl {
+        name: "clear_colors",
+        default: SettingDefault::Bool(false),
+        doc: "clear the color targets first; off, texels no fragment wrote keep whatever they held (every built-in reader masks them by depth = 0), which saves a full-screen write",
+    }
+}
+
 /// The built-in pass kinds.
 pub fn builtin_kinds() -> Vec<PassKindInfo> {
     vec![
@@ -186,19 +194,19 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
                 ms(slot("ids", Usage::ColorAttachment, false, FormatRule::Exact(VISIBILITY_FORMAT), "visibility buffer: instance id, triangle id (instead of albedo and normal)")),
                 ms(slot("depth", Usage::DepthAttachment, true, FormatRule::Depth, "reversed-Z depth (cleared to 0, stencil to 0)")),
             ],
-            settings: vec![],
+            settings: vec![clear_colors_setting()],
             slots_from_shader: false,
         },
         PassKindInfo {
             name: "gbuffer_equal",
-            doc: "the MSAA Z-prepass baseline: redraws the lists with depth EQUAL against finished depth, one stencil bit per sample (each sample written once), into cleared albedo and normal",
+            doc: "the MSAA Z-prepass baseline: redraws the lists with depth EQUAL against finished depth, one stencil bit per sample (each sample written once), into albedo and normal",
             reads: redraw_list_slots(),
             writes: vec![
                 ms(slot("albedo", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a")),
                 ms(slot("normal", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a")),
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished depth, with stencil (its stencil is written)")),
             ],
-            settings: vec![],
+            settings: vec![clear_colors_setting()],
             slots_from_shader: false,
         },
         PassKindInfo {
