@@ -33,8 +33,8 @@ fn uncleared_gbuffer_colors_never_reach_the_image() {
         let render = |clear: bool| {
             let mut spec = GraphSpec::builtin(graph).unwrap();
             if clear {
-                let pass = ["kind: \"gbuffer\",", "kind: \"gbuffer_equal\","];
-                for kind in pass {
+                let geometry_kinds = ["kind: \"gbuffer\",", "kind: \"gbuffer_equal\","];
+                for kind in geometry_kinds {
                     spec.text = spec.text.replace(kind, &format!("{kind} settings: {{\"clear_colors\": true}},"));
                 }
                 assert!(spec.text.contains("clear_colors"), "{graph}: no gbuffer pass found");

@@ -224,7 +224,7 @@ pub enum GeometryMode {
 pub struct GbufferPass {
     pipeline: Pipeline,
     mode: GeometryMode,
-    /// The `clear_colors` setting (never for `Append`, which keeps what is there).
+    /// The `clear_colors` setting (`gbuffer_append` has none: it loads what is there).
     clear_colors: bool,
 }
 
@@ -260,8 +260,7 @@ impl GbufferPass {
         };
         let pipeline =
             geometry_pipeline(ctx, shaders, &pass.name, fragment, &colors, depth, mode == GeometryMode::Equal)?;
-        let clear_colors = mode != GeometryMode::Append && pass.bool_setting("clear_colors", false);
-        Ok(Self { pipeline, mode, clear_colors })
+        Ok(Self { pipeline, mode, clear_colors: pass.bool_setting("clear_colors", false) })
     }
 }
 
