@@ -62,8 +62,9 @@ pub fn shader_interface_with(compiler: &crate::gpu::ShaderCompiler, path: &Path)
         }
     };
     let mut interface = crate::gpu::reflect::reflect(&spirv).map_err(|e| e.to_string())?;
-    // The optimizer strips variable names from the SPIR-V; take them from the source.
-    let source = if path.is_file() { std::fs::read_to_string(path).ok() } else { None };
+    // The optimizer strips variable names from the SPIR-V; take them from the source, with the
+    // headers it includes from beside it.
+    let source = if path.is_file() { source_with_local_includes(path, 0) } else { None };
     if let Some(source) = source {
         let names = binding_names(&source);
         for (binding, info) in interface.bindings.iter_mut() {
@@ -75,9 +76,34 @@ pub fn shader_interface_with(compiler: &crate::gpu::ShaderCompiler, path: &Path)
     Ok(interface)
 }
 
+/// Headers included more deeply than this are not searched for binding names (include cycles).
+const MAX_INCLUDE_DEPTH: u32 = 16;
+
+/// The text of the shader file `path` with every `#include "file"` that names a file beside it
+/// (relative to the including file) inlined, so that bindings declared in such headers have
+/// names; includes from the shader library stay as they are. `None` if `path` cannot be read.
+fn source_with_local_includes(path: &Path, depth: u32) -> Option<String> {
+    let source = std::fs::read_to_string(path).ok()?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut out = String::with_capacity(source.len());
+    for line in source.lines() {
+        let included = line.trim_start().strip_prefix("#include").map(str::trim).and_then(|rest| {
+            let name = rest.strip_prefix('"')?.split('"').next()?;
+            let file = dir.join(name);
+            (depth < MAX_INCLUDE_DEPTH && file.is_file())
+                .then(|| source_with_local_includes(&file, depth + 1))
+                .flatten()
+        });
+        out.push_str(included.as_deref().unwrap_or(line));
+        out.push('\n');
+    }
+    Some(out)
+}
+
 /// GLSL variable names of `layout(.. binding = N ..)` declarations in `source`: the variable
 /// name, or for a block without an instance name, the block name. Declarations in included
-/// files are not seen (their bindings can still be bound by number).
+/// files are not seen here ([`shader_interface_with`] inlines the headers beside a shader file
+/// first; bindings of others can still be bound by number).
 pub fn binding_names(source: &str) -> std::collections::BTreeMap<u32, String> {
     let text = strip_comments(source);
     let mut out = std::collections::BTreeMap::new();
@@ -253,5 +279,26 @@ layout(push_constant) uniform Push { uint n; } push;
         let names = binding_names(src);
         let v: Vec<(u32, &str)> = names.iter().map(|(k, v)| (*k, v.as_str())).collect();
         assert_eq!(v, vec![(0, "src"), (1, "dst"), (2, "counts"), (3, "Params"), (4, "many")]);
+    }
+
+    #[test]
+    fn inlines_the_headers_beside_a_shader_but_not_library_ones_or_cycles() {
+        let dir = std::env::temp_dir().join(format!("cullgraph-env-includes-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        std::fs::write(
+            dir.join("main.comp"),
+            "#version 460\n#include \"sub/body.glsl\"\n#include \"common/scene.glsl\"\n",
+        )
+        .unwrap();
+        std::fs::write(
+            dir.join("sub/body.glsl"),
+            "layout(binding = 3) buffer B { uint w[]; } claims;\n#include \"body.glsl\"\n",
+        )
+        .unwrap();
+        let text = source_with_local_includes(&dir.join("main.comp"), 0).unwrap();
+        assert!(text.contains("#include \"common/scene.glsl\""), "library includes stay: {text}");
+        assert_eq!(binding_names(&text).get(&3).map(String::as_str), Some("claims"));
+        assert_eq!(text.matches("claims;").count() as u32, MAX_INCLUDE_DEPTH, "a cycle stops at the depth limit");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
