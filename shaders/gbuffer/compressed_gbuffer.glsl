@@ -39,6 +39,13 @@ uint link_count(uint link) { return (link >> 26) & 7u; }
 uint link_sample(uint link) { return link >> 29; }
 uint make_link(uint index, uint count, uint sample_index) { return index | (count << 26) | (sample_index << 29); }
 
+// The `sample_claim` buffer (no stencil): a byte per pixel of the samples claimed. Pixel p's
+// byte is byte p / W of word p % W, W = ceil(pixels / 4), so that neighbouring pixels, drawn
+// together, claim in different words rather than queueing atomics on a shared one.
+uint claim_words(uint pixels) { return (pixels + 3u) / 4u; }
+uint claim_word(uint pixel, uint pixels) { return pixel % claim_words(pixels); }
+uint claim_shift(uint pixel, uint pixels) { return (pixel / claim_words(pixels)) * 8u; }
+
 struct Block {
     vec3 albedo;
     float metallic;

@@ -5,6 +5,8 @@
 // claim their samples with an atomic OR instead. The fragment that owns sample 0 writes the
 // pixel's head block; every other fragment takes a pool block with an atomic and pushes it on
 // the pixel's list. A full pool drops the fragment: its samples fall to the head's weight.
+// The head's sample count is not stored: the lighting pass derives it as the covered samples
+// (from the depth, or from the claimed samples) minus those its list holds.
 #extension GL_ARB_post_depth_coverage : require
 #include "../common/scene.glsl"
 #include "../common/octahedral.glsl"
@@ -25,33 +27,6 @@ layout(set = 0, binding = 4, scalar) buffer Gbuffer {
 layout(set = 0, binding = 5) uniform usampler2D aa_mask;
 #endif
 
-#ifdef HEAD_SAMPLES
-// Samples each pixel's head stands for, one byte per pixel, four to a word (no carry between
-// bytes: at most 8 samples). The lighting pass derives the background from it instead of
-// reading every depth sample.
-layout(set = 0, binding = 6) buffer HeadSamples { uint head_samples[]; };
-void add_head_samples(uint pixel, uint mask) { atomicAdd(head_samples[pixel >> 2], uint(bitCount(mask)) << ((pixel & 3u) * 8u)); }
-#else
-void add_head_samples(uint pixel, uint mask) {}
-#endif
-
-#ifdef SAMPLE_CLAIM
-// Stencil-free ownership (graph/msaa_compressed_claim.ron): a byte per pixel, four to a word,
-// of the samples already claimed (at most 8 samples). A fragment keeps the samples of its
-// post-depth coverage that no other fragment claimed before it. Depth EQUAL still settles
-// intersecting triangles; exactly coplanar fragments go to whichever claims first, which is
-// not draw order and may change from run to run, but every covered sample still belongs to
-// exactly one fragment.
-layout(set = 0, binding = 7) buffer SampleClaim { uint sample_claim[]; };
-uint claim_samples(uint pixel, uint mask) {
-    uint shift = (pixel & 3u) * 8u;
-    uint old = atomicOr(sample_claim[pixel >> 2], mask << shift);
-    return mask & ~(old >> shift) & 0xFFu;
-}
-#else
-uint claim_samples(uint pixel, uint mask) { return mask; }   // the stencil already decided
-#endif
-
 layout(push_constant) uniform Push {
     uint width;
     uint height;
@@ -61,6 +36,25 @@ layout(push_constant) uniform Push {
     float aa_max_distance;   // 0: no limit
     uint aa_object_flags;    // 1: FLAG_NO_AA instances keep one block
 } pc;
+
+#ifdef SAMPLE_CLAIM
+// Stencil-free ownership (graph/msaa_compressed_claim.ron): a byte per pixel (claim_word) of
+// the samples already claimed (at most 8 samples). A fragment keeps the samples of its
+// post-depth coverage that no other fragment claimed before it. Depth EQUAL still settles
+// intersecting triangles; exactly coplanar fragments go to whichever claims first, which is
+// not draw order and may change from run to run, but every covered sample still belongs to
+// exactly one fragment.
+layout(set = 0, binding = 7) buffer SampleClaim { uint sample_claim[]; };
+uint claim_samples(uint pixel, uint mask) {
+    uint pixels = pc.width * pc.height;
+    uint shift = claim_shift(pixel, pixels);
+    uint old = atomicOr(sample_claim[claim_word(pixel, pixels)], mask << shift);
+    return mask & ~(old >> shift) & 0xFFu;
+}
+#else
+uint claim_samples(uint pixel, uint mask) { return mask; }   // the stencil already decided
+#endif
+
 
 layout(location = 0) in vec3 in_normal;
 layout(location = 1) flat in uint in_material;
@@ -98,26 +92,24 @@ void main() {
     uint pixel = uint(gl_FragCoord.y) * pc.width + uint(gl_FragCoord.x);
     mask = claim_samples(pixel, mask);
     if (mask == 0u) return;
+    bool head = (mask & 1u) != 0u;
+    // Capped to one surface: the head takes these samples (the lighting gives the head every
+    // covered sample that no listed block has).
+    if (!head && !may_allocate()) return;
     GpuMaterial m = materials[in_material];
     vec3 n = normalize(in_normal);
     // Seen from behind (open meshes): light the side that faces the eye. A mirrored instance
     // flips the winding, so its outside shows as a back face.
     if (gl_FrontFacing == (in_mirrored != 0u)) n = -n;
-    if ((mask & 1u) != 0u) {
-        write_block(pixel, m, n);   // the head; its link belongs to the list
-        add_head_samples(pixel, mask);
-        return;
-    }
-    if (!may_allocate()) {
-        add_head_samples(pixel, mask);   // capped to one surface: the head takes these samples
+    if (head) {
+        write_block(pixel, m, n);   // its link belongs to the list
         return;
     }
     uint slot = atomicAdd(gb.header[GBUFFER_HEADER_ALLOCATED], 1u);
     if (slot >= pc.pool_blocks) {
         atomicAdd(gb.header[GBUFFER_HEADER_OVERFLOW_FRAGMENTS], 1u);
         atomicAdd(gb.header[GBUFFER_HEADER_OVERFLOW_SAMPLES], uint(bitCount(mask)));
-        add_head_samples(pixel, mask);
-        return;
+        return;   // these samples fall to the head, as above
     }
     uint index = pc.width * pc.height + slot;
     write_block(index, m, n);

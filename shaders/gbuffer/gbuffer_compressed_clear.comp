@@ -1,6 +1,6 @@
 #version 460
 // Start of the compressed G-buffer pass: zero the header counters, every head's link (an
-// empty list) and, when bound, the head sample counts and the claimed samples. Head attributes
+// empty list) and, without stencil, the claimed samples. Head attributes
 // need no clearing: a head whose pixel has no surface at sample 0 is never read (the lighting
 // pass sees the background in the depth).
 #include "compressed_gbuffer.glsl"
@@ -12,16 +12,13 @@ layout(set = 0, binding = 0, scalar) buffer Gbuffer {
     BlockPair pairs[];
 } gb;
 
-#ifdef HEAD_SAMPLES
-layout(set = 0, binding = 1) buffer HeadSamples { uint head_samples[]; };
-#endif
 #ifdef SAMPLE_CLAIM
 layout(set = 0, binding = 2) buffer SampleClaim { uint sample_claim[]; };
 #endif
 
 layout(push_constant) uniform Push {
     uint head_pairs;
-    uint head_sample_words;   // ceil(pixels / 4): one byte per pixel (head_samples, sample_claim)
+    uint claim_words;   // ceil(pixels / 4): one byte per pixel
 } pc;
 
 void main() {
@@ -31,10 +28,7 @@ void main() {
         gb.pairs[i].link[0] = LINK_NULL;
         gb.pairs[i].link[1] = LINK_NULL;
     }
-#ifdef HEAD_SAMPLES
-    if (i < pc.head_sample_words) head_samples[i] = 0u;
-#endif
 #ifdef SAMPLE_CLAIM
-    if (i < pc.head_sample_words) sample_claim[i] = 0u;
+    if (i < pc.claim_words) sample_claim[i] = 0u;
 #endif
 }

@@ -48,11 +48,10 @@ layout(set = 0, binding = 5) buffer Stats {
 shared uint local_histogram[8];
 #endif
 
-#ifdef HEAD_SAMPLES
-// Samples each pixel's head stands for, one byte per pixel (written by gbuffer_compressed): its
-// own and those of fragments that kept no block. With it the pass reads one depth sample per
-// block instead of all of them: background = SAMPLES - head samples - listed samples.
-layout(set = 0, binding = 6) readonly buffer HeadSamples { uint head_samples[]; };
+#ifdef SAMPLE_CLAIM
+// The samples the geometry pass's fragments claimed (graph/msaa_compressed_claim.ron), a byte
+// per pixel: exactly the covered samples, so one word replaces reading every depth sample.
+layout(set = 0, binding = 6) readonly buffer SampleClaim { uint sample_claim[]; };
 #endif
 
 // The tile's pool blocks, shaded by all its invocations together. Each pixel chains its own
@@ -143,6 +142,7 @@ struct PixelList {
 };
 
 uint head_index(ivec2 pixel) { return uint(pixel.y) * frame.size_lights.x + uint(pixel.x); }
+uint pixel_count() { return frame.size_lights.x * frame.size_lights.y; }
 
 uint entry_meta_pixel(uint meta) { return meta & 0xFFu; }
 uint entry_meta_next(uint meta) { return meta >> 8; }
@@ -155,29 +155,61 @@ uint listed_weight(PixelList list, uint link, uint n) {
 // What a pixel's head holds, loaded before anything waits on it (so that the loads' latencies
 // overlap each other and the tile's first barrier instead of forming a chain).
 struct HeadLoads {
-    float depth;         // depth at sample 0
     uint link;           // the head's link
-    uint samples_word;   // the word of `head_samples` holding its byte
     BlockWords block;
+#ifdef SAMPLE_CLAIM
+    float depth;         // depth at sample 0
+    uint claim_word;     // the word of `sample_claim` holding the pixel's byte
+#else
+    float depth[SAMPLES];   // every sample's depth: the covered ones, and each block's
+#endif
 };
 
 HeadLoads load_head(ivec2 pixel) {
     uint head = head_index(pixel);
     HeadLoads h;
-    h.depth = DEPTH_AT(pixel, 0u);
     h.link = gb.pairs[head >> 1].link[head & 1u];
-#ifdef HEAD_SAMPLES
-    h.samples_word = head_samples[head >> 2];
-#else
-    h.samples_word = 0u;
-#endif
     h.block = load_block(head);
+#ifdef SAMPLE_CLAIM
+    h.depth = DEPTH_AT(pixel, 0u);
+    h.claim_word = sample_claim[claim_word(head, pixel_count())];
+#else
+    for (uint s = 0u; s < SAMPLES; ++s) h.depth[s] = DEPTH_AT(pixel, s);
+#endif
     return h;
+}
+
+float head_depth(HeadLoads h) {
+#ifdef SAMPLE_CLAIM
+    return h.depth;
+#else
+    return h.depth[0];
+#endif
+}
+
+// Depth at sample `s` of the pixel whose head `h` is.
+float loaded_depth(HeadLoads h, ivec2 pixel, uint s) {
+#ifdef SAMPLE_CLAIM
+    return DEPTH_AT(pixel, s);
+#else
+    return h.depth[s];
+#endif
+}
+
+// Samples of the pixel that some surface covers.
+uint covered_samples(HeadLoads h, uint head) {
+#ifdef SAMPLE_CLAIM
+    return uint(bitCount((h.claim_word >> claim_shift(head, pixel_count())) & 0xFFu));
+#else
+    uint covered = 0u;
+    for (uint s = 0u; s < SAMPLES; ++s) covered += h.depth[s] > 0.0 ? 1u : 0u;
+    return covered;
+#endif
 }
 
 PixelList gather_pixel(ivec2 pixel, HeadLoads h, inout DepthRange range) {
     PixelList list;
-    list.head_depth = h.depth;
+    list.head_depth = head_depth(h);
     list.blocks = 0u;
     list.listed = 0u;
     list.first_entry = ENTRY_NONE;
@@ -192,7 +224,7 @@ PixelList gather_pixel(ivec2 pixel, HeadLoads h, inout DepthRange range) {
         list.blocks += 1u;
         list.listed += link_count(link);
         // Light culling must cover the depth each block is shaded at.
-        depth_range_add(range, DEPTH_AT(pixel, link_sample(link)));
+        depth_range_add(range, loaded_depth(h, pixel, link_sample(link)));
 #if SHARED_BLOCKS > 0
         uint entry = atomicAdd(sh_block_total, 1u);
         if (entry < uint(SHARED_BLOCKS)) {
@@ -222,18 +254,11 @@ PixelList gather_pixel(ivec2 pixel, HeadLoads h, inout DepthRange range) {
         list.first_entry = ENTRY_NONE;
     }
 #endif
-#ifdef HEAD_SAMPLES
-    list.kept = (h.samples_word >> ((head & 3u) * 8u)) & 0xFFu;
-    list.background = SAMPLES - min(SAMPLES, list.kept + list.listed);
-#else
-    list.background = 0u;
-    for (uint s = 0u; s < SAMPLES; ++s) {
-        float d = DEPTH_AT(pixel, s);
-        depth_range_add(range, d);
-        if (d <= 0.0) list.background += 1u;
-    }
-    list.kept = SAMPLES - min(SAMPLES, list.listed + list.background);
-#endif
+    // The head stands for every covered sample no listed block has: its own, and those of
+    // fragments that kept no block (a full pool, an AA cap).
+    uint covered = covered_samples(h, head);
+    list.kept = covered - min(covered, list.listed);
+    list.background = SAMPLES - min(SAMPLES, covered);
     return list;
 }
 

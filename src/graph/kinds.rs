@@ -220,7 +220,6 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             writes: vec![
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished MSAA depth: with stencil (its stencil is written), or without stencil and a sample_claim buffer")),
                 slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header, width x height head blocks, then the pool (size: compressed_gbuffer_bytes(pool_blocks))"),
-                slot("head_samples", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "samples each pixel's head stands for, one byte per pixel (size: ceil_div(width * height, 4) * 4), so the lighting need not read every depth sample"),
                 slot("sample_claim", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "with a depth format without stencil: the samples already claimed, one byte per pixel (size: ceil_div(width * height, 4) * 4; at most 8 samples)"),
             ],
             settings: vec![
@@ -256,7 +255,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             reads: vec![
                 ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the MSAA depth (positions are rebuilt from each block's sample)")),
                 slot("gbuffer", Usage::StorageBufferRead(Stages::Compute), true, FormatRule::Any, "the compressed G-buffer"),
-                slot("head_samples", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "the geometry pass's head sample counts: one depth read per block instead of every sample"),
+                slot("sample_claim", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "the samples gbuffer_compressed's fragments claimed (with a depth without stencil): the covered samples in one word instead of a read of every depth sample"),
             ],
             writes: vec![
                 slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image"),

@@ -51,9 +51,8 @@ pub fn pool_blocks(bytes: u64, pixels: u64) -> Result<u64, String> {
     Ok(blocks.min(MAX_BLOCKS) - pixels)
 }
 
-/// Bytes of the optional `head_samples` and `sample_claim` buffers: one byte per pixel, in
-/// whole words.
-pub fn head_samples_bytes(pixels: u64) -> u64 {
+/// Bytes of the `sample_claim` buffer: one byte per pixel, in whole words.
+pub fn sample_claim_bytes(pixels: u64) -> u64 {
     pixels.div_ceil(4) * 4
 }
 
@@ -99,7 +98,7 @@ impl SampleOwner {
 }
 
 /// The compressed G-buffer bound to a pass's `gbuffer` slot, with the pool its size gives an
-/// image the size of `depth`, and the optional `head_samples` counts.
+/// image the size of `depth`, and the `sample_claim` buffer when one is bound.
 pub struct BoundGbuffer<'a> {
     /// The buffer.
     pub buffer: &'a crate::gpu::Buffer,
@@ -107,8 +106,8 @@ pub struct BoundGbuffer<'a> {
     pub pixels: u64,
     /// Pool blocks, within the 26-bit index.
     pub pool_blocks: u32,
-    /// Samples each head stands for (one byte per pixel), when the graph binds it.
-    pub head_samples: Option<&'a crate::gpu::Buffer>,
+    /// The samples the fragments claimed (one byte per pixel), when the graph binds it.
+    pub sample_claim: Option<&'a crate::gpu::Buffer>,
 }
 
 impl<'a> BoundGbuffer<'a> {
@@ -124,17 +123,17 @@ impl<'a> BoundGbuffer<'a> {
         let extent = depth.extent();
         let pixels = extent.width as u64 * extent.height as u64;
         let pool = pool_blocks(buffer.size(), pixels).map_err(invalid)?;
-        let head_samples = slots.buffer("head_samples");
-        if let Some(counts) = head_samples {
-            if counts.size() < head_samples_bytes(pixels) {
+        let sample_claim = slots.buffer("sample_claim");
+        if let Some(claim) = sample_claim {
+            if claim.size() < sample_claim_bytes(pixels) {
                 return Err(invalid(format!(
-                    "head_samples holds {} bytes; {pixels} pixels need {} (ceil_div(width * height, 4) * 4)",
-                    counts.size(),
-                    head_samples_bytes(pixels)
+                    "sample_claim holds {} bytes; {pixels} pixels need {} (ceil_div(width * height, 4) * 4)",
+                    claim.size(),
+                    sample_claim_bytes(pixels)
                 )));
             }
         }
-        Ok(Self { buffer, pixels, pool_blocks: pool as u32, head_samples })
+        Ok(Self { buffer, pixels, pool_blocks: pool as u32, sample_claim })
     }
 }
 
@@ -211,9 +210,6 @@ impl GbufferCompressedPass {
         // Graph loading checks this too; a plan built another way gets the same error here.
         let owner = SampleOwner::for_depth(depth.0, depth.1.as_raw(), bound("sample_claim")).map_err(invalid)?;
         let mut buffers = Vec::new();
-        if bound("head_samples") {
-            buffers.push(("HEAD_SAMPLES", "1"));
-        }
         if owner == SampleOwner::Claim {
             buffers.push(("SAMPLE_CLAIM", "1"));
         }
@@ -246,34 +242,22 @@ impl PassNode for GbufferCompressedPass {
         let (gbuffer, pixels, extent) = (bound.buffer, bound.pixels, depth.extent());
         let device = rec.ctx.device();
         let head_pairs = pixels.div_ceil(2) as u32;
-        let head_sample_words = pixels.div_ceil(4) as u32;
-        let claim = if self.claim {
-            let claim = slots.buffer("sample_claim").ok_or_else(|| {
-                crate::Error::Invalid(
+        let claim_words = pixels.div_ceil(4) as u32;
+        let claim = match (self.claim, bound.sample_claim) {
+            (true, None) => {
+                return Err(crate::Error::Invalid(
                     "gbuffer_compressed: no sample_claim buffer bound (the depth has no stencil)".into(),
-                )
-            })?;
-            if claim.size() < head_samples_bytes(pixels) {
-                return Err(crate::Error::Invalid(format!(
-                    "gbuffer_compressed: sample_claim holds {} bytes; {pixels} pixels need {} (ceil_div(width * height, 4) * 4)",
-                    claim.size(),
-                    head_samples_bytes(pixels)
-                )));
+                ))
             }
-            Some(claim)
-        } else {
-            None
+            (claim, buffer) => buffer.filter(|_| claim),
         };
         let mut clear_binds = vec![Bind::Buffer(0, gbuffer.handle())];
-        if let Some(counts) = bound.head_samples {
-            clear_binds.push(Bind::Buffer(1, counts.handle()));
-        }
         if let Some(claim) = claim {
             clear_binds.push(Bind::Buffer(2, claim.handle()));
         }
         self.clear.bind(rec.cmd);
         self.clear.push_bindings(rec.cmd, &clear_binds);
-        self.clear.push_constants(rec.cmd, &[head_pairs, head_sample_words]);
+        self.clear.push_constants(rec.cmd, &[head_pairs, claim_words]);
         // SAFETY: cmd recording with the clear pipeline bound.
         unsafe { device.cmd_dispatch(rec.cmd, head_pairs.div_ceil(256).max(1), 1, 1) };
         let fragment_rw = Access {
@@ -294,9 +278,6 @@ impl PassNode for GbufferCompressedPass {
         let scene = rec.frame.scene;
         let lists = DrawSource::redraw_lists(slots, scene);
         let mut extra = vec![Bind::Buffer(4, gbuffer.handle())];
-        if let Some(counts) = bound.head_samples {
-            extra.push(Bind::Buffer(6, counts.handle()));
-        }
         if let Some(claim) = claim {
             extra.push(Bind::Buffer(7, claim.handle()));
         }

@@ -78,8 +78,8 @@ impl LightingCompressedPass {
             ("SHARED_BLOCKS", shared_blocks.as_str()),
             ("SHARED_MIN_BLOCKS", shared_min_blocks.as_str()),
         ];
-        if pass.bindings.iter().any(|b| b.slot == "head_samples") {
-            defines.push(("HEAD_SAMPLES", "1"));
+        if pass.bindings.iter().any(|b| b.slot == "sample_claim") {
+            defines.push(("SAMPLE_CLAIM", "1"));
         }
         if with_stats {
             defines.push(("WRITE_STATS", "1"));
@@ -133,8 +133,8 @@ impl PassNode for LightingCompressedPass {
         if let Some(stats) = stats {
             binds.push(Bind::Buffer(5, stats.handle()));
         }
-        if let Some(counts) = bound.head_samples {
-            binds.push(Bind::Buffer(6, counts.handle()));
+        if let Some(claim) = bound.sample_claim {
+            binds.push(Bind::Buffer(6, claim.handle()));
         }
         self.pipeline.bind(rec.cmd);
         self.pipeline.push_bindings(rec.cmd, &binds);
