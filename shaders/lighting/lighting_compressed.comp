@@ -55,14 +55,14 @@ layout(set = 0, binding = 6) readonly buffer SampleClaim { uint sample_claim[]; 
 #endif
 
 // The tile's pool blocks, shaded by all its invocations together. Each pixel chains its own
-// entries in list order (`next`); a pixel whose blocks do not all fit shades its whole list
-// itself (correct, only slower). SHARED_BLOCKS 0 (the graph's shared_blocks setting) turns the
-// shared list off: every pixel loops over its own list, the thesis's resolve.
+// entries in list order (`next`); blocks that do not fit wait for the next round (at most
+// MAX_SHARED_ROUNDS, then their pixels shade them). SHARED_BLOCKS 0 (the graph's shared_blocks
+// setting) turns the shared list off: every pixel loops over its own list, the thesis's resolve.
 #ifndef SHARED_BLOCKS
 #define SHARED_BLOCKS 512
 #endif
 #ifndef SHARED_MIN_BLOCKS
-#define SHARED_MIN_BLOCKS 32u   // fewer pool blocks in a tile: each pixel shades its own
+#define SHARED_MIN_BLOCKS 0u   // at most this many pool blocks in a tile: each pixel shades its own
 #endif
 #define ENTRY_NONE 0xFFFFu
 #if SHARED_BLOCKS > 0
@@ -139,6 +139,7 @@ struct PixelList {
     uint listed;           // samples they cover
     uint background;       // samples with no geometry
     uint first_entry;      // first of its entries in the tile's shared list, or ENTRY_NONE
+    uint next_link;        // the link to its first block not in the shared list yet (LINK_NULL: none)
 };
 
 uint head_index(ivec2 pixel) { return uint(pixel.y) * frame.size_lights.x + uint(pixel.x); }
@@ -207,17 +208,35 @@ uint covered_samples(HeadLoads h, uint head) {
 #endif
 }
 
+#if SHARED_BLOCKS > 0
+// Puts the block `link` points to on the tile's shared list, after `last_entry` (the pixel's
+// previous entry, or ENTRY_NONE); false when the list is full.
+bool push_block(uint link, inout uint first_entry, inout uint last_entry) {
+    uint entry = atomicAdd(sh_block_total, 1u);
+    if (entry >= uint(SHARED_BLOCKS)) return false;
+    sh_block_link[entry] = link;
+    sh_block_meta[entry] = gl_LocalInvocationIndex | (ENTRY_NONE << 8);
+    if (last_entry == ENTRY_NONE) {
+        first_entry = entry;
+    } else {
+        sh_block_meta[last_entry] = (sh_block_meta[last_entry] & 0xFFu) | (entry << 8);
+    }
+    last_entry = entry;
+    return true;
+}
+#endif
+
 PixelList gather_pixel(ivec2 pixel, HeadLoads h, inout DepthRange range) {
     PixelList list;
     list.head_depth = head_depth(h);
     list.blocks = 0u;
     list.listed = 0u;
     list.first_entry = ENTRY_NONE;
+    list.next_link = LINK_NULL;
     depth_range_add(range, list.head_depth);
     uint head = head_index(pixel);
     uint link = h.link;
     uint last_entry = ENTRY_NONE;
-    bool all_shared = true;
     // At most SAMPLES - 1 blocks can be listed (one per sample not owned by the head); the bound
     // also keeps a corrupted list from looping.
     for (uint n = 0u; n < SAMPLES && link_index(link) != LINK_NULL; ++n) {
@@ -226,34 +245,12 @@ PixelList gather_pixel(ivec2 pixel, HeadLoads h, inout DepthRange range) {
         // Light culling must cover the depth each block is shaded at.
         depth_range_add(range, loaded_depth(h, pixel, link_sample(link)));
 #if SHARED_BLOCKS > 0
-        uint entry = atomicAdd(sh_block_total, 1u);
-        if (entry < uint(SHARED_BLOCKS)) {
-            sh_block_link[entry] = link;
-            sh_block_meta[entry] = gl_LocalInvocationIndex | (ENTRY_NONE << 8);
-            if (last_entry == ENTRY_NONE) {
-                list.first_entry = entry;
-            } else {
-                sh_block_meta[last_entry] = (sh_block_meta[last_entry] & 0xFFu) | (entry << 8);
-            }
-            last_entry = entry;
-        } else {
-            all_shared = false;
-        }
+        // Blocks past a full list wait for the next round (`shade_remaining_rounds`), in order.
+        if (list.next_link == LINK_NULL && !push_block(link, list.first_entry, last_entry)) list.next_link = link;
 #endif
         uint index = link_index(link);
         link = gb.pairs[index >> 1].link[index & 1u];
     }
-#if SHARED_BLOCKS > 0
-    if (!all_shared) {
-        // Some blocks did not fit: this pixel shades its own list; release the entries it took.
-        for (uint e = list.first_entry; e != ENTRY_NONE;) {
-            uint next = entry_meta_next(sh_block_meta[e]);
-            sh_block_meta[e] = ENTRY_NONE;
-            e = next;
-        }
-        list.first_entry = ENTRY_NONE;
-    }
-#endif
     // The head stands for every covered sample no listed block has: its own, and those of
     // fragments that kept no block (a full pool, an AA cap).
     uint covered = covered_samples(h, head);
@@ -285,26 +282,64 @@ uint pixel_surfaces(PixelList list) {
     return max((list.background > 0u ? 1u : 0u) + (list.head_depth > 0.0 ? 1u : 0u) + list.blocks, 1u);
 }
 
-// Sums and writes one pixel, its head color already shaded.
-void resolve_pixel(ivec2 pixel, vec2 center, PixelList list, vec3 head_color) {
-    bool has_head = list.head_depth > 0.0;
-    vec3 sum = has_head ? head_color * float(list.kept) : vec3(0.0);
-    if (list.first_entry != ENTRY_NONE) {
+// Adds the pixel's entries in this round of the shared list to `sum`, in list order (`n`: the
+// pixel's blocks summed so far).
+vec3 add_shared_blocks(PixelList list, vec3 sum, inout uint n) {
 #if SHARED_BLOCKS > 0
-        uint n = 0u;
-        for (uint e = list.first_entry; e != ENTRY_NONE; e = entry_meta_next(sh_block_meta[e]), ++n) {
-            sum += unpack_color(sh_block_color[e]) * float(listed_weight(list, sh_block_link[e], n));
-        }
+    for (uint e = list.first_entry; e != ENTRY_NONE; e = entry_meta_next(sh_block_meta[e]), ++n) {
+        sum += unpack_color(sh_block_color[e]) * float(listed_weight(list, sh_block_link[e], n));
+    }
 #endif
-    } else if (list.blocks > 0u) {
-        uint head = head_index(pixel);
-        uint link = gb.pairs[head >> 1].link[head & 1u];
-        for (uint n = 0u; n < list.blocks; ++n) {
-            vec3 c = shade_block(read_block(link_index(link)), center, DEPTH_AT(pixel, link_sample(link)));
-            sum += c * float(listed_weight(list, link, n));
+    return sum;
+}
+
+// Rounds of the shared list at most (the first included): at 8x a tile has at most 1792 pool
+// blocks, which the default 512-entry list takes in four. Blocks left after them are shaded by
+// their pixels (`resolve_pixel`). (Lavapipe also lost whole tiles when a loop with barriers
+// ran a few hundred times, as a 1-entry list needed.)
+#define MAX_SHARED_ROUNDS 4u
+
+// When the tile had more blocks than the shared list holds, its pixels put the rest on the
+// list in further rounds, each shaded by all invocations together, and sum them in list order
+// (`n`: the pixel's blocks summed so far). A pixel left to loop over its own blocks would hold
+// its whole subgroup in the light loop once per block: on the monastery at 8x and 500 lights
+// that was most of the pass's time. Called by every invocation of the tile, `round_total` (the
+// first round's pushes) the same for all.
+vec3 shade_remaining_rounds(bool inside, inout PixelList list, vec3 sum, inout uint n, uint round_total) {
+#if SHARED_BLOCKS > 0
+    for (uint round = 1u; round < MAX_SHARED_ROUNDS && round_total > uint(SHARED_BLOCKS); ++round) {
+        barrier();   // everyone has read this round's entries
+        if (gl_LocalInvocationIndex == 0u) sh_block_total = 0u;
+        barrier();
+        list.first_entry = ENTRY_NONE;
+        uint link = inside ? list.next_link : LINK_NULL;
+        uint last_entry = ENTRY_NONE;
+        for (uint guard = 0u; guard < SAMPLES && link_index(link) != LINK_NULL; ++guard) {
+            if (!push_block(link, list.first_entry, last_entry)) break;
             uint index = link_index(link);
             link = gb.pairs[index >> 1].link[index & 1u];
         }
+        list.next_link = link;
+        barrier();
+        round_total = sh_block_total;
+        shade_shared_blocks();
+        barrier();
+        if (inside) sum = add_shared_blocks(list, sum, n);
+    }
+#endif
+    return sum;
+}
+
+// Adds the pixel's blocks from `link` on, the `n`-th of its list first, shaded by itself (a
+// tile that did not share its blocks, or blocks left after the shared rounds), and its sky to
+// `sum` (its head and shared blocks already in), and writes it.
+void resolve_pixel(ivec2 pixel, vec2 center, PixelList list, vec3 sum, uint link, uint n) {
+    bool has_head = list.head_depth > 0.0;
+    for (; n < list.blocks && link_index(link) != LINK_NULL; ++n) {
+        vec3 c = shade_block(read_block(link_index(link)), center, DEPTH_AT(pixel, link_sample(link)));
+        sum += c * float(listed_weight(list, link, n));
+        uint index = link_index(link);
+        link = gb.pairs[index >> 1].link[index & 1u];
     }
     // Sky: the background samples, and the head's when the pixel has no surface at all.
     uint sky_weight = list.background + (!has_head && list.blocks == 0u ? list.kept : 0u);
@@ -339,24 +374,31 @@ void main() {
 #endif
     tile_add_depth_range(range);
     tile_cull_lights(settings.light_tiles != 0u);   // (its barriers publish the shared list)
+    // A tile with at most SHARED_MIN_BLOCKS pool blocks leaves them to its pixels (0 by default:
+    // on the H100 sharing was never slower).
+    bool distribute = false;
 #if SHARED_BLOCKS > 0
-    // A tile with few pool blocks leaves them to their pixels: spreading them costs more than
-    // the divergence it saves.
-    bool distribute = sh_block_total > SHARED_MIN_BLOCKS;
-    if (!distribute) list.first_entry = ENTRY_NONE;
+    uint round_total = sh_block_total;
+    distribute = round_total > SHARED_MIN_BLOCKS;
 #endif
     // Heads and the tile's pool blocks are shaded in one step, spread over the invocations.
     vec3 head_color = vec3(0.0);
     if (inside && list.head_depth > 0.0 && list.kept > 0u) {
         head_color = shade_block(decode_block(head.block), center, list.head_depth);
     }
+    vec3 sum = inside && list.head_depth > 0.0 ? head_color * float(list.kept) : vec3(0.0);
+    // Blocks this pixel shades itself: all of them, or those the shared rounds left.
+    uint own_link = inside ? head.link : LINK_NULL, own_n = 0u;
 #if SHARED_BLOCKS > 0
     if (distribute) {
         shade_shared_blocks();
         barrier();
+        if (inside) sum = add_shared_blocks(list, sum, own_n);
+        sum = shade_remaining_rounds(inside, list, sum, own_n, round_total);
+        own_link = inside ? list.next_link : LINK_NULL;
     }
 #endif
-    if (inside) resolve_pixel(pixel, center, list, head_color);
+    if (inside) resolve_pixel(pixel, center, list, sum, own_link, own_n);
 #ifdef WRITE_STATS
     // The tile's counts were summed before the light culling's barriers: one global atomic per
     // counter and tile.

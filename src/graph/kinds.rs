@@ -266,12 +266,12 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
                 settings.push(SettingDecl {
                     name: "shared_blocks",
                     default: SettingDefault::Int(512),
-                    doc: "pool blocks a 16x16 tile gathers and shades with all its invocations (0..=1024; 0: each pixel loops over its own list, the thesis's resolve)",
+                    doc: "pool blocks a 16x16 tile gathers and shades with all its invocations per round, in up to four rounds (0..=1024; 0: each pixel loops over its own list, the thesis's resolve)",
                 });
                 settings.push(SettingDecl {
                     name: "shared_min_blocks",
-                    default: SettingDefault::Int(32),
-                    doc: "a tile with at most this many pool blocks leaves them to their pixels' own loops (spreading few blocks costs more than it saves)",
+                    default: SettingDefault::Int(0),
+                    doc: "a tile with at most this many pool blocks leaves them to their pixels' own loops (0: every tile shares its blocks, the fastest on the H100)",
                 });
                 settings
             },

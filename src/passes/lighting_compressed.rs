@@ -15,7 +15,7 @@ use ash::vk;
 /// Pool blocks a tile shades together unless the graph says otherwise (`shared_blocks`).
 const DEFAULT_SHARED_BLOCKS: u32 = 512;
 /// Tiles with at most this many pool blocks leave them to their pixels (`shared_min_blocks`).
-const DEFAULT_SHARED_MIN_BLOCKS: u32 = 32;
+const DEFAULT_SHARED_MIN_BLOCKS: u32 = 0;
 /// Most `shared_blocks` allowed.
 const MAX_SHARED_BLOCKS: u32 = 1024;
 /// Shared memory per shared block (link, owner and pixel, half-float color) and for the rest of
