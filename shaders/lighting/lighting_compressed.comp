@@ -381,7 +381,7 @@ void main() {
     uint round_total = sh_block_total;
     distribute = round_total > SHARED_MIN_BLOCKS;
 #endif
-    // Heads and the tile's pool blocks are shaded in one step, spread over the invocations.
+    // Every invocation shades its pixel's head, then all of them the tile's shared blocks.
     vec3 head_color = vec3(0.0);
     if (inside && list.head_depth > 0.0 && list.kept > 0u) {
         head_color = shade_block(decode_block(head.block), center, list.head_depth);
