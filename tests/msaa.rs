@@ -297,9 +297,10 @@ fn light_tiles_change_nothing() {
     }
 }
 
-/// The lighting pass hands a tile's pool blocks to all its invocations through shared memory;
-/// past the list's capacity a pixel shades its own. Both paths, and the thesis's per-pixel loop
-/// (capacity 0), shade every block once with the same weight: same image, same counters.
+/// The lighting pass hands a tile's pool blocks to all its invocations through shared memory,
+/// in rounds when they do not fit (capacity 16: several rounds), and pixels shade what four
+/// rounds leave (capacity 1). Every path, and the thesis's per-pixel loop (capacity 0), shades
+/// every block once with the same weight: same image, same counters.
 #[test]
 fn shared_block_shading_matches_the_per_pixel_loop() {
     let gpu = GpuTest::new();
@@ -318,7 +319,7 @@ fn shared_block_shading_matches_the_per_pixel_loop() {
     };
     let (loop_image, loop_used, loop_histogram) = run("0");
     assert!(loop_used > 0, "the view has edge pixels with pool blocks");
-    for capacity in ["1", "512"] {
+    for capacity in ["1", "16", "512"] {
         let (image, used, histogram) = run(capacity);
         let (mean, max) = mean_and_max_difference(&image, &loop_image);
         assert!(max <= 1 && mean < 0.01, "capacity {capacity}: mean {mean}, max {max}");
