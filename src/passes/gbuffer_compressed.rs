@@ -243,13 +243,14 @@ impl PassNode for GbufferCompressedPass {
         let device = rec.ctx.device();
         let head_pairs = pixels.div_ceil(2) as u32;
         let claim_words = pixels.div_ceil(4) as u32;
-        let claim = match (self.claim, bound.sample_claim) {
-            (true, None) => {
-                return Err(crate::Error::Invalid(
+        let claim = if self.claim {
+            Some(bound.sample_claim.ok_or_else(|| {
+                crate::Error::Invalid(
                     "gbuffer_compressed: no sample_claim buffer bound (the depth has no stencil)".into(),
-                ))
-            }
-            (claim, buffer) => buffer.filter(|_| claim),
+                )
+            })?)
+        } else {
+            None
         };
         let mut clear_binds = vec![Bind::Buffer(0, gbuffer.handle())];
         if let Some(claim) = claim {
