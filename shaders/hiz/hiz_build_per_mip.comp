@@ -5,6 +5,7 @@
 // HIZ_MSAA; otherwise level k + 1 from level k, the same footprints. The pass puts a barrier on
 // the written mip between dispatches.
 #version 460
+#extension GL_EXT_control_flow_attributes : require
 #include "common/hiz.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -23,15 +24,16 @@ layout(binding = 1, r32f) uniform writeonly image2D dst_mip;
 layout(push_constant) uniform Push {
     uvec2 src_size;  // size of the level read (the depth's for chain level 1)
     uvec2 dst_size;  // size of the level written
-    uint samples;    // depth samples per pixel (HIZ_FROM_DEPTH)
 };
+// Depth samples per pixel (HIZ_FROM_DEPTH with HIZ_MSAA), as in hiz_build_single.comp.
+layout(constant_id = 0) const int HIZ_SAMPLES = 1;
 
 // One texel of the source: the min over a pixel's samples, or a texel of the previous level.
 float load_src(ivec2 p) {
 #ifdef HIZ_FROM_DEPTH
     float v = texelFetch(depth_tex, p, 0).r;
 #ifdef HIZ_MSAA
-    for (int s = 1; s < int(samples); ++s) v = min(v, texelFetch(depth_tex, p, s).r);
+    [[unroll]] for (int s = 1; s < HIZ_SAMPLES; ++s) v = min(v, texelFetch(depth_tex, p, s).r);
 #endif
     return v;
 #else

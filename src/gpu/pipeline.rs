@@ -73,15 +73,31 @@ pub struct Pipeline {
 impl Pipeline {
     /// A compute pipeline from one shader.
     pub fn compute(ctx: &GpuContext, name: &str, spirv: &Spirv) -> GpuResult<Self> {
+        Self::compute_specialized(ctx, name, spirv, &[])
+    }
+
+    /// A compute pipeline from one shader whose specialization constants `0..constants.len()`
+    /// (`layout(constant_id = i) const uint ...`) take `constants[i]`; ids the shader does not
+    /// declare are ignored. The driver compiles with the values known, so loops bounded by them
+    /// can be unrolled.
+    pub fn compute_specialized(ctx: &GpuContext, name: &str, spirv: &Spirv, constants: &[u32]) -> GpuResult<Self> {
         let interface = reflect_or_err(name, &[spirv])?;
         let stages = vk::ShaderStageFlags::COMPUTE;
         let (set_layout, layout) = create_layout(ctx, &interface, stages)?;
         let mut p = Self::empty(ctx, name, set_layout, layout, vk::PipelineBindPoint::COMPUTE, stages, interface);
         let module = ShaderModule::new(ctx, spirv)?;
-        let stage = vk::PipelineShaderStageCreateInfo::default()
+        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+            .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: i * 4, size: 4 })
+            .collect();
+        let data: &[u8] = bytemuck::cast_slice(constants);
+        let specialization = vk::SpecializationInfo::default().map_entries(&entries).data(data);
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module.0)
             .name(c"main");
+        if !constants.is_empty() {
+            stage = stage.specialization_info(&specialization);
+        }
         let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
         // SAFETY: valid module and layout.
         let result = unsafe { ctx.device().create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
