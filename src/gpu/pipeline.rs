@@ -77,7 +77,7 @@ impl Pipeline {
     }
 
     /// A compute pipeline from one shader whose specialization constants `0..constants.len()`
-    /// (`layout(constant_id = i) const uint ...`) take `constants[i]`; ids the shader does not
+    /// (`layout(constant_id = i) const int ...` or `uint`, 32 bits) take `constants[i]`; ids the shader does not
     /// declare are ignored. The driver compiles with the values known, so loops bounded by them
     /// can be unrolled.
     pub fn compute_specialized(ctx: &GpuContext, name: &str, spirv: &Spirv, constants: &[u32]) -> GpuResult<Self> {
