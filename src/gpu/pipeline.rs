@@ -77,9 +77,9 @@ impl Pipeline {
     }
 
     /// A compute pipeline from one shader whose specialization constants `0..constants.len()`
-    /// (`layout(constant_id = i) const int ...` or `uint`, 32 bits) take `constants[i]`; ids the shader does not
-    /// declare are ignored. The driver compiles with the values known, so loops bounded by them
-    /// can be unrolled.
+    /// (`layout(constant_id = i) const int ...` or `uint`: 32 bits each) take `constants[i]`;
+    /// ids the shader does not declare are ignored. The driver compiles with the values known,
+    /// so loops bounded by them can be unrolled.
     pub fn compute_specialized(ctx: &GpuContext, name: &str, spirv: &Spirv, constants: &[u32]) -> GpuResult<Self> {
         let interface = reflect_or_err(name, &[spirv])?;
         let stages = vk::ShaderStageFlags::COMPUTE;
