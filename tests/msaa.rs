@@ -202,6 +202,13 @@ fn a_full_pool_degrades_gracefully_and_counts_what_it_dropped() {
     assert!(mean > 0.0 && mean <= no_aa_mean, "starved pool differs by {mean}, no AA by {no_aa_mean}");
 }
 
+/// The monastery asset (beside the repository, or where the workplace keeps it).
+fn monastery() -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/monastery.glb");
+    let path = if path.exists() { path } else { std::path::PathBuf::from("/work/shared/assets/monastery.glb") };
+    SceneSource::File(path).load(&LoadOptions::default()).unwrap()
+}
+
 /// Mean and largest per-channel difference, in 8-bit units.
 fn mean_and_max_difference(a: &RgbaImage, b: &RgbaImage) -> (f64, u8) {
     let mut sum = 0u64;
@@ -400,11 +407,7 @@ fn selective_aa_keeps_one_block_where_it_is_capped() {
 #[test]
 fn compressed_gbuffer_takes_less_memory_than_the_per_sample_gbuffer() {
     let gpu = GpuTest::new();
-    let monastery = {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/monastery.glb");
-        let path = if path.exists() { path } else { std::path::PathBuf::from("/work/shared/assets/monastery.glb") };
-        SceneSource::File(path).load(&LoadOptions::default()).unwrap()
-    };
+    let monastery = monastery();
     for (scene, what) in [(city(1500).0, "city"), (monastery, "monastery")] {
         let bytes = |graph: &str, resources: &[&str]| -> u64 {
             let settings = RenderSettings::new(96, 64);
@@ -448,4 +451,29 @@ fn the_claim_graph_is_the_stencil_graph_with_claims() {
     let derived = with_owner(&read("graph/msaa_compressed.ron"), Owner::Claim)
         .replace(r#"name: "msaa_compressed","#, r#"name: "msaa_compressed_claim","#);
     assert_eq!(tokens(&derived), tokens(&read("graph/msaa_compressed_claim.ron")));
+}
+
+/// The packed normal word (octahedral 12 + 12 bits, roughness 8 bits; the built-in graphs'
+/// default without MSAA) shades like the float texel (normal xyz, roughness as halves; the
+/// per-sample MSAA baseline's layout): with one sample and with four, on flat and curved surfaces.
+#[test]
+fn packed_and_float_normals_shade_alike() {
+    let gpu = GpuTest::new();
+    let monastery = monastery();
+    let (city, city_camera) = city(1500);
+    let monastery_camera = monastery.default_camera(96.0 / 64.0);
+    const PACKED: &str = "\"normal\": Image(format: R32_UINT";
+    const FLOAT: &str = "\"normal\": Image(format: R16G16B16A16_SFLOAT";
+    for (scene, camera, what) in [(&city, &city_camera, "city"), (&monastery, &monastery_camera, "monastery")] {
+        for (graph, from, to) in [("builtin:two_phase", PACKED, FLOAT), ("builtin:msaa_per_sample", FLOAT, PACKED)] {
+            let shipped = spec(graph, &[]);
+            let mut swapped = shipped.clone();
+            swapped.text = shipped.text.replace(from, to);
+            assert_ne!(swapped.text, shipped.text, "{graph} declares its normal image as {from}");
+            let a = render(&gpu, scene, camera, (96, 64), &shipped, 2).0;
+            let b = render(&gpu, scene, camera, (96, 64), &swapped, 2).0;
+            let (mean, max) = mean_and_max_difference(&a, &b);
+            assert!(mean < 0.05 && max <= 2, "{what}, {graph}: packed vs float normals: mean {mean}, max {max}");
+        }
+    }
 }

@@ -5,6 +5,7 @@
 // sample is shaded and the tone-mapped results averaged.
 #include "../common/scene.glsl"
 #include "../common/shading.glsl"
+#include "../common/gbuffer_normal.glsl"
 
 layout(local_size_x = 16, local_size_y = 16) in;
 
@@ -14,12 +15,12 @@ layout(local_size_x = 16, local_size_y = 16) in;
 #if SAMPLES > 1
 layout(set = 0, binding = 0) uniform sampler2DMS depth_tex;
 layout(set = 0, binding = 1) uniform sampler2DMS albedo_metallic_tex;
-layout(set = 0, binding = 2) uniform sampler2DMS normal_roughness_tex;
+layout(set = 0, binding = 2) uniform NORMAL_SAMPLER_2DMS normal_roughness_tex;
 #define FETCH(tex, p, s) texelFetch(tex, p, int(s))
 #else
 layout(set = 0, binding = 0) uniform sampler2D depth_tex;
 layout(set = 0, binding = 1) uniform sampler2D albedo_metallic_tex;
-layout(set = 0, binding = 2) uniform sampler2D normal_roughness_tex;
+layout(set = 0, binding = 2) uniform NORMAL_SAMPLER_2D normal_roughness_tex;
 #define FETCH(tex, p, s) texelFetch(tex, p, 0)
 #endif
 layout(set = 0, binding = 3, scalar) readonly buffer Frame { FrameConstants frame; };
@@ -39,10 +40,10 @@ vec3 shade_sample(ivec2 pixel, uint s, vec2 center) {
     float depth = FETCH(depth_tex, pixel, s).r;
     if (depth <= 0.0) return tonemap_aces(sky_color(view_direction(center)) * settings.exposure);
     vec4 am = FETCH(albedo_metallic_tex, pixel, s);
-    vec4 nr = FETCH(normal_roughness_tex, pixel, s);
+    vec4 nr = decode_normal_roughness(FETCH(normal_roughness_tex, pixel, s));
     Surface surface;
     surface.position = surface_position(center, depth);
-    surface.normal = normalize(nr.xyz);
+    surface.normal = nr.xyz;
     surface.albedo = am.rgb;
     surface.metallic = am.a;
     surface.roughness = nr.a;
@@ -55,7 +56,8 @@ vec3 shade_sample(ivec2 pixel, uint s, vec2 center) {
 
 // Whether every sample of `pixel` holds what sample 0 holds (one surface: shade once).
 bool single_surface(ivec2 pixel) {
-    vec4 a0 = FETCH(albedo_metallic_tex, pixel, 0u), n0 = FETCH(normal_roughness_tex, pixel, 0u);
+    vec4 a0 = FETCH(albedo_metallic_tex, pixel, 0u);
+    NORMAL_TEXEL4 n0 = FETCH(normal_roughness_tex, pixel, 0u);
     bool bg0 = FETCH(depth_tex, pixel, 0u).r <= 0.0;
     for (uint s = 1u; s < SAMPLES; ++s) {
         bool bg = FETCH(depth_tex, pixel, s).r <= 0.0;

@@ -16,7 +16,7 @@ const GRAPH: &str = r#"Graph(
     params: {"method": "single"},
     resources: {
         "albedo": Image(format: R8G8B8A8_UNORM),
-        "normal": Image(format: R16G16B16A16_SFLOAT),
+        "normal": Image(format: R32_UINT),  // octahedral normal 12 + 12 bits, roughness 8
         "depth": Image(format: D32_SFLOAT),
         "hiz": Image(format: R32_SFLOAT, size: Fixed("max(1, width / 2)", "max(1, height / 2)"), mips: MIPS),
     },

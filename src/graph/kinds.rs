@@ -17,6 +17,8 @@ pub enum FormatRule {
     Color,
     /// Exactly this format (the pass's shaders are written for it).
     Exact(vk::Format),
+    /// One of these formats (the pass compiles its shaders for the one bound).
+    OneOf(&'static [vk::Format]),
 }
 
 /// One named input or output of a pass kind.
@@ -89,8 +91,15 @@ pub const COMPUTE_KIND: &str = "compute";
 
 /// The G-buffer geometry pass's albedo/metallic format.
 pub const GBUFFER_ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
-/// The G-buffer geometry pass's normal/roughness format.
-pub const GBUFFER_NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// The G-buffer's packed normal/roughness format: octahedral normal in 12 + 12 bits, roughness
+/// in 8 (`shaders/common/gbuffer_normal.glsl`). The built-in graphs use it where they have no
+/// multisampling.
+pub const GBUFFER_NORMAL_PACKED: vk::Format = vk::Format::R32_UINT;
+/// The G-buffer normal/roughness formats the geometry and lighting passes accept: the packed
+/// word, or normal xyz + roughness as four halves (the thesis's per-sample MSAA baseline layout).
+pub const GBUFFER_NORMAL_FORMATS: &[vk::Format] = &[GBUFFER_NORMAL_PACKED, vk::Format::R16G16B16A16_SFLOAT];
+/// What the G-buffer's `normal` slots hold, in either format.
+const NORMAL_SLOT_DOC: &str = "normal and roughness (packed R32_UINT, or R16G16B16A16_SFLOAT)";
 /// The visibility buffer's format: instance id and triangle id per sample.
 pub const VISIBILITY_FORMAT: vk::Format = vk::Format::R32G32_UINT;
 /// Format of the selective-AA mask (`aa_edges`): 1 where a pixel may keep several surfaces.
@@ -190,7 +199,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             reads: draw_list_slots(false),
             writes: vec![
                 ms(slot("albedo", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
-                ms(slot("normal", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a")),
+                ms(slot("normal", Usage::ColorAttachment, false, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
                 ms(slot("ids", Usage::ColorAttachment, false, FormatRule::Exact(VISIBILITY_FORMAT), "visibility buffer: instance id, triangle id (instead of albedo and normal)")),
                 ms(slot("depth", Usage::DepthAttachment, true, FormatRule::Depth, "reversed-Z depth (cleared to 0, stencil to 0)")),
             ],
@@ -203,7 +212,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             reads: redraw_list_slots(),
             writes: vec![
                 ms(slot("albedo", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a")),
-                ms(slot("normal", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a")),
+                ms(slot("normal", Usage::ColorAttachment, true, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished depth, with stencil (its stencil is written)")),
             ],
             settings: vec![clear_colors_setting()],
@@ -283,7 +292,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             reads: vec![
                 ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "reversed-Z depth (multisampled: every sample is lit)")),
                 ms(slot("albedo", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo, metallic")),
-                ms(slot("normal", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal, roughness")),
+                ms(slot("normal", Usage::Sampled(Stages::Compute), true, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
             ],
             writes: vec![slot(
                 "output",
@@ -314,7 +323,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             reads: draw_list_slots(true),
             writes: vec![
                 ms(slot("albedo", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
-                ms(slot("normal", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_NORMAL_FORMAT), "normal xyz, roughness a")),
+                ms(slot("normal", Usage::ColorAttachmentLoad, false, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
                 ms(slot("ids", Usage::ColorAttachmentLoad, false, FormatRule::Exact(VISIBILITY_FORMAT), "visibility buffer: instance id, triangle id")),
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "reversed-Z depth")),
             ],

@@ -23,8 +23,6 @@ use ash::vk;
 
 /// Albedo (rgb) and metallic (a).
 pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
-/// Normal (xyz) and roughness (a).
-pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// Reversed-Z depth: cleared to 0 (infinitely far), nearer is greater.
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
@@ -81,6 +79,16 @@ pub fn bound_image(plan: &CompiledGraph, pass: &PlannedPass, slot: &str) -> Opti
     match &plan.resources.get(binding.resource)?.kind {
         ResolvedKind::Image { format, samples, .. } => Some((*format, *samples)),
         ResolvedKind::Buffer { .. } => None,
+    }
+}
+
+/// The defines of the shaders that write or read a G-buffer normal image of `format`
+/// (`shaders/common/gbuffer_normal.glsl`): `NORMAL_PACKED` for the packed word.
+pub fn normal_defines(format: Option<vk::Format>) -> &'static [(&'static str, &'static str)] {
+    if format == Some(crate::graph::kinds::GBUFFER_NORMAL_PACKED) {
+        &[("NORMAL_PACKED", "1")]
+    } else {
+        &[]
     }
 }
 
@@ -254,9 +262,10 @@ impl GbufferPass {
                 depth.0
             )));
         }
+        let normal = bound_image(plan, pass, "normal").map(|(f, _)| f);
         let (fragment, colors) = match ids {
             Some((format, _)) => (Some(("gbuffer/visibility.frag", &[][..])), vec![format]),
-            None => ((!colors.is_empty()).then_some(("gbuffer/gbuffer.frag", &[][..])), colors),
+            None => ((!colors.is_empty()).then_some(("gbuffer/gbuffer.frag", normal_defines(normal))), colors),
         };
         let pipeline =
             geometry_pipeline(ctx, shaders, &pass.name, fragment, &colors, depth, mode == GeometryMode::Equal)?;

@@ -4,7 +4,7 @@
 use crate::gpu::{Bind, Buffer, GpuContext, Image, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::{PassContext, PassNode};
 use crate::graph::plan::{CompiledGraph, PlannedPass};
-use crate::passes::gbuffer::bound_image;
+use crate::passes::gbuffer::{bound_image, normal_defines};
 use ash::vk;
 
 /// Format of the lit output (values are sRGB-encoded by the shader).
@@ -62,10 +62,19 @@ pub struct LightingPass {
 }
 
 impl LightingPass {
-    /// Compiles the shader for G-buffer images of `samples` samples and creates the pipeline.
-    pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler, samples: vk::SampleCountFlags) -> crate::Result<Self> {
+    /// Compiles the shader for G-buffer images of `samples` samples whose normal image has
+    /// `normal_format` (one of [`GBUFFER_NORMAL_FORMATS`](crate::graph::kinds::GBUFFER_NORMAL_FORMATS))
+    /// and creates the pipeline.
+    pub fn new(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        samples: vk::SampleCountFlags,
+        normal_format: vk::Format,
+    ) -> crate::Result<Self> {
         let samples = samples.as_raw().max(1).to_string();
-        let spirv = shaders.compile("lighting/lighting.comp", &[("SAMPLES", &samples)])?;
+        let mut defines = vec![("SAMPLES", samples.as_str())];
+        defines.extend_from_slice(normal_defines(Some(normal_format)));
+        let spirv = shaders.compile("lighting/lighting.comp", &defines)?;
         let settings = LightingSettings { exposure: 0.8, debug_view: 0, light_tiles: 1 };
         Ok(Self {
             pipeline: Pipeline::compute(ctx, "lighting", &spirv)?,
@@ -82,7 +91,8 @@ impl LightingPass {
         plan: &CompiledGraph,
     ) -> crate::Result<Self> {
         let samples = bound_image(plan, pass, "depth").map_or(vk::SampleCountFlags::TYPE_1, |(_, s)| s);
-        Ok(Self { settings: LightingSettings::from_plan(pass), ..Self::new(ctx, shaders, samples)? })
+        let normal = bound_image(plan, pass, "normal").map_or(crate::graph::kinds::GBUFFER_NORMAL_PACKED, |(f, _)| f);
+        Ok(Self { settings: LightingSettings::from_plan(pass), ..Self::new(ctx, shaders, samples, normal)? })
     }
 
     /// Records one dispatch over the output.

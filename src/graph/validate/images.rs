@@ -79,6 +79,9 @@ fn format_errors(graph: &ValidatedGraph) -> Vec<(Pos, String)> {
             let depth = formats::is_depth(format);
             let needs = match rule {
                 FormatRule::Exact(f) if f != format => Some(formats::name(f)),
+                FormatRule::OneOf(fs) if !fs.contains(&format) => {
+                    Some(fs.iter().map(|&f| formats::name(f)).collect::<Vec<_>>().join(" or "))
+                }
                 FormatRule::Depth if !depth => Some("a depth format".to_string()),
                 FormatRule::Color if depth => Some("a color format".to_string()),
                 _ if b.usage.needs_depth_format() && !depth => Some("a depth format".to_string()),
