@@ -67,7 +67,7 @@ layout(set = 0, binding = 6) readonly buffer SampleClaim { uint sample_claim[]; 
 #define ENTRY_NONE 0xFFFFu
 #if SHARED_BLOCKS > 0
 shared uint sh_block_link[SHARED_BLOCKS];    // the link that points at the block
-shared uint sh_block_meta[SHARED_BLOCKS];    // local pixel | next entry of the pixel << 8; ENTRY_NONE pixel: unused
+shared uint sh_block_meta[SHARED_BLOCKS];    // local pixel | next entry of the pixel << 8 (ENTRY_NONE: last)
 shared uvec2 sh_block_color[SHARED_BLOCKS];  // tone-mapped color, half floats (small shared use keeps occupancy up)
 #endif
 shared uint sh_block_total;
@@ -267,9 +267,7 @@ void shade_shared_blocks() {
 #if SHARED_BLOCKS > 0
     uint total = min(sh_block_total, uint(SHARED_BLOCKS));
     for (uint e = gl_LocalInvocationIndex; e < total; e += TILE_SIZE * TILE_SIZE) {
-        uint meta = sh_block_meta[e];
-        if (meta == ENTRY_NONE) continue;
-        uint local_pixel = entry_meta_pixel(meta);
+        uint local_pixel = entry_meta_pixel(sh_block_meta[e]);  // every entry below the total was pushed
         ivec2 pixel = ivec2(gl_WorkGroupID.xy * TILE_SIZE + uvec2(local_pixel % TILE_SIZE, local_pixel / TILE_SIZE));
         uint link = sh_block_link[e];
         sh_block_color[e] = pack_color(shade_block(read_block(link_index(link)), vec2(pixel) + 0.5, DEPTH_AT(pixel, link_sample(link))));
