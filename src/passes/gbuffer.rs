@@ -21,11 +21,6 @@ use crate::render::gpu_types::DrawIndexedIndirect;
 use crate::render::scene_buffers::GpuScene;
 use ash::vk;
 
-/// Albedo (rgb) and metallic (a).
-pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
-/// Reversed-Z depth: cleared to 0 (infinitely far), nearer is greater.
-pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
-
 /// Slots of a geometry pass's draw list.
 pub const LIST_SLOTS: [&str; 3] = ["draw_commands", "draw_count", "draw_instance_ids"];
 /// Slots of a redraw pass's second (late) list.
