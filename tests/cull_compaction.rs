@@ -40,7 +40,6 @@ fn expected(scene: &cullgraph::scene::Scene, camera: &Camera, w: u32, h: u32) ->
 /// What each draw pass of the last frame drew (the graphs here all cull).
 fn draw_lists(renderer: &Renderer) -> Vec<Vec<u32>> {
     renderer
-        .runtime()
         .drawn()
         .unwrap()
         .unwrap()

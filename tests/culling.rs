@@ -6,13 +6,15 @@
 mod common;
 
 use common::{cube_mesh, GpuTest};
+use cullgraph::oracle::raycast::{RaycastOracle, SamplePattern};
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::{Camera, CameraPath, Instance, Material, Projection, Scene, SceneSource, Transform};
+use cullgraph::scene::{Camera, CameraPath, Instance, Material, MeshData, Projection, Scene, SceneSource, Transform};
 use cullgraph::stats::FrameStats;
 use glam::{DVec3, Mat3, Vec3};
 use proptest::prelude::*;
+use std::collections::BTreeSet;
 
 /// Graphs that must never miss a visible instance.
 const EXACT_GRAPHS: [&str; 3] = ["frustum", "two_phase", "occluder_prepass"];
@@ -64,6 +66,7 @@ fn wall_scene() -> Scene {
         albedo: Vec3::new(0.8, 0.1, 0.1),
         roughness: 0.5,
         metallic: 0.0,
+        double_sided: false,
     });
     let mut place = |scale: Vec3, at: DVec3, material: u32, flags: u32| {
         scene.instances.push(Instance {
@@ -183,6 +186,72 @@ fn zero_and_negative_scale() {
         });
     }
     check(&gpu, &scene, &wall_camera(), (48, 36), 2, CameraPath::Still);
+}
+
+/// Five quads in a row in front of the eye (at the origin, looking down -z): one-sided facing
+/// the eye, one-sided turned away, one-sided mirrored in x (glTF keeps its front toward the eye),
+/// one-sided mirrored through its own plane (front away), double-sided turned away. With
+/// `away_double_sided` the two whose front is away are double-sided too; `shown_only` leaves
+/// out what a one-sided rendering must not show.
+fn quads_scene(away_double_sided: bool, shown_only: bool) -> Scene {
+    let mut scene = Scene { name: "quads".into(), ..Default::default() };
+    let quad = MeshData {
+        positions: vec![
+            Vec3::new(-0.8, -0.8, 0.0),
+            Vec3::new(0.8, -0.8, 0.0),
+            Vec3::new(0.8, 0.8, 0.0),
+            Vec3::new(-0.8, 0.8, 0.0),
+        ],
+        normals: vec![],
+        indices: vec![0, 1, 2, 0, 2, 3],
+    };
+    let mesh = scene.add_mesh("quad", &quad, "quad").unwrap();
+    let one = scene.add_material(Material { name: "one-sided".into(), ..Default::default() });
+    let two = scene.add_material(Material { name: "double-sided".into(), double_sided: true, ..Default::default() });
+    let turned = Mat3::from_rotation_y(std::f32::consts::PI);
+    let away = if away_double_sided { two } else { one };
+    let placements = [
+        (Mat3::IDENTITY, one, true),
+        (turned, away, away_double_sided),
+        (Mat3::from_diagonal(Vec3::new(-1.0, 1.0, 1.0)), one, true),
+        (Mat3::from_diagonal(Vec3::new(1.0, 1.0, -1.0)), away, away_double_sided),
+        (turned, two, true),
+    ];
+    for (i, (linear, material, shown)) in placements.into_iter().enumerate() {
+        if shown || !shown_only {
+            let translation = DVec3::new(-4.0 + 2.0 * i as f64, 0.0, -8.0);
+            scene.instances.push(Instance { transform: Transform { linear, translation }, mesh, material, flags: 0 });
+        }
+    }
+    scene
+}
+
+#[test]
+fn back_faces_of_one_sided_materials_are_not_drawn() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (w, h) = (64, 48);
+    let camera = Camera { eye: DVec3::ZERO, target: DVec3::NEG_Z, ..Default::default() };
+    let render = |scene: &Scene| {
+        let spec = GraphSpec::builtin("no_cull").unwrap();
+        let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
+        r.enable_verification(&shaders).unwrap();
+        let (_, image) = r.render_to_image(&camera).unwrap();
+        (image, r.exactly_visible().clone())
+    };
+    let scene = quads_scene(false, false);
+    let (image, visible) = render(&scene);
+    // The faces the rasterizer drops leave no pixel: the frame equals one without those quads.
+    assert!(image.as_raw() == render(&quads_scene(false, true)).0.as_raw(), "a culled face left pixels");
+    assert!(image.as_raw() != render(&quads_scene(true, false)).0.as_raw(), "double-sided quads must show");
+    // The instance-id render and the ray cast agree on what is seen.
+    assert_eq!(visible, BTreeSet::from([0, 2, 4]));
+    let rays = RaycastOracle::new(&scene, camera.eye).cast(&camera, w, h, SamplePattern::Center).unwrap();
+    assert_eq!(rays.visible, visible);
+    // Culling changes nothing, along the row from in front of the quads and, as the camera
+    // orbits past their plane, from behind.
+    let side = Camera { eye: DVec3::new(8.0, 1.0, -7.5), target: DVec3::new(0.0, 0.0, -8.0), ..Default::default() };
+    check(&gpu, &scene, &side, (w, h), 4, CameraPath::Orbit);
 }
 
 #[test]

@@ -177,7 +177,6 @@ impl Tools {
                 depth_compare: compare,
                 depth_write: true,
                 samples: vk::SampleCountFlags::from_raw(samples),
-                cull_mode: vk::CullModeFlags::NONE,
                 stencil: Default::default(),
             };
             [
@@ -270,6 +269,7 @@ impl Tools {
         unsafe {
             device.cmd_begin_rendering(cmd, &rendering);
             device.cmd_set_viewport(cmd, 0, &[viewport]);
+            device.cmd_set_cull_mode(cmd, vk::CullModeFlags::NONE);
             device.cmd_set_scissor(cmd, 0, &[area]);
             pipeline.bind(cmd);
             pipeline.push_constants(cmd, &push);

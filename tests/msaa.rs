@@ -119,6 +119,7 @@ fn intersecting_scene() -> Scene {
         albedo: Vec3::new(0.1, 0.7, 0.2),
         roughness: 0.5,
         metallic: 0.0,
+        double_sided: false,
     });
     let cube = scene.instances[1].mesh;
     let tilted =

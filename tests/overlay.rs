@@ -181,6 +181,7 @@ fn wall_scene() -> Scene {
         albedo: Vec3::new(0.8, 0.1, 0.1),
         roughness: 0.5,
         metallic: 0.0,
+        double_sided: false,
     });
     let mut place = |scale: Vec3, at: DVec3, material: u32| {
         scene.instances.push(Instance {

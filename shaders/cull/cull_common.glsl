@@ -29,6 +29,9 @@ struct CullRecord {
 // Set when a bound does not fit half floats (larger than 65504): always visible.
 #define CULL_HUGE 0x80000000u
 
+// Face-cull regions of a command list, each with its own draw count (src/render/face_cull.rs).
+#define FACE_CULL_REGIONS 3u
+
 vec3 record_center_lo(CullRecord r) { return vec3(unpackHalf2x16(r.lo_xy), unpackHalf2x16(r.lo_z_radius).x); }
 float record_radius(CullRecord r) { return unpackHalf2x16(r.lo_z_radius).y; }
 vec3 record_half_extent(CullRecord r) { return vec3(unpackHalf2x16(r.half_xy), unpackHalf2x16(r.half_z).x); }

@@ -8,6 +8,8 @@
 // the superblock + bits before it in the block). Slots are sorted by draw group, so each group's
 // survivors form one slice, in instance order, every run; the group's command starts there
 // (first instance = the survivors of the groups before it, summed from the group counts).
+// Groups are sorted by face cull (src/render/face_cull.rs): each face cull's commands are
+// compacted from its region's first group on, with a count of its own.
 //
 // VISIBLE_OUT (late phase): each block also places the instance ids of its visible slots, the
 // same way, and workgroup 0 writes the commands, the count and the counters of that list too:
@@ -28,7 +30,7 @@ layout(set = 0, binding = 3) readonly buffer SlotInstances { uint slot_instances
 layout(set = 0, binding = 4) writeonly buffer DrawIds { uint draw_ids[]; };
 layout(set = 0, binding = 5) buffer GroupCounts { uint group_counts[]; };
 layout(set = 0, binding = 6, scalar) writeonly buffer Commands { DrawCommand commands[]; };
-layout(set = 0, binding = 7) writeonly buffer DrawCount { uint draw_count; };
+layout(set = 0, binding = 7) writeonly buffer DrawCount { uint draw_count[FACE_CULL_REGIONS]; };
 layout(set = 0, binding = 8, scalar) writeonly buffer Stats { CullStats stats; };
 
 #ifdef VISIBLE_OUT
@@ -37,7 +39,7 @@ layout(set = 0, binding = 10) writeonly buffer VisibleIds { uint visible_ids[]; 
 // The next frame's early draw list: its commands, their count, and its counters (CullStats,
 // tested 0), all history buffers the next frame reads as `.prev`.
 layout(set = 0, binding = 11, scalar) writeonly buffer ListCommands { DrawCommand list_commands[]; };
-layout(set = 0, binding = 12) writeonly buffer ListCount { uint list_count; };
+layout(set = 0, binding = 12) writeonly buffer ListCount { uint list_count[FACE_CULL_REGIONS]; };
 layout(set = 0, binding = 13, scalar) writeonly buffer ListStats { CullStats list_stats; };
 #endif
 
@@ -45,6 +47,7 @@ layout(push_constant) uniform Push {
     uint slot_count;
     uint group_count;
     uint superblocks;
+    uint region_first[FACE_CULL_REGIONS];  // first group of each face cull's region
 } pc;
 
 // Placing a block: its draw bits [0] and visibility bits [1], and the survivors / visible slots
@@ -154,9 +157,22 @@ uint take_group_count(uint at) {
 // What one draw list's commands add up to.
 struct ListTotals {
     uint placed;         // instances
-    uint written;        // commands
+    uvec3 written;       // commands, per face-cull region
     uint64_t triangles;  // this invocation's share
 };
+
+// The face-cull region of group `g`.
+uint region_of(uint g) { return g >= pc.region_first[2] ? 2u : (g >= pc.region_first[1] ? 1u : 0u); }
+
+// One command in region `r`, as a scan term: three 10-bit counters in one word (a chunk of
+// THREADS groups writes at most 256 commands per region).
+uint region_term(uint r) { return 1u << (10u * r); }
+uvec3 region_counts(uint packed) { return uvec3(packed & 0x3FFu, (packed >> 10u) & 0x3FFu, packed >> 20u); }
+
+// Where the next command of region `r` goes, given the commands before it in this chunk.
+uint command_index(ListTotals t, uint r, uint packed_before) {
+    return pc.region_first[r] + t.written[r] + region_counts(packed_before)[r];
+}
 
 // A group's command for `count` instances from `first_instance` on; adds its triangles to `t`.
 DrawCommand group_command(DrawGroup group, uint count, uint first_instance, inout ListTotals t) {
@@ -175,8 +191,8 @@ DrawCommand group_command(DrawGroup group, uint count, uint first_instance, inou
 // count back to zero. Called in uniform control flow.
 void write_group_commands(out ListTotals drawn, out ListTotals listed) {
     uint lane = gl_LocalInvocationIndex;
-    drawn = ListTotals(0u, 0u, 0ul);
-    listed = ListTotals(0u, 0u, 0ul);
+    drawn = ListTotals(0u, uvec3(0u), 0ul);
+    listed = ListTotals(0u, uvec3(0u), 0ul);
     for (uint chunk = 0u; chunk < pc.group_count; chunk += THREADS) {
         uint g = chunk + lane;
         uint count = 0u, visible = 0u;
@@ -188,19 +204,23 @@ void write_group_commands(out ListTotals drawn, out ListTotals listed) {
 #endif
             if (count != 0u || visible != 0u) group = groups[g];
         }
+        uint r = region_of(g);
         uvec4 total;
         uvec4 before = workgroup_exclusive_scan(
-            uvec4(count, count != 0u ? 1u : 0u, visible, visible != 0u ? 1u : 0u), total);
-        if (count != 0u) commands[drawn.written + before.y] = group_command(group, count, drawn.placed + before.x, drawn);
+            uvec4(count, count != 0u ? region_term(r) : 0u, visible, visible != 0u ? region_term(r) : 0u), total);
+        if (count != 0u) {
+            commands[command_index(drawn, r, before.y)] = group_command(group, count, drawn.placed + before.x, drawn);
+        }
 #ifdef VISIBLE_OUT
         if (visible != 0u) {
-            list_commands[listed.written + before.w] = group_command(group, visible, listed.placed + before.z, listed);
+            list_commands[command_index(listed, r, before.w)] =
+                group_command(group, visible, listed.placed + before.z, listed);
         }
 #endif
         drawn.placed += total.x;
-        drawn.written += total.y;
+        drawn.written += region_counts(total.y);
         listed.placed += total.z;
-        listed.written += total.w;
+        listed.written += region_counts(total.w);
     }
 }
 
@@ -233,6 +253,8 @@ CullStats stats_record(uint tested, uint frustum, uint occlusion, uint drawn, ui
     return s;
 }
 
+uint commands_of(ListTotals t) { return t.written.x + t.written.y + t.written.z; }
+
 void write_commands() {
     uint lane = gl_LocalInvocationIndex;
     if (lane < 8u) sh_totals[lane] = 0u;
@@ -256,9 +278,9 @@ void write_commands() {
     }
     uint64_t triangles = workgroup_triangles(drawn.triangles);
     if (lane == 0u) {
-        draw_count = drawn.written;
+        for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) draw_count[r] = drawn.written[r];
         stats = stats_record(sh_totals[TOTAL_TESTED], sh_totals[TOTAL_FRUSTUM], sh_totals[TOTAL_OCCLUSION], drawn.placed,
-                             drawn.written, triangles, sh_totals[TOTAL_VISIBLE]);
+                             commands_of(drawn), triangles, sh_totals[TOTAL_VISIBLE]);
         // Nothing reads this word in this dispatch: the next run's test step does.
         scratch[SCRATCH_TEST_RUN] = run + 1u;
     }
@@ -270,8 +292,8 @@ void write_commands() {
     barrier();
     uint64_t list_triangles = workgroup_triangles(listed.triangles);
     if (lane == 0u) {
-        list_count = listed.written;
-        list_stats = stats_record(0u, 0u, 0u, listed.placed, listed.written, list_triangles, 0u);
+        for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) list_count[r] = listed.written[r];
+        list_stats = stats_record(0u, 0u, 0u, listed.placed, commands_of(listed), list_triangles, 0u);
     }
 #endif
 }

@@ -1,7 +1,8 @@
 #version 460
 // Atomic-append variant, step 1: one thread per draw group writes the group's command with no
 // instances yet (the test step bumps instanceCount atomically), and thread 0 resets the
-// counters and sets the draw count to every group (empty ones are no-op draws).
+// counters and sets each face-cull region's draw count to all its groups (empty ones are no-op
+// draws).
 #extension GL_GOOGLE_include_directive : require
 #include "cull_common.glsl"
 
@@ -9,15 +10,21 @@ layout(local_size_x = 256) in;
 
 layout(set = 0, binding = 0, scalar) readonly buffer Groups { DrawGroup groups[]; };
 layout(set = 0, binding = 1, scalar) writeonly buffer Commands { DrawCommand commands[]; };
-layout(set = 0, binding = 2) writeonly buffer DrawCount { uint draw_count; };
+layout(set = 0, binding = 2) writeonly buffer DrawCount { uint draw_count[FACE_CULL_REGIONS]; };
 layout(set = 0, binding = 3, scalar) writeonly buffer Stats { CullStats stats; };
 
-layout(push_constant) uniform Push { uint group_count; } pc;
+layout(push_constant) uniform Push {
+    uint group_count;
+    uint region_first[FACE_CULL_REGIONS];  // first group of each face cull's region
+} pc;
 
 void main() {
     uint g = gl_GlobalInvocationID.x;
     if (g == 0u) {
-        draw_count = pc.group_count;
+        for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) {
+            uint end = r + 1u < FACE_CULL_REGIONS ? pc.region_first[r + 1u] : pc.group_count;
+            draw_count[r] = end - pc.region_first[r];
+        }
         CullStats s;
         s.tested = 0u;
         s.frustum_culled = 0u;

@@ -19,7 +19,8 @@ pub enum Bind {
     Sampled(u32, vk::ImageView, vk::Sampler, vk::ImageLayout),
 }
 
-/// Fixed-function state of a graphics pipeline (dynamic rendering, dynamic viewport/scissor).
+/// Fixed-function state of a graphics pipeline (dynamic rendering; viewport, scissor and cull
+/// mode are dynamic state, counter-clockwise is the front face).
 #[derive(Clone, Debug)]
 pub struct GraphicsDesc<'a> {
     /// Vertex shader.
@@ -40,8 +41,6 @@ pub struct GraphicsDesc<'a> {
     pub depth_write: bool,
     /// Samples per pixel.
     pub samples: vk::SampleCountFlags,
-    /// Face culling.
-    pub cull_mode: vk::CullModeFlags,
     /// Stencil use (only with a depth format that has stencil).
     pub stencil: StencilRule,
 }
@@ -162,7 +161,6 @@ impl Pipeline {
         let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
         let raster = vk::PipelineRasterizationStateCreateInfo::default()
             .polygon_mode(vk::PolygonMode::FILL)
-            .cull_mode(desc.cull_mode)
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(desc.samples);
@@ -191,7 +189,8 @@ impl Pipeline {
             .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
             .collect();
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        // The cull mode is per draw: each face-cull region of a command list sets its own.
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR, vk::DynamicState::CULL_MODE];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(desc.color_formats)

@@ -11,11 +11,13 @@
 //! The ray–triangle test is watertight (Woop, Benthin & Wald 2013, with the `f64` fallback for
 //! edge functions that round to zero), so a ray through a shared edge never slips between two
 //! triangles. Triangles of zero area and non-finite ones are skipped (the rasterizer draws
-//! nothing for them). Limits of "exact": a sample within the rasterizer's sub-pixel snapping
+//! nothing for them), and so are the faces the rasterizer culls: back faces of one-sided
+//! materials, with the winding flipped for mirrored instances ([`FaceCull`]). Limits of "exact": a sample within the rasterizer's sub-pixel snapping
 //! distance of an edge may resolve differently, and exact depth ties between instances go to
 //! whichever the traversal meets first, where the rasterizer would follow draw order.
 
 use super::cull_math::CullView;
+use crate::render::face_cull::FaceCull;
 use crate::scene::Scene;
 use crate::{Error, Result};
 use glam::{DMat3, DVec3, Vec3A};
@@ -84,6 +86,8 @@ pub struct RaycastOracle {
     tris: Vec<[Vec3A; 3]>,
     /// Instance of each triangle, same order.
     tri_instance: Vec<u32>,
+    /// Which faces of each triangle are culled, same order.
+    tri_face_cull: Vec<FaceCull>,
     build_time: Duration,
 }
 
@@ -93,8 +97,10 @@ impl RaycastOracle {
         let start = Instant::now();
         let mut tris = Vec::new();
         let mut tri_instance = Vec::new();
+        let mut tri_face_cull = Vec::new();
         for (id, instance) in scene.instances.iter().enumerate() {
             let mesh = &scene.meshes[instance.mesh as usize];
+            let face_cull = FaceCull::of(scene, instance);
             let linear = instance.transform.linear.as_dmat3();
             let offset = instance.transform.translation - eye;
             let indices = &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
@@ -111,10 +117,11 @@ impl RaycastOracle {
                 }
                 tris.push(tri);
                 tri_instance.push(id as u32);
+                tri_face_cull.push(face_cull);
             }
         }
         if tris.is_empty() {
-            return Self { eye, bvh: None, tris, tri_instance, build_time: start.elapsed() };
+            return Self { eye, bvh: None, tris, tri_instance, tri_face_cull, build_time: start.elapsed() };
         }
         let input: Vec<Triangle> = tris.iter().map(|t| Triangle { v0: t[0], v1: t[1], v2: t[2] }).collect();
         let mut core = Duration::ZERO;
@@ -122,7 +129,8 @@ impl RaycastOracle {
         // Reorder so that the traversal's primitive index addresses the arrays directly.
         let tris: Vec<[Vec3A; 3]> = bvh.primitive_indices.iter().map(|&i| tris[i as usize]).collect();
         let tri_instance: Vec<u32> = bvh.primitive_indices.iter().map(|&i| tri_instance[i as usize]).collect();
-        Self { eye, bvh: Some(bvh), tris, tri_instance, build_time: start.elapsed() }
+        let tri_face_cull = bvh.primitive_indices.iter().map(|&i| tri_face_cull[i as usize]).collect();
+        Self { eye, bvh: Some(bvh), tris, tri_instance, tri_face_cull, build_time: start.elapsed() }
     }
 
     /// The eye the triangles are relative to.
@@ -147,10 +155,31 @@ impl RaycastOracle {
         let shear = Shear::new(direction);
         let ray = Ray::new(origin, direction, t_min, t_max);
         let mut hit = RayHit::none();
-        if bvh.ray_traverse(ray, &mut hit, |ray, id| intersect_watertight(&self.tris[id], ray, &shear)) {
+        let hit_if_drawn = |ray: &Ray, id: usize| {
+            if self.is_culled(id, direction) {
+                f32::INFINITY
+            } else {
+                intersect_watertight(&self.tris[id], ray, &shear)
+            }
+        };
+        if bvh.ray_traverse(ray, &mut hit, hit_if_drawn) {
             Some((self.tri_instance[hit.primitive_id as usize], hit.t))
         } else {
             None
+        }
+    }
+
+    /// Whether the rasterizer culls triangle `id` seen along `direction`. Its counter-clockwise
+    /// side, the front of a pipeline, is the one whose normal (by the right-hand rule over the
+    /// world-space vertices) points against the view direction (`lighting_visibility.comp`
+    /// derives `gl_FrontFacing` the same way). Edge-on triangles cover no sample either way.
+    fn is_culled(&self, id: usize, direction: Vec3A) -> bool {
+        let t = &self.tris[id];
+        let toward = (t[1] - t[0]).cross(t[2] - t[0]).dot(direction);
+        match self.tri_face_cull[id] {
+            FaceCull::Back => toward >= 0.0,
+            FaceCull::Front => toward <= 0.0,
+            FaceCull::None => false,
         }
     }
 
@@ -355,12 +384,16 @@ mod tests {
     }
 
     #[test]
-    fn a_box_straddling_the_near_plane_shows_its_far_part() {
-        // Box from z = -0.5 to -1.5 with near 1: the part beyond the near plane is visible,
-        // seen from inside (its back face at distance 1.5).
-        let scene = boxes(&[(Vec3::ONE, DVec3::new(0.0, 0.0, -1.0))]);
-        let oracle = RaycastOracle::new(&scene, DVec3::ZERO);
+    fn a_box_straddling_the_near_plane_shows_its_far_part_when_double_sided() {
+        // Box from z = -0.5 to -1.5 with near 1: the part beyond the near plane is seen from
+        // inside, where only its back faces are (the one at distance 1.5 in the middle).
+        let mut scene = boxes(&[(Vec3::ONE, DVec3::new(0.0, 0.0, -1.0))]);
         let cam = camera(DVec3::ZERO, Projection::Perspective { fov_y_deg: 60.0 }, 1.0);
+        // One-sided (no material: glTF's default): the rasterizer culls back faces, so nothing.
+        let one_sided = RaycastOracle::new(&scene, DVec3::ZERO).cast(&cam, 8, 8, SamplePattern::Center).unwrap();
+        assert!(one_sided.visible.is_empty());
+        scene.add_material(crate::scene::Material { double_sided: true, ..Default::default() });
+        let oracle = RaycastOracle::new(&scene, DVec3::ZERO);
         let image = oracle.cast(&cam, 8, 8, SamplePattern::Center).unwrap();
         assert_eq!(image.visible, BTreeSet::from([0]));
         let z = image.depth[(4 * 8 + 4) as usize];
@@ -368,6 +401,40 @@ mod tests {
         // With near 2 the box is entirely clipped.
         let cam = camera(DVec3::ZERO, Projection::Perspective { fov_y_deg: 60.0 }, 2.0);
         assert!(oracle.cast(&cam, 8, 8, SamplePattern::Center).unwrap().visible.is_empty());
+    }
+
+    #[test]
+    fn back_faces_of_one_sided_triangles_are_not_hit_and_mirroring_flips_the_front() {
+        // A unit quad in the z = 0 plane, counter-clockwise seen from +z, in front of the eye.
+        let quad = MeshData {
+            positions: vec![
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(-1.0, 1.0, 0.0),
+            ],
+            normals: vec![],
+            indices: vec![0, 1, 2, 0, 2, 3],
+        };
+        let sees = |linear: Mat3, double_sided: bool| {
+            let mut scene = Scene::default();
+            let mesh = scene.add_mesh("quad", &quad, "quad").unwrap();
+            let material = scene.add_material(crate::scene::Material { double_sided, ..Default::default() });
+            let translation = DVec3::new(0.0, 0.0, -5.0);
+            scene.instances.push(Instance { transform: Transform { linear, translation }, mesh, material, flags: 0 });
+            let cam = camera(DVec3::ZERO, Projection::Perspective { fov_y_deg: 60.0 }, 0.1);
+            !RaycastOracle::new(&scene, DVec3::ZERO).cast(&cam, 8, 8, SamplePattern::Center).unwrap().visible.is_empty()
+        };
+        let turned = Mat3::from_rotation_y(std::f32::consts::PI);
+        let mirror_x = Mat3::from_diagonal(Vec3::new(-1.0, 1.0, 1.0));
+        let mirror_z = Mat3::from_diagonal(Vec3::new(1.0, 1.0, -1.0));
+        assert!(sees(Mat3::IDENTITY, false), "front face toward the eye");
+        assert!(!sees(turned, false), "back face toward the eye");
+        assert!(sees(turned, true), "double-sided");
+        // Mirrored in x: same plane, reversed winding, but glTF keeps the front toward +z.
+        assert!(sees(mirror_x, false), "mirrored, front toward the eye");
+        assert!(!sees(mirror_z, false), "mirrored through its plane: front away from the eye");
+        assert!(sees(mirror_z, true), "mirrored, double-sided");
     }
 
     #[test]

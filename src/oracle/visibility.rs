@@ -64,7 +64,6 @@ impl VisibilityOracle {
                 depth_compare: vk::CompareOp::GREATER,
                 depth_write: true,
                 samples,
-                cull_mode: vk::CullModeFlags::NONE,
                 stencil: Default::default(),
             },
         )?;
@@ -148,17 +147,8 @@ impl VisibilityOracle {
                 );
                 device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
                 device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
-                if scene.max_draws > 0 {
-                    device.cmd_draw_indexed_indirect_count(
-                        cmd,
-                        scene.draw_commands.handle(),
-                        0,
-                        scene.draw_count.handle(),
-                        0,
-                        scene.max_draws,
-                        20,
-                    );
-                }
+                // The same faces as the frame's draws: one-sided materials lose their back faces.
+                scene.regions.record(device, cmd, &scene.draw_commands, &scene.draw_count);
                 device.cmd_end_rendering(cmd);
             }
             let sampled = Access { access: vk::AccessFlags2::SHADER_SAMPLED_READ, ..Access::COMPUTE_READ };

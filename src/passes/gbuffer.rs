@@ -17,7 +17,6 @@ use crate::gpu::barrier::layout_for_format;
 use crate::gpu::{Bind, Buffer, GpuContext, GraphicsDesc, Image, Pipeline, ShaderCompiler, StencilRule};
 use crate::graph::executor::{PassContext, PassNode};
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind};
-use crate::render::gpu_types::DrawIndexedIndirect;
 use crate::render::scene_buffers::GpuScene;
 use ash::vk;
 
@@ -30,23 +29,16 @@ pub const LATE_LIST_SLOTS: [&str; 3] = ["late_draw_commands", "late_draw_count",
 pub struct DrawSource<'a> {
     /// `VkDrawIndexedIndirectCommand`s.
     pub commands: &'a Buffer,
-    /// Their number (read by the GPU).
+    /// Their number in each face-cull region (read by the GPU).
     pub count: &'a Buffer,
     /// Instance ids, one slice per command.
     pub instance_ids: &'a Buffer,
-    /// The most commands the count may say.
-    pub max_draws: u32,
 }
 
 impl<'a> DrawSource<'a> {
     /// Every instance of the scene.
     pub fn unculled(scene: &'a GpuScene) -> Self {
-        Self {
-            commands: &scene.draw_commands,
-            count: &scene.draw_count,
-            instance_ids: &scene.draw_instance_ids,
-            max_draws: scene.max_draws,
-        }
+        Self { commands: &scene.draw_commands, count: &scene.draw_count, instance_ids: &scene.draw_instance_ids }
     }
 
     /// The list bound to the slots `names` (commands, count, instance ids), if all three are bound.
@@ -54,9 +46,7 @@ impl<'a> DrawSource<'a> {
         let commands = slots.buffer(names[0])?;
         let count = slots.buffer(names[1])?;
         let instance_ids = slots.buffer(names[2])?;
-        let stride = std::mem::size_of::<DrawIndexedIndirect>() as u64;
-        let max_draws = (commands.size() / stride).min(u32::MAX as u64) as u32;
-        Some(Self { commands, count, instance_ids, max_draws })
+        Some(Self { commands, count, instance_ids })
     }
 
     /// The lists a redraw pass draws: the first list (or every instance when none is bound),
@@ -120,8 +110,6 @@ pub fn geometry_pipeline(
             depth_compare: if equal { vk::CompareOp::EQUAL } else { vk::CompareOp::GREATER },
             depth_write: !equal,
             samples: depth.1,
-            // Two-sided: open meshes and mirrored instances must not lose faces.
-            cull_mode: vk::CullModeFlags::NONE,
             // EQUAL redraws without stencil decide each sample otherwise (gbuffer_compressed's
             // sample_claim); the passes refuse that combination where they have no other way.
             stencil: if equal && crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL) {
@@ -177,7 +165,6 @@ pub fn record_geometry(
         min_depth: 0.0,
         max_depth: 1.0,
     };
-    let stride = std::mem::size_of::<DrawIndexedIndirect>() as u32;
     // SAFETY: cmd is recording; every handle is alive for the command buffer's execution.
     unsafe {
         device.cmd_begin_rendering(cmd, &rendering);
@@ -196,17 +183,7 @@ pub fn record_geometry(
             ];
             binds.extend_from_slice(extra);
             pipeline.push_bindings(cmd, &binds);
-            if list.max_draws > 0 {
-                device.cmd_draw_indexed_indirect_count(
-                    cmd,
-                    list.commands.handle(),
-                    0,
-                    list.count.handle(),
-                    0,
-                    list.max_draws,
-                    stride,
-                );
-            }
+            scene.regions.record(device, cmd, list.commands, list.count);
         }
         device.cmd_end_rendering(cmd);
     }

@@ -33,6 +33,7 @@ use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::{PassContext, PassNode, LIST_COUNT_SLOT, LIST_STATS_SLOT};
 use crate::graph::plan::{PlannedPass, SettingValue};
+use crate::render::face_cull::DRAW_COUNT_BYTES;
 use ash::vk;
 
 /// Slots per block of the prefix sum (`CULL_BLOCK` in `cull_common.glsl`).
@@ -271,7 +272,8 @@ impl PassNode for InstanceCullPass {
             ("draw_instance_ids", Some(draw_ids), ids_bytes, "instances * 4"),
             ("visible_ids", rec.slots.buffer("visible_ids"), ids_bytes, "instances * 4"),
             ("list_commands", rec.slots.buffer("list_commands"), commands_bytes, "meshes * 20"),
-            ("list_count", rec.slots.buffer("list_count"), 4, "4"),
+            ("draw_count", Some(draw_count), DRAW_COUNT_BYTES, "one count per face cull: 12"),
+            ("list_count", rec.slots.buffer("list_count"), DRAW_COUNT_BYTES, "one count per face cull: 12"),
             ("list_stats", rec.slots.buffer("list_stats"), 64, "64"),
         ];
         for (slot, buffer, need, rule) in sizes {
@@ -351,7 +353,8 @@ impl PassNode for InstanceCullPass {
                     Bind::Buffer(3, stats.handle()),
                 ],
             );
-            init.push_constants(cmd, &groups);
+            let [_, first1, first2] = scene.regions.first;
+            init.push_constants(cmd, &[groups, 0, first1, first2]);
             // SAFETY: cmd recording with the pipeline bound.
             unsafe { device.cmd_dispatch(cmd, groups.div_ceil(256).max(1), 1, 1) };
             step_barrier(ctx, cmd);
@@ -401,7 +404,8 @@ impl PassNode for InstanceCullPass {
             ];
             compact_binds.extend(optional.iter().filter_map(|(b, buf)| buf.map(|buf| Bind::Buffer(*b, buf.handle()))));
             compact.push_bindings(cmd, &compact_binds);
-            compact.push_constants(cmd, &[slots, groups, superblocks]);
+            compact
+                .push_constants(cmd, &[slots, groups, superblocks, 0, scene.regions.first[1], scene.regions.first[2]]);
             // Workgroup 0 writes the commands, workgroup 1 + b places block b.
             // SAFETY: as above.
             unsafe { device.cmd_dispatch(cmd, blocks + 1, 1, 1) };

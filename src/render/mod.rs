@@ -2,6 +2,7 @@
 //! headlessly or into a host engine's command buffer.
 
 pub mod cull_data;
+pub mod face_cull;
 pub mod gpu_types;
 pub mod graph_spec;
 pub mod output;

@@ -77,6 +77,8 @@ pub struct Renderer {
     previous_camera: Option<Camera>,
     /// Exact-visibility oracle, when verification is on.
     oracle: Option<VisibilityOracle>,
+    /// What the oracle saw in the last verified frame.
+    exactly_visible: BTreeSet<u32>,
     /// The graph being run, for re-planning it with another pool size.
     spec: GraphSpec,
     /// Sizes the compressed G-buffer's pool, when enabled.
@@ -139,6 +141,7 @@ impl Renderer {
             settings,
             previous_camera: None,
             oracle: None,
+            exactly_visible: BTreeSet::new(),
             spec: spec.clone(),
             pool: None,
         })
@@ -209,6 +212,18 @@ impl Renderer {
     /// The graph's runtime (resources, memory, timings).
     pub fn runtime(&self) -> &GraphRuntime {
         &self.runtime
+    }
+
+    /// The instances seen by some sample of the last frame rendered with verification on (the
+    /// unculled instance-id render; empty before).
+    pub fn exactly_visible(&self) -> &BTreeSet<u32> {
+        &self.exactly_visible
+    }
+
+    /// What each draw pass drew in the last completed frame (`None` unless verification is
+    /// on): see [`GraphRuntime::drawn`].
+    pub fn drawn(&self) -> Result<Option<Vec<crate::graph::executor::DrawnInstances>>> {
+        self.runtime.drawn(&self.gpu_scene.regions)
     }
 
     /// The graph's first output image as left by the last recorded frame, and the access it was
@@ -320,17 +335,20 @@ impl Renderer {
         let mut stats = self.completed_stats(frame)?;
         stats.cpu_record_ms = record_ms;
         if self.oracle.is_some() {
-            stats.verify = Some(self.verify(frame)?);
+            let (verify, visible) = self.verify(frame)?;
+            stats.verify = Some(verify);
+            self.exactly_visible = visible;
         }
         Ok(stats)
     }
 
-    /// Compares what `frame` (just completed) drew with exact visibility.
-    fn verify(&self, frame: u64) -> Result<VerifyStats> {
-        let Some(oracle) = &self.oracle else { return Ok(VerifyStats::default()) };
+    /// Compares what `frame` (just completed) drew with exact visibility; also returns the
+    /// exactly visible instances.
+    fn verify(&self, frame: u64) -> Result<(VerifyStats, BTreeSet<u32>)> {
+        let Some(oracle) = &self.oracle else { return Ok(Default::default()) };
         let constants = &self.slots[(frame % FRAMES_IN_FLIGHT as u64) as usize].constants;
         let visible = oracle.render(&self.ctx, &self.gpu_scene, constants)?.visible;
-        let lists = self.runtime.drawn()?.unwrap_or_default();
+        let lists = self.drawn()?.unwrap_or_default();
         let drawn: BTreeSet<u32> = if lists.contains(&DrawnInstances::All) {
             (0..self.gpu_scene.instance_count).collect()
         } else {
@@ -343,13 +361,14 @@ impl Renderer {
                 .collect()
         };
         let missed: Vec<u32> = visible.difference(&drawn).copied().collect();
-        Ok(VerifyStats {
+        let stats = VerifyStats {
             visible: visible.len() as u32,
             drawn: drawn.len() as u32,
             false_negatives: missed.len() as u32,
             false_positives: drawn.difference(&visible).count() as u32,
             missed: missed.into_iter().take(16).collect(),
-        })
+        };
+        Ok((stats, visible))
     }
 
     /// The figures of a recorded frame once it has completed on the GPU (counters and

@@ -1,6 +1,7 @@
 //! The scene on the GPU: vertex/index pools, instances, materials, and the draw list that the
 //! indirect draws consume.
 
+use super::face_cull::{DrawRegions, FaceCull, FACE_CULL_REGIONS};
 use super::gpu_types::{DrawIndexedIndirect, GpuInstance, GpuMaterial};
 use crate::gpu::{Buffer, GpuContext, UploadBatch};
 use crate::scene::Scene;
@@ -16,12 +17,14 @@ pub struct GpuScene {
     pub instances: Buffer,
     /// [`GpuMaterial`] per material.
     pub materials: Buffer,
-    /// Instance ids grouped by draw group (mesh), each group in instance order.
+    /// Instance ids grouped by draw group (face cull, mesh), each group in instance order.
     pub draw_instance_ids: Buffer,
     /// One [`DrawIndexedIndirect`] per non-empty draw group.
     pub draw_commands: Buffer,
-    /// The number of commands (read by `vkCmdDrawIndexedIndirectCount`).
+    /// The number of commands of each face-cull region (read by `vkCmdDrawIndexedIndirectCount`).
     pub draw_count: Buffer,
+    /// Where each face cull's groups are, in every command list of this scene.
+    pub regions: DrawRegions,
     /// [`super::cull_data::GpuCullRecord`] per slot (draw-list order).
     pub cull_records: Buffer,
     /// [`super::cull_data::GpuDrawGroup`] per non-empty draw group.
@@ -39,21 +42,26 @@ pub struct GpuScene {
     pub triangles: u64,
 }
 
-/// The unculled draw list: instances grouped by mesh, preserving instance order in each group.
+/// The unculled draw list: instances grouped by face cull, then by mesh, preserving instance
+/// order in each group ([`super::face_cull`]).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DrawList {
     /// Instance ids, group after group.
     pub instance_ids: Vec<u32>,
     /// One command per non-empty group, `first_instance` pointing at its slice of `instance_ids`.
     pub commands: Vec<DrawIndexedIndirect>,
+    /// The groups of each face cull.
+    pub regions: DrawRegions,
 }
 
 impl DrawList {
-    /// Groups every instance of `scene` by mesh (a counting sort, so it is stable).
+    /// Groups every instance of `scene` by (face cull, mesh) (a counting sort, so it is stable).
     pub fn all_instances(scene: &Scene) -> Self {
-        let mut counts = vec![0u32; scene.meshes.len()];
+        let meshes = scene.meshes.len();
+        let key = |inst: &crate::scene::Instance| FaceCull::of(scene, inst) as usize * meshes + inst.mesh as usize;
+        let mut counts = vec![0u32; FACE_CULL_REGIONS * meshes];
         for inst in &scene.instances {
-            counts[inst.mesh as usize] += 1;
+            counts[key(inst)] += 1;
         }
         let mut starts = Vec::with_capacity(counts.len());
         let mut total = 0u32;
@@ -64,24 +72,24 @@ impl DrawList {
         let mut cursor = starts.clone();
         let mut instance_ids = vec![0u32; scene.instances.len()];
         for (id, inst) in scene.instances.iter().enumerate() {
-            let slot = &mut cursor[inst.mesh as usize];
+            let slot = &mut cursor[key(inst)];
             instance_ids[*slot as usize] = id as u32;
             *slot += 1;
         }
-        let commands = scene
-            .meshes
-            .iter()
-            .enumerate()
-            .filter(|(m, _)| counts[*m] > 0)
-            .map(|(m, mesh)| DrawIndexedIndirect {
+        let mut region_len = [0u32; FACE_CULL_REGIONS];
+        let mut commands = Vec::new();
+        for (k, &count) in counts.iter().enumerate().filter(|(_, c)| **c > 0) {
+            let mesh = &scene.meshes[k % meshes];
+            region_len[k / meshes] += 1;
+            commands.push(DrawIndexedIndirect {
                 index_count: mesh.index_count,
-                instance_count: counts[m],
+                instance_count: count,
                 first_index: mesh.first_index,
                 vertex_offset: mesh.vertex_offset as i32,
-                first_instance: starts[m],
-            })
-            .collect();
-        Self { instance_ids, commands }
+                first_instance: starts[k],
+            });
+        }
+        Self { instance_ids, commands, regions: DrawRegions::from_lengths(region_len) }
     }
 }
 
@@ -93,7 +101,7 @@ impl GpuScene {
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();
         let draws = DrawList::all_instances(scene);
         let cull = super::cull_data::CullData::new(scene, &draws);
-        let count = [draws.commands.len() as u32];
+        let count = draws.regions.len;
         Ok(Self {
             vertices: batch.buffer(
                 ctx,
@@ -135,6 +143,7 @@ impl GpuScene {
                 storage,
                 bytemuck::cast_slice(&instance_triangle_bases(scene)),
             )?,
+            regions: draws.regions,
             group_count: cull.groups.len() as u32,
             instance_count: scene.instances.len() as u32,
             max_draws: draws.commands.len() as u32,

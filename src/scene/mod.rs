@@ -58,11 +58,14 @@ pub struct Material {
     pub roughness: f32,
     /// Metalness in [0, 1].
     pub metallic: f32,
+    /// Both sides are drawn (glTF `doubleSided`); otherwise back faces are culled, the winding
+    /// that counts as front being flipped for mirrored instances as glTF specifies.
+    pub double_sided: bool,
 }
 
 impl Default for Material {
     fn default() -> Self {
-        Self { name: "default".into(), albedo: Vec3::splat(0.8), roughness: 0.6, metallic: 0.0 }
+        Self { name: "default".into(), albedo: Vec3::splat(0.8), roughness: 0.6, metallic: 0.0, double_sided: false }
     }
 }
 

@@ -85,19 +85,26 @@ pub fn boxes_scene() -> cullgraph::scene::Scene {
     use glam::{DVec3, Mat3, Vec3};
     let mut scene = Scene { name: "test boxes".into(), ..Default::default() };
     let cube = scene.add_mesh("cube", &cube_mesh(), "cube").unwrap();
-    let grey =
-        scene.add_material(Material { name: "ground".into(), albedo: Vec3::splat(0.5), roughness: 0.9, metallic: 0.0 });
+    let grey = scene.add_material(Material {
+        name: "ground".into(),
+        albedo: Vec3::splat(0.5),
+        roughness: 0.9,
+        metallic: 0.0,
+        double_sided: false,
+    });
     let red = scene.add_material(Material {
         name: "red".into(),
         albedo: Vec3::new(0.8, 0.1, 0.1),
         roughness: 0.4,
         metallic: 0.0,
+        double_sided: false,
     });
     let blue = scene.add_material(Material {
         name: "blue".into(),
         albedo: Vec3::new(0.1, 0.2, 0.8),
         roughness: 0.3,
         metallic: 0.5,
+        double_sided: false,
     });
     let place = |scale: Vec3, at: DVec3, material| Instance {
         transform: Transform { linear: Mat3::from_diagonal(scale), translation: at },

@@ -30,7 +30,8 @@ pub struct FrameInputs {
     pub height: u32,
     /// Instances in the scene (`instances`).
     pub instances: u64,
-    /// Meshes, i.e. draw groups (`meshes`).
+    /// Meshes (`meshes`), each counted once more per further face cull its instances need, so
+    /// that it bounds the draw groups ([`crate::render::face_cull::command_capacity`]).
     pub meshes: u64,
     /// Point lights (`lights`).
     pub lights: u64,
@@ -54,7 +55,7 @@ impl FrameInputs {
             width,
             height,
             instances: scene.instances.len() as u64,
-            meshes: scene.meshes.len() as u64,
+            meshes: crate::render::face_cull::command_capacity(scene) as u64,
             lights: scene.lights.len() as u64,
             materials: scene.materials.len() as u64,
             triangles: scene.instanced_triangles(),

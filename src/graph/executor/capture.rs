@@ -6,6 +6,7 @@ use super::resources::{Physical, RuntimeResources};
 use crate::gpu::{Buffer, BufferDesc, GpuContext, MemoryLocation};
 use crate::graph::kinds::builtin_kinds;
 use crate::graph::plan::PlannedPass;
+use crate::render::face_cull::DrawRegions;
 use crate::render::gpu_types::DrawIndexedIndirect;
 use ash::vk;
 
@@ -80,17 +81,18 @@ impl DrawCapture {
             .filter_map(move |(slot, host)| pass.bindings.iter().find(|b| b.slot == *slot).map(|b| (b, host)))
     }
 
-    /// What each draw pass drew in the last completed frame, in pass order.
-    pub fn drawn(&self) -> crate::Result<Vec<DrawnInstances>> {
+    /// What each draw pass drew in the last completed frame, in pass order (command lists laid
+    /// out in `regions`).
+    pub fn drawn(&self, regions: &DrawRegions) -> crate::Result<Vec<DrawnInstances>> {
         self.copies
             .iter()
             .map(|(_, hosts)| {
                 let Some([commands, count, ids]) = hosts else { return Ok(DrawnInstances::All) };
                 let commands: &[DrawIndexedIndirect] = bytemuck::cast_slice(commands.read_bytes()?);
-                let count = bytemuck::cast_slice::<u8, u32>(count.read_bytes()?).first().copied().unwrap_or(0);
+                let counts: &[u32] = bytemuck::cast_slice(count.read_bytes()?);
                 let ids: &[u32] = bytemuck::cast_slice(ids.read_bytes()?);
                 let mut out = Vec::new();
-                for c in commands.iter().take(count as usize) {
+                for c in regions.drawn(commands, counts) {
                     let start = c.first_instance as usize;
                     let end = (start + c.instance_count as usize).min(ids.len());
                     out.extend_from_slice(&ids[start.min(end)..end]);

@@ -409,9 +409,10 @@ impl GraphRuntime {
     }
 
     /// What each draw pass drew in the last recorded frame, once it has completed (`None`
-    /// without [`GraphRuntime::set_draw_capture`]). Read before recording the next frame.
-    pub fn drawn(&self) -> crate::Result<Option<Vec<DrawnInstances>>> {
-        self.capture.as_ref().map(|c| c.drawn()).transpose()
+    /// without [`GraphRuntime::set_draw_capture`]), its command lists laid out in `regions`.
+    /// Read before recording the next frame.
+    pub fn drawn(&self, regions: &crate::render::face_cull::DrawRegions) -> crate::Result<Option<Vec<DrawnInstances>>> {
+        self.capture.as_ref().map(|c| c.drawn(regions)).transpose()
     }
 
     /// The counters each pass with a `stats` slot wrote in `frame`, once the frame has completed

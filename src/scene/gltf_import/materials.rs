@@ -29,6 +29,7 @@ pub(super) fn convert(document: &Document, notes: &mut Vec<String>) -> Vec<Mater
             albedo: Vec3::new(finite(r, 0.8), finite(g, 0.8), finite(b, 0.8)).clamp(Vec3::ZERO, Vec3::ONE),
             roughness: finite(pbr.roughness_factor(), 0.6).clamp(0.0, 1.0),
             metallic: finite(pbr.metallic_factor(), 0.0).clamp(0.0, 1.0),
+            double_sided: material.double_sided(),
         });
     }
     if textured > 0 || document.textures().len() > 0 {

@@ -1,0 +1,196 @@
+//! Back-face culling for indirect draws.
+//!
+//! glTF culls the back faces of one-sided materials, and a mirroring transform (negative
+//! determinant) flips which winding is the front. The rasterizer's cull mode is fixed for one
+//! `vkCmdDrawIndexedIndirectCount`, so a draw group is a (face cull, mesh) pair and the groups
+//! are sorted by face cull first. Every command list then holds one *region* per face cull, at
+//! the same place in every list (the region's first group), each compacted from its start with
+//! its own count; a draw pass issues one indirect draw per non-empty region, with the cull mode
+//! set as dynamic state.
+
+use crate::gpu::Buffer;
+use crate::render::gpu_types::DrawIndexedIndirect;
+use crate::scene::{Instance, Scene};
+use ash::vk;
+
+/// Which faces of an instance's triangles the rasterizer drops.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum FaceCull {
+    /// One-sided material: counter-clockwise is the front, back faces are dropped.
+    Back = 0,
+    /// One-sided material on a mirrored instance: clockwise is the front (glTF), so the
+    /// counter-clockwise faces are dropped.
+    Front = 1,
+    /// Double-sided material: nothing is dropped.
+    None = 2,
+}
+
+/// Number of face-cull regions in a command list.
+pub const FACE_CULL_REGIONS: usize = 3;
+
+/// Bytes of a draw count buffer: one `u32` per region, in [`FaceCull`] order.
+pub const DRAW_COUNT_BYTES: u64 = 4 * FACE_CULL_REGIONS as u64;
+
+impl FaceCull {
+    /// The regions in command-list order.
+    pub const ALL: [FaceCull; FACE_CULL_REGIONS] = [FaceCull::Back, FaceCull::Front, FaceCull::None];
+
+    /// The face cull of `instance` (an unknown material counts as one-sided).
+    pub fn of(scene: &Scene, instance: &Instance) -> Self {
+        let double_sided = scene.materials.get(instance.material as usize).is_some_and(|m| m.double_sided);
+        if double_sided {
+            FaceCull::None
+        } else if instance.transform.linear.determinant() < 0.0 {
+            // The same sign test as `instance_is_mirrored` in `shaders/common/scene.glsl`.
+            FaceCull::Front
+        } else {
+            FaceCull::Back
+        }
+    }
+
+    /// The rasterizer's cull mode (pipelines take counter-clockwise as the front).
+    pub fn mode(self) -> vk::CullModeFlags {
+        match self {
+            FaceCull::Back => vk::CullModeFlags::BACK,
+            FaceCull::Front => vk::CullModeFlags::FRONT,
+            FaceCull::None => vk::CullModeFlags::NONE,
+        }
+    }
+}
+
+/// The graphs' `meshes` variable: every mesh once, and once more for each further face cull its
+/// instances need, so that `meshes * 20` bytes hold any command list of `scene` (at least one
+/// command per mesh, as before face culls were grouped).
+pub fn command_capacity(scene: &Scene) -> usize {
+    let meshes = scene.meshes.len();
+    let mut used = vec![[false; FACE_CULL_REGIONS]; meshes];
+    for instance in &scene.instances {
+        if let Some(u) = used.get_mut(instance.mesh as usize) {
+            u[FaceCull::of(scene, instance) as usize] = true;
+        }
+    }
+    used.iter().map(|u| u.iter().filter(|&&b| b).count().max(1)).sum()
+}
+
+/// Where each face cull's commands live in a command list, in groups (= commands).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DrawRegions {
+    /// First group of each region, in [`FaceCull`] order.
+    pub first: [u32; FACE_CULL_REGIONS],
+    /// Groups in each region (the most commands its count may say).
+    pub len: [u32; FACE_CULL_REGIONS],
+}
+
+impl DrawRegions {
+    /// Regions of `len[r]` groups each, one after the other.
+    pub fn from_lengths(len: [u32; FACE_CULL_REGIONS]) -> Self {
+        Self { first: [0, len[0], len[0] + len[1]], len }
+    }
+
+    /// Groups over all regions.
+    pub fn groups(&self) -> u32 {
+        self.len.iter().sum()
+    }
+
+    /// The commands a list drew, given its commands and its per-region counts (host copies).
+    pub fn drawn<'a>(
+        &self,
+        commands: &'a [DrawIndexedIndirect],
+        counts: &[u32],
+    ) -> impl Iterator<Item = &'a DrawIndexedIndirect> + 'a {
+        let spans: Vec<(usize, usize)> = (0..FACE_CULL_REGIONS)
+            .map(|r| {
+                let first = self.first[r] as usize;
+                let count = counts.get(r).copied().unwrap_or(0).min(self.len[r]) as usize;
+                (first.min(commands.len()), (first + count).min(commands.len()))
+            })
+            .collect();
+        spans.into_iter().flat_map(move |(start, end)| commands[start..end].iter())
+    }
+
+    /// Records one `vkCmdDrawIndexedIndirectCount` per non-empty region of `commands` (counts
+    /// in `count`, one `u32` per region), each with its region's cull mode. The pipeline bound
+    /// must have the cull mode as dynamic state; a commands buffer shorter than the regions
+    /// clamps them.
+    pub fn record(&self, device: &ash::Device, cmd: vk::CommandBuffer, commands: &Buffer, count: &Buffer) {
+        let stride = std::mem::size_of::<DrawIndexedIndirect>() as u32;
+        let capacity = (commands.size() / stride as u64).min(u32::MAX as u64) as u32;
+        for (r, face_cull) in FaceCull::ALL.iter().enumerate() {
+            let max = self.len[r].min(capacity.saturating_sub(self.first[r]));
+            if max == 0 || count.size() < (r as u64 + 1) * 4 {
+                continue;
+            }
+            // SAFETY: cmd is recording inside a rendering scope with a graphics pipeline bound;
+            // the buffers outlive the command buffer's execution.
+            unsafe {
+                device.cmd_set_cull_mode(cmd, face_cull.mode());
+                device.cmd_draw_indexed_indirect_count(
+                    cmd,
+                    commands.handle(),
+                    self.first[r] as u64 * stride as u64,
+                    count.handle(),
+                    r as u64 * 4,
+                    max,
+                    stride,
+                );
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cmd(first_instance: u32) -> DrawIndexedIndirect {
+        DrawIndexedIndirect { index_count: 3, instance_count: 1, first_index: 0, vertex_offset: 0, first_instance }
+    }
+
+    #[test]
+    fn drawn_takes_each_region_up_to_its_count() {
+        let regions = DrawRegions::from_lengths([3, 1, 2]);
+        assert_eq!(regions.first, [0, 3, 4]);
+        let commands: Vec<_> = (0..6).map(cmd).collect();
+        let firsts = |counts: &[u32]| regions.drawn(&commands, counts).map(|c| c.first_instance).collect::<Vec<_>>();
+        assert_eq!(firsts(&[2, 0, 1]), [0, 1, 4]);
+        // A count past its region is clamped to it, and a missing count is zero.
+        assert_eq!(firsts(&[9, 1]), [0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn draw_lists_group_by_face_cull_then_mesh() {
+        use crate::render::scene_buffers::DrawList;
+        use crate::scene::{Instance, Material, MeshData, Transform};
+        use glam::{DVec3, Mat3, Vec3};
+        let mut scene = Scene::default();
+        let tri = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
+        let a = scene.add_mesh("a", &tri, "a").unwrap();
+        let b = scene.add_mesh("b", &tri, "b").unwrap();
+        let _unused = scene.add_mesh("c", &tri, "c").unwrap();
+        let one = scene.add_material(Material::default());
+        let two = scene.add_material(Material { double_sided: true, ..Default::default() });
+        let mirrored = Mat3::from_diagonal(Vec3::new(1.0, -2.0, 1.0));
+        for (mesh, material, linear) in [
+            (a, one, Mat3::IDENTITY),
+            (a, one, mirrored),
+            (b, two, mirrored),
+            (b, one, Mat3::IDENTITY),
+            (a, one, Mat3::IDENTITY),
+        ] {
+            let transform = Transform { linear, translation: DVec3::ZERO };
+            scene.instances.push(Instance { transform, mesh, material, flags: 0 });
+        }
+        let faces: Vec<_> = scene.instances.iter().map(|i| FaceCull::of(&scene, i)).collect();
+        assert_eq!(faces, [FaceCull::Back, FaceCull::Front, FaceCull::None, FaceCull::Back, FaceCull::Back]);
+        let draws = DrawList::all_instances(&scene);
+        // Back: a [0, 4], b [3]; Front: a [1]; None: b [2].
+        assert_eq!(draws.instance_ids, [0, 4, 3, 1, 2]);
+        assert_eq!(
+            draws.commands.iter().map(|c| (c.first_instance, c.instance_count)).collect::<Vec<_>>(),
+            [(0, 2), (2, 1), (3, 1), (4, 1)]
+        );
+        assert_eq!(draws.regions, DrawRegions::from_lengths([2, 1, 1]));
+        // a twice, b twice, c (unused) once.
+        assert_eq!(command_capacity(&scene), 5);
+    }
+}
