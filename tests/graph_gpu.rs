@@ -121,3 +121,18 @@ fn a_broken_reload_keeps_the_last_good_graph_running() {
     };
     assert!(sum(&after) > sum(&before) * 11 / 10);
 }
+
+#[test]
+fn a_draw_count_too_small_for_the_face_cull_regions_is_refused_by_name() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    // A graph written before face culling: its cull pass's count buffer holds one count.
+    let mut old = GraphSpec::builtin("two_phase").unwrap();
+    old.text = old.text.replace("\"late_count\": Buffer(size: 12)", "\"late_count\": Buffer(size: 4)");
+    let mut renderer = Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(48, 32), &old).unwrap();
+    let err = renderer.render(&boxes_camera()).unwrap_err().to_string();
+    assert!(
+        err.contains("pass 'cull_late'") && err.contains("draw_count needs 12 bytes") && err.contains("got 4"),
+        "{err}"
+    );
+}

@@ -100,6 +100,8 @@ struct Scratch {
 
 /// The instance-cull pass.
 pub struct InstanceCullPass {
+    /// The pass's name in the graph, for messages.
+    name: String,
     settings: CullSettings,
     test: Pipeline,
     compact: Option<Pipeline>,
@@ -160,7 +162,15 @@ impl InstanceCullPass {
             let defines: &[(&str, &str)] = if visible_out { &[("VISIBLE_OUT", "1")] } else { &[] };
             (Some(compute("compact", "cull/cull_compact.comp", defines)?), None)
         };
-        Ok(Self { settings, test, compact, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
+        Ok(Self {
+            name: pass.name.clone(),
+            settings,
+            test,
+            compact,
+            init,
+            sampler: Sampler::nearest_clamp(ctx)?,
+            scratch: None,
+        })
     }
 
     /// The settings in use.
@@ -239,6 +249,9 @@ fn blocks_of(slots: u32) -> u32 {
     slots.div_ceil(CULL_BLOCK).max(1)
 }
 
+/// Why a draw count takes 12 bytes (graphs written before face culling declared 4).
+const COUNT_RULE: &str = "one count per face cull: back, front, none; graphs before face culling declared 4";
+
 /// Blocks per superblock (`CULL_SUPERBLOCK` in `cull_common.glsl`).
 pub const CULL_SUPERBLOCK: u32 = 64;
 
@@ -272,14 +285,15 @@ impl PassNode for InstanceCullPass {
             ("draw_instance_ids", Some(draw_ids), ids_bytes, "instances * 4"),
             ("visible_ids", rec.slots.buffer("visible_ids"), ids_bytes, "instances * 4"),
             ("list_commands", rec.slots.buffer("list_commands"), commands_bytes, "meshes * 20"),
-            ("draw_count", Some(draw_count), DRAW_COUNT_BYTES, "one count per face cull: 12"),
-            ("list_count", rec.slots.buffer("list_count"), DRAW_COUNT_BYTES, "one count per face cull: 12"),
+            ("draw_count", Some(draw_count), DRAW_COUNT_BYTES, COUNT_RULE),
+            ("list_count", rec.slots.buffer("list_count"), DRAW_COUNT_BYTES, COUNT_RULE),
             ("list_stats", rec.slots.buffer("list_stats"), 64, "64"),
         ];
         for (slot, buffer, need, rule) in sizes {
             if let Some(buffer) = buffer.filter(|b| b.size() < need) {
                 return Err(crate::Error::Invalid(format!(
-                    "instance_cull: {slot} needs {need} bytes ({rule}); got {}",
+                    "pass '{}' (instance_cull): {slot} needs {need} bytes ({rule}); got {}",
+                    self.name,
                     buffer.size()
                 )));
             }
