@@ -135,4 +135,11 @@ fn a_draw_count_too_small_for_the_face_cull_regions_is_refused_by_name() {
         err.contains("pass 'cull_late'") && err.contains("draw_count needs 12 bytes") && err.contains("got 4"),
         "{err}"
     );
+    // The early draw reads last frame's list count: the geometry pass refuses it first.
+    old.text = old
+        .text
+        .replace("\"early_count\": Buffer(size: 12, history: true)", "\"early_count\": Buffer(size: 4, history: true)");
+    let mut renderer = Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(48, 32), &old).unwrap();
+    let err = renderer.render(&boxes_camera()).unwrap_err().to_string();
+    assert!(err.contains("pass 'draw_early'") && err.contains("draw_count holds 4 bytes"), "{err}");
 }

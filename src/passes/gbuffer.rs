@@ -17,6 +17,7 @@ use crate::gpu::barrier::layout_for_format;
 use crate::gpu::{Bind, Buffer, GpuContext, GraphicsDesc, Image, Pipeline, ShaderCompiler, StencilRule};
 use crate::graph::executor::{PassContext, PassNode};
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind};
+use crate::render::face_cull::DRAW_COUNT_BYTES;
 use crate::render::scene_buffers::GpuScene;
 use ash::vk;
 
@@ -41,20 +42,34 @@ impl<'a> DrawSource<'a> {
         Self { commands: &scene.draw_commands, count: &scene.draw_count, instance_ids: &scene.draw_instance_ids }
     }
 
-    /// The list bound to the slots `names` (commands, count, instance ids), if all three are bound.
-    pub fn bound(slots: &crate::graph::executor::SlotBindings<'a>, names: [&str; 3]) -> Option<Self> {
-        let commands = slots.buffer(names[0])?;
-        let count = slots.buffer(names[1])?;
-        let instance_ids = slots.buffer(names[2])?;
-        Some(Self { commands, count, instance_ids })
+    /// The list bound to the slots `names` (commands, count, instance ids), if all three are
+    /// bound; an error if its count buffer cannot hold a count per face-cull region.
+    pub fn bound(slots: &crate::graph::executor::SlotBindings<'a>, names: [&str; 3]) -> crate::Result<Option<Self>> {
+        let (Some(commands), Some(count), Some(instance_ids)) =
+            (slots.buffer(names[0]), slots.buffer(names[1]), slots.buffer(names[2]))
+        else {
+            return Ok(None);
+        };
+        if count.size() < DRAW_COUNT_BYTES {
+            return Err(crate::Error::Invalid(format!(
+                "pass '{}': {} holds {} bytes; a draw count holds one count per face cull ({DRAW_COUNT_BYTES} bytes)",
+                slots.pass_name(),
+                names[1],
+                count.size()
+            )));
+        }
+        Ok(Some(Self { commands, count, instance_ids }))
     }
 
     /// The lists a redraw pass draws: the first list (or every instance when none is bound),
     /// then the `late_` list when bound (two-phase culling draws in two lists).
-    pub fn redraw_lists(slots: &crate::graph::executor::SlotBindings<'a>, scene: &'a GpuScene) -> Vec<Self> {
-        let mut lists = vec![Self::bound(slots, LIST_SLOTS).unwrap_or_else(|| Self::unculled(scene))];
-        lists.extend(Self::bound(slots, LATE_LIST_SLOTS));
-        lists
+    pub fn redraw_lists(
+        slots: &crate::graph::executor::SlotBindings<'a>,
+        scene: &'a GpuScene,
+    ) -> crate::Result<Vec<Self>> {
+        let mut lists = vec![Self::bound(slots, LIST_SLOTS)?.unwrap_or_else(|| Self::unculled(scene))];
+        lists.extend(Self::bound(slots, LATE_LIST_SLOTS)?);
+        Ok(lists)
     }
 }
 
@@ -270,8 +285,8 @@ impl PassNode for GbufferPass {
             .collect();
         let scene = rec.frame.scene;
         let lists = match self.mode {
-            GeometryMode::Equal => DrawSource::redraw_lists(slots, scene),
-            _ => vec![DrawSource::bound(slots, LIST_SLOTS).unwrap_or_else(|| DrawSource::unculled(scene))],
+            GeometryMode::Equal => DrawSource::redraw_lists(slots, scene)?,
+            _ => vec![DrawSource::bound(slots, LIST_SLOTS)?.unwrap_or_else(|| DrawSource::unculled(scene))],
         };
         record_geometry(
             rec.ctx,

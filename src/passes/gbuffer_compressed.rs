@@ -277,7 +277,7 @@ impl PassNode for GbufferCompressedPass {
             aa_object_flags: self.aa.object_flags as u32,
         };
         let scene = rec.frame.scene;
-        let lists = DrawSource::redraw_lists(slots, scene);
+        let lists = DrawSource::redraw_lists(slots, scene)?;
         let mut extra = vec![Bind::Buffer(4, gbuffer.handle())];
         if let Some(claim) = claim {
             extra.push(Bind::Buffer(7, claim.handle()));

@@ -109,14 +109,15 @@ impl DrawRegions {
     }
 
     /// Records one `vkCmdDrawIndexedIndirectCount` per non-empty region of `commands` (counts
-    /// in `count`, one `u32` per region), each with its region's cull mode. The pipeline bound
-    /// must have the cull mode as dynamic state; a commands buffer shorter than the regions
-    /// clamps them.
+    /// in `count`, one `u32` per region: [`DRAW_COUNT_BYTES`], which callers check), each with
+    /// its region's cull mode. The pipeline bound must have the cull mode as dynamic state; a
+    /// commands buffer shorter than the regions clamps them.
     pub fn record(&self, device: &ash::Device, cmd: vk::CommandBuffer, commands: &Buffer, count: &Buffer) {
         let stride = std::mem::size_of::<DrawIndexedIndirect>() as u32;
         let capacity = (commands.size() / stride as u64).min(u32::MAX as u64) as u32;
         for (r, face_cull) in FaceCull::ALL.iter().enumerate() {
             let max = self.len[r].min(capacity.saturating_sub(self.first[r]));
+            // Never reads a count past the buffer (callers refuse short ones with a message).
             if max == 0 || count.size() < (r as u64 + 1) * 4 {
                 continue;
             }

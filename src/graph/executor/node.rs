@@ -33,6 +33,11 @@ pub struct SlotBindings<'a> {
 }
 
 impl<'a> SlotBindings<'a> {
+    /// The name of the pass in the graph, for messages.
+    pub fn pass_name(&self) -> &'a str {
+        &self.pass.name
+    }
+
     /// The binding of `slot`, if the graph bound it.
     pub fn binding(&self, slot: &str) -> Option<&'a Binding> {
         self.pass.bindings.iter().find(|b| b.slot == slot)
