@@ -12,9 +12,10 @@
 //! edge functions that round to zero), so a ray through a shared edge never slips between two
 //! triangles. Triangles of zero area and non-finite ones are skipped (the rasterizer draws
 //! nothing for them), and so are the faces the rasterizer culls: back faces of one-sided
-//! materials, with the winding flipped for mirrored instances ([`FaceCull`]). Limits of "exact": a sample within the rasterizer's sub-pixel snapping
-//! distance of an edge may resolve differently, and exact depth ties between instances go to
-//! whichever the traversal meets first, where the rasterizer would follow draw order.
+//! materials, with the winding flipped for mirrored instances ([`FaceCull`]). Limits of
+//! "exact": a sample within the rasterizer's sub-pixel snapping distance of an edge may resolve
+//! differently, and exact depth ties between instances go to whichever the traversal meets
+//! first, where the rasterizer would follow draw order.
 
 use super::cull_math::CullView;
 use crate::render::face_cull::FaceCull;
