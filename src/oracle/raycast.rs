@@ -344,6 +344,21 @@ mod tests {
         m
     }
 
+    /// A 2x2 quad in the z = 0 plane, two triangles sharing the diagonal, counter-clockwise
+    /// seen from +z.
+    fn quad() -> MeshData {
+        MeshData {
+            positions: vec![
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(-1.0, 1.0, 0.0),
+            ],
+            normals: vec![],
+            indices: vec![0, 1, 2, 0, 2, 3],
+        }
+    }
+
     /// Boxes of the given (scale, translation) along the −Z axis, camera at the origin.
     fn boxes(placements: &[(Vec3, DVec3)]) -> Scene {
         let mut scene = Scene::default();
@@ -406,17 +421,7 @@ mod tests {
 
     #[test]
     fn back_faces_of_one_sided_triangles_are_not_hit_and_mirroring_flips_the_front() {
-        // A unit quad in the z = 0 plane, counter-clockwise seen from +z, in front of the eye.
-        let quad = MeshData {
-            positions: vec![
-                Vec3::new(-1.0, -1.0, 0.0),
-                Vec3::new(1.0, -1.0, 0.0),
-                Vec3::new(1.0, 1.0, 0.0),
-                Vec3::new(-1.0, 1.0, 0.0),
-            ],
-            normals: vec![],
-            indices: vec![0, 1, 2, 0, 2, 3],
-        };
+        let quad = quad();
         let sees = |linear: Mat3, double_sided: bool| {
             let mut scene = Scene::default();
             let mesh = scene.add_mesh("quad", &quad, "quad").unwrap();
@@ -463,16 +468,7 @@ mod tests {
         // A big quad (two triangles sharing the diagonal) in front of a far box; rays aimed at the
         // diagonal must all hit the quad.
         let mut scene = boxes(&[(Vec3::splat(100.0), DVec3::new(0.0, 0.0, -200.0))]);
-        let quad = MeshData {
-            positions: vec![
-                Vec3::new(-1.0, -1.0, 0.0),
-                Vec3::new(1.0, -1.0, 0.0),
-                Vec3::new(1.0, 1.0, 0.0),
-                Vec3::new(-1.0, 1.0, 0.0),
-            ],
-            normals: vec![],
-            indices: vec![0, 1, 2, 0, 2, 3],
-        };
+        let quad = quad();
         let mesh = scene.add_mesh("quad", &quad, "quad").unwrap();
         scene.instances.push(Instance {
             transform: Transform {

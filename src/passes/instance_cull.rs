@@ -265,7 +265,7 @@ impl PassNode for InstanceCullPass {
         let (ctx, cmd, frame) = (rec.ctx, rec.cmd, rec.frame);
         let scene = frame.scene;
         let slots = scene.instance_count;
-        let groups = scene.group_count;
+        let groups = scene.regions.groups();
         if slots as usize > crate::render::cull_data::MAX_CULL_SLOTS {
             return Err(crate::Error::Invalid(format!(
                 "instance_cull handles at most {} instances per pass; the scene has {slots}",

@@ -663,7 +663,7 @@ impl PassNode for OverlayPass {
             &TextPush {
                 stats_count: stats.len() as u32,
                 instances: scene.instance_count,
-                all_draws: scene.max_draws,
+                all_draws: scene.regions.groups(),
                 all_triangles_lo: triangles as u32,
                 all_triangles_hi: (triangles >> 32) as u32,
             },

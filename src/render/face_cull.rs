@@ -14,7 +14,7 @@ use crate::scene::{Instance, Scene};
 use ash::vk;
 
 /// Which faces of an instance's triangles the rasterizer drops.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FaceCull {
     /// One-sided material: counter-clockwise is the front, back faces are dropped.
     Back = 0,
@@ -96,16 +96,14 @@ impl DrawRegions {
     pub fn drawn<'a>(
         &self,
         commands: &'a [DrawIndexedIndirect],
-        counts: &[u32],
+        counts: &'a [u32],
     ) -> impl Iterator<Item = &'a DrawIndexedIndirect> + 'a {
-        let spans: Vec<(usize, usize)> = (0..FACE_CULL_REGIONS)
-            .map(|r| {
-                let first = self.first[r] as usize;
-                let count = counts.get(r).copied().unwrap_or(0).min(self.len[r]) as usize;
-                (first.min(commands.len()), (first + count).min(commands.len()))
-            })
-            .collect();
-        spans.into_iter().flat_map(move |(start, end)| commands[start..end].iter())
+        let regions = *self;
+        (0..FACE_CULL_REGIONS).flat_map(move |r| {
+            let first = (regions.first[r] as usize).min(commands.len());
+            let count = counts.get(r).copied().unwrap_or(0).min(regions.len[r]) as usize;
+            commands[first..(first + count).min(commands.len())].iter()
+        })
     }
 
     /// Records one `vkCmdDrawIndexedIndirectCount` per non-empty region of `commands` (counts

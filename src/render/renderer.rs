@@ -396,7 +396,7 @@ impl Renderer {
             frame,
             instances: self.gpu_scene.instance_count,
             drawn: self.gpu_scene.instance_count,
-            draws: self.gpu_scene.max_draws,
+            draws: self.gpu_scene.regions.groups(),
             triangles: self.gpu_scene.triangles,
             gpu_ms: timings.into_iter().filter(|t| t.name != "frame").collect(),
             gpu_total_ms: total,

@@ -23,7 +23,8 @@ pub struct GpuScene {
     pub draw_commands: Buffer,
     /// The number of commands of each face-cull region (read by `vkCmdDrawIndexedIndirectCount`).
     pub draw_count: Buffer,
-    /// Where each face cull's groups are, in every command list of this scene.
+    /// Where each face cull's groups are, in every command list of this scene; their total is
+    /// the number of non-empty draw groups (the most commands a frame can issue).
     pub regions: DrawRegions,
     /// [`super::cull_data::GpuCullRecord`] per slot (draw-list order).
     pub cull_records: Buffer,
@@ -32,12 +33,8 @@ pub struct GpuScene {
     /// Per instance: its mesh's first index and vertex offset (`uvec2`), for passes that rebuild
     /// a triangle from its id (the visibility buffer).
     pub instance_triangles: Buffer,
-    /// Number of non-empty draw groups.
-    pub group_count: u32,
     /// Number of instances.
     pub instance_count: u32,
-    /// Number of non-empty draw groups (the most commands a frame can issue).
-    pub max_draws: u32,
     /// Triangles over all instances.
     pub triangles: u64,
 }
@@ -144,9 +141,7 @@ impl GpuScene {
                 bytemuck::cast_slice(&instance_triangle_bases(scene)),
             )?,
             regions: draws.regions,
-            group_count: cull.groups.len() as u32,
             instance_count: scene.instances.len() as u32,
-            max_draws: draws.commands.len() as u32,
             triangles: scene.instanced_triangles(),
         })
     }

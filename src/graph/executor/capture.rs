@@ -88,11 +88,12 @@ impl DrawCapture {
             .iter()
             .map(|(_, hosts)| {
                 let Some([commands, count, ids]) = hosts else { return Ok(DrawnInstances::All) };
-                let commands: &[DrawIndexedIndirect] = bytemuck::cast_slice(commands.read_bytes()?);
-                let counts: &[u32] = bytemuck::cast_slice(count.read_bytes()?);
-                let ids: &[u32] = bytemuck::cast_slice(ids.read_bytes()?);
+                // Whole elements only: a graph may size a buffer to any number of bytes.
+                let commands: Vec<DrawIndexedIndirect> = whole(commands.read_bytes()?);
+                let counts: Vec<u32> = whole(count.read_bytes()?);
+                let ids: Vec<u32> = whole(ids.read_bytes()?);
                 let mut out = Vec::new();
-                for c in regions.drawn(commands, counts) {
+                for c in regions.drawn(&commands, &counts) {
                     let start = c.first_instance as usize;
                     let end = (start + c.instance_count as usize).min(ids.len());
                     out.extend_from_slice(&ids[start.min(end)..end]);
@@ -101,4 +102,9 @@ impl DrawCapture {
             })
             .collect()
     }
+}
+
+/// The whole `T`s at the start of `bytes` (a trailing partial one is left out).
+fn whole<T: bytemuck::Pod>(bytes: &[u8]) -> Vec<T> {
+    bytes.chunks_exact(std::mem::size_of::<T>()).map(bytemuck::pod_read_unaligned).collect()
 }
