@@ -499,7 +499,7 @@ fn partial_mip_chains_match_the_oracle_prefix() {
 #[test]
 fn repeated_builds_into_one_image_give_the_oracle_pyramid() {
     let mut h = Harness::new();
-    for (w, hh) in [(640u32, 480u32), (129, 1)] {
+    for (w, hh) in [(640u32, 480u32), (129, 1), (1100, 600), (4100, 3)] {
         for round in 0..2 {
             let out = h.run((w, hh, 1), Pattern::Random, 50 + round, stored_mip_count(UVec2::new(w, hh)), 3);
             let oracle = HiZPyramid::from_depth(w, hh, &out.depth);

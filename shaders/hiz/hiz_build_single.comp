@@ -1,5 +1,5 @@
-// Hi-Z pyramid in two dispatches of this shader (AMD single-pass-downsampler style tiles, then
-// one workgroup for the top; conservative for any size), stored from chain level 1
+// Hi-Z pyramid in one dispatch (AMD single-pass-downsampler style tiles, the levels above them
+// merged with atomics; conservative for any size), stored from chain level 1
 // (HIZ_FIRST_LEVEL): stored mip m = chain level m + 1, level 0 being the depth (min over
 // samples), which is read once and never written.
 //
@@ -24,15 +24,17 @@
 // (clamped) block and apply the fold. Levels 3..6 of the tile level by level in shared memory
 // (ping-pong, a barrier per level, a texel per thread reading at most 3x3: reducing level 6
 // straight from level 2 made one thread read 256..961 values in a row, which cost more than
-// reading the depth on an H100). The tile's level-6 texel also goes to the buffer `top`.
+// reading the depth on an H100).
 //
-// With HIZ_TOP_PASS, one workgroup (a second dispatch, after a barrier) loads level 6 from `top`
-// into shared memory and reduces levels 7.. there. Measured on an H100, this is faster than the
-// "last workgroup to finish does the top" pattern (3840x2160: 0.052 against 0.057 ms): the
-// device-scope release that each tile then needs before its done-counter atomic waits for the
-// tile's image stores under full memory load, which holds every workgroup's slot longer. Only
-// the mips above level 6, which the top workgroup reads back itself when a level does not fit
-// shared memory, are coherent images.
+// Levels 7.. in the same dispatch: each tile's level-6 texel is merged into the one texel of
+// every higher level that contains it, with an atomicMin on its bits (non-negative floats order
+// like their bits) in the coherent buffer `above`, by a thread of the tile's last warp, which
+// stored nothing since level 2 (its device-scope fence before the done counter then waits only
+// for these atomics). The tile that brings the counter to the tile count copies those levels
+// into their mips and puts the buffer back to +inf and the counter to 0 for the next build (the
+// pass fills it once, before the first). On an H100 this took 1920x1080 from 0.0188 to 0.0153 ms
+// against a one-workgroup second dispatch that reduced levels 7.. level by level (3840x2160:
+// 0.041 both); see src/passes/hiz_build.rs for the variants tried.
 #version 460
 #extension GL_EXT_control_flow_attributes : require
 #include "common/hiz.glsl"
@@ -44,8 +46,9 @@ layout(binding = 0) uniform sampler2DMS depth_tex;
 #else
 layout(binding = 0) uniform sampler2D depth_tex;  // nearest, clamp to edge
 #endif
-// Level 6 (one texel per tile, row-major), for the top pass.
-layout(binding = 18) buffer Top { float top[]; };
+// The tiles' done counter, then chain levels 7.. as the bits of their values, one level after
+// another (row-major). 0 and +inf between builds.
+layout(binding = 18) coherent buffer Above { uint done_tiles; uint above[]; };
 // One storage image per stored mip (binding 2 + mip; mip m = chain level m + 1); mips the image
 // lacks are bound to its last mip and never touched.
 layout(binding = 2, r32f) uniform writeonly image2D mip0;
@@ -54,16 +57,16 @@ layout(binding = 4, r32f) uniform writeonly image2D mip2;
 layout(binding = 5, r32f) uniform writeonly image2D mip3;
 layout(binding = 6, r32f) uniform writeonly image2D mip4;
 layout(binding = 7, r32f) uniform writeonly image2D mip5;
-layout(binding = 8, r32f) uniform coherent image2D mip6;
-layout(binding = 9, r32f) uniform coherent image2D mip7;
-layout(binding = 10, r32f) uniform coherent image2D mip8;
-layout(binding = 11, r32f) uniform coherent image2D mip9;
-layout(binding = 12, r32f) uniform coherent image2D mip10;
-layout(binding = 13, r32f) uniform coherent image2D mip11;
-layout(binding = 14, r32f) uniform coherent image2D mip12;
-layout(binding = 15, r32f) uniform coherent image2D mip13;
-layout(binding = 16, r32f) uniform coherent image2D mip14;
-layout(binding = 17, r32f) uniform coherent image2D mip15;
+layout(binding = 8, r32f) uniform writeonly image2D mip6;
+layout(binding = 9, r32f) uniform writeonly image2D mip7;
+layout(binding = 10, r32f) uniform writeonly image2D mip8;
+layout(binding = 11, r32f) uniform writeonly image2D mip9;
+layout(binding = 12, r32f) uniform writeonly image2D mip10;
+layout(binding = 13, r32f) uniform writeonly image2D mip11;
+layout(binding = 14, r32f) uniform writeonly image2D mip12;
+layout(binding = 15, r32f) uniform writeonly image2D mip13;
+layout(binding = 16, r32f) uniform writeonly image2D mip14;
+layout(binding = 17, r32f) uniform writeonly image2D mip15;
 
 layout(push_constant) uniform Push {
     uvec2 base;    // chain level 0 size (the depth's)
@@ -75,20 +78,15 @@ layout(constant_id = 0) const int HIZ_SAMPLES = 1;
 
 const uint SIDE = 16u;         // threads per axis
 const uint TILE_LEVEL = 6u;    // chain level: a workgroup owns the subtree of one level-6 texel
-const uint TOP_CAP = 4096u;    // level-6 texels the top pass loads into shared memory at once
 #define FAR_INIT uintBitsToFloat(0x7F800000u)  // +inf: min identity
 
 // s_a: level 2 of the tile (<= 31x31, stride 32), then levels 3..6 alternate between s_b and s_a
-// (same stride). The top pass reuses s_a and s_b, flat, for the levels above the tiles
-// (s_a: level 6, up to TOP_CAP texels). The tiles need only 32x32 in s_a: 8 KB instead of
-// 20 KB lets an SM hold as many tiles as it has threads for (3840x2160 on an H100: 0.052 ->
-// 0.041 ms).
-#ifdef HIZ_TOP_PASS
-shared float s_a[TOP_CAP];
-#else
+// (same stride), level 6 ending in s_a[0]. 8 KB in all: a one-workgroup top pass that kept 16 KB
+// more here made an SM hold fewer tiles than it had threads for (3840x2160 on an H100: 0.052 ->
+// 0.041 ms when it went).
 shared float s_a[1024];
-#endif
 shared float s_b[1024];
+shared bool s_last_tile;  // this tile finished last: it writes levels 7..
 
 vec2 inv_base;  // 1 / base, for gather coordinates
 
@@ -110,23 +108,6 @@ void store_mip(uint mip, ivec2 p, float v) {
         case 13u: imageStore(mip13, p, vec4(v)); break;
         case 14u: imageStore(mip14, p, vec4(v)); break;
         default: imageStore(mip15, p, vec4(v)); break;
-    }
-}
-
-// Mips read back by the top pass: above level 6 (written by itself), when a level does not
-// fit shared memory; level 6 comes from `top`.
-float load_mip(uint mip, ivec2 p) {
-    switch (mip) {
-        case 5u: return top[p.y * hiz_level_size(base, TILE_LEVEL).x + p.x];
-        case 6u: return imageLoad(mip6, p).r;
-        case 7u: return imageLoad(mip7, p).r;
-        case 8u: return imageLoad(mip8, p).r;
-        case 9u: return imageLoad(mip9, p).r;
-        case 10u: return imageLoad(mip10, p).r;
-        case 11u: return imageLoad(mip11, p).r;
-        case 12u: return imageLoad(mip12, p).r;
-        case 13u: return imageLoad(mip13, p).r;
-        default: return imageLoad(mip14, p).r;
     }
 }
 
@@ -230,20 +211,55 @@ uvec2 tile_hi(uvec2 g, uvec2 n, uint k) {
             }                                                                                       \
             imageStore(MIP, ivec2(lo + t), vec4(v));                                                \
             DST[t.y * 32u + t.x] = v;                                                               \
-            if (K < levels) top[g.y * n.x + g.x] = v;                                              \
         }                                                                                           \
     }
 
-// Loads the `total` texels of level 6 from `top`, flat into s_a, 8 per thread at a time (all
-// issued before any is used; one round up to 2048 texels, a 3840x2160 depth).
-#define LOAD_TOP_BUFFER()                                                                           \
-    for (uint first = lid; first < total; first += 8u * SIDE * SIDE) {                              \
-        float vals[8];                                                                              \
-        [[unroll]] for (uint i = 0u; i < 8u; ++i) vals[i] = top[min(first + i * SIDE * SIDE, total - 1u)]; \
-        [[unroll]] for (uint i = 0u; i < 8u; ++i) {                                                 \
-            if (first + i * SIDE * SIDE < total) s_a[first + i * SIDE * SIDE] = vals[i];            \
-        }                                                                                           \
+// The bits that order a depth like its value for atomicMin: a non-negative float's own (anything
+// else, which a depth never is, as 0: the farthest, so conservative).
+uint depth_bits(float d) {
+    return d > 0.0 ? floatBitsToUint(d) : 0u;
+}
+
+// Merges this tile's level-6 texel `v` into levels 7..levels (the texel of level k over level-6
+// texel g is min(g >> (k - 6), size_k - 1): the folds put a dropped texel into the last one) and
+// counts the tile done; true for the tile that finished last.
+bool merge_above(uvec2 g, uvec2 n, float v) {
+    uint bits = depth_bits(v);
+    uint offset = 0u;
+    for (uint k = TILE_LEVEL + 1u; k <= levels; ++k) {
+        uvec2 size = hiz_level_size(base, k);
+        uvec2 t = min(g >> (k - TILE_LEVEL), size - 1u);
+        atomicMin(above[offset + t.y * size.x + t.x], bits);
+        offset += size.x * size.y;
     }
+    memoryBarrierBuffer();  // the merges before the count
+    return atomicAdd(done_tiles, 1u) == n.x * n.y - 1u;
+}
+
+// The last tile: levels 7..levels from `above` into their mips, then `above` back to +inf and
+// the counter to 0. Flat over the levels (3 load-store round trips at 3840x2160 instead of one
+// per level and more).
+void write_above(uint lid) {
+    memoryBarrierBuffer();  // every tile's merges, seen through its count
+    uint total = 0u;
+    for (uint k = TILE_LEVEL + 1u; k <= levels; ++k) {
+        uvec2 size = hiz_level_size(base, k);
+        total += size.x * size.y;
+    }
+    for (uint i = lid; i < total; i += SIDE * SIDE) {
+        // Entry i: texel `at` of chain level k.
+        uint k = TILE_LEVEL + 1u;
+        uint at = i;
+        for (uvec2 size = hiz_level_size(base, k); at >= size.x * size.y; size = hiz_level_size(base, k)) {
+            at -= size.x * size.y;
+            ++k;
+        }
+        uvec2 size = hiz_level_size(base, k);
+        store_mip(k - 1u, ivec2(at % size.x, at / size.x), uintBitsToFloat(above[i]));
+        above[i] = floatBitsToUint(FAR_INIT);
+    }
+    if (lid == 0u) done_tiles = 0u;
+}
 
 void main() {
     uvec2 tid = gl_LocalInvocationID.xy;
@@ -253,7 +269,6 @@ void main() {
     uint top_level = min(TILE_LEVEL, levels);  // highest chain level stored inside the tile
     inv_base = 1.0 / vec2(base);
 
-#ifndef HIZ_TOP_PASS
     // Chain levels 1 and 2 from the depth; level 2 of the tile into s_a.
     uvec2 s2 = hiz_level_size(base, 2u);
     uvec2 lo2 = tile_lo(g, 2u);
@@ -272,65 +287,13 @@ void main() {
     REDUCE_TILE_LEVEL(4u, s_b, s_a, mip3)
     REDUCE_TILE_LEVEL(5u, s_a, s_b, mip4)
     REDUCE_TILE_LEVEL(6u, s_b, s_a, mip5)
-    // The top pass (HIZ_TOP_PASS, a second dispatch) reduces levels 7.., if any.
-#else
 
-    // Top pass: chain levels 7.. by this one workgroup. Level k - 1 (size src) is read while k is written.
-    uint k = TILE_LEVEL + 1u;
-    uvec2 src = n;
-    // Sources too large for shared memory (a depth over ~8192 pixels), through the coherent image.
-    while (k <= levels && src.x * src.y > TOP_CAP) {
-        uvec2 size = hiz_level_size(base, k);
-        for (uint ty = tid.y; ty < size.y; ty += SIDE) {
-            for (uint tx = tid.x; tx < size.x; tx += SIDE) {
-                uvec2 first, count;
-                hiz_footprint(uvec2(tx, ty), src, first, count);
-                float v = FAR_INIT;
-                for (uint y = 0u; y < count.y; ++y) {
-                    for (uint x = 0u; x < count.x; ++x) {
-                        v = min(v, load_mip(k - 2u, ivec2(first + uvec2(x, y))));
-                    }
-                }
-                store_mip(k - 1u, ivec2(tx, ty), v);
-            }
-        }
-        memoryBarrierImage();
+    // Chain levels 7.. (see above), merged by the tile's last thread (which stored nothing since
+    // level 2) once level 6 is in s_a[0].
+    if (levels > TILE_LEVEL) {
         barrier();
-        src = size;
-        ++k;
-    }
-    if (k > levels) return;
-    uint total = src.x * src.y;
-    if (k == TILE_LEVEL + 1u) {
-        LOAD_TOP_BUFFER()
-    } else {  // after image-only levels (a depth over ~8192 pixels): one load at a time
-        for (uint i = lid; i < total; i += SIDE * SIDE) s_a[i] = load_mip(k - 2u, ivec2(i % src.x, i / src.x));
-    }
-    barrier();
-    bool in_a = true;  // level k - 1 is in s_a (stride src.x), else in s_b
-    for (; k <= levels; ++k) {
-        uvec2 size = hiz_level_size(base, k);
-        for (uint i = lid; i < size.x * size.y; i += SIDE * SIDE) {
-            uvec2 t = uvec2(i % size.x, i / size.x);
-            uvec2 first, count;
-            hiz_footprint(t, src, first, count);
-            float v = FAR_INIT;
-            for (uint y = 0u; y < count.y; ++y) {
-                for (uint x = 0u; x < count.x; ++x) {
-                    uint j = (first.y + y) * src.x + first.x + x;
-                    v = min(v, in_a ? s_a[j] : s_b[j]);
-                }
-            }
-            store_mip(k - 1u, ivec2(t), v);
-            if (in_a) {
-                s_b[i] = v;
-            } else {
-                s_a[i] = v;
-            }
-        }
+        if (lid == SIDE * SIDE - 1u) s_last_tile = merge_above(g, n, s_a[0]);
         barrier();
-        in_a = !in_a;
-        src = size;
+        if (s_last_tile) write_above(lid);
     }
-#endif
 }

@@ -1,7 +1,7 @@
 //! Hi-Z benchmark: the pyramid of a real depth buffer (the city, unculled), single dispatch
 //! against one dispatch per mip, at several output sizes. The single dispatch is also timed with
 //! truncated pyramids (1, 2 and 6 mips) so that its cost splits into reading the depth, the
-//! in-tile levels and the last workgroup's top levels.
+//! in-tile levels and the levels above the tiles.
 
 use super::median_per_pass;
 use crate::gpu::{GpuContext, ShaderCompiler};

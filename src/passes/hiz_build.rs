@@ -31,18 +31,25 @@
 //!   in registers (four `textureGather`s, one per level-1 texel; the blocks on the depth's last
 //!   column/row of level 2 read 8×8 clamped pixels and apply the fold, see the shader), stores
 //!   its 2×2 level-1 texels and its level-2 texel, and levels 3..=6 of the tile go through shared
-//!   memory (a barrier per level, one texel per thread reading at most 3×3). The tile's level-6
-//!   texel also goes to a small buffer; after a barrier, one workgroup loads that level into
-//!   shared memory once and reduces levels 7.. there. No subgroup operations, so no assumption on
-//!   the subgroup size.
+//!   memory (a barrier per level, one texel per thread reading at most 3×3). Levels 7.. are
+//!   merged: each tile `atomicMin`s the bits of its level-6 texel into the one texel of every
+//!   higher level above it (in a small buffer), then counts itself done; the tile that finishes
+//!   last copies those levels into their mips and resets the buffer for the next build. No
+//!   subgroup operations, so no assumption on the subgroup size.
 //!
-//!   Measured on an H100 (`cullgraph bench`, 3840×2160 / 1920×1080): 0.052 / 0.020 ms, against
-//!   0.090 / 0.029 ms when levels 3..=6 were reduced straight from level 2 (one thread read up to
-//!   961 shared values in a row) and 0.057 / 0.021 ms when the last tile to finish did the top
-//!   levels (a device-scope acquire-release done-counter: each tile's release then waits for its
-//!   image stores under full memory load, holding its slot, which costs more than the barrier and
-//!   the extra dispatch). Reading the depth and writing level 1 alone (`mips: 1`) takes 0.027 /
-//!   0.009 ms; `textureGather` beats four `texelFetch`es (0.047 / 0.015 ms).
+//!   Measured on an H100 (`cullgraph bench`, 3840×2160 / 1920×1080, stop 16): 0.041 / 0.0153
+//!   ms, against 0.041 / 0.0188 with a second, one-workgroup dispatch that reduced levels 7..
+//!   level by level from the tiles' level 6 (the drain before it, and a barrier per level).
+//!   Tried at the same time, not kept: the merges with a one-workgroup copy dispatch instead of
+//!   the last tile (0.040 / 0.017); counting the tiles per level-9 group so that no address
+//!   takes more than 64 atomics (0.042 / 0.017: the group step lengthens the tail); copying
+//!   four texels per thread per round (0.042 at 4K). Earlier: 0.090 / 0.029 ms when levels
+//!   3..=6 were reduced straight from level 2 (one thread read up to 961 shared values in a
+//!   row), and 0.057 / 0.021 ms when the last tile reduced the top levels itself from level 6
+//!   (every thread's release then waited for its image stores under full memory load). Reading
+//!   the depth and writing level 1 alone (`mips: 1`) takes 0.025 / 0.009 ms and the tiles'
+//!   levels up to 6 (`mips: 6`) 0.030 / 0.012; `textureGather` beats four `texelFetch`es
+//!   (0.047 / 0.015 ms).
 //! - `per_mip` (baseline, `shaders/hiz/hiz_build_per_mip.comp`): one dispatch per level (level 1
 //!   from the depth's footprints, then level `k + 1` from level `k` through storage-image mip
 //!   views), with a barrier on the written mip between dispatches.
@@ -90,7 +97,8 @@ pub fn pyramid_mip_count(depth: vk::Extent2D) -> u32 {
 /// How the pyramid is built.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum HizMethod {
-    /// One dispatch for the whole pyramid (64×64-pixel tiles, the last workgroup does the top levels).
+    /// One dispatch for the whole pyramid (64×64-pixel tiles; the last one to finish writes the
+    /// levels above the tiles, merged by all of them).
     #[default]
     Single,
     /// One dispatch per level with barriers between (baseline).
@@ -164,11 +172,22 @@ pub struct HizBuildPass {
     /// Per-mip: chain level `k + 1` from level `k`.
     reduce: Option<Pipeline>,
     sampler: Sampler,
-    /// Single method: the levels above the tiles, one workgroup.
-    top_pass: Option<Pipeline>,
-    /// Level 6, one texel per tile, for the top pass (single method), sized for the device's
-    /// largest image.
-    top: Buffer,
+    /// Single method: the tiles' done counter, then chain levels 7.. merged by the tiles (the
+    /// bits of their values), sized for the device's largest image. Between builds the counter
+    /// is 0 and every level +inf: the last tile of a build resets what it used.
+    above: Buffer,
+    /// Whether `above` has been filled (recorded once, before the first build).
+    above_filled: bool,
+}
+
+/// Entries of the single method's `above` buffer for a depth of up to `max_dim` pixels per axis:
+/// the counter and chain levels 7..=[`MAX_LEVELS`].
+fn above_entries(max_dim: u32) -> u64 {
+    let base = glam::UVec2::splat(max_dim);
+    1 + (TILE_LEVEL + 1..=MAX_LEVELS)
+        .map(|k| crate::oracle::hiz::level_size(base, k))
+        .map(|s| u64::from(s.x) * u64::from(s.y))
+        .sum::<u64>()
 }
 
 impl HizBuildPass {
@@ -196,12 +215,6 @@ impl HizBuildPass {
             Ok(Lazy::new(shaders.compile(path, &defines)?))
         };
         let from_depth = [variant(false)?, variant(true)?];
-        let top_pass = if method == HizMethod::Single {
-            let spirv = shaders.compile(path, &[("HIZ_TOP_PASS", "1")])?;
-            Some(Pipeline::compute(ctx, &format!("{name} (top levels)"), &spirv)?)
-        } else {
-            None
-        };
         let reduce = match method {
             HizMethod::Single => None,
             HizMethod::PerMip => {
@@ -209,17 +222,24 @@ impl HizBuildPass {
                 Some(Pipeline::compute(ctx, &format!("{name} (reduce)"), &spirv)?)
             }
         };
-        let max_tiles = (ctx.caps().limits.max_image_dimension2_d >> TILE_LEVEL).max(1) as u64;
-        let top = Buffer::new(
+        let above = Buffer::new(
             ctx,
             &BufferDesc {
-                name: &format!("{name} (tile level)"),
-                size: max_tiles * max_tiles * 4,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                name: &format!("{name} (levels above the tiles)"),
+                size: above_entries(ctx.caps().limits.max_image_dimension2_d) * 4,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
                 location: MemoryLocation::GpuOnly,
             },
         )?;
-        Ok(Self { name: name.into(), method, from_depth, reduce, sampler: Sampler::nearest_clamp(ctx)?, top, top_pass })
+        Ok(Self {
+            name: name.into(),
+            method,
+            from_depth,
+            reduce,
+            sampler: Sampler::nearest_clamp(ctx)?,
+            above,
+            above_filled: false,
+        })
     }
 
     /// The method this pass uses.
@@ -235,6 +255,9 @@ impl HizBuildPass {
     /// most [`MAX_LEVELS`]) in `GENERAL`, whose previous accesses are ordered before
     /// compute-shader writes. Every mip is left written by compute shaders in `GENERAL`: the
     /// caller's barrier to the next reader has source [`Access::COMPUTE_WRITE`].
+    ///
+    /// The single method keeps a small buffer of its own between builds, which the first build
+    /// recorded also fills: submit what this pass records in the order it was recorded.
     pub fn record_images(
         &mut self,
         ctx: &GpuContext,
@@ -284,33 +307,17 @@ impl HizBuildPass {
         match self.method {
             HizMethod::Single => {
                 let tiles = crate::oracle::hiz::level_size(glam::UVec2::from(base), TILE_LEVEL);
-                let pipeline = self.from_depth[variant].get(ctx, &self.name, samples)?;
                 if levels > TILE_LEVEL {
-                    // The previous build's top pass has read the tile level before this one
-                    // writes it.
-                    let top_rw = Access {
-                        stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
-                        access: vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
-                        layout: vk::ImageLayout::UNDEFINED,
-                    };
-                    cmd_barriers(device, cmd, &[memory_barrier(top_rw, top_rw)], &[]);
+                    self.prepare_above(device, cmd);
                 }
-                let mut binds = vec![depth_bind, Bind::Buffer(18, self.top.handle())];
+                let pipeline = self.from_depth[variant].get(ctx, &self.name, samples)?;
+                let mut binds = vec![depth_bind, Bind::Buffer(18, self.above.handle())];
                 binds.extend((0..MAX_LEVELS).map(|l| Bind::StorageImage(2 + l, hiz.mip_view(l.min(levels - 1)))));
                 pipeline.bind(cmd);
                 pipeline.push_bindings(cmd, &binds);
                 pipeline.push_constants(cmd, &SinglePush { base, levels });
                 // SAFETY: cmd recording with the pipeline bound and every binding pushed.
                 unsafe { device.cmd_dispatch(cmd, tiles.x, tiles.y, 1) };
-                if let Some(top_pass) = self.top_pass.as_ref().filter(|_| levels > TILE_LEVEL) {
-                    // The tiles' level 6 (buffer) and mips, written, before the top reads them.
-                    cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::COMPUTE_WRITE)], &[]);
-                    top_pass.bind(cmd);
-                    top_pass.push_bindings(cmd, &binds[1..]);
-                    top_pass.push_constants(cmd, &SinglePush { base, levels });
-                    // SAFETY: as above.
-                    unsafe { device.cmd_dispatch(cmd, 1, 1, 1) };
-                }
             }
             HizMethod::PerMip => {
                 let size = |k: u32| crate::oracle::hiz::level_size(glam::UVec2::from(base), k).to_array();
@@ -352,6 +359,27 @@ impl HizBuildPass {
             }
         }
         Ok(())
+    }
+
+    /// Records what the single method's merges into `above` need first: the buffer filled (the
+    /// first time: counter 0, levels +inf), and the previous build's last tile done with it.
+    fn prepare_above(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) {
+        let merge = Access {
+            stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
+            access: vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            layout: vk::ImageLayout::UNDEFINED,
+        };
+        if self.above_filled {
+            cmd_barriers(device, cmd, &[memory_barrier(merge, merge)], &[]);
+            return;
+        }
+        // SAFETY: a buffer with TRANSFER_DST usage that no command has used yet; cmd recording.
+        unsafe {
+            device.cmd_fill_buffer(cmd, self.above.handle(), 4, vk::WHOLE_SIZE, f32::INFINITY.to_bits());
+            device.cmd_fill_buffer(cmd, self.above.handle(), 0, 4, 0);
+        }
+        cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, merge)], &[]);
+        self.above_filled = true;
     }
 }
 
