@@ -364,11 +364,8 @@ impl HizBuildPass {
     /// Records what the single method's merges into `above` need first: the buffer filled (the
     /// first time: counter 0, levels +inf), and the previous build's last tile done with it.
     fn prepare_above(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) {
-        let merge = Access {
-            stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
-            access: vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
-            layout: vk::ImageLayout::UNDEFINED,
-        };
+        // The merges read and write `above` from compute shaders.
+        let merge = Access::COMPUTE_WRITE;
         if self.above_filled {
             cmd_barriers(device, cmd, &[memory_barrier(merge, merge)], &[]);
             return;
