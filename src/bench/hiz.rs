@@ -4,6 +4,7 @@
 //! in-tile levels and the levels above the tiles.
 
 use super::median_per_pass;
+use crate::gpu::PassTiming;
 use crate::gpu::{GpuContext, ShaderCompiler};
 use crate::render::{GraphSpec, RenderSettings, Renderer};
 use crate::scene::source::LoadOptions;
@@ -27,6 +28,9 @@ const GRAPH: &str = r#"Graph(
     outputs: ["hiz"],
 )"#;
 
+/// The timing name of a frame less its depth pass (not a pass name: those are the graph's).
+const AFTER_DEPTH: &str = "frame less gbuffer";
+
 /// One size and method.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct HizFigure {
@@ -41,6 +45,10 @@ pub struct HizFigure {
     pub mips: Option<u32>,
     /// Median GPU milliseconds of the pyramid.
     pub ms: f64,
+    /// Median GPU milliseconds of the frame less the depth pass: the pyramid with the barrier
+    /// before it, which the pass's own timestamps leave out.
+    #[serde(default)]
+    pub after_depth_ms: f64,
 }
 
 /// Measures both methods at each size (`frames` measured after `warmup`).
@@ -67,10 +75,20 @@ pub fn run(
             for _ in 0..warmup {
                 renderer.render(&camera)?;
             }
-            let timings =
-                (0..frames).map(|_| renderer.render(&camera).map(|s| s.gpu_ms)).collect::<crate::Result<Vec<_>>>()?;
-            let ms = median_per_pass(&timings).into_iter().find(|(p, _)| p == "hiz").map_or(0.0, |(_, ms)| ms);
-            out.push(HizFigure { width, height, method: method.into(), mips, ms });
+            // Each frame's passes, plus "after depth": its whole less the depth pass.
+            let timings = (0..frames)
+                .map(|_| {
+                    renderer.render(&camera).map(|s| {
+                        let depth = s.gpu_ms.iter().find(|t| t.name == "gbuffer").map_or(0.0, |t| t.ms);
+                        let after = PassTiming { name: AFTER_DEPTH.into(), ms: s.gpu_total_ms - depth };
+                        s.gpu_ms.into_iter().chain([after]).collect::<Vec<_>>()
+                    })
+                })
+                .collect::<crate::Result<Vec<_>>>()?;
+            let medians = median_per_pass(&timings);
+            let of = |pass: &str| medians.iter().find(|(p, _)| p == pass).map_or(0.0, |(_, ms)| *ms);
+            let (ms, after_depth_ms) = (of("hiz"), of(AFTER_DEPTH));
+            out.push(HizFigure { width, height, method: method.into(), mips, ms, after_depth_ms });
         }
     }
     Ok(out)
@@ -78,10 +96,14 @@ pub fn run(
 
 /// A Markdown table of the figures.
 pub fn markdown(figures: &[HizFigure]) -> String {
-    let mut s = String::from("# Hi-Z pyramid\n\n| size | method | mips | ms |\n|---|---|---|---|\n");
+    let mut s =
+        String::from("# Hi-Z pyramid\n\n| size | method | mips | ms | frame - depth ms |\n|---|---|---|---|---|\n");
     for f in figures {
         let mips = f.mips.map_or("all".to_string(), |m| m.to_string());
-        s.push_str(&format!("| {}x{} | {} | {mips} | {:.4} |\n", f.width, f.height, f.method, f.ms));
+        s.push_str(&format!(
+            "| {}x{} | {} | {mips} | {:.4} | {:.4} |\n",
+            f.width, f.height, f.method, f.ms, f.after_depth_ms
+        ));
     }
     s
 }

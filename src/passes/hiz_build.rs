@@ -18,8 +18,7 @@
 //! Two methods (setting `method`):
 //!
 //! - `single` (default, `shaders/hiz/hiz_build_single.comp`): the tiles of AMD's single-pass
-//!   downsampler in one dispatch, then one workgroup for the top levels in a second (the setting
-//!   keeps its name for the graphs that use it). Every level is a min over an aligned block of
+//!   downsampler in one dispatch, the levels above the tiles included. Every level is a min over an aligned block of
 //!   the depth — texel `x` of level `k` covers columns `[x·2^k, (x+1)·2^k)`, except the last
 //!   texel of a level, which extends to the end of the row because halving folds the dropped
 //!   column into it — so the pyramid is a tree and the texels of level 6 cut it into independent
@@ -49,7 +48,19 @@
 //!   (every thread's release then waited for its image stores under full memory load). Reading
 //!   the depth and writing level 1 alone (`mips: 1`) takes 0.025 / 0.009 ms and the tiles'
 //!   levels up to 6 (`mips: 6`) 0.030 / 0.012; `textureGather` beats four `texelFetch`es
-//!   (0.047 / 0.015 ms).
+//!   (0.047 / 0.015 ms) and a bilinear fetch through a min-reduction sampler, one value per
+//!   quad instead of four (level 1 alone 0.030 / 0.0107, stop 17).
+//!
+//!   Since stop 17 the dependency of a build on the previous one's use of the merge buffer rides
+//!   in the executor's barrier before the pass ([`PassNode::own_dependency`]) instead of a
+//!   barrier of the pass's own: 0.0396 / 0.0141 ms, and 1.1 µs less for the frame less its
+//!   depth pass. Where the 4K time goes (stop 17, timing-only shader variants, `mips: 1`): an
+//!   empty dispatch of the same tiles 0.0050 ms (the hand-over after the depth pass and the
+//!   launch), reading the depth with no stores 0.0227, the stores with no reads 0.0130, both
+//!   0.0251. So reading the 33 MB of depth takes about 0.018 ms (1.9 TB/s, 470 G texels/s):
+//!   about 45 % of the texel rate the H100 is quoted at (528 texture units at up to 1.98 GHz),
+//!   which a one-value-per-quad min-reduction fetch did not raise. Together with the hand-over,
+//!   that is above the 0.02 ms that issue 5 asks for the whole 4K pyramid.
 //! - `per_mip` (baseline, `shaders/hiz/hiz_build_per_mip.comp`): one dispatch per level (level 1
 //!   from the depth's footprints, then level `k + 1` from level `k` through storage-image mip
 //!   views), with a barrier on the written mip between dispatches.
@@ -178,6 +189,9 @@ pub struct HizBuildPass {
     above: Buffer,
     /// Whether `above` has been filled (recorded once, before the first build).
     above_filled: bool,
+    /// The executor's barrier before this run already orders the previous build's use of
+    /// `above` before this one's ([`PassNode::own_dependency`]).
+    above_ordered: bool,
 }
 
 /// Entries of the single method's `above` buffer for a depth of up to `max_dim` pixels per axis:
@@ -239,6 +253,7 @@ impl HizBuildPass {
             sampler: Sampler::nearest_clamp(ctx)?,
             above,
             above_filled: false,
+            above_ordered: false,
         })
     }
 
@@ -362,12 +377,14 @@ impl HizBuildPass {
     }
 
     /// Records what the single method's merges into `above` need first: the buffer filled (the
-    /// first time: counter 0, levels +inf), and the previous build's last tile done with it.
+    /// first time: counter 0, levels +inf), and the previous build's last tile done with it
+    /// (unless the executor's barrier before the pass saw to that).
     fn prepare_above(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) {
-        // The merges read and write `above` from compute shaders.
-        let merge = Access::COMPUTE_WRITE;
+        let ordered = std::mem::take(&mut self.above_ordered);
         if self.above_filled {
-            cmd_barriers(device, cmd, &[memory_barrier(merge, merge)], &[]);
+            if !ordered {
+                cmd_barriers(device, cmd, &[memory_barrier(ABOVE_ACCESS, ABOVE_ACCESS)], &[]);
+            }
             return;
         }
         // SAFETY: a buffer with TRANSFER_DST usage that no command has used yet; cmd recording.
@@ -375,15 +392,27 @@ impl HizBuildPass {
             device.cmd_fill_buffer(cmd, self.above.handle(), 4, vk::WHOLE_SIZE, f32::INFINITY.to_bits());
             device.cmd_fill_buffer(cmd, self.above.handle(), 0, 4, 0);
         }
-        cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, merge)], &[]);
+        cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, ABOVE_ACCESS)], &[]);
         self.above_filled = true;
     }
 }
+
+/// How the single method's builds use `above`: compute-shader reads and writes (the merges, the
+/// last tile's copy and reset).
+const ABOVE_ACCESS: Access = Access::COMPUTE_WRITE;
 
 impl PassNode for HizBuildPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let depth = rec.slots.required_image("depth")?;
         let hiz = rec.slots.required_image("hiz")?;
         self.record_images(rec.ctx, rec.cmd, depth, hiz)
+    }
+
+    /// The previous build's last tile before this build's merges: in the executor's barrier
+    /// rather than one of the pass's own (H100: 1.2 µs less per build). The first build fills
+    /// `above` and orders that itself.
+    fn own_dependency(&mut self) -> Option<(Access, Access)> {
+        self.above_ordered = self.method == HizMethod::Single && self.above_filled;
+        self.above_ordered.then_some((ABOVE_ACCESS, ABOVE_ACCESS))
     }
 }

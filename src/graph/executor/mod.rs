@@ -219,6 +219,9 @@ impl GraphRuntime {
                     Physical::Unbound => {}
                 }
             }
+            if let Some((src, dst)) = node.own_dependency() {
+                memory.push(memory_barrier(src, dst));
+            }
             // One global barrier carries every buffer dependency of the pass.
             let merged: Vec<vk::MemoryBarrier2> = memory
                 .into_iter()

@@ -2,7 +2,7 @@
 //! resources bound to its slots and the frame's shared inputs.
 
 use super::resources::{Physical, RuntimeResources};
-use crate::gpu::{Buffer, GpuContext, GpuTimer, Image};
+use crate::gpu::{Access, Buffer, GpuContext, GpuTimer, Image};
 use crate::graph::plan::{Binding, PlannedPass};
 use crate::render::scene_buffers::GpuScene;
 use ash::vk;
@@ -139,4 +139,13 @@ impl<'a> StepTimer<'a> {
 pub trait PassNode {
     /// Records the pass's commands. Barriers around it are the executor's job.
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()>;
+
+    /// What this run needs of the pass's own earlier runs through memory that the graph does
+    /// not see (a buffer the pass owns): the (source, destination) of a global memory barrier.
+    /// Called right before [`PassNode::record`]; the executor folds it into the barrier it
+    /// records before the pass anyway, so the pass records none of its own (a separate barrier
+    /// cost about 1.2 µs on an H100). `None` (the default): nothing to wait for.
+    fn own_dependency(&mut self) -> Option<(Access, Access)> {
+        None
+    }
 }
