@@ -314,3 +314,213 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
     drop(host);
     assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
 }
+
+/// An image the "engine" makes with its own allocator, and its view of every mip and aspect.
+struct HostOwnedImage {
+    image: vk::Image,
+    view: vk::ImageView,
+    memory: gpu_allocator::vulkan::Allocation,
+    host: HostImage,
+}
+
+impl HostOwnedImage {
+    fn new(
+        d: &ash::Device,
+        allocator: &Arc<Mutex<Allocator>>,
+        format: vk::Format,
+        (w, h, mips): (u32, u32, u32),
+        usage: vk::ImageUsageFlags,
+    ) -> Self {
+        let image = unsafe {
+            d.create_image(
+                &vk::ImageCreateInfo::default()
+                    .image_type(vk::ImageType::TYPE_2D)
+                    .format(format)
+                    .extent(vk::Extent3D { width: w, height: h, depth: 1 })
+                    .mip_levels(mips)
+                    .array_layers(1)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .usage(usage)
+                    .initial_layout(vk::ImageLayout::UNDEFINED),
+                None,
+            )
+            .unwrap()
+        };
+        let requirements = unsafe { d.get_image_memory_requirements(image) };
+        let memory = allocator
+            .lock()
+            .unwrap()
+            .allocate(&gpu_allocator::vulkan::AllocationCreateDesc {
+                name: "host image",
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: gpu_allocator::vulkan::AllocationScheme::GpuAllocatorManaged,
+            })
+            .unwrap();
+        unsafe { d.bind_image_memory(image, memory.memory(), memory.offset()).unwrap() };
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(cullgraph::gpu::image::aspect_of(format))
+            .level_count(mips)
+            .layer_count(1);
+        let info = vk::ImageViewCreateInfo::default().image(image).view_type(vk::ImageViewType::TYPE_2D).format(format);
+        let view = unsafe { d.create_image_view(&info.subresource_range(range), None).unwrap() };
+        let host = HostImage {
+            image,
+            view,
+            format,
+            extent: vk::Extent2D { width: w, height: h },
+            mip_levels: mips,
+            samples: vk::SampleCountFlags::TYPE_1,
+        };
+        Self { image, view, memory, host }
+    }
+
+    fn destroy(self, d: &ash::Device, allocator: &Arc<Mutex<Allocator>>) {
+        unsafe {
+            d.destroy_image_view(self.view, None);
+            d.destroy_image(self.image, None);
+        }
+        allocator.lock().unwrap().free(self.memory).unwrap();
+    }
+}
+
+/// The engine owns the depth (with stencil, as engines often do) and the Hi-Z pyramid; the graph
+/// draws into the one, samples its depth aspect and builds the other mip by mip.
+const HOST_DEPTH_AND_PYRAMID: &str = r#"Graph(
+    name: "host_depth_and_pyramid",
+    resources: {
+        "albedo": Image(format: R8G8B8A8_UNORM),
+        "normal": Image(format: R32_UINT),
+        "depth": Imported(Image(format: D32_SFLOAT_S8_UINT)),
+        "hiz": Imported(Image(format: R32_SFLOAT, size: Fixed("max(1, width / 2)", "max(1, height / 2)"), mips: All)),
+        "color": Image(format: R8G8B8A8_UNORM),
+    },
+    passes: [
+        Pass(name: "gbuffer", kind: "gbuffer", writes: {"albedo": "albedo", "normal": "normal", "depth": "depth"}),
+        Pass(name: "hiz", kind: "hiz_build", reads: {"depth": "depth"}, writes: {"hiz": "hiz"}),
+        Pass(name: "lighting", kind: "lighting", reads: {"depth": "depth", "albedo": "albedo", "normal": "normal"}, writes: {"output": "color"}),
+    ],
+    outputs: ["color"],
+)"#;
+
+#[test]
+fn the_host_can_own_a_depth_stencil_image_and_a_mipmapped_pyramid() {
+    use cullgraph::oracle::hiz::{level_offset, level_size, stored_mip_count, stored_size, HiZPyramid};
+    use glam::UVec2;
+    // 203x131: a pyramid of 7 mips, levels above the 64-pixel tiles included.
+    let (w, h) = (203u32, 131u32);
+    let base = UVec2::new(w, h);
+    let (pyramid, mips) = (stored_size(base), stored_mip_count(base));
+    let host = Host::new();
+    let allocator = host.allocator();
+    let d = host.device.clone();
+    let depth = HostOwnedImage::new(
+        &d,
+        &allocator,
+        vk::Format::D32_SFLOAT_S8_UINT,
+        (w, h, 1),
+        vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_SRC,
+    );
+    let hiz = HostOwnedImage::new(
+        &d,
+        &allocator,
+        vk::Format::R32_SFLOAT,
+        (pyramid.x, pyramid.y, mips),
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC,
+    );
+    {
+        let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
+        let shaders =
+            ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
+        let spec =
+            GraphSpec { text: HOST_DEPTH_AND_PYRAMID.into(), file: "host.ron".into(), dir: None, overrides: vec![] };
+        let mut renderer =
+            Renderer::with_graph(&ctx, &shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
+        let readback = |name: &str, texels: u32| {
+            Buffer::new(
+                &ctx,
+                &BufferDesc {
+                    name,
+                    size: u64::from(texels) * 4,
+                    usage: vk::BufferUsageFlags::TRANSFER_DST,
+                    location: MemoryLocation::GpuToCpu,
+                },
+            )
+            .unwrap()
+        };
+        let (depth_out, hiz_out) = (readback("depth", w * h), readback("hiz", level_offset(pyramid, mips)));
+        let mut camera = boxes_camera();
+        let mut current = Access::NONE;
+        // Three frames in one command buffer (as many as may be in flight: the views made for
+        // the host's mips and depth aspect must outlive the frames that use them), then two more
+        // one by one, the camera moving; the host reads back the last frame's depth and pyramid.
+        for batch in [3, 1, 1] {
+            ctx.submit_and_wait(|cmd| {
+                for _ in 0..batch {
+                    camera.eye.x -= 0.2;
+                    let imports = Imports::new().image("depth", depth.host, current, Access::TRANSFER_READ).image(
+                        "hiz",
+                        hiz.host,
+                        current,
+                        Access::TRANSFER_READ,
+                    );
+                    renderer.record_with_imports(cmd, &camera, &imports)?;
+                    current = Access::TRANSFER_READ;
+                }
+                let depth_region = vk::BufferImageCopy::default()
+                    .image_subresource(
+                        vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::DEPTH).layer_count(1),
+                    )
+                    .image_extent(vk::Extent3D { width: w, height: h, depth: 1 });
+                let hiz_regions: Vec<_> = (0..mips)
+                    .map(|k| {
+                        let size = level_size(pyramid, k);
+                        vk::BufferImageCopy::default()
+                            .buffer_offset(u64::from(level_offset(pyramid, k)) * 4)
+                            .image_subresource(
+                                vk::ImageSubresourceLayers::default()
+                                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                                    .mip_level(k)
+                                    .layer_count(1),
+                            )
+                            .image_extent(vk::Extent3D { width: size.x, height: size.y, depth: 1 })
+                    })
+                    .collect();
+                let layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+                unsafe {
+                    d.cmd_copy_image_to_buffer(cmd, depth.image, layout, depth_out.handle(), &[depth_region]);
+                    d.cmd_copy_image_to_buffer(cmd, hiz.image, layout, hiz_out.handle(), &hiz_regions);
+                    let to_host = vk::MemoryBarrier2::default()
+                        .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+                        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                        .dst_access_mask(vk::AccessFlags2::HOST_READ);
+                    d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[to_host]));
+                }
+                Ok::<(), cullgraph::Error>(())
+            })
+            .unwrap();
+        }
+        let floats = |b: &Buffer| -> Vec<f32> { bytemuck::cast_slice(b.read_bytes().unwrap()).to_vec() };
+        let depth_texels = floats(&depth_out);
+        assert!(depth_texels.iter().filter(|&&z| z > 0.0).count() > (w * h) as usize / 4, "the boxes cover the view");
+        let oracle = HiZPyramid::from_depth(w, h, &depth_texels);
+        let gpu = floats(&hiz_out);
+        for k in 0..mips {
+            let level = oracle.stored_level(k);
+            let start = level_offset(pyramid, k) as usize;
+            let got = &gpu[start..start + level.texels.len()];
+            let wrong = level.texels.iter().zip(got).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
+            assert_eq!(wrong, 0, "mip {k} ({}x{}): {wrong} texels differ from the oracle", level.width, level.height);
+        }
+    }
+    depth.destroy(&d, &allocator);
+    hiz.destroy(&d, &allocator);
+    drop(allocator);
+    let log = (*host.log).clone();
+    drop(host);
+    assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
+}

@@ -48,7 +48,8 @@ pub struct Image {
 pub struct HostImage {
     /// The image.
     pub image: vk::Image,
-    /// A view of all its mips (2D, the image's format).
+    /// A view of all its mips and aspects (2D, the image's format). cullgraph makes any view
+    /// of a part it needs (a mip, the depth aspect of a depth+stencil image) itself.
     pub view: vk::ImageView,
     /// Its format.
     pub format: vk::Format,
@@ -133,9 +134,12 @@ impl Image {
         })
     }
 
-    /// Wraps a host engine's image without taking ownership: dropping the wrapper destroys nothing.
-    pub fn from_host(ctx: &GpuContext, name: &str, host: &HostImage) -> Self {
-        Self {
+    /// Wraps a host engine's image without taking ownership: the image and `host.view` stay the
+    /// host's. The views that passes need and the host's does not give (one per mip of a
+    /// mipmapped image, the depth aspect alone of a depth+stencil image) are made here and
+    /// destroyed with the wrapper, so keep it until the frames that use it have executed.
+    pub fn from_host(ctx: &GpuContext, name: &str, host: &HostImage) -> GpuResult<Self> {
+        let mut image = Self {
             shared: ctx.shared.clone(),
             handle: host.image,
             view: host.view,
@@ -148,7 +152,9 @@ impl Image {
             samples: host.samples,
             name: name.into(),
             external: true,
-        }
+        };
+        image.create_part_views()?;
+        Ok(image)
     }
 
     /// Binds memory and creates the views.
@@ -156,6 +162,12 @@ impl Image {
         // SAFETY: memory is compatible and large enough (caller contract: requirements honoured).
         unsafe { self.shared.device.bind_image_memory(self.handle, memory, offset) }.vk("vkBindImageMemory")?;
         self.view = self.create_view(0, self.mip_levels)?;
+        self.create_part_views()
+    }
+
+    /// The views of parts of the image: the depth aspect of a depth+stencil image (a sampled
+    /// view may show one aspect only) and each mip of a mipmapped one (storage views show one).
+    fn create_part_views(&mut self) -> GpuResult<()> {
         if self.aspect() == vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL {
             let info = vk::ImageViewCreateInfo::default()
                 .image(self.handle)
@@ -280,18 +292,20 @@ fn create_info<'a>(desc: &ImageDesc<'_>) -> vk::ImageCreateInfo<'a> {
 
 impl Drop for Image {
     fn drop(&mut self) {
-        if self.external {
-            return;
-        }
-        // SAFETY: the caller guarantees the GPU no longer uses the image.
+        // SAFETY: the caller guarantees the GPU no longer uses the image or its views. A host's
+        // image and view stay the host's; the views made for its parts are ours.
         unsafe {
             for v in self.mip_views.drain(..) {
                 self.shared.device.destroy_image_view(v, None);
             }
-            for v in [self.view, self.depth_view] {
-                if v != vk::ImageView::null() {
-                    self.shared.device.destroy_image_view(v, None);
-                }
+            if self.depth_view != vk::ImageView::null() {
+                self.shared.device.destroy_image_view(self.depth_view, None);
+            }
+            if self.external {
+                return;
+            }
+            if self.view != vk::ImageView::null() {
+                self.shared.device.destroy_image_view(self.view, None);
             }
             if let Some(allocation) = self.allocation.take() {
                 let _ = self.shared.allocator().free(allocation);

@@ -117,6 +117,9 @@ pub struct GraphRuntime {
     stats_ring: Vec<Buffer>,
     /// Copies of the draw lists, when verification asked for them.
     capture: Option<capture::DrawCapture>,
+    /// The wrappers of host resources used by earlier frames, with the frame: kept until that
+    /// frame has executed, because the views made for their mips and aspects go with them.
+    retired_imports: Vec<(u64, Physical)>,
     frame: u64,
 }
 
@@ -165,6 +168,7 @@ impl GraphRuntime {
             stats_sources,
             stats_ring,
             capture: None,
+            retired_imports: Vec::new(),
             frame: 0,
         })
     }
@@ -312,7 +316,7 @@ impl GraphRuntime {
                             host.mip_levels
                         )));
                     }
-                    (Physical::Image(Image::from_host(&self.ctx, name, host)), *current)
+                    (Physical::Image(Image::from_host(&self.ctx, name, host)?), *current)
                 }
                 (Import::Buffer { buffer, size, current, .. }, ResolvedKind::Buffer { size: needed, .. }) => {
                     if size < needed {
@@ -331,6 +335,10 @@ impl GraphRuntime {
             self.resources.bind_import(phys, resource);
             self.tracker.set_external(phys, current);
         }
+        // At most FRAMES_IN_FLIGHT recorded frames execute at once (`Renderer::record`): the
+        // frame FRAMES_IN_FLIGHT before this one is done with its wrappers.
+        let frame = self.frame;
+        self.retired_imports.retain(|(f, _)| frame < f + FRAMES_IN_FLIGHT as u64);
         Ok(())
     }
 
@@ -355,8 +363,10 @@ impl GraphRuntime {
         }
         cmd_barriers(self.ctx.device(), cmd, &memory, &images);
         for &(_, phys) in self.resources.imported().to_vec().iter() {
-            // The host's handles are only valid for this frame.
-            self.resources.bind_import(phys, Physical::Unbound);
+            // The host's handles are only valid for this frame; the views made for them must
+            // last until the frame has executed.
+            let used = self.resources.bind_import(phys, Physical::Unbound);
+            self.retired_imports.push((self.frame, used));
         }
     }
 

@@ -207,9 +207,9 @@ impl RuntimeResources {
         &self.imported
     }
 
-    /// Puts the host's resource for this frame in an imported slot.
-    pub fn bind_import(&mut self, phys: usize, resource: Physical) {
-        self.physical[phys] = resource;
+    /// Puts the host's resource for this frame in an imported slot; returns the one it replaces.
+    pub fn bind_import(&mut self, phys: usize, resource: Physical) -> Physical {
+        std::mem::replace(&mut self.physical[phys], resource)
     }
 
     /// Transient memory as actually placed.
