@@ -193,48 +193,13 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
     let allocator = host.allocator();
     // The engine's own image and view, made with its own allocator.
     let d = host.device.clone();
-    let format = vk::Format::R8G8B8A8_UNORM;
-    let image = unsafe {
-        d.create_image(
-            &vk::ImageCreateInfo::default()
-                .image_type(vk::ImageType::TYPE_2D)
-                .format(format)
-                .extent(vk::Extent3D { width: w, height: h, depth: 1 })
-                .mip_levels(1)
-                .array_layers(1)
-                .samples(vk::SampleCountFlags::TYPE_1)
-                .usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC)
-                .initial_layout(vk::ImageLayout::UNDEFINED),
-            None,
-        )
-        .unwrap()
-    };
-    let requirements = unsafe { d.get_image_memory_requirements(image) };
-    let memory = allocator
-        .lock()
-        .unwrap()
-        .allocate(&gpu_allocator::vulkan::AllocationCreateDesc {
-            name: "host back buffer",
-            requirements,
-            location: MemoryLocation::GpuOnly,
-            linear: false,
-            allocation_scheme: gpu_allocator::vulkan::AllocationScheme::GpuAllocatorManaged,
-        })
-        .unwrap();
-    unsafe { d.bind_image_memory(image, memory.memory(), memory.offset()).unwrap() };
-    let range =
-        vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1);
-    let view = unsafe {
-        d.create_image_view(
-            &vk::ImageViewCreateInfo::default()
-                .image(image)
-                .view_type(vk::ImageViewType::TYPE_2D)
-                .format(format)
-                .subresource_range(range),
-            None,
-        )
-        .unwrap()
-    };
+    let target = HostOwnedImage::new(
+        &d,
+        &allocator,
+        vk::Format::R8G8B8A8_UNORM,
+        (w, h, 1),
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+    );
     {
         let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
         let shaders =
@@ -255,14 +220,6 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
             },
         )
         .unwrap();
-        let host_image = HostImage {
-            image,
-            view,
-            format,
-            extent: vk::Extent2D { width: w, height: h },
-            mip_levels: 1,
-            samples: vk::SampleCountFlags::TYPE_1,
-        };
         // Missing imports are an error before anything is recorded.
         ctx.submit_and_wait(|cmd| {
             let err = renderer.record(cmd, &boxes_camera()).unwrap_err().to_string();
@@ -280,7 +237,7 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
                 )
                 .unwrap()[0];
             d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
-            let imports = Imports::new().image("color", host_image, Access::NONE, Access::TRANSFER_READ);
+            let imports = Imports::new().image("color", target.host, Access::NONE, Access::TRANSFER_READ);
             renderer.record_with_imports(cmd, &boxes_camera(), &imports).unwrap();
             // The engine copies its image, which cullgraph left in TRANSFER_SRC_OPTIMAL.
             let region = vk::BufferImageCopy::default()
@@ -288,7 +245,13 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
                     vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
                 )
                 .image_extent(vk::Extent3D { width: w, height: h, depth: 1 });
-            d.cmd_copy_image_to_buffer(cmd, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, readback.handle(), &[region]);
+            d.cmd_copy_image_to_buffer(
+                cmd,
+                target.image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                readback.handle(),
+                &[region],
+            );
             let to_host = vk::MemoryBarrier2::default()
                 .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
                 .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
@@ -304,11 +267,7 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
         }
         assert_eq!(readback.read_bytes().unwrap(), reference.as_raw().as_slice());
     }
-    unsafe {
-        d.destroy_image_view(view, None);
-        d.destroy_image(image, None);
-    }
-    allocator.lock().unwrap().free(memory).unwrap();
+    target.destroy(&d, &allocator);
     drop(allocator);
     let log = (*host.log).clone();
     drop(host);
