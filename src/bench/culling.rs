@@ -37,7 +37,8 @@ pub struct PassFigure {
     pub pass: String,
     /// Median GPU milliseconds.
     pub ms: f64,
-    /// Bytes the pass reads and writes by the estimate in [`cull_pass_bytes`] (culling passes only).
+    /// Bytes the pass reads and writes by the estimates in [`cull_pass_bytes`] and
+    /// [`hiz_pass_bytes`] (culling and Hi-Z passes only).
     pub bytes: Option<u64>,
     /// `bytes / ms`, GB/s.
     pub gbps: Option<f64>,
@@ -114,6 +115,30 @@ pub fn cull_pass_bytes(slots: u64, tested: u64, drawn: u64, groups: u64, list: b
     test + compact + list_commands
 }
 
+/// Bytes a hiz_build pass moves: every depth sample read once (4 bytes) and every stored texel
+/// of `mips` pyramid levels written once (4 bytes), for a `depth`-sized depth of `samples`
+/// samples per pixel. Not counted: the tiles' merge buffer (a few KB).
+pub fn hiz_pass_bytes(depth: glam::UVec2, samples: u32, mips: u32) -> u64 {
+    let read = u64::from(depth.x) * u64::from(depth.y) * u64::from(samples) * 4;
+    let written = crate::oracle::hiz::level_offset(crate::oracle::hiz::stored_size(depth), mips);
+    read + u64::from(written) * 4
+}
+
+/// [`hiz_pass_bytes`] of a planned hiz_build pass, from the images bound to its slots.
+fn planned_hiz_bytes(plan: &crate::graph::plan::CompiledGraph, pass: &crate::graph::plan::PlannedPass) -> Option<u64> {
+    use crate::graph::plan::ResolvedKind;
+    let image = |slot: &str| {
+        let binding = pass.bindings.iter().find(|b| b.slot == slot)?;
+        match &plan.resources[binding.resource].kind {
+            ResolvedKind::Image { extent, mip_levels, samples, .. } => Some((*extent, *mip_levels, *samples)),
+            ResolvedKind::Buffer { .. } => None,
+        }
+    };
+    let (depth, _, samples) = image("depth")?;
+    let (_, mips, _) = image("hiz")?;
+    Some(hiz_pass_bytes(glam::UVec2::new(depth.width, depth.height), samples.as_raw(), mips))
+}
+
 /// Runs the benchmark.
 pub fn run(
     ctx: &GpuContext,
@@ -165,18 +190,22 @@ pub fn run(
             let last = last.unwrap_or_default();
             let kinds: Vec<(String, String)> =
                 renderer.plan().passes.iter().map(|p| (p.name.clone(), p.kind.clone())).collect();
-            // Cull passes only (a late phase's early draw list is reported under the draw pass).
-            let cull_pass =
-                |pass: &str| renderer.plan().passes.iter().find(|p| p.name == pass && p.kind == "instance_cull");
+            // Cull and Hi-Z passes only (a late phase's early draw list is reported under the draw pass).
+            let planned =
+                |pass: &str, kind: &str| renderer.plan().passes.iter().find(|p| p.name == pass && p.kind == kind);
+            let cull_pass = |pass: &str| planned(pass, "instance_cull");
             let passes: Vec<PassFigure> = median_per_pass(&timings)
                 .into_iter()
                 .map(|(pass, ms)| {
                     let writes_list = |p: &crate::graph::plan::PlannedPass| {
                         p.bindings.iter().any(|b| b.slot == crate::graph::executor::LIST_STATS_SLOT)
                     };
-                    let bytes = cull_pass(&pass).zip(last.culling.iter().find(|c| c.pass == pass)).map(|(p, c)| {
-                        cull_pass_bytes(n as u64, c.tested as u64, c.drawn as u64, groups, writes_list(p))
-                    });
+                    let bytes = cull_pass(&pass)
+                        .zip(last.culling.iter().find(|c| c.pass == pass))
+                        .map(|(p, c)| {
+                            cull_pass_bytes(n as u64, c.tested as u64, c.drawn as u64, groups, writes_list(p))
+                        })
+                        .or_else(|| planned(&pass, "hiz_build").and_then(|p| planned_hiz_bytes(renderer.plan(), p)));
                     PassFigure { gbps: bytes.map(|b| gbps(b, ms)), pass, ms, bytes }
                 })
                 .collect();
@@ -269,5 +298,25 @@ impl CullingReport {
             }
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hiz_bytes_are_the_depth_read_once_and_each_stored_texel_written_once() {
+        // 5x3 depth at 4x: 60 samples read; stored levels 2x1 and 1x1 written.
+        assert_eq!(hiz_pass_bytes(glam::UVec2::new(5, 3), 4, 2), 60 * 4 + 3 * 4);
+        // 1920x1080: 8,294,400 bytes of depth; 11 levels from 960x540 down to 1x1.
+        let texels: u64 = (0..11)
+            .map(|k| {
+                let s = crate::oracle::hiz::level_size(glam::UVec2::new(960, 540), k);
+                u64::from(s.x) * u64::from(s.y)
+            })
+            .sum();
+        assert_eq!(hiz_pass_bytes(glam::UVec2::new(1920, 1080), 1, 11), 8_294_400 + texels * 4);
+        assert!((690_000..700_000).contains(&texels), "{texels}");
     }
 }
