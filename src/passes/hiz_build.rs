@@ -280,6 +280,8 @@ impl HizBuildPass {
         depth: &Image,
         hiz: &Image,
     ) -> crate::Result<()> {
+        // Whether the executor's barrier covered `above`: for this build only, even one that fails.
+        let above_ordered = std::mem::take(&mut self.above_ordered);
         let invalid = |m: String| crate::Error::Invalid(format!("pass '{}': {m}", self.name));
         let (e, he) = (depth.extent(), hiz.extent());
         let want = pyramid_size(vk::Extent2D { width: e.width, height: e.height });
@@ -323,7 +325,7 @@ impl HizBuildPass {
             HizMethod::Single => {
                 let tiles = crate::oracle::hiz::level_size(glam::UVec2::from(base), TILE_LEVEL);
                 if levels > TILE_LEVEL {
-                    self.prepare_above(device, cmd);
+                    self.prepare_above(device, cmd, above_ordered);
                 }
                 let pipeline = self.from_depth[variant].get(ctx, &self.name, samples)?;
                 let mut binds = vec![depth_bind, Bind::Buffer(18, self.above.handle())];
@@ -379,8 +381,7 @@ impl HizBuildPass {
     /// Records what the single method's merges into `above` need first: the buffer filled (the
     /// first time: counter 0, levels +inf), and the previous build's last tile done with it
     /// (unless the executor's barrier before the pass saw to that).
-    fn prepare_above(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) {
-        let ordered = std::mem::take(&mut self.above_ordered);
+    fn prepare_above(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, ordered: bool) {
         if self.above_filled {
             if !ordered {
                 cmd_barriers(device, cmd, &[memory_barrier(ABOVE_ACCESS, ABOVE_ACCESS)], &[]);
