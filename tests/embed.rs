@@ -344,25 +344,9 @@ impl HostOwnedImage {
     }
 }
 
-/// The engine owns the depth (with stencil, as engines often do) and the Hi-Z pyramid; the graph
-/// draws into the one, samples its depth aspect and builds the other mip by mip.
-const HOST_DEPTH_AND_PYRAMID: &str = r#"Graph(
-    name: "host_depth_and_pyramid",
-    resources: {
-        "albedo": Image(format: R8G8B8A8_UNORM),
-        "normal": Image(format: R32_UINT),
-        "depth": Imported(Image(format: D32_SFLOAT_S8_UINT)),
-        "hiz": Imported(Image(format: R32_SFLOAT, size: Fixed("max(1, width / 2)", "max(1, height / 2)"), mips: All)),
-        "color": Image(format: R8G8B8A8_UNORM),
-    },
-    passes: [
-        Pass(name: "gbuffer", kind: "gbuffer", writes: {"albedo": "albedo", "normal": "normal", "depth": "depth"}),
-        Pass(name: "hiz", kind: "hiz_build", reads: {"depth": "depth"}, writes: {"hiz": "hiz"}),
-        Pass(name: "lighting", kind: "lighting", reads: {"depth": "depth", "albedo": "albedo", "normal": "normal"}, writes: {"output": "color"}),
-    ],
-    outputs: ["color"],
-)"#;
-
+/// `graph/examples/host_depth_and_pyramid.ron`: the engine owns the depth (with stencil) and
+/// the Hi-Z pyramid; the graph draws into the one, samples its depth aspect and builds the other
+/// mip by mip.
 #[test]
 fn the_host_can_own_a_depth_stencil_image_and_a_mipmapped_pyramid() {
     use cullgraph::oracle::hiz::{level_offset, level_size, stored_mip_count, stored_size, HiZPyramid};
@@ -394,8 +378,10 @@ fn the_host_can_own_a_depth_stencil_image_and_a_mipmapped_pyramid() {
         let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
         let shaders =
             ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
-        let spec =
-            GraphSpec { text: HOST_DEPTH_AND_PYRAMID.into(), file: "host.ron".into(), dir: None, overrides: vec![] };
+        let spec = GraphSpec::from_file(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("graph/examples/host_depth_and_pyramid.ron"),
+        )
+        .unwrap();
         let mut renderer =
             Renderer::with_graph(&ctx, &shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
         let readback = |name: &str, texels: u32| {
