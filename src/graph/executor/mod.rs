@@ -289,10 +289,15 @@ impl GraphRuntime {
             let declared = &self.plan.resources[id];
             let name = &declared.name;
             let given = imports.get(name).ok_or_else(|| {
-                invalid(format!(
-                    "imported resource '{name}' was not provided (provided: {})",
-                    imports.names().collect::<Vec<_>>().join(", ")
-                ))
+                let provided: Vec<_> = imports.names().collect();
+                invalid(if provided.is_empty() {
+                    format!(
+                        "imported resource '{name}' was not provided (none were: a graph with `Imported(...)` \
+                         resources runs embedded, its host handing them to `Renderer::record_with_imports`)"
+                    )
+                } else {
+                    format!("imported resource '{name}' was not provided (provided: {})", provided.join(", "))
+                })
             })?;
             let (resource, current) = match (given, &declared.kind) {
                 (
