@@ -202,14 +202,7 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
     );
     {
         let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
-        let shaders =
-            ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
-        let spec = GraphSpec::from_file(
-            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("graph/examples/host_target.ron"),
-        )
-        .unwrap();
-        let mut renderer =
-            Renderer::with_graph(&ctx, &shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
+        let mut renderer = example_renderer(&ctx, "host_target", w, h);
         let readback = Buffer::new(
             &ctx,
             &BufferDesc {
@@ -272,6 +265,14 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
     let log = (*host.log).clone();
     drop(host);
     assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
+}
+
+/// The boxes through `graph/examples/NAME.ron` at `w`x`h`, on the host's context.
+fn example_renderer(ctx: &GpuContext, name: &str, w: u32, h: u32) -> Renderer {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let shaders = ShaderCompiler::new(ShaderRoot::Directory(root.join("shaders"))).unwrap();
+    let spec = GraphSpec::from_file(&root.join(format!("graph/examples/{name}.ron"))).unwrap();
+    Renderer::with_graph(ctx, &shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap()
 }
 
 /// An image the "engine" makes with its own allocator, and its view of every mip and aspect.
@@ -376,14 +377,7 @@ fn the_host_can_own_a_depth_stencil_image_and_a_mipmapped_pyramid() {
     );
     {
         let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
-        let shaders =
-            ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
-        let spec = GraphSpec::from_file(
-            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("graph/examples/host_depth_and_pyramid.ron"),
-        )
-        .unwrap();
-        let mut renderer =
-            Renderer::with_graph(&ctx, &shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
+        let mut renderer = example_renderer(&ctx, "host_depth_and_pyramid", w, h);
         let readback = |name: &str, texels: u32| {
             Buffer::new(
                 &ctx,
