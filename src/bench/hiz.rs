@@ -4,8 +4,7 @@
 //! in-tile levels and the levels above the tiles.
 
 use super::median_per_pass;
-use crate::gpu::PassTiming;
-use crate::gpu::{GpuContext, ShaderCompiler};
+use crate::gpu::{GpuContext, PassTiming, ShaderCompiler};
 use crate::render::{GraphSpec, RenderSettings, Renderer};
 use crate::scene::source::LoadOptions;
 use crate::scene::SceneSource;

@@ -18,22 +18,22 @@
 //! Two methods (setting `method`):
 //!
 //! - `single` (default, `shaders/hiz/hiz_build_single.comp`): the tiles of AMD's single-pass
-//!   downsampler in one dispatch, the levels above the tiles included. Every level is a min over an aligned block of
-//!   the depth — texel `x` of level `k` covers columns `[x·2^k, (x+1)·2^k)`, except the last
-//!   texel of a level, which extends to the end of the row because halving folds the dropped
-//!   column into it — so the pyramid is a tree and the texels of level 6 cut it into independent
-//!   subtrees. Workgroup `g` (256 threads) owns the subtree of level-6 texel `g`: a 64×64 tile of
-//!   the depth, except that the last workgroup column (row) owns everything up to the right
-//!   (bottom) edge, 64 to 127 pixels (these heavier tiles are scheduled first). The odd columns
-//!   and rows that the halvings fold into edge texels therefore never leave the tile that reduces
-//!   them: no halo, no reads of a neighbour's texels. Each thread reduces a 4×4 block of the depth
-//!   in registers (four `textureGather`s, one per level-1 texel; the blocks on the depth's last
-//!   column/row of level 2 read 8×8 clamped pixels and apply the fold, see the shader), stores
-//!   its 2×2 level-1 texels and its level-2 texel, and levels 3..=6 of the tile go through shared
-//!   memory (a barrier per level, one texel per thread reading at most 3×3). Levels 7.. are
-//!   merged: each tile `atomicMin`s the bits of its level-6 texel into the one texel of every
-//!   higher level above it (in a small buffer), then counts itself done; the tile that finishes
-//!   last copies those levels into their mips and resets the buffer for the next build. No
+//!   downsampler in one dispatch, the levels above the tiles included. Every level is a min over an
+//!   aligned block of the depth — texel `x` of level `k` covers columns `[x·2^k, (x+1)·2^k)`,
+//!   except the last texel of a level, which extends to the end of the row because halving folds
+//!   the dropped column into it — so the pyramid is a tree and the texels of level 6 cut it into
+//!   independent subtrees. Workgroup `g` (256 threads) owns the subtree of level-6 texel `g`: a
+//!   64×64 tile of the depth, except that the last workgroup column (row) owns everything up to the
+//!   right (bottom) edge, 64 to 127 pixels (these heavier tiles are scheduled first). The odd
+//!   columns and rows that the halvings fold into edge texels therefore never leave the tile that
+//!   reduces them: no halo, no reads of a neighbour's texels. Each thread reduces a 4×4 block of
+//!   the depth in registers (four `textureGather`s, one per level-1 texel; the blocks on the
+//!   depth's last column/row of level 2 read 8×8 clamped pixels and apply the fold, see the
+//!   shader), stores its 2×2 level-1 texels and its level-2 texel, and levels 3..=6 of the tile go
+//!   through shared memory (a barrier per level, one texel per thread reading at most 3×3). Levels
+//!   7.. are merged: each tile `atomicMin`s the bits of its level-6 texel into the one texel of
+//!   every higher level above it (in a small buffer), then counts itself done; the tile that
+//!   finishes last copies those levels into their mips and resets the buffer for the next build. No
 //!   subgroup operations, so no assumption on the subgroup size.
 //!
 //!   Measured on an H100 (`cullgraph bench`, 3840×2160 / 1920×1080, stop 16): 0.041 / 0.0153

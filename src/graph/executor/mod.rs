@@ -321,6 +321,9 @@ impl GraphRuntime {
                             host.mip_levels
                         )));
                     }
+                    // A fresh wrapper (and views of its mips and depth aspect) every frame: a
+                    // host may destroy an image and get its handles back for a new one, so
+                    // views are never reused across frames.
                     (Physical::Image(Image::from_host(&self.ctx, name, host)?), *current)
                 }
                 (Import::Buffer { buffer, size, current, .. }, ResolvedKind::Buffer { size: needed, .. }) => {
@@ -337,7 +340,11 @@ impl GraphRuntime {
                     )))
                 }
             };
-            self.resources.bind_import(phys, resource);
+            // Normally unbound; a frame whose recording failed before its end left its wrapper.
+            let stale = self.resources.bind_import(phys, resource);
+            if !matches!(stale, Physical::Unbound) {
+                self.retired_imports.push((self.frame, stale));
+            }
             self.tracker.set_external(phys, current);
         }
         // At most FRAMES_IN_FLIGHT recorded frames execute at once (`Renderer::record`): the
