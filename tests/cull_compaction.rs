@@ -59,10 +59,18 @@ fn drawn(renderer: &Renderer) -> Vec<u32> {
 fn frustum_lists_equal_the_cpu_reference_exactly() {
     let gpu = GpuTest::new();
     let (w, h) = (64, 48);
-    // 40003: more test workgroups than done-counter lanes (64), so lanes count several.
-    for (instances, kinds) in [(1000usize, 7usize), (5003, 1000), (777, 700), (40_003, 300)] {
-        let scene = SceneSource::Builtin("field".into())
-            .load(&LoadOptions { instances: Some(instances), kinds: Some(kinds), ..Default::default() })
+    // 40003: more test workgroups than done-counter lanes (64), so lanes count several. The
+    // city: its street view, three face-cull regions.
+    let scenes: [(&str, usize, Option<usize>); 5] = [
+        ("field", 1000, Some(7)),
+        ("field", 5003, Some(1000)),
+        ("field", 777, Some(700)),
+        ("field", 40_003, Some(300)),
+        ("city", 20_003, None),
+    ];
+    for (name, instances, kinds) in scenes {
+        let scene = SceneSource::Builtin(name.into())
+            .load(&LoadOptions { instances: Some(instances), kinds, ..Default::default() })
             .unwrap();
         let base = scene.default_camera(w as f32 / h as f32);
         let spec = GraphSpec::builtin("frustum").unwrap();
@@ -77,6 +85,10 @@ fn frustum_lists_equal_the_cpu_reference_exactly() {
         let mut narrow = base.clone();
         narrow.projection = cullgraph::scene::Projection::Perspective { fov_y_deg: 3.0 };
         cameras.push(narrow);
+        // Looking away: nothing survives.
+        let mut away = base.clone();
+        away.target = base.eye + (base.eye - base.target);
+        cameras.push(away);
         for (i, camera) in cameras.iter().enumerate() {
             let stats = renderer.render(camera).unwrap();
             let want = expected(&scene, camera, w, h);
@@ -99,6 +111,10 @@ fn frustum_lists_equal_the_cpu_reference_exactly() {
                     .count() as u32
             };
             assert_eq!(stats.draws, groups_with_survivors, "camera {i}: one command per non-empty group");
+            // Every slot is tested and counted once.
+            let pass = &stats.culling[0];
+            assert_eq!(pass.tested, instances as u32, "camera {i}: tested ({stats:?})");
+            assert_eq!(pass.frustum_culled, (instances - want.len()) as u32, "camera {i}: frustum-culled");
         }
     }
     let _ = Vec3::ZERO;
