@@ -6,9 +6,9 @@ use super::watch::FileWatch;
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::render::output::save_png;
 use cullgraph::render::reference::{image_reference_error, reference_render_size};
-use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
+use cullgraph::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::{Camera, Projection};
-use cullgraph::stats::RunStats;
+use cullgraph::stats::{FrameStats, RunStats};
 use cullgraph::{Error, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -67,17 +67,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     let bar = progress(Some(args.frames as u64), "rendering");
     let mut last_frame = None;
-    for frame in 0..args.frames {
-        let last = frame + 1 == args.frames;
-        let camera = args.camera_path.camera_at(&camera, frame);
-        let frame_stats = if last {
-            let (frame_stats, image) = renderer.render_to_image(&camera)?;
-            save_png(&image, &args.out)?;
-            last_frame = Some((camera, image));
-            frame_stats
-        } else {
-            renderer.render(&camera)?
-        };
+    // Without --verify (which checks each frame once it has executed), frames do not wait for
+    // each other: their figures come back a few frames late. The last frame is read back whole.
+    let mut pipeline = (!args.verify).then(|| FramePipeline::new(&ctx)).transpose()?;
+    let mut take = |frame_stats: FrameStats, renderer: &mut Renderer| -> Result<()> {
+        let frame = frame_stats.frame;
         if let Some(v) = frame_stats.verify.as_ref().filter(|v| v.false_negatives > 0) {
             eprintln!("frame {frame}: {} visible instance(s) culled, e.g. {:?}", v.false_negatives, v.missed);
         }
@@ -85,8 +79,29 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             bar.println(format!("frame {frame}: compressed G-buffer pool re-planned at {fraction} blocks per pixel"));
         }
         stats.frames.push(frame_stats);
+        Ok(())
+    };
+    for frame in 0..args.frames {
+        let camera = args.camera_path.camera_at(&camera, frame);
+        if frame + 1 == args.frames {
+            for earlier in pipeline.as_mut().map_or(Ok(Vec::new()), |p| p.finish(&renderer))? {
+                take(earlier, &mut renderer)?;
+            }
+            let (frame_stats, image) = renderer.render_to_image(&camera)?;
+            save_png(&image, &args.out)?;
+            last_frame = Some((camera, image));
+            take(frame_stats, &mut renderer)?;
+        } else if let Some(pipeline) = pipeline.as_mut() {
+            if let Some(earlier) = pipeline.submit(&mut renderer, &camera)? {
+                take(earlier, &mut renderer)?;
+            }
+        } else {
+            let frame_stats = renderer.render(&camera)?;
+            take(frame_stats, &mut renderer)?;
+        }
         bar.inc(1);
     }
+    drop(pipeline);
     bar.finish_and_clear();
     // Memory as planned for the last frame: `--pool-adapt` may have re-planned the graph.
     let memory = renderer.runtime().memory();
