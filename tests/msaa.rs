@@ -7,10 +7,11 @@
 mod common;
 
 use common::{boxes_camera, boxes_scene, GpuTest};
+use cullgraph::oracle::image_error::mean_flip;
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::{Camera, Instance, Material, Scene, SceneSource, Transform};
+use cullgraph::scene::{Camera, Instance, Material, Scene, SceneSource, Transform, FLAG_NO_AA};
 use cullgraph::stats::FrameStats;
 use glam::{DVec3, Mat3, Quat, Vec3};
 use std::path::Path;
@@ -227,8 +228,14 @@ fn mean_and_max_difference(a: &RgbaImage, b: &RgbaImage) -> (f64, u8) {
 #[test]
 fn compressed_matches_per_sample_msaa_and_the_zprepass_baseline_is_identical() {
     let gpu = GpuTest::new();
-    for (scene, camera, what) in [(intersecting_scene(), boxes_camera(), "boxes"), (city(1500).0, city(1500).1, "city")]
-    {
+    // Bounds of compressed vs per-sample MSAA (mean and max difference in 8-bit units, mean FLIP),
+    // measured on lavapipe at 96x64 plus headroom: boxes 0.0041, 1, 0.00079; city 0.0442, 15,
+    // 0.00370 (no AA against per-sample MSAA: mean 0.72 / 2.85, FLIP 0.0154 / 0.0428).
+    let cases = [
+        (intersecting_scene(), boxes_camera(), "boxes", (0.008, 2, 0.0012)),
+        (city(1500).0, city(1500).1, "city", (0.06, 20, 0.005)),
+    ];
+    for (scene, camera, what, (max_mean, max_max, max_flip)) in cases {
         let size = (96, 64);
         let per_sample = render(&gpu, &scene, &camera, size, &spec("builtin:msaa_per_sample", &[]), 2).0;
         let zprepass = render(&gpu, &scene, &camera, size, &spec("builtin:msaa_zprepass", &[]), 2).0;
@@ -243,11 +250,26 @@ fn compressed_matches_per_sample_msaa_and_the_zprepass_baseline_is_identical() {
             vis_mean < 1.0 && vis_max < 64,
             "{what}: visibility buffer vs per-sample MSAA: mean {vis_mean}, max {vis_max}"
         );
-        // The only difference: a surface is shaded once per pixel (at one of its samples, with
-        // 8-bit roughness and 16-bit octahedral normals) instead of at every sample.
+        // Both keep the same samples of the same surfaces (same depth test, same coverage), so
+        // they differ only in shading: the compressed G-buffer shades each surface of a pixel once
+        // (at the depth of one of its samples) and weights that colour by the surface's sample
+        // count, where per-sample MSAA shades every sample of a pixel with several surfaces (each
+        // at its own depth), tone-maps each and averages; and it stores normals and roughness as
+        // half floats where the compressed blocks hold 16-bit octahedral normals and 8-bit
+        // roughness. A surface's shading varies little across one pixel, hence small figures.
         let (mean, max) = mean_and_max_difference(&per_sample, &compressed);
         let (aa_mean, _) = mean_and_max_difference(&per_sample, &no_aa);
-        assert!(mean < 0.25 && max < 64, "{what}: compressed vs per-sample MSAA: mean {mean}, max {max}");
+        let flip = mean_flip(per_sample.as_raw(), compressed.as_raw(), size.0, size.1).unwrap();
+        let aa_flip = mean_flip(per_sample.as_raw(), no_aa.as_raw(), size.0, size.1).unwrap();
+        println!(
+            "{what}: compressed vs per-sample MSAA: mean {mean:.4}, max {max}, mean FLIP {flip:.5}; \
+             no AA: mean {aa_mean:.4}, FLIP {aa_flip:.5}"
+        );
+        assert!(
+            mean < max_mean && max <= max_max && flip < max_flip,
+            "{what}: compressed vs per-sample MSAA: mean {mean}, max {max}, mean FLIP {flip}"
+        );
+        assert!(flip * 5.0 < aa_flip, "{what}: compressed FLIP {flip} is far below no AA's {aa_flip}");
         assert!(mean * 4.0 < aa_mean, "{what}: compressed ({mean}) is much closer to MSAA than no AA is ({aa_mean})");
         assert!(
             vis_mean * 2.0 < aa_mean,
@@ -477,4 +499,130 @@ fn packed_and_float_normals_shade_alike() {
             assert!(mean < 0.05 && max <= 2, "{what}, {graph}: packed vs float normals: mean {mean}, max {max}");
         }
     }
+}
+
+/// The boxes scene with the ground and the red cube flagged `FLAG_NO_AA`; the tall blue box and
+/// the small red cube in front are not.
+fn flagged_boxes() -> Scene {
+    let mut scene = boxes_scene();
+    for i in [0, 1] {
+        scene.instances[i].flags |= FLAG_NO_AA;
+    }
+    scene
+}
+
+/// Per-pixel covered samples of `scene` with only the instances whose `FLAG_NO_AA` is `flagged`:
+/// where 0, none of them owns a sample in the full scene either (the others can only take
+/// samples from them there, not give them any).
+fn covered_by(gpu: &GpuTest, scene: &Scene, flagged: bool) -> Vec<u8> {
+    let mut part = scene.clone();
+    part.instances.retain(|i| (i.flags & FLAG_NO_AA != 0) == flagged);
+    let spec = spec("tests/graphs/gpu/compressed_check.ron", &[("pool_fraction", "3")]);
+    check_pixels(&render(gpu, &part, &boxes_camera(), (96, 64), &spec, 1).0).iter().map(|p| p[2]).collect()
+}
+
+/// Selective AA by object flag (`aa_object_flags`): pixels that only flagged instances cover keep
+/// their head alone, while unflagged instances' edge pixels keep their pool blocks exactly as
+/// without the flag mode; with the mode off, flags change nothing. Measured at 96x64 (both
+/// owners alike): pool blocks 352 off, 94 on; pixels with blocks where only flagged instances
+/// are, 224 off, 0 on; where unflagged ones are, 110 off, 88 on; 138 lit pixels change.
+#[test]
+fn flagged_instances_keep_one_block_with_object_flags_on() {
+    let gpu = GpuTest::new();
+    let scene = flagged_boxes();
+    let flagged = covered_by(&gpu, &scene, true);
+    let unflagged = covered_by(&gpu, &scene, false);
+    let only_flagged: Vec<bool> = unflagged.iter().map(|&c| c == 0).collect();
+    let only_unflagged: Vec<bool> = flagged.iter().map(|&c| c == 0).collect();
+    for owner in OWNERS {
+        let blocks = |object_flags: &str| -> (u32, Vec<[u8; 4]>) {
+            let params = [("pool_fraction", "3"), ("aa_object_flags", object_flags)];
+            let spec = owner_spec("tests/graphs/gpu/compressed_check.ron", owner, &params);
+            let (check, stats) = render(&gpu, &scene, &boxes_camera(), (96, 64), &spec, 1);
+            let pixels = check_pixels(&check);
+            // As in `selective_aa_keeps_one_block_where_it_is_capped`: capped samples fall to the
+            // head (error 16: a pixel without a head).
+            assert!(pixels.iter().all(|p| p[0] & !16 == 0), "{owner:?}, {object_flags}: broken lists or claims");
+            let g = &stats.last().unwrap().gbuffer[0];
+            assert_eq!(g.overflow_fragments, 0, "{owner:?}: {g:?}");
+            assert_eq!(g.pool_used as usize, pixels.iter().map(|p| p[1] as usize).sum::<usize>());
+            (g.pool_used, pixels)
+        };
+        let (off_used, off) = blocks("false");
+        let (on_used, on) = blocks("true");
+        // Pixels with pool blocks: only flagged instances (with background), and any unflagged.
+        let with_blocks = |pixels: &[[u8; 4]], only: bool| {
+            pixels.iter().zip(&only_flagged).filter(|(p, &o)| o == only && p[1] > 0).count()
+        };
+        let (off_flagged, off_unflagged) = (with_blocks(&off, true), with_blocks(&off, false));
+        let (on_flagged, on_unflagged) = (with_blocks(&on, true), with_blocks(&on, false));
+        println!(
+            "{owner:?}: pool blocks off {off_used}, on {on_used}; pixels with blocks, only flagged \
+             instances: off {off_flagged}, on {on_flagged}; with unflagged: off {off_unflagged}, on {on_unflagged}"
+        );
+        assert!(off_flagged > 150 && off_unflagged > 80 && on_unflagged > 60 && on_used < off_used, "{owner:?}");
+        assert_eq!(on_flagged, 0, "{owner:?}: flagged instances' pixels keep one block");
+        for (i, ((a, b), &o)) in on.iter().zip(&off).zip(&only_unflagged).enumerate() {
+            assert!(a[1] <= b[1], "{owner:?}: pixel {i} gained blocks ({b:?} -> {a:?})");
+            if o {
+                assert_eq!(a[1], b[1], "{owner:?}: pixel {i}, no flagged instance there, lost blocks");
+            }
+        }
+        // The shipped graph: flags off shade like no flags at all; flags on alias the flagged
+        // instances' edges and leave pixels without them exactly as they were.
+        let graph = if owner == Owner::Stencil { "builtin:msaa_compressed" } else { "builtin:msaa_compressed_claim" };
+        let lit = |scene: &Scene, object_flags: &str| {
+            let spec = spec(graph, &[("pool_fraction", "3"), ("aa_object_flags", object_flags)]);
+            render(&gpu, scene, &boxes_camera(), (96, 64), &spec, 1).0
+        };
+        let (lit_off, lit_on) = (lit(&scene, "false"), lit(&scene, "true"));
+        assert_eq!(lit_off, lit(&boxes_scene(), "true"), "{owner:?}: flags matter only with aa_object_flags");
+        let changed: Vec<usize> =
+            lit_off.pixels().zip(lit_on.pixels()).enumerate().filter(|(_, (a, b))| a != b).map(|(i, _)| i).collect();
+        println!("{owner:?}: {} pixels change in the lit image", changed.len());
+        assert!(!changed.is_empty(), "{owner:?}: capping flagged edges changes the image");
+        assert!(changed.iter().all(|&i| !only_unflagged[i]), "{owner:?}: a pixel without flagged instances changed");
+    }
+}
+
+/// `debug_view: samples` paints each pixel by its distinct surfaces (`heat()` in
+/// `lighting_compressed.comp`: 1 dark blue, 2 green, 3 yellow, 4 orange, 5+ red): every pixel has
+/// the colour of the count its list gives (from `compressed_check`: background if a sample is
+/// uncovered, the head if sample 0 is covered, plus the pool blocks), and the colours' pixel
+/// counts are the stats' histogram. Measured at 48x32: 1360, 157, 17 and 2 pixels with 1 to 4
+/// surfaces; every pixel within one 8-bit level of its colour.
+#[test]
+fn the_samples_debug_view_colours_pixels_by_their_surfaces() {
+    use cullgraph::oracle::image_error::linear_to_srgb;
+    let gpu = GpuTest::new();
+    let (scene, camera, size) = (intersecting_scene(), boxes_camera(), (48, 32));
+    let ramp = [[0.05, 0.05, 0.3], [0.0, 0.6, 0.2], [0.9, 0.8, 0.0], [1.0, 0.35, 0.0], [1.0, 0.0, 0.0f32]];
+    let heat = |surfaces: usize| ramp[surfaces.clamp(1, 5) - 1].map(|c| linear_to_srgb(c.powf(2.2)));
+    let params = [("pool_fraction", "3")];
+    let check = check_pixels(
+        &render(&gpu, &scene, &camera, size, &spec("tests/graphs/gpu/compressed_check.ron", &params), 1).0,
+    );
+    let (image, stats) = render(
+        &gpu,
+        &scene,
+        &camera,
+        size,
+        &spec("builtin:msaa_compressed", &[("pool_fraction", "3"), ("debug_view", "samples")]),
+        1,
+    );
+    let mut counts = [0u32; 8];
+    for (i, (p, c)) in image.pixels().zip(&check).enumerate() {
+        assert_eq!(c[0], 0, "pixel {i}: broken list {c:?}");
+        let surfaces = (c[2] < 4) as usize + (c[2] > c[3]) as usize + c[1] as usize;
+        let expected = heat(surfaces);
+        assert!(
+            (0..3).all(|k| p[k].abs_diff(expected[k]) <= 1),
+            "pixel {i}: {surfaces} surface(s) ({c:?}) shown as {p:?}, not {expected:?}"
+        );
+        counts[surfaces - 1] += 1;
+    }
+    println!("pixels with 1, 2, ... surfaces: {counts:?}");
+    assert!(counts[1] > 100 && counts[2] > 5, "edge pixels with two and three surfaces in view: {counts:?}");
+    assert_ne!(heat(1), heat(2));
+    assert_eq!(stats.last().unwrap().gbuffer[0].surfaces_per_pixel, counts);
 }
