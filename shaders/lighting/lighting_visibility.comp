@@ -72,9 +72,13 @@ Surface rebuild(uint id, uint prim, vec2 center, float depth) {
     Surface s;
     s.position = surface_position(center, depth);
     s.normal = normal;
-    s.albedo = m.albedo;
-    s.metallic = m.metallic;
-    s.roughness = m.roughness;
+    // The material as the G-buffer methods store it (albedo and metallic in RGBA8 UNORM, roughness
+    // in 8 bits), so that every method shades the same inputs: the 8-bit steps of a dark albedo
+    // alone shift whole surfaces by about one output level.
+    vec4 albedo_metallic = unpackUnorm4x8(packUnorm4x8(vec4(m.albedo, m.metallic)));
+    s.albedo = albedo_metallic.rgb;
+    s.metallic = albedo_metallic.a;
+    s.roughness = unpackUnorm4x8(packUnorm4x8(vec4(m.roughness))).x;
     return s;
 }
 
