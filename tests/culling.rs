@@ -1,11 +1,14 @@
 //! GPU culling on lavapipe with validation on: every culling graph must draw every visible
 //! instance (exact visibility from an unculled id render is the oracle) and give the same image,
-//! pixel for pixel, as no culling. Named hard cases, then property tests over random scenes,
-//! cameras and sizes.
+//! pixel for pixel, as no culling. Named hard cases (the occlusion test's variants, the MSAA
+//! graphs against themselves with culling off, one_phase's misses counted exactly), then property
+//! tests over random scenes, cameras, sizes and occlusion-test params.
 
 mod common;
 
 use common::{cube_mesh, GpuTest};
+use cullgraph::gpu::ShaderCompiler;
+use cullgraph::graph::executor::DrawnInstances;
 use cullgraph::oracle::raycast::{RaycastOracle, SamplePattern};
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
@@ -14,12 +17,94 @@ use cullgraph::scene::{Camera, CameraPath, Instance, Material, MeshData, Project
 use cullgraph::stats::FrameStats;
 use glam::{DVec3, Mat3, Vec3};
 use proptest::prelude::*;
+use std::cell::Cell;
 use std::collections::BTreeSet;
+use std::time::Instant;
 
 /// Graphs that must never miss a visible instance.
 const EXACT_GRAPHS: [&str; 3] = ["frustum", "two_phase", "occluder_prepass"];
 
-/// Renders `frames` frames of each graph along `path` and checks them against no culling:
+/// A built-in graph with param overrides.
+fn graph(name: &str, params: &[(&str, &str)]) -> GraphSpec {
+    GraphSpec::builtin(name).unwrap().with_overrides(params.iter().map(|(k, v)| (k.to_string(), v.to_string())))
+}
+
+/// A graph's name and overrides, for messages.
+fn label(spec: &GraphSpec) -> String {
+    let params: Vec<String> = spec.overrides.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    format!("{} [{}]", spec.file, params.join(" "))
+}
+
+/// Renders `frames` frames of `spec` along `path`, with verification on if `verify`: each
+/// frame's image and stats.
+#[allow(clippy::too_many_arguments)]
+fn render_path(
+    gpu: &GpuTest,
+    shaders: &ShaderCompiler,
+    scene: &Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    frames: u32,
+    path: CameraPath,
+    spec: &GraphSpec,
+    verify: bool,
+) -> (Vec<RgbaImage>, Vec<FrameStats>) {
+    let settings = RenderSettings::new(size.0, size.1);
+    let mut r = Renderer::with_graph(gpu, shaders, scene.clone(), settings, spec).unwrap();
+    if verify {
+        r.enable_verification(shaders).unwrap();
+    }
+    (0..frames)
+        .map(|f| {
+            let (stats, image) = r.render_to_image(&path.camera_at(camera, f)).unwrap();
+            (image, stats)
+        })
+        .unzip()
+}
+
+/// Renders `frames` frames of `reference` (a graph that culls nothing) and of each of `graphs`
+/// along `path`, and checks every frame of each graph against the reference: no false negatives
+/// and the same image, pixel for pixel. Returns the reference's stats (it is not verified),
+/// then each graph's.
+#[allow(clippy::too_many_arguments)]
+fn check_graphs(
+    gpu: &GpuTest,
+    shaders: &ShaderCompiler,
+    scene: &Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    frames: u32,
+    path: CameraPath,
+    reference: &GraphSpec,
+    graphs: &[GraphSpec],
+) -> (Vec<FrameStats>, Vec<Vec<FrameStats>>) {
+    let render = |spec: &GraphSpec, verify| render_path(gpu, shaders, scene, camera, size, frames, path, spec, verify);
+    let (reference_images, reference_stats) = render(reference, false);
+    let all = graphs
+        .iter()
+        .map(|spec| {
+            let (images, stats) = render(spec, true);
+            let graph = label(spec);
+            for (f, (image, s)) in images.iter().zip(&stats).enumerate() {
+                let v = s.verify.as_ref().unwrap();
+                assert_eq!(
+                    v.false_negatives, 0,
+                    "{graph}, frame {f}: visible instances culled: {:?} ({s:?})",
+                    v.missed
+                );
+                assert!(
+                    image.as_raw() == reference_images[f].as_raw(),
+                    "{graph}, frame {f}: the image differs from {}",
+                    label(reference)
+                );
+            }
+            stats
+        })
+        .collect();
+    (reference_stats, all)
+}
+
+/// Renders `frames` frames of each exact graph along `path` and checks them against no culling:
 /// identical images and no false negatives. Returns the culled graphs' last-frame stats.
 fn check(
     gpu: &GpuTest,
@@ -29,31 +114,10 @@ fn check(
     frames: u32,
     path: CameraPath,
 ) -> Vec<FrameStats> {
-    let shaders = gpu.shaders();
-    let settings = RenderSettings::new(size.0, size.1);
-    let render = |graph: &str| -> (Vec<RgbaImage>, Vec<FrameStats>) {
-        let spec = GraphSpec::builtin(graph).unwrap();
-        let mut r = Renderer::with_graph(gpu, &shaders, scene.clone(), settings.clone(), &spec).unwrap();
-        r.enable_verification(&shaders).unwrap();
-        (0..frames)
-            .map(|f| {
-                let (stats, image) = r.render_to_image(&path.camera_at(camera, f)).unwrap();
-                (image, stats)
-            })
-            .unzip()
-    };
-    let (reference, _) = render("no_cull");
-    let mut last = Vec::new();
-    for graph in EXACT_GRAPHS {
-        let (images, stats) = render(graph);
-        for (f, (image, s)) in images.iter().zip(&stats).enumerate() {
-            let v = s.verify.as_ref().unwrap();
-            assert_eq!(v.false_negatives, 0, "{graph}, frame {f}: visible instances culled: {:?} ({s:?})", v.missed);
-            assert!(image.as_raw() == reference[f].as_raw(), "{graph}, frame {f}: the image differs from no culling");
-        }
-        last.push(stats.last().unwrap().clone());
-    }
-    last
+    let graphs = EXACT_GRAPHS.map(|g| graph(g, &[]));
+    let (_, stats) =
+        check_graphs(gpu, &gpu.shaders(), scene, camera, size, frames, path, &graph("no_cull", &[]), &graphs);
+    stats.into_iter().map(|s| s.last().unwrap().clone()).collect()
 }
 
 /// A small scene: a wall in front of boxes, boxes beside it, one box behind the eye.
@@ -99,6 +163,176 @@ fn hidden_boxes_are_culled_and_visible_ones_kept() {
     // 6 boxes hide behind the wall; the one behind the eye is outside the frustum.
     assert!(two_phase.occlusion_culled >= 6, "{two_phase:?}");
     assert!(two_phase.frustum_culled >= 1, "{two_phase:?}");
+}
+
+/// The occlusion test's variants, each alone and all together.
+const OCCLUSION_VARIANTS: [&[(&str, &str)]; 4] = [
+    &[("hiz_test", "finer")],
+    &[("bound", "sphere")],
+    &[("hiz_method", "per_mip")],
+    &[("hiz_test", "finer"), ("bound", "sphere"), ("hiz_method", "per_mip")],
+];
+
+#[test]
+fn occlusion_test_variants_keep_every_visible_instance_under_motion() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    // The two-phase graph with the finer footprint, sphere bounds and the per-mip pyramid (each
+    // alone and together), and the pre-pass with all three.
+    let graphs: Vec<GraphSpec> = OCCLUSION_VARIANTS
+        .iter()
+        .map(|params| graph("two_phase", params))
+        .chain([graph("occluder_prepass", OCCLUSION_VARIANTS[3])])
+        .collect();
+    for path in [CameraPath::Orbit, CameraPath::Shake] {
+        let start = Instant::now();
+        let (_, stats) = check_graphs(
+            &gpu,
+            &shaders,
+            &wall_scene(),
+            &wall_camera(),
+            (48, 36),
+            5,
+            path,
+            &graph("no_cull", &[]),
+            &graphs,
+        );
+        for (spec, stats) in graphs.iter().zip(&stats) {
+            // Each variant did cull by occlusion along the way (the boxes behind the wall), so
+            // its test was exercised, not just skipped.
+            let occluded: Vec<u32> = stats.iter().map(|s| s.occlusion_culled).collect();
+            assert!(occluded.iter().sum::<u32>() >= 6, "{} along {path:?}: occlusion-culled {occluded:?}", label(spec));
+            println!("{} along {path:?}: occlusion-culled per frame {occluded:?}", label(spec));
+        }
+        println!("occlusion variants along {path:?}: {:.2} s", start.elapsed().as_secs_f64());
+    }
+}
+
+/// The instances the renderer's last frame drew (verification on).
+fn drawn_instances(r: &Renderer) -> BTreeSet<u32> {
+    let lists = r.drawn().unwrap().expect("verification is on");
+    let all = lists.contains(&DrawnInstances::All);
+    let instances = r.scene().instances.len() as u32;
+    lists
+        .into_iter()
+        .flat_map(|l| match l {
+            DrawnInstances::Some(ids) if !all => ids,
+            _ => Vec::new(),
+        })
+        .chain(if all { 0..instances } else { 0..0 })
+        .collect()
+}
+
+#[test]
+fn one_phase_counts_exactly_the_instances_it_pops_in_late() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, size) = (wall_scene(), (48, 36));
+    // The orbit at three steps a frame (36 degrees) brings the boxes out from behind the wall
+    // from one frame to the next: hidden in last frame's pyramid, one_phase culls them for a
+    // frame. A still camera has nothing new to miss.
+    let orbit: Vec<Camera> = (0..5).map(|f| CameraPath::Orbit.camera_at(&wall_camera(), 3 * f)).collect();
+    let mut total_missed = 0;
+    for (what, cameras) in [("fast orbit", orbit), ("still", vec![wall_camera(); 4])] {
+        let start = Instant::now();
+        let render = |spec: &GraphSpec| {
+            let settings = RenderSettings::new(size.0, size.1);
+            let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), settings, spec).unwrap();
+            r.enable_verification(&shaders).unwrap();
+            r
+        };
+        let mut reference = render(&graph("no_cull", &[]));
+        let mut r = render(&graph("one_phase", &[]));
+        let mut last_visible = BTreeSet::new();
+        let mut missed_per_frame = Vec::new();
+        for (f, camera) in cameras.iter().enumerate() {
+            let (_, expected) = reference.render_to_image(camera).unwrap();
+            let (stats, image) = r.render_to_image(camera).unwrap();
+            let v = stats.verify.as_ref().unwrap();
+            // The count is exactly the visible instances left undrawn, and `missed` lists them.
+            let visible = r.exactly_visible().clone();
+            let missed: Vec<u32> = visible.difference(&drawn_instances(&r)).copied().collect();
+            assert_eq!(v.false_negatives as usize, missed.len(), "{what}, frame {f}: {v:?}");
+            assert_eq!(v.missed, missed.iter().take(16).copied().collect::<Vec<_>>(), "{what}, frame {f}");
+            assert_eq!(v.visible as usize, visible.len(), "{what}, frame {f}");
+            // What one_phase misses pops in: it was not visible last frame (what was visible
+            // then is in front in the pyramid it tests against).
+            assert!(missed.iter().all(|i| !last_visible.contains(i)), "{what}, frame {f}: missed {missed:?}");
+            // A frame without misses is the unculled frame; one with them lacks what it missed.
+            let same = image.as_raw() == expected.as_raw();
+            assert_eq!(same, missed.is_empty(), "{what}, frame {f}: missed {missed:?}, same image: {same}");
+            if what == "still" && f > 0 {
+                assert!(missed.is_empty(), "still camera, frame {f}: missed {missed:?}");
+                assert!(stats.occlusion_culled >= 6, "still camera, frame {f}: {stats:?}");
+            }
+            total_missed += missed.len();
+            missed_per_frame.push(missed);
+            last_visible = visible;
+        }
+        gpu.assert_clean();
+        println!("one_phase, {what}: missed per frame {missed_per_frame:?}, {:.2} s", start.elapsed().as_secs_f64());
+    }
+    assert!(total_missed > 0, "the fast orbit must make one_phase miss something");
+}
+
+/// `spec` (a two-phase graph) with culling off: its late cull pass reads no Hi-Z and skips the
+/// frustum (`frustum: false`, the instance-cull kind's no-cull baseline), so the early and late
+/// lists together hold every instance every frame, and the Hi-Z pass is pruned. Everything else
+/// (formats, samples, the passes after culling) is the graph's own. The library has no switch
+/// for this: `--no-cull` selects `graph/no_cull.ron` instead, which has no MSAA.
+fn without_culling(spec: &GraphSpec) -> GraphSpec {
+    let edits = [
+        (
+            r#"reads: {"visibility_prev": "visibility.prev", "hiz": "hiz"},"#,
+            r#"reads: {"visibility_prev": "visibility.prev"},"#,
+        ),
+        (
+            r#"settings: {"phase": "late", "bound": "bound", "hiz_test": "hiz_test"},"#,
+            r#"settings: {"phase": "late", "frustum": false},"#,
+        ),
+    ];
+    let mut out = spec.clone();
+    for (from, to) in edits {
+        assert_eq!(out.text.matches(from).count(), 1, "{}: `{from}`", spec.file);
+        out.text = out.text.replace(from, to);
+    }
+    out.file = format!("{} (culling off)", spec.file);
+    out
+}
+
+#[test]
+fn msaa_graphs_cull_over_the_msaa_depth_without_losing_a_sample() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let scene = wall_scene();
+    let instances = scene.instances.len() as u32;
+    for name in ["msaa_compressed", "msaa_compressed_claim", "msaa_zprepass"] {
+        for path in [CameraPath::Orbit, CameraPath::Shake] {
+            let start = Instant::now();
+            let spec = graph(name, &[("msaa", "4")]);
+            let reference = without_culling(&spec);
+            let (unculled, stats) = check_graphs(
+                &gpu,
+                &shaders,
+                &scene,
+                &wall_camera(),
+                (40, 30),
+                5,
+                path,
+                &reference,
+                std::slice::from_ref(&spec),
+            );
+            // The reference really culls nothing (its cull pass's counters), and the graph culls
+            // by occlusion.
+            for (f, s) in unculled.iter().enumerate() {
+                assert_eq!((s.drawn, s.frustum_culled, s.occlusion_culled), (instances, 0, 0), "{name}, frame {f}");
+            }
+            let occluded: Vec<u32> = stats[0].iter().map(|s| s.occlusion_culled).collect();
+            assert!(occluded.iter().sum::<u32>() >= 6, "{name} along {path:?}: occlusion-culled {occluded:?}");
+            assert!(stats[0].iter().all(|s| s.frustum_culled >= 1), "{name} along {path:?}: the box behind the eye");
+            println!("{name} x4 along {path:?}: occlusion-culled {occluded:?}, {:.2} s", start.elapsed().as_secs_f64());
+        }
+    }
 }
 
 #[test]
@@ -195,17 +429,7 @@ fn zero_and_negative_scale() {
 /// out what a one-sided rendering must not show.
 fn quads_scene(away_double_sided: bool, shown_only: bool) -> Scene {
     let mut scene = Scene { name: "quads".into(), ..Default::default() };
-    let quad = MeshData {
-        positions: vec![
-            Vec3::new(-0.8, -0.8, 0.0),
-            Vec3::new(0.8, -0.8, 0.0),
-            Vec3::new(0.8, 0.8, 0.0),
-            Vec3::new(-0.8, 0.8, 0.0),
-        ],
-        normals: vec![],
-        indices: vec![0, 1, 2, 0, 2, 3],
-    };
-    let mesh = scene.add_mesh("quad", &quad, "quad").unwrap();
+    let mesh = scene.add_mesh("quad", &quad_mesh(), "quad").unwrap();
     let one = scene.add_material(Material { name: "one-sided".into(), ..Default::default() });
     let two = scene.add_material(Material { name: "double-sided".into(), double_sided: true, ..Default::default() });
     let turned = Mat3::from_rotation_y(std::f32::consts::PI);
@@ -322,58 +546,162 @@ fn the_city_under_every_camera_path() {
     }
 }
 
-/// A random scene of boxes and walls and a random camera, size and path.
-fn random_case() -> impl Strategy<Value = (Scene, Camera, (u32, u32), CameraPath)> {
+/// A quad (-0.8..0.8 in x and y), front face toward +z.
+fn quad_mesh() -> MeshData {
+    MeshData {
+        positions: vec![
+            Vec3::new(-0.8, -0.8, 0.0),
+            Vec3::new(0.8, -0.8, 0.0),
+            Vec3::new(0.8, 0.8, 0.0),
+            Vec3::new(-0.8, 0.8, 0.0),
+        ],
+        normals: vec![],
+        indices: vec![0, 1, 2, 0, 2, 3],
+    }
+}
+
+/// A tetrahedron inside the unit cube, its faces counter-clockwise seen from outside.
+fn tetrahedron_mesh() -> MeshData {
+    let positions = vec![
+        Vec3::new(0.5, 0.5, 0.5),
+        Vec3::new(0.5, -0.5, -0.5),
+        Vec3::new(-0.5, 0.5, -0.5),
+        Vec3::new(-0.5, -0.5, 0.5),
+    ];
+    let mut indices = Vec::new();
+    for [a, b, c] in [[0u32, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+        let [pa, pb, pc] = [a, b, c].map(|i| positions[i as usize]);
+        // The centroid is the origin: a face's outward normal points away from it.
+        let outward = (pb - pa).cross(pc - pa).dot(pa + pb + pc) > 0.0;
+        indices.extend(if outward { [a, b, c] } else { [a, c, b] });
+    }
+    MeshData { positions, normals: vec![], indices }
+}
+
+/// The culling of a random case: bound, Hi-Z footprint, pyramid method, and the exact graph
+/// checked besides two_phase.
+type TestParams = (&'static str, &'static str, &'static str, &'static str);
+
+/// A random case: scene, camera, output size, camera path and the culling graphs' params.
+type Case = (Scene, Camera, (u32, u32), CameraPath, TestParams);
+
+/// A random scene of cubes (some flagged as occluders), one-sided and double-sided quads and
+/// tetrahedra, some mirrored, maybe a wall across the view, and a random perspective or
+/// orthographic camera, size, path and culling.
+fn random_case() -> impl Strategy<Value = Case> {
     let boxes = prop::collection::vec(
         (
             (-20.0f64..20.0, 0.0f64..6.0, -20.0f64..20.0),
             (0.05f32..6.0, 0.05f32..6.0, 0.05f32..6.0),
             -3.2f32..3.2,
             0u32..2,
+            // mesh (cube twice as often), double-sided, mirrored
+            prop_oneof![Just(0u32), Just(0), Just(1), Just(2)],
+            any::<bool>(),
+            prop::bool::weighted(0.2),
         ),
         2..40,
     );
+    let projection = prop_oneof![
+        3 => (10.0f32..150.0).prop_map(|fov_y_deg| Projection::Perspective { fov_y_deg }),
+        1 => (1.0f32..40.0, 20.0f32..150.0).prop_map(|(height, far)| Projection::Orthographic { height, far }),
+    ];
     let camera = (
         (-25.0f64..25.0, 0.2f64..15.0, -25.0f64..25.0),
         (-10.0f64..10.0, 0.0f64..5.0, -10.0f64..10.0),
-        10.0f32..150.0,
+        projection,
         0.01f32..1.0,
     );
     let size = prop_oneof![Just((1u32, 1u32)), Just((3, 3)), (2u32..70, 2u32..50)];
-    let path = prop_oneof![Just(CameraPath::Still), Just(CameraPath::Orbit), Just(CameraPath::Shake)];
-    (boxes, camera, size, path).prop_filter_map("eye equals target", |(boxes, (eye, target, fov, near), size, path)| {
-        let mut scene = Scene { name: "random".into(), ..Default::default() };
-        let cube = scene.add_mesh("cube", &cube_mesh(), "cube").unwrap();
-        scene.add_material(Material::default());
-        for ((x, y, z), (sx, sy, sz), angle, occluder) in boxes {
-            let linear = Mat3::from_rotation_y(angle) * Mat3::from_diagonal(Vec3::new(sx, sy, sz));
-            scene.instances.push(Instance {
-                transform: Transform { linear, translation: DVec3::new(x, y, z) },
-                mesh: cube,
-                material: 0,
-                flags: occluder,
-            });
-        }
-        let camera = Camera {
-            eye: DVec3::new(eye.0, eye.1, eye.2),
-            target: DVec3::new(target.0, target.1, target.2),
-            projection: Projection::Perspective { fov_y_deg: fov },
-            near,
-            ..Default::default()
-        };
-        camera.validate().ok()?;
-        Some((scene, camera, size, path))
-    })
+    let path =
+        prop_oneof![Just(CameraPath::Still), Just(CameraPath::Orbit), Just(CameraPath::Dolly), Just(CameraPath::Shake)];
+    // Half the cases get a wall across the view (at a share of the way to the target, width,
+    // height), so that the occlusion test has work.
+    let wall = prop::option::weighted(0.5, (0.1f64..0.9, 1.0f32..20.0, 1.0f32..12.0));
+    let params = (
+        prop_oneof![Just("box"), Just("sphere")],
+        prop_oneof![Just("coarse"), Just("finer")],
+        prop_oneof![Just("single"), Just("per_mip")],
+        prop_oneof![Just("frustum"), Just("occluder_prepass")],
+    );
+    (boxes, wall, camera, size, path, params).prop_filter_map(
+        "eye equals target",
+        |(boxes, wall, (eye, target, projection, near), size, path, params)| {
+            let mut scene = Scene { name: "random".into(), ..Default::default() };
+            let meshes = [
+                scene.add_mesh("cube", &cube_mesh(), "cube").unwrap(),
+                scene.add_mesh("quad", &quad_mesh(), "quad").unwrap(),
+                scene.add_mesh("tetrahedron", &tetrahedron_mesh(), "tetrahedron").unwrap(),
+            ];
+            let one_sided = scene.add_material(Material::default());
+            let double_sided =
+                scene.add_material(Material { name: "double-sided".into(), double_sided: true, ..Default::default() });
+            for ((x, y, z), (sx, sy, sz), angle, occluder, mesh, two_sided, mirrored) in boxes {
+                let sx = if mirrored { -sx } else { sx };
+                let linear = Mat3::from_rotation_y(angle) * Mat3::from_diagonal(Vec3::new(sx, sy, sz));
+                scene.instances.push(Instance {
+                    transform: Transform { linear, translation: DVec3::new(x, y, z) },
+                    mesh: meshes[mesh as usize],
+                    material: if two_sided { double_sided } else { one_sided },
+                    flags: occluder,
+                });
+            }
+            let camera = Camera {
+                eye: DVec3::new(eye.0, eye.1, eye.2),
+                target: DVec3::new(target.0, target.1, target.2),
+                projection,
+                near,
+                ..Default::default()
+            };
+            camera.validate().ok()?;
+            if let Some((at, width, height)) = wall {
+                let towards_eye = camera.eye - camera.target;
+                let turn = towards_eye.x.atan2(towards_eye.z) as f32;
+                scene.instances.push(Instance {
+                    transform: Transform {
+                        linear: Mat3::from_rotation_y(turn) * Mat3::from_diagonal(Vec3::new(width, height, 0.3)),
+                        translation: camera.eye.lerp(camera.target, at),
+                    },
+                    mesh: meshes[0],
+                    material: one_sided,
+                    flags: 1,
+                });
+            }
+            Some((scene, camera, size, path, params))
+        },
+    )
 }
 
-proptest! {
-    #![proptest_config(ProptestConfig { cases: 40, failure_persistence: None, ..ProptestConfig::default() })]
-
-    /// 40 random scenes x 3 culling graphs x 3 frames = 360 checked GPU frames (plus references).
-    #[test]
-    fn random_scenes_and_cameras_never_lose_a_visible_instance(case in random_case()) {
-        let (scene, camera, size, path) = case;
-        let gpu = GpuTest::new();
-        check(&gpu, &scene, &camera, size, 3, path);
-    }
+/// 200 random cases: each renders 2 frames of no culling, of two_phase and of frustum or
+/// occluder_prepass (occlusion-test params random too), and checks every culled frame: no false
+/// negatives, the unculled image (800 checked frames in all).
+#[test]
+fn random_scenes_and_cameras_never_lose_a_visible_instance() {
+    // One context and one shader cache for all the cases: creating pipelines, not rendering,
+    // is what a case costs. A case fails on its own validation messages.
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let start = Instant::now();
+    let (cases, prepass_cases, occluding_cases) = (Cell::new(0), Cell::new(0), Cell::new(0));
+    let config = ProptestConfig { cases: 200, failure_persistence: None, ..ProptestConfig::default() };
+    proptest!(config, |(case in random_case())| {
+        let (scene, camera, size, path, (bound, hiz_test, hiz_method, other)) = case;
+        let before = gpu.validation_log().count();
+        let occlusion = [("bound", bound), ("hiz_test", hiz_test), ("hiz_method", hiz_method)];
+        let other = graph(other, if other == "frustum" { &occlusion[..1] } else { &occlusion });
+        let graphs = [graph("two_phase", &occlusion), other];
+        let (_, stats) = check_graphs(&gpu, &shaders, &scene, &camera, size, 2, path, &graph("no_cull", &[]), &graphs);
+        let messages = gpu.validation_log().messages();
+        prop_assert!(messages.len() == before, "validation messages:\n{}", messages[before..].join("\n"));
+        cases.set(cases.get() + 1);
+        prepass_cases.set(prepass_cases.get() + (graphs[1].file.contains("occluder_prepass") as u32));
+        occluding_cases.set(occluding_cases.get() + stats[0].iter().any(|s| s.occlusion_culled > 0) as u32);
+    });
+    println!(
+        "{} random cases ({} with occluder_prepass, the others frustum; two_phase culled by occlusion in {}) in {:.1} s",
+        cases.get(),
+        prepass_cases.get(),
+        occluding_cases.get(),
+        start.elapsed().as_secs_f64()
+    );
 }
