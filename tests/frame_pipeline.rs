@@ -21,14 +21,14 @@ fn counters(s: &FrameStats) -> impl PartialEq + std::fmt::Debug {
 fn pipelined_frames_report_late_and_exactly_what_waited_frames_report() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
-    let scene = SceneSource::Builtin("city".into())
-        .load(&LoadOptions { instances: Some(3000), ..Default::default() })
-        .unwrap();
+    let scene =
+        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(3000), ..Default::default() }).unwrap();
     let (w, h) = (96, 54);
     let base = scene.default_camera(w as f32 / h as f32);
     let frames = 8u32;
     let spec = GraphSpec::builtin("two_phase").unwrap();
-    let new_renderer = || Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
+    let new_renderer =
+        || Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
 
     let mut waited = new_renderer();
     let expected: Vec<FrameStats> =
