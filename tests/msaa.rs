@@ -626,3 +626,45 @@ fn the_samples_debug_view_colours_pixels_by_their_surfaces() {
     assert_ne!(heat(1), heat(2));
     assert_eq!(stats.last().unwrap().gbuffer[0].surfaces_per_pixel, counts);
 }
+
+/// The visibility buffer's ids packed in one word (the shipped graph) and as two words give the
+/// same image; a scene whose ids need more than 32 bits is refused, naming the pass, and renders
+/// with two words.
+#[test]
+fn packed_visibility_ids_shade_like_two_words_and_refuse_what_does_not_fit() {
+    let gpu = GpuTest::new();
+    let (scene, camera) = city(1500);
+    let packed = spec("builtin:visibility_buffer", &[]);
+    assert!(packed.text.contains("\"ids\": Image(format: R32_UINT"), "the shipped graph packs its ids");
+    let mut two_words = packed.clone();
+    two_words.text = two_words.text.replace("\"ids\": Image(format: R32_UINT", "\"ids\": Image(format: R32G32_UINT");
+    let (a, _) = render(&gpu, &scene, &camera, (96, 64), &packed, 2);
+    let (b, _) = render(&gpu, &scene, &camera, (96, 64), &two_words, 2);
+    assert!(a.as_raw() == b.as_raw(), "packed and two-word ids shade differently");
+
+    // 2^18 + 1 instances need 19 bits, a mesh of 2^14 + 1 triangles 15: 34 in all.
+    let mut big = Scene { name: "big ids".into(), ..Default::default() };
+    let strip = cullgraph::scene::MeshData {
+        positions: (0..=(1u32 << 14) + 2).map(|i| Vec3::new(i as f32 * 1e-4, (i % 2) as f32 * 1e-4, 0.0)).collect(),
+        normals: vec![],
+        indices: (0..=(1u32 << 14)).flat_map(|i| [i, i + 1, i + 2]).collect(),
+    };
+    let mesh = big.add_mesh("strip", &strip, "strip").unwrap();
+    let material = big.add_material(Material::default());
+    for i in 0..(1u32 << 18) + 1 {
+        let translation = DVec3::new((i % 512) as f64, (i / 512) as f64, -10.0);
+        big.instances.push(Instance {
+            transform: Transform { linear: Mat3::IDENTITY, translation },
+            mesh,
+            material,
+            flags: 0,
+        });
+    }
+    let camera = Camera { eye: DVec3::new(0.0, 0.0, 0.0), target: DVec3::new(0.0, 0.0, -1.0), ..Default::default() };
+    let settings = RenderSettings::new(8, 8);
+    let mut renderer = Renderer::with_graph(&gpu, &gpu.shaders(), big.clone(), settings.clone(), &packed).unwrap();
+    let refused = renderer.render(&camera).unwrap_err().to_string();
+    assert!(refused.contains("pass 'draw_early'") && refused.contains("19 + 15"), "{refused}");
+    let mut renderer = Renderer::with_graph(&gpu, &gpu.shaders(), big, settings, &two_words).unwrap();
+    renderer.render(&camera).unwrap();
+}

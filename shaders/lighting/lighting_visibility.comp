@@ -1,10 +1,10 @@
 #version 460
 // Shading from the visibility buffer (seed 003) with MSAA: per pixel, the distinct
-// (instance, triangle) ids among its samples are each shaded once: the triangle is fetched from
-// the shared pools, the camera ray through the pixel center gives its barycentrics (the
-// attributes a rasterizer interpolates at the pixel center), and the tone-mapped result is
-// weighted by the samples the id covers. The background is sky. The scenes have no textures,
-// so no UV gradients are rebuilt.
+// (instance, triangle) ids among its samples (PACKED_IDS: both in one word, see visibility.frag)
+// are each shaded once: the triangle is fetched from the shared pools, the camera ray through
+// the pixel center gives its barycentrics (the attributes a rasterizer interpolates at the pixel
+// center), and the tone-mapped result is weighted by the samples the id covers. The background
+// is sky. The scenes have no textures, so no UV gradients are rebuilt.
 #include "../common/scene.glsl"
 #include "../common/shading.glsl"
 #include "../common/octahedral.glsl"
@@ -39,7 +39,18 @@ layout(push_constant) uniform Settings {
     float exposure;
     uint debug_view;
     uint light_tiles;
+    uint triangle_bits;    // PACKED_IDS: low bits of an id word that hold the triangle
 } settings;
+
+// Sample `s`'s (instance id, triangle id).
+uvec2 load_id(ivec2 pixel, uint s) {
+#ifdef PACKED_IDS
+    uint word = FETCH(id_tex, pixel, s).x;
+    return uvec2(word >> settings.triangle_bits, word & ((1u << settings.triangle_bits) - 1u));
+#else
+    return FETCH(id_tex, pixel, s).xy;
+#endif
+}
 
 // The surface of triangle `prim` of instance `id` seen through `center`, at `depth`.
 Surface rebuild(uint id, uint prim, vec2 center, float depth) {
@@ -111,7 +122,7 @@ void main() {
             background += 1u;
             continue;
         }
-        uvec2 id = FETCH(id_tex, pixel, s).xy;
+        uvec2 id = load_id(pixel, s);
         uint k = 0u;
         while (k < distinct && ids[k] != id) ++k;
         if (k == distinct) {

@@ -100,8 +100,12 @@ pub const GBUFFER_NORMAL_PACKED: vk::Format = vk::Format::R32_UINT;
 pub const GBUFFER_NORMAL_FORMATS: &[vk::Format] = &[GBUFFER_NORMAL_PACKED, vk::Format::R16G16B16A16_SFLOAT];
 /// What the G-buffer's `normal` slots hold, in either format.
 const NORMAL_SLOT_DOC: &str = "normal and roughness (packed R32_UINT, or R16G16B16A16_SFLOAT)";
-/// The visibility buffer's format: instance id and triangle id per sample.
-pub const VISIBILITY_FORMAT: vk::Format = vk::Format::R32G32_UINT;
+/// The visibility buffer's packed format: instance id and triangle id in one 32-bit word, the
+/// triangle in the low bits (as many as the scene's largest mesh needs; `passes::visibility_ids`).
+pub const VISIBILITY_PACKED: vk::Format = vk::Format::R32_UINT;
+/// The visibility buffer's formats: the packed word, or instance id and triangle id as two words
+/// (any scene).
+pub const VISIBILITY_FORMATS: &[vk::Format] = &[VISIBILITY_PACKED, vk::Format::R32G32_UINT];
 /// Format of the selective-AA mask (`aa_edges`): 1 where a pixel may keep several surfaces.
 pub const AA_MASK_FORMAT: vk::Format = vk::Format::R8_UINT;
 /// Format of the Hi-Z pyramid (reversed-Z depth, minimum reduction).
@@ -200,7 +204,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             writes: vec![
                 ms(slot("albedo", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
                 ms(slot("normal", Usage::ColorAttachment, false, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
-                ms(slot("ids", Usage::ColorAttachment, false, FormatRule::Exact(VISIBILITY_FORMAT), "visibility buffer: instance id, triangle id (instead of albedo and normal)")),
+                ms(slot("ids", Usage::ColorAttachment, false, FormatRule::OneOf(VISIBILITY_FORMATS), "visibility buffer: instance id and triangle id, packed in R32_UINT or as R32G32_UINT (instead of albedo and normal)")),
                 ms(slot("depth", Usage::DepthAttachment, true, FormatRule::Depth, "reversed-Z depth (cleared to 0, stencil to 0)")),
             ],
             settings: vec![clear_colors_setting()],
@@ -244,7 +248,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             doc: "shades from a visibility buffer in compute (seed 003): each distinct (instance, triangle) id of a pixel's samples is rebuilt from the shared pools (barycentrics of the pixel-center ray) and shaded once, weighted by its samples",
             reads: vec![
                 ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the depth the ids were drawn with")),
-                ms(slot("ids", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(VISIBILITY_FORMAT), "instance id, triangle id per sample")),
+                ms(slot("ids", Usage::Sampled(Stages::Compute), true, FormatRule::OneOf(VISIBILITY_FORMATS), "instance id and triangle id per sample (packed R32_UINT or R32G32_UINT)")),
             ],
             writes: vec![slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image")],
             settings: lighting_settings(),
@@ -324,7 +328,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             writes: vec![
                 ms(slot("albedo", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
                 ms(slot("normal", Usage::ColorAttachmentLoad, false, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
-                ms(slot("ids", Usage::ColorAttachmentLoad, false, FormatRule::Exact(VISIBILITY_FORMAT), "visibility buffer: instance id, triangle id")),
+                ms(slot("ids", Usage::ColorAttachmentLoad, false, FormatRule::OneOf(VISIBILITY_FORMATS), "visibility buffer: instance id and triangle id (packed R32_UINT or R32G32_UINT)")),
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "reversed-Z depth")),
             ],
             settings: vec![],

@@ -82,6 +82,23 @@ pub fn bound_image(plan: &CompiledGraph, pass: &PlannedPass, slot: &str) -> Opti
     }
 }
 
+/// The defines of the shaders that write or read a visibility-id image of `format`:
+/// `PACKED_IDS` for one word per sample (`visibility_ids`).
+pub fn visibility_defines(format: Option<vk::Format>) -> &'static [(&'static str, &'static str)] {
+    if format == Some(crate::graph::kinds::VISIBILITY_PACKED) {
+        &[("PACKED_IDS", "1")]
+    } else {
+        &[]
+    }
+}
+
+/// The scene's triangle bits for packed visibility ids (`visibility_ids`), or the error that
+/// names `pass`.
+pub fn packed_id_bits(pass: &str, scene: &GpuScene) -> crate::Result<u32> {
+    super::visibility_ids::triangle_bits(scene.instance_count, scene.max_mesh_triangles)
+        .map_err(|m| crate::Error::Invalid(format!("pass '{pass}': {m}")))
+}
+
 /// The defines of the shaders that write or read a G-buffer normal image of `format`
 /// (`shaders/common/gbuffer_normal.glsl`): `NORMAL_PACKED` for the packed word.
 pub fn normal_defines(format: Option<vk::Format>) -> &'static [(&'static str, &'static str)] {
@@ -217,10 +234,14 @@ pub enum GeometryMode {
 
 /// The `gbuffer`, `gbuffer_append` and `gbuffer_equal` passes.
 pub struct GbufferPass {
+    /// The pass's name in the graph, for messages.
+    name: String,
     pipeline: Pipeline,
     mode: GeometryMode,
     /// The `clear_colors` setting (`gbuffer_append` has none: it loads what is there).
     clear_colors: bool,
+    /// Visibility ids packed in one word (`visibility_ids`): the triangle bits are pushed.
+    packed_ids: bool,
 }
 
 impl GbufferPass {
@@ -250,13 +271,20 @@ impl GbufferPass {
             )));
         }
         let normal = bound_image(plan, pass, "normal").map(|(f, _)| f);
+        let packed_ids = ids.is_some_and(|(format, _)| format == crate::graph::kinds::VISIBILITY_PACKED);
         let (fragment, colors) = match ids {
-            Some((format, _)) => (Some(("gbuffer/visibility.frag", &[][..])), vec![format]),
+            Some((format, _)) => (Some(("gbuffer/visibility.frag", visibility_defines(Some(format)))), vec![format]),
             None => ((!colors.is_empty()).then_some(("gbuffer/gbuffer.frag", normal_defines(normal))), colors),
         };
         let pipeline =
             geometry_pipeline(ctx, shaders, &pass.name, fragment, &colors, depth, mode == GeometryMode::Equal)?;
-        Ok(Self { pipeline, mode, clear_colors: pass.bool_setting("clear_colors", false) })
+        Ok(Self {
+            name: pass.name.clone(),
+            pipeline,
+            mode,
+            clear_colors: pass.bool_setting("clear_colors", false),
+            packed_ids,
+        })
     }
 }
 
@@ -284,6 +312,7 @@ impl PassNode for GbufferPass {
             })
             .collect();
         let scene = rec.frame.scene;
+        let push = if self.packed_ids { packed_id_bits(&self.name, scene)?.to_ne_bytes().to_vec() } else { Vec::new() };
         let lists = match self.mode {
             GeometryMode::Equal => DrawSource::redraw_lists(slots, scene)?,
             _ => vec![DrawSource::bound(slots, LIST_SLOTS)?.unwrap_or_else(|| DrawSource::unculled(scene))],
@@ -299,7 +328,7 @@ impl PassNode for GbufferPass {
             depth,
             depth_load,
             &[],
-            &[],
+            &push,
         );
         Ok(())
     }

@@ -3,7 +3,7 @@
 //! triangle of a pixel from the scene's pools and shades it once, like the compressed G-buffer
 //! shades each distinct surface once.
 
-use super::gbuffer::bound_samples;
+use super::gbuffer::{bound_image, bound_samples, packed_id_bits, visibility_defines};
 use super::lighting::LightingSettings;
 use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::{PassContext, PassNode};
@@ -12,9 +12,13 @@ use ash::vk;
 
 /// The `lighting_visibility` pass.
 pub struct LightingVisibilityPass {
+    /// The pass's name in the graph, for messages.
+    name: String,
     pipeline: Pipeline,
     sampler: Sampler,
     settings: LightingSettings,
+    /// Ids packed in one word: the scene's triangle bits are pushed after the settings.
+    packed_ids: bool,
 }
 
 impl LightingVisibilityPass {
@@ -26,11 +30,16 @@ impl LightingVisibilityPass {
         plan: &CompiledGraph,
     ) -> crate::Result<Self> {
         let samples = bound_samples(plan, pass, "ids").to_string();
-        let spirv = shaders.compile("lighting/lighting_visibility.comp", &[("SAMPLES", &samples)])?;
+        let format = bound_image(plan, pass, "ids").map(|(f, _)| f);
+        let mut defines = vec![("SAMPLES", samples.as_str())];
+        defines.extend_from_slice(visibility_defines(format));
+        let spirv = shaders.compile("lighting/lighting_visibility.comp", &defines)?;
         Ok(Self {
+            name: pass.name.clone(),
             pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
             sampler: Sampler::nearest_clamp(ctx)?,
             settings: LightingSettings::from_plan(pass),
+            packed_ids: format == Some(crate::graph::kinds::VISIBILITY_PACKED),
         })
     }
 }
@@ -58,7 +67,9 @@ impl PassNode for LightingVisibilityPass {
                 Bind::Buffer(9, scene.instance_triangles.handle()),
             ],
         );
-        self.pipeline.push_constants(rec.cmd, &self.settings);
+        let triangle_bits = if self.packed_ids { packed_id_bits(&self.name, scene)? } else { 0 };
+        let push = [bytemuck::bytes_of(&self.settings), &triangle_bits.to_ne_bytes()].concat();
+        self.pipeline.push_constant_bytes(rec.cmd, &push);
         let e = output.extent();
         // SAFETY: cmd recording with this pipeline bound.
         unsafe { rec.ctx.device().cmd_dispatch(rec.cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };

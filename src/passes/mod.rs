@@ -12,6 +12,7 @@ pub mod lighting;
 pub mod lighting_compressed;
 pub mod lighting_visibility;
 pub mod overlay;
+pub mod visibility_ids;
 
 use crate::gpu::{GpuContext, ShaderCompiler};
 use crate::graph::executor::PassNode;

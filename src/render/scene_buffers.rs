@@ -37,6 +37,8 @@ pub struct GpuScene {
     pub instance_count: u32,
     /// Triangles over all instances.
     pub triangles: u64,
+    /// Triangles of the largest mesh (how many bits a triangle id needs).
+    pub max_mesh_triangles: u32,
 }
 
 /// The unculled draw list: instances grouped by face cull, then by mesh, preserving instance
@@ -143,6 +145,7 @@ impl GpuScene {
             regions: draws.regions,
             instance_count: scene.instances.len() as u32,
             triangles: scene.instanced_triangles(),
+            max_mesh_triangles: scene.meshes.iter().map(|m| m.index_count / 3).max().unwrap_or(0),
         })
     }
 }
