@@ -546,6 +546,37 @@ fn the_city_under_every_camera_path() {
     }
 }
 
+/// A scene that flags no occluders (as glTF files do) still gets them in the occluder pre-pass:
+/// cheap meshes (at most `occluder_triangles` triangles) near and large on screen. With the
+/// setting at 0 (flagged ones only) the pre-pass has nothing to draw and occludes nothing.
+#[test]
+fn the_occluder_prepass_chooses_cheap_meshes_where_the_scene_flags_none() {
+    let gpu = GpuTest::new();
+    let mut scene =
+        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(3000), ..Default::default() }).unwrap();
+    for instance in &mut scene.instances {
+        instance.flags = 0;
+    }
+    let camera = scene.default_camera(64.0 / 40.0);
+    let graphs = [graph("occluder_prepass", &[]), graph("occluder_prepass", &[("occluder_triangles", "0")])];
+    let (_, stats) = check_graphs(
+        &gpu,
+        &gpu.shaders(),
+        &scene,
+        &camera,
+        (64, 40),
+        3,
+        CameraPath::Orbit,
+        &graph("no_cull", &[]),
+        &graphs,
+    );
+    let occluders = |s: &FrameStats| s.culling.iter().find(|p| p.pass == "cull_occluders").unwrap().drawn;
+    for (cheap, flagged_only) in stats[0].iter().zip(&stats[1]) {
+        assert!(occluders(cheap) > 0 && cheap.occlusion_culled > 300, "cheap meshes: {cheap:?}");
+        assert!(occluders(flagged_only) == 0 && flagged_only.occlusion_culled == 0, "flagged only: {flagged_only:?}");
+    }
+}
+
 /// A quad (-0.8..0.8 in x and y), front face toward +z.
 fn quad_mesh() -> MeshData {
     MeshData {

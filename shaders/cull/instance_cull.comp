@@ -71,6 +71,7 @@ layout(push_constant) uniform Push {
     uint group_count;          // VISIBLE_OUT: visible counts follow the survivor counts
     float occluder_distance;   // PHASE_OCCLUDERS/REST: farthest occluder center distance
     float occluder_size;       // smallest projected radius / view height
+    uint occluder_triangles;   // meshes this cheap are candidates unflagged (0: flagged only)
 } pc;
 
 shared uint sh_draw[CULL_WORDS_PER_BLOCK];
@@ -145,10 +146,12 @@ bool occluded(CullRecord r, float radius, vec3 half_extent) {
 #endif
 
 #if defined(PHASE_OCCLUDERS) || defined(PHASE_REST)
-// The thesis's local occluder choice: flagged as an occluder (large and cheap), near, and
-// large on screen. Deterministic, so PHASE_REST excludes exactly what PHASE_OCCLUDERS drew.
+// The thesis's local occluder choice: cheap (flagged as an occluder by the scene, or a mesh of
+// at most occluder_triangles triangles), near, and large on screen. Deterministic, so
+// PHASE_REST excludes exactly what PHASE_OCCLUDERS drew.
 bool is_occluder(CullRecord r, vec3 c, float radius) {
-    if (((r.group_flags >> 24) & FLAG_OCCLUDER) == 0u) return false;
+    bool flagged = ((r.group_flags >> 24) & FLAG_OCCLUDER) != 0u;
+    if (!flagged && groups[record_group(r)].index_count / 3u > pc.occluder_triangles) return false;
     float d = length(c);
     if (d > pc.occluder_distance + radius) return false;
     float size = radius / max(d, frame.cull_view.near) * frame.cull_view.scale.y * 0.5;

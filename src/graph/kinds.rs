@@ -373,6 +373,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
                 SettingDecl { name: "compaction", default: SettingDefault::Choice(&["ordered", "atomic"]), doc: "prefix-sum compaction in instance order, or the thesis's atomic append (order varies, measured only)" },
                 SettingDecl { name: "occluder_distance", default: SettingDefault::Float(200.0), doc: "occluders phase: farthest distance of an occluder's bound" },
                 SettingDecl { name: "occluder_size", default: SettingDefault::Float(0.02), doc: "occluders phase: smallest projected radius, as a fraction of the view height" },
+                SettingDecl { name: "occluder_triangles", default: SettingDefault::Int(1024), doc: "occluders phase: instances of meshes with at most this many triangles are candidates too, besides those flagged as occluders (0: flagged ones only)" },
             ],
             slots_from_shader: false,
         },

@@ -58,6 +58,8 @@ pub struct CullSettings {
     pub occluder_distance: f32,
     /// Occluder choice: smallest projected radius over the view height.
     pub occluder_size: f32,
+    /// Occluder choice: meshes this cheap are candidates without the occluder flag (0: none).
+    pub occluder_triangles: u32,
 }
 
 impl CullSettings {
@@ -77,6 +79,7 @@ impl CullSettings {
             atomic: choice("compaction", "ordered") == "atomic",
             occluder_distance: float("occluder_distance", 200.0),
             occluder_size: float("occluder_size", 0.02),
+            occluder_triangles: pass.float_setting("occluder_triangles", 1024.0).clamp(0.0, u32::MAX as f64) as u32,
         }
     }
 }
@@ -346,6 +349,7 @@ impl PassNode for InstanceCullPass {
             group_count: u32,
             occluder_distance: f32,
             occluder_size: f32,
+            occluder_triangles: u32,
         }
         let push = TestPush {
             slot_count: slots,
@@ -353,6 +357,7 @@ impl PassNode for InstanceCullPass {
             group_count: groups,
             occluder_distance: self.settings.occluder_distance,
             occluder_size: self.settings.occluder_size,
+            occluder_triangles: self.settings.occluder_triangles,
         };
 
         if let Some(init) = &self.init {
