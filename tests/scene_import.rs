@@ -5,7 +5,7 @@
 use cullgraph::scene::gltf_import::{self, ImportReport};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::validate::validate_scene;
-use cullgraph::scene::{Scene, SceneError};
+use cullgraph::scene::{Scene, SceneError, FLAG_NO_AA, FLAG_OCCLUDER};
 use glam::{DVec3, Mat3, Vec3};
 use proptest::prelude::*;
 use serde_json::json;
@@ -400,6 +400,37 @@ fn hierarchy_composes_transforms_and_shares_meshes() {
     assert!((sibling.translation - DVec3::new(10.0, 0.0, 0.0)).length() < 1e-12);
     assert!(sibling.linear.abs_diff_eq(Mat3::from_diagonal(Vec3::splat(2.0)), 1e-6));
     validate_scene(&scene).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn node_extras_flag_occluders_and_no_aa_down_the_hierarchy() {
+    let dir = scratch("extras");
+    let (doc, bin) = document(
+        &[triangle()],
+        json!([
+            {"name": "walls", "extras": {"cullgraph": {"occluder": true}, "exporter": "kept out"}, "children": [1, 2]},
+            {"name": "wall", "mesh": 0, "extras": {"cullgraph": {"no_aa": true, "occluder": false}}},
+            {"name": "door", "mesh": 0, "extras": "not an object: ignored"},
+            {"name": "plain", "mesh": 0}
+        ]),
+    );
+    let mut doc = doc;
+    doc["scenes"] = json!([{"nodes": [0, 3]}]);
+    let (scene, _) = load(&write(&dir, &doc, &bin)).unwrap();
+    let flags: Vec<u32> = scene.instances.iter().map(|i| i.flags).collect();
+    // A child keeps what an ancestor set (its `false` clears nothing) and adds its own.
+    assert_eq!(flags, [FLAG_OCCLUDER | FLAG_NO_AA, FLAG_OCCLUDER, 0]);
+
+    for (extras, message) in [
+        (json!({"cullgraph": {"no_AA": true}}), "extras.cullgraph.no_AA is unknown (known: occluder, no_aa)"),
+        (json!({"cullgraph": {"occluder": 1}}), "extras.cullgraph.occluder must be true or false, not 1"),
+        (json!({"cullgraph": true}), "extras.cullgraph must be an object"),
+    ] {
+        let (doc, bin) = document(&[triangle()], json!([{"name": "n", "mesh": 0, "extras": extras}]));
+        let m = load_err(&write(&dir, &doc, &bin));
+        assert!(m.starts_with(&format!("scene.gltf: node 'n' (#0): {message}")), "{m}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -8,6 +8,7 @@
 
 mod accessor;
 mod buffers;
+mod flags;
 mod materials;
 mod nodes;
 mod primitive;
@@ -122,7 +123,7 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
             imported[mesh.index()] = Some(prims);
         }
         for &(mesh, material) in imported[mesh.index()].iter().flatten().flatten() {
-            scene.instances.push(Instance { transform: p.world, mesh, material, flags: 0 });
+            scene.instances.push(Instance { transform: p.world, mesh, material, flags: p.flags });
         }
     }
     if skinned > 0 {

@@ -23,9 +23,11 @@ pub use source::SceneSource;
 
 use glam::{DVec3, Mat3, Vec3};
 
-/// Instance flag: a large, cheap object that the occluder pre-pass may draw first.
+/// Instance flag: a large, cheap object that the occluder pre-pass may draw first. In glTF:
+/// node extras `{"cullgraph": {"occluder": true}}` (that node and those below it).
 pub const FLAG_OCCLUDER: u32 = 1 << 0;
-/// Instance flag: render this object with one sample per pixel (selective anti-aliasing).
+/// Instance flag: render this object with one sample per pixel (selective anti-aliasing). In
+/// glTF: node extras `{"cullgraph": {"no_aa": true}}`.
 pub const FLAG_NO_AA: u32 = 1 << 1;
 
 /// A range of the shared index pool with its local-space bounds; one draw group.

@@ -16,6 +16,8 @@ pub(super) struct Placed<'a> {
     pub node: Node<'a>,
     /// Local-to-world transform.
     pub world: Transform,
+    /// Instance flags from its own and its ancestors' extras ([`super::flags`]).
+    pub flags: u32,
 }
 
 /// `node 'name' (#i)`, or `node #i` for an unnamed node.
@@ -66,9 +68,9 @@ pub(super) fn walk<'a>(
     let mut parent = vec![None::<usize>; count];
     let mut visited = vec![false; count];
     let mut out = Vec::new();
-    let mut stack: Vec<(Node<'a>, Transform, usize, Option<usize>)> =
-        roots.into_iter().rev().map(|n| (n, Transform::default(), 0, None)).collect();
-    while let Some((node, parent_world, depth, from)) = stack.pop() {
+    let mut stack: Vec<(Node<'a>, Transform, u32, usize, Option<usize>)> =
+        roots.into_iter().rev().map(|n| (n, Transform::default(), 0, 0, None)).collect();
+    while let Some((node, parent_world, parent_flags, depth, from)) = stack.pop() {
         let i = node.index();
         let place = || format!("{file}: {}", node_label(&node));
         if visited[i] {
@@ -87,11 +89,12 @@ pub(super) fn walk<'a>(
                 "world transform is not finite (the composed transforms overflow)",
             ));
         }
+        let flags = parent_flags | super::flags::node_flags(&node).map_err(|m| SceneError::invalid(place(), m))?;
         let children: Vec<Node<'a>> = node.children().collect();
         for child in children.into_iter().rev() {
-            stack.push((child, world, depth + 1, Some(i)));
+            stack.push((child, world, flags, depth + 1, Some(i)));
         }
-        out.push(Placed { node, world });
+        out.push(Placed { node, world, flags });
     }
     Ok(out)
 }
