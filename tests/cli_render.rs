@@ -87,6 +87,63 @@ fn renders_an_image_and_stats() {
     assert_eq!(culling(1)[0]["tested"], 0, "the early draw list is drawn without a test");
 }
 
+/// `--verify` under `--camera-path` far from the origin (`--world-offset`): every frame is
+/// checked against exact visibility and loses nothing; `--no-cull` draws everything.
+#[test]
+fn verify_camera_path_world_offset_and_no_cull_from_the_command_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (png, json) = (tmp.path().join("f.png"), tmp.path().join("f.json"));
+    let frames = |extra: &[&str]| -> (String, Vec<serde_json::Value>) {
+        let mut args = vec!["render", "--instances", "2000", "--size", "64x36", "--frames", "4", "--validation"];
+        args.extend(["--out", png.to_str().unwrap(), "--stats", json.to_str().unwrap()]);
+        args.extend(extra);
+        let (code, stdout, err) = run(&args);
+        assert_eq!(code, 0, "{args:?}: {stdout}{err}");
+        let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (stdout, stats["frames"].as_array().unwrap().clone())
+    };
+    let moving = ["--camera-path", "orbit", "--world-offset", "1e7,0,-1e7"];
+    let (stdout, culled) = frames(&[&moving[..], &["--verify"]].concat());
+    assert!(stdout.contains("verify: 4 frame(s)") && stdout.contains(" 0 false negatives"), "{stdout}");
+    for (f, frame) in culled.iter().enumerate() {
+        let verify = &frame["verify"];
+        assert_eq!(verify["false_negatives"], 0, "frame {f}: {verify}");
+        assert!(verify["visible"].as_u64().unwrap() > 0, "frame {f}: {verify}");
+        assert!(frame["drawn"].as_u64().unwrap() < 2000, "frame {f} culls");
+    }
+    let visible: Vec<&serde_json::Value> = culled.iter().map(|f| &f["verify"]["visible"]).collect();
+    assert!(visible.windows(2).any(|w| w[0] != w[1]), "the orbit moves the view: {visible:?}");
+    let (_, unculled) = frames(&[&moving[..], &["--no-cull"]].concat());
+    for frame in &unculled {
+        assert_eq!((frame["drawn"].as_u64(), frame["frustum_culled"].as_u64()), (Some(2000), Some(0)));
+    }
+}
+
+/// A pool far too small overflows, the lost samples are counted, and `--pool-adapt` grows it from
+/// those counters (read a few frames late) until nothing overflows.
+#[test]
+fn pool_adaptation_grows_a_pool_that_overflows() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (png, json) = (tmp.path().join("f.png"), tmp.path().join("f.json"));
+    let mut args = vec!["render", "--graph", "builtin:msaa_compressed", "--param", "msaa=4", "--instances", "1000"];
+    args.extend(["--size", "48x32", "--param", "pool_fraction=0.002", "--pool-adapt", "--frames", "10"]);
+    args.extend(["--out", png.to_str().unwrap(), "--stats", json.to_str().unwrap()]);
+    let (code, stdout, err) = run(&args);
+    assert_eq!(code, 0, "{stdout}{err}");
+    let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let pools: Vec<(u64, u64)> = stats["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            (f["gbuffer"][0]["pool_blocks"].as_u64().unwrap(), f["gbuffer"][0]["overflow_samples"].as_u64().unwrap())
+        })
+        .collect();
+    let (first, last) = (pools[0], *pools.last().unwrap());
+    assert!(first.1 > 0, "the small pool overflows: {pools:?}");
+    assert!(last.0 > first.0 && last.1 == 0, "the pool grew until nothing overflowed: {pools:?}");
+}
+
 /// With `--pool-adapt` the stats report the memory of the graph the last frame ran, after the
 /// pool was re-planned, not of the graph the run started with.
 #[test]

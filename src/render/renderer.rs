@@ -380,7 +380,11 @@ impl Renderer {
         let counters = if frame >= self.runtime_start {
             self.runtime.pass_counters(frame - self.runtime_start)?
         } else {
-            Vec::new()
+            // A frame recorded before a reload: its runtime kept its counters.
+            match self.retired.iter().find(|(start, end, _)| (*start..*end).contains(&frame)) {
+                Some((start, _, old)) => old.pass_counters(frame - start)?,
+                None => Vec::new(),
+            }
         };
         let culling: Vec<CullPassStats> = counters
             .iter()
