@@ -35,50 +35,49 @@ fn label(spec: &GraphSpec) -> String {
     format!("{} [{}]", spec.file, params.join(" "))
 }
 
-/// Renders `frames` frames of `spec` along `path`, with verification on if `verify`: each
-/// frame's image and stats.
-#[allow(clippy::too_many_arguments)]
-fn render_path(
-    gpu: &GpuTest,
-    shaders: &ShaderCompiler,
-    scene: &Scene,
-    camera: &Camera,
+/// A scene seen from `camera` moving along `path`, at `size`, for `frames` frames.
+#[derive(Clone, Copy)]
+struct Shot<'a> {
+    scene: &'a Scene,
+    camera: &'a Camera,
     size: (u32, u32),
     frames: u32,
     path: CameraPath,
+}
+
+/// Renders `shot` through `spec`, with verification on if `verify`: each frame's image and stats.
+fn render_path(
+    gpu: &GpuTest,
+    shaders: &ShaderCompiler,
+    shot: Shot<'_>,
     spec: &GraphSpec,
     verify: bool,
 ) -> (Vec<RgbaImage>, Vec<FrameStats>) {
-    let settings = RenderSettings::new(size.0, size.1);
-    let mut r = Renderer::with_graph(gpu, shaders, scene.clone(), settings, spec).unwrap();
+    let settings = RenderSettings::new(shot.size.0, shot.size.1);
+    let mut r = Renderer::with_graph(gpu, shaders, shot.scene.clone(), settings, spec).unwrap();
     if verify {
         r.enable_verification(shaders).unwrap();
     }
-    (0..frames)
+    (0..shot.frames)
         .map(|f| {
-            let (stats, image) = r.render_to_image(&path.camera_at(camera, f)).unwrap();
+            let (stats, image) = r.render_to_image(&shot.path.camera_at(shot.camera, f)).unwrap();
             (image, stats)
         })
         .unzip()
 }
 
-/// Renders `frames` frames of `reference` (a graph that culls nothing) and of each of `graphs`
-/// along `path`, and checks every frame of each graph against the reference: no false negatives
-/// and the same image, pixel for pixel. Returns the reference's stats (it is not verified),
-/// then each graph's.
-#[allow(clippy::too_many_arguments)]
+/// Renders `shot` through `reference` (a graph that culls nothing) and through each of
+/// `graphs`, and checks every frame of each graph against the reference: no false negatives and
+/// the same image, pixel for pixel. Returns the reference's stats (it is not verified), then
+/// each graph's.
 fn check_graphs(
     gpu: &GpuTest,
     shaders: &ShaderCompiler,
-    scene: &Scene,
-    camera: &Camera,
-    size: (u32, u32),
-    frames: u32,
-    path: CameraPath,
+    shot: Shot<'_>,
     reference: &GraphSpec,
     graphs: &[GraphSpec],
 ) -> (Vec<FrameStats>, Vec<Vec<FrameStats>>) {
-    let render = |spec: &GraphSpec, verify| render_path(gpu, shaders, scene, camera, size, frames, path, spec, verify);
+    let render = |spec: &GraphSpec, verify| render_path(gpu, shaders, shot, spec, verify);
     let (reference_images, reference_stats) = render(reference, false);
     let all = graphs
         .iter()
@@ -116,7 +115,7 @@ fn check(
 ) -> Vec<FrameStats> {
     let graphs = EXACT_GRAPHS.map(|g| graph(g, &[]));
     let (_, stats) =
-        check_graphs(gpu, &gpu.shaders(), scene, camera, size, frames, path, &graph("no_cull", &[]), &graphs);
+        check_graphs(gpu, &gpu.shaders(), Shot { scene, camera, size, frames, path }, &graph("no_cull", &[]), &graphs);
     stats.into_iter().map(|s| s.last().unwrap().clone()).collect()
 }
 
@@ -186,17 +185,9 @@ fn occlusion_test_variants_keep_every_visible_instance_under_motion() {
         .collect();
     for path in [CameraPath::Orbit, CameraPath::Shake] {
         let start = Instant::now();
-        let (_, stats) = check_graphs(
-            &gpu,
-            &shaders,
-            &wall_scene(),
-            &wall_camera(),
-            (48, 36),
-            5,
-            path,
-            &graph("no_cull", &[]),
-            &graphs,
-        );
+        let (scene, camera) = (wall_scene(), wall_camera());
+        let shot = Shot { scene: &scene, camera: &camera, size: (48, 36), frames: 5, path };
+        let (_, stats) = check_graphs(&gpu, &shaders, shot, &graph("no_cull", &[]), &graphs);
         for (spec, stats) in graphs.iter().zip(&stats) {
             // Each variant did cull by occlusion along the way (the boxes behind the wall), so
             // its test was exercised, not just skipped.
@@ -311,17 +302,9 @@ fn msaa_graphs_cull_over_the_msaa_depth_without_losing_a_sample() {
             let start = Instant::now();
             let spec = graph(name, &[("msaa", "4")]);
             let reference = without_culling(&spec);
-            let (unculled, stats) = check_graphs(
-                &gpu,
-                &shaders,
-                &scene,
-                &wall_camera(),
-                (40, 30),
-                5,
-                path,
-                &reference,
-                std::slice::from_ref(&spec),
-            );
+            let camera = wall_camera();
+            let shot = Shot { scene: &scene, camera: &camera, size: (40, 30), frames: 5, path };
+            let (unculled, stats) = check_graphs(&gpu, &shaders, shot, &reference, std::slice::from_ref(&spec));
             // The reference really culls nothing (its cull pass's counters), and the graph culls
             // by occlusion.
             for (f, s) in unculled.iter().enumerate() {
@@ -559,17 +542,8 @@ fn the_occluder_prepass_chooses_cheap_meshes_where_the_scene_flags_none() {
     }
     let camera = scene.default_camera(64.0 / 40.0);
     let graphs = [graph("occluder_prepass", &[]), graph("occluder_prepass", &[("occluder_triangles", "0")])];
-    let (_, stats) = check_graphs(
-        &gpu,
-        &gpu.shaders(),
-        &scene,
-        &camera,
-        (64, 40),
-        3,
-        CameraPath::Orbit,
-        &graph("no_cull", &[]),
-        &graphs,
-    );
+    let shot = Shot { scene: &scene, camera: &camera, size: (64, 40), frames: 3, path: CameraPath::Orbit };
+    let (_, stats) = check_graphs(&gpu, &gpu.shaders(), shot, &graph("no_cull", &[]), &graphs);
     let occluders = |s: &FrameStats| s.culling.iter().find(|p| p.pass == "cull_occluders").unwrap().drawn;
     for (cheap, flagged_only) in stats[0].iter().zip(&stats[1]) {
         assert!(occluders(cheap) > 0 && cheap.occlusion_culled > 300, "cheap meshes: {cheap:?}");
@@ -721,7 +695,8 @@ fn random_scenes_and_cameras_never_lose_a_visible_instance() {
         let occlusion = [("bound", bound), ("hiz_test", hiz_test), ("hiz_method", hiz_method)];
         let other = graph(other, if other == "frustum" { &occlusion[..1] } else { &occlusion });
         let graphs = [graph("two_phase", &occlusion), other];
-        let (_, stats) = check_graphs(&gpu, &shaders, &scene, &camera, size, 2, path, &graph("no_cull", &[]), &graphs);
+        let shot = Shot { scene: &scene, camera: &camera, size, frames: 2, path };
+        let (_, stats) = check_graphs(&gpu, &shaders, shot, &graph("no_cull", &[]), &graphs);
         let messages = gpu.validation_log().messages();
         prop_assert!(messages.len() == before, "validation messages:\n{}", messages[before..].join("\n"));
         cases.set(cases.get() + 1);
