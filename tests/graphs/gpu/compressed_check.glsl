@@ -8,6 +8,13 @@
 //  32: the list is longer than the samples allow
 //  64: (SAMPLE_CLAIM) the claimed samples are not the covered samples, from which the lighting
 //      gives the head every covered sample its list does not hold
+// 128: against an independent oracle, the triangle each sample shows (`ids`, drawn by a
+//      visibility-buffer pass of the same lists): the listed blocks of some triangle other than
+//      the head's do not add up to that triangle's samples, or the head's triangle's blocks
+//      leave the head none (a fragment was lost; a full pool or a selective-AA cap drops
+//      fragments on purpose, so there this bit is expected). A triangle may own several blocks:
+//      lavapipe may run more than one fragment invocation for one triangle in one pixel, each
+//      with part of its coverage.
 // Included by compressed_check.comp (stencil) and compressed_check_claim.comp (sample claims).
 #include "gbuffer/compressed_gbuffer.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -21,6 +28,17 @@ layout(set = 0, binding = 2, rgba8) uniform writeonly image2D check;
 #ifdef SAMPLE_CLAIM
 layout(set = 0, binding = 3) readonly buffer SampleClaim { uint words[]; } sample_claim;
 #endif
+layout(set = 0, binding = 4) uniform usampler2DMS ids;
+
+// The covered samples of pixel `p` that show the same triangle as sample `s`.
+uint same_triangle(ivec2 p, uint s, uint covered, uint samples) {
+    uvec2 id = texelFetch(ids, p, int(s)).xy;
+    uint mask = 0u;
+    for (uint t = 0u; t < samples; ++t) {
+        if ((covered & (1u << t)) != 0u && texelFetch(ids, p, int(t)).xy == id) mask |= 1u << t;
+    }
+    return mask;
+}
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -36,18 +54,32 @@ void main() {
     uint head = uint(p.y * size.x + p.x);
     uint link = gbuffer.pairs[head >> 1].link[head & 1u];
     uint errors = 0u, listed = 0u, sum = 0u, used = 0u;
+    // The oracle's view: listed samples per triangle, kept at the triangle's lowest sample.
+    uint per_triangle[8] = uint[8](0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u);
     while (link_index(link) != LINK_NULL && listed <= samples) {
         uint index = link_index(link), count = link_count(link), sample_index = link_sample(link);
         if (index < pixels || index >= blocks) { errors |= 1u; break; }
         if (count == 0u || count >= samples) errors |= 2u;
         uint bit = 1u << sample_index;
         if (sample_index == 0u || sample_index >= samples || (covered & bit) == 0u || (used & bit) != 0u) errors |= 4u;
+        if (sample_index < samples && (covered & bit) != 0u) {
+            per_triangle[findLSB(same_triangle(p, sample_index, covered, samples))] += count;
+        }
         used |= bit;
         sum += count;
         listed += 1u;
         link = gbuffer.pairs[index >> 1].link[index & 1u];
     }
     uint head_owned = (covered & 1u) != 0u ? 1u : 0u;
+    for (uint s = 0u; s < samples; ++s) {
+        uint triangle = (covered & (1u << s)) != 0u ? same_triangle(p, s, covered, samples) : 0u;
+        if (triangle == 0u || findLSB(triangle) != int(s)) continue;
+        // The head's triangle keeps at least sample 0 for the head; every other triangle is
+        // listed whole.
+        bool heads = head_owned != 0u && s == 0u;
+        uint want = uint(bitCount(triangle));
+        if (heads ? per_triangle[s] >= want : per_triangle[s] != want) errors |= 128u;
+    }
     if (sum + head_owned > uint(bitCount(covered))) errors |= 8u;
     if (head_owned == 0u && sum != uint(bitCount(covered))) errors |= 16u;
     if (listed >= samples) errors |= 32u;
