@@ -126,7 +126,16 @@ fn pool_adaptation_grows_a_pool_that_overflows() {
     let tmp = tempfile::tempdir().unwrap();
     let (png, json) = (tmp.path().join("f.png"), tmp.path().join("f.json"));
     let mut args = vec!["render", "--graph", "builtin:msaa_compressed", "--param", "msaa=4", "--instances", "1000"];
-    args.extend(["--size", "48x32", "--param", "pool_fraction=0.002", "--pool-adapt", "--frames", "10"]);
+    args.extend([
+        "--size",
+        "48x32",
+        "--param",
+        "pool_fraction=0.002",
+        "--pool-adapt",
+        "--frames",
+        "10",
+        "--validation",
+    ]);
     args.extend(["--out", png.to_str().unwrap(), "--stats", json.to_str().unwrap()]);
     let (code, stdout, err) = run(&args);
     assert_eq!(code, 0, "{stdout}{err}");
@@ -153,6 +162,7 @@ fn pool_adaptation_is_reflected_in_the_reported_memory() {
         let (png, json) = (tmp.path().join("f.png"), tmp.path().join("f.json"));
         // A pool far larger than the frame needs (4 blocks per pixel), so adapting shrinks it.
         let mut args = vec!["render", "--graph", "builtin:msaa_compressed", "--instances", "1000", "--size", "32x24"];
+        args.push("--validation");
         args.extend(["--param", "pool_fraction=4"]);
         args.extend(["--frames", frames, "--out", png.to_str().unwrap(), "--stats", json.to_str().unwrap()]);
         if adapt {
