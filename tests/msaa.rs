@@ -683,3 +683,42 @@ fn packed_visibility_ids_shade_like_two_words_and_refuse_what_does_not_fit() {
     let mut renderer = Renderer::with_graph(&gpu, &gpu.shaders(), big, settings, &two_words).unwrap();
     renderer.render(&camera).unwrap();
 }
+
+/// Two boxes of one material, one in front of the other, their front faces parallel (one normal):
+/// at the front box's silhouette a pixel holds two surfaces that differ only in depth. The
+/// per-sample baseline must shade them apart (each at its own depth, as the compressed G-buffer
+/// does), not as one surface at sample 0's depth; a point light between them makes the depth
+/// matter.
+#[test]
+fn per_sample_msaa_shades_parallel_surfaces_at_their_own_depths() {
+    let gpu = GpuTest::new();
+    let mut scene = Scene { name: "parallel".into(), ..Default::default() };
+    let cube = scene.add_mesh("cube", &common::cube_mesh(), "cube").unwrap();
+    let grey = scene.add_material(Material {
+        name: "grey".into(),
+        albedo: Vec3::splat(0.6),
+        roughness: 0.5,
+        metallic: 0.0,
+        double_sided: false,
+    });
+    let place = |scale: Vec3, at: DVec3| Instance {
+        transform: Transform { linear: Mat3::from_diagonal(scale), translation: at },
+        mesh: cube,
+        material: grey,
+        flags: 0,
+    };
+    scene.instances.push(place(Vec3::new(1.0, 1.0, 1.0), DVec3::new(0.0, 0.0, 0.0)));
+    scene.instances.push(place(Vec3::new(4.0, 4.0, 1.0), DVec3::new(0.7, 0.4, -3.0)));
+    scene.lights.push(cullgraph::scene::PointLight {
+        position: DVec3::new(0.3, 0.2, 1.0),
+        color: Vec3::new(6.0, 6.0, 6.0),
+        range: 6.0,
+    });
+    let camera = Camera { eye: DVec3::new(0.0, 0.0, 5.0), target: DVec3::new(0.0, 0.0, 0.0), ..Default::default() };
+    let size = (64, 48);
+    let per_sample = render(&gpu, &scene, &camera, size, &spec("builtin:msaa_per_sample", &[]), 2).0;
+    let compressed = render(&gpu, &scene, &camera, size, &spec("builtin:msaa_compressed", &[]), 2).0;
+    let (mean, max) = mean_and_max_difference(&per_sample, &compressed);
+    println!("per-sample vs compressed on parallel surfaces: mean {mean:.4}, max {max}");
+    assert!(max <= 2, "per-sample MSAA shades parallel surfaces apart: mean {mean}, max {max}");
+}

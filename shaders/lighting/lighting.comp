@@ -1,8 +1,8 @@
 #version 460
 // Deferred lighting in compute over a G-buffer of images: sun, tile-culled point lights and a
 // sky ambient term, tone-mapped, written sRGB-encoded. With multisampled images (the per-sample
-// MSAA baseline) a pixel whose samples all hold the same surface is shaded once; otherwise every
-// sample is shaded and the tone-mapped results averaged.
+// MSAA baseline) a pixel whose samples all hold the same surface (material, normal and plane)
+// is shaded once; otherwise every sample is shaded and the tone-mapped results averaged.
 #include "../common/scene.glsl"
 #include "../common/shading.glsl"
 #include "../common/gbuffer_normal.glsl"
@@ -54,15 +54,48 @@ vec3 shade_sample(ivec2 pixel, uint s, vec2 center) {
     return tonemap_aces(shade_tile_lights(surface) * settings.exposure);
 }
 
-// Whether every sample of `pixel` holds what sample 0 holds (one surface: shade once).
+#if SAMPLES > 1
+// Where sample `s` lies in its pixel: Vulkan's standard sample locations.
+vec2 sample_location(uint s) {
+#if SAMPLES == 2
+    const vec2 at[2] = vec2[](vec2(0.75, 0.75), vec2(0.25, 0.25));
+    return at[s];
+#elif SAMPLES == 4
+    const vec2 at[4] = vec2[](vec2(0.375, 0.125), vec2(0.875, 0.375), vec2(0.125, 0.625), vec2(0.625, 0.875));
+    return at[s];
+#elif SAMPLES == 8
+    const vec2 at[8] = vec2[](vec2(0.5625, 0.3125), vec2(0.4375, 0.6875), vec2(0.8125, 0.5625), vec2(0.3125, 0.1875),
+                              vec2(0.1875, 0.8125), vec2(0.0625, 0.4375), vec2(0.6875, 0.9375), vec2(0.9375, 0.0625));
+    return at[s];
+#else
+    return vec2(0.5);
+#endif
+}
+#endif
+
+// Whether every sample of `pixel` holds what sample 0 holds (one surface: shade once): the same
+// material and normal, and a position on sample 0's plane (two parallel surfaces of one
+// material differ only in depth). The plane allows a thousandth of the distance, far more than
+// the depth's rounding and far less than what separates two surfaces that should be shaded apart.
 bool single_surface(ivec2 pixel) {
     vec4 a0 = FETCH(albedo_metallic_tex, pixel, 0u);
     NORMAL_TEXEL4 n0 = FETCH(normal_roughness_tex, pixel, 0u);
-    bool bg0 = FETCH(depth_tex, pixel, 0u).r <= 0.0;
+    float d0 = FETCH(depth_tex, pixel, 0u).r;
+    bool bg0 = d0 <= 0.0;
+#if SAMPLES > 1
+    vec3 p0 = surface_position(vec2(pixel) + sample_location(0u), d0);
+    vec3 normal0 = decode_normal_roughness(n0).xyz;
+#endif
     for (uint s = 1u; s < SAMPLES; ++s) {
-        bool bg = FETCH(depth_tex, pixel, s).r <= 0.0;
+        float d = FETCH(depth_tex, pixel, s).r;
+        bool bg = d <= 0.0;
         if (bg != bg0) return false;
-        if (!bg && (FETCH(albedo_metallic_tex, pixel, s) != a0 || FETCH(normal_roughness_tex, pixel, s) != n0)) return false;
+        if (bg) continue;
+        if (FETCH(albedo_metallic_tex, pixel, s) != a0 || FETCH(normal_roughness_tex, pixel, s) != n0) return false;
+#if SAMPLES > 1
+        vec3 p = surface_position(vec2(pixel) + sample_location(s), d);
+        if (abs(dot(p - p0, normal0)) > 1e-3 * length(p0)) return false;
+#endif
     }
     return true;
 }
