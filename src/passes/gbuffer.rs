@@ -312,7 +312,8 @@ impl PassNode for GbufferPass {
             })
             .collect();
         let scene = rec.frame.scene;
-        let push = if self.packed_ids { packed_id_bits(&self.name, scene)?.to_ne_bytes().to_vec() } else { Vec::new() };
+        let triangle_bits = if self.packed_ids { Some(packed_id_bits(&self.name, scene)?.to_ne_bytes()) } else { None };
+        let push: &[u8] = triangle_bits.as_ref().map_or(&[], |b| b.as_slice());
         let lists = match self.mode {
             GeometryMode::Equal => DrawSource::redraw_lists(slots, scene)?,
             _ => vec![DrawSource::bound(slots, LIST_SLOTS)?.unwrap_or_else(|| DrawSource::unculled(scene))],
@@ -328,7 +329,7 @@ impl PassNode for GbufferPass {
             depth,
             depth_load,
             &[],
-            &push,
+            push,
         );
         Ok(())
     }

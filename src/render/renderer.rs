@@ -273,14 +273,23 @@ impl Renderer {
         Ok(frame)
     }
 
+    /// The runtime that recorded `frame` and the frame's index within it: the current one, or a
+    /// runtime a reload retired (it keeps its frames' timestamps and counters until they can no
+    /// longer be executing). `None` once that runtime is gone.
+    fn runtime_of(&self, frame: u64) -> Option<(&GraphRuntime, u64)> {
+        if frame >= self.runtime_start {
+            return Some((&self.runtime, frame - self.runtime_start));
+        }
+        self.retired
+            .iter()
+            .find(|(start, end, _)| (*start..*end).contains(&frame))
+            .map(|(start, _, old)| (old, frame - start))
+    }
+
     /// GPU timings of a recorded frame if it has completed and its timestamps were not reused.
     pub fn completed_timings(&self, frame: u64) -> Result<Vec<PassTiming>> {
-        if frame >= self.runtime_start {
-            return self.runtime.timings(frame - self.runtime_start);
-        }
-        // Frames recorded before a reload were timed by the runtime that recorded them.
-        match self.retired.iter().find(|(start, end, _)| (*start..*end).contains(&frame)) {
-            Some((start, _, old)) => old.timings(frame - start),
+        match self.runtime_of(frame) {
+            Some((runtime, index)) => runtime.timings(index),
             None => Ok(Vec::new()),
         }
     }
@@ -377,14 +386,9 @@ impl Renderer {
     pub fn completed_stats(&self, frame: u64) -> Result<FrameStats> {
         let timings = self.completed_timings(frame)?;
         let total = timings.iter().find(|t| t.name == "frame").map_or(0.0, |t| t.ms);
-        let counters = if frame >= self.runtime_start {
-            self.runtime.pass_counters(frame - self.runtime_start)?
-        } else {
-            // A frame recorded before a reload: its runtime kept its counters.
-            match self.retired.iter().find(|(start, end, _)| (*start..*end).contains(&frame)) {
-                Some((start, _, old)) => old.pass_counters(frame - start)?,
-                None => Vec::new(),
-            }
+        let counters = match self.runtime_of(frame) {
+            Some((runtime, index)) => runtime.pass_counters(index)?,
+            None => Vec::new(),
         };
         let culling: Vec<CullPassStats> = counters
             .iter()
