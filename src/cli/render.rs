@@ -100,6 +100,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             take(frame_stats, &mut renderer)?;
         }
         bar.inc(1);
+        profiling::finish_frame!();
     }
     drop(pipeline);
     bar.finish_and_clear();

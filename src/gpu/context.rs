@@ -317,6 +317,7 @@ impl GpuContext {
                 let fence = device.create_fence(&vk::FenceCreateInfo::default(), None).vk("vkCreateFence")?;
                 let cmd_info = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
                 let submitted = self.submit(&vk::SubmitInfo2::default().command_buffer_infos(&cmd_info), fence);
+                profiling::scope!("cullgraph::wait_gpu");
                 let waited =
                     submitted.and_then(|_| device.wait_for_fences(&[fence], true, u64::MAX).vk("vkWaitForFences"));
                 device.destroy_fence(fence, None);

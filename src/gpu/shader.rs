@@ -132,6 +132,7 @@ impl ShaderCompiler {
         if let Some(hit) = self.cache.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
             return Ok(hit.clone());
         }
+        profiling::scope!("cullgraph::compile_shader", name);
         let kind = stage_of(name).ok_or_else(|| ShaderError::UnknownStage(name.into()))?;
         let internal = |e: shaderc::Error| ShaderError::Internal(e.to_string());
         let mut options = shaderc::CompileOptions::new().map_err(internal)?;

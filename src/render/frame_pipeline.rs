@@ -102,6 +102,7 @@ impl FramePipeline {
     /// Waits for `slot`'s last frame and reads its figures, once.
     fn collect(&mut self, slot: usize, renderer: &Renderer) -> Result<Option<FrameStats>> {
         let slot = &mut self.slots[slot];
+        profiling::scope!("cullgraph::wait_gpu");
         // SAFETY: the fence belongs to this device.
         unsafe { self.ctx.device().wait_for_fences(&[slot.fence], true, u64::MAX) }.vk("vkWaitForFences")?;
         let Some((frame, record_ms)) = slot.pending.take() else { return Ok(None) };

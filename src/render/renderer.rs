@@ -99,6 +99,7 @@ impl Renderer {
         settings: RenderSettings,
         spec: &GraphSpec,
     ) -> Result<Self> {
+        profiling::scope!("cullgraph::Renderer::with_graph");
         settings.validate()?;
         crate::scene::validate::validate_scene(&scene)?;
         let runtime = build_runtime(ctx, shaders, &scene, &settings, spec)?;
@@ -243,6 +244,7 @@ impl Renderer {
     /// Like [`Renderer::record`], with the host resources the graph imports (e.g. the engine's
     /// back buffer as the lighting output).
     pub fn record_with_imports(&mut self, cmd: vk::CommandBuffer, camera: &Camera, imports: &Imports) -> Result<u64> {
+        profiling::scope!("cullgraph::Renderer::record");
         camera.validate().map_err(|e| Error::Invalid(format!("camera: {e}")))?;
         let frame = self.frame_index;
         let slot_index = (frame % FRAMES_IN_FLIGHT as u64) as usize;
@@ -474,6 +476,7 @@ fn build_runtime(
     settings: &RenderSettings,
     spec: &GraphSpec,
 ) -> Result<GraphRuntime> {
+    profiling::scope!("cullgraph::build_graph");
     let plan = spec.compile(ctx, shaders, scene, settings.width, settings.height)?;
     GraphRuntime::new(ctx, shaders, plan, spec.dir.as_deref())
 }

@@ -95,6 +95,7 @@ impl DrawList {
 impl GpuScene {
     /// Creates the device buffers and queues their contents on `batch`.
     pub fn upload(ctx: &GpuContext, scene: &Scene, batch: &mut UploadBatch) -> crate::Result<Self> {
+        profiling::scope!("cullgraph::upload_scene");
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let instances: Vec<GpuInstance> = scene.instances.iter().map(GpuInstance::new).collect();
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();

@@ -67,6 +67,7 @@ impl FrameInputs {
 /// Compiles `graph` for one frame configuration. Errors (values out of range for this frame,
 /// bad overrides) carry file positions like load errors.
 pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGraph, GraphErrors> {
+    profiling::scope!("cullgraph::compile_graph", graph.name.as_str());
     let mut sink = Sink::new(&graph.file);
     if frame.width == 0 || frame.height == 0 || frame.width > 16384 || frame.height > 16384 {
         sink.command_line(format!("output size {}x{} must be 1 to 16384 in each dimension", frame.width, frame.height));

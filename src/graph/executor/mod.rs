@@ -199,6 +199,7 @@ impl GraphRuntime {
     /// resource the graph declares `Imported(..)` (and a kept pass uses); they are left in the
     /// access each import asks for.
     pub fn record(&mut self, cmd: vk::CommandBuffer, inputs: &FrameData<'_>, imports: &Imports) -> crate::Result<u64> {
+        profiling::scope!("cullgraph::record_graph", self.plan.name.as_str());
         let frame = self.frame;
         let device = self.ctx.device().clone();
         self.bind_imports(imports)?;
@@ -209,6 +210,7 @@ impl GraphRuntime {
         timer.borrow_mut().reset(cmd);
         timer.borrow_mut().begin(cmd, "frame");
         for (index, (pass, node)) in self.plan.passes.iter().zip(self.nodes.iter_mut()).enumerate() {
+            profiling::scope!("cullgraph::record_pass", pass.name.as_str());
             let mut memory = Vec::new();
             let mut images = Vec::new();
             for b in &pass.barriers {
