@@ -1,7 +1,8 @@
 //! Embedding cullgraph in an engine that owns the Vulkan instance, device, queue and allocator.
 //!
 //! The "engine" below creates everything with raw `ash`, enabling what cullgraph needs
-//! ([`REQUIRED_DEVICE_EXTENSIONS`] and [`RequiredFeatures`]), hands the handles over, and records
+//! ([`REQUIRED_DEVICE_EXTENSIONS`], the [`OPTIONAL_DEVICE_EXTENSIONS`] the device has, and
+//! [`RequiredFeatures`]), hands the handles over with the list of what it enabled, and records
 //! cullgraph's frame into its own command buffer, which it submits itself. cullgraph never
 //! submits or waits here; the output image is left in `GENERAL` for the engine to sample or copy.
 //!
@@ -9,11 +10,13 @@
 
 use ash::vk;
 use cullgraph::gpu::{
-    GpuContext, HostHandles, RequiredFeatures, ShaderCompiler, ShaderRoot, REQUIRED_DEVICE_EXTENSIONS,
+    GpuContext, HostHandles, RequiredFeatures, ShaderCompiler, ShaderRoot, OPTIONAL_DEVICE_EXTENSIONS,
+    REQUIRED_DEVICE_EXTENSIONS,
 };
 use cullgraph::render::{RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::SceneSource;
+use std::ffi::CStr;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // --- the engine's own Vulkan setup ---
@@ -28,7 +31,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("no graphics+compute queue")? as u32;
     let priorities = [1.0];
     let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
-    let extensions: Vec<_> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+    // What cullgraph needs, and the optional extensions this device has (the MSAA graphs'
+    // compressed G-buffer needs VK_EXT_post_depth_coverage).
+    let available = unsafe { instance.enumerate_device_extension_properties(physical_device)? };
+    let has = |want: &CStr| available.iter().any(|e| e.extension_name_as_c_str() == Ok(want));
+    let enabled: Vec<&CStr> = REQUIRED_DEVICE_EXTENSIONS
+        .iter()
+        .chain(OPTIONAL_DEVICE_EXTENSIONS.iter().filter(|e| has(e)))
+        .copied()
+        .collect();
+    let extensions: Vec<_> = enabled.iter().map(|e| e.as_ptr()).collect();
     let mut features = RequiredFeatures::new();
     let mut features2 = features.chain();
     let device_info = vk::DeviceCreateInfo::default()
@@ -49,6 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             queue,
             allocator: None, // or Some(the engine's Arc<Mutex<gpu_allocator::vulkan::Allocator>>)
             debug_utils: false,
+            enabled_device_extensions: enabled.iter().map(|e| (*e).to_owned()).collect(),
         })?;
         let scene = SceneSource::Builtin("city".into()).load(&LoadOptions::default())?;
         let settings = RenderSettings::new(640, 360);

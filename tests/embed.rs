@@ -8,7 +8,7 @@ use common::{boxes_camera, boxes_scene, GpuTest};
 use cullgraph::gpu::transfer::record_image_to_buffer;
 use cullgraph::gpu::{
     Access, Buffer, BufferDesc, GpuContext, HostHandles, HostImage, MemoryLocation, RequiredFeatures, ShaderCompiler,
-    ShaderRoot, ValidationLog, REQUIRED_DEVICE_EXTENSIONS,
+    ShaderRoot, ValidationLog, OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS,
 };
 use cullgraph::graph::executor::Imports;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
@@ -25,10 +25,17 @@ struct Host {
     queue: vk::Queue,
     debug: (ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT),
     log: Box<ValidationLog>,
+    /// The device extensions the engine enabled.
+    extensions: Vec<&'static std::ffi::CStr>,
 }
 
 impl Host {
+    /// An engine that enables only what cullgraph requires.
     fn new() -> Self {
+        Self::with_extensions(REQUIRED_DEVICE_EXTENSIONS.to_vec())
+    }
+
+    fn with_extensions(extensions: Vec<&'static std::ffi::CStr>) -> Self {
         let entry = unsafe { ash::Entry::load() }.unwrap();
         let log = Box::new(ValidationLog::default());
         let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
@@ -59,7 +66,7 @@ impl Host {
             .unwrap() as u32;
         let priorities = [1.0];
         let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
-        let ext_names: Vec<_> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+        let ext_names: Vec<_> = extensions.iter().map(|e| e.as_ptr()).collect();
         let mut required = RequiredFeatures::new();
         let mut features2 = required.chain();
         let info = vk::DeviceCreateInfo::default()
@@ -68,7 +75,7 @@ impl Host {
             .push_next(&mut features2);
         let device = unsafe { instance.create_device(physical_device, &info, None) }.unwrap();
         let queue = unsafe { device.get_device_queue(family, 0) };
-        Self { entry, instance, physical_device, device, family, queue, debug: (loader, messenger), log }
+        Self { entry, instance, physical_device, device, family, queue, debug: (loader, messenger), log, extensions }
     }
 }
 
@@ -98,6 +105,7 @@ impl Host {
             queue: self.queue,
             allocator: Some(allocator.clone()),
             debug_utils: true,
+            enabled_device_extensions: self.extensions.iter().map(|e| (*e).to_owned()).collect(),
         }
     }
 }
@@ -462,4 +470,56 @@ fn the_host_can_own_a_depth_stencil_image_and_a_mipmapped_pyramid() {
     let log = (*host.log).clone();
     drop(host);
     assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
+}
+
+#[test]
+fn the_compressed_g_buffer_runs_on_a_host_device_only_where_the_host_enabled_post_depth_coverage() {
+    let (w, h) = (64, 48);
+    let spec = GraphSpec::builtin("msaa_compressed").unwrap().with_overrides([("msaa".to_string(), "4".to_string())]);
+    let render = |ctx: &GpuContext| -> cullgraph::Result<Vec<u8>> {
+        let shaders =
+            ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
+        let mut r = Renderer::with_graph(ctx, &shaders, boxes_scene(), RenderSettings::new(w, h), &spec)?;
+        Ok(r.render_to_image(&boxes_camera())?.1.into_raw())
+    };
+    let reference = render(&GpuTest::new()).unwrap();
+
+    // Lavapipe supports the extension, but this engine did not enable it: the pass refuses to
+    // be built, naming what is missing, instead of using an extension the device lacks.
+    let host = Host::new();
+    let allocator = host.allocator();
+    {
+        let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
+        assert!(!ctx.caps().post_depth_coverage);
+        let err = render(&ctx).unwrap_err().to_string();
+        assert!(err.contains("pass 'gbuffer'") && err.contains("VK_EXT_post_depth_coverage"), "{err}");
+    }
+    drop(allocator);
+    let log = (*host.log).clone();
+    drop(host);
+    assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
+
+    // An engine that enabled it gets the frame the owned context renders.
+    let host = Host::with_extensions([REQUIRED_DEVICE_EXTENSIONS, OPTIONAL_DEVICE_EXTENSIONS].concat());
+    let allocator = host.allocator();
+    {
+        let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
+        assert!(ctx.caps().post_depth_coverage);
+        assert_eq!(render(&ctx).unwrap(), reference, "embedded MSAA frame differs from the owned-context frame");
+    }
+    drop(allocator);
+    let log = (*host.log).clone();
+    drop(host);
+    assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
+}
+
+#[test]
+fn a_host_that_did_not_enable_a_required_extension_is_refused_naming_it() {
+    let host = Host::new();
+    let allocator = host.allocator();
+    let mut handles = host.handles(&allocator);
+    handles.enabled_device_extensions.clear();
+    let err = GpuContext::from_host(handles).err().expect("refused").to_string();
+    assert!(err.contains("VK_KHR_push_descriptor") && err.contains("not among the host's enabled extensions"), "{err}");
+    drop(allocator);
 }

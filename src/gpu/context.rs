@@ -39,7 +39,9 @@ impl Default for ContextOptions {
 /// Handles a host engine passes to [`GpuContext::from_host`]; cullgraph creates no device of its own.
 ///
 /// The host must have created the device with [`REQUIRED_DEVICE_EXTENSIONS`] and
-/// [`RequiredFeatures::new`] enabled, and API version 1.3.
+/// [`RequiredFeatures::new`] enabled, and API version 1.3. cullgraph never waits on the host's
+/// device: the host drops a renderer (and the context) only once the frames it recorded have
+/// executed, as it would free any resource of its own.
 pub struct HostHandles {
     /// The loader entry the host used.
     pub entry: ash::Entry,
@@ -57,6 +59,13 @@ pub struct HostHandles {
     pub allocator: Option<Arc<Mutex<Allocator>>>,
     /// Whether the host enabled `VK_EXT_debug_utils` on the instance (for pass labels).
     pub debug_utils: bool,
+    /// The device extensions the host enabled: every one of [`REQUIRED_DEVICE_EXTENSIONS`], and
+    /// those of [`OPTIONAL_DEVICE_EXTENSIONS`] it chose to. Vulkan cannot be asked which
+    /// extensions a device was created with, and cullgraph uses an optional one only when it is
+    /// listed here (a pass that needs a missing one refuses to be built, naming it).
+    ///
+    /// [`OPTIONAL_DEVICE_EXTENSIONS`]: super::features::OPTIONAL_DEVICE_EXTENSIONS
+    pub enabled_device_extensions: Vec<CString>,
 }
 
 /// What the rest of the library needs to know about the device.
@@ -76,7 +85,8 @@ pub struct DeviceCaps {
     pub subgroup_size: u32,
     /// Subgroup operations the device supports in compute shaders (empty if none there).
     pub subgroup_compute_ops: vk::SubgroupFeatureFlags,
-    /// `VK_EXT_post_depth_coverage` is supported (and enabled on a device cullgraph creates).
+    /// `VK_EXT_post_depth_coverage` is enabled: supported, on a device cullgraph creates; supported
+    /// and listed in [`HostHandles::enabled_device_extensions`], on a host's device.
     pub post_depth_coverage: bool,
 }
 
@@ -113,9 +123,14 @@ impl DeviceShared {
 
 impl Drop for DeviceShared {
     fn drop(&mut self) {
-        // SAFETY: every resource holds an Arc to this struct, so nothing created from the device is left.
+        // SAFETY: every resource holds an Arc to this struct, so nothing created from the device is
+        // left. A host's device is not waited on: vkDeviceWaitIdle needs every queue of the device
+        // externally synchronized, and the host's other threads may be submitting; the host
+        // knows, by its own fences, when cullgraph's frames have executed (see `HostHandles`).
         unsafe {
-            let _ = self.device.device_wait_idle();
+            if self.owned.is_some() {
+                let _ = self.device.device_wait_idle();
+            }
             ManuallyDrop::drop(&mut self.allocator);
             if let Some(owned) = self.owned.take() {
                 self.device.destroy_device(None);
@@ -169,16 +184,27 @@ impl GpuContext {
             options.validation,
             validation,
             Some(owned),
+            // `create_device` enabled every optional extension the device supports.
+            &|_| true,
         )
     }
 
     /// Wraps a host engine's instance and device; creates no instance or device and never destroys them.
     ///
-    /// Fails if the physical device lacks what cullgraph needs (the host must also have *enabled* it).
+    /// Fails if the physical device lacks a feature cullgraph needs, or the host did not list a
+    /// required extension as enabled (the host must also have *enabled* the features).
     pub fn from_host(host: HostHandles) -> GpuResult<Self> {
         let name = device_name(&host.instance, host.physical_device);
         let supported = RequiredFeatures::supported_by(&host.instance, host.physical_device);
-        let missing = RequiredFeatures::new().missing_from(&supported);
+        let mut missing: Vec<String> =
+            RequiredFeatures::new().missing_from(&supported).into_iter().map(String::from).collect();
+        let enabled = |want: &CStr| host.enabled_device_extensions.iter().any(|e| e.as_c_str() == want);
+        missing.extend(
+            REQUIRED_DEVICE_EXTENSIONS
+                .iter()
+                .filter(|want| !enabled(want))
+                .map(|want| format!("{} (not among the host's enabled extensions)", want.to_string_lossy())),
+        );
         if !missing.is_empty() {
             return Err(GpuError::MissingFeatures { device: name, missing: missing.join(", ") });
         }
@@ -193,6 +219,8 @@ impl GpuContext {
             host.debug_utils,
             ValidationLog::default(),
             None,
+            // Supported is not enabled: only the host knows what it created the device with.
+            &enabled,
         )
     }
 
@@ -208,8 +236,9 @@ impl GpuContext {
         debug_utils: bool,
         validation: ValidationLog,
         owned: Option<OwnedParts>,
+        enabled_extension: &dyn Fn(&CStr) -> bool,
     ) -> GpuResult<Self> {
-        let caps = query_caps(&instance, physical_device, queue_family);
+        let caps = query_caps(&instance, physical_device, queue_family, enabled_extension);
         let allocator = match allocator {
             Some(a) => a,
             None => {
@@ -498,7 +527,14 @@ fn device_name(instance: &ash::Instance, pd: vk::PhysicalDevice) -> String {
     props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
 }
 
-fn query_caps(instance: &ash::Instance, pd: vk::PhysicalDevice, queue_family: u32) -> DeviceCaps {
+/// The device's properties; `enabled_extension` says whether a supported device extension was
+/// enabled when the device was created.
+fn query_caps(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    queue_family: u32,
+    enabled_extension: &dyn Fn(&CStr) -> bool,
+) -> DeviceCaps {
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
     let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
     // SAFETY: valid handles; the chain lives on this frame.
@@ -508,7 +544,9 @@ fn query_caps(instance: &ash::Instance, pd: vk::PhysicalDevice, queue_family: u3
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     // SAFETY: valid handles.
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
-    let has = |name: &std::ffi::CStr| exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name));
+    let has = |name: &CStr| {
+        exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name)) && enabled_extension(name)
+    };
     DeviceCaps {
         name: props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
         kind: props.device_type,

@@ -22,7 +22,7 @@ pub use buffer::{Buffer, BufferDesc};
 pub use context::{ContextOptions, DeviceCaps, GpuContext, HostHandles};
 pub use device_select::DeviceSelector;
 pub use error::{GpuError, GpuResult};
-pub use features::{RequiredFeatures, REQUIRED_DEVICE_EXTENSIONS};
+pub use features::{RequiredFeatures, OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS};
 pub use gpu_allocator::MemoryLocation;
 pub use image::{HostImage, Image, ImageDesc};
 pub use memory::MemoryBlock;

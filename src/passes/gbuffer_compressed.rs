@@ -201,7 +201,8 @@ impl GbufferCompressedPass {
         let invalid = |m: String| crate::Error::Invalid(format!("pass '{}': {m}", pass.name));
         if !ctx.caps().post_depth_coverage {
             return Err(invalid(format!(
-                "gbuffer_compressed needs VK_EXT_post_depth_coverage, which {} does not support",
+                "gbuffer_compressed needs VK_EXT_post_depth_coverage, which is not enabled on {} (not supported, or \
+                 not among a host's `enabled_device_extensions`)",
                 ctx.caps().name
             )));
         }
