@@ -57,3 +57,47 @@ fn pipelined_frames_report_late_and_exactly_what_waited_frames_report() {
         assert!(g.gpu_total_ms > 0.0 && g.gpu_ms.iter().any(|t| t.name == "cull_late"), "frame {}: timings", g.frame);
     }
 }
+
+#[test]
+fn pipelined_frames_wait_on_and_signal_the_hosts_timeline_semaphore() {
+    use ash::vk;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let scene =
+        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(500), ..Default::default() }).unwrap();
+    let (w, h) = (64, 36);
+    let camera = scene.default_camera(w as f32 / h as f32);
+    let mut renderer = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(w, h)).unwrap();
+    let device = gpu.device();
+    let mut timeline = vk::SemaphoreTypeCreateInfo::default().semaphore_type(vk::SemaphoreType::TIMELINE);
+    let semaphore =
+        unsafe { device.create_semaphore(&vk::SemaphoreCreateInfo::default().push_next(&mut timeline), None) }.unwrap();
+    let at = |value: u64| {
+        vk::SemaphoreSubmitInfo::default()
+            .semaphore(semaphore)
+            .value(value)
+            .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+    };
+    let counter = || unsafe { device.get_semaphore_counter_value(semaphore) }.unwrap();
+    let wait_for = |value: u64| {
+        let (semaphores, values) = ([semaphore], [value]);
+        let info = vk::SemaphoreWaitInfo::default().semaphores(&semaphores).values(&values);
+        unsafe { device.wait_semaphores(&info, 10_000_000_000) }.unwrap();
+    };
+
+    let mut pipeline = FramePipeline::new(&gpu).unwrap();
+    // Frame 0 signals 1 once it has executed.
+    assert!(pipeline.submit_with(&mut renderer, &camera, &[], &[at(1)]).unwrap().is_none());
+    wait_for(1);
+    // Frame 1 waits for 2, which the host signals from the CPU only later, and then signals 3.
+    assert!(pipeline.submit_with(&mut renderer, &camera, &[at(2)], &[at(3)]).unwrap().is_none());
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert_eq!(counter(), 1, "frame 1 ran before the value it waits for was signalled");
+    unsafe { device.signal_semaphore(&vk::SemaphoreSignalInfo::default().semaphore(semaphore).value(2)) }.unwrap();
+    wait_for(3);
+    let frames = pipeline.finish(&renderer).unwrap();
+    assert_eq!(frames.iter().map(|s| s.frame).collect::<Vec<_>>(), [0, 1]);
+    assert!(frames.iter().all(|s| s.drawn > 0 && s.drawn == frames[0].drawn), "both frames drew the same view");
+    drop(pipeline);
+    unsafe { device.destroy_semaphore(semaphore, None) };
+}

@@ -492,6 +492,9 @@ fn find_queue_family(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Option
 fn create_device(instance: &ash::Instance, chosen: &DeviceInfo, queue_family: u32) -> GpuResult<ash::Device> {
     let supported = RequiredFeatures::supported_by(instance, chosen.handle);
     let mut required = RequiredFeatures::new();
+    // Not needed by cullgraph itself, but a caller of `FramePipeline::submit_with` can only make
+    // timeline semaphores on a device that enabled them (every Vulkan 1.2 device supports them).
+    required.v12.timeline_semaphore = supported.v12.timeline_semaphore;
     let mut missing: Vec<String> = required.missing_from(&supported).into_iter().map(String::from).collect();
     // SAFETY: valid handles.
     let exts = unsafe { instance.enumerate_device_extension_properties(chosen.handle) }

@@ -62,6 +62,20 @@ impl FramePipeline {
     /// submitted `FRAMES_IN_FLIGHT` frames ago, if any, and returns its figures: they come back
     /// that many frames late.
     pub fn submit(&mut self, renderer: &mut Renderer, camera: &Camera) -> Result<Option<FrameStats>> {
+        self.submit_with(renderer, camera, &[], &[])
+    }
+
+    /// Like [`FramePipeline::submit`], the frame waiting on the host's `wait` semaphores before it
+    /// executes and signalling `signal` once it has, binary or timeline (`value`), at the stages
+    /// each names: how a host orders its own queue work, or another queue's, around cullgraph's
+    /// frames. The host keeps the semaphores alive until the frame has executed.
+    pub fn submit_with(
+        &mut self,
+        renderer: &mut Renderer,
+        camera: &Camera,
+        wait: &[vk::SemaphoreSubmitInfo<'_>],
+        signal: &[vk::SemaphoreSubmitInfo<'_>],
+    ) -> Result<Option<FrameStats>> {
         let done = self.collect(self.next, renderer)?;
         let device = self.ctx.device();
         let slot = &mut self.slots[self.next];
@@ -82,7 +96,11 @@ impl FramePipeline {
         // SAFETY: the fence is signalled and no submission uses it (waited on in collect).
         unsafe { device.reset_fences(&[slot.fence]) }.vk("vkResetFences")?;
         let cmd_info = [vk::CommandBufferSubmitInfo::default().command_buffer(slot.cmd)];
-        self.ctx.submit(&vk::SubmitInfo2::default().command_buffer_infos(&cmd_info), slot.fence)?;
+        let info = vk::SubmitInfo2::default()
+            .wait_semaphore_infos(wait)
+            .command_buffer_infos(&cmd_info)
+            .signal_semaphore_infos(signal);
+        self.ctx.submit(&info, slot.fence)?;
         slot.pending = Some((frame, record_ms));
         self.next = (self.next + 1) % self.slots.len();
         Ok(done)
