@@ -123,23 +123,61 @@ fn a_broken_reload_keeps_the_last_good_graph_running() {
 }
 
 #[test]
-fn a_draw_count_too_small_for_the_face_cull_regions_is_refused_by_name() {
+fn buffers_too_small_for_their_slots_are_refused_at_the_binding_when_the_graph_is_compiled() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
+    let scene = boxes_scene();
+    let refused = |spec: &GraphSpec| {
+        Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(48, 32), spec)
+            .err()
+            .expect("refused before any frame")
+            .to_string()
+    };
+    // The position of the `n`-th binding of `resource` in the graph's text, as `line:col`.
+    let binding_pos = |text: &str, resource: &str, n: usize| {
+        let quoted = format!("\"{resource}\"");
+        let offset = text.match_indices(&quoted).nth(n).expect("bound").0;
+        let line = text[..offset].matches('\n').count() + 1;
+        let col = offset - text[..offset].rfind('\n').map_or(0, |i| i + 1) + 1;
+        format!("{line}:{col}")
+    };
+
     // A graph written before face culling: its cull pass's count buffer holds one count.
     let mut old = GraphSpec::builtin("two_phase").unwrap();
     old.text = old.text.replace("\"late_count\": Buffer(size: 12)", "\"late_count\": Buffer(size: 4)");
-    let mut renderer = Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(48, 32), &old).unwrap();
-    let err = renderer.render(&boxes_camera()).unwrap_err().to_string();
+    let err = refused(&old);
     assert!(
-        err.contains("pass 'cull_late'") && err.contains("draw_count needs 12 bytes") && err.contains("got 4"),
+        err.contains(&format!("two_phase.ron:{}", binding_pos(&old.text, "late_count", 1)))
+            && err.contains("pass 'cull_late' writes \"draw_count\": 'late_count' holds 4 bytes; the slot takes 12"),
         "{err}"
     );
-    // The early draw reads last frame's list count: the geometry pass refuses it first.
-    old.text = old
-        .text
-        .replace("\"early_count\": Buffer(size: 12, history: true)", "\"early_count\": Buffer(size: 4, history: true)");
-    let mut renderer = Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(48, 32), &old).unwrap();
-    let err = renderer.render(&boxes_camera()).unwrap_err().to_string();
-    assert!(err.contains("pass 'draw_early'") && err.contains("draw_count holds 4 bytes"), "{err}");
+    // The draw that reads it is refused at its own binding too.
+    assert!(err.contains("pass 'draw_late' reads \"draw_count\": 'late_count' holds 4 bytes"), "{err}");
+
+    // Sizes that depend on the scene: an id per instance.
+    let instances = scene.instances.len();
+    let mut small = GraphSpec::builtin("two_phase").unwrap();
+    small.text = small.text.replace("\"late_ids\": Buffer(size: \"instances * 4\")", "\"late_ids\": Buffer(size: 8)");
+    assert_ne!(small.text, GraphSpec::builtin("two_phase").unwrap().text, "the edit applied");
+    let err = refused(&small);
+    assert!(
+        err.contains(&format!(
+            "'late_ids' holds 8 bytes; the slot takes instances * 4 = {} bytes for this scene ({instances} instances",
+            instances * 4
+        )),
+        "{err}"
+    );
+
+    // A pyramid at the depth's own size (the layout before its level 0 was dropped).
+    let mut full = GraphSpec::builtin("two_phase").unwrap();
+    full.text = full.text.replace(
+        "size: Fixed(\"max(1, width / 2)\", \"max(1, height / 2)\"), mips: All",
+        "size: Fixed(\"width\", \"height\"), mips: All",
+    );
+    let err = refused(&full);
+    assert!(
+        err.contains(&format!("two_phase.ron:{}", binding_pos(&full.text, "hiz", 3)))
+            && err.contains("pass 'hiz': the pyramid 'hiz' is 48x32; it must be 24x16"),
+        "{err}"
+    );
 }

@@ -39,6 +39,8 @@ pub struct GraphArgs {
 pub enum GraphCommand {
     /// Validate a graph: prints `FILE: ok (N passes, M resources)`, or every error as
     /// `file:line:col: message` and exits with status 1. Uses the Vulkan device when there is one.
+    /// What depends on the output size or the scene (buffer sizes a slot needs, expressions out of
+    /// range) is checked when the graph is compiled: `graph plan`, or rendering.
     Check(GraphCheckArgs),
     /// Compile a graph for an output size and scene and print the plan: pass order, barriers,
     /// pruned passes, resources, lifetimes and transient memory.

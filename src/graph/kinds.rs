@@ -36,6 +36,47 @@ pub struct SlotDecl {
     pub multisample_ok: bool,
     /// What the slot is for, for `graph/README.md`-style listings and errors.
     pub doc: &'static str,
+    /// The least a buffer bound here must hold; checked when the graph is compiled for a scene.
+    pub min_bytes: MinBytes,
+}
+
+/// The least a buffer slot takes, in terms of the scene a graph is compiled for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MinBytes {
+    /// No minimum (or an image slot).
+    Any,
+    /// This many bytes.
+    Fixed(u64),
+    /// This many bytes per instance (`instances * n`).
+    PerInstance(u64),
+    /// This many bytes per draw group (`meshes * n`).
+    PerMesh(u64),
+    /// A bit per instance, in 32-bit words (`ceil(instances / 32) * 4`).
+    InstanceBits,
+}
+
+impl MinBytes {
+    /// The bytes it asks for with `instances` instances and `meshes` draw groups.
+    pub fn bytes(self, instances: u64, meshes: u64) -> u64 {
+        match self {
+            MinBytes::Any => 0,
+            MinBytes::Fixed(n) => n,
+            MinBytes::PerInstance(n) => instances * n,
+            MinBytes::PerMesh(n) => meshes * n,
+            MinBytes::InstanceBits => instances.div_ceil(32) * 4,
+        }
+    }
+
+    /// The rule as a size expression of the graph files.
+    pub fn rule(self) -> String {
+        match self {
+            MinBytes::Any => "any size".into(),
+            MinBytes::Fixed(n) => n.to_string(),
+            MinBytes::PerInstance(n) => format!("instances * {n}"),
+            MinBytes::PerMesh(n) => format!("meshes * {n}"),
+            MinBytes::InstanceBits => "ceil_div(instances, 32) * 4".into(),
+        }
+    }
 }
 
 /// The type and default of a pass setting.
@@ -118,8 +159,22 @@ pub const LIT_OUTPUT_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 pub const FXAA_PRESETS: &[&str] = &["39", "29", "23", "15", "12", "10"];
 
 const fn slot(name: &'static str, usage: Usage, required: bool, format: FormatRule, doc: &'static str) -> SlotDecl {
-    SlotDecl { name, usage, required, format, multisample_ok: false, doc }
+    SlotDecl { name, usage, required, format, multisample_ok: false, doc, min_bytes: MinBytes::Any }
 }
+
+/// `s`, taking buffers of at least `min` bytes.
+const fn sized(s: SlotDecl, min: MinBytes) -> SlotDecl {
+    SlotDecl { min_bytes: min, ..s }
+}
+
+/// A draw command per draw group (`VkDrawIndexedIndirectCommand`).
+const COMMANDS_BYTES: MinBytes = MinBytes::PerMesh(20);
+/// A draw count per face-cull region: back, front, none (graphs before face culling declared 4).
+const COUNT_BYTES: MinBytes = MinBytes::Fixed(12);
+/// An instance id per instance.
+const IDS_BYTES: MinBytes = MinBytes::PerInstance(4);
+/// A cull pass's counters (`CullCounters`), and the compressed G-buffer's.
+const STATS_BYTES: MinBytes = MinBytes::Fixed(64);
 
 const fn ms(s: SlotDecl) -> SlotDecl {
     SlotDecl { multisample_ok: true, ..s }
@@ -129,20 +184,26 @@ const fn ms(s: SlotDecl) -> SlotDecl {
 /// unbound list means every instance).
 fn draw_list_slots(required: bool) -> Vec<SlotDecl> {
     vec![
-        slot(
-            "draw_commands",
-            Usage::Indirect,
-            required,
-            FormatRule::Any,
-            "VkDrawIndexedIndirectCommand per draw group",
+        sized(
+            slot(
+                "draw_commands",
+                Usage::Indirect,
+                required,
+                FormatRule::Any,
+                "VkDrawIndexedIndirectCommand per draw group",
+            ),
+            COMMANDS_BYTES,
         ),
-        slot("draw_count", Usage::Indirect, required, FormatRule::Any, "number of commands"),
-        slot(
-            "draw_instance_ids",
-            Usage::StorageBufferRead(Stages::Vertex),
-            required,
-            FormatRule::Any,
-            "instance ids, one slice per draw group",
+        sized(slot("draw_count", Usage::Indirect, required, FormatRule::Any, "number of commands"), COUNT_BYTES),
+        sized(
+            slot(
+                "draw_instance_ids",
+                Usage::StorageBufferRead(Stages::Vertex),
+                required,
+                FormatRule::Any,
+                "instance ids, one slice per draw group",
+            ),
+            IDS_BYTES,
         ),
     ]
 }
@@ -151,20 +212,26 @@ fn draw_list_slots(required: bool) -> Vec<SlotDecl> {
 fn redraw_list_slots() -> Vec<SlotDecl> {
     let mut slots = draw_list_slots(false);
     slots.extend([
-        slot(
-            "late_draw_commands",
-            Usage::Indirect,
-            false,
-            FormatRule::Any,
-            "a second list's commands (two-phase culling's late draw)",
+        sized(
+            slot(
+                "late_draw_commands",
+                Usage::Indirect,
+                false,
+                FormatRule::Any,
+                "a second list's commands (two-phase culling's late draw)",
+            ),
+            COMMANDS_BYTES,
         ),
-        slot("late_draw_count", Usage::Indirect, false, FormatRule::Any, "its count"),
-        slot(
-            "late_draw_instance_ids",
-            Usage::StorageBufferRead(Stages::Vertex),
-            false,
-            FormatRule::Any,
-            "its instance ids",
+        sized(slot("late_draw_count", Usage::Indirect, false, FormatRule::Any, "its count"), COUNT_BYTES),
+        sized(
+            slot(
+                "late_draw_instance_ids",
+                Usage::StorageBufferRead(Stages::Vertex),
+                false,
+                FormatRule::Any,
+                "its instance ids",
+            ),
+            IDS_BYTES,
         ),
     ]);
     slots
@@ -272,7 +339,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             ],
             writes: vec![
                 slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image"),
-                slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "pool counters and a blocks-per-pixel histogram (size: 64)"),
+                sized(slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "pool counters and a blocks-per-pixel histogram (size: 64)"), STATS_BYTES),
             ],
             settings: {
                 let mut settings = lighting_settings();
@@ -350,19 +417,19 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             name: "instance_cull",
             doc: "tests every instance's world bound (frustum, optionally Hi-Z occlusion) and compacts the survivors per draw group in instance order into draw commands for vkCmdDrawIndexedIndirectCount",
             reads: vec![
-                slot("visibility_prev", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "last frame's visibility bits (early and late phases)"),
+                sized(slot("visibility_prev", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "last frame's visibility bits (early and late phases)"), MinBytes::InstanceBits),
                 slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid to test against (none: frustum only)"),
             ],
             writes: vec![
-                slot("draw_commands", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "one command per draw group (size: meshes * 20)"),
-                slot("draw_count", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "number of commands of each face-cull region (12 bytes)"),
-                slot("draw_instance_ids", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "survivors, one slice per draw group (size: instances * 4)"),
-                slot("visibility", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits (late phase)"),
-                slot("visible_ids", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group: the next frame's early draw list, which that frame draws as it is with no cull pass (size: instances * 4, history; the draw binds `.prev`)"),
-                slot("list_commands", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: the commands of that list (size: meshes * 20, history)"),
-                slot("list_count", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: their number per face-cull region (size: 12, history)"),
-                slot("list_stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: that list's counters, reported as the next frame's early draw (size: 64, history)"),
-                slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "counters of this pass (size: 64)"),
+                sized(slot("draw_commands", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "one command per draw group (size: meshes * 20)"), COMMANDS_BYTES),
+                sized(slot("draw_count", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "number of commands of each face-cull region (12 bytes)"), COUNT_BYTES),
+                sized(slot("draw_instance_ids", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "survivors, one slice per draw group (size: instances * 4)"), IDS_BYTES),
+                sized(slot("visibility", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits (late phase)"), MinBytes::InstanceBits),
+                sized(slot("visible_ids", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group: the next frame's early draw list, which that frame draws as it is with no cull pass (size: instances * 4, history; the draw binds `.prev`)"), IDS_BYTES),
+                sized(slot("list_commands", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: the commands of that list (size: meshes * 20, history)"), COMMANDS_BYTES),
+                sized(slot("list_count", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: their number per face-cull region (size: 12, history)"), COUNT_BYTES),
+                sized(slot("list_stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: that list's counters, reported as the next frame's early draw (size: 64, history)"), STATS_BYTES),
+                sized(slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "counters of this pass (size: 64)"), STATS_BYTES),
             ],
             settings: vec![
                 SettingDecl { name: "phase", default: SettingDefault::Choice(&["all", "early", "late", "occluders", "rest"]), doc: "which instances the pass draws: all survivors; last frame's visible ones (early); newly visible ones (late); chosen occluders; all but the occluders" },
@@ -381,12 +448,12 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             name: "overlay",
             doc: "draws this frame's culling counters (formatted on the GPU), per-pass GPU milliseconds and optional debug views (a Hi-Z mip, occlusion-culled instances) over the lit image",
             reads: vec![
-                slot("stats0", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a cull pass (its `stats` buffer, 64 bytes)"),
-                slot("stats1", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a second cull pass"),
-                slot("stats2", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a third cull pass"),
-                slot("stats3", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a fourth cull pass"),
+                sized(slot("stats0", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a cull pass (its `stats` buffer, 64 bytes)"), STATS_BYTES),
+                sized(slot("stats1", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a second cull pass"), STATS_BYTES),
+                sized(slot("stats2", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a third cull pass"), STATS_BYTES),
+                sized(slot("stats3", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a fourth cull pass"), STATS_BYTES),
                 slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid (view \"hiz\")"),
-                slot("visibility", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits from the late cull pass (view \"culled\")"),
+                sized(slot("visibility", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits from the late cull pass (view \"culled\")"), MinBytes::InstanceBits),
             ],
             writes: vec![slot(
                 "output",

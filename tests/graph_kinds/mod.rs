@@ -3,11 +3,19 @@
 
 #![allow(dead_code)]
 
-use cullgraph::graph::kinds::{FormatRule, PassKindInfo, SlotDecl};
+use cullgraph::graph::kinds::{FormatRule, MinBytes, PassKindInfo, SlotDecl};
 use cullgraph::graph::{Stages, Usage};
 
 const fn slot(name: &'static str, usage: Usage) -> SlotDecl {
-    SlotDecl { name, usage, required: false, format: FormatRule::Any, multisample_ok: false, doc: "test slot" }
+    SlotDecl {
+        name,
+        usage,
+        required: false,
+        format: FormatRule::Any,
+        multisample_ok: false,
+        doc: "test slot",
+        min_bytes: MinBytes::Any,
+    }
 }
 
 /// Image read slots of kind `img`.

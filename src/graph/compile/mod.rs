@@ -88,6 +88,12 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
     for (pos, message) in super::validate::sample_errors(graph, &samples) {
         sink.at(pos, message);
     }
+    // Sizes that failed to resolve stand in as 4 bytes: no size errors on top of those.
+    if errors.list.is_empty() {
+        for (pos, message) in super::validate::slot_size_errors(graph, &resolved, frame.instances, frame.meshes) {
+            sink.at(pos, message);
+        }
+    }
 
     let pruning = prune::prune(graph);
     let kept: Vec<usize> = (0..graph.passes.len()).filter(|&p| pruning.keep[p]).collect();

@@ -15,8 +15,10 @@ mod dataflow;
 mod images;
 mod passes;
 mod resources;
+mod slot_sizes;
 
 pub(crate) use images::sample_errors;
+pub(crate) use slot_sizes::slot_size_errors;
 
 use super::env::Environment;
 use super::error::{list, GraphError, GraphErrors, Pos, Sink};

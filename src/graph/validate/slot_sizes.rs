@@ -1,0 +1,73 @@
+//! Resources too small for the slot they are bound to, for the output size and scene a graph is
+//! compiled for: buffers (a draw command per draw group, an id per instance, 64-byte counters...)
+//! and the Hi-Z pyramid (half its depth's size). Reported at
+//! the binding, instead of by the pass when it is built or first recorded.
+
+use super::super::compile::resolve::Resolved;
+use super::super::error::Pos;
+use super::super::kinds::MinBytes;
+use super::super::validated::{Pass, ValidatedGraph};
+use crate::oracle::hiz::stored_size;
+use glam::UVec2;
+
+/// `(position, message)` for every binding whose resource is smaller than its slot takes;
+/// `resolved[r]` is resource `r` as compiled.
+pub(crate) fn slot_size_errors(
+    graph: &ValidatedGraph,
+    resolved: &[Resolved],
+    instances: u64,
+    meshes: u64,
+) -> Vec<(Pos, String)> {
+    let mut out = Vec::new();
+    for pass in &graph.passes {
+        let Some(kind) = graph.kinds.iter().find(|k| k.name == pass.kind) else { continue };
+        for binding in &pass.bindings {
+            let Some(Resolved::Buffer(bytes)) = resolved.get(binding.resource) else { continue };
+            let min = kind.slot(&binding.slot).map_or(MinBytes::Any, |s| s.min_bytes);
+            let need = min.bytes(instances, meshes);
+            if *bytes < need {
+                let dir = if binding.in_writes { "writes" } else { "reads" };
+                out.push((
+                    binding.pos,
+                    format!(
+                        "pass '{}' {dir} \"{}\": '{}' holds {bytes} bytes; the slot takes {} = {need} bytes \
+                         for this scene ({instances} instances, {meshes} meshes)",
+                        pass.name,
+                        binding.written_slot,
+                        graph.resources[binding.resource].name,
+                        min.rule()
+                    ),
+                ));
+            }
+        }
+        if pass.kind == "hiz_build" {
+            out.extend(pyramid_error(graph, pass, resolved));
+        }
+    }
+    out
+}
+
+/// The pyramid of a `hiz_build` pass must be half its depth's size: level 0 of the chain is not
+/// stored.
+fn pyramid_error(graph: &ValidatedGraph, pass: &Pass, resolved: &[Resolved]) -> Option<(Pos, String)> {
+    let image = |slot: &str| {
+        let b = pass.bindings.iter().find(|b| b.slot == slot)?;
+        match resolved.get(b.resource)? {
+            Resolved::Image { extent, .. } => Some((b, UVec2::new(extent.width, extent.height))),
+            Resolved::Buffer(_) => None,
+        }
+    };
+    let ((_, depth), (hiz_binding, hiz)) = (image("depth")?, image("hiz")?);
+    let want = stored_size(depth);
+    if hiz == want {
+        // (A pyramid of this size cannot have more mips than the depth has levels below its own.)
+        return None;
+    }
+    let name = &graph.resources[hiz_binding.resource].name;
+    let message = format!(
+        "pass '{}': the pyramid '{name}' is {}x{}; it must be {}x{}, half the depth's size {}x{} (size: \
+         Fixed(\"max(1, width / 2)\", \"max(1, height / 2)\") for a full-screen depth)",
+        pass.name, hiz.x, hiz.y, want.x, want.y, depth.x, depth.y
+    );
+    Some((hiz_binding.pos, message))
+}
