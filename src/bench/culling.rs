@@ -1,7 +1,7 @@
 //! Culling benchmark: the shipped culling graphs on city scenes of growing size, in the city's
 //! street view (an occluded view), with the naive peer and copy bandwidth measured in the same run.
 
-use super::peer::{copy_ms, gbps, naive_frustum_ms};
+use super::peer::{copy_gbps, gbps, naive_frustum_ms};
 use super::{median, median_per_pass};
 use crate::gpu::{GpuContext, ShaderCompiler};
 use crate::render::{GraphSpec, RenderSettings, Renderer};
@@ -146,13 +146,12 @@ pub fn run(
     bench: &CullingBench,
     progress: &dyn Fn(&str),
 ) -> crate::Result<CullingReport> {
-    let copy_bytes = 256u64 << 20;
-    let copy = copy_ms(ctx, shaders, copy_bytes, 9)?;
+    let copy_gbps = copy_gbps(ctx, shaders, 256 << 20, 9)?;
     let mut report = CullingReport {
         device: ctx.caps().name.clone(),
         width: bench.width,
         height: bench.height,
-        copy_gbps: gbps(2 * copy_bytes, copy),
+        copy_gbps,
         scenes: Vec::new(),
     };
     let aspect = bench.width as f32 / bench.height as f32;

@@ -63,9 +63,11 @@ pub fn run(
     let mut out = Vec::new();
     for &(width, height) in sizes {
         let camera = scene.default_camera(width as f32 / height as f32);
-        // The whole pyramid by both methods, then truncated single-dispatch pyramids.
-        let runs = [("single", None), ("per_mip", None), ("single", Some(1)), ("single", Some(2)), ("single", Some(6))];
-        for (method, mips) in runs {
+        // The whole pyramid by both methods, then truncated single-dispatch pyramids (those
+        // shorter than the whole: a small depth has fewer levels).
+        let chain = crate::passes::hiz_build::pyramid_mip_count(ash::vk::Extent2D { width, height });
+        let truncated = [1, 2, 6].into_iter().filter(|&m| m < chain).map(|m| ("single", Some(m)));
+        for (method, mips) in [("single", None), ("per_mip", None)].into_iter().chain(truncated) {
             let text = GRAPH.replace("MIPS", &mips.map_or("All".to_string(), |m: u32| m.to_string()));
             let spec = GraphSpec { text, file: "hiz_bench.ron".into(), dir: None, overrides: Vec::new() }
                 .with_overrides([("method".to_string(), method.to_string())]);

@@ -6,10 +6,16 @@
 //!   each scheme culls (exact visibility as the oracle), and the bytes each pass moves against
 //!   the device's measured copy bandwidth and a naive atomic-append frustum peer.
 //! - [`hiz`]: the Hi-Z pyramid, single dispatch against one dispatch per mip, at several sizes.
+//! - [`msaa`]: speed against error of every anti-aliasing method (GPU ms, G-buffer memory, mean
+//!   FLIP and PSNR against a supersampled reference), the compressed G-buffer against its
+//!   baselines.
+//! - [`plot`]: SVG plots of the culling and MSAA figures.
 
 pub mod culling;
 pub mod hiz;
+pub mod msaa;
 pub mod peer;
+pub mod plot;
 
 use crate::gpu::PassTiming;
 

@@ -19,12 +19,13 @@ pub fn gbps(bytes: u64, ms: f64) -> f64 {
     }
 }
 
-/// Copies `bytes` between two device buffers `repeats` times, once with `vkCmdCopyBuffer` and
-/// once with a compute kernel; returns the median milliseconds of the faster of the two (the
-/// practical bandwidth a compute pass can reach). A copy reads and writes every byte, so the
-/// bandwidth is `2 * bytes / time`.
-pub fn copy_ms(ctx: &GpuContext, shaders: &ShaderCompiler, bytes: u64, repeats: usize) -> crate::Result<f64> {
-    let bytes = bytes / 16 * 16;
+/// Copies `bytes` (at most what one storage-buffer binding sees) between two device buffers
+/// `repeats` times, once with `vkCmdCopyBuffer` and once with a compute kernel; returns the
+/// bandwidth of the faster of the two medians (the practical bandwidth a compute pass can
+/// reach), in GB/s. A copy reads and writes every byte: `2 * bytes / time`.
+pub fn copy_gbps(ctx: &GpuContext, shaders: &ShaderCompiler, bytes: u64, repeats: usize) -> crate::Result<f64> {
+    // The compute copy binds each buffer whole: no more than one storage-buffer binding can see.
+    let bytes = bytes.min(ctx.caps().limits.max_storage_buffer_range as u64) / 16 * 16;
     let buffer = |name| {
         Buffer::new(
             ctx,
@@ -49,7 +50,8 @@ pub fn copy_ms(ctx: &GpuContext, shaders: &ShaderCompiler, bytes: u64, repeats: 
         ctx.submit_and_wait(|cmd| {
             // SAFETY: cmd recording; both buffers live until the wait returns.
             unsafe { ctx.device().cmd_fill_buffer(cmd, a.handle(), 0, vk::WHOLE_SIZE, 7) };
-            cmd_barriers(ctx.device(), cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::TRANSFER_WRITE)], &[]);
+            // The fill before the copy reads the source; the copy's writes before the kernel's.
+            cmd_barriers(ctx.device(), cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::TRANSFER_READ)], &[]);
             timer.reset(cmd);
             timer.begin(cmd, "transfer");
             // SAFETY: as above.
@@ -80,7 +82,7 @@ pub fn copy_ms(ctx: &GpuContext, shaders: &ShaderCompiler, bytes: u64, repeats: 
             }
         }
     }
-    Ok(super::median(&mut transfer).min(super::median(&mut compute)))
+    Ok(gbps(2 * bytes, super::median(&mut transfer).min(super::median(&mut compute))))
 }
 
 /// The naive frustum peer over `scene`'s instances seen by `camera`: median milliseconds of

@@ -65,6 +65,11 @@ pub struct GraphCheckArgs {
 /// `cullgraph bench` flags.
 #[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
+    /// What to measure, comma-separated: `culling` (the culling graphs on cities of growing
+    /// size), `hiz` (the pyramid builds), `msaa` (speed against error of every anti-aliasing
+    /// method).
+    #[arg(long, value_delimiter = ',', default_values_t = ["culling".to_string(), "hiz".into()])]
+    pub suites: Vec<String>,
     /// City sizes to measure (instances), comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [10_000usize, 100_000, 1_000_000])]
     pub instances: Vec<usize>,
@@ -90,7 +95,24 @@ pub struct BenchArgs {
     /// steps may add a little time to those passes).
     #[arg(long)]
     pub step_times: bool,
-    /// Folder for bench.json and bench.md.
+    /// MSAA suite: scenes, comma-separated (`builtin:city` or glTF files).
+    #[arg(long, value_delimiter = ',', default_values_t = ["builtin:city".to_string()])]
+    pub msaa_scenes: Vec<String>,
+    /// MSAA suite: the methods (built-in graphs), comma-separated; `two_phase` (no AA) and
+    /// `fxaa` run at one sample, the others at each of `--msaa-samples`.
+    #[arg(long, value_delimiter = ',', default_values_t = ["two_phase".to_string(), "fxaa".into(), "msaa_per_sample".into(), "msaa_zprepass".into(), "msaa_compressed".into(), "msaa_compressed_claim".into(), "visibility_buffer".into()])]
+    pub msaa_methods: Vec<String>,
+    /// MSAA suite: sample counts, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [2u32, 4, 8])]
+    pub msaa_samples: Vec<u32>,
+    /// MSAA suite: point-light counts, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [5usize, 50, 500])]
+    pub msaa_lights: Vec<usize>,
+    /// MSAA suite: the reference's supersampling per axis (4: 16 samples per pixel; 0: no
+    /// image error).
+    #[arg(long, default_value_t = 4, value_name = "N")]
+    pub reference: u32,
+    /// Folder for bench.json, bench.md and the plots (culling.svg, msaa.svg).
     #[arg(long, default_value = "out/bench")]
     pub out: PathBuf,
     /// Vulkan device by name substring or index; env CULLGRAPH_DEVICE.

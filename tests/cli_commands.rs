@@ -1,0 +1,154 @@
+//! The command line's other subcommands as a user runs them: `bench` (every suite, its JSON,
+//! Markdown and plots), `graph check|plan|dot` and `devices`.
+
+use std::process::Command;
+
+fn cullgraph() -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_cullgraph"));
+    cmd.env("CULLGRAPH_DEVICE", std::env::var("CULLGRAPH_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into()));
+    cmd.env("CULLGRAPH_VALIDATION", "1");
+    cmd
+}
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let out = cullgraph().args(args).output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+#[test]
+fn bench_writes_speed_against_error_as_json_markdown_and_plots() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().to_str().unwrap();
+    let monastery = format!("{ROOT}/../shared/assets/monastery.glb");
+    let scenes = if std::path::Path::new(&monastery).exists() {
+        format!("builtin:city,{monastery}")
+    } else {
+        "builtin:city".into()
+    };
+    let scene_count = scenes.split(',').count();
+    #[rustfmt::skip]
+    let (code, stdout, err) = run(&[
+        "bench", "--suites", "culling,hiz,msaa", "--out", out, "--size", "64x36", "--warmup", "1", "--frames", "2",
+        "--instances", "1000,2000", "--graphs", "no_cull,two_phase", "--verify", "--hiz-sizes", "33x17",
+        "--msaa-scenes", &scenes, "--msaa-lights", "5", "--msaa-samples", "4", "--reference", "2",
+        "--msaa-methods", "two_phase,msaa_per_sample,msaa_zprepass,msaa_compressed_claim",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("bench.json")).unwrap()).unwrap();
+
+    // Culling: both sizes, both graphs, exact visibility checked, nothing visible culled.
+    let culling = &json["culling"]["scenes"];
+    assert_eq!(culling.as_array().unwrap().len(), 2);
+    for scene in culling.as_array().unwrap() {
+        let graphs = scene["graphs"].as_array().unwrap();
+        assert_eq!(graphs.iter().map(|g| g["graph"].as_str().unwrap()).collect::<Vec<_>>(), ["no_cull", "two_phase"]);
+        for g in graphs {
+            assert_eq!(g["false_negatives"], 0, "{g}");
+            assert!(g["frame_ms"].as_f64().unwrap() > 0.0);
+        }
+        let two_phase = &graphs[1];
+        assert!(two_phase["drawn"].as_u64().unwrap() < graphs[0]["drawn"].as_u64().unwrap(), "two_phase culls");
+    }
+    // Hi-Z: the size asked for, both methods.
+    let hiz = json["hiz"].as_array().unwrap();
+    assert!(hiz.iter().any(|h| h["method"] == "single") && hiz.iter().any(|h| h["method"] == "per_mip"));
+    assert!(hiz.iter().all(|h| h["width"] == 33 && h["height"] == 17));
+
+    // MSAA: one row per scene and method, each with memory and its error against the reference.
+    let rows = json["msaa"]["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), scene_count * 4);
+    assert_eq!(json["msaa"]["reference_samples"], 4);
+    for r in rows {
+        let flip = r["mean_flip"].as_f64().unwrap();
+        assert!(flip > 0.0 && flip < 0.2, "{r}");
+        assert!(r["gbuffer_bytes"].as_u64().unwrap() > 0 && r["frame_ms"].as_f64().unwrap() > 0.0, "{r}");
+        assert_eq!(r["samples"], if r["method"] == "two_phase" { 1 } else { 4 });
+        assert_eq!(r["pool"].is_null(), r["method"] != "msaa_compressed_claim", "{r}");
+    }
+    let per_sample = |scene: &str, key: &str| {
+        rows.iter().find(|r| r["scene"] == scene && r["method"] == "msaa_per_sample").unwrap()[key].as_f64().unwrap()
+    };
+    for r in rows.iter().filter(|r| r["method"] == "msaa_compressed_claim") {
+        let scene = r["scene"].as_str().unwrap();
+        // The compressed G-buffer holds less than a per-sample one, and shades alike.
+        assert!(r["gbuffer_bytes"].as_f64().unwrap() < per_sample(scene, "gbuffer_bytes"), "{r}");
+        assert!((r["mean_flip"].as_f64().unwrap() - per_sample(scene, "mean_flip")).abs() < 0.002, "{r}");
+    }
+    let markdown = std::fs::read_to_string(tmp.path().join("bench.md")).unwrap();
+    assert_eq!(stdout.trim(), markdown.trim());
+    assert!(
+        markdown.contains("| frame / Z-prepass |") && markdown.contains("| city | 5 | 4x | msaa_compressed_claim |")
+    );
+    for (plot, names) in
+        [("culling.svg", ["no_cull", "naive frustum peer"]), ("msaa.svg", ["msaa_per_sample", "city, 5 lights"])]
+    {
+        let svg = std::fs::read_to_string(tmp.path().join(plot)).unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "{plot}");
+        for name in names {
+            assert!(svg.contains(name), "{plot} names {name}");
+        }
+    }
+
+    let (code, _, err) = run(&["bench", "--suites", "culling,speed", "--out", out]);
+    assert_eq!(code, 1);
+    assert!(err.contains("unknown suite 'speed' (known: culling, hiz, msaa)"), "{err}");
+}
+
+#[test]
+fn graph_check_plan_and_dot() {
+    let tmp = tempfile::tempdir().unwrap();
+    let two_phase = format!("{ROOT}/graph/two_phase.ron");
+    let (code, stdout, err) = run(&["graph", "check", &two_phase]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("two_phase.ron: ok ("), "{stdout}");
+
+    let bad = tmp.path().join("bad.ron");
+    let text = std::fs::read_to_string(&two_phase).unwrap().replacen("kind: \"hiz_build\"", "kind: \"hiz_builder\"", 1);
+    std::fs::write(&bad, &text).unwrap();
+    let (code, _, err) = run(&["graph", "check", bad.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    let line = text.lines().position(|l| l.contains("hiz_builder")).unwrap() + 1;
+    assert!(err.contains(&format!("bad.ron:{line}:")) && err.contains("hiz_builder"), "{err}");
+
+    // The plan: every pass in execution order, for the size and scene given.
+    let (code, stdout, err) =
+        run(&["graph", "plan", &two_phase, "--size", "320x180", "--scene", "builtin:city", "--instances", "1000"]);
+    assert_eq!(code, 0, "{err}");
+    let passes: Vec<&str> = stdout
+        .lines()
+        .filter_map(|l| {
+            // "  N: name (kind) ..."
+            let (index, rest) = l.strip_prefix("  ")?.split_once(": ")?;
+            index.parse::<usize>().ok()?;
+            rest.split(' ').next()
+        })
+        .collect();
+    assert_eq!(passes, ["draw_early", "hiz", "cull_late", "draw_late", "lighting"], "{stdout}");
+    // A buffer too small for this scene is refused at its binding.
+    let small = tmp.path().join("small.ron");
+    std::fs::write(&small, std::fs::read_to_string(&two_phase).unwrap().replace("\"instances * 4\"", "64")).unwrap();
+    let (code, _, err) = run(&["graph", "plan", small.to_str().unwrap(), "--instances", "1000"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("small.ron:") && err.contains("the slot takes instances * 4 = 4000 bytes"), "{err}");
+
+    let dot = tmp.path().join("g.dot");
+    let (code, _, err) = run(&["graph", "dot", &two_phase, "-o", dot.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let dot = std::fs::read_to_string(dot).unwrap();
+    assert!(dot.starts_with("digraph") && dot.contains("cull_late") && dot.contains("->"), "{dot}");
+}
+
+#[test]
+fn devices_lists_what_the_loader_sees() {
+    let (code, stdout, err) = run(&["devices"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.lines().any(|l| l.starts_with("0: ") || l.contains(": ")), "{stdout}");
+    assert!(stdout.contains("llvmpipe"), "{stdout}");
+}
