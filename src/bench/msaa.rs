@@ -8,10 +8,12 @@
 
 use super::{median, median_per_pass};
 use crate::gpu::{GpuContext, ShaderCompiler};
-use crate::render::reference::{image_reference_error, reference_render_size};
-use crate::render::{GraphSpec, RenderSettings, Renderer};
+use crate::oracle::image_error::image_error;
+use crate::render::output::RgbaImage;
+use crate::render::reference::{reference_render_size, render_reference};
+use crate::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
 use crate::scene::source::LoadOptions;
-use crate::scene::SceneSource;
+use crate::scene::{Camera, Scene, SceneSource};
 use serde::{Deserialize, Serialize};
 
 /// Methods with one sample per pixel: no AA, and FXAA on top of it.
@@ -130,63 +132,34 @@ pub fn run(
             progress(&format!("{scene_name}, {lights} lights: loading"));
             let scene = source.load(&LoadOptions { lights: Some(lights), ..Default::default() })?;
             let camera = scene.default_camera(bench.width as f32 / bench.height as f32);
+            // Every method first, their images kept, then one reference for all of them: the
+            // reference's large render and the CPU's error would leave the GPU idle between
+            // measurements, and a GPU that idles lowers its clocks.
+            let mut measured = Vec::new();
             for method in &bench.methods {
                 let sample_counts =
                     if ONE_SAMPLE_METHODS.contains(&method.as_str()) { vec![1] } else { bench.samples.clone() };
                 for samples in sample_counts {
                     progress(&format!("{scene_name}, {lights} lights: {method} at {samples}x"));
-                    let mut spec = GraphSpec::builtin(method)?;
-                    if samples > 1 {
-                        spec = spec.with_overrides([("msaa".to_string(), samples.to_string())]);
-                    }
-                    let settings = RenderSettings::new(bench.width, bench.height);
-                    let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
-                    for _ in 0..bench.warmup {
-                        renderer.render(&camera)?;
-                    }
-                    let (mut timings, mut totals) = (Vec::new(), Vec::new());
-                    for _ in 1..bench.frames.max(1) {
-                        let stats = renderer.render(&camera)?;
-                        timings.push(stats.gpu_ms);
-                        totals.push(stats.gpu_total_ms);
-                    }
-                    let (last, image) = renderer.render_to_image(&camera)?;
-                    timings.push(last.gpu_ms.clone());
-                    totals.push(last.gpu_total_ms);
-                    let gbuffer_bytes = renderer
-                        .runtime()
-                        .resource_bytes()
-                        .iter()
-                        .filter(|r| GBUFFER_RESOURCES.contains(&r.name.as_str()))
-                        .map(|r| r.bytes)
-                        .sum();
-                    drop(renderer);
-                    let error = bench
-                        .reference
-                        .map(|n| image_reference_error(ctx, shaders, &scene, &camera, &image, n, &spec.overrides))
-                        .transpose()?;
-                    let passes: Vec<PassTime> =
-                        median_per_pass(&timings).into_iter().map(|(pass, ms)| PassTime { pass, ms }).collect();
-                    let sum = |keep: &dyn Fn(&str) -> bool| passes.iter().filter(|p| keep(&p.pass)).map(|p| p.ms).sum();
-                    rows.push(MsaaFigure {
-                        scene: scene_name.clone(),
-                        lights,
-                        samples,
-                        method: method.clone(),
-                        frame_ms: median(&mut totals),
-                        geometry_ms: sum(&|p| ["draw_", "depth_", "gbuffer"].iter().any(|s| p.starts_with(s))),
-                        lighting_ms: sum(&|p| p == "lighting"),
-                        passes,
-                        gbuffer_bytes,
-                        pool: last.gbuffer.first().map(|g| PoolFigure {
-                            used: g.pool_used,
-                            blocks: g.pool_blocks,
-                            overflow_samples: g.overflow_samples,
-                        }),
-                        mean_flip: error.as_ref().map(|e| e.mean_flip),
-                        psnr_db: error.as_ref().map(|e| e.psnr_db).filter(|p| p.is_finite()),
-                    });
+                    let figure = measure(ctx, shaders, bench, &scene, &camera, method, samples)?;
+                    measured.push((MsaaFigure { scene: scene_name.clone(), lights, ..figure.0 }, figure.1));
                 }
+            }
+            let reference = match bench.reference {
+                Some(n) => {
+                    progress(&format!("{scene_name}, {lights} lights: the reference, {n}x{n} samples per pixel"));
+                    let size = (bench.width, bench.height);
+                    Some((n, render_reference(ctx, shaders, &scene, &camera, size, n, &[])?))
+                }
+                None => None,
+            };
+            for (mut figure, image) in measured {
+                if let Some((n, reference)) = &reference {
+                    let error = image_error(reference.as_raw(), image.as_raw(), bench.width, bench.height, n * n)?;
+                    figure.mean_flip = Some(error.mean_flip);
+                    figure.psnr_db = Some(error.psnr_db).filter(|p| p.is_finite());
+                }
+                rows.push(figure);
             }
         }
     }
@@ -197,6 +170,76 @@ pub fn run(
         reference_samples: bench.reference.map(|n| n * n),
         rows,
     })
+}
+
+/// How long frames run before any is measured, at least: a GPU that idled (while the CPU loaded
+/// a scene or computed image errors) takes a few hundred milliseconds to raise its clocks again,
+/// and on the H100 the first configurations after an idle ran up to 5x slower within 30 frames.
+const MIN_WARMUP: std::time::Duration = std::time::Duration::from_millis(500);
+
+/// Renders `method` at `samples` per pixel: at least `bench.warmup` frames and [`MIN_WARMUP`],
+/// then `bench.frames` measured back to back, as an application renders them, then one more read
+/// back. The figure's scene name, light count and image error are left for the caller.
+fn measure(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    bench: &MsaaBench,
+    scene: &Scene,
+    camera: &Camera,
+    method: &str,
+    samples: u32,
+) -> crate::Result<(MsaaFigure, RgbaImage)> {
+    let mut spec = GraphSpec::builtin(method)?;
+    if samples > 1 {
+        spec = spec.with_overrides([("msaa".to_string(), samples.to_string())]);
+    }
+    let settings = RenderSettings::new(bench.width, bench.height);
+    let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
+    let mut pipeline = FramePipeline::new(ctx)?;
+    let started = std::time::Instant::now();
+    let mut warmup = 0u64;
+    while warmup < bench.warmup as u64 || started.elapsed() < MIN_WARMUP {
+        pipeline.submit(&mut renderer, camera)?;
+        warmup += 1;
+    }
+    let mut measured = Vec::new();
+    for _ in 0..bench.frames.max(1) {
+        measured.extend(pipeline.submit(&mut renderer, camera)?);
+    }
+    measured.extend(pipeline.finish(&renderer)?);
+    drop(pipeline);
+    measured.retain(|s| s.frame >= warmup);
+    let timings: Vec<_> = measured.iter().map(|s| s.gpu_ms.clone()).collect();
+    let mut totals: Vec<f64> = measured.iter().map(|s| s.gpu_total_ms).collect();
+    let (last, image) = renderer.render_to_image(camera)?;
+    let gbuffer_bytes = renderer
+        .runtime()
+        .resource_bytes()
+        .iter()
+        .filter(|r| GBUFFER_RESOURCES.contains(&r.name.as_str()))
+        .map(|r| r.bytes)
+        .sum();
+    let passes: Vec<PassTime> = median_per_pass(&timings).into_iter().map(|(pass, ms)| PassTime { pass, ms }).collect();
+    let sum = |keep: &dyn Fn(&str) -> bool| passes.iter().filter(|p| keep(&p.pass)).map(|p| p.ms).sum();
+    let figure = MsaaFigure {
+        scene: String::new(),
+        lights: 0,
+        samples,
+        method: method.to_string(),
+        frame_ms: median(&mut totals),
+        geometry_ms: sum(&|p| ["draw_", "depth_", "gbuffer"].iter().any(|s| p.starts_with(s))),
+        lighting_ms: sum(&|p| p == "lighting"),
+        passes,
+        gbuffer_bytes,
+        pool: last.gbuffer.first().map(|g| PoolFigure {
+            used: g.pool_used,
+            blocks: g.pool_blocks,
+            overflow_samples: g.overflow_samples,
+        }),
+        mean_flip: None,
+        psnr_db: None,
+    };
+    Ok((figure, image))
 }
 
 impl MsaaReport {
