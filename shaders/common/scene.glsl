@@ -55,9 +55,11 @@ struct GpuPointLight {
 };
 
 // Eye-relative position of a local-space point. Subtracting the eye before adding the
-// local offset keeps the big numbers out of the sum.
+// local offset keeps the big numbers out of the sum. The hi parts are whole numbers
+// (split_hi_lo in src/render/gpu_types.rs), so their difference is exact, and `precise` keeps
+// the compiler from regrouping the sum: the same relative position at any whole offset.
 vec3 instance_rel_eye(GpuInstance inst, vec3 local, vec3 eye_hi, vec3 eye_lo) {
-    vec3 t = (vec3(inst.row0.w, inst.row1.w, inst.row2.w) - eye_hi) + (inst.translation_lo - eye_lo);
+    precise vec3 t = (vec3(inst.row0.w, inst.row1.w, inst.row2.w) - eye_hi) + (inst.translation_lo - eye_lo);
     mat3 m = transpose(mat3(inst.row0.xyz, inst.row1.xyz, inst.row2.xyz));
     return m * local + t;
 }

@@ -4,11 +4,33 @@ use crate::scene::{Camera, Instance, Material, PointLight, Scene};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Mat4, Vec3};
 
-/// Splits a double into a float and the float remainder, so that `hi + lo` carries ~48 bits.
+/// Splits a double into a float on a grid and the float remainder, so that `hi + lo` carries
+/// ~48 bits. `hi` is the whole number of units below the value while whole numbers are exact
+/// floats (|v| < 2^24), a coarser power-of-two grid beyond. Moving scene and camera together by a
+/// whole number of units then moves only the `hi` parts, and the shaders' `hi - eye_hi` is exact:
+/// the eye-relative positions, and the image, are the same bits at the origin and at 10^7 (for
+/// coordinates that the move itself does not round: floats, as glTF stores them, or doubles
+/// without bits below 2^-29). Rounding `v` to the nearest float for `hi` instead gives a
+/// different remainder at each offset.
 pub fn split_hi_lo(v: DVec3) -> (Vec3, Vec3) {
-    let hi = v.as_vec3();
-    let lo = (v - hi.as_dvec3()).as_vec3();
-    (hi, lo)
+    let split = |x: f64| {
+        let hi = (x / hi_grid(x)).floor() * hi_grid(x);
+        (hi as f32, (x - hi) as f32)
+    };
+    let (x, y, z) = (split(v.x), split(v.y), split(v.z));
+    (Vec3::new(x.0, y.0, z.0), Vec3::new(x.1, y.1, z.1))
+}
+
+/// The grid of `x`'s hi part: 1 while whole numbers are exact floats, else the power of two that
+/// keeps `x / grid` within a float's 24 bits.
+fn hi_grid(x: f64) -> f64 {
+    const EXACT_WHOLE: f64 = (1u32 << 24) as f64;
+    let m = x.abs();
+    if !(m >= EXACT_WHOLE) || !m.is_finite() {
+        1.0
+    } else {
+        2f64.powi(m.log2().floor() as i32 - 23)
+    }
 }
 
 /// One instance as the shaders read it (64 bytes).
@@ -192,10 +214,34 @@ mod tests {
 
     #[test]
     fn hi_lo_keeps_precision_far_from_origin() {
-        let v = DVec3::new(1.0e7 + 0.123456, -9_999_999.875, 3.0e6 + 1.0 / 3.0);
-        let (hi, lo) = split_hi_lo(v);
-        let back = hi.as_dvec3() + lo.as_dvec3();
-        assert!((back - v).abs().max_element() < 1e-6, "{back:?} vs {v:?}");
+        for v in [
+            DVec3::new(1.0e7 + 0.123456, -9_999_999.875, 3.0e6 + 1.0 / 3.0),
+            DVec3::new(-0.4, 0.25, 16_777_215.75),
+            DVec3::new(3.0e8 + 0.5, -5.0e9, 1.0e12 + 7.0),
+        ] {
+            let (hi, lo) = split_hi_lo(v);
+            let back = hi.as_dvec3() + lo.as_dvec3();
+            let allowed = v.abs().max_element().max(1.0) * 2f64.powi(-45);
+            assert!((back - v).abs().max_element() <= allowed, "{back:?} vs {v:?}");
+        }
+    }
+
+    #[test]
+    fn a_whole_offset_moves_only_the_hi_part_and_eye_relative_sums_stay_the_same_bits() {
+        // Float coordinates, as glTF stores them: adding 10^7 in f64 is exact for them. (A double
+        // with bits below 2^-29 is rounded by the move itself, before any split.)
+        let eye = Vec3::new(3.25, 1.7, -12.125).as_dvec3();
+        let point = Vec3::new(-40.123456, 2.0 / 3.0, 7.000001).as_dvec3();
+        let rel = |p: DVec3, e: DVec3| {
+            let ((ph, pl), (eh, el)) = (split_hi_lo(p), split_hi_lo(e));
+            (ph - eh) + (pl - el)
+        };
+        for offset in [DVec3::new(1.0e7, 0.0, -1.0e7), DVec3::new(-3.0, 123_456.0, 8_000_000.0)] {
+            let (near, far) = (split_hi_lo(point), split_hi_lo(point + offset));
+            assert_eq!(near.1, far.1, "the lo part does not move");
+            assert_eq!(far.0 - near.0, offset.as_vec3(), "the hi part moves by the offset");
+            assert_eq!(rel(point, eye), rel(point + offset, eye + offset));
+        }
     }
 
     #[test]
