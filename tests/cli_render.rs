@@ -184,6 +184,59 @@ fn pool_adaptation_is_reflected_in_the_reported_memory() {
     assert!(adapted_bytes < fixed_bytes, "reported {adapted_bytes} bytes after adapting, {fixed_bytes} before");
 }
 
+/// `cullgraph render --watch` on `graph`, its stdout and stderr lines merged into one stream.
+struct Watching {
+    child: std::process::Child,
+    lines: mpsc::Receiver<String>,
+    seen: Vec<String>,
+}
+
+impl Watching {
+    fn start(graph: &std::path::Path, png: &std::path::Path) -> Self {
+        #[rustfmt::skip]
+        let mut child = cullgraph()
+            .args(["render", "--scene", "builtin:field", "--instances", "100", "--size", "32x24", "--watch", "--watch-for", "60"])
+            .arg("--graph").arg(graph).arg("--out").arg(png)
+            .stdout(Stdio::piped()).stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let (tx, lines) = mpsc::channel::<String>();
+        for stream in [
+            Box::new(child.stdout.take().unwrap()) as Box<dyn std::io::Read + Send>,
+            Box::new(child.stderr.take().unwrap()),
+        ] {
+            let tx = tx.clone();
+            std::thread::spawn(move || {
+                for line in BufReader::new(stream).lines().map_while(Result::ok) {
+                    let _ = tx.send(line);
+                }
+            });
+        }
+        Self { child, lines, seen: Vec::new() }
+    }
+
+    /// Whether a line containing `needle` comes within 40 s.
+    fn wait_for(&mut self, needle: &str) -> bool {
+        let deadline = Instant::now() + Duration::from_secs(40);
+        while Instant::now() < deadline {
+            if let Ok(line) = self.lines.recv_timeout(Duration::from_millis(200)) {
+                self.seen.push(line.clone());
+                if line.contains(needle) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+impl Drop for Watching {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
 #[test]
 fn watch_reloads_on_change_and_keeps_the_last_good_graph_on_error() {
     let tmp = tempfile::tempdir().unwrap();
@@ -191,65 +244,43 @@ fn watch_reloads_on_change_and_keeps_the_last_good_graph_on_error() {
     let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/graph/default.ron")).unwrap();
     std::fs::write(&graph, &good).unwrap();
     let png = tmp.path().join("w.png");
-    let mut child = cullgraph()
-        .args([
-            "render",
-            "--scene",
-            "builtin:field",
-            "--instances",
-            "100",
-            "--size",
-            "32x24",
-            "--watch",
-            "--watch-for",
-            "60",
-        ])
-        .arg("--graph")
-        .arg(&graph)
-        .arg("--out")
-        .arg(&png)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Merge stdout and stderr lines into one channel.
-    let (tx, rx) = mpsc::channel::<String>();
-    for stream in [
-        Box::new(child.stdout.take().unwrap()) as Box<dyn std::io::Read + Send>,
-        Box::new(child.stderr.take().unwrap()),
-    ] {
-        let tx = tx.clone();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stream).lines().map_while(Result::ok) {
-                let _ = tx.send(line);
-            }
-        });
-    }
-    let mut seen = Vec::new();
-    let wait_for = |seen: &mut Vec<String>, needle: &str| {
-        let deadline = Instant::now() + Duration::from_secs(40);
-        while Instant::now() < deadline {
-            if let Ok(line) = rx.recv_timeout(Duration::from_millis(200)) {
-                seen.push(line.clone());
-                if line.contains(needle) {
-                    return true;
-                }
-            }
-        }
-        false
-    };
-    assert!(wait_for(&mut seen, "watching"), "no start: {seen:?}");
+    let mut watch = Watching::start(&graph, &png);
+    assert!(watch.wait_for("watching"), "no start: {:?}", watch.seen);
     // Break the graph: an unknown resource, positioned.
     std::fs::write(&graph, good.replace("writes: {\"output\": \"color\"}", "writes: {\"output\": \"colour\"}"))
         .unwrap();
-    assert!(wait_for(&mut seen, "still running the last good graph"), "no error reported: {seen:?}");
-    assert!(seen.iter().any(|l| l.contains("g.ron:") && l.contains("colour")), "{seen:?}");
+    assert!(watch.wait_for("still running the last good graph"), "no error reported: {:?}", watch.seen);
+    assert!(watch.seen.iter().any(|l| l.contains("g.ron:") && l.contains("colour")), "{:?}", watch.seen);
     // Fix it with a visible change.
     std::fs::write(&graph, good.replace("\"exposure\": 0.8", "\"exposure\": 1.6")).unwrap();
-    assert!(wait_for(&mut seen, "reloaded"), "no reload: {seen:?}");
-    let _ = child.kill();
-    let _ = child.wait();
+    assert!(watch.wait_for("reloaded"), "no reload: {:?}", watch.seen);
+    drop(watch);
     assert!(png.exists());
+}
+
+#[test]
+fn watch_follows_the_headers_a_user_shader_includes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let examples = concat!(env!("CARGO_MANIFEST_DIR"), "/graph/examples");
+    let graph = tmp.path().join("tint.ron");
+    std::fs::copy(format!("{examples}/tint.ron"), &graph).unwrap();
+    // The tint's factor moves to a header next to the shader.
+    let shader = std::fs::read_to_string(format!("{examples}/tint.comp")).unwrap();
+    let shader = shader
+        .replace("layout(local_size_x", "#include \"tint_factor.glsl\"\nlayout(local_size_x")
+        .replace("vec3(1.0, 0.85, 0.7)", "TINT_FACTOR");
+    std::fs::write(tmp.path().join("tint.comp"), shader).unwrap();
+    let header = tmp.path().join("tint_factor.glsl");
+    std::fs::write(&header, "#define TINT_FACTOR vec3(1.0, 0.85, 0.7)\n").unwrap();
+    let png = tmp.path().join("w.png");
+    let mut watch = Watching::start(&graph, &png);
+    assert!(watch.wait_for("watching"), "no start: {:?}", watch.seen);
+    // An error in the header is reported against the header, and the last good graph stays.
+    std::fs::write(&header, "#define TINT_FACTOR vec3(1.0, 0.85, 0.7)\nconst float broken = ;\n").unwrap();
+    assert!(watch.wait_for("still running the last good graph"), "header edit not seen: {:?}", watch.seen);
+    assert!(watch.seen.iter().any(|l| l.contains("tint_factor.glsl")), "{:?}", watch.seen);
+    std::fs::write(&header, "#define TINT_FACTOR vec3(0.5)\n").unwrap();
+    assert!(watch.wait_for("reloaded"), "no reload: {:?}", watch.seen);
 }
 
 #[test]

@@ -201,7 +201,7 @@ fn watch(
         Ok(())
     };
     render_once(renderer)?;
-    let mut files = FileWatch::new(watched_paths(args, &spec, renderer));
+    let mut files = FileWatch::new(watched_paths(args, shaders));
     println!("watching {} file(s); Ctrl-C stops", files.paths().count());
     while deadline.is_none_or(|d| Instant::now() < d) {
         std::thread::sleep(Duration::from_millis(200));
@@ -218,32 +218,40 @@ fn watch(
         .and_then(|new_spec| renderer.reload_graph(shaders, &new_spec).map(|_| new_spec));
         match reloaded {
             Ok(new_spec) => {
-                spec = new_spec;
-                println!("reloaded '{}'", spec.file);
-                files = FileWatch::new(watched_paths(args, &spec, renderer));
+                // A graph that loads and compiles can still fail when its first frame is
+                // recorded (a pass refusing what is bound to it): then the last good one returns.
+                match render_once(renderer) {
+                    Ok(()) => {
+                        spec = new_spec;
+                        println!("reloaded '{}'", spec.file);
+                    }
+                    Err(e) => {
+                        eprintln!("error: {e}");
+                        shaders.clear_cache();
+                        renderer.reload_graph(shaders, &spec)?;
+                        eprintln!("(back to the last good graph)");
+                        render_once(renderer)?;
+                    }
+                }
             }
             Err(e) => {
                 eprintln!("error: {e}");
                 eprintln!("(still running the last good graph)");
+                render_once(renderer)?;
             }
         }
-        // The last good graph keeps producing frames either way.
-        render_once(renderer)?;
+        // Headers a changed shader now includes.
+        files.watch_also(watched_paths(args, shaders));
     }
     Ok(())
 }
 
-/// The graph file, the shaders its compute passes use, and the shader library on disk.
-fn watched_paths(args: &RenderArgs, spec: &GraphSpec, renderer: &Renderer) -> Vec<PathBuf> {
+/// The graph file and every file on disk its shaders were compiled from: user shaders, the
+/// headers they include, and the shader library when it comes from a directory. (Built-in
+/// graphs and embedded shaders cannot change while the program runs.)
+fn watched_paths(args: &RenderArgs, shaders: &ShaderCompiler) -> Vec<PathBuf> {
     let mut paths: Vec<PathBuf> = args.graph.iter().filter(|g| !g.starts_with("builtin:")).map(PathBuf::from).collect();
-    for pass in &renderer.plan().passes {
-        if let Some(shader) = &pass.shader {
-            let resolved =
-                spec.dir.as_ref().map(|d| d.join(shader)).filter(|p| p.exists()).unwrap_or_else(|| shader.clone());
-            paths.push(resolved);
-        }
-    }
-    paths.extend(args.shader_dir.iter().cloned());
+    paths.extend(shaders.files_read());
     paths
 }
 

@@ -25,6 +25,22 @@ impl FileWatch {
         Self { files }
     }
 
+    /// Also watches those of `paths` not watched yet, as they are now; the others keep the state
+    /// they were last seen in, so that no change made meanwhile is missed.
+    pub fn watch_also(&mut self, paths: impl IntoIterator<Item = PathBuf>) {
+        let mut files = Vec::new();
+        for p in paths {
+            collect(&p, &mut files);
+        }
+        for path in files {
+            if !self.files.iter().any(|(p, _)| *p == path) {
+                let now = stamp(&path);
+                self.files.push((path, now));
+            }
+        }
+        self.files.sort();
+    }
+
     /// The files watched.
     pub fn paths(&self) -> impl Iterator<Item = &Path> {
         self.files.iter().map(|(p, _)| p.as_path())

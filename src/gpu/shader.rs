@@ -4,7 +4,7 @@
 //! Shaders come either from the sources embedded at build time (so a binary carried to another
 //! machine works on its own) or from a directory on disk (for editing and hot reload).
 
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 use std::fmt;
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -79,13 +79,27 @@ impl ShaderRoot {
         }
     }
 
-    fn read(&self, rel: &str) -> Option<String> {
+    /// The source at `rel`; a file read from disk is noted in `read_log`.
+    fn read(&self, rel: &str, read_log: &ReadLog) -> Option<String> {
         match self {
             ShaderRoot::Embedded => {
                 embedded::EMBEDDED_SHADERS.iter().find(|(p, _)| *p == rel).map(|(_, s)| s.to_string())
             }
-            ShaderRoot::Directory(dir) => std::fs::read_to_string(dir.join(rel)).ok(),
+            ShaderRoot::Directory(dir) => read_log.read(&dir.join(rel)),
         }
+    }
+}
+
+/// The files on disk that compiles read (sources and the headers they include), for watchers.
+#[derive(Clone, Default)]
+struct ReadLog(Arc<Mutex<BTreeSet<PathBuf>>>);
+
+impl ReadLog {
+    /// Reads `path`, noting it when it exists.
+    fn read(&self, path: &Path) -> Option<String> {
+        let text = std::fs::read_to_string(path).ok()?;
+        self.0.lock().unwrap_or_else(|p| p.into_inner()).insert(path.to_path_buf());
+        Some(text)
     }
 }
 
@@ -97,13 +111,21 @@ pub struct ShaderCompiler {
     compiler: shaderc::Compiler,
     root: ShaderRoot,
     cache: Mutex<HashMap<(String, Vec<Define>), Spirv>>,
+    read_log: ReadLog,
 }
 
 impl ShaderCompiler {
     /// A compiler reading sources from `root`.
     pub fn new(root: ShaderRoot) -> Result<Self, ShaderError> {
         let compiler = shaderc::Compiler::new().map_err(|e| ShaderError::Internal(e.to_string()))?;
-        Ok(Self { compiler, root, cache: Mutex::new(HashMap::new()) })
+        Ok(Self { compiler, root, cache: Mutex::new(HashMap::new()), read_log: ReadLog::default() })
+    }
+
+    /// Every file on disk the compiles so far read: user shaders given by path, the library's
+    /// sources when they come from a directory, and every header they included from disk. A
+    /// watcher that reloads when one changes sees edits to included headers too.
+    pub fn files_read(&self) -> Vec<PathBuf> {
+        self.read_log.0.lock().unwrap_or_else(|p| p.into_inner()).iter().cloned().collect()
     }
 
     /// Where sources come from.
@@ -119,7 +141,7 @@ impl ShaderCompiler {
     /// Compiles the library shader at `path` (relative to `shaders/`, e.g. `lighting/deferred.comp`).
     pub fn compile(&self, path: &str, defines: &[(&str, &str)]) -> Result<Spirv, ShaderError> {
         let rel = normalize(Path::new(path)).ok_or_else(|| ShaderError::NotFound(path.into()))?;
-        let source = self.root.read(&rel).ok_or_else(|| ShaderError::NotFound(path.into()))?;
+        let source = self.root.read(&rel, &self.read_log).ok_or_else(|| ShaderError::NotFound(path.into()))?;
         self.compile_source(&rel, &source, defines)
     }
 
@@ -134,6 +156,10 @@ impl ShaderCompiler {
         }
         profiling::scope!("cullgraph::compile_shader", name);
         let kind = stage_of(name).ok_or_else(|| ShaderError::UnknownStage(name.into()))?;
+        if Path::new(name).is_file() {
+            // A user shader given by its path (the caller read it).
+            self.read_log.0.lock().unwrap_or_else(|p| p.into_inner()).insert(PathBuf::from(name));
+        }
         let internal = |e: shaderc::Error| ShaderError::Internal(e.to_string());
         let mut options = shaderc::CompileOptions::new().map_err(internal)?;
         options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_3 as u32);
@@ -142,9 +168,10 @@ impl ShaderCompiler {
         for (k, v) in &key.1 {
             options.add_macro_definition(k, Some(v));
         }
-        let root = self.root.clone();
-        options
-            .set_include_callback(move |requested, kind, from, _depth| resolve_include(&root, requested, kind, from));
+        let (root, read_log) = (self.root.clone(), self.read_log.clone());
+        options.set_include_callback(move |requested, kind, from, _depth| {
+            resolve_include(&root, &read_log, requested, kind, from)
+        });
         let result = self.compiler.compile_into_spirv(source, kind, name, "main", Some(&options));
         let artifact = match result {
             Ok(a) => a,
@@ -171,6 +198,7 @@ fn stage_of(name: &str) -> Option<shaderc::ShaderKind> {
 
 fn resolve_include(
     root: &ShaderRoot,
+    read_log: &ReadLog,
     requested: &str,
     kind: shaderc::IncludeType,
     from: &str,
@@ -184,12 +212,12 @@ fn resolve_include(
     for candidate in &candidates {
         // A real file next to a user shader outside the library.
         if candidate.is_absolute() || Path::new(from).is_absolute() {
-            if let Ok(content) = std::fs::read_to_string(candidate) {
+            if let Some(content) = read_log.read(candidate) {
                 return Ok(shaderc::ResolvedInclude { resolved_name: candidate.display().to_string(), content });
             }
         }
         if let Some(rel) = normalize(candidate) {
-            if let Some(content) = root.read(&rel) {
+            if let Some(content) = root.read(&rel, read_log) {
                 return Ok(shaderc::ResolvedInclude { resolved_name: rel, content });
             }
         }
