@@ -26,7 +26,8 @@ pub fn split_hi_lo(v: DVec3) -> (Vec3, Vec3) {
 fn hi_grid(x: f64) -> f64 {
     const EXACT_WHOLE: f64 = (1u32 << 24) as f64;
     let m = x.abs();
-    if !(m >= EXACT_WHOLE) || !m.is_finite() {
+    // (NaN and infinity, refused at upload, take the unit grid.)
+    if m < EXACT_WHOLE || !m.is_finite() {
         1.0
     } else {
         2f64.powi(m.log2().floor() as i32 - 23)
