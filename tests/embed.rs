@@ -523,3 +523,88 @@ fn a_host_that_did_not_enable_a_required_extension_is_refused_naming_it() {
     assert!(err.contains("VK_KHR_push_descriptor") && err.contains("not among the host's enabled extensions"), "{err}");
     drop(allocator);
 }
+
+#[test]
+fn the_host_hands_buffers_in_and_reads_back_what_the_graph_wrote_into_them() {
+    let (w, h) = (48u32, 32u32);
+    let gpu = GpuTest::new();
+    let ctx: &GpuContext = &gpu;
+    let shaders = gpu.shaders();
+    // The default frame, then a user pass that scales the lit image by the host's factor and
+    // counts the pixels it wrote into the host's buffer.
+    let tmp = tempfile::tempdir().unwrap();
+    let examples = concat!(env!("CARGO_MANIFEST_DIR"), "/graph/examples");
+    let graph = std::fs::read_to_string(format!("{examples}/tint.ron"))
+        .unwrap()
+        .replace(
+            "\"tinted\": Image(format: R8G8B8A8_UNORM),",
+            "\"tinted\": Image(format: R8G8B8A8_UNORM),\n        \"factor\": Imported(Buffer(size: 16)),\n        \"probe\": Imported(Buffer(size: 16)),",
+        )
+        .replace("reads: {\"src\": \"color\"},", "reads: {\"src\": \"color\", \"2\": \"factor\"},")
+        .replace("writes: {\"1\": \"tinted\"},", "writes: {\"1\": \"tinted\", \"3\": \"probe\"},");
+    std::fs::write(tmp.path().join("tint.ron"), &graph).unwrap();
+    std::fs::write(
+        tmp.path().join("tint.comp"),
+        r#"#version 460
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0) uniform sampler2D src;
+layout(set = 0, binding = 1, rgba8) uniform writeonly image2D dst;
+layout(set = 0, binding = 2) readonly buffer Factor { vec4 factor; };
+layout(set = 0, binding = 3) buffer Probe { uint pixels; };
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;
+    vec4 c = texelFetch(src, p, 0);
+    imageStore(dst, p, vec4(c.rgb * factor.rgb, c.a));
+    atomicAdd(pixels, 1u);
+}
+"#,
+    )
+    .unwrap();
+    let spec = GraphSpec::from_file(&tmp.path().join("tint.ron")).unwrap();
+    let mut renderer = Renderer::with_graph(ctx, &shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
+    let host_buffer = |name, location| {
+        Buffer::new(ctx, &BufferDesc { name, size: 16, usage: vk::BufferUsageFlags::STORAGE_BUFFER, location }).unwrap()
+    };
+    let mut factor = host_buffer("host factor", MemoryLocation::CpuToGpu);
+    factor.write_bytes(0, bytemuck::cast_slice(&[0.5f32, 0.0, 1.0, 1.0])).unwrap();
+    let mut probe = host_buffer("host probe", MemoryLocation::GpuToCpu);
+    probe.write_bytes(0, &[0u8; 16]).unwrap();
+    let readback = Buffer::new(
+        ctx,
+        &BufferDesc {
+            name: "readback",
+            size: (w * h * 4) as u64,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuToCpu,
+        },
+    )
+    .unwrap();
+    ctx.submit_and_wait(|cmd| {
+        let imports = Imports::new().buffer("factor", factor.handle(), 16, Access::NONE, Access::COMPUTE_READ).buffer(
+            "probe",
+            probe.handle(),
+            16,
+            Access::NONE,
+            Access::HOST_READ,
+        );
+        renderer.record_with_imports(cmd, &boxes_camera(), &imports)?;
+        let (output, state) = renderer.output().expect("an image output");
+        record_image_to_buffer(ctx, cmd, output, state, &readback);
+        Ok::<(), cullgraph::Error>(())
+    })
+    .unwrap();
+    let pixels = u32::from_le_bytes(probe.read_bytes().unwrap()[..4].try_into().unwrap());
+    assert_eq!(pixels, w * h, "the pass counted every pixel into the host's buffer");
+    // Against the untinted frame: red halved, green gone, blue kept (8-bit rounding aside).
+    let plain = Renderer::new(ctx, &shaders, boxes_scene(), RenderSettings::new(w, h))
+        .unwrap()
+        .render_to_image(&boxes_camera())
+        .unwrap()
+        .1;
+    let tinted = readback.read_bytes().unwrap();
+    for (p, q) in plain.as_raw().chunks(4).zip(tinted.chunks(4)) {
+        assert!(q[0].abs_diff(p[0] / 2) <= 1 && q[1] <= 1 && q[2].abs_diff(p[2]) <= 1, "{p:?} -> {q:?}");
+    }
+    assert!(plain.as_raw().chunks(4).any(|p| p[0] > 40 && p[1] > 40), "the frame has colour to scale");
+}
