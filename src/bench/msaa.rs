@@ -126,6 +126,19 @@ pub fn run(
     if let Some(n) = bench.reference {
         reference_render_size(ctx, (bench.width, bench.height), n)?;
     }
+    // Refuse what would fail hours in, before anything renders.
+    if let Some(m) =
+        bench.methods.iter().find(|m| !ONE_SAMPLE_METHODS.contains(&m.as_str()) && !MSAA_METHODS.contains(&m.as_str()))
+    {
+        return Err(crate::Error::Invalid(format!(
+            "unknown MSAA bench method '{m}' (known: {}, {})",
+            ONE_SAMPLE_METHODS.join(", "),
+            MSAA_METHODS.join(", ")
+        )));
+    }
+    if let Some(n) = bench.samples.iter().find(|n| ![2, 4, 8].contains(*n)) {
+        return Err(crate::Error::Invalid(format!("MSAA bench sample count {n}: 2, 4 or 8")));
+    }
     let mut rows = Vec::new();
     for (scene_name, source) in &bench.scenes {
         for &lights in &bench.lights {
@@ -190,7 +203,7 @@ fn measure(
     samples: u32,
 ) -> crate::Result<(MsaaFigure, RgbaImage)> {
     let mut spec = GraphSpec::builtin(method)?;
-    if samples > 1 {
+    if !ONE_SAMPLE_METHODS.contains(&method) {
         spec = spec.with_overrides([("msaa".to_string(), samples.to_string())]);
     }
     let settings = RenderSettings::new(bench.width, bench.height);

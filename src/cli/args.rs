@@ -100,7 +100,7 @@ pub struct BenchArgs {
     pub msaa_scenes: Vec<String>,
     /// MSAA suite: the methods (built-in graphs), comma-separated; `two_phase` (no AA) and
     /// `fxaa` run at one sample, the others at each of `--msaa-samples`.
-    #[arg(long, value_delimiter = ',', default_values_t = ["two_phase".to_string(), "fxaa".into(), "msaa_per_sample".into(), "msaa_zprepass".into(), "msaa_compressed".into(), "msaa_compressed_claim".into(), "visibility_buffer".into()])]
+    #[arg(long, value_delimiter = ',', default_values_t = cullgraph::bench::msaa::ONE_SAMPLE_METHODS.iter().chain(cullgraph::bench::msaa::MSAA_METHODS).map(|m| m.to_string()))]
     pub msaa_methods: Vec<String>,
     /// MSAA suite: sample counts, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [2u32, 4, 8])]

@@ -42,8 +42,33 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     };
     let progress = |what: &str| eprintln!("bench: {what}");
     let (width, height) = args.size;
+    // Each suite's results are written as soon as it finishes, so that a later failure (or an
+    // interrupted sweep) keeps them. A plot that cannot be drawn is reported, not fatal.
     let mut json = serde_json::Map::new();
     let mut markdown = Vec::new();
+    let mut finish_suite = |name: &str, value: serde_json::Value, text: String| -> Result<()> {
+        json.insert(name.into(), value);
+        markdown.push(text);
+        write("bench.json", &serde_json::to_string_pretty(&json).unwrap_or_default())?;
+        write("bench.md", &markdown.join("\n"))
+    };
+    let plot = |name: &str, svg: Result<Option<String>>| -> Result<()> {
+        let path = args.out.join(name);
+        match svg {
+            Ok(Some(svg)) => write(name, &svg),
+            Ok(None) => std::fs::remove_file(&path).or_else(|e| {
+                if e.kind() == std::io::ErrorKind::NotFound {
+                    Ok(())
+                } else {
+                    Err(io(&path, e))
+                }
+            }),
+            Err(e) => {
+                eprintln!("bench: {name} not drawn: {e}");
+                Ok(())
+            }
+        }
+    };
     if suite("culling") {
         let report = culling::run(
             &ctx,
@@ -60,15 +85,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             },
             &progress,
         )?;
-        write("culling.svg", &plot::culling_svg(&report)?)?;
-        markdown.push(report.markdown());
-        json.insert("culling".into(), serde_json::to_value(&report).unwrap_or_default());
+        finish_suite("culling", serde_json::to_value(&report).unwrap_or_default(), report.markdown())?;
+        plot("culling.svg", plot::culling_svg(&report).map(Some))?;
     }
     if suite("hiz") {
         progress("hi-z pyramid");
         let pyramid = hiz::run(&ctx, &shaders, &args.hiz_sizes, args.warmup, args.frames)?;
-        markdown.push(hiz::markdown(&pyramid));
-        json.insert("hiz".into(), serde_json::to_value(&pyramid).unwrap_or_default());
+        finish_suite("hiz", serde_json::to_value(&pyramid).unwrap_or_default(), hiz::markdown(&pyramid))?;
     }
     if suite("msaa") {
         let report = msaa::run(
@@ -87,16 +110,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             },
             &progress,
         )?;
-        if let Some(svg) = plot::msaa_svg(&report)? {
-            write("msaa.svg", &svg)?;
-        }
-        markdown.push(report.markdown());
-        json.insert("msaa".into(), serde_json::to_value(&report).unwrap_or_default());
+        finish_suite("msaa", serde_json::to_value(&report).unwrap_or_default(), report.markdown())?;
+        plot("msaa.svg", plot::msaa_svg(&report))?;
     }
-    let markdown = markdown.join("\n");
-    write("bench.json", &serde_json::to_string_pretty(&json).unwrap_or_default())?;
-    write("bench.md", &markdown)?;
-    println!("{markdown}");
+    println!("{}", markdown.join("\n"));
     match ctx.validation_log().count() {
         0 => Ok(()),
         n => Err(Error::Invalid(format!("the validation layer reported {n} message(s)"))),
