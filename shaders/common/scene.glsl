@@ -54,12 +54,18 @@ struct GpuPointLight {
     vec4 color;
 };
 
-// Eye-relative position of a local-space point. Subtracting the eye before adding the
-// local offset keeps the big numbers out of the sum. The hi parts are whole numbers
+// A split world position (hi + lo) relative to the split eye. The hi parts are whole numbers
 // (split_hi_lo in src/render/gpu_types.rs), so their difference is exact, and `precise` keeps
 // the compiler from regrouping the sum: the same relative position at any whole offset.
+vec3 rel_eye(vec3 hi, vec3 lo, vec3 eye_hi, vec3 eye_lo) {
+    precise vec3 t = (hi - eye_hi) + (lo - eye_lo);
+    return t;
+}
+
+// Eye-relative position of a local-space point. Subtracting the eye before adding the
+// local offset keeps the big numbers out of the sum.
 vec3 instance_rel_eye(GpuInstance inst, vec3 local, vec3 eye_hi, vec3 eye_lo) {
-    precise vec3 t = (vec3(inst.row0.w, inst.row1.w, inst.row2.w) - eye_hi) + (inst.translation_lo - eye_lo);
+    vec3 t = rel_eye(vec3(inst.row0.w, inst.row1.w, inst.row2.w), inst.translation_lo, eye_hi, eye_lo);
     mat3 m = transpose(mat3(inst.row0.xyz, inst.row1.xyz, inst.row2.xyz));
     return m * local + t;
 }

@@ -123,10 +123,10 @@ bool in_frustum(CullView view, vec3 c, float radius, vec3 half_extent) {
 bool occluded(CullRecord r, float radius, vec3 half_extent) {
 #ifdef HIZ_PREV_VIEW
     CullView view = frame.prev_cull_view;
-    vec3 c = (r.center_hi - frame.prev_eye_hi.xyz) + (record_center_lo(r) - frame.prev_eye_lo.xyz);
+    vec3 c = rel_eye(r.center_hi, record_center_lo(r), frame.prev_eye_hi.xyz, frame.prev_eye_lo.xyz);
 #else
     CullView view = frame.cull_view;
-    vec3 c = (r.center_hi - frame.eye_hi.xyz) + (record_center_lo(r) - frame.eye_lo.xyz);
+    vec3 c = rel_eye(r.center_hi, record_center_lo(r), frame.eye_hi.xyz, frame.eye_lo.xyz);
 #endif
     uvec4 rect;
     float nearest;
@@ -181,7 +181,7 @@ Decision decide(CullRecord r, bool evaluated, bool was_visible) {
     d.group = record_group(r);
     float radius = record_radius(r);
     vec3 half_extent = record_half_extent(r);
-    vec3 c = (r.center_hi - frame.eye_hi.xyz) + (record_center_lo(r) - frame.eye_lo.xyz);
+    vec3 c = rel_eye(r.center_hi, record_center_lo(r), frame.eye_hi.xyz, frame.eye_lo.xyz);
     bool huge = (r.group_flags & CULL_HUGE) != 0u;
     bool inside = huge || in_frustum(frame.cull_view, c, radius, half_extent);
     bool hidden = false;

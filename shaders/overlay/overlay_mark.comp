@@ -32,7 +32,7 @@ void main() {
     // Huge bounds are always visible; anything else not visible but inside the frustum (the
     // cull's box test) was behind the Hi-Z.
     if ((r.group_flags & CULL_HUGE) != 0u) return;
-    vec3 c = (r.center_hi - frame.eye_hi.xyz) + (record_center_lo(r) - frame.eye_lo.xyz);
+    vec3 c = rel_eye(r.center_hi, record_center_lo(r), frame.eye_hi.xyz, frame.eye_lo.xyz);
     vec3 half_extent = record_half_extent(r);
     vec3 lo = c - half_extent;
     vec3 hi = c + half_extent;
