@@ -168,13 +168,14 @@ const fn sized(s: SlotDecl, min: MinBytes) -> SlotDecl {
 }
 
 /// A draw command per draw group (`VkDrawIndexedIndirectCommand`).
-const COMMANDS_BYTES: MinBytes = MinBytes::PerMesh(20);
+const COMMANDS_BYTES: MinBytes =
+    MinBytes::PerMesh(std::mem::size_of::<crate::render::gpu_types::DrawIndexedIndirect>() as u64);
 /// A draw count per face-cull region: back, front, none (graphs before face culling declared 4).
-const COUNT_BYTES: MinBytes = MinBytes::Fixed(12);
+const COUNT_BYTES: MinBytes = MinBytes::Fixed(crate::render::face_cull::DRAW_COUNT_BYTES);
 /// An instance id per instance.
 const IDS_BYTES: MinBytes = MinBytes::PerInstance(4);
 /// A cull pass's counters (`CullCounters`), and the compressed G-buffer's.
-const STATS_BYTES: MinBytes = MinBytes::Fixed(64);
+const STATS_BYTES: MinBytes = MinBytes::Fixed(crate::graph::executor::STATS_BYTES as u64);
 
 const fn ms(s: SlotDecl) -> SlotDecl {
     SlotDecl { multisample_ok: true, ..s }
@@ -405,7 +406,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
             name: "hiz_build",
             doc: "builds the reversed-Z Hi-Z pyramid (minimum = farthest depth per footprint, conservative for every size) from (MSAA) depth",
             reads: vec![SlotDecl { multisample_ok: true, ..slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "depth, reduced across samples first") }],
-            writes: vec![slot("hiz", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(HIZ_FORMAT), "the pyramid: mip 0 at the depth's size, every mip written")],
+            writes: vec![slot("hiz", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(HIZ_FORMAT), "the pyramid from chain level 1: mip 0 at half the depth's size (max(1, width / 2) x max(1, height / 2)), at most the levels down to 1x1, every mip written")],
             settings: vec![SettingDecl {
                 name: "method",
                 default: SettingDefault::Choice(&["single", "per_mip"]),

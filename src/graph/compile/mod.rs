@@ -88,14 +88,16 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
     for (pos, message) in super::validate::sample_errors(graph, &samples) {
         sink.at(pos, message);
     }
-    // Sizes that failed to resolve stand in as 4 bytes: no size errors on top of those.
+
+    let pruning = prune::prune(graph);
+    // What the kept passes need of their resources. (Sizes that failed to resolve stand in as
+    // 4 bytes: no size errors on top of those.)
     if errors.list.is_empty() {
-        for (pos, message) in super::validate::slot_size_errors(graph, &resolved, frame.instances, frame.meshes) {
+        let errs = super::validate::slot_size_errors(graph, &pruning.keep, &resolved, frame.instances, frame.meshes);
+        for (pos, message) in errs {
             sink.at(pos, message);
         }
     }
-
-    let pruning = prune::prune(graph);
     let kept: Vec<usize> = (0..graph.passes.len()).filter(|&p| pruning.keep[p]).collect();
     let flows = flow::flows(graph, &pruning.keep);
     let deps = flow::dependencies(&flows);

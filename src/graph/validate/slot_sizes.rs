@@ -7,19 +7,20 @@ use super::super::compile::resolve::Resolved;
 use super::super::error::Pos;
 use super::super::kinds::MinBytes;
 use super::super::validated::{Pass, ValidatedGraph};
-use crate::oracle::hiz::stored_size;
-use glam::UVec2;
+use crate::passes::hiz_build::pyramid_size;
+use ash::vk;
 
-/// `(position, message)` for every binding whose resource is smaller than its slot takes;
-/// `resolved[r]` is resource `r` as compiled.
+/// `(position, message)` for every binding of a kept pass (`keep[p]`) whose resource is smaller
+/// than its slot takes; `resolved[r]` is resource `r` as compiled.
 pub(crate) fn slot_size_errors(
     graph: &ValidatedGraph,
+    keep: &[bool],
     resolved: &[Resolved],
     instances: u64,
     meshes: u64,
 ) -> Vec<(Pos, String)> {
     let mut out = Vec::new();
-    for pass in &graph.passes {
+    for (_, pass) in graph.passes.iter().enumerate().filter(|(p, _)| keep.get(*p).copied().unwrap_or(true)) {
         let Some(kind) = graph.kinds.iter().find(|k| k.name == pass.kind) else { continue };
         for binding in &pass.bindings {
             let Some(Resolved::Buffer(bytes)) = resolved.get(binding.resource) else { continue };
@@ -53,13 +54,13 @@ fn pyramid_error(graph: &ValidatedGraph, pass: &Pass, resolved: &[Resolved]) -> 
     let image = |slot: &str| {
         let b = pass.bindings.iter().find(|b| b.slot == slot)?;
         match resolved.get(b.resource)? {
-            Resolved::Image { extent, .. } => Some((b, UVec2::new(extent.width, extent.height))),
+            Resolved::Image { extent, .. } => Some((b, *extent)),
             Resolved::Buffer(_) => None,
         }
     };
     let ((_, depth), (hiz_binding, hiz)) = (image("depth")?, image("hiz")?);
-    let want = stored_size(depth);
-    if hiz == want {
+    let want: vk::Extent2D = pyramid_size(depth);
+    if (hiz.width, hiz.height) == (want.width, want.height) {
         // (A pyramid of this size cannot have more mips than the depth has levels below its own.)
         return None;
     }
@@ -67,7 +68,7 @@ fn pyramid_error(graph: &ValidatedGraph, pass: &Pass, resolved: &[Resolved]) -> 
     let message = format!(
         "pass '{}': the pyramid '{name}' is {}x{}; it must be {}x{}, half the depth's size {}x{} (size: \
          Fixed(\"max(1, width / 2)\", \"max(1, height / 2)\") for a full-screen depth)",
-        pass.name, hiz.x, hiz.y, want.x, want.y, depth.x, depth.y
+        pass.name, hiz.width, hiz.height, want.width, want.height, depth.width, depth.height
     );
     Some((hiz_binding.pos, message))
 }
