@@ -254,6 +254,13 @@ fn watch_reloads_on_change_and_keeps_the_last_good_graph_on_error() {
     // Fix it with a visible change.
     std::fs::write(&graph, good.replace("\"exposure\": 0.8", "\"exposure\": 1.6")).unwrap();
     assert!(watch.wait_for("reloaded"), "no reload: {:?}", watch.seen);
+    // A graph that compiles but cannot record a frame (it lights into an image only an engine
+    // provides): the last good graph comes back and keeps rendering.
+    let host = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/graph/examples/host_target.ron")).unwrap();
+    std::fs::write(&graph, host).unwrap();
+    assert!(watch.wait_for("back to the last good graph"), "no fallback: {:?}", watch.seen);
+    assert!(watch.seen.iter().any(|l| l.contains("imported resource 'color' was not provided")), "{:?}", watch.seen);
+    assert!(watch.wait_for("rendered 'default'"), "the last good graph renders again: {:?}", watch.seen);
     drop(watch);
     assert!(png.exists());
 }
@@ -275,12 +282,15 @@ fn watch_follows_the_headers_a_user_shader_includes() {
     let png = tmp.path().join("w.png");
     let mut watch = Watching::start(&graph, &png);
     assert!(watch.wait_for("watching"), "no start: {:?}", watch.seen);
+    let first = std::fs::read(&png).unwrap();
     // An error in the header is reported against the header, and the last good graph stays.
     std::fs::write(&header, "#define TINT_FACTOR vec3(1.0, 0.85, 0.7)\nconst float broken = ;\n").unwrap();
     assert!(watch.wait_for("still running the last good graph"), "header edit not seen: {:?}", watch.seen);
     assert!(watch.seen.iter().any(|l| l.contains("tint_factor.glsl")), "{:?}", watch.seen);
     std::fs::write(&header, "#define TINT_FACTOR vec3(0.5)\n").unwrap();
+    // (A reload is announced once its first frame is written.)
     assert!(watch.wait_for("reloaded"), "no reload: {:?}", watch.seen);
+    assert_ne!(std::fs::read(&png).unwrap(), first, "the header's new factor reached the image");
 }
 
 #[test]

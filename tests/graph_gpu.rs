@@ -181,3 +181,27 @@ fn buffers_too_small_for_their_slots_are_refused_at_the_binding_when_the_graph_i
         "{err}"
     );
 }
+
+#[test]
+fn a_reload_that_fails_at_its_first_frame_reverts_to_the_graph_it_replaced() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let settings = RenderSettings::new(48, 32);
+    let mut renderer = Renderer::new(&gpu, &shaders, boxes_scene(), settings).unwrap();
+    let before = renderer.render_to_image(&boxes_camera()).unwrap().1;
+    // Loads and compiles, but its frames need an image the host has not given.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let needs_host = GraphSpec::from_file(&root.join("graph/examples/host_target.ron")).unwrap();
+    renderer.reload_graph(&shaders, &needs_host).unwrap();
+    let err = renderer.render(&boxes_camera()).unwrap_err().to_string();
+    assert!(err.contains("imported resource 'color' was not provided"), "{err}");
+    renderer.revert_reload().unwrap();
+    assert_eq!(renderer.plan().name, "default");
+    let after = renderer.render_to_image(&boxes_camera()).unwrap().1;
+    assert_eq!(before.as_raw(), after.as_raw(), "the reverted graph renders as before");
+    // Only a reload that recorded nothing can be reverted, once.
+    assert!(renderer.revert_reload().is_err());
+    renderer.reload_graph(&shaders, &GraphSpec::default_graph()).unwrap();
+    renderer.render(&boxes_camera()).unwrap();
+    assert!(renderer.revert_reload().is_err(), "the new graph has recorded a frame");
+}

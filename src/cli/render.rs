@@ -227,8 +227,7 @@ fn watch(
                     }
                     Err(e) => {
                         eprintln!("error: {e}");
-                        shaders.clear_cache();
-                        renderer.reload_graph(shaders, &spec)?;
+                        renderer.revert_reload()?;
                         eprintln!("(back to the last good graph)");
                         render_once(renderer)?;
                     }

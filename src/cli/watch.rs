@@ -15,14 +15,9 @@ pub struct FileWatch {
 impl FileWatch {
     /// Watches `paths` (files; a directory means every file below it).
     pub fn new(paths: impl IntoIterator<Item = PathBuf>) -> Self {
-        let mut files = Vec::new();
-        for p in paths {
-            collect(&p, &mut files);
-        }
-        files.sort();
-        files.dedup();
-        let files = files.into_iter().map(|p| (stamp(&p), p)).map(|(s, p)| (p, s)).collect();
-        Self { files }
+        let mut watch = Self::default();
+        watch.watch_also(paths);
+        watch
     }
 
     /// Also watches those of `paths` not watched yet, as they are now; the others keep the state
@@ -38,7 +33,7 @@ impl FileWatch {
                 self.files.push((path, now));
             }
         }
-        self.files.sort();
+        self.files.sort_by(|a, b| a.0.cmp(&b.0));
     }
 
     /// The files watched.

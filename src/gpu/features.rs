@@ -11,7 +11,8 @@ pub const REQUIRED_DEVICE_EXTENSIONS: &[&CStr] = &[ash::khr::push_descriptor::NA
 
 /// Device extensions enabled when present; passes that need one refuse to run without it
 /// (`VK_EXT_post_depth_coverage`: the compressed G-buffer's per-sample coverage after the depth
-/// and stencil tests). A host engine that creates the device enables these too.
+/// and stencil tests). A host engine that creates the device enables those it wants too, and
+/// lists them in `HostHandles::enabled_device_extensions`.
 pub const OPTIONAL_DEVICE_EXTENSIONS: &[&CStr] = &[ash::ext::post_depth_coverage::NAME];
 
 /// The feature structs cullgraph enables, ready to chain into `VkDeviceCreateInfo`.

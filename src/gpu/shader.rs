@@ -210,8 +210,9 @@ fn resolve_include(
     }
     candidates.push(PathBuf::from(requested));
     for candidate in &candidates {
-        // A real file next to a user shader outside the library.
-        if candidate.is_absolute() || Path::new(from).is_absolute() {
+        // A real file next to a user shader outside the library (given by a path, relative to the
+        // working directory or not).
+        if candidate.is_absolute() || Path::new(from).is_absolute() || Path::new(from).is_file() {
             if let Some(content) = read_log.read(candidate) {
                 return Ok(shaderc::ResolvedInclude { resolved_name: candidate.display().to_string(), content });
             }

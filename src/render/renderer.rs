@@ -83,6 +83,8 @@ pub struct Renderer {
     spec: GraphSpec,
     /// Sizes the compressed G-buffer's pool, when enabled.
     pool: Option<PoolAdapter>,
+    /// The spec the last reload replaced (for [`Renderer::revert_reload`]).
+    replaced_spec: Option<GraphSpec>,
 }
 
 impl Renderer {
@@ -145,6 +147,7 @@ impl Renderer {
             exactly_visible: BTreeSet::new(),
             spec: spec.clone(),
             pool: None,
+            replaced_spec: None,
         })
     }
 
@@ -155,8 +158,31 @@ impl Renderer {
         let old = std::mem::replace(&mut self.runtime, runtime);
         self.retired.push((self.runtime_start, self.frame_index, old));
         self.runtime_start = self.frame_index;
-        self.spec = spec.clone();
+        self.replaced_spec = Some(std::mem::replace(&mut self.spec, spec.clone()));
         Ok(())
+    }
+
+    /// Puts back the graph that the last [`Renderer::reload_graph`] replaced, as it was, when
+    /// the new one has not recorded a frame: a graph that loads and compiles can still fail at
+    /// its first frame (a pass refusing what is bound to it), and a hot reload then falls back to
+    /// the last good graph without rebuilding it from files that may have changed meanwhile.
+    pub fn revert_reload(&mut self) -> Result<()> {
+        let recorded_none = self.runtime_start == self.frame_index;
+        match (self.retired.pop(), self.replaced_spec.take()) {
+            (Some((start, end, old)), Some(spec)) if recorded_none && end == self.frame_index => {
+                self.runtime = old;
+                self.runtime_start = start;
+                self.spec = spec;
+                Ok(())
+            }
+            (retired, spec) => {
+                self.retired.extend(retired);
+                self.replaced_spec = spec;
+                Err(Error::Invalid(
+                    "no reload to revert: nothing was reloaded, or the new graph has recorded frames".into(),
+                ))
+            }
+        }
     }
 
     /// Lets the compressed G-buffer's pool follow what frames ask for (see
