@@ -1,15 +1,16 @@
 //! Pass declarations: names, kinds, slots and the resources bound to them, settings, and the
 //! shader/dispatch fields that only compute passes take.
 
+use super::slot_sizes::too_small;
 use super::{literal_text, resource_list, Scope, Validator, Vars};
 use crate::graph::error::{close_names, list};
-use crate::graph::kinds::{PassKindInfo, SettingDefault, COMPUTE_KIND};
+use crate::graph::kinds::{MinBytes, PassKindInfo, SettingDefault, COMPUTE_KIND};
 use crate::graph::locate::Seg;
 use crate::graph::plan::{SettingValue, Version};
 use crate::graph::schema::{GraphFile, Literal, PassDecl};
 use crate::graph::validated::ParamValue;
-use crate::graph::validated::{Pass, PassBinding, PassSetting, Resource, SettingSource};
-use std::collections::HashMap;
+use crate::graph::validated::{Pass, PassBinding, PassSetting, Resource, ResourceDesc, SettingSource};
+use std::collections::{BTreeMap, HashMap};
 
 /// A `reads`/`writes` entry after its resource was looked up.
 pub(super) struct Entry<'d> {
@@ -247,7 +248,7 @@ impl Validator<'_> {
                 self.drop_binding(e.target);
                 continue;
             }
-            pass.bindings.push(PassBinding {
+            let binding = PassBinding {
                 slot: slot.name.to_string(),
                 written_slot: e.slot.to_string(),
                 resource: r,
@@ -256,7 +257,16 @@ impl Validator<'_> {
                 multisample_ok: slot.multisample_ok,
                 in_writes: e.in_writes,
                 pos: val_pos,
-            });
+            };
+            // A fixed minimum against a constant size needs no scene: say it now, not at compile.
+            if let (MinBytes::Fixed(need), ResourceDesc::Buffer { size }) = (slot.min_bytes, &res.desc) {
+                let bytes = size.expr.eval(&BTreeMap::new()).ok().map(|n| n.as_f64());
+                if let Some(bytes) = bytes.filter(|b| *b >= 0.0 && *b < need as f64) {
+                    let message = too_small(&decl.name, &binding, &res.name, bytes as u64, slot.min_bytes, need, "");
+                    self.err(val_pos, message);
+                }
+            }
+            pass.bindings.push(binding);
         }
         let pass_pos = self.pos(&[Seg::Field("passes"), Seg::Index(i)]);
         for (in_writes, slots) in [(false, &kind.reads), (true, &kind.writes)] {

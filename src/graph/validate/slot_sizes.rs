@@ -6,7 +6,7 @@
 use super::super::compile::resolve::Resolved;
 use super::super::error::Pos;
 use super::super::kinds::MinBytes;
-use super::super::validated::{Pass, ValidatedGraph};
+use super::super::validated::{Pass, PassBinding, ValidatedGraph};
 use crate::passes::hiz_build::pyramid_size;
 use ash::vk;
 
@@ -27,18 +27,10 @@ pub(crate) fn slot_size_errors(
             let min = kind.slot(&binding.slot).map_or(MinBytes::Any, |s| s.min_bytes);
             let need = min.bytes(instances, meshes);
             if *bytes < need {
-                let dir = if binding.in_writes { "writes" } else { "reads" };
-                out.push((
-                    binding.pos,
-                    format!(
-                        "pass '{}' {dir} \"{}\": '{}' holds {bytes} bytes; the slot takes {} = {need} bytes \
-                         for this scene ({instances} instances, {meshes} meshes)",
-                        pass.name,
-                        binding.written_slot,
-                        graph.resources[binding.resource].name,
-                        min.rule()
-                    ),
-                ));
+                let resource = &graph.resources[binding.resource].name;
+                let scene = format!(" for this scene ({instances} instances, {meshes} meshes)");
+                let message = too_small(&pass.name, binding, resource, *bytes, min, need, &scene);
+                out.push((binding.pos, message));
             }
         }
         if pass.kind == "hiz_build" {
@@ -46,6 +38,28 @@ pub(crate) fn slot_size_errors(
         }
     }
     out
+}
+
+/// What a binding whose buffer holds `bytes` where its slot takes `min` (`need` bytes, `scene`
+/// saying for what when that depends on the scene) is told.
+pub(crate) fn too_small(
+    pass: &str,
+    binding: &PassBinding,
+    resource: &str,
+    bytes: u64,
+    min: MinBytes,
+    need: u64,
+    scene: &str,
+) -> String {
+    let dir = if binding.in_writes { "writes" } else { "reads" };
+    let rule = match min {
+        MinBytes::Fixed(_) => String::new(),
+        _ => format!("{} = ", min.rule()),
+    };
+    format!(
+        "pass '{pass}' {dir} \"{}\": '{resource}' holds {bytes} bytes; the slot takes {rule}{need} bytes{scene}",
+        binding.written_slot
+    )
 }
 
 /// The pyramid of a `hiz_build` pass must be half its depth's size: level 0 of the chain is not
