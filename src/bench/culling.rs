@@ -214,7 +214,8 @@ pub fn run(
                     kinds.iter().any(|(name, kind)| *name == p.pass && (kind == "instance_cull" || kind == "hiz_build"))
                 })
                 .map(|p| p.ms)
-                .sum();
+                // (A float sum starts at -0.0: a graph with no culling pass would print "-0.0000".)
+                .fold(0.0, |a, b| a + b);
             let mut g = GraphFigure {
                 graph: graph.clone(),
                 frame_ms: median(&mut totals),

@@ -233,7 +233,8 @@ fn measure(
         .map(|r| r.bytes)
         .sum();
     let passes: Vec<PassTime> = median_per_pass(&timings).into_iter().map(|(pass, ms)| PassTime { pass, ms }).collect();
-    let sum = |keep: &dyn Fn(&str) -> bool| passes.iter().filter(|p| keep(&p.pass)).map(|p| p.ms).sum();
+    let sum =
+        |keep: &dyn Fn(&str) -> bool| passes.iter().filter(|p| keep(&p.pass)).map(|p| p.ms).fold(0.0, |a, b| a + b);
     let figure = MsaaFigure {
         scene: String::new(),
         lights: 0,
