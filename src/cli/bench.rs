@@ -22,7 +22,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let source: SceneSource = s.parse()?;
             let name = match &source {
                 SceneSource::Builtin(name) => name.clone(),
-                SceneSource::File(path) => path.file_stem().map_or(s.clone(), |n| n.to_string_lossy().into_owned()),
+                SceneSource::File(path) => {
+                    // Before the suites before it have run for minutes.
+                    if !path.is_file() {
+                        return Err(Error::Invalid(format!("--msaa-scenes: no file '{}'", path.display())));
+                    }
+                    path.file_stem().map_or(s.clone(), |n| n.to_string_lossy().into_owned())
+                }
             };
             Ok((name, source))
         })
