@@ -59,6 +59,14 @@ pub enum ShaderError {
     /// shaderc itself failed (initialisation, internal error).
     #[error("shaderc: {0}")]
     Internal(String),
+    /// A shader file on disk could not be read.
+    #[error("cannot read shader '{path}': {source}")]
+    Read {
+        /// The file.
+        path: String,
+        /// Why.
+        source: std::io::Error,
+    },
 }
 
 /// Where shader sources are read from.
@@ -145,6 +153,18 @@ impl ShaderCompiler {
         self.compile_source(&rel, &source, defines)
     }
 
+    /// Compiles the shader at `path`: the file on disk if there is one (a user shader), otherwise
+    /// `path` inside the shader library (e.g. `lighting/lighting.comp`).
+    pub fn compile_path(&self, path: &Path, defines: &[(&str, &str)]) -> Result<Spirv, ShaderError> {
+        if !path.is_file() {
+            return self.compile(&path.to_string_lossy(), defines);
+        }
+        let source = std::fs::read_to_string(path)
+            .map_err(|source| ShaderError::Read { path: path.display().to_string(), source })?;
+        self.read_log.0.lock().unwrap_or_else(|p| p.into_inner()).insert(path.to_path_buf());
+        self.compile_source(&path.display().to_string(), &source, defines)
+    }
+
     /// Compiles `source`, named `name` (its extension gives the stage); includes resolve relative
     /// to `name`'s directory first (on disk when `name` is a real path), then against the library.
     pub fn compile_source(&self, name: &str, source: &str, defines: &[(&str, &str)]) -> Result<Spirv, ShaderError> {
@@ -156,10 +176,6 @@ impl ShaderCompiler {
         }
         profiling::scope!("cullgraph::compile_shader", name);
         let kind = stage_of(name).ok_or_else(|| ShaderError::UnknownStage(name.into()))?;
-        if Path::new(name).is_file() {
-            // A user shader given by its path (the caller read it).
-            self.read_log.0.lock().unwrap_or_else(|p| p.into_inner()).insert(PathBuf::from(name));
-        }
         let internal = |e: shaderc::Error| ShaderError::Internal(e.to_string());
         let mut options = shaderc::CompileOptions::new().map_err(internal)?;
         options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_3 as u32);

@@ -49,17 +49,11 @@ impl Environment for NoDevice {
 /// Compiles the shader at `path` with `compiler` and reflects it: the file on disk if it
 /// exists, otherwise `path` inside the compiler's shader library (e.g. `lighting/lighting.comp`).
 pub fn shader_interface_with(compiler: &crate::gpu::ShaderCompiler, path: &Path) -> Result<ShaderInterface, String> {
-    let spirv = if path.is_file() {
-        let source =
-            std::fs::read_to_string(path).map_err(|e| format!("cannot read shader '{}': {e}", path.display()))?;
-        compiler.compile_source(&path.display().to_string(), &source, &[]).map_err(|e| e.to_string())?
-    } else {
-        match compiler.compile(&path.to_string_lossy(), &[]) {
-            Err(crate::gpu::ShaderError::NotFound(_)) => {
-                return Err("not found (looked next to the graph file and in the shader library)".into())
-            }
-            other => other.map_err(|e| e.to_string())?,
+    let spirv = match compiler.compile_path(path, &[]) {
+        Err(crate::gpu::ShaderError::NotFound(_)) => {
+            return Err("not found (looked next to the graph file and in the shader library)".into())
         }
+        other => other.map_err(|e| e.to_string())?,
     };
     let mut interface = crate::gpu::reflect::reflect(&spirv).map_err(|e| e.to_string())?;
     // The optimizer strips variable names from the SPIR-V; take them from the source, with the

@@ -30,13 +30,7 @@ impl ComputePass {
             Some(dir) if shader.is_relative() && dir.join(shader).exists() => dir.join(shader),
             _ => shader.clone(),
         };
-        let spirv = if path.exists() {
-            let source = std::fs::read_to_string(&path)
-                .map_err(|source| crate::Error::Io { path: path.display().to_string(), source })?;
-            shaders.compile_source(&path.display().to_string(), &source, &[])?
-        } else {
-            shaders.compile(&shader.to_string_lossy(), &[])?
-        };
+        let spirv = shaders.compile_path(&path, &[])?;
         let dispatch = pass.dispatch.ok_or_else(|| invalid("a compute pass needs a dispatch size".into()))?;
         Ok(Self {
             pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
