@@ -301,3 +301,34 @@ fn the_overlay_flags_of_cullgraph_render() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
 }
+
+#[test]
+fn the_compressed_gbuffers_counters_on_the_panel_are_this_frames() {
+    let gpu = GpuTest::new();
+    let scene =
+        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(2000), ..Default::default() }).unwrap();
+    let size = (480, 270);
+    let camera = scene.default_camera(size.0 as f32 / size.1 as f32);
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let example = GraphSpec::from_file(&root.join("graph/examples/msaa_overlay.ron")).unwrap();
+    // A pool this small overflows, so that every figure on the row is one the frame made.
+    for pool_fraction in ["0.5", "0.004"] {
+        let spec = example.clone().with_overrides([("pool_fraction".to_string(), pool_fraction.to_string())]);
+        let (stats, image, _) = render(&gpu, &scene, &camera, size, &spec, 2);
+        let g = &stats.gbuffer[0];
+        let edges: u32 = g.surfaces_per_pixel[1..].iter().sum();
+        let lines = read_panel(&image, 8, 1);
+        let row = |prefix: &str| lines.iter().find(|l| l.starts_with(prefix)).cloned().unwrap_or_default();
+        assert_eq!(
+            row("pool blocks"),
+            format!("pool blocks {} / {}  overflow {} samples", g.pool_used, g.pool_blocks, g.overflow_samples),
+            "panel:\n{}",
+            lines.join("\n")
+        );
+        assert_eq!(row("pixels with"), format!("pixels with 2+ surfaces {edges}"));
+        assert!(edges > 0, "the city has edge pixels");
+        if pool_fraction == "0.004" {
+            assert!(g.overflow_samples > 0 && g.pool_used == g.pool_blocks, "{g:?}");
+        }
+    }
+}

@@ -37,6 +37,10 @@
 #define FIELD_TOTAL_MS 7u      // the timed frame's total, as a time field
 #define FIELD_TIMED_FRAME 8u   // which frame the times are from ("-" when none yet)
 #define FIELD_MARKED 9u        // instances the culled view outlined
+#define FIELD_POOL_USED 10u    // compressed G-buffer: pool blocks in use this frame
+#define FIELD_POOL_BLOCKS 11u  // blocks in the pool
+#define FIELD_OVERFLOW 12u     // samples whose fragments found the pool full
+#define FIELD_EDGE_PIXELS 13u  // pixels with two or more distinct surfaces
 #define FIELD_PASS_DRAWN 16u   // + stats slot: instances that pass drew
 #define FIELD_PASS_MS 32u      // + pass index: its GPU time, 8 characters wide ("-" when unknown)
 

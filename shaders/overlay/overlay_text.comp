@@ -2,7 +2,7 @@
 // Overlay, step 1: formats the panel's text. One thread per row walks the row's template and
 // writes its characters, numbers formatted here from this frame's counters (no readback), into
 // the character grid; the rows' lengths give the panel width. Variant HAS_MARKS also reads the
-// number of instances the culled view outlined.
+// number of instances the culled view outlined, HAS_GBUFFER the compressed G-buffer's counters.
 #extension GL_GOOGLE_include_directive : require
 #include "../cull/cull_common.glsl"
 #include "overlay_common.glsl"
@@ -18,6 +18,18 @@ layout(set = 0, binding = 5, scalar) readonly buffer Times { OverlayTimes times;
 layout(set = 0, binding = 6, scalar) writeonly buffer Text { OverlayText text; };
 #ifdef HAS_MARKS
 layout(set = 0, binding = 7) readonly buffer Marks { uint marked; };
+#endif
+#ifdef HAS_GBUFFER
+// A lighting_compressed pass's counters (GbufferCounters in src/stats/gbuffer.rs), this frame's.
+layout(set = 0, binding = 8) readonly buffer GbufferStats {
+    uint allocated;
+    uint overflow_fragments;
+    uint overflow_samples;
+    uint pool_blocks;
+    uint pixels;
+    uint pad[3];
+    uint histogram[8];   // pixels with 2..8 surfaces in [1..7]
+} gstats;
 #endif
 
 layout(push_constant) uniform Push {
@@ -157,6 +169,16 @@ void main() {
             }
 #ifdef HAS_MARKS
             else if (field == FIELD_MARKED) put_u32(marked);
+#endif
+#ifdef HAS_GBUFFER
+            else if (field == FIELD_POOL_USED) put_u32(min(gstats.allocated, gstats.pool_blocks));
+            else if (field == FIELD_POOL_BLOCKS) put_u32(gstats.pool_blocks);
+            else if (field == FIELD_OVERFLOW) put_u32(gstats.overflow_samples);
+            else if (field == FIELD_EDGE_PIXELS) {
+                uint edges = 0u;
+                for (uint k = 1u; k < 8u; ++k) edges += gstats.histogram[k];
+                put_u32(edges);
+            }
 #endif
             else if (field >= FIELD_PASS_DRAWN && field < FIELD_PASS_DRAWN + OVERLAY_MAX_STATS) {
                 uint k = field - FIELD_PASS_DRAWN;

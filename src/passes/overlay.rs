@@ -4,7 +4,8 @@
 //! **Text without readback.** When the pass is created, the CPU describes the panel as text
 //! templates (`shaders/overlay/overlay_common.glsl`): rows of tokens, each an ASCII character or a
 //! numeric field (instances, tested, frustum-culled, occlusion-culled, drawn in total and per cull
-//! pass, draws, triangles, milliseconds). Labels come from the plan: the cull passes' `phase`
+//! pass, draws, triangles, milliseconds; with `gbuffer_stats` bound, the compressed G-buffer's
+//! pool blocks in use, overflowed samples and pixels with two or more surfaces). Labels come from the plan: the cull passes' `phase`
 //! (or their names) and every pass's name for the timings. Each frame `overlay_text.comp` (one
 //! workgroup, a thread per row) formats the fields from the counters the cull passes wrote to
 //! their `stats` buffers earlier in the same frame, so the figures are this frame's, on the
@@ -62,6 +63,8 @@ pub const MAX_LABEL: usize = 12;
 
 /// The stats slots, in the order the panel lists them.
 pub const STATS_SLOTS: [&str; MAX_STATS] = ["stats0", "stats1", "stats2", "stats3"];
+/// The slot of a compressed G-buffer's counters (a `lighting_compressed` pass's `stats`).
+pub const GBUFFER_STATS_SLOT: &str = "gbuffer_stats";
 
 const TOKEN_END: u32 = 0xFFFF_FFFF;
 const TOKEN_FIELD: u32 = 0x1000_0000;
@@ -75,6 +78,10 @@ const FIELD_TRIANGLES: u32 = 6;
 const FIELD_TOTAL_MS: u32 = 7;
 const FIELD_TIMED_FRAME: u32 = 8;
 const FIELD_MARKED: u32 = 9;
+const FIELD_POOL_USED: u32 = 10;
+const FIELD_POOL_BLOCKS: u32 = 11;
+const FIELD_OVERFLOW: u32 = 12;
+const FIELD_EDGE_PIXELS: u32 = 13;
 const FIELD_PASS_DRAWN: u32 = 16;
 const FIELD_PASS_MS: u32 = 32;
 /// Characters of a time field.
@@ -297,6 +304,19 @@ impl Panel {
             }
         }
         rows.push(Row::default().text("draws ").count(FIELD_DRAWS).text("  triangles ").field(FIELD_TRIANGLES, 20));
+        if pass.bindings.iter().any(|b| b.slot == GBUFFER_STATS_SLOT) {
+            rows.push(
+                Row::default()
+                    .text("pool blocks ")
+                    .count(FIELD_POOL_USED)
+                    .text(" / ")
+                    .count(FIELD_POOL_BLOCKS)
+                    .text("  overflow ")
+                    .count(FIELD_OVERFLOW)
+                    .text(" samples"),
+            );
+            rows.push(Row::default().text("pixels with 2+ surfaces ").count(FIELD_EDGE_PIXELS));
+        }
         match settings.view {
             OverlayView::Stats => {}
             OverlayView::Hiz => {
@@ -499,9 +519,15 @@ impl OverlayPass {
         let panel = Panel::new(plan, pass, &settings, &labels);
         let name = |step: &str| format!("{} ({step})", pass.name);
         let culled = settings.view == OverlayView::Culled;
-        let text_defines: &[(&str, &str)] = if culled { &[("HAS_MARKS", "1")] } else { &[] };
+        let mut text_defines = Vec::new();
+        if culled {
+            text_defines.push(("HAS_MARKS", "1"));
+        }
+        if bound(GBUFFER_STATS_SLOT) {
+            text_defines.push(("HAS_GBUFFER", "1"));
+        }
         let text_step =
-            Pipeline::compute(ctx, &name("text"), &shaders.compile("overlay/overlay_text.comp", text_defines)?)?;
+            Pipeline::compute(ctx, &name("text"), &shaders.compile("overlay/overlay_text.comp", &text_defines)?)?;
         let view_define: &[(&str, &str)] = match settings.view {
             OverlayView::Stats => &[],
             OverlayView::Hiz => &[("VIEW_HIZ", "1")],
@@ -654,6 +680,9 @@ impl PassNode for OverlayPass {
         ]);
         if let Some((_, coverage)) = &self.coverage {
             binds.push(Bind::Buffer(7, coverage.handle()));
+        }
+        if let Some(gbuffer) = rec.slots.buffer(GBUFFER_STATS_SLOT) {
+            binds.push(Bind::Buffer(8, gbuffer.handle()));
         }
         let triangles = scene.triangles;
         self.text_step.bind(cmd);
