@@ -5,8 +5,9 @@
 //! templates (`shaders/overlay/overlay_common.glsl`): rows of tokens, each an ASCII character or a
 //! numeric field (instances, tested, frustum-culled, occlusion-culled, drawn in total and per cull
 //! pass, draws, triangles, milliseconds; with `gbuffer_stats` bound, the compressed G-buffer's
-//! pool blocks in use, overflowed samples and pixels with two or more surfaces). Labels come from the plan: the cull passes' `phase`
-//! (or their names) and every pass's name for the timings. Each frame `overlay_text.comp` (one
+//! pool blocks in use, overflowed samples and pixels with two or more surfaces). Labels come
+//! from the plan: the cull passes' `phase` (or their names) and every pass's name for the
+//! timings. Each frame `overlay_text.comp` (one
 //! workgroup, a thread per row) formats the fields from the counters the cull passes wrote to
 //! their `stats` buffers earlier in the same frame, so the figures are this frame's, on the
 //! GPU, with no readback; then `overlay_draw.comp` draws the character grid with font8x8 glyphs
