@@ -1,23 +1,9 @@
 //! The command line's other subcommands as a user runs them: `bench` (every suite, its JSON,
 //! Markdown and plots), `graph check|plan|dot` and `devices`.
 
-use std::process::Command;
+mod common;
 
-fn cullgraph() -> Command {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_cullgraph"));
-    cmd.env("CULLGRAPH_DEVICE", std::env::var("CULLGRAPH_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into()));
-    cmd.env("CULLGRAPH_VALIDATION", "1");
-    cmd
-}
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = cullgraph().args(args).output().unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+use common::cli::run;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 

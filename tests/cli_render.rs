@@ -1,25 +1,13 @@
 //! The `cullgraph render` command as a user runs it: bad input gives a clear message and a
 //! non-zero exit; `--watch` hot-reloads a graph, keeping the last good one on errors.
 
+mod common;
+
+use common::cli::{cullgraph, run};
 use std::io::{BufRead, BufReader};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
-
-fn cullgraph() -> Command {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_cullgraph"));
-    cmd.env("CULLGRAPH_DEVICE", std::env::var("CULLGRAPH_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into()));
-    cmd
-}
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = cullgraph().args(args).output().unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
 
 #[test]
 fn bad_flags_and_files_are_reported_clearly() {

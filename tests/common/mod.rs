@@ -3,6 +3,8 @@
 //! validation on, and any validation message fails it.
 #![allow(dead_code)]
 
+pub mod cli;
+
 use cullgraph::gpu::{ContextOptions, GpuContext, ShaderCompiler, ShaderRoot};
 use std::ops::Deref;
 
