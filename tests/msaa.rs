@@ -60,8 +60,15 @@ fn with_owner(text: &str, owner: Owner) -> String {
             0..=1,
         ),
     ];
+    // Only claims have an order to choose; the check graph sets no selective-AA params.
+    let params = r#""aa_object_flags": false,"#;
+    let settings = r#""aa_object_flags": "aa_object_flags","#;
+    let order_edits = [
+        (params, format!("{params}\n        \"claim_order\": \"auto\","), 0..=1),
+        (settings, format!("{settings}\n                \"claim_order\": \"claim_order\","), 0..=1),
+    ];
     let mut text = text.to_string();
-    for (from, to, times) in edits {
+    for (from, to, times) in edits.into_iter().chain(order_edits) {
         let count = text.matches(from).count();
         assert!(times.contains(&count), "the graph has `{from}` {count} times");
         text = text.replace(from, &to);
@@ -75,6 +82,10 @@ fn owner_spec(file: &str, owner: Owner, params: &[(&str, &str)]) -> GraphSpec {
     let mut spec = spec(file, params);
     spec.text = with_owner(&spec.text, owner);
     spec
+}
+
+fn read_repo_file(path: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(path)).unwrap()
 }
 
 fn spec(file: &str, params: &[(&str, &str)]) -> GraphSpec {
@@ -323,6 +334,92 @@ fn claimed_samples_give_the_stencils_image_except_at_coplanar_ties() {
     println!("claim vs stencil: {differing} of {ties} tie pixels differ");
     if gpu.caps().name.contains("llvmpipe") {
         assert_eq!(differing, 0, "lavapipe claims in draw order");
+    }
+
+    // `claim_order: "draw"` claims in an ordered sample interlock: the stencil's image on any
+    // device that has one, and a clear refusal, naming what is missing, on one that has not
+    // (lavapipe 22.3).
+    let draw_order = spec("builtin:msaa_compressed_claim", &[("pool_fraction", "3"), ("claim_order", "draw")]);
+    if gpu.caps().sample_interlock {
+        let claim = render(&gpu, &scene, &boxes_camera(), size, &draw_order, 2).0;
+        assert_eq!(
+            mean_and_max_difference(&claim, &red_first),
+            (0.0, 0),
+            "draw-order claims decide ties as the stencil"
+        );
+    } else {
+        let settings = RenderSettings::new(size.0, size.1);
+        let error = Renderer::with_graph(&gpu, &gpu.shaders(), scene.clone(), settings, &draw_order).err().unwrap();
+        let message = error.to_string();
+        assert!(
+            message.contains("VK_EXT_fragment_shader_interlock") && message.contains("fragmentShaderSampleInterlock"),
+            "{message}"
+        );
+        assert!(message.contains("pass 'gbuffer'"), "the error names the pass: {message}");
+        gpu.assert_clean();
+    }
+}
+
+/// The order of a pixel's list is the order its fragments happened to run, which a GPU does not
+/// fix: the lighting must give the same image for any order. The frame is lit twice, before and
+/// after a compute pass reverses every list, and the two images are compared on the GPU; with a
+/// pool small enough to drop fragments (whose samples then go to a listed block where the pixel
+/// has no head), and with an unbounded one.
+#[test]
+fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
+    let gpu = GpuTest::new();
+    let (scene, camera) = city(1500);
+    let outputs = r#"    outputs: ["color"],"#;
+    let extra_passes = r#"        Pass(
+            name: "reverse_lists",
+            kind: "compute",
+            shader: "reverse_lists.comp",
+            reads: {"depth": "depth"},
+            writes: {"gbuffer": "gbuffer"},
+            dispatch: PerPixel("depth"),
+        ),
+        Pass(
+            name: "lighting_reversed",
+            kind: "lighting_compressed",
+            reads: {"depth": "depth", "gbuffer": "gbuffer"},
+            writes: {"output": "color_reversed"},
+            settings: {"exposure": "exposure", "light_tiles": "light_tiles", "shared_blocks": "shared_blocks"},
+        ),
+        Pass(
+            name: "difference",
+            kind: "compute",
+            shader: "image_difference.comp",
+            reads: {"first": "color", "second": "color_reversed"},
+            writes: {"difference": "difference"},
+            dispatch: PerPixel("difference"),
+        ),
+    ],
+    outputs: ["difference", "color"],"#;
+    let images = r#"        "color": Image(format: R8G8B8A8_UNORM),"#;
+    let more_images = r#"
+        "color_reversed": Image(format: R8G8B8A8_UNORM),
+        "difference": Image(format: R8G8B8A8_UNORM),"#;
+    for owner in OWNERS {
+        for pool in ["0.05", "3"] {
+            // The shipped graph, in the test graphs' folder for the extra shaders.
+            let mut graph = spec("tests/graphs/gpu/compressed_check.ron", &[("pool_fraction", pool)]);
+            let text = with_owner(&read_repo_file("graph/msaa_compressed.ron"), owner);
+            assert_eq!((text.matches(outputs).count(), text.matches(images).count()), (1, 1));
+            let text = text.replace(&format!("    ],\n{outputs}"), extra_passes);
+            graph.text = text.replace(images, &format!("{images}{more_images}"));
+            let (difference, stats) = render(&gpu, &scene, &camera, (96, 64), &graph, 2);
+            let g = &stats.last().unwrap().gbuffer[0];
+            assert!(
+                g.surfaces_per_pixel[2..].iter().sum::<u32>() >= 5,
+                "{owner:?}, pool {pool}: lists of two or more blocks: {g:?}"
+            );
+            if pool != "3" {
+                assert!(g.overflow_fragments > 0, "{owner:?}, pool {pool}: the pool overflows: {g:?}");
+            }
+            let differing: Vec<_> =
+                difference.pixels().enumerate().filter(|(_, p)| p.0[..3] != [0, 0, 0]).take(5).collect();
+            assert!(differing.is_empty(), "{owner:?}, pool {pool}: reversed lists change pixels {differing:?}");
+        }
     }
 }
 

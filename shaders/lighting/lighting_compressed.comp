@@ -7,7 +7,12 @@
 // A workgroup is a 16x16 tile. Its pixels' pool blocks are gathered into one shared list and
 // shaded by all 256 invocations together, so that an edge pixel's extra blocks do not make its
 // whole subgroup wait on a loop (the divergence the thesis notes in its resolve loop); every
-// block is still shaded exactly once and each pixel sums its own blocks in list order.
+// block is still shaded exactly once.
+//
+// A pixel's list is in the order its fragments happened to run, which no GPU fixes, so nothing
+// here depends on it: the weighted colors are summed in fixed point (exact, so in any order),
+// and samples the head would take where there is no head go to the block holding the lowest
+// sample, not to the first listed.
 #include "../common/scene.glsl"
 #include "../common/shading.glsl"
 #include "../common/octahedral.glsl"
@@ -137,6 +142,7 @@ struct PixelList {
     uint kept;             // samples the head stands for (its own, and any dropped by a full pool or an AA cap)
     uint blocks;           // pool blocks listed
     uint listed;           // samples they cover
+    uint lowest_sample;    // lowest sample a listed block holds (SAMPLES: none)
     uint background;       // samples with no geometry
     uint first_entry;      // first of its entries in the tile's shared list, or ENTRY_NONE
     uint next_link;        // the link to its first block not in the shared list yet (LINK_NULL: none)
@@ -148,9 +154,18 @@ uint pixel_count() { return frame.size_lights.x * frame.size_lights.y; }
 uint entry_meta_pixel(uint meta) { return meta & 0xFFu; }
 uint entry_meta_next(uint meta) { return meta >> 8; }
 
-// Weight of the n-th listed block: its samples, plus the head's when there is no head block.
-uint listed_weight(PixelList list, uint link, uint n) {
-    return link_count(link) + (n == 0u && list.head_depth <= 0.0 ? list.kept : 0u);
+// Weight of a listed block: its samples, plus those the head stands for when there is no head
+// block (given to the block with the lowest sample, whatever the list's order).
+uint listed_weight(PixelList list, uint link) {
+    bool takes_kept = list.head_depth <= 0.0 && link_sample(link) == list.lowest_sample;
+    return link_count(link) + (takes_kept ? list.kept : 0u);
+}
+
+// A pixel's weighted sum of tone-mapped colors (each within [0, 1]) in units of 2^-24: at most
+// 2^24 * SAMPLES <= 2^27, and integer sums do not depend on their order.
+#define SUM_UNIT 16777216.0
+void add_weighted(inout uvec3 sum, vec3 color, uint weight) {
+    sum += uvec3(clamp(color, 0.0, 1.0) * SUM_UNIT + 0.5) * weight;
 }
 
 // What a pixel's head holds, loaded before anything waits on it (so that the loads' latencies
@@ -231,6 +246,7 @@ PixelList gather_pixel(ivec2 pixel, HeadLoads h, inout DepthRange range) {
     list.head_depth = head_depth(h);
     list.blocks = 0u;
     list.listed = 0u;
+    list.lowest_sample = SAMPLES;
     list.first_entry = ENTRY_NONE;
     list.next_link = LINK_NULL;
     depth_range_add(range, list.head_depth);
@@ -242,6 +258,7 @@ PixelList gather_pixel(ivec2 pixel, HeadLoads h, inout DepthRange range) {
     for (uint n = 0u; n < SAMPLES && link_index(link) != LINK_NULL; ++n) {
         list.blocks += 1u;
         list.listed += link_count(link);
+        list.lowest_sample = min(list.lowest_sample, link_sample(link));
         // Light culling must cover the depth each block is shaded at.
         depth_range_add(range, loaded_depth(h, pixel, link_sample(link)));
 #if SHARED_BLOCKS > 0
@@ -280,12 +297,12 @@ uint pixel_surfaces(PixelList list) {
     return max((list.background > 0u ? 1u : 0u) + (list.head_depth > 0.0 ? 1u : 0u) + list.blocks, 1u);
 }
 
-// Adds the pixel's entries in this round of the shared list to `sum`, in list order (`n`: the
-// pixel's blocks summed so far).
-vec3 add_shared_blocks(PixelList list, vec3 sum, inout uint n) {
+// Adds the pixel's entries in this round of the shared list to `sum` (`n`: the pixel's blocks
+// summed so far).
+uvec3 add_shared_blocks(PixelList list, uvec3 sum, inout uint n) {
 #if SHARED_BLOCKS > 0
     for (uint e = list.first_entry; e != ENTRY_NONE; e = entry_meta_next(sh_block_meta[e]), ++n) {
-        sum += unpack_color(sh_block_color[e]) * float(listed_weight(list, sh_block_link[e], n));
+        add_weighted(sum, unpack_color(sh_block_color[e]), listed_weight(list, sh_block_link[e]));
     }
 #endif
     return sum;
@@ -298,12 +315,12 @@ vec3 add_shared_blocks(PixelList list, vec3 sum, inout uint n) {
 #define MAX_SHARED_ROUNDS 4u
 
 // When the tile had more blocks than the shared list holds, its pixels put the rest on the
-// list in further rounds, each shaded by all invocations together, and sum them in list order
+// list in further rounds, each shaded by all invocations together, and add them to their sums
 // (`n`: the pixel's blocks summed so far). A pixel left to loop over its own blocks would hold
 // its whole subgroup in the light loop once per block: on the monastery at 8x and 500 lights
 // that was most of the pass's time. Called by every invocation of the tile, `round_total` (the
 // first round's pushes) the same for all.
-vec3 shade_remaining_rounds(bool inside, inout PixelList list, vec3 sum, inout uint n, uint round_total) {
+uvec3 shade_remaining_rounds(bool inside, inout PixelList list, uvec3 sum, inout uint n, uint round_total) {
 #if SHARED_BLOCKS > 0
     for (uint round = 1u; round < MAX_SHARED_ROUNDS && round_total > uint(SHARED_BLOCKS); ++round) {
         barrier();   // everyone has read this round's entries
@@ -331,18 +348,18 @@ vec3 shade_remaining_rounds(bool inside, inout PixelList list, vec3 sum, inout u
 // Adds the pixel's blocks from `link` on, the `n`-th of its list first, shaded by itself (a
 // tile that did not share its blocks, or blocks left after the shared rounds), and its sky to
 // `sum` (its head and shared blocks already in), and writes it.
-void resolve_pixel(ivec2 pixel, vec2 center, PixelList list, vec3 sum, uint link, uint n) {
+void resolve_pixel(ivec2 pixel, vec2 center, PixelList list, uvec3 sum, uint link, uint n) {
     bool has_head = list.head_depth > 0.0;
     for (; n < list.blocks && link_index(link) != LINK_NULL; ++n) {
         vec3 c = shade_block(read_block(link_index(link)), center, DEPTH_AT(pixel, link_sample(link)));
-        sum += c * float(listed_weight(list, link, n));
+        add_weighted(sum, c, listed_weight(list, link));
         uint index = link_index(link);
         link = gb.pairs[index >> 1].link[index & 1u];
     }
     // Sky: the background samples, and the head's when the pixel has no surface at all.
     uint sky_weight = list.background + (!has_head && list.blocks == 0u ? list.kept : 0u);
-    if (sky_weight > 0u) sum += tonemap_aces(sky_color(view_direction(center)) * settings.exposure) * float(sky_weight);
-    vec3 color = sum / float(SAMPLES);
+    if (sky_weight > 0u) add_weighted(sum, tonemap_aces(sky_color(view_direction(center)) * settings.exposure), sky_weight);
+    vec3 color = vec3(sum) * (1.0 / (SUM_UNIT * float(SAMPLES)));
     if (settings.debug_view == DEBUG_VIEW_SAMPLES) color = heat(pixel_surfaces(list));
     imageStore(out_color, pixel, vec4(linear_to_srgb(color), 1.0));
 }
@@ -384,7 +401,8 @@ void main() {
     if (inside && list.head_depth > 0.0 && list.kept > 0u) {
         head_color = shade_block(decode_block(head.block), center, list.head_depth);
     }
-    vec3 sum = inside && list.head_depth > 0.0 ? head_color * float(list.kept) : vec3(0.0);
+    uvec3 sum = uvec3(0u);
+    if (inside && list.head_depth > 0.0) add_weighted(sum, head_color, list.kept);
     // Blocks this pixel shades itself: all of them, or those the shared rounds left.
     uint own_link = inside ? head.link : LINK_NULL, own_n = 0u;
 #if SHARED_BLOCKS > 0

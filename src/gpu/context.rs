@@ -64,6 +64,10 @@ pub struct HostHandles {
     /// extensions a device was created with, and cullgraph uses an optional one only when it is
     /// listed here (a pass that needs a missing one refuses to be built, naming it).
     ///
+    /// `VK_EXT_fragment_shader_interlock` is not among the optional ones because it needs a
+    /// feature too: list it only if the device was created with it and with
+    /// `fragmentShaderSampleInterlock` on; the sample-claim G-buffer then claims in draw order.
+    ///
     /// [`OPTIONAL_DEVICE_EXTENSIONS`]: super::features::OPTIONAL_DEVICE_EXTENSIONS
     pub enabled_device_extensions: Vec<CString>,
 }
@@ -88,6 +92,11 @@ pub struct DeviceCaps {
     /// `VK_EXT_post_depth_coverage` is enabled: supported, on a device cullgraph creates; supported
     /// and listed in [`HostHandles::enabled_device_extensions`], on a host's device.
     pub post_depth_coverage: bool,
+    /// `VK_EXT_fragment_shader_interlock` with `fragmentShaderSampleInterlock` is enabled: both
+    /// supported, on a device cullgraph creates; supported and the extension listed in
+    /// [`HostHandles::enabled_device_extensions`] (which then promises the feature too), on a
+    /// host's device. The sample-claim G-buffer can then claim in draw order (`claim_order`).
+    pub sample_interlock: bool,
 }
 
 /// State shared by the context and every resource created from it; dropped last.
@@ -515,13 +524,35 @@ fn create_device(instance: &ash::Instance, chosen: &DeviceInfo, queue_family: u3
             ext_names.push(want.as_ptr());
         }
     }
+    // An ordered sample interlock lets the claim graph settle coplanar ties in draw order
+    // (`gbuffer_compressed`'s `claim_order`); enabled with its extension when the device has both.
+    let interlock_ext = ash::ext::fragment_shader_interlock::NAME;
+    let has_interlock = exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == interlock_ext))
+        && sample_interlock_supported(instance, chosen.handle);
+    if has_interlock {
+        ext_names.push(interlock_ext.as_ptr());
+    }
+    let mut interlock =
+        vk::PhysicalDeviceFragmentShaderInterlockFeaturesEXT::default().fragment_shader_sample_interlock(true);
     let mut features2 = required.chain();
-    let info = vk::DeviceCreateInfo::default()
+    let mut info = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queues)
         .enabled_extension_names(&ext_names)
         .push_next(&mut features2);
+    if has_interlock {
+        info = info.push_next(&mut interlock);
+    }
     // SAFETY: every pointer in `info` lives on this stack frame.
     unsafe { instance.create_device(chosen.handle, &info, None) }.vk("vkCreateDevice")
+}
+
+/// Whether the device supports `fragmentShaderSampleInterlock`.
+fn sample_interlock_supported(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
+    let mut interlock = vk::PhysicalDeviceFragmentShaderInterlockFeaturesEXT::default();
+    let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut interlock);
+    // SAFETY: valid handles; the chain lives on this stack frame.
+    unsafe { instance.get_physical_device_features2(pd, &mut features2) };
+    interlock.fragment_shader_sample_interlock == vk::TRUE
 }
 
 fn device_name(instance: &ash::Instance, pd: vk::PhysicalDevice) -> String {
@@ -563,5 +594,6 @@ fn query_caps(
             vk::SubgroupFeatureFlags::empty()
         },
         post_depth_coverage: has(ash::ext::post_depth_coverage::NAME),
+        sample_interlock: has(ash::ext::fragment_shader_interlock::NAME) && sample_interlock_supported(instance, pd),
     }
 }

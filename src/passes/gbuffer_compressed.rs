@@ -180,6 +180,26 @@ impl SelectiveAa {
     }
 }
 
+/// Whether the sample claims of `pass` run in draw order (its `claim_order` setting): `draw`
+/// needs the device's ordered sample interlock, `auto` uses it where there is one.
+fn claims_in_draw_order(ctx: &GpuContext, pass: &PlannedPass) -> Result<bool, String> {
+    let interlock = ctx.caps().sample_interlock;
+    match pass.choice_setting("claim_order", "auto") {
+        "arrival" => return Ok(false),
+        "auto" => return Ok(interlock),
+        _ => {}
+    }
+    if !interlock {
+        return Err(format!(
+            "claim_order \"draw\" needs VK_EXT_fragment_shader_interlock with fragmentShaderSampleInterlock, which \
+             is not enabled on {} (not supported, or not among a host's `enabled_device_extensions`); \"arrival\" \
+             needs nothing, and msaa_compressed.ron's stencil also decides ties in draw order",
+            ctx.caps().name
+        ));
+    }
+    Ok(true)
+}
+
 /// The `gbuffer_compressed` pass.
 pub struct GbufferCompressedPass {
     draw: Pipeline,
@@ -215,6 +235,9 @@ impl GbufferCompressedPass {
             buffers.push(("SAMPLE_CLAIM", "1"));
         }
         let mut defines = buffers.clone();
+        if owner == SampleOwner::Claim && claims_in_draw_order(ctx, pass).map_err(invalid)? {
+            defines.push(("CLAIM_IN_DRAW_ORDER", "1"));
+        }
         if bound("aa_mask") {
             defines.push(("AA_MASK", "1"));
         }
