@@ -347,6 +347,38 @@ mod tests {
         assert!(pool_blocks(u64::MAX / 2, MAX_BLOCKS).is_err());
     }
 
+    /// Whether `spirv` declares capability `id` (OpCapability: opcode 17, one operand).
+    fn has_capability(spirv: &[u32], id: u32) -> bool {
+        let mut at = 5; // after the header
+        while at < spirv.len() {
+            let (count, opcode) = ((spirv[at] >> 16) as usize, spirv[at] & 0xFFFF);
+            if opcode == 17 && spirv.get(at + 1) == Some(&id) {
+                return true;
+            }
+            at += count.max(1);
+        }
+        false
+    }
+
+    /// Every variant of the geometry pass's shader compiles, the draw-order claims among them,
+    /// which lavapipe never builds (it has no interlock); only they declare the interlock.
+    #[test]
+    fn every_fragment_shader_variant_compiles() {
+        const SAMPLE_INTERLOCK: u32 = 5363; // FragmentShaderSampleInterlockEXT
+        let shaders = ShaderCompiler::new(crate::gpu::ShaderRoot::Embedded).unwrap();
+        let variants: [&[(&str, &str)]; 4] = [
+            &[],
+            &[("SAMPLE_CLAIM", "1")],
+            &[("SAMPLE_CLAIM", "1"), ("CLAIM_IN_DRAW_ORDER", "1")],
+            &[("SAMPLE_CLAIM", "1"), ("CLAIM_IN_DRAW_ORDER", "1"), ("AA_MASK", "1")],
+        ];
+        for defines in variants {
+            let spirv = shaders.compile("gbuffer/gbuffer_compressed.frag", defines).unwrap();
+            let ordered = defines.iter().any(|d| d.0 == "CLAIM_IN_DRAW_ORDER");
+            assert_eq!(has_capability(&spirv, SAMPLE_INTERLOCK), ordered, "{defines:?}");
+        }
+    }
+
     #[test]
     fn stencil_or_claim_decides_each_sample_never_both_nor_neither() {
         let (d32s8, d32) = (vk::Format::D32_SFLOAT_S8_UINT, vk::Format::D32_SFLOAT);
