@@ -547,7 +547,7 @@ fn create_device(instance: &ash::Instance, chosen: &DeviceInfo, queue_family: u3
 }
 
 /// Whether the device supports `fragmentShaderSampleInterlock`.
-fn sample_interlock_supported(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
+pub(crate) fn sample_interlock_supported(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
     let mut interlock = vk::PhysicalDeviceFragmentShaderInterlockFeaturesEXT::default();
     let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut interlock);
     // SAFETY: valid handles; the chain lives on this stack frame.

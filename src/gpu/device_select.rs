@@ -62,21 +62,29 @@ pub struct DeviceInfo {
     pub kind: vk::PhysicalDeviceType,
     /// Supported API version.
     pub api_version: u32,
+    /// Whether the device has `VK_EXT_post_depth_coverage`, which the compressed G-buffer needs.
+    pub post_depth_coverage: bool,
+    /// Whether it has `VK_EXT_fragment_shader_interlock` with `fragmentShaderSampleInterlock`,
+    /// with which the sample-claim G-buffer claims in draw order.
+    pub sample_interlock: bool,
     /// The handle.
     pub handle: vk::PhysicalDevice,
 }
 
 impl fmt::Display for DeviceInfo {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let yes_no = |b: bool| if b { "yes" } else { "no" };
         write!(
             f,
-            "{}: {} ({:?}, Vulkan {}.{}.{})",
+            "{}: {} ({:?}, Vulkan {}.{}.{}; compressed G-buffer: {}, draw-order sample claims: {})",
             self.index,
             self.name,
             self.kind,
             vk::api_version_major(self.api_version),
             vk::api_version_minor(self.api_version),
-            vk::api_version_patch(self.api_version)
+            vk::api_version_patch(self.api_version),
+            yes_no(self.post_depth_coverage),
+            yes_no(self.sample_interlock),
         )
     }
 }
@@ -91,11 +99,17 @@ pub fn enumerate(instance: &ash::Instance) -> GpuResult<Vec<DeviceInfo>> {
         .map(|(index, handle)| {
             // SAFETY: handle comes from this instance.
             let props = unsafe { instance.get_physical_device_properties(handle) };
+            // SAFETY: handle comes from this instance.
+            let exts = unsafe { instance.enumerate_device_extension_properties(handle) }.unwrap_or_default();
+            let has = |name: &std::ffi::CStr| exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name));
             DeviceInfo {
                 index,
                 name: props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
                 kind: props.device_type,
                 api_version: props.api_version,
+                post_depth_coverage: has(ash::ext::post_depth_coverage::NAME),
+                sample_interlock: has(ash::ext::fragment_shader_interlock::NAME)
+                    && super::context::sample_interlock_supported(instance, handle),
                 handle,
             }
         })
@@ -144,6 +158,8 @@ mod tests {
             name: name.into(),
             kind,
             api_version: vk::API_VERSION_1_3,
+            post_depth_coverage: true,
+            sample_interlock: false,
             handle: vk::PhysicalDevice::null(),
         }
     }

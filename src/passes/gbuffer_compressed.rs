@@ -186,7 +186,11 @@ fn claims_in_draw_order(ctx: &GpuContext, pass: &PlannedPass) -> Result<bool, St
     let interlock = ctx.caps().sample_interlock;
     match pass.choice_setting("claim_order", "auto") {
         "arrival" => return Ok(false),
-        "auto" => return Ok(interlock),
+        "auto" => {
+            let order = if interlock { "draw" } else { "arrival (no ordered sample interlock)" };
+            tracing::info!("pass '{}': claim_order auto: {order} on {}", pass.name, ctx.caps().name);
+            return Ok(interlock);
+        }
         _ => {}
     }
     if !interlock {
