@@ -1,9 +1,10 @@
 // Data of the instance-cull pass. Layouts mirror src/render/cull_data.rs and
 // src/passes/instance_cull.rs (scalar block layout).
 //
-// Slots are instances sorted by draw group, each group in instance order (the unculled draw
-// list's order). Survivors are compacted in slot order by a prefix sum over one survivor bit
-// per slot, so each group's survivors form one slice in instance order and draw order, and with
+// Slots are instances sorted by draw group, each group in spatial order (Morton order of the
+// instances' origins, equal codes in instance order; src/render/scene_buffers.rs), which is the
+// unculled draw list's order. Survivors are compacted in slot order by a prefix sum over one survivor bit
+// per slot, so each group's survivors form one slice in slot order and draw order, and with
 // it every depth tie, does not depend on timing.
 #ifndef CULLGRAPH_CULL_COMMON_GLSL
 #define CULLGRAPH_CULL_COMMON_GLSL

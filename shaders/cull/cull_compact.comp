@@ -6,7 +6,7 @@
 // Survivors are compacted in slot order: a survivor's position is the number of survivors in
 // slots before it (superblock counts before its superblock + block counts before its block in
 // the superblock + bits before it in the block). Slots are sorted by draw group, so each group's
-// survivors form one slice, in instance order, every run; the group's command starts there
+// survivors form one slice, in slot order, every run; the group's command starts there
 // (first instance = the survivors of the groups before it, summed from the group counts).
 // Groups are sorted by face cull (src/render/face_cull.rs): each face cull's commands are
 // compacted from its region's first group on, with a count of its own.

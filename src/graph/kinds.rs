@@ -417,7 +417,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
         },
         PassKindInfo {
             name: "instance_cull",
-            doc: "tests every instance's world bound (frustum, optionally Hi-Z occlusion) and compacts the survivors per draw group in instance order into draw commands for vkCmdDrawIndexedIndirectCount",
+            doc: "tests every instance's world bound (frustum, optionally Hi-Z occlusion) and compacts the survivors per draw group in slot order (the unculled draw order) into draw commands for vkCmdDrawIndexedIndirectCount",
             reads: vec![
                 sized(slot("visibility_prev", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "last frame's visibility bits (early and late phases)"), MinBytes::InstanceBits),
                 slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid to test against (none: frustum only)"),
@@ -439,7 +439,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
                 SettingDecl { name: "bound", default: SettingDefault::Choice(&["box", "sphere"]), doc: "world bound tested: axis-aligned box or sphere" },
                 SettingDecl { name: "hiz_test", default: SettingDefault::Choice(&["coarse", "finer"]), doc: "occlusion footprint: at most 2x2 texels, or up to 3x3 one level finer (culls more)" },
                 SettingDecl { name: "hiz_view", default: SettingDefault::Choice(&["current", "previous"]), doc: "project with this frame's camera, or last frame's (a test against last frame's pyramid)" },
-                SettingDecl { name: "compaction", default: SettingDefault::Choice(&["ordered", "atomic"]), doc: "prefix-sum compaction in instance order, or the thesis's atomic append (order varies, measured only)" },
+                SettingDecl { name: "compaction", default: SettingDefault::Choice(&["ordered", "atomic"]), doc: "prefix-sum compaction in slot order (the unculled draw order), or the thesis's atomic append (order varies, measured only)" },
                 SettingDecl { name: "occluder_distance", default: SettingDefault::Float(200.0), doc: "occluders phase: farthest distance of an occluder's bound" },
                 SettingDecl { name: "occluder_size", default: SettingDefault::Float(0.02), doc: "occluders phase: smallest projected radius, as a fraction of the view height" },
                 SettingDecl { name: "occluder_triangles", default: SettingDefault::Int(1024), doc: "occluders phase: instances of meshes with at most this many triangles are candidates too, besides those flagged as occluders (0: flagged ones only)" },

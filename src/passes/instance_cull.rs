@@ -1,6 +1,6 @@
 //! The instance-cull pass (ICR/HOCR in one): tests every instance's world bound against the
 //! frustum and, when a Hi-Z pyramid is bound, the conservative occlusion test, then compacts the
-//! survivors in instance order into one slice per draw group, with a
+//! survivors in slot order into one slice per draw group, with a
 //! `VkDrawIndexedIndirectCommand` per non-empty group and a draw count for
 //! `vkCmdDrawIndexedIndirectCount`. No CPU readback anywhere.
 //!

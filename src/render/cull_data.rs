@@ -1,5 +1,5 @@
 //! What the culling passes read about the scene: one bound per *slot* (instances sorted by draw
-//! group, each group in instance order, the same order as the unculled draw list) and one entry
+//! group, each group in spatial order, the same order as the unculled draw list) and one entry
 //! per draw group. Uploaded once; the passes never touch the full instance records.
 
 use super::gpu_types::split_hi_lo;
