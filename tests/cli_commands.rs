@@ -138,10 +138,8 @@ fn devices_lists_what_the_loader_sees() {
     assert!(stdout.lines().any(|l| l.starts_with("0: ") || l.contains(": ")), "{stdout}");
     let device = std::env::var("CULLGRAPH_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
     assert!(stdout.contains(&device), "{stdout}");
-    // What the optional graphs need, per device (lavapipe 22.3: post-depth coverage, no interlock).
+    // What the optional graphs need, per device; the test device runs the compressed G-buffer
+    // (tests/msaa.rs), and whether it claims in draw order depends on its driver's version.
     let line = stdout.lines().find(|l| l.contains(&device)).unwrap();
-    assert!(line.contains("compressed G-buffer: ") && line.contains("draw-order sample claims: "), "{line}");
-    if device == "llvmpipe" {
-        assert!(line.contains("compressed G-buffer: yes, draw-order sample claims: no"), "{line}");
-    }
+    assert!(line.contains("compressed G-buffer: yes, draw-order sample claims: "), "{line}");
 }

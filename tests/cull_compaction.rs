@@ -1,5 +1,5 @@
 //! The instance-cull pass's draw lists are exactly what a CPU reference computes from the same
-//! packed bounds: per draw group, the survivors in instance order, one command per non-empty
+//! packed bounds: per draw group, the survivors in slot order, one command per non-empty
 //! group in group order. Many mesh kinds (groups spanning and sharing blocks), sparse and dense
 //! survivors, sizes that are not multiples of the block.
 

@@ -299,18 +299,24 @@ fn compressed_matches_per_sample_msaa_and_the_zprepass_baseline_is_identical() {
     }
 }
 
-/// Claiming samples with atomics instead of the stencil changes nothing where no two fragments
-/// tie exactly (depth EQUAL then passes each sample for one fragment either way). Where the red
-/// cube and its green duplicate tie, the claim may give a sample to either, not to the first in
-/// draw order: only pixels where the stencil's choice shows (the images with red or green drawn
-/// first differ) may differ.
+/// Claiming samples with atomics in arrival order instead of the stencil changes nothing where
+/// no two fragments tie exactly (depth EQUAL then passes each sample for one fragment either
+/// way). Where the red cube and its green duplicate tie, the claim may give a sample to either,
+/// not to the first in draw order: only pixels where the stencil's choice shows (the images
+/// with red or green drawn first differ) may differ. Claims in draw order give the stencil's
+/// image everywhere.
 #[test]
 fn claimed_samples_give_the_stencils_image_except_at_coplanar_ties() {
     let gpu = GpuTest::new();
     let size = (96, 64);
     let (city_scene, city_camera) = city(1500);
     let run = |scene: &Scene, camera: &Camera, graph: &str| {
-        render(&gpu, scene, camera, size, &spec(graph, &[("pool_fraction", "3")]), 2).0
+        let params: &[_] = if graph.ends_with("_claim") {
+            &[("pool_fraction", "3"), ("claim_order", "arrival")]
+        } else {
+            &[("pool_fraction", "3")]
+        };
+        render(&gpu, scene, camera, size, &spec(graph, params), 2).0
     };
     let stencil = run(&city_scene, &city_camera, "builtin:msaa_compressed");
     let claim = run(&city_scene, &city_camera, "builtin:msaa_compressed_claim");
@@ -363,19 +369,22 @@ fn claimed_samples_give_the_stencils_image_except_at_coplanar_ties() {
 /// The order of a pixel's list is the order its fragments happened to run, which a GPU does not
 /// fix: the lighting must give the same image for any order. The frame is lit twice, before and
 /// after a compute pass reverses every list, and the two images are compared on the GPU; with a
-/// pool small enough to drop fragments (whose samples then go to a listed block where the pixel
-/// has no head), and with an unbounded one.
+/// pool small enough to drop fragments (whose samples, where the pixel has no head, go to one
+/// of its listed blocks), and with an unbounded one. The reversing pass also marks the pixels
+/// where each case arises: reversed lists are asserted; pixels without a head whose dropped
+/// samples go to a listed block are only counted (none arise in these views, nor in the city
+/// with 2*10^4 or 10^5 instances at 48x32: they need sky at sample 0, two blocks and a dropped
+/// fragment in one pixel).
 #[test]
 fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
     let gpu = GpuTest::new();
-    let (scene, camera) = city(1500);
     let outputs = r#"    outputs: ["color"],"#;
     let extra_passes = r#"        Pass(
             name: "reverse_lists",
             kind: "compute",
             shader: "reverse_lists.comp",
             reads: {"depth": "depth"},
-            writes: {"gbuffer": "gbuffer"},
+            writes: {"gbuffer": "gbuffer", "marks": "marks"},
             dispatch: PerPixel("depth"),
         ),
         Pass(
@@ -389,7 +398,7 @@ fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
             name: "difference",
             kind: "compute",
             shader: "image_difference.comp",
-            reads: {"first": "color", "second": "color_reversed"},
+            reads: {"first": "color", "second": "color_reversed", "marks": "marks"},
             writes: {"difference": "difference"},
             dispatch: PerPixel("difference"),
         ),
@@ -398,28 +407,33 @@ fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
     let images = r#"        "color": Image(format: R8G8B8A8_UNORM),"#;
     let more_images = r#"
         "color_reversed": Image(format: R8G8B8A8_UNORM),
+        "marks": Image(format: R8G8B8A8_UNORM),
         "difference": Image(format: R8G8B8A8_UNORM),"#;
-    for owner in OWNERS {
-        for pool in ["0.05", "3"] {
-            // The shipped graph, in the test graphs' folder for the extra shaders.
-            let mut graph = spec("tests/graphs/gpu/compressed_check.ron", &[("pool_fraction", pool)]);
-            let text = with_owner(&read_repo_file("graph/msaa_compressed.ron"), owner);
-            assert_eq!((text.matches(outputs).count(), text.matches(images).count()), (1, 1));
-            let text = text.replace(&format!("    ],\n{outputs}"), extra_passes);
-            graph.text = text.replace(images, &format!("{images}{more_images}"));
-            let (difference, stats) = render(&gpu, &scene, &camera, (96, 64), &graph, 2);
-            let g = &stats.last().unwrap().gbuffer[0];
-            assert!(
-                g.surfaces_per_pixel[2..].iter().sum::<u32>() >= 5,
-                "{owner:?}, pool {pool}: lists of two or more blocks: {g:?}"
-            );
-            if pool != "3" {
-                assert!(g.overflow_fragments > 0, "{owner:?}, pool {pool}: the pool overflows: {g:?}");
-            }
-            let differing: Vec<_> =
-                difference.pixels().enumerate().filter(|(_, p)| p.0[..3] != [0, 0, 0]).take(5).collect();
-            assert!(differing.is_empty(), "{owner:?}, pool {pool}: reversed lists change pixels {differing:?}");
+    let shipped = read_repo_file("graph/msaa_compressed.ron");
+    assert_eq!((shipped.matches(outputs).count(), shipped.matches(images).count()), (1, 1));
+    let text =
+        shipped.replace(&format!("    ],\n{outputs}"), extra_passes).replace(images, &format!("{images}{more_images}"));
+    let cases = [
+        (city(1500), "0.02", "city"),
+        (city(1500), "3", "city"),
+        ((intersecting_scene(), boxes_camera()), "0.05", "cubes"),
+    ];
+    for (((scene, camera), pool, what), owner) in cases.iter().flat_map(|c| OWNERS.map(|o| (c, o))) {
+        let what = format!("{what}, {owner:?}, pool {pool}");
+        // The test graphs' folder has the extra shaders; both lightings read the claims.
+        let mut graph = spec("tests/graphs/gpu/compressed_check.ron", &[("pool_fraction", pool)]);
+        graph.text = with_owner(&text, owner);
+        let (difference, stats) = render(&gpu, scene, camera, (96, 64), &graph, 2);
+        let g = &stats.last().unwrap().gbuffer[0];
+        let flags = |bit: u8| difference.pixels().filter(|p| p.0[3] & bit != 0).count();
+        assert!(flags(1) >= 5, "{what}: reversed lists of two or more blocks: {}", flags(1));
+        if *pool != "3" {
+            assert!(g.overflow_fragments > 0, "{what}: the pool overflows: {g:?}");
         }
+        println!("{what}: {} lists reversed, {} of them without a head and with dropped samples", flags(1), flags(2));
+        let differing: Vec<_> =
+            difference.pixels().enumerate().filter(|(_, p)| p.0[..3] != [0, 0, 0]).take(5).collect();
+        assert!(differing.is_empty(), "{what}: reversed lists change pixels {differing:?}");
     }
 }
 
@@ -458,8 +472,9 @@ fn shared_block_shading_matches_the_per_pixel_loop() {
     assert!(loop_used > 0, "the view has edge pixels with pool blocks");
     for capacity in ["1", "16", "512"] {
         let (image, used, histogram) = run(capacity);
-        let (mean, max) = mean_and_max_difference(&image, &loop_image);
-        assert!(max <= 1 && mean < 0.01, "capacity {capacity}: mean {mean}, max {max}");
+        // Bit for bit: the pixels round the blocks they shade themselves to the shared list's
+        // half floats.
+        assert_eq!(mean_and_max_difference(&image, &loop_image), (0.0, 0), "capacity {capacity}");
         assert_eq!((used, histogram), (loop_used, loop_histogram), "capacity {capacity}");
     }
 }

@@ -4,10 +4,14 @@
 // coverage after those tests (post-depth coverage). Without stencil (SAMPLE_CLAIM) fragments
 // claim their samples with an atomic OR instead. The fragment that owns sample 0 writes the
 // pixel's head block; every other fragment takes a pool block with an atomic and pushes it on
-// the pixel's list. A full pool drops the fragment: its samples fall to the head's weight.
-// The head's sample count is not stored: the lighting pass derives it as the covered samples
-// (from the depth, or from the claimed samples) minus those its list holds.
+// the pixel's list. A full pool drops the fragment: its samples fall to the head's weight (to
+// a listed block's where the pixel has no head). The head's sample count is not stored: the
+// lighting pass derives it as the covered samples (from the depth, or from the claimed
+// samples) minus those its list holds.
 #extension GL_ARB_post_depth_coverage : require
+#ifdef CLAIM_IN_DRAW_ORDER
+#extension GL_ARB_fragment_shader_interlock : require
+#endif
 #include "../common/scene.glsl"
 #include "../common/octahedral.glsl"
 #include "compressed_gbuffer.glsl"
@@ -20,7 +24,6 @@ layout(post_depth_coverage) in;
 // lighting does not depend on the order of a pixel's list. (On the H100 a pixel interlock cost
 // about twice as much as this sample interlock, and putting the list push inside it too cost
 // 0.04-0.1 ms more at 1080p; docs/msaa.md.)
-#extension GL_ARB_fragment_shader_interlock : require
 layout(sample_interlock_ordered) in;
 #endif
 
@@ -50,9 +53,10 @@ layout(push_constant) uniform Push {
 // Stencil-free ownership (graph/msaa_compressed_claim.ron): a byte per pixel (claim_word) of
 // the samples already claimed (at most 8 samples). A fragment keeps the samples of its
 // post-depth coverage that no other fragment claimed before it. Depth EQUAL still settles
-// intersecting triangles; exactly coplanar fragments go to whichever claims first, which is
-// not draw order and may change from run to run, but every covered sample still belongs to
-// exactly one fragment.
+// intersecting triangles. Exactly coplanar fragments go to whichever claims first: with
+// CLAIM_IN_DRAW_ORDER the first in draw order, as with the stencil; without it whichever
+// arrives first, which may change from run to run. Every covered sample belongs to exactly one
+// fragment either way.
 layout(set = 0, binding = 7) buffer SampleClaim { uint sample_claim[]; };
 uint claim_samples(uint pixel, uint mask) {
     uint pixels = pc.width * pc.height;
@@ -125,7 +129,7 @@ void main() {
     if (slot >= pc.pool_blocks) {
         atomicAdd(gb.header[GBUFFER_HEADER_OVERFLOW_FRAGMENTS], 1u);
         atomicAdd(gb.header[GBUFFER_HEADER_OVERFLOW_SAMPLES], uint(bitCount(mask)));
-        return;   // these samples fall to the head, as above
+        return;   // these samples fall to the head (or a listed block), as above
     }
     uint index = pc.width * pc.height + slot;
     write_block(index, m, n);

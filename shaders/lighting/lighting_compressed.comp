@@ -2,7 +2,8 @@
 // Lighting over the compressed G-buffer (thesis 000 section 4.3, resolve): per pixel, every
 // block of its list is shaded once with the tile's lights, tone-mapped, and weighted by the
 // samples it covers; the background samples (depth 0) are sky; the head takes the rest (its own
-// samples and any a full pool dropped). The weighted mean is written sRGB-encoded.
+// samples and any a full pool or an AA cap dropped; where the pixel has no head, the listed
+// block with the lowest sample does). The weighted mean is written sRGB-encoded.
 //
 // A workgroup is a 16x16 tile. Its pixels' pool blocks are gathered into one shared list and
 // shaded by all 256 invocations together, so that an edge pixel's extra blocks do not make its
@@ -352,7 +353,9 @@ void resolve_pixel(ivec2 pixel, vec2 center, PixelList list, uvec3 sum, uint lin
     bool has_head = list.head_depth > 0.0;
     for (; n < list.blocks && link_index(link) != LINK_NULL; ++n) {
         vec3 c = shade_block(read_block(link_index(link)), center, DEPTH_AT(pixel, link_sample(link)));
-        add_weighted(sum, c, listed_weight(list, link));
+        // Rounded as the shared list stores its colors: which blocks a tile shares depends on
+        // the order of its lists, and the image must not.
+        add_weighted(sum, unpack_color(pack_color(c)), listed_weight(list, link));
         uint index = link_index(link);
         link = gb.pairs[index >> 1].link[index & 1u];
     }

@@ -36,7 +36,11 @@ pub fn main() -> ExitCode {
 
 fn list_devices() -> cullgraph::Result<()> {
     for d in cullgraph::gpu::context::list_devices()? {
-        println!("{d}");
+        if d.api_version >= ash::vk::API_VERSION_1_3 {
+            println!("{d}; {}", d.capabilities());
+        } else {
+            println!("{d}; cullgraph needs Vulkan 1.3");
+        }
     }
     Ok(())
 }

@@ -73,18 +73,29 @@ pub struct DeviceInfo {
 
 impl fmt::Display for DeviceInfo {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let yes_no = |b: bool| if b { "yes" } else { "no" };
         write!(
             f,
-            "{}: {} ({:?}, Vulkan {}.{}.{}; compressed G-buffer: {}, draw-order sample claims: {})",
+            "{}: {} ({:?}, Vulkan {}.{}.{})",
             self.index,
             self.name,
             self.kind,
             vk::api_version_major(self.api_version),
             vk::api_version_minor(self.api_version),
             vk::api_version_patch(self.api_version),
+        )
+    }
+}
+
+impl DeviceInfo {
+    /// What the optional graphs need, as `cullgraph devices` lists it: whether the compressed
+    /// G-buffer can run (it needs Vulkan 1.3 too, as everything does) and whether sample claims
+    /// can go in draw order.
+    pub fn capabilities(&self) -> String {
+        let yes_no = |b: bool| if b { "yes" } else { "no" };
+        format!(
+            "compressed G-buffer: {}, draw-order sample claims: {}",
             yes_no(self.post_depth_coverage),
-            yes_no(self.sample_interlock),
+            yes_no(self.sample_interlock)
         )
     }
 }

@@ -5,8 +5,10 @@
 //!
 //! With a depth format without stencil and a `sample_claim` buffer ([`SampleOwner::Claim`])
 //! the fragments claim their samples with an atomic OR on a byte per pixel instead of the
-//! stencil test: the depth takes 4 instead of 8 bytes per sample on NVIDIA, and coplanar ties
-//! go to whichever fragment claims first instead of the first in draw order.
+//! stencil test: the depth takes 4 instead of 8 bytes per sample on NVIDIA. Coplanar ties go
+//! to the first fragment in draw order where the claims run in an ordered sample interlock
+//! (`claim_order` `draw`, or `auto` on a device that has one), otherwise to whichever fragment
+//! claims first.
 //!
 //! The `gbuffer` buffer: a 16-byte header (pool blocks asked for, fragments and samples dropped
 //! because the pool was full), then `width * height` head blocks, then the pool, all as 28-byte
@@ -66,8 +68,9 @@ pub enum SampleOwner {
     /// order wins (deterministic). Needs a depth format with stencil.
     Stencil,
     /// An atomic OR on the `sample_claim` buffer (a byte per pixel): the first fragment to
-    /// claim wins, so coplanar ties are not decided in draw order. Needs a depth format
-    /// without stencil and at most [`MAX_CLAIM_SAMPLES`] samples.
+    /// claim wins, which is the first in draw order only when the claims run in an ordered
+    /// sample interlock (`claim_order`). Needs a depth format without stencil and at most
+    /// [`MAX_CLAIM_SAMPLES`] samples.
     Claim,
 }
 
@@ -351,12 +354,13 @@ mod tests {
         assert!(pool_blocks(u64::MAX / 2, MAX_BLOCKS).is_err());
     }
 
-    /// Whether `spirv` declares capability `id` (OpCapability: opcode 17, one operand).
-    fn has_capability(spirv: &[u32], id: u32) -> bool {
+    /// Whether `spirv` has an instruction `opcode` whose operand `operand` (counted from the
+    /// first word after the opcode) is `value`.
+    fn has_instruction(spirv: &[u32], opcode: u32, operand: usize, value: u32) -> bool {
         let mut at = 5; // after the header
         while at < spirv.len() {
-            let (count, opcode) = ((spirv[at] >> 16) as usize, spirv[at] & 0xFFFF);
-            if opcode == 17 && spirv.get(at + 1) == Some(&id) {
+            let (count, op) = ((spirv[at] >> 16) as usize, spirv[at] & 0xFFFF);
+            if op == opcode && spirv.get(at + 1 + operand) == Some(&value) {
                 return true;
             }
             at += count.max(1);
@@ -365,10 +369,14 @@ mod tests {
     }
 
     /// Every variant of the geometry pass's shader compiles, the draw-order claims among them,
-    /// which lavapipe never builds (it has no interlock); only they declare the interlock.
+    /// which lavapipe never builds (it has no interlock); only they declare the interlock, and
+    /// an ordered one.
     #[test]
     fn every_fragment_shader_variant_compiles() {
-        const SAMPLE_INTERLOCK: u32 = 5363; // FragmentShaderSampleInterlockEXT
+        const OP_CAPABILITY: u32 = 17;
+        const OP_EXECUTION_MODE: u32 = 16;
+        const SAMPLE_INTERLOCK: u32 = 5363; // capability FragmentShaderSampleInterlockEXT
+        const SAMPLE_INTERLOCK_ORDERED: u32 = 5368; // execution mode SampleInterlockOrderedEXT
         let shaders = ShaderCompiler::new(crate::gpu::ShaderRoot::Embedded).unwrap();
         let variants: [&[(&str, &str)]; 4] = [
             &[],
@@ -379,7 +387,9 @@ mod tests {
         for defines in variants {
             let spirv = shaders.compile("gbuffer/gbuffer_compressed.frag", defines).unwrap();
             let ordered = defines.iter().any(|d| d.0 == "CLAIM_IN_DRAW_ORDER");
-            assert_eq!(has_capability(&spirv, SAMPLE_INTERLOCK), ordered, "{defines:?}");
+            assert_eq!(has_instruction(&spirv, OP_CAPABILITY, 0, SAMPLE_INTERLOCK), ordered, "{defines:?}");
+            // Ordered: fragments covering a sample claim it in primitive order.
+            assert_eq!(has_instruction(&spirv, OP_EXECUTION_MODE, 1, SAMPLE_INTERLOCK_ORDERED), ordered, "{defines:?}");
         }
     }
 

@@ -106,7 +106,9 @@ fn spatial_keys(scene: &Scene) -> Vec<u64> {
     let origins = || scene.instances.iter().map(|i| i.transform.translation).filter(|t| t.is_finite());
     let lo = origins().fold(glam::DVec3::splat(f64::INFINITY), |a, b| a.min(b));
     let hi = origins().fold(glam::DVec3::splat(f64::NEG_INFINITY), |a, b| a.max(b));
-    let scale = ((1u64 << 21) - 1) as f64 / (hi - lo).max_element().max(f64::MIN_POSITIVE);
+    // All origins at one point (or none finite): every code 0, so instance order decides.
+    let extent = (hi - lo).max_element();
+    let scale = if extent > 0.0 && extent.is_finite() { ((1u64 << 21) - 1) as f64 / extent } else { 0.0 };
     let spread = |v: f64| -> u64 {
         // Bits of a 21-bit value, two zero bits between each.
         let mut x = (v.clamp(0.0, ((1u64 << 21) - 1) as f64)) as u64;
@@ -232,5 +234,27 @@ mod tests {
         assert_eq!(draws.instance_ids[..18], z_order);
         assert_eq!(draws.instance_ids[18], 18);
         assert_eq!(draws.commands.len(), 2);
+    }
+
+    /// Degenerate layouts keep instance order: every origin at one point, and an origin that is
+    /// not finite (sorted last; such a scene is refused at upload anyway).
+    #[test]
+    fn degenerate_origins_keep_instance_order() {
+        let mut scene = Scene::default();
+        let tri = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
+        let mesh = scene.add_mesh("a", &tri, "a").unwrap();
+        scene.add_material(Default::default());
+        let at = |t: DVec3| Instance {
+            transform: Transform { translation: t, ..Default::default() },
+            mesh,
+            material: 0,
+            flags: 0,
+        };
+        scene.instances = vec![at(DVec3::splat(5.0)); 4];
+        assert_eq!(DrawList::all_instances(&scene).instance_ids, [0, 1, 2, 3]);
+        scene.instances[1] = at(DVec3::new(f64::NAN, 0.0, 0.0));
+        scene.instances.push(at(DVec3::new(-1.0e7, 0.0, 1.0e7)));
+        // The far one (4) has the largest z, the highest bit its code can set.
+        assert_eq!(DrawList::all_instances(&scene).instance_ids, [0, 2, 3, 4, 1]);
     }
 }

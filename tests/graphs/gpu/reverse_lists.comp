@@ -1,7 +1,9 @@
 #version 460
 // Reverses every pixel's list of pool blocks in place (tests/msaa.rs): the lighting must give
 // the same image whatever order a pixel's blocks were pushed in, which is the order fragments
-// happened to run.
+// happened to run. Marks, per pixel, what the test needs to see happen: r = 1/255 where a list
+// of two or more blocks was reversed; g = 1/255 where, in addition, the pixel has no head and
+// its head samples (covered samples no block lists: dropped fragments') go to one of the blocks.
 #include "gbuffer/compressed_gbuffer.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -10,6 +12,7 @@ layout(set = 0, binding = 1, scalar) buffer Gbuffer {
     uint header[GBUFFER_HEADER_WORDS];
     BlockPair pairs[];
 } gbuffer;
+layout(set = 0, binding = 2, rgba8) uniform writeonly image2D marks;
 
 void main() {
     ivec2 size = textureSize(depth);
@@ -18,13 +21,18 @@ void main() {
     uint head = uint(p.y * size.x + p.x);
     // links[i] points to the i-th block; at most 7 blocks (one per sample besides the head's).
     uint links[8];
-    uint n = 0u;
+    uint n = 0u, listed = 0u;
     uint link = gbuffer.pairs[head >> 1].link[head & 1u];
     while (link_index(link) != LINK_NULL && n < 8u) {
+        listed += link_count(link);
         links[n++] = link;
         uint index = link_index(link);
         link = gbuffer.pairs[index >> 1].link[index & 1u];
     }
+    uint covered = 0u;
+    for (int s = 0; s < textureSamples(depth); ++s) covered += texelFetch(depth, p, s).r > 0.0 ? 1u : 0u;
+    bool headless_with_dropped = texelFetch(depth, p, 0).r <= 0.0 && covered > listed;
+    imageStore(marks, p, vec4(n >= 2u ? 1.0 : 0.0, n >= 2u && headless_with_dropped ? 1.0 : 0.0, 0.0, 0.0) / 255.0);
     if (n < 2u) return;
     // head -> last, each block -> the one listed before it, the first -> null.
     gbuffer.pairs[head >> 1].link[head & 1u] = links[n - 1u];
