@@ -208,16 +208,22 @@ mod tests {
     use crate::scene::{Instance, MeshData, Transform};
     use glam::{DVec3, Vec3};
 
+    /// A scene of `meshes` one-triangle meshes and one material, no instances yet.
+    fn triangle_meshes(meshes: usize) -> (Scene, Vec<u32>) {
+        let mut scene = Scene::default();
+        let tri = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
+        let ids = (0..meshes).map(|m| scene.add_mesh(&format!("m{m}"), &tri, "m").unwrap()).collect();
+        scene.add_material(Default::default());
+        (scene, ids)
+    }
+
     /// Within a group, slots follow the Morton order of the instances' origins (a 4x4 grid
     /// created row by row comes out in Z order), and instances at the same origin keep their
     /// instance order; groups stay apart.
     #[test]
     fn groups_are_in_spatial_order_with_duplicates_in_instance_order() {
-        let mut scene = Scene::default();
-        let tri = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
-        let mesh = scene.add_mesh("a", &tri, "a").unwrap();
-        let other = scene.add_mesh("b", &tri, "b").unwrap();
-        scene.add_material(Default::default());
+        let (mut scene, meshes) = triangle_meshes(2);
+        let (mesh, other) = (meshes[0], meshes[1]);
         let at = |x: f64, z: f64| Transform { translation: DVec3::new(x, 0.0, z), ..Default::default() };
         for row in 0..4 {
             for col in 0..4 {
@@ -240,10 +246,8 @@ mod tests {
     /// not finite (sorted last; such a scene is refused at upload anyway).
     #[test]
     fn degenerate_origins_keep_instance_order() {
-        let mut scene = Scene::default();
-        let tri = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
-        let mesh = scene.add_mesh("a", &tri, "a").unwrap();
-        scene.add_material(Default::default());
+        let (mut scene, meshes) = triangle_meshes(1);
+        let mesh = meshes[0];
         let at = |t: DVec3| Instance {
             transform: Transform { translation: t, ..Default::default() },
             mesh,
