@@ -80,8 +80,12 @@ pub fn run(
             let timings = (0..frames)
                 .map(|_| {
                     renderer.render(&camera).map(|s| {
-                        let depth = s.gpu_ms.iter().find(|t| t.name == "gbuffer").map_or(0.0, |t| t.ms);
-                        let after = PassTiming { name: AFTER_DEPTH.into(), ms: s.gpu_total_ms - depth };
+                        let depth = s.gpu_ms.iter().find(|t| t.name == "gbuffer");
+                        let after = PassTiming {
+                            name: AFTER_DEPTH.into(),
+                            start_ms: depth.map_or(0.0, |t| t.start_ms + t.ms),
+                            ms: s.gpu_total_ms - depth.map_or(0.0, |t| t.ms),
+                        };
                         s.gpu_ms.into_iter().chain([after]).collect::<Vec<_>>()
                     })
                 })

@@ -59,7 +59,7 @@ mod tests {
         assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), 2.5);
         assert_eq!(median(&mut []), 0.0);
-        let t = |n: &str, ms| PassTiming { name: n.into(), ms };
+        let t = |n: &str, ms| PassTiming { name: n.into(), start_ms: 0.0, ms };
         let m = median_per_pass(&[vec![t("a", 1.0), t("b", 5.0)], vec![t("a", 3.0), t("b", 7.0)], vec![t("a", 2.0)]]);
         assert_eq!(m, vec![("a".to_string(), 2.0), ("b".to_string(), 6.0)]);
     }

@@ -5,11 +5,18 @@ use super::error::{GpuResult, VkResultExt};
 use ash::vk;
 use std::sync::Arc;
 
-/// The measured GPU time of one named scope.
+/// The measured GPU time of one named scope: its timestamp pair, as an offset and a length.
+///
+/// `start_ms` places the scope on the frame's GPU timeline (0 is the frame's first timestamp),
+/// so that a host can draw the passes as GPU zones in its own profiler.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PassTiming {
     /// Scope (pass) name.
     pub name: String,
+    /// Milliseconds from the frame's first timestamp (the first scope's begin) to this scope's
+    /// begin.
+    #[serde(default)]
+    pub start_ms: f64,
     /// Milliseconds between the scope's begin and end timestamps.
     pub ms: f64,
 }
@@ -113,6 +120,10 @@ impl GpuTimer {
             )
         }
         .vk("vkGetQueryPoolResults")?;
+        // Ticks from `from` to `to`, across a wrap of the valid bits.
+        let span = |from: u64, to: u64| (to & self.valid_mask).wrapping_sub(from & self.valid_mask) & self.valid_mask;
+        let ms = |ticks: u64| ticks as f64 * self.period_ns * 1e-6;
+        let origin = raw[0][0];
         Ok(self
             .names
             .iter()
@@ -120,9 +131,10 @@ impl GpuTimer {
             .filter(|(i, _)| (*i as u32) * 2 + 1 < count)
             .filter_map(|(i, name)| {
                 let (b, e) = (raw[i * 2], raw[i * 2 + 1]);
-                (b[1] != 0 && e[1] != 0).then(|| {
-                    let ticks = (e[0] & self.valid_mask).wrapping_sub(b[0] & self.valid_mask) & self.valid_mask;
-                    PassTiming { name: name.clone(), ms: ticks as f64 * self.period_ns * 1e-6 }
+                (b[1] != 0 && e[1] != 0).then(|| PassTiming {
+                    name: name.clone(),
+                    start_ms: ms(span(origin, b[0])),
+                    ms: ms(span(b[0], e[0])),
                 })
             })
             .collect())

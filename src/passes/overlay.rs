@@ -811,7 +811,7 @@ mod tests {
     #[test]
     fn times_follow_the_plan_order_and_unknown_ones_are_negative() {
         let p = plan(["early", "late"]);
-        let timing = |name: &str, ms| PassTiming { name: name.into(), ms };
+        let timing = |name: &str, ms| PassTiming { name: name.into(), start_ms: 0.0, ms };
         let t =
             GpuPassTimes::from_timings(&p, 7, &[timing("frame", 3.0), timing("cull_b", 2.0), timing("overlay", 0.5)]);
         assert_eq!((t.count, t.frame, t.total_ms), (3, 7, 3.0));
