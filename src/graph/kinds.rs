@@ -308,7 +308,7 @@ pub fn builtin_kinds() -> Vec<PassKindInfo> {
                 SettingDecl { name: "aa_region_size", default: SettingDefault::Float(0.6), doc: "size of the AA region as a fraction of the screen's width and height" },
                 SettingDecl { name: "aa_max_depth_distance", default: SettingDefault::Float(0.0), doc: "selective AA: pixels farther than this distance keep one block (0: no limit)" },
                 SettingDecl { name: "aa_object_flags", default: SettingDefault::Bool(false), doc: "selective AA: instances flagged no-AA keep one block" },
-                SettingDecl { name: "claim_order", default: SettingDefault::Choice(&["auto", "draw", "arrival"]), doc: "with sample_claim: who wins an exactly coplanar tie. draw: the first fragment in draw order, as the stencil decides, through an ordered sample interlock (needs VK_EXT_fragment_shader_interlock); arrival: the first to claim, which may change from run to run and so flicker; auto: draw where the device has the interlock, else arrival" },
+                SettingDecl { name: "claim_order", default: SettingDefault::Choice(&["auto", "draw", "arrival"]), doc: "with sample_claim: who wins an exactly coplanar tie. draw: the first fragment in draw order, as the stencil decides, through an ordered sample interlock (needs VK_EXT_fragment_shader_interlock); arrival: the first to claim, which may change from run to run and so flicker; auto: draw where the device has the interlock, else arrival. Refused on a pass whose depth has stencil (the stencil decides, in draw order)" },
             ],
             slots_from_shader: false,
         },

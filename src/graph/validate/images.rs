@@ -171,10 +171,26 @@ fn sample_owner_errors(graph: &ValidatedGraph, samples: &[u32]) -> Vec<(Pos, Str
         }
         let claim = pass.bindings.iter().find(|b| b.slot == "sample_claim");
         let count = samples.get(depth.resource).copied().unwrap_or(1);
-        if let Err(message) = SampleOwner::for_depth(format, count, claim.is_some()) {
-            // At the binding to change: the claim buffer when there is one, else the depth.
-            let pos = claim.map_or(depth.pos, |c| c.pos);
-            out.push((pos, format!("pass '{}' (gbuffer_compressed): {message}", pass.name)));
+        match SampleOwner::for_depth(format, count, claim.is_some()) {
+            Err(message) => {
+                // At the binding to change: the claim buffer when there is one, else the depth.
+                let pos = claim.map_or(depth.pos, |c| c.pos);
+                out.push((pos, format!("pass '{}' (gbuffer_compressed): {message}", pass.name)));
+            }
+            // A claim order the pass would ignore is refused rather than dropped silently.
+            Ok(SampleOwner::Stencil) => {
+                if let Some(order) = pass.settings.iter().find(|s| s.name == "claim_order") {
+                    out.push((
+                        order.pos,
+                        format!(
+                            "pass '{}' (gbuffer_compressed): claim_order applies to sample claims, but the depth has \
+                             stencil, which settles ties in draw order: remove claim_order",
+                            pass.name
+                        ),
+                    ));
+                }
+            }
+            Ok(SampleOwner::Claim) => {}
         }
     }
     out
