@@ -2,7 +2,7 @@
 
 use super::device_select::{self, DeviceInfo, DeviceSelector};
 use super::error::{GpuError, GpuResult, VkResultExt};
-use super::features::{RequiredFeatures, REQUIRED_DEVICE_EXTENSIONS};
+use super::features::{lists_extension, RequiredFeatures, REQUIRED_DEVICE_EXTENSIONS};
 use super::validation::{self, ValidationLog};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -441,7 +441,7 @@ fn create_instance(
     // SAFETY: querying the loader.
     let exts =
         unsafe { entry.enumerate_instance_extension_properties(None) }.vk("vkEnumerateInstanceExtensionProperties")?;
-    let has_ext = |name: &CStr| exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name));
+    let has_ext = |name: &CStr| lists_extension(&exts, name);
     let debug_utils = has_ext(ash::ext::debug_utils::NAME) || options.validation;
 
     let app_name = CString::new(options.app_name.replace('\0', " ")).unwrap_or_default();
@@ -509,7 +509,7 @@ fn create_device(instance: &ash::Instance, chosen: &DeviceInfo, queue_family: u3
     let exts = unsafe { instance.enumerate_device_extension_properties(chosen.handle) }
         .vk("vkEnumerateDeviceExtensionProperties")?;
     for want in REQUIRED_DEVICE_EXTENSIONS {
-        if !exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == *want)) {
+        if !lists_extension(&exts, want) {
             missing.push(want.to_string_lossy().into_owned());
         }
     }
@@ -520,15 +520,14 @@ fn create_device(instance: &ash::Instance, chosen: &DeviceInfo, queue_family: u3
     let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
     let mut ext_names: Vec<*const c_char> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
     for want in super::features::OPTIONAL_DEVICE_EXTENSIONS {
-        if exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == *want)) {
+        if lists_extension(&exts, want) {
             ext_names.push(want.as_ptr());
         }
     }
     // An ordered sample interlock lets the claim graph settle coplanar ties in draw order
     // (`gbuffer_compressed`'s `claim_order`); enabled with its extension when the device has both.
     let interlock_ext = ash::ext::fragment_shader_interlock::NAME;
-    let has_interlock = exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == interlock_ext))
-        && sample_interlock_supported(instance, chosen.handle);
+    let has_interlock = lists_extension(&exts, interlock_ext) && sample_interlock_supported(instance, chosen.handle);
     if has_interlock {
         ext_names.push(interlock_ext.as_ptr());
     }
@@ -578,9 +577,7 @@ fn query_caps(
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     // SAFETY: valid handles.
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
-    let has = |name: &CStr| {
-        exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name)) && enabled_extension(name)
-    };
+    let has = |name: &CStr| lists_extension(&exts, name) && enabled_extension(name);
     DeviceCaps {
         name: props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
         kind: props.device_type,

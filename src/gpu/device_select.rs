@@ -112,7 +112,7 @@ pub fn enumerate(instance: &ash::Instance) -> GpuResult<Vec<DeviceInfo>> {
             let props = unsafe { instance.get_physical_device_properties(handle) };
             // SAFETY: handle comes from this instance.
             let exts = unsafe { instance.enumerate_device_extension_properties(handle) }.unwrap_or_default();
-            let has = |name: &std::ffi::CStr| exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name));
+            let has = |name: &std::ffi::CStr| super::features::lists_extension(&exts, name);
             DeviceInfo {
                 index,
                 name: props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),

@@ -15,6 +15,11 @@ pub const REQUIRED_DEVICE_EXTENSIONS: &[&CStr] = &[ash::khr::push_descriptor::NA
 /// lists them in `HostHandles::enabled_device_extensions`.
 pub const OPTIONAL_DEVICE_EXTENSIONS: &[&CStr] = &[ash::ext::post_depth_coverage::NAME];
 
+/// Whether `extensions` (as Vulkan lists them) has the one called `name`.
+pub(crate) fn lists_extension(extensions: &[vk::ExtensionProperties], name: &CStr) -> bool {
+    extensions.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name))
+}
+
 /// The feature structs cullgraph enables, ready to chain into `VkDeviceCreateInfo`.
 ///
 /// Everything here is core Vulkan 1.3 or earlier; the struct only exists so that the same list
