@@ -11,7 +11,7 @@ use cullgraph::oracle::image_error::mean_flip;
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::{Camera, Instance, Material, Scene, SceneSource, Transform, FLAG_NO_AA};
+use cullgraph::scene::{Camera, Instance, Material, MeshData, Projection, Scene, SceneSource, Transform, FLAG_NO_AA};
 use cullgraph::stats::FrameStats;
 use glam::{DVec3, Mat3, Quat, Vec3};
 use std::path::Path;
@@ -366,15 +366,55 @@ fn claimed_samples_give_the_stencils_image_except_at_coplanar_ties() {
     }
 }
 
+/// One 4x pixel built to have no head, two listed blocks and dropped samples: seen by an
+/// orthographic camera at one world unit per pixel, three tiny double-sided triangles each cover
+/// one sample of pixel (3, 3) at Vulkan's standard 4x positions (sample 0 stays sky): sample 1
+/// red, sample 2 green, sample 3 blue and flagged `FLAG_NO_AA`, so that with `aa_object_flags`
+/// its sample is dropped and goes to a listed block, the one with the lowest sample.
+fn headless_pixel_scene() -> (Scene, Camera) {
+    let mut scene = Scene { name: "headless pixel".into(), ..Default::default() };
+    let tri = MeshData {
+        positions: vec![Vec3::new(-0.1, -0.1, 0.0), Vec3::new(0.1, -0.1, 0.0), Vec3::new(0.0, 0.1, 0.0)],
+        normals: vec![],
+        indices: vec![0, 1, 2],
+    };
+    let mesh = scene.add_mesh("sliver", &tri, "sliver").unwrap();
+    let material =
+        |albedo: Vec3| Material { name: "m".into(), albedo, roughness: 0.5, metallic: 0.0, double_sided: true };
+    // Pixel (3, 3) of an 8x8 view of x, y in -4..4 (rows from the top): its corner is (-1, 1).
+    let sample = |sx: f64, sy: f64| DVec3::new(-1.0 + sx, 1.0 - sy, 0.0);
+    for (at, albedo, flags) in [
+        (sample(0.875, 0.375), Vec3::new(0.9, 0.1, 0.1), 0),
+        (sample(0.125, 0.625), Vec3::new(0.1, 0.9, 0.1), 0),
+        (sample(0.625, 0.875), Vec3::new(0.1, 0.1, 0.9), FLAG_NO_AA),
+    ] {
+        let material = scene.add_material(material(albedo));
+        scene.instances.push(Instance {
+            transform: Transform { translation: at, ..Default::default() },
+            mesh,
+            material,
+            flags,
+        });
+    }
+    let camera = Camera {
+        eye: DVec3::new(0.0, 0.0, 10.0),
+        target: DVec3::ZERO,
+        projection: Projection::Orthographic { height: 8.0, far: 100.0 },
+        ..Default::default()
+    };
+    (scene, camera)
+}
+
 /// The order of a pixel's list is the order its fragments happened to run, which a GPU does not
 /// fix: the lighting must give the same image for any order. The frame is lit twice, before and
 /// after a compute pass reverses every list, and the two images are compared on the GPU; with a
 /// pool small enough to drop fragments (whose samples, where the pixel has no head, go to one
 /// of its listed blocks), and with an unbounded one. The reversing pass also marks the pixels
-/// where each case arises: reversed lists are asserted; pixels without a head whose dropped
-/// samples go to a listed block are only counted (none arise in these views, nor in the city
-/// with 2*10^4 or 10^5 instances at 48x32: they need sky at sample 0, two blocks and a dropped
-/// fragment in one pixel).
+/// where each case arises, and the test asserts that they did: reversed lists everywhere, and
+/// a pixel without a head whose dropped sample goes to a listed block in a scene built for it
+/// (such pixels need sky at sample 0, two blocks and a dropped fragment; the city views have
+/// none). With the old rule (the first listed block takes the dropped samples) that pixel
+/// changes by 24 levels when its list is reversed.
 #[test]
 fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
     let gpu = GpuTest::new();
@@ -413,20 +453,27 @@ fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
     assert_eq!((shipped.matches(outputs).count(), shipped.matches(images).count()), (1, 1));
     let text =
         shipped.replace(&format!("    ],\n{outputs}"), extra_passes).replace(images, &format!("{images}{more_images}"));
+    // (scene and camera, size, pool, AA cap by object flags, what, least reversed lists, least
+    // headless pixels with dropped samples)
     let cases = [
-        (city(1500), "0.02", "city"),
-        (city(1500), "3", "city"),
-        ((intersecting_scene(), boxes_camera()), "0.05", "cubes"),
+        (city(1500), (96, 64), "0.02", "false", "city", 5, 0),
+        (city(1500), (96, 64), "3", "false", "city", 5, 0),
+        ((intersecting_scene(), boxes_camera()), (96, 64), "0.05", "false", "cubes", 5, 0),
+        (headless_pixel_scene(), (8, 8), "3", "true", "headless pixel", 1, 1),
     ];
-    for (((scene, camera), pool, what), owner) in cases.iter().flat_map(|c| OWNERS.map(|o| (c, o))) {
+    for (((scene, camera), size, pool, cap, what, reversed, headless), owner) in
+        cases.iter().flat_map(|c| OWNERS.map(|o| (c, o)))
+    {
         let what = format!("{what}, {owner:?}, pool {pool}");
         // The test graphs' folder has the extra shaders; both lightings read the claims.
-        let mut graph = spec("tests/graphs/gpu/compressed_check.ron", &[("pool_fraction", pool)]);
+        let params = [("pool_fraction", *pool), ("aa_object_flags", *cap)];
+        let mut graph = spec("tests/graphs/gpu/compressed_check.ron", &params);
         graph.text = with_owner(&text, owner);
-        let (difference, stats) = render(&gpu, scene, camera, (96, 64), &graph, 2);
+        let (difference, stats) = render(&gpu, scene, camera, *size, &graph, 2);
         let g = &stats.last().unwrap().gbuffer[0];
         let flags = |bit: u8| difference.pixels().filter(|p| p.0[3] & bit != 0).count();
-        assert!(flags(1) >= 5, "{what}: reversed lists of two or more blocks: {}", flags(1));
+        assert!(flags(1) >= *reversed, "{what}: reversed lists of two or more blocks: {}", flags(1));
+        assert!(flags(2) >= *headless, "{what}: headless pixels with dropped samples: {}", flags(2));
         if *pool != "3" {
             assert!(g.overflow_fragments > 0, "{what}: the pool overflows: {g:?}");
         }
