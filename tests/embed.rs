@@ -80,6 +80,16 @@ impl Host {
 }
 
 impl Host {
+    /// Shuts the engine down (its `allocator` first, then the device, whose destruction reports
+    /// leaks) and fails on any validation message of its lifetime.
+    fn shut_down_clean(self, allocator: Arc<Mutex<Allocator>>) {
+        drop(allocator);
+        let log = (*self.log).clone();
+        drop(self);
+        let messages = log.messages();
+        assert!(messages.is_empty(), "validation: {messages:#?}");
+    }
+
     /// The engine's own gpu-allocator on its device.
     fn allocator(&self) -> Arc<Mutex<Allocator>> {
         let allocator = Allocator::new(&AllocatorCreateDesc {
@@ -180,13 +190,9 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
         let pixels = readback.read_bytes().unwrap();
         assert_eq!(pixels, reference.as_raw().as_slice(), "embedded frame differs from the owned-context frame");
     }
-    // cullgraph released everything it made from the host's allocator and device.
-    drop(allocator);
-    // Leaks would be reported by vkDestroyDevice, which runs in the host's drop.
-    let log = (*host.log).clone();
-    drop(host);
-    let messages = log.messages();
-    assert!(messages.is_empty(), "validation: {messages:#?}");
+    // cullgraph released everything it made from the host's allocator and device (leaks would
+    // be reported by vkDestroyDevice).
+    host.shut_down_clean(allocator);
 }
 
 #[test]
@@ -269,10 +275,7 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
         assert_eq!(readback.read_bytes().unwrap(), reference.as_raw().as_slice());
     }
     target.destroy(&d, &allocator);
-    drop(allocator);
-    let log = (*host.log).clone();
-    drop(host);
-    assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
+    host.shut_down_clean(allocator);
 }
 
 /// The boxes through `graph/examples/NAME.ron` at `w`x`h`, on the host's context.
@@ -466,10 +469,7 @@ fn the_host_can_own_a_depth_stencil_image_and_a_mipmapped_pyramid() {
     }
     depth.destroy(&d, &allocator);
     hiz.destroy(&d, &allocator);
-    drop(allocator);
-    let log = (*host.log).clone();
-    drop(host);
-    assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
+    host.shut_down_clean(allocator);
 }
 
 #[test]
@@ -494,10 +494,7 @@ fn the_compressed_g_buffer_runs_on_a_host_device_only_where_the_host_enabled_pos
         let err = render(&ctx).unwrap_err().to_string();
         assert!(err.contains("pass 'gbuffer'") && err.contains("VK_EXT_post_depth_coverage"), "{err}");
     }
-    drop(allocator);
-    let log = (*host.log).clone();
-    drop(host);
-    assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
+    host.shut_down_clean(allocator);
 
     // An engine that enabled it gets the frame the owned context renders.
     let host = Host::with_extensions([REQUIRED_DEVICE_EXTENSIONS, OPTIONAL_DEVICE_EXTENSIONS].concat());
@@ -507,10 +504,7 @@ fn the_compressed_g_buffer_runs_on_a_host_device_only_where_the_host_enabled_pos
         assert!(ctx.caps().post_depth_coverage);
         assert_eq!(render(&ctx).unwrap(), reference, "embedded MSAA frame differs from the owned-context frame");
     }
-    drop(allocator);
-    let log = (*host.log).clone();
-    drop(host);
-    assert!(log.messages().is_empty(), "validation: {:#?}", log.messages());
+    host.shut_down_clean(allocator);
 }
 
 #[test]

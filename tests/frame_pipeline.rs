@@ -4,10 +4,9 @@
 
 mod common;
 
-use common::GpuTest;
+use common::{city_view, GpuTest};
 use cullgraph::render::{FramePipeline, GraphSpec, RenderSettings, Renderer, FRAMES_IN_FLIGHT};
-use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::{CameraPath, SceneSource};
+use cullgraph::scene::CameraPath;
 use cullgraph::stats::FrameStats;
 
 /// What must not depend on how the frames were submitted.
@@ -21,10 +20,8 @@ fn counters(s: &FrameStats) -> impl PartialEq + std::fmt::Debug {
 fn pipelined_frames_report_late_and_exactly_what_waited_frames_report() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
-    let scene =
-        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(3000), ..Default::default() }).unwrap();
     let (w, h) = (96, 54);
-    let base = scene.default_camera(w as f32 / h as f32);
+    let (scene, base) = city_view(3000, (w, h));
     let frames = 8u32;
     let spec = GraphSpec::builtin("two_phase").unwrap();
     let new_renderer =
@@ -63,10 +60,8 @@ fn pipelined_frames_wait_on_and_signal_the_hosts_timeline_semaphore() {
     use ash::vk;
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
-    let scene =
-        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(500), ..Default::default() }).unwrap();
     let (w, h) = (64, 36);
-    let camera = scene.default_camera(w as f32 / h as f32);
+    let (scene, camera) = city_view(500, (w, h));
     let mut renderer = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(w, h)).unwrap();
     let device = gpu.device();
     let mut timeline = vk::SemaphoreTypeCreateInfo::default().semaphore_type(vk::SemaphoreType::TIMELINE);

@@ -3,10 +3,8 @@
 
 mod common;
 
-use common::GpuTest;
+use common::{city_view, GpuTest};
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
-use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::SceneSource;
 
 /// GPU times come as timestamp pairs on the frame's timeline (`start_ms`, `ms`), from which a
 /// host can draw GPU zones in its own profiler: the passes follow one another in execution
@@ -15,10 +13,8 @@ use cullgraph::scene::SceneSource;
 #[test]
 fn gpu_timings_place_each_pass_on_the_frames_timeline() {
     let gpu = GpuTest::new();
-    let scene =
-        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(500), ..Default::default() }).unwrap();
     let (w, h) = (64, 36);
-    let camera = scene.default_camera(w as f32 / h as f32);
+    let (scene, camera) = city_view(500, (w, h));
     let spec = GraphSpec::builtin("two_phase").unwrap();
     let mut renderer = Renderer::with_graph(&gpu, &gpu.shaders(), scene, RenderSettings::new(w, h), &spec).unwrap();
     renderer.set_step_timing(true);

@@ -5,13 +5,12 @@
 
 mod common;
 
-use common::{cube_mesh, GpuTest};
+use common::{city_view, cube_mesh, GpuTest};
 use cullgraph::graph::plan::ResolvedKind;
 use cullgraph::passes::overlay::{glyph, glyph_origin, panel_rect, BAR_CHARS, LABEL_COLOR, MAX_COLS, NUMBER_COLOR};
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
-use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::{Camera, Instance, Material, Scene, SceneSource, Transform};
+use cullgraph::scene::{Camera, Instance, Material, Scene, Transform};
 use cullgraph::stats::FrameStats;
 use glam::{DVec3, Mat3, Vec3};
 
@@ -84,10 +83,8 @@ fn differences_outside(a: &RgbaImage, b: &RgbaImage, rect: (u32, u32, u32, u32))
 #[test]
 fn stats_panel_shows_this_frames_counters_and_touches_nothing_else() {
     let gpu = GpuTest::new();
-    let scene =
-        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(2000), ..Default::default() }).unwrap();
     let size = (480, 270);
-    let camera = scene.default_camera(size.0 as f32 / size.1 as f32);
+    let (scene, camera) = city_view(2000, size);
     let (lit_stats, lit, lit_renderer) = render(&gpu, &scene, &camera, size, &GraphSpec::default_graph(), 3);
     let (stats, image, renderer) = render(&gpu, &scene, &camera, size, &overlay_graph(&[]), 3);
     // The overlay changes nothing the frame computes.
@@ -246,10 +243,8 @@ fn hiz_view_shows_a_pyramid_level_in_grey_and_is_deterministic() {
 #[test]
 fn culled_view_tints_exactly_the_occlusion_culled_instances() {
     let gpu = GpuTest::new();
-    let scene =
-        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(2000), ..Default::default() }).unwrap();
     let size = (480, 270);
-    let camera = scene.default_camera(size.0 as f32 / size.1 as f32);
+    let (scene, camera) = city_view(2000, size);
     let spec = overlay_graph(&[("overlay_view", "culled"), ("overlay_timings", "false")]);
     let (_, lit, _) = render(&gpu, &scene, &camera, size, &GraphSpec::default_graph(), 3);
     let (stats, image, _) = render(&gpu, &scene, &camera, size, &spec, 3);
@@ -305,10 +300,8 @@ fn the_overlay_flags_of_cullgraph_render() {
 #[test]
 fn the_compressed_gbuffers_counters_on_the_panel_are_this_frames() {
     let gpu = GpuTest::new();
-    let scene =
-        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(2000), ..Default::default() }).unwrap();
     let size = (480, 270);
-    let camera = scene.default_camera(size.0 as f32 / size.1 as f32);
+    let (scene, camera) = city_view(2000, size);
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let example = GraphSpec::from_file(&root.join("graph/examples/msaa_overlay.ron")).unwrap();
     // A pool this small overflows, so that every figure on the row is one the frame made.

@@ -5,10 +5,8 @@
 
 mod common;
 
-use common::GpuTest;
+use common::{city_view, GpuTest};
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
-use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::SceneSource;
 use profiling::puffin;
 
 /// A scope as read back: nesting depth, name and data.
@@ -50,10 +48,8 @@ fn cpu_scopes_reach_the_profiler_with_one_per_pass() {
     let view = puffin::GlobalFrameView::default();
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
-    let scene =
-        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(500), ..Default::default() }).unwrap();
     let (w, h) = (64, 36);
-    let camera = scene.default_camera(w as f32 / h as f32);
+    let (scene, camera) = city_view(500, (w, h));
     let spec = GraphSpec::builtin("two_phase").unwrap();
     let mut renderer = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(w, h), &spec).unwrap();
     puffin::GlobalProfiler::lock().new_frame();

@@ -181,60 +181,35 @@ const fn ms(s: SlotDecl) -> SlotDecl {
     SlotDecl { multisample_ok: true, ..s }
 }
 
+/// The three slots of one draw list: `names` and `docs` for its commands, count and instance
+/// ids (`required`: the graph must bind them).
+fn list_slots(names: [&'static str; 3], docs: [&'static str; 3], required: bool) -> [SlotDecl; 3] {
+    [
+        sized(slot(names[0], Usage::Indirect, required, FormatRule::Any, docs[0]), COMMANDS_BYTES),
+        sized(slot(names[1], Usage::Indirect, required, FormatRule::Any, docs[1]), COUNT_BYTES),
+        sized(slot(names[2], Usage::StorageBufferRead(Stages::Vertex), required, FormatRule::Any, docs[2]), IDS_BYTES),
+    ]
+}
+
 /// The draw list a geometry pass draws (`required`: the graph must bind it; otherwise an
 /// unbound list means every instance).
 fn draw_list_slots(required: bool) -> Vec<SlotDecl> {
-    vec![
-        sized(
-            slot(
-                "draw_commands",
-                Usage::Indirect,
-                required,
-                FormatRule::Any,
-                "VkDrawIndexedIndirectCommand per draw group",
-            ),
-            COMMANDS_BYTES,
-        ),
-        sized(slot("draw_count", Usage::Indirect, required, FormatRule::Any, "number of commands"), COUNT_BYTES),
-        sized(
-            slot(
-                "draw_instance_ids",
-                Usage::StorageBufferRead(Stages::Vertex),
-                required,
-                FormatRule::Any,
-                "instance ids, one slice per draw group",
-            ),
-            IDS_BYTES,
-        ),
-    ]
+    list_slots(
+        ["draw_commands", "draw_count", "draw_instance_ids"],
+        ["VkDrawIndexedIndirectCommand per draw group", "number of commands", "instance ids, one slice per draw group"],
+        required,
+    )
+    .to_vec()
 }
 
 /// The lists a redraw pass draws: the first (default: every instance) and an optional `late_` one.
 fn redraw_list_slots() -> Vec<SlotDecl> {
     let mut slots = draw_list_slots(false);
-    slots.extend([
-        sized(
-            slot(
-                "late_draw_commands",
-                Usage::Indirect,
-                false,
-                FormatRule::Any,
-                "a second list's commands (two-phase culling's late draw)",
-            ),
-            COMMANDS_BYTES,
-        ),
-        sized(slot("late_draw_count", Usage::Indirect, false, FormatRule::Any, "its count"), COUNT_BYTES),
-        sized(
-            slot(
-                "late_draw_instance_ids",
-                Usage::StorageBufferRead(Stages::Vertex),
-                false,
-                FormatRule::Any,
-                "its instance ids",
-            ),
-            IDS_BYTES,
-        ),
-    ]);
+    slots.extend(list_slots(
+        ["late_draw_commands", "late_draw_count", "late_draw_instance_ids"],
+        ["a second list's commands (two-phase culling's late draw)", "its count", "its instance ids"],
+        false,
+    ));
     slots
 }
 

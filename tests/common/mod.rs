@@ -130,3 +130,13 @@ pub fn boxes_camera() -> cullgraph::scene::Camera {
         ..Default::default()
     }
 }
+
+/// The built-in city with `instances` instances, and its default camera for a `size` image.
+pub fn city_view(instances: usize, size: (u32, u32)) -> (cullgraph::scene::Scene, cullgraph::scene::Camera) {
+    use cullgraph::scene::{source::LoadOptions, SceneSource};
+    let scene = SceneSource::Builtin("city".into())
+        .load(&LoadOptions { instances: Some(instances), ..Default::default() })
+        .unwrap();
+    let camera = scene.default_camera(size.0 as f32 / size.1 as f32);
+    (scene, camera)
+}
