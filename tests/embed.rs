@@ -130,6 +130,20 @@ impl Drop for Host {
     }
 }
 
+/// A host-readable buffer of `bytes` that copies land in.
+fn readback_buffer(ctx: &GpuContext, name: &'static str, bytes: u64) -> Buffer {
+    Buffer::new(
+        ctx,
+        &BufferDesc {
+            name,
+            size: bytes,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuToCpu,
+        },
+    )
+    .unwrap()
+}
+
 #[test]
 fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
     let (w, h) = (96, 64);
@@ -147,16 +161,7 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
         let shaders =
             ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
         let mut renderer = Renderer::new(&ctx, &shaders, boxes_scene(), RenderSettings::new(w, h)).unwrap();
-        let readback = Buffer::new(
-            &ctx,
-            &BufferDesc {
-                name: "host readback",
-                size: (w * h * 4) as u64,
-                usage: vk::BufferUsageFlags::TRANSFER_DST,
-                location: MemoryLocation::GpuToCpu,
-            },
-        )
-        .unwrap();
+        let readback = readback_buffer(&ctx, "host readback", (w * h * 4) as u64);
 
         // The host's own command pool, command buffer, fence and submit.
         let d = &host.device;
@@ -217,16 +222,7 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
     {
         let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
         let mut renderer = example_renderer(&ctx, "host_target", w, h);
-        let readback = Buffer::new(
-            &ctx,
-            &BufferDesc {
-                name: "host readback",
-                size: (w * h * 4) as u64,
-                usage: vk::BufferUsageFlags::TRANSFER_DST,
-                location: MemoryLocation::GpuToCpu,
-            },
-        )
-        .unwrap();
+        let readback = readback_buffer(&ctx, "host readback", (w * h * 4) as u64);
         // Missing imports are an error before anything is recorded.
         ctx.submit_and_wait(|cmd| {
             let err = renderer.record(cmd, &boxes_camera()).unwrap_err().to_string();
@@ -564,16 +560,7 @@ void main() {
     factor.write_bytes(0, bytemuck::cast_slice(&[0.5f32, 0.0, 1.0, 1.0])).unwrap();
     let mut probe = host_buffer("host probe", MemoryLocation::GpuToCpu);
     probe.write_bytes(0, &[0u8; 16]).unwrap();
-    let readback = Buffer::new(
-        ctx,
-        &BufferDesc {
-            name: "readback",
-            size: (w * h * 4) as u64,
-            usage: vk::BufferUsageFlags::TRANSFER_DST,
-            location: MemoryLocation::GpuToCpu,
-        },
-    )
-    .unwrap();
+    let readback = readback_buffer(ctx, "readback", (w * h * 4) as u64);
     ctx.submit_and_wait(|cmd| {
         let imports = Imports::new().buffer("factor", factor.handle(), 16, Access::NONE, Access::COMPUTE_READ).buffer(
             "probe",
