@@ -74,12 +74,13 @@ layout(location = 1) flat in uint in_material;
 layout(location = 2) flat in uint in_mirrored;
 layout(location = 3) flat in uint in_flags;
 
-void write_block(uint index, GpuMaterial m, vec3 n) {
+// A block's attributes, but AO where the clear has put it already (heads).
+void write_block(uint index, GpuMaterial m, vec3 n, bool ao_cleared) {
     uint pair = index >> 1, k = index & 1u;
     gb.pairs[pair].albedo_metallic[k] = packUnorm4x8(vec4(m.albedo, m.metallic));
     gb.pairs[pair].normal[k] = packSnorm2x16(oct_encode(n));
     gb.pairs[pair].roughness[k] = uint8_t(uint(clamp(m.roughness, 0.0, 1.0) * 255.0 + 0.5));
-    gb.pairs[pair].ao[k] = uint8_t(255u);
+    if (!ao_cleared) gb.pairs[pair].ao[k] = uint8_t(BLOCK_AO);
 }
 
 // Selective AA (paper 002 section 5): whether this fragment may take a pool block.
@@ -121,7 +122,7 @@ void main() {
     // flips the winding, so its outside shows as a back face.
     if (gl_FrontFacing == (in_mirrored != 0u)) n = -n;
     if (head) {
-        write_block(pixel, m, n);   // its link belongs to the list
+        write_block(pixel, m, n, true);   // its link belongs to the list
         return;
     }
     // The list's order is whichever order the fragments run in; the lighting does not depend on it.
@@ -132,7 +133,7 @@ void main() {
         return;   // these samples fall to the head (or a listed block), as above
     }
     uint index = pc.width * pc.height + slot;
-    write_block(index, m, n);
+    write_block(index, m, n, false);
     uint link = make_link(index, uint(bitCount(mask)), uint(findLSB(mask)));
     uint head_link = atomicExchange(gb.pairs[pixel >> 1].link[pixel & 1u], link);
     gb.pairs[index >> 1].link[index & 1u] = head_link;
