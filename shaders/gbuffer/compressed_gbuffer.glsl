@@ -20,14 +20,10 @@ struct BlockPair {
     uint link[2];
 };
 
-// The same 28 bytes with roughness and AO of both blocks as one word, for the clear pass, which
-// writes that word and the links of every head pair in three stores.
-struct BlockPairWords {
-    uint albedo_metallic[2];
-    uint normal[2];
-    uint roughness_ao;   // roughness[0], roughness[1], ao[0], ao[1] (little-endian bytes)
-    uint link[2];
-};
+// The same 28 bytes as 7 words, for the clear pass: word 4 holds roughness[0], roughness[1],
+// ao[0], ao[1] (little-endian bytes), words 5 and 6 the links.
+#define PAIR_WORDS 7u
+#define PAIR_WORD_ROUGHNESS_AO 4u
 
 // Ambient occlusion of every block: no material carries an occlusion term yet. The clear writes
 // it into every head (with roughness 0, which the head's fragment overwrites), so that a head's

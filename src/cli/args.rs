@@ -252,6 +252,10 @@ pub struct RenderArgs {
     /// starts from `--param pool_fraction=F` (blocks per pixel), or the graph's 0.5.
     #[arg(long)]
     pub pool_adapt: bool,
+    /// Also time each step of multi-dispatch passes (`pass/step` entries in the stats JSON's
+    /// `gpu_ms`; the timestamps between steps may add a little time to those passes).
+    #[arg(long)]
+    pub step_times: bool,
     /// Also render the last frame's supersampled reference: the same scene, camera and frame
     /// through `builtin:no_cull` (no AA) at N times the size, box-filtered down in linear light
     /// (N x N samples per pixel; N defaults to 4), and report the image's mean FLIP and PSNR

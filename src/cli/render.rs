@@ -60,6 +60,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.watch {
         return watch(args, &mut renderer, &shaders, spec, &camera);
     }
+    renderer.set_step_timing(args.step_times);
     if args.pool_adapt {
         let start = args.params.iter().rev().find(|(k, _)| k == "pool_fraction").and_then(|(_, v)| v.parse().ok());
         renderer.enable_pool_adaptation(start.unwrap_or(0.5));

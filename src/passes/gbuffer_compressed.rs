@@ -287,6 +287,7 @@ impl PassNode for GbufferCompressedPass {
         if let Some(claim) = claim {
             clear_binds.push(Bind::Buffer(2, claim.handle()));
         }
+        rec.step("clear");
         self.clear.bind(rec.cmd);
         self.clear.push_bindings(rec.cmd, &clear_binds);
         self.clear.push_constants(rec.cmd, &[head_pairs, claim_words]);
@@ -298,6 +299,7 @@ impl PassNode for GbufferCompressedPass {
             layout: vk::ImageLayout::UNDEFINED,
         };
         cmd_barriers(device, rec.cmd, &[memory_barrier(Access::COMPUTE_WRITE, fragment_rw)], &[]);
+        rec.step("draw");
         let push = CompressedPush {
             width: extent.width,
             height: extent.height,
