@@ -249,7 +249,8 @@ pub struct RenderArgs {
     pub verify: bool,
     /// Let the compressed G-buffer's pool follow the frames' needs (counters read back a few
     /// frames late): grow when fragments were dropped, shrink after 30 mostly empty frames. It
-    /// starts from `--param pool_fraction=F` (blocks per pixel), or the graph's 0.5.
+    /// starts from the graph's `pool_fraction` (blocks per pixel; `--param pool_fraction=F`
+    /// overrides it).
     #[arg(long)]
     pub pool_adapt: bool,
     /// Also time each step of multi-dispatch passes (`pass/step` entries in the stats JSON's

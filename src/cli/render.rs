@@ -62,8 +62,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     renderer.set_step_timing(args.step_times);
     if args.pool_adapt {
-        let start = args.params.iter().rev().find(|(k, _)| k == "pool_fraction").and_then(|(_, v)| v.parse().ok());
-        renderer.enable_pool_adaptation(start.unwrap_or(0.5));
+        renderer.enable_pool_adaptation();
     }
 
     let bar = progress(Some(args.frames as u64), "rendering");

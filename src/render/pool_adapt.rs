@@ -14,20 +14,23 @@ pub const MAX_FRACTION: f64 = 7.0;
 pub const MIN_FRACTION: f64 = 0.02;
 
 /// The adapter's state.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct PoolAdapter {
-    fraction: f64,
+    /// Pool blocks per pixel of the graph as last planned; `None` until the first frame says
+    /// what the graph started with.
+    fraction: Option<f64>,
     quiet_frames: u32,
 }
 
 impl PoolAdapter {
-    /// Starting from `fraction` pool blocks per pixel.
-    pub fn new(fraction: f64) -> Self {
-        Self { fraction, quiet_frames: 0 }
+    /// Starting from the pool the first observed frame reports (whatever the graph's
+    /// `pool_fraction` gave it).
+    pub fn new() -> Self {
+        Self::default()
     }
 
-    /// Pool blocks per pixel now.
-    pub fn fraction(&self) -> f64 {
+    /// Pool blocks per pixel now (`None` before the first frame).
+    pub fn fraction(&self) -> Option<f64> {
         self.fraction
     }
 
@@ -35,12 +38,15 @@ impl PoolAdapter {
     /// fraction when the pool should change.
     pub fn observe(&mut self, g: &GbufferPassStats, pixels: u64) -> Option<f64> {
         let pixels = pixels.max(1) as f64;
+        // Frames still in flight when the graph was re-planned report the old pool: compare
+        // with the planned fraction, not theirs.
+        let current = *self.fraction.get_or_insert(g.pool_blocks as f64 / pixels);
         let round = |f: f64| (f.clamp(MIN_FRACTION, MAX_FRACTION) * 1000.0).ceil() / 1000.0;
         if g.overflow_fragments > 0 {
             self.quiet_frames = 0;
-            let wanted = round((g.pool_requested as f64 * 1.25 / pixels).max(self.fraction * 1.5));
-            return (wanted > self.fraction).then(|| {
-                self.fraction = wanted;
+            let wanted = round((g.pool_requested as f64 * 1.25 / pixels).max(current * 1.5));
+            return (wanted > current).then(|| {
+                self.fraction = Some(wanted);
                 wanted
             });
         }
@@ -49,8 +55,8 @@ impl PoolAdapter {
             if self.quiet_frames >= SHRINK_AFTER_FRAMES {
                 self.quiet_frames = 0;
                 let wanted = round(g.pool_used as f64 * 2.0 / pixels);
-                if wanted < self.fraction {
-                    self.fraction = wanted;
+                if wanted < current {
+                    self.fraction = Some(wanted);
                     return Some(wanted);
                 }
             }
@@ -77,7 +83,7 @@ mod tests {
 
     #[test]
     fn grows_at_once_and_shrinks_slowly() {
-        let mut a = PoolAdapter::new(0.1);
+        let mut a = PoolAdapter::new();
         // 1000 pixels, a pool of 100 blocks asked for 300: grow to 300 * 1.25.
         assert_eq!(a.observe(&stats(300, 100), 1000), Some(0.375));
         assert_eq!(a.observe(&stats(300, 375), 1000), None);
@@ -88,10 +94,11 @@ mod tests {
         assert_eq!(a.observe(&stats(20, 375), 1000), Some(0.04));
         // Never beyond 7 blocks per pixel, never below the floor.
         assert_eq!(a.observe(&stats(100_000, 40), 1000), Some(MAX_FRACTION));
-        let mut b = PoolAdapter::new(0.5);
+        let mut b = PoolAdapter::new();
+        assert_eq!(b.fraction(), None);
         for _ in 0..SHRINK_AFTER_FRAMES {
             b.observe(&stats(0, 500), 1000);
         }
-        assert_eq!(b.fraction(), MIN_FRACTION);
+        assert_eq!(b.fraction(), Some(MIN_FRACTION));
     }
 }

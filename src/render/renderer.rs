@@ -186,10 +186,10 @@ impl Renderer {
     }
 
     /// Lets the compressed G-buffer's pool follow what frames ask for (see
-    /// [`crate::render::pool_adapt`]), starting from `pool_fraction` blocks per pixel (the
-    /// graph's parameter of that name). Call [`Renderer::adapt_pool`] after each frame.
-    pub fn enable_pool_adaptation(&mut self, pool_fraction: f64) {
-        self.pool = Some(PoolAdapter::new(pool_fraction));
+    /// [`crate::render::pool_adapt`]), starting from the pool the graph's `pool_fraction`
+    /// parameter gives it. Call [`Renderer::adapt_pool`] after each frame.
+    pub fn enable_pool_adaptation(&mut self) {
+        self.pool = Some(PoolAdapter::new());
     }
 
     /// Feeds a completed frame's counters to the pool adapter; when the pool should change,
