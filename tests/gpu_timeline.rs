@@ -14,27 +14,41 @@ use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 fn gpu_timings_place_each_pass_on_the_frames_timeline() {
     let gpu = GpuTest::new();
     let (w, h) = (64, 36);
-    let (scene, camera) = city_view(500, (w, h));
-    let spec = GraphSpec::builtin("two_phase").unwrap();
-    let mut renderer = Renderer::with_graph(&gpu, &gpu.shaders(), scene, RenderSettings::new(w, h), &spec).unwrap();
-    renderer.set_step_timing(true);
-    let stats = (0..3).map(|_| renderer.render(&camera).unwrap()).last().unwrap();
-    gpu.assert_clean();
-    let passes: Vec<String> = renderer.plan().passes.iter().map(|p| p.name.clone()).collect();
-    let timings = &stats.gpu_ms;
-    let of = |name: &str| timings.iter().find(|t| t.name == name).unwrap_or_else(|| panic!("{name} in {timings:?}"));
-    let end = |t: &cullgraph::gpu::PassTiming| t.start_ms + t.ms;
-    // Ticks convert to milliseconds with rounding: allow a nanosecond.
-    let eps = 1e-6;
-    for pair in passes.windows(2) {
-        let (a, b) = (of(&pair[0]), of(&pair[1]));
-        assert!(a.start_ms >= 0.0 && b.start_ms + eps >= end(a), "{} then {}: {timings:?}", a.name, b.name);
-    }
-    assert!(end(of(passes.last().unwrap())) <= stats.gpu_total_ms + eps, "{timings:?}");
-    let steps: Vec<_> = timings.iter().filter(|t| t.name.contains('/')).collect();
-    assert!(!steps.is_empty(), "the cull pass's steps are timed: {timings:?}");
-    for step in steps {
-        let pass = of(step.name.split('/').next().unwrap());
-        assert!(step.start_ms + eps >= pass.start_ms && end(step) <= end(pass) + eps, "{step:?} within {pass:?}");
+    // The steps each graph's multi-dispatch passes time.
+    let graphs = [
+        ("two_phase", &["cull_late/test", "cull_late/compact"][..]),
+        ("msaa_compressed", &["cull_late/test", "cull_late/compact", "gbuffer/clear", "gbuffer/draw"][..]),
+    ];
+    for (graph, expected_steps) in graphs {
+        let (scene, camera) = city_view(500, (w, h));
+        let spec = GraphSpec::builtin(graph).unwrap();
+        let mut renderer = Renderer::with_graph(&gpu, &gpu.shaders(), scene, RenderSettings::new(w, h), &spec).unwrap();
+        renderer.set_step_timing(true);
+        let stats = (0..3).map(|_| renderer.render(&camera).unwrap()).last().unwrap();
+        gpu.assert_clean();
+        let passes: Vec<String> = renderer.plan().passes.iter().map(|p| p.name.clone()).collect();
+        let timings = &stats.gpu_ms;
+        let of = |name: &str| {
+            timings.iter().find(|t| t.name == name).unwrap_or_else(|| panic!("{graph}: {name} in {timings:?}"))
+        };
+        let end = |t: &cullgraph::gpu::PassTiming| t.start_ms + t.ms;
+        // Ticks convert to milliseconds with rounding: allow a nanosecond.
+        let eps = 1e-6;
+        for pair in passes.windows(2) {
+            let (a, b) = (of(&pair[0]), of(&pair[1]));
+            assert!(
+                a.start_ms >= 0.0 && b.start_ms + eps >= end(a),
+                "{graph}: {} then {}: {timings:?}",
+                a.name,
+                b.name
+            );
+        }
+        assert!(end(of(passes.last().unwrap())) <= stats.gpu_total_ms + eps, "{graph}: {timings:?}");
+        let steps: Vec<&str> = timings.iter().filter(|t| t.name.contains('/')).map(|t| t.name.as_str()).collect();
+        assert_eq!(steps, expected_steps, "{graph}: the timed steps");
+        for step in steps.iter().map(|name| of(name)) {
+            let pass = of(step.name.split('/').next().unwrap());
+            assert!(step.start_ms + eps >= pass.start_ms && end(step) <= end(pass) + eps, "{step:?} within {pass:?}");
+        }
     }
 }
