@@ -4,7 +4,7 @@
 mod common;
 
 use ash::vk;
-use common::{boxes_camera, boxes_scene, GpuTest};
+use common::{boxes_camera, boxes_scene, readback_buffer, GpuTest};
 use cullgraph::gpu::transfer::record_image_to_buffer;
 use cullgraph::gpu::{
     Access, Buffer, BufferDesc, GpuContext, HostHandles, HostImage, MemoryLocation, RequiredFeatures, ShaderCompiler,
@@ -128,20 +128,6 @@ impl Drop for Host {
             self.instance.destroy_instance(None);
         }
     }
-}
-
-/// A host-readable buffer of `bytes` that copies land in.
-fn readback_buffer(ctx: &GpuContext, name: &'static str, bytes: u64) -> Buffer {
-    Buffer::new(
-        ctx,
-        &BufferDesc {
-            name,
-            size: bytes,
-            usage: vk::BufferUsageFlags::TRANSFER_DST,
-            location: MemoryLocation::GpuToCpu,
-        },
-    )
-    .unwrap()
 }
 
 #[test]
@@ -385,18 +371,7 @@ fn the_host_can_own_a_depth_stencil_image_and_a_mipmapped_pyramid() {
     {
         let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
         let mut renderer = example_renderer(&ctx, "host_depth_and_pyramid", w, h);
-        let readback = |name: &str, texels: u32| {
-            Buffer::new(
-                &ctx,
-                &BufferDesc {
-                    name,
-                    size: u64::from(texels) * 4,
-                    usage: vk::BufferUsageFlags::TRANSFER_DST,
-                    location: MemoryLocation::GpuToCpu,
-                },
-            )
-            .unwrap()
-        };
+        let readback = |name: &str, texels: u32| readback_buffer(&ctx, name, u64::from(texels) * 4);
         let (depth_out, hiz_out) = (readback("depth", w * h), readback("hiz", level_offset(pyramid, mips)));
         let mut camera = boxes_camera();
         let mut current = Access::NONE;

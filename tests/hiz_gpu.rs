@@ -12,11 +12,9 @@
 mod common;
 
 use ash::vk;
-use common::{boxes_camera, boxes_scene, GpuTest};
+use common::{boxes_camera, boxes_scene, readback_buffer, GpuTest};
 use cullgraph::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
-use cullgraph::gpu::{
-    Access, Bind, Buffer, BufferDesc, GraphicsDesc, Image, ImageDesc, MemoryLocation, Pipeline, Sampler, ShaderCompiler,
-};
+use cullgraph::gpu::{Access, Bind, Buffer, GraphicsDesc, Image, ImageDesc, Pipeline, Sampler, ShaderCompiler};
 use cullgraph::oracle::hiz::{level_offset, level_size, stored_mip_count, stored_size, HiZPyramid};
 use cullgraph::passes::hiz_build::{HizBuildPass, HizMethod, HIZ_FORMAT};
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
@@ -202,18 +200,7 @@ impl Tools {
             },
         )
         .unwrap();
-        let readback = |name: &str, bytes: u64| {
-            Buffer::new(
-                gpu,
-                &BufferDesc {
-                    name,
-                    size: bytes,
-                    usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                    location: MemoryLocation::GpuToCpu,
-                },
-            )
-            .unwrap()
-        };
+        let readback = |name: &str, bytes: u64| readback_buffer(gpu, name, bytes);
         let hiz = || {
             Image::new(
                 gpu,
@@ -544,18 +531,7 @@ fn hiz_build_in_a_graph_reduces_the_gbuffer_depth() {
         let mut camera = first.clone();
         camera.eye.x -= 0.7;
         let base = UVec2::new(w, h);
-        let readback = |name: &str, bytes: u64| {
-            Buffer::new(
-                gpu,
-                &BufferDesc {
-                    name,
-                    size: bytes,
-                    usage: vk::BufferUsageFlags::TRANSFER_DST,
-                    location: MemoryLocation::GpuToCpu,
-                },
-            )
-            .unwrap()
-        };
+        let readback = |name: &str, bytes: u64| readback_buffer(gpu, name, bytes);
         let pyramid = stored_size(base);
         let hiz_out = readback("hiz readback", level_offset(pyramid, stored_mip_count(base)) as u64 * 4);
         let depth_out = readback("depth readback", (w * h) as u64 * 4);

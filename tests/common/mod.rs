@@ -5,7 +5,7 @@
 
 pub mod cli;
 
-use cullgraph::gpu::{ContextOptions, GpuContext, ShaderCompiler, ShaderRoot};
+use cullgraph::gpu::{Buffer, BufferDesc, ContextOptions, GpuContext, MemoryLocation, ShaderCompiler, ShaderRoot};
 use std::ops::Deref;
 
 /// A validated context; dropping it fails the test if the layer reported anything.
@@ -139,4 +139,18 @@ pub fn city_view(instances: usize, size: (u32, u32)) -> (cullgraph::scene::Scene
         .unwrap();
     let camera = scene.default_camera(size.0 as f32 / size.1 as f32);
     (scene, camera)
+}
+
+/// A host-readable buffer of `bytes` that copies land in (it may also be bound as storage).
+pub fn readback_buffer(ctx: &GpuContext, name: &str, bytes: u64) -> Buffer {
+    Buffer::new(
+        ctx,
+        &BufferDesc {
+            name,
+            size: bytes,
+            usage: ash::vk::BufferUsageFlags::TRANSFER_DST | ash::vk::BufferUsageFlags::STORAGE_BUFFER,
+            location: MemoryLocation::GpuToCpu,
+        },
+    )
+    .unwrap()
 }
