@@ -200,7 +200,6 @@ impl Tools {
             },
         )
         .unwrap();
-        let readback = |name: &str, bytes: u64| readback_buffer(gpu, name, bytes);
         let hiz = || {
             Image::new(
                 gpu,
@@ -218,9 +217,12 @@ impl Tools {
         let flat_bytes = level_offset(pyramid, mips) as u64 * 4;
         Case {
             depth,
-            depth_out: readback("depth readback", w as u64 * h as u64 * samples as u64 * 4),
+            depth_out: readback_buffer(gpu, "depth readback", w as u64 * h as u64 * samples as u64 * 4),
             hiz: [hiz(), hiz()],
-            hiz_out: [readback("hiz readback", flat_bytes), readback("hiz readback", flat_bytes)],
+            hiz_out: [
+                readback_buffer(gpu, "hiz readback", flat_bytes),
+                readback_buffer(gpu, "hiz readback", flat_bytes),
+            ],
         }
     }
 
@@ -531,10 +533,9 @@ fn hiz_build_in_a_graph_reduces_the_gbuffer_depth() {
         let mut camera = first.clone();
         camera.eye.x -= 0.7;
         let base = UVec2::new(w, h);
-        let readback = |name: &str, bytes: u64| readback_buffer(gpu, name, bytes);
         let pyramid = stored_size(base);
-        let hiz_out = readback("hiz readback", level_offset(pyramid, stored_mip_count(base)) as u64 * 4);
-        let depth_out = readback("depth readback", (w * h) as u64 * 4);
+        let hiz_out = readback_buffer(gpu, "hiz readback", level_offset(pyramid, stored_mip_count(base)) as u64 * 4);
+        let depth_out = readback_buffer(gpu, "depth readback", (w * h) as u64 * 4);
         let ctx: &cullgraph::gpu::GpuContext = gpu;
         ctx.submit_and_wait(|cmd| {
             // Two frames in one command buffer, so that synchronization validation sees the
