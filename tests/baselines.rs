@@ -18,12 +18,12 @@
 //! | `msaa_zprepass`         | 0.0106    | 41.60 dB |
 //! | `visibility_buffer`     | 0.0101    | 41.60 dB |
 //!
-//! (This table first had 0.0098 for `msaa_compressed`; the rows were re-measured together. The
-//! per-sample rows were 0.0110 / 41.55 dB while its lighting shaded two parallel surfaces of one
-//! material in one pixel as one.) The
-//! visibility buffer measured 0.0238 (41.39 dB) while it shaded the material's float albedo and
-//! roughness instead of the 8-bit values every G-buffer method stores: the 8-bit steps of a dark
-//! albedo shifted whole surfaces by about one output level, which FLIP counts everywhere.
+//! The rows come from one run, so they compare with each other. The MSAA rows agree because every
+//! method shades the same inputs the same way: the visibility buffer shades the 8-bit albedo and
+//! roughness every G-buffer method stores, not the material's floats (the 8-bit steps of a dark
+//! albedo shift whole surfaces by about one output level, which FLIP counts everywhere), and the
+//! per-sample lighting shades two parallel surfaces of one material in one pixel each at its own
+//! depth.
 //!
 //! FXAA lowers the pixel error (PSNR +1.9 dB) but FLIP rates it slightly *worse* than no AA here
 //! (and at 256x144 and 640x360, and on the test boxes scene, for every preset and with `subpix`

@@ -142,7 +142,7 @@ fn buffers_too_small_for_their_slots_are_refused_at_the_binding_when_the_graph_i
         format!("{line}:{col}")
     };
 
-    // A graph written before face culling: its cull pass's count buffer holds one count.
+    // A count buffer that holds one count, where the cull pass writes one per face-cull region.
     let mut old = GraphSpec::builtin("two_phase").unwrap();
     old.text = old.text.replace("\"late_count\": Buffer(size: 12)", "\"late_count\": Buffer(size: 4)");
     let err = refused(&old);
@@ -168,7 +168,7 @@ fn buffers_too_small_for_their_slots_are_refused_at_the_binding_when_the_graph_i
         "{err}"
     );
 
-    // A pyramid at the depth's own size (the layout before its level 0 was dropped).
+    // A pyramid at the depth's own size (as if it stored level 0 too, which the pass does not).
     let mut full = GraphSpec::builtin("two_phase").unwrap();
     full.text = full.text.replace(
         "size: Fixed(\"max(1, width / 2)\", \"max(1, height / 2)\"), mips: All",

@@ -413,8 +413,8 @@ fn headless_pixel_scene() -> (Scene, Camera) {
 /// where each case arises, and the test asserts that they did: reversed lists everywhere, and
 /// a pixel without a head whose dropped sample goes to a listed block in a scene built for it
 /// (such pixels need sky at sample 0, two blocks and a dropped fragment; the city views have
-/// none). With the old rule (the first listed block takes the dropped samples) that pixel
-/// changes by 24 levels when its list is reversed.
+/// none). A rule that gave the dropped samples to the first listed block would make that pixel
+/// change visibly when its list is reversed, so this scene is what catches it.
 #[test]
 fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
     let gpu = GpuTest::new();

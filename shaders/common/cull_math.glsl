@@ -1,11 +1,11 @@
 // Conservative culling math: frustum tests, screen rectangles with nearest depths, Hi-Z level
-// choice and the Hi-Z occlusion test. GPU twin of src/oracle/cull_math.rs (and of
-// `is_occluded` in src/oracle/hiz.rs): the same names without the `cull_` prefix, the same f32
+// choice and the Hi-Z occlusion test. GPU twin of src/cull/math.rs (and of
+// `is_occluded` in src/cull/hiz.rs): the same names without the `cull_` prefix, the same f32
 // operations in the same order. Every float temporary is `precise` so that no multiply-add is
-// fused and the GPU makes the same decisions as the CPU oracle (tests/cull_math_gpu.rs). Measured
-// on 40000 random cases: lavapipe agrees bit for bit; the H100 agrees on every decision and
-// rectangle, nearest depths within 2 ulps (its division); without `precise` the H100 fused
-// multiply-adds and 1068 cases drifted beyond 8 ulps (13 rectangles moved by a pixel).
+// fused and the GPU makes the same decisions as the CPU oracle (tests/cull_math_gpu.rs): a fused
+// multiply-add rounds once where the oracle rounds twice, which is enough to drift nearest depths
+// by many ulps and to move a rectangle by a pixel. A GPU's division need not be correctly
+// rounded, so nearest depths may still differ from the oracle's in the last bits.
 //
 // Conventions (see src/oracle/mod.rs): inputs are eye-relative (world minus eye, after the hi/lo
 // subtraction); `rotation` is world->view, view looks down -Z, d = -z_view. Perspective:
@@ -15,7 +15,7 @@
 //
 // Conservativeness: distances and extents are widened by CULL_REL_EPS * M (M bounds the length of
 // the bound's points), perspective tangents by CULL_REL_EPS * (M / d_lo) * (1 + |t|), pixel
-// coordinates by CULL_PIXEL_EPS * max(W, H); the derivation is in src/oracle/cull_math.rs.
+// coordinates by CULL_PIXEL_EPS * max(W, H); the derivation is in src/cull/math.rs.
 //
 // Plain GLSL 4.60, no subgroup operations. Before calling cull_hiz_occluded, define
 //     float hiz_load(uint level, uvec2 texel)
@@ -261,7 +261,7 @@ uint cull_ceil_log2(uint n) {
 }
 
 // Hi-Z level whose texels the rectangle touches at most 2x2 of: ceil(log2(max(w, h))) (proof in
-// src/oracle/cull_math.rs, `hiz_level`). The caller clamps it to the pyramid's last level.
+// src/cull/math.rs, `hiz_level`). The caller clamps it to the pyramid's last level.
 uint cull_hiz_level(uvec4 rect) {
     uint w = rect.z - rect.x + 1u;
     uint h = rect.w - rect.y + 1u;

@@ -1,6 +1,6 @@
 // Hi-Z pyramid geometry for any size (non-power-of-two and odd levels): level sizes, offsets in a
 // flat buffer, reduction footprints, and which texel of a level covers a level-0 pixel. GPU twin
-// of src/oracle/hiz.rs (same names without the `hiz_` prefix). Integer addressing only.
+// of src/cull/hiz.rs (same names without the `hiz_` prefix). Integer addressing only.
 //
 // Level k+1 is max(1, size_k >> 1) per axis. Texel x of level k+1 reduces (min, reversed-Z) the
 // source texels 2x .. 2x+1, plus 2x+2 when x is the last texel and size_k is odd (the dropped

@@ -1,4 +1,4 @@
-// Scene data shared by every pass. Layouts mirror src/render/gpu_types.rs (scalar block layout).
+// Scene data shared by every pass. Layouts mirror src/passes/shared/gpu_types.rs (scalar block layout).
 #ifndef CULLGRAPH_SCENE_GLSL
 #define CULLGRAPH_SCENE_GLSL
 
@@ -55,7 +55,7 @@ struct GpuPointLight {
 };
 
 // A split world position (hi + lo) relative to the split eye. The hi parts are whole numbers
-// (split_hi_lo in src/render/gpu_types.rs), so their difference is exact, and `precise` keeps
+// (split_hi_lo in src/passes/shared/gpu_types.rs), so their difference is exact, and `precise` keeps
 // the compiler from regrouping the sum: the same relative position at any whole offset.
 vec3 rel_eye(vec3 hi, vec3 lo, vec3 eye_hi, vec3 eye_lo) {
     precise vec3 t = (hi - eye_hi) + (lo - eye_lo);

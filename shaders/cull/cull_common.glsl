@@ -1,8 +1,8 @@
-// Data of the instance-cull pass. Layouts mirror src/render/cull_data.rs and
+// Data of the instance-cull pass. Layouts mirror src/passes/shared/cull_data.rs and
 // src/passes/instance_cull.rs (scalar block layout).
 //
 // Slots are instances sorted by draw group, each group in spatial order (Morton order of the
-// instances' origins, equal codes in instance order; src/render/scene_buffers.rs), which is the
+// instances' origins, equal codes in instance order; src/passes/shared/scene_buffers.rs), which is the
 // unculled draw list's order. Survivors are compacted in slot order by a prefix sum over one survivor bit
 // per slot, so each group's survivors form one slice in slot order and draw order, and with
 // it every depth tie, does not depend on timing.
@@ -16,7 +16,7 @@
 #define CULL_WORDS_PER_BLOCK (CULL_BLOCK / 32u)
 
 // World bound of one slot, 32 bytes. The small quantities are half floats, rounded outward
-// on the CPU and widened by their own rounding error (src/render/cull_data.rs), so the bound
+// on the CPU and widened by their own rounding error (src/passes/shared/cull_data.rs), so the bound
 // read here always contains the exact one.
 struct CullRecord {
     vec3 center_hi;       // world center, hi part
@@ -30,7 +30,7 @@ struct CullRecord {
 // Set when a bound does not fit half floats (larger than 65504): always visible.
 #define CULL_HUGE 0x80000000u
 
-// Face-cull regions of a command list, each with its own draw count (src/render/face_cull.rs).
+// Face-cull regions of a command list, each with its own draw count (src/passes/shared/face_cull.rs).
 #define FACE_CULL_REGIONS 3u
 
 vec3 record_center_lo(CullRecord r) { return vec3(unpackHalf2x16(r.lo_xy), unpackHalf2x16(r.lo_z_radius).x); }

@@ -8,7 +8,7 @@
 // the superblock + bits before it in the block). Slots are sorted by draw group, so each group's
 // survivors form one slice, in slot order, every run; the group's command starts there
 // (first instance = the survivors of the groups before it, summed from the group counts).
-// Groups are sorted by face cull (src/render/face_cull.rs): each face cull's commands are
+// Groups are sorted by face cull (src/passes/shared/face_cull.rs): each face cull's commands are
 // compacted from its region's first group on, with a count of its own.
 //
 // VISIBLE_OUT (late phase): each block also places the instance ids of its visible slots, the

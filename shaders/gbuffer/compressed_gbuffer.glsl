@@ -27,8 +27,10 @@ struct BlockPair {
 
 // Ambient occlusion of every block: no material carries an occlusion term yet. The clear writes
 // it into every head (with roughness 0, which the head's fragment overwrites), so that a head's
-// fragment stores one byte fewer: on an H100 the AO byte store cost the city's geometry pass
-// 0.18 ms of 0.91 at 2x (docs/msaa.md, stop 21). Pool blocks are not cleared and store it.
+// fragment stores one byte fewer: a head fragment's stores are scattered at the pairs' 28-byte
+// stride, and on GPUs that export fragments through few graphics units each store instruction
+// costs about the same whether it writes a byte or a word (docs/msaa.md). Pool blocks are not
+// cleared and store it.
 #define BLOCK_AO 255u
 #define HEAD_ROUGHNESS_AO_CLEARED ((BLOCK_AO << 16) | (BLOCK_AO << 24))
 

@@ -21,9 +21,9 @@ layout(post_depth_coverage) in;
 #ifdef CLAIM_IN_DRAW_ORDER
 // The claims run in an ordered critical section per sample, so fragments that cover the same
 // sample claim it in primitive (draw) order, as the stencil test decides. Only the claim: the
-// lighting does not depend on the order of a pixel's list. (On the H100 a pixel interlock cost
-// about twice as much as this sample interlock, and putting the list push inside it too cost
-// 0.04-0.1 ms more at 1080p; docs/msaa.md.)
+// lighting does not depend on the order of a pixel's list. A sample interlock, not a pixel
+// one: fragments that share a pixel but not a sample need not wait for each other, and the list
+// push stays outside the critical section, which it would only lengthen (docs/msaa.md).
 layout(sample_interlock_ordered) in;
 #endif
 

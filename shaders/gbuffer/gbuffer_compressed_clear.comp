@@ -5,8 +5,8 @@
 // attributes need no clearing (a head whose pixel has no surface at sample 0 is never read: the
 // lighting pass sees the background in the depth), but the pairs are written whole, all seven
 // words, so that a warp's stores fill contiguous 32-byte sectors: writing only the three words
-// that need it, at the pairs' 28-byte stride, leaves every sector partly written, and took 0.043
-// ms at 1920x1080 on an H100 against 0.015 for the whole pairs (docs/msaa.md, stop 21).
+// that need it, at the pairs' 28-byte stride, would leave every sector partly written, and
+// partly written sectors cost more than the extra bytes of whole pairs (docs/msaa.md).
 #include "compressed_gbuffer.glsl"
 
 layout(local_size_x = 256) in;

@@ -23,18 +23,18 @@
 // fold at all (4 gathers, 4 + 1 stores); the blocks on the last column/row of level 2 read a 8x8
 // (clamped) block and apply the fold. Levels 3..6 of the tile level by level in shared memory
 // (ping-pong, a barrier per level, a texel per thread reading at most 3x3: reducing level 6
-// straight from level 2 made one thread read 256..961 values in a row, which cost more than
-// reading the depth on an H100).
+// straight from level 2 would leave one thread reading 256..961 values in a row while the rest
+// of the workgroup idles, a serial tail longer than the whole read of the depth).
 //
 // Levels 7.. in the same dispatch: each tile's level-6 texel is merged into the one texel of
 // every higher level that contains it, with an atomicMin on its bits (non-negative floats order
 // like their bits) in the coherent buffer `above`, by the tile's last thread, which stored
 // nothing since level 2, so that its device-scope fence before the done counter has little more
-// than these atomics to wait for (thread 0, right after level 6, measured the same). The tile that brings the counter to the tile count copies those levels
-// into their mips and puts the buffer back to +inf and the counter to 0 for the next build (the
-// pass fills it once, before the first). On an H100 this took 1920x1080 from 0.0188 to 0.0153 ms
-// against a one-workgroup second dispatch that reduced levels 7.. level by level (3840x2160:
-// 0.041 both); see src/passes/hiz_build.rs for the variants tried.
+// than these atomics to wait for. The tile that brings the counter to the tile count copies those
+// levels into their mips and puts the buffer back to +inf and the counter to 0 for the next build
+// (the pass fills it once, before the first). Not a one-workgroup second dispatch for levels 7..:
+// that would wait for the whole tile dispatch to drain and then reduce the levels one after
+// another on one SM; see src/passes/hiz_build.rs for the alternatives.
 #version 460
 #extension GL_EXT_control_flow_attributes : require
 #include "common/hiz.glsl"
@@ -72,8 +72,8 @@ layout(push_constant) uniform Push {
     uvec2 base;    // chain level 0 size (the depth's)
     uint levels;   // stored mips to write (chain levels 1 ..= levels), 1 ..= max(1, hiz_level_count(base) - 1)
 };
-// Depth samples per pixel: a specialization constant, so that the driver can unroll the loop
-// over them (a push constant before: 2x 0.039 -> 0.037 ms at 1920x1080 on an H100).
+// Depth samples per pixel: a specialization constant, not a push constant, so that the driver
+// can unroll the loop over them.
 layout(constant_id = 0) const int HIZ_SAMPLES = 1;
 
 const uint SIDE = 16u;         // threads per axis
@@ -81,9 +81,9 @@ const uint TILE_LEVEL = 6u;    // chain level: a workgroup owns the subtree of o
 #define FAR_INIT uintBitsToFloat(0x7F800000u)  // +inf: min identity
 
 // s_a: level 2 of the tile (<= 31x31, stride 32), then levels 3..6 alternate between s_b and s_a
-// (same stride), level 6 ending in s_a[0]. 8 KB in all: a one-workgroup top pass that kept 16 KB
-// more here made an SM hold fewer tiles than it had threads for (3840x2160 on an H100: 0.052 ->
-// 0.041 ms when it went).
+// (same stride), level 6 ending in s_a[0]. 8 KB in all, kept that small on purpose: every extra
+// KB of shared memory per workgroup lowers how many tiles an SM holds at once, and at 16 KB more
+// an SM would hold fewer tiles than it has threads for.
 shared float s_a[1024];
 shared float s_b[1024];
 shared bool s_last_tile;  // this tile finished last: it writes levels 7..

@@ -47,7 +47,7 @@ void depth_range_add(inout DepthRange range, float depth) {
 
 // Adds one invocation's depth range to the tile. Every invocation of the workgroup calls it, in
 // uniform control flow: the subgroup reduces first, so the tile takes one shared atomic per
-// subgroup instead of two per sample (those serialised on two addresses). Positive floats order
+// subgroup instead of two per sample (which would serialise on two addresses). Positive floats order
 // like uints.
 void tile_add_depth_range(DepthRange range) {
     bool any_geometry = range.nearest > 0.0;

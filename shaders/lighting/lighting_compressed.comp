@@ -311,16 +311,16 @@ uvec3 add_shared_blocks(PixelList list, uvec3 sum, inout uint n) {
 
 // Rounds of the shared list at most (the first included): at 8x a tile has at most 1792 pool
 // blocks, which the default 512-entry list takes in four. Blocks left after them are shaded by
-// their pixels (`resolve_pixel`). (Lavapipe also lost whole tiles when a loop with barriers
-// ran a few hundred times, as a 1-entry list needed.)
+// their pixels (`resolve_pixel`). (The bound also keeps loops with barriers short: lavapipe
+// loses whole tiles when such a loop runs a few hundred times, as a 1-entry list would need.)
 #define MAX_SHARED_ROUNDS 4u
 
 // When the tile had more blocks than the shared list holds, its pixels put the rest on the
 // list in further rounds, each shaded by all invocations together, and add them to their sums
 // (`n`: the pixel's blocks summed so far). A pixel left to loop over its own blocks would hold
-// its whole subgroup in the light loop once per block: on the monastery at 8x and 500 lights
-// that was most of the pass's time. Called by every invocation of the tile, `round_total` (the
-// first round's pushes) the same for all.
+// its whole subgroup in the light loop once per block, and detailed tiles hold hundreds of
+// blocks, so those serial loops would dominate the pass. Called by every invocation of the
+// tile, `round_total` (the first round's pushes) the same for all.
 uvec3 shade_remaining_rounds(bool inside, inout PixelList list, uvec3 sum, inout uint n, uint round_total) {
 #if SHARED_BLOCKS > 0
     for (uint round = 1u; round < MAX_SHARED_ROUNDS && round_total > uint(SHARED_BLOCKS); ++round) {
@@ -393,7 +393,7 @@ void main() {
     tile_add_depth_range(range);
     tile_cull_lights(settings.light_tiles != 0u);   // (its barriers publish the shared list)
     // A tile with at most SHARED_MIN_BLOCKS pool blocks leaves them to its pixels (0 by default:
-    // on the H100 sharing was never slower).
+    // sharing costs no more than per-pixel shading even for a tile with few blocks).
     bool distribute = false;
 #if SHARED_BLOCKS > 0
     uint round_total = sh_block_total;

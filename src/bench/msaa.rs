@@ -187,7 +187,8 @@ pub fn run(
 
 /// How long frames run before any is measured, at least: a GPU that idled (while the CPU loaded
 /// a scene or computed image errors) takes a few hundred milliseconds to raise its clocks again,
-/// and on the H100 the first configurations after an idle ran up to 5x slower within 30 frames.
+/// and a frame count alone can end before that: frames measured at the lowered clocks run
+/// several times slower than the same frames warm.
 const MIN_WARMUP: std::time::Duration = std::time::Duration::from_millis(500);
 
 /// Renders `method` at `samples` per pixel: at least `bench.warmup` frames and [`MIN_WARMUP`],

@@ -1,5 +1,5 @@
 //! Image metrics for comparing renders: mean absolute error and PSNR over the RGB channels of two
-//! RGBA8 images (alpha ignored), in 8-bit units. (FLIP comes later.)
+//! RGBA8 images (alpha ignored), in 8-bit units. (FLIP is in `oracle::image_error`.)
 
 use crate::{Error, Result};
 
