@@ -6,10 +6,10 @@
 mod common;
 
 use common::GpuTest;
-use cullgraph::graph::executor::DrawnInstances;
-use cullgraph::oracle::cull_math::{aabb_in_frustum, CullView};
-use cullgraph::render::cull_data::{CullData, CULL_HUGE};
-use cullgraph::render::scene_buffers::DrawList;
+use cullgraph::cull::math::{aabb_in_frustum, CullView};
+use cullgraph::passes::shared::cull_data::{CullData, CULL_HUGE};
+use cullgraph::passes::shared::scene_buffers::DrawList;
+use cullgraph::render::DrawnInstances;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{Camera, CameraPath, SceneSource};
@@ -20,7 +20,7 @@ fn expected(scene: &cullgraph::scene::Scene, camera: &Camera, w: u32, h: u32) ->
     let draws = DrawList::all_instances(scene);
     let data = CullData::new(scene, &draws);
     let view = CullView::from_camera(camera, w, h);
-    let (eye_hi, eye_lo) = cullgraph::render::gpu_types::split_hi_lo(camera.eye);
+    let (eye_hi, eye_lo) = cullgraph::passes::shared::gpu_types::split_hi_lo(camera.eye);
     let mut out = Vec::new();
     for group in &data.groups {
         for slot in group.first_slot..group.first_slot + group.slot_count {
@@ -126,11 +126,12 @@ fn in_frustum(scene: &cullgraph::scene::Scene, camera: &Camera, w: u32, h: u32) 
 }
 
 /// The two-phase graph's early phase draws last frame's visible list as it is (the late
-/// phase's `visible_ids` with its commands; no early cull pass). Against the earlier early phase, which tested
-/// every slot's visibility bit and the frustum, on a camera moving fast enough that part of
-/// last frame's visible set leaves the view: the early lists agree exactly (same ids, same
-/// order) inside the frustum, the late lists are identical, the early and late lists never
-/// share an instance, and neither misses anything visible.
+/// phase's `visible_ids` with its commands; no early cull pass). Against an early phase that
+/// tests every slot's visibility bit and the frustum (`tests/graphs/gpu/two_phase_bits.ron`),
+/// on a camera moving fast enough that part of last frame's visible set leaves the view: the
+/// early lists agree exactly (same ids, same order) inside the frustum, the late lists are
+/// identical, the early and late lists never share an instance, and neither misses anything
+/// visible.
 #[test]
 fn early_phase_from_last_frames_list_matches_the_tested_early_phase() {
     let gpu = GpuTest::new();

@@ -8,9 +8,9 @@ mod common;
 
 use common::{cube_mesh, GpuTest};
 use cullgraph::gpu::ShaderCompiler;
-use cullgraph::graph::executor::DrawnInstances;
 use cullgraph::oracle::raycast::{RaycastOracle, SamplePattern};
 use cullgraph::render::output::RgbaImage;
+use cullgraph::render::DrawnInstances;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{Camera, CameraPath, Instance, Material, MeshData, Projection, Scene, SceneSource, Transform};

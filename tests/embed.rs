@@ -260,6 +260,85 @@ fn the_graph_lights_straight_into_an_image_the_host_owns() {
     host.shut_down_clean(allocator);
 }
 
+#[test]
+fn a_failed_record_consumes_nothing_so_the_host_can_discard_its_command_buffer() {
+    let (w, h) = (80, 48);
+    let reference = {
+        let gpu = GpuTest::new();
+        let mut r = Renderer::new(&gpu, &gpu.shaders(), boxes_scene(), RenderSettings::new(w, h)).unwrap();
+        r.render_to_image(&boxes_camera()).unwrap().1
+    };
+    let host = Host::new();
+    let allocator = host.allocator();
+    // The engine's own image and view, made with its own allocator.
+    let d = host.device.clone();
+    let target = HostOwnedImage::new(
+        &d,
+        &allocator,
+        vk::Format::R8G8B8A8_UNORM,
+        (w, h, 1),
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+    );
+    {
+        let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
+        let mut renderer = example_renderer(&ctx, "host_target", w, h);
+        let readback = readback_buffer(&ctx, "host readback", (w * h * 4) as u64);
+        unsafe {
+            let pool = d
+                .create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(host.family), None)
+                .unwrap();
+            let cmd = d
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
+                )
+                .unwrap()[0];
+            // The first record fails (an import is missing) into a command buffer the host then
+            // throws away unsubmitted: the scene upload it would have carried is not lost.
+            let discarded = d
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
+                )
+                .unwrap()[0];
+            d.begin_command_buffer(discarded, &vk::CommandBufferBeginInfo::default()).unwrap();
+            let err = renderer.record(discarded, &boxes_camera()).unwrap_err().to_string();
+            assert!(err.contains("imported resource 'color' was not provided"), "{err}");
+            d.end_command_buffer(discarded).unwrap();
+            d.free_command_buffers(pool, &[discarded]);
+            d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
+            let imports = Imports::new().image("color", target.host, Access::NONE, Access::TRANSFER_READ);
+            assert_eq!(renderer.record_with_imports(cmd, &boxes_camera(), &imports).unwrap(), 0);
+            // The engine copies its image, which cullgraph left in TRANSFER_SRC_OPTIMAL.
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+                )
+                .image_extent(vk::Extent3D { width: w, height: h, depth: 1 });
+            d.cmd_copy_image_to_buffer(
+                cmd,
+                target.image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                readback.handle(),
+                &[region],
+            );
+            let to_host = vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ);
+            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[to_host]));
+            d.end_command_buffer(cmd).unwrap();
+            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
+            d.queue_submit(host.queue, &[vk::SubmitInfo::default().command_buffers(&[cmd])], fence).unwrap();
+            d.wait_for_fences(&[fence], true, u64::MAX).unwrap();
+            d.destroy_fence(fence, None);
+            d.destroy_command_pool(pool, None);
+        }
+        assert_eq!(readback.read_bytes().unwrap(), reference.as_raw().as_slice());
+    }
+    target.destroy(&d, &allocator);
+    host.shut_down_clean(allocator);
+}
+
 /// The boxes through `graph/examples/NAME.ron` at `w`x`h`, on the host's context.
 fn example_renderer(ctx: &GpuContext, name: &str, w: u32, h: u32) -> Renderer {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -343,7 +422,7 @@ impl HostOwnedImage {
 /// mip by mip.
 #[test]
 fn the_host_can_own_a_depth_stencil_image_and_a_mipmapped_pyramid() {
-    use cullgraph::oracle::hiz::{level_offset, level_size, stored_mip_count, stored_size, HiZPyramid};
+    use cullgraph::cull::hiz::{level_offset, level_size, stored_mip_count, stored_size, HiZPyramid};
     use glam::UVec2;
     // 203x131: a pyramid of 7 mips, levels above the 64-pixel tiles included.
     let (w, h) = (203u32, 131u32);

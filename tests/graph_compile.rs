@@ -9,6 +9,7 @@ use cullgraph::gpu::{Access, ShaderRoot};
 use cullgraph::graph::compile::flow;
 use cullgraph::graph::plan::{Placement, PlannedBarrier, SettingValue, Version};
 use cullgraph::graph::{self, CompiledGraph, FrameInputs, NoDevice, ResourceClass, Stages, Usage, ValidatedGraph};
+use cullgraph::passes::builtin_kinds;
 use std::path::Path;
 
 fn env() -> NoDevice {
@@ -18,11 +19,11 @@ fn env() -> NoDevice {
 /// The simplest shipped frame (G-buffer, lighting): `graph/no_cull.ron`.
 fn default_graph() -> ValidatedGraph {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("graph/no_cull.ron");
-    graph::load_file(&path, &[], &env()).unwrap_or_else(|e| panic!("{e}"))
+    graph::load_file(&path, &[], &env(), &builtin_kinds()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn load_test(text: &str) -> ValidatedGraph {
-    graph::load_with_kinds(text, "test.ron", &[], &env(), graph_kinds::test_kinds()).unwrap_or_else(|e| panic!("{e}"))
+    graph::load(text, "test.ron", &[], &env(), &graph_kinds::test_kinds()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn compile(g: &ValidatedGraph) -> CompiledGraph {
@@ -87,12 +88,12 @@ fn shipped_graphs_load_and_compile() {
         ("graph/examples/host_target.ron", 2),
         ("graph/examples/host_depth_and_pyramid.ron", 3),
     ] {
-        let g = graph::load_file(&root.join(file), &[], &env()).unwrap_or_else(|e| panic!("{e}"));
+        let g = graph::load_file(&root.join(file), &[], &env(), &builtin_kinds()).unwrap_or_else(|e| panic!("{e}"));
         let c = compile(&g);
         assert_eq!((c.passes.len(), c.pruned.len()), (passes, 0), "{file}");
     }
     // The compute pass of tint.ron: binding 0 sampled, binding 1 written, 8x8 workgroups.
-    let tint = graph::load_file(&root.join("graph/examples/tint.ron"), &[], &env()).expect("tint");
+    let tint = graph::load_file(&root.join("graph/examples/tint.ron"), &[], &env(), &builtin_kinds()).expect("tint");
     let c = compile(&tint);
     let pass = &c.passes[2];
     let slots: Vec<(&str, Usage)> = pass.bindings.iter().map(|b| (b.slot.as_str(), b.usage)).collect();

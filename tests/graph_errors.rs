@@ -10,6 +10,7 @@ use ash::vk;
 use cullgraph::gpu::reflect::ShaderInterface;
 use cullgraph::gpu::ShaderRoot;
 use cullgraph::graph::{self, Environment, GraphErrors, NoDevice};
+use cullgraph::passes::builtin_kinds;
 use std::path::{Path, PathBuf};
 
 /// A device that cannot use sRGB formats as storage images, has no 8x MSAA and no
@@ -77,7 +78,7 @@ fn header(text: &str) -> Case {
 
 fn actual(text: &str, path: &Path, params: &[(String, String)]) -> Result<(), GraphErrors> {
     let env = FakeDevice::new();
-    graph::load(text, &path.display().to_string(), params, &env).map(|_| ())
+    graph::load(text, &path.display().to_string(), params, &env, &builtin_kinds()).map(|_| ())
 }
 
 #[test]
@@ -223,7 +224,7 @@ mod never_panics {
                 text = edit(&text, kind, at, len, snippet);
             }
             let env = FakeDevice::new();
-            match graph::load(&text, &file, &[], &env) {
+            match graph::load(&text, &file, &[], &env, &cullgraph::passes::builtin_kinds()) {
                 Ok(g) => {
                     let _ = graph::compile(&g, &FrameInputs::new(64, 48)).map(|c| (c.to_string(), graph::to_dot(&c)));
                 }

@@ -150,7 +150,7 @@ fn env() -> NoDevice {
 
 /// Loads; `None` for a dependency cycle (random graphs may have one), panics on other errors.
 fn load(text: &str) -> Option<ValidatedGraph> {
-    match graph::load_with_kinds(text, "random.ron", &[], &env(), graph_kinds::test_kinds()) {
+    match graph::load(text, "random.ron", &[], &env(), &graph_kinds::test_kinds()) {
         Ok(g) => Some(g),
         Err(e) if e.iter().all(|e| e.message.starts_with("cycle: ")) => None,
         Err(e) => panic!("generated graph is invalid:\n{e}\n{text}"),

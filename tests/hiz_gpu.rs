@@ -13,9 +13,9 @@ mod common;
 
 use ash::vk;
 use common::{boxes_camera, boxes_scene, readback_buffer, GpuTest};
+use cullgraph::cull::hiz::{level_offset, level_size, stored_mip_count, stored_size, HiZPyramid};
 use cullgraph::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
 use cullgraph::gpu::{Access, Bind, Buffer, GraphicsDesc, Image, ImageDesc, Pipeline, Sampler, ShaderCompiler};
-use cullgraph::oracle::hiz::{level_offset, level_size, stored_mip_count, stored_size, HiZPyramid};
 use cullgraph::passes::hiz_build::{HizBuildPass, HizMethod, HIZ_FORMAT};
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use glam::UVec2;
@@ -176,6 +176,7 @@ impl Tools {
                 depth_write: true,
                 samples: vk::SampleCountFlags::from_raw(samples),
                 stencil: Default::default(),
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             };
             [
                 Pipeline::graphics(gpu, "fill pattern", &desc(&vert, Some(&frag), vk::CompareOp::ALWAYS)).unwrap(),
@@ -526,6 +527,7 @@ fn hiz_build_in_a_graph_reduces_the_gbuffer_depth() {
             file: "hiz_test.ron".into(),
             dir: None,
             overrides: vec![("method".into(), method.into())],
+            kinds: cullgraph::passes::builtin_kinds(),
         };
         let mut renderer =
             Renderer::with_graph(gpu, &tools.shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
@@ -580,7 +582,7 @@ fn a_pyramid_of_the_wrong_size_is_rejected() {
         )
         .unwrap()
     };
-    // The depth's own size (the layout before level 0 was dropped), and half rounded up. (A
+    // The depth's own size (a pyramid that would store level 0 too), and half rounded up. (A
     // pyramid of the right size cannot have too many mips: its own chain is the depth's minus 1.)
     let cases = [(hiz(w, hh, 1), "it must be 10x5"), (hiz(11, 6, 1), "it must be 10x5")];
     for (image, want) in &cases {

@@ -1,4 +1,4 @@
-//! Brute-force proofs of the conservative culling math (`cullgraph::oracle::cull_math`): for many
+//! Brute-force proofs of the conservative culling math (`cullgraph::cull::math`): for many
 //! thousands of random bounds and cameras, densely sampled points of each bound are projected in
 //! `f64` and must all land in the computed pixel rectangle, at depths no larger than the computed
 //! nearest depth, and never inside the frustum when the frustum test rejected the bound.
@@ -9,8 +9,8 @@
 //! worlds 10⁷ from the origin with hi/lo eye-relative inputs; instance boxes with zero and
 //! negative scales through `Scene::instance_bounds`.
 
-use cullgraph::oracle::cull_math::{self as cm, CullView, ScreenBounds};
-use cullgraph::render::gpu_types::split_hi_lo;
+use cullgraph::cull::math::{self as cm, CullView, ScreenBounds};
+use cullgraph::passes::shared::gpu_types::split_hi_lo;
 use cullgraph::scene::{Aabb, Instance, Mesh, Scene, Sphere, Transform};
 use glam::{DMat3, DVec3, Mat3, Quat, UVec2, Vec3};
 use proptest::prelude::*;

@@ -1,12 +1,12 @@
-//! Brute-force proofs of the Hi-Z pyramid and occlusion test (`cullgraph::oracle::hiz`):
+//! Brute-force proofs of the Hi-Z pyramid and occlusion test (`cullgraph::cull::hiz`):
 //! coverage of every level-0 texel by exactly `min(x >> k, size_k − 1)`, conservative texel
 //! values, no false "occluded" against a brute-force scan of the rectangle (1× and 4× MSAA), the
 //! finer variant culling at least as much, and the `floor(log2)` regression.
 
-use cullgraph::oracle::cull_math::{ceil_log2, hiz_level, PixelRect};
-use cullgraph::oracle::hiz::{
+use cullgraph::cull::hiz::{
     self, footprint, is_occluded, level_count, level_size, texel_of_pixel, HiZPyramid, HizVariant,
 };
+use cullgraph::cull::math::{ceil_log2, hiz_level, PixelRect};
 use glam::UVec2;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};

@@ -3,8 +3,8 @@
 //! must pass the frustum test and must not be occluded by the Hi-Z pyramid built from the
 //! ray-cast depth (coarse and finer variants), with box and sphere bounds.
 
-use cullgraph::oracle::cull_math::{self as cm, CullView, ScreenBounds};
-use cullgraph::oracle::hiz::{is_occluded, HiZPyramid, HizVariant};
+use cullgraph::cull::hiz::{is_occluded, HiZPyramid, HizVariant};
+use cullgraph::cull::math::{self as cm, CullView, ScreenBounds};
 use cullgraph::oracle::raycast::{RaycastOracle, SamplePattern, NO_INSTANCE};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{Scene, SceneSource};

@@ -120,7 +120,7 @@ pub fn cull_pass_bytes(slots: u64, tested: u64, drawn: u64, groups: u64, list: b
 /// samples per pixel. Not counted: the tiles' merge buffer (a few KB).
 pub fn hiz_pass_bytes(depth: glam::UVec2, samples: u32, mips: u32) -> u64 {
     let read = u64::from(depth.x) * u64::from(depth.y) * u64::from(samples) * 4;
-    let written = crate::oracle::hiz::level_offset(crate::oracle::hiz::stored_size(depth), mips);
+    let written = crate::cull::hiz::level_offset(crate::cull::hiz::stored_size(depth), mips);
     read + u64::from(written) * 4
 }
 
@@ -312,7 +312,7 @@ mod tests {
         // 1920x1080: 8,294,400 bytes of depth; 11 levels from 960x540 down to 1x1.
         let texels: u64 = (0..11)
             .map(|k| {
-                let s = crate::oracle::hiz::level_size(glam::UVec2::new(960, 540), k);
+                let s = crate::cull::hiz::level_size(glam::UVec2::new(960, 540), k);
                 u64::from(s.x) * u64::from(s.y)
             })
             .sum();

@@ -69,7 +69,7 @@ pub fn run(
         let truncated = [1, 2, 6].into_iter().filter(|&m| m < chain).map(|m| ("single", Some(m)));
         for (method, mips) in [("single", None), ("per_mip", None)].into_iter().chain(truncated) {
             let text = GRAPH.replace("MIPS", &mips.map_or("All".to_string(), |m: u32| m.to_string()));
-            let spec = GraphSpec { text, file: "hiz_bench.ron".into(), dir: None, overrides: Vec::new() }
+            let spec = GraphSpec { text, file: "hiz_bench.ron".into(), ..GraphSpec::default_graph() }
                 .with_overrides([("method".to_string(), method.to_string())]);
             let mut renderer =
                 Renderer::with_graph(ctx, shaders, scene.clone(), RenderSettings::new(width, height), &spec)?;

@@ -4,7 +4,9 @@
 
 use super::args::{GraphArgs, GraphCommand, GraphFrameArgs};
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
-use cullgraph::graph::{self, CompiledGraph, DeviceEnv, Environment, FrameInputs, GraphErrors, NoDevice};
+use cullgraph::graph::{self, CompiledGraph, DeviceEnv, Environment, GraphErrors, NoDevice};
+use cullgraph::passes::builtin_kinds;
+use cullgraph::passes::shared::frame_inputs;
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -72,12 +74,12 @@ fn check(file: &Path, params: &[(String, String)], device: Option<&str>) -> Resu
         Ok(ctx) => {
             let shaders = ShaderCompiler::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
             let env = DeviceEnv::new(&ctx, &shaders);
-            graph::load_file(file, params, &env)?
+            graph::load_file(file, params, &env, &builtin_kinds())?
         }
         Err(e) => {
             eprintln!("note: no Vulkan device ({e}); image formats are not checked against a device");
             let env = NoDevice::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
-            graph::load_file(file, params, &env as &dyn Environment)?
+            graph::load_file(file, params, &env as &dyn Environment, &builtin_kinds())?
         }
     };
     println!("{}: ok ({} passes, {} resources)", file.display(), graph.passes.len(), graph.resources.len());
@@ -87,17 +89,17 @@ fn check(file: &Path, params: &[(String, String)], device: Option<&str>) -> Resu
 /// Loads (without a device) and compiles for the requested size and scene.
 fn compiled(file: &Path, params: &[(String, String)], frame: &GraphFrameArgs) -> Result<CompiledGraph, Failure> {
     let env = NoDevice::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
-    let graph = graph::load_file(file, params, &env)?;
+    let graph = graph::load_file(file, params, &env, &builtin_kinds())?;
     let scene = frame.scene.load().map_err(|e| Failure::Other(e.to_string()))?;
     let (width, height) = frame.size;
-    let inputs = FrameInputs::from_scene(&scene, width, height);
+    let inputs = frame_inputs(&scene, width, height);
     let started = std::time::Instant::now();
     let plan = graph::compile(&graph, &inputs)?;
     let compile_time = started.elapsed();
     // Reload the same file to time loading and validation alone (the first load above also
     // warmed the file cache and the shader compiler).
     let started = std::time::Instant::now();
-    let reloaded = graph::load_file(file, params, &env)?;
+    let reloaded = graph::load_file(file, params, &env, &builtin_kinds())?;
     let load_time = started.elapsed();
     drop(reloaded);
     eprintln!(

@@ -29,7 +29,7 @@
 //! minimum of the depth (level 0, which is then also the last level). GLSL: `HIZ_FIRST_LEVEL`,
 //! `hiz_stored_mip_count`, `hiz_stored_mip` in `shaders/common/hiz.glsl`.
 
-use super::cull_math::{hiz_level, PixelRect};
+use super::math::{hiz_level, PixelRect};
 use glam::UVec2;
 
 /// Which Hi-Z level the occlusion test reads.
@@ -224,7 +224,7 @@ pub fn texel_range(base: UVec2, levels: u32, rect: PixelRect, variant: HizVarian
 }
 
 /// Whether a bound with screen rectangle `rect` and nearest reversed-Z depth `nearest_depth`
-/// (from [`super::cull_math::project_sphere`] or [`super::cull_math::project_aabb`]) is hidden:
+/// (from [`super::math::project_sphere`] or [`super::math::project_aabb`]) is hidden:
 /// `nearest_depth` strictly below every texel covering the rectangle at the chosen level.
 ///
 /// Conservative: each covering texel is ≤ the depth of every level-0 pixel under it, so if any

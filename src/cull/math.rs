@@ -491,7 +491,7 @@ pub fn ceil_log2(n: u32) -> u32 {
 /// **The rectangle touches at most 2×2 texels of level `L`, for every alignment.** Level `L`
 /// texel `t` of an axis covers pixels `t·2^L … t·2^L + 2^L − 1`, except the last texel, which
 /// also covers everything beyond (the pyramid folds the dropped row/column of odd levels into
-/// it; see [`crate::oracle::hiz`]): pixel `x` is covered by `min(x >> L, size_L − 1)`.
+/// it; see [`crate::cull::hiz`]): pixel `x` is covered by `min(x >> L, size_L − 1)`.
 /// Since `w ≤ 2^L`, `x1 − x0 < 2^L`. Let `a = x0 >> L` and `b = x1 >> L`; then
 /// `b·2^L ≤ x1 < x0 + 2^L < (a + 1)·2^L + 2^L`, so `b < a + 2`, i.e. `b ≤ a + 1`.
 /// `min(·, size_L − 1)` is monotone and never increases a difference, so the clamped texels
@@ -503,7 +503,7 @@ pub fn ceil_log2(n: u32) -> u32 {
 /// **`floor(log₂)` is not enough**: for `w = 6` it gives level 2 (texels of 4 pixels), and the
 /// rectangle `x = 3..8` touches texels 0, 1 and 2; a 2×2 read misses one.
 ///
-/// **Finer variant** ([`crate::oracle::hiz::HizVariant::Finer`]): level `L' = max(L − 1, 0)`.
+/// **Finer variant** ([`crate::cull::hiz::HizVariant::Finer`]): level `L' = max(L − 1, 0)`.
 /// Now `x1 − x0 < 2^L = 2·2^L'`, so by the same argument `b ≤ a + 2`: at most 3×3 texels (the
 /// test loops over all of them; 4×4 is never needed). Each level-`L'` texel touched is inside the
 /// footprint of a level-`L` texel touched, so the finer minimum is never smaller: it culls at

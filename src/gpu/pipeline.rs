@@ -43,6 +43,8 @@ pub struct GraphicsDesc<'a> {
     pub samples: vk::SampleCountFlags,
     /// Stencil use (only with a depth format that has stencil).
     pub stencil: StencilRule,
+    /// What the vertices make: triangles for geometry, lines for debug drawing.
+    pub topology: vk::PrimitiveTopology,
 }
 
 /// What a pipeline does with the stencil aspect.
@@ -156,8 +158,7 @@ impl Pipeline {
         } else {
             vk::PipelineVertexInputStateCreateInfo::default()
         };
-        let input_assembly =
-            vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
         let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
         let raster = vk::PipelineRasterizationStateCreateInfo::default()
             .polygon_mode(vk::PolygonMode::FILL)

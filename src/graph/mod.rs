@@ -15,6 +15,10 @@
 //!   uses last frame's Hi-Z.
 //! - Passes whose results reach no output and no later frame are pruned (and listed).
 //!
+//! The graph knows no pass kind: every kind, built-in or an engine's, is a [`PassKind`] in the
+//! [`KindRegistry`] a graph is loaded with; this module imports nothing from the layers above it
+//! (`tests/layers.rs` checks it).
+//!
 //! Pipeline: [`schema`] (serde types of the RON file) -> [`validate`] (all errors at once, with
 //! positions from [`locate`]) -> [`ValidatedGraph`] -> [`compile()`] for one output size and scene
 //! -> [`CompiledGraph`] (printable through `Display`, [`report::to_dot`]).
@@ -34,12 +38,23 @@ pub mod usage;
 pub mod validate;
 pub mod validated;
 
+pub use compile::resolve::Resolved;
 pub use compile::{compile, FrameInputs};
 pub use env::{DeviceEnv, Environment, NoDevice};
 pub use error::{GraphError, GraphErrors, Pos};
-pub use kinds::{builtin_kinds, PassKindInfo, SlotDecl};
-pub use plan::{CompiledGraph, PlannedBarrier, PlannedPass, PlannedResource, ResourceClass, ResourceId, Version};
+pub use executor::{
+    FrameData, GraphRuntime, Import, Imports, PassContext, PassNode, ResourceBytes, SlotBindings, StepTimer,
+    FRAMES_IN_FLIGHT, STATS_BYTES, STATS_SLOT,
+};
+pub use kinds::{
+    FormatRule, KindCheck, KindRegistry, MinBytes, NodeSetup, PassKind, PassKindInfo, RegisteredKind, SettingDecl,
+    SettingDefault, SlotDecl, COMPUTE_KIND,
+};
+pub use plan::{
+    Binding, CompiledGraph, PlannedBarrier, PlannedPass, PlannedResource, ResolvedKind, ResourceClass, ResourceId,
+    SettingValue, Version,
+};
 pub use report::to_dot;
 pub use usage::{Stages, Usage};
-pub use validate::{load, load_file, load_in, load_with_kinds, parse_param_override, ParamOverride};
-pub use validated::ValidatedGraph;
+pub use validate::{load, load_file, load_in, parse_param_override, ParamOverride};
+pub use validated::{Pass, PassBinding, ResourceDesc, ValidatedGraph};

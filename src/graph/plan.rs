@@ -215,4 +215,7 @@ pub struct CompiledGraph {
     /// Transient memory, estimated from formats and sizes (the executor re-plans with the
     /// device's real memory requirements through the same algorithm).
     pub memory: MemoryPlan,
+    /// The pass kinds the graph was loaded with (the executor creates each pass's node through
+    /// its kind).
+    pub kinds: super::kinds::KindRegistry,
 }

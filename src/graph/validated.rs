@@ -7,7 +7,7 @@
 
 use super::error::Pos;
 use super::expr::{Expr, Num};
-use super::kinds::{PassKindInfo, SettingDefault};
+use super::kinds::{KindRegistry, PassKindInfo, SettingDefault};
 use super::plan::{ResourceId, SettingValue, Version};
 use super::usage::Usage;
 use ash::vk;
@@ -276,7 +276,7 @@ pub struct ValidatedGraph {
     /// Output resources.
     pub outputs: Vec<ResourceId>,
     /// The pass kinds it was validated against.
-    pub kinds: Vec<PassKindInfo>,
+    pub kinds: KindRegistry,
 }
 
 impl ValidatedGraph {
@@ -292,6 +292,6 @@ impl ValidatedGraph {
 
     /// The kind of pass `pass`.
     pub fn kind(&self, pass: usize) -> Option<&PassKindInfo> {
-        self.kinds.iter().find(|k| k.name == self.passes[pass].kind)
+        self.kinds.info(&self.passes[pass].kind)
     }
 }

@@ -7,24 +7,8 @@
 
 use super::metrics::compare_rgba8;
 use crate::{Error, Result};
-use serde::{Deserialize, Serialize};
 
-/// How far a rendered image is from the supersampled reference of the same frame.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ImageError {
-    /// Samples per pixel of the reference (N x N for an N-times-larger render).
-    pub samples_per_pixel: u32,
-    /// Mean LDR-FLIP error over the pixels (0: identical; 1: maximal).
-    pub mean_flip: f64,
-    /// PSNR in dB over RGB in 8-bit sRGB units (JSON `null` when identical, i.e. infinite).
-    #[serde(deserialize_with = "infinite_when_null")]
-    pub psnr_db: f64,
-}
-
-/// Reads a number, or `null` (how JSON writes an infinite PSNR) as +infinity.
-fn infinite_when_null<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
-}
+pub use crate::stats::ImageError;
 
 /// sRGB-encoded 8-bit value to linear light (the exact piecewise curve).
 pub fn srgb_to_linear(v: u8) -> f32 {

@@ -17,8 +17,8 @@
 //! differently, and exact depth ties between instances go to whichever the traversal meets
 //! first, where the rasterizer would follow draw order.
 
-use super::cull_math::CullView;
-use crate::render::face_cull::FaceCull;
+use crate::cull::CullView;
+use crate::passes::shared::face_cull::FaceCull;
 use crate::scene::Scene;
 use crate::{Error, Result};
 use glam::{DMat3, DVec3, Vec3A};

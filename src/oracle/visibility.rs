@@ -8,7 +8,7 @@ use crate::gpu::{
     Access, Bind, Buffer, BufferDesc, GpuContext, GraphicsDesc, Image, ImageDesc, MemoryLocation, Pipeline, Sampler,
     ShaderCompiler,
 };
-use crate::render::scene_buffers::GpuScene;
+use crate::passes::shared::scene_buffers::GpuScene;
 use ash::vk;
 use std::collections::BTreeSet;
 
@@ -65,6 +65,7 @@ impl VisibilityOracle {
                 depth_write: true,
                 samples,
                 stencil: Default::default(),
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             },
         )?;
         let defines: &[(&str, &str)] =
@@ -93,7 +94,7 @@ impl VisibilityOracle {
         Ok(Self { draw, readback, sampler: Sampler::nearest_clamp(ctx)?, ids, depth, out, extent, samples })
     }
 
-    /// Draws every instance of `scene` as `constants` (a [`crate::render::gpu_types::FrameConstants`]
+    /// Draws every instance of `scene` as `constants` (a [`crate::passes::shared::gpu_types::FrameConstants`]
     /// buffer) sees it, and reads the ids back. Submits and waits: a checking tool, not a frame pass.
     pub fn render(&self, ctx: &GpuContext, scene: &GpuScene, constants: &Buffer) -> crate::Result<VisibleIds> {
         let device = ctx.device();

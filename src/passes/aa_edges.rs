@@ -5,9 +5,13 @@
 //! cost no pool blocks.
 
 use super::gbuffer::bound_samples;
+use super::slots::{ms, slot, AA_MASK_FORMAT};
 use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
-use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
+use crate::graph::{
+    FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, Stages, Usage,
+};
 use ash::vk;
 
 /// The `aa_edges` pass.
@@ -58,5 +62,25 @@ impl PassNode for AaEdgesPass {
         // SAFETY: cmd recording with this pipeline bound.
         unsafe { rec.ctx.device().cmd_dispatch(rec.cmd, e.width.div_ceil(8), e.height.div_ceil(8), 1) };
         Ok(())
+    }
+}
+
+/// The `aa_edges` pass kind.
+pub struct AaEdgesKind;
+
+impl PassKind for AaEdgesKind {
+    fn info(&self) -> PassKindInfo {
+        PassKindInfo {
+            name: "aa_edges",
+            doc: "selective AA by depth-edge detection: marks the pixels whose depth samples mix background and surface or differ by more than a relative threshold",
+            reads: vec![ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the finished MSAA depth"))],
+            writes: vec![slot("mask", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(AA_MASK_FORMAT), "1 on depth edges, 0 elsewhere")],
+            settings: vec![SettingDecl { name: "threshold", default: SettingDefault::Float(0.01), doc: "relative view-depth difference between a pixel's samples that makes it an edge" }],
+            slots_from_shader: false,
+        }
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(AaEdgesPass::new(s.ctx, s.shaders, s.pass, s.plan)?))
     }
 }

@@ -4,8 +4,9 @@
 //! `uvec4(output width, output height, frame number, 0)`.
 
 use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
-use crate::graph::executor::{PassContext, PassNode, Physical};
+use crate::graph::executor::{PassContext, Physical};
 use crate::graph::plan::PlannedPass;
+use crate::graph::{NodeSetup, PassKind, PassKindInfo, PassNode, COMPUTE_KIND};
 use ash::vk;
 use std::path::Path;
 
@@ -74,5 +75,25 @@ impl PassNode for ComputePass {
         // SAFETY: cmd recording with the pipeline bound.
         unsafe { rec.ctx.device().cmd_dispatch(rec.cmd, x, y, z) };
         Ok(())
+    }
+}
+
+/// The `compute` pass kind.
+pub struct ComputeKind;
+
+impl PassKind for ComputeKind {
+    fn info(&self) -> PassKindInfo {
+        PassKindInfo {
+            name: COMPUTE_KIND,
+            doc: "a user compute shader; its slots are the shader's bindings (by binding number or variable name)",
+            reads: vec![],
+            writes: vec![],
+            settings: vec![],
+            slots_from_shader: true,
+        }
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(ComputePass::new(s.ctx, s.shaders, s.pass, s.graph_dir)?))
     }
 }

@@ -3,11 +3,18 @@
 //! image through a bilinear sampler and writes the filtered one (`shaders/fxaa/fxaa.comp`).
 
 use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
-use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::executor::PassContext;
 use crate::graph::plan::{PlannedPass, SettingValue};
 use ash::vk;
 
-pub use crate::graph::kinds::FXAA_PRESETS as PRESETS;
+/// FXAA's search schedules (`FXAA_QUALITY__PRESET`), the `preset` words; the first
+/// is the default (39, "extreme quality": twelve taps per direction, the first five one pixel
+/// apart).
+pub const PRESETS: &[&str] = &["39", "29", "23", "15", "12", "10"];
+use super::slots::{slot, LIT_OUTPUT_FORMAT};
+use crate::graph::{
+    FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, Stages, Usage,
+};
 
 /// Push constants of `fxaa.comp`: FXAA's three tunables.
 #[repr(C)]
@@ -100,5 +107,30 @@ impl PassNode for FxaaPass {
         // SAFETY: cmd recording with this pipeline bound.
         unsafe { rec.ctx.device().cmd_dispatch(rec.cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
         Ok(())
+    }
+}
+
+/// The `fxaa` pass kind.
+pub struct FxaaKind;
+
+impl PassKind for FxaaKind {
+    fn info(&self) -> PassKindInfo {
+        PassKindInfo {
+            name: "fxaa",
+            doc: "FXAA 3.11 (PC quality) in compute over the lit image: luma from the sRGB-encoded value, edge search along the local edge, subpixel blend (the post-process AA baseline)",
+            reads: vec![slot("input", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "the lit image (sRGB-encoded), sampled bilinearly")],
+            writes: vec![slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "the anti-aliased image (same size as the input)")],
+            settings: vec![
+                SettingDecl { name: "preset", default: SettingDefault::Choice(PRESETS), doc: "FXAA_QUALITY__PRESET: the edge search schedule (39: extreme quality, 12: FXAA's default)" },
+                SettingDecl { name: "subpix", default: SettingDefault::Float(0.75), doc: "amount of subpixel aliasing removal (0: off, 1: softest)" },
+                SettingDecl { name: "edge_threshold", default: SettingDefault::Float(0.166), doc: "minimum local contrast, relative to the local maximum luma, to process a pixel" },
+                SettingDecl { name: "edge_threshold_min", default: SettingDefault::Float(0.0833), doc: "minimum absolute local contrast (skips dark areas)" },
+            ],
+            slots_from_shader: false,
+        }
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(FxaaPass::new(s.ctx, s.shaders, s.pass)?))
     }
 }

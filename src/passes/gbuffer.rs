@@ -13,12 +13,18 @@
 //! Formats and the sample count come from the bound images, so one pass serves no AA and every
 //! MSAA rate.
 
+use super::slots::{
+    clear_colors_setting, draw_list_slots, ms, redraw_list_slots, slot, GBUFFER_ALBEDO_FORMAT, GBUFFER_NORMAL_FORMATS,
+    NORMAL_SLOT_DOC, VISIBILITY_FORMATS,
+};
 use crate::gpu::barrier::layout_for_format;
 use crate::gpu::{Bind, Buffer, GpuContext, GraphicsDesc, Image, Pipeline, ShaderCompiler, StencilRule};
-use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind};
-use crate::render::face_cull::DRAW_COUNT_BYTES;
-use crate::render::scene_buffers::GpuScene;
+use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Usage};
+use crate::passes::shared::face_cull::DRAW_COUNT_BYTES;
+use crate::passes::shared::scene_buffers::GpuScene;
+use crate::passes::shared::SceneInputs;
 use ash::vk;
 
 /// Slots of a geometry pass's draw list.
@@ -85,7 +91,7 @@ pub fn bound_image(plan: &CompiledGraph, pass: &PlannedPass, slot: &str) -> Opti
 /// The defines of the shaders that write or read a visibility-id image of `format`:
 /// `PACKED_IDS` for one word per sample (`visibility_ids`).
 pub fn visibility_defines(format: Option<vk::Format>) -> &'static [(&'static str, &'static str)] {
-    if format == Some(crate::graph::kinds::VISIBILITY_PACKED) {
+    if format == Some(crate::passes::slots::VISIBILITY_PACKED) {
         &[("PACKED_IDS", "1")]
     } else {
         &[]
@@ -102,7 +108,7 @@ pub fn packed_id_bits(pass: &str, scene: &GpuScene) -> crate::Result<u32> {
 /// The defines of the shaders that write or read a G-buffer normal image of `format`
 /// (`shaders/common/gbuffer_normal.glsl`): `NORMAL_PACKED` for the packed word.
 pub fn normal_defines(format: Option<vk::Format>) -> &'static [(&'static str, &'static str)] {
-    if format == Some(crate::graph::kinds::GBUFFER_NORMAL_PACKED) {
+    if format == Some(crate::passes::slots::GBUFFER_NORMAL_PACKED) {
         &[("NORMAL_PACKED", "1")]
     } else {
         &[]
@@ -149,6 +155,7 @@ pub fn geometry_pipeline(
             } else {
                 StencilRule::Off
             },
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
         },
     )?)
 }
@@ -271,7 +278,7 @@ impl GbufferPass {
             )));
         }
         let normal = bound_image(plan, pass, "normal").map(|(f, _)| f);
-        let packed_ids = ids.is_some_and(|(format, _)| format == crate::graph::kinds::VISIBILITY_PACKED);
+        let packed_ids = ids.is_some_and(|(format, _)| format == crate::passes::slots::VISIBILITY_PACKED);
         let (fragment, colors) = match ids {
             Some((format, _)) => (Some(("gbuffer/visibility.frag", visibility_defines(Some(format)))), vec![format]),
             None => ((!colors.is_empty()).then_some(("gbuffer/gbuffer.frag", normal_defines(normal))), colors),
@@ -311,7 +318,8 @@ impl PassNode for GbufferPass {
                     .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
             })
             .collect();
-        let scene = rec.frame.scene;
+        let inputs = SceneInputs::of(rec)?;
+        let scene = &inputs.scene;
         let triangle_bits = if self.packed_ids { Some(packed_id_bits(&self.name, scene)?.to_ne_bytes()) } else { None };
         let push: &[u8] = triangle_bits.as_ref().map_or(&[], |b| b.as_slice());
         let lists = match self.mode {
@@ -324,7 +332,7 @@ impl PassNode for GbufferPass {
             &self.pipeline,
             scene,
             &lists,
-            rec.frame.constants,
+            inputs.constants(),
             &colors,
             depth,
             depth_load,
@@ -332,5 +340,58 @@ impl PassNode for GbufferPass {
             push,
         );
         Ok(())
+    }
+}
+
+/// The `gbuffer`, `gbuffer_append` and `gbuffer_equal` pass kinds: one geometry pass drawing in
+/// each [`GeometryMode`].
+pub struct GbufferKind(pub GeometryMode);
+
+impl PassKind for GbufferKind {
+    fn info(&self) -> PassKindInfo {
+        match self.0 {
+            GeometryMode::Clear => PassKindInfo {
+                name: "gbuffer",
+                doc: "draws a draw list with vkCmdDrawIndexedIndirectCount into albedo, normal and reversed-Z depth (any sample count), or into depth alone when no color target is bound (an MSAA Z-prepass)",
+                reads: draw_list_slots(false),
+                writes: vec![
+                    ms(slot("albedo", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
+                    ms(slot("normal", Usage::ColorAttachment, false, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
+                    ms(slot("ids", Usage::ColorAttachment, false, FormatRule::OneOf(VISIBILITY_FORMATS), "visibility buffer: instance id and triangle id, packed in R32_UINT or as R32G32_UINT (instead of albedo and normal)")),
+                    ms(slot("depth", Usage::DepthAttachment, true, FormatRule::Depth, "reversed-Z depth (cleared to 0, stencil to 0)")),
+                ],
+                settings: vec![clear_colors_setting()],
+                slots_from_shader: false,
+            },
+            GeometryMode::Append => PassKindInfo {
+                name: "gbuffer_append",
+                doc: "like gbuffer, but draws on top of the existing targets (the late phase of two-phase culling)",
+                reads: draw_list_slots(true),
+                writes: vec![
+                    ms(slot("albedo", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
+                    ms(slot("normal", Usage::ColorAttachmentLoad, false, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
+                    ms(slot("ids", Usage::ColorAttachmentLoad, false, FormatRule::OneOf(VISIBILITY_FORMATS), "visibility buffer: instance id and triangle id (packed R32_UINT or R32G32_UINT)")),
+                    ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "reversed-Z depth")),
+                ],
+                settings: vec![],
+                slots_from_shader: false,
+            },
+            GeometryMode::Equal => PassKindInfo {
+                name: "gbuffer_equal",
+                doc: "the MSAA Z-prepass baseline: redraws the lists with depth EQUAL against finished depth, one stencil bit per sample (each sample written once), into albedo and normal",
+                reads: redraw_list_slots(),
+                writes: vec![
+                    ms(slot("albedo", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a")),
+                    ms(slot("normal", Usage::ColorAttachment, true, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
+                    ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished depth, with stencil (its stencil is written)")),
+                ],
+                settings: vec![clear_colors_setting()],
+                slots_from_shader: false,
+            },
+        }
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(GbufferPass::for_plan(s.ctx, s.shaders, s.pass, s.plan, self.0)?))
     }
 }

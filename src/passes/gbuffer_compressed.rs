@@ -16,10 +16,16 @@
 //! indices have 26 bits, so at most 2^26 blocks are used whatever the size.
 
 use super::gbuffer::{bound_image, geometry_pipeline, record_geometry, DrawSource};
+use super::slots::{ms, redraw_list_slots, slot, AA_MASK_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, GpuContext, Pipeline, ShaderCompiler};
-use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
+use crate::graph::{
+    FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, ResourceDesc, SettingDecl, SettingDefault,
+    Stages, Usage,
+};
+use crate::passes::shared::SceneInputs;
 use ash::vk;
 
 /// Bytes of the header before the blocks.
@@ -309,7 +315,8 @@ impl PassNode for GbufferCompressedPass {
             aa_max_distance: self.aa.max_distance,
             aa_object_flags: self.aa.object_flags as u32,
         };
-        let scene = rec.frame.scene;
+        let inputs = SceneInputs::of(rec)?;
+        let scene = &inputs.scene;
         let lists = DrawSource::redraw_lists(slots, scene)?;
         let mut extra = vec![Bind::Buffer(4, gbuffer.handle())];
         if let Some(claim) = claim {
@@ -329,7 +336,7 @@ impl PassNode for GbufferCompressedPass {
             &self.draw,
             scene,
             &lists,
-            rec.frame.constants,
+            inputs.constants(),
             &[],
             depth,
             vk::AttachmentLoadOp::LOAD,
@@ -337,6 +344,73 @@ impl PassNode for GbufferCompressedPass {
             bytemuck::bytes_of(&push),
         );
         Ok(())
+    }
+}
+
+/// The `gbuffer_compressed` pass kind.
+pub struct GbufferCompressedKind;
+
+impl PassKind for GbufferCompressedKind {
+    fn info(&self) -> PassKindInfo {
+        PassKindInfo {
+            name: "gbuffer_compressed",
+            doc: "the compressed G-buffer geometry pass: redraws the lists with depth EQUAL, stencil first-fragment-wins (or, without stencil, atomic sample claims) and post-depth coverage, writing one 14-byte block per pixel plus pooled blocks for the other distinct surfaces of edge pixels, in per-pixel linked lists",
+            reads: {
+                let mut reads = redraw_list_slots();
+                reads.push(slot("aa_mask", Usage::Sampled(Stages::Fragment), false, FormatRule::Exact(AA_MASK_FORMAT), "selective AA: only pixels whose mask is not 0 keep more than one block (an aa_edges pass makes it)"));
+                reads
+            },
+            writes: vec![
+                ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished MSAA depth: with stencil (its stencil is written), or without stencil and a sample_claim buffer")),
+                slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header, width x height head blocks, then the pool (size: compressed_gbuffer_bytes(pool_blocks))"),
+                slot("sample_claim", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "with a depth format without stencil: the samples already claimed, one byte per pixel (size: ceil_div(width * height, 4) * 4; at most 8 samples)"),
+            ],
+            settings: vec![
+                SettingDecl { name: "aa_region", default: SettingDefault::Choice(&["all", "ellipse", "rectangle"]), doc: "selective AA: only pixels inside this screen region (centered, aa_region_size of the screen) keep more than one block" },
+                SettingDecl { name: "aa_region_size", default: SettingDefault::Float(0.6), doc: "size of the AA region as a fraction of the screen's width and height" },
+                SettingDecl { name: "aa_max_depth_distance", default: SettingDefault::Float(0.0), doc: "selective AA: pixels farther than this distance keep one block (0: no limit)" },
+                SettingDecl { name: "aa_object_flags", default: SettingDefault::Bool(false), doc: "selective AA: instances flagged no-AA keep one block" },
+                SettingDecl { name: "claim_order", default: SettingDefault::Choice(&["auto", "draw", "arrival"]), doc: "with sample_claim: who wins an exactly coplanar tie. draw: the first fragment in draw order, as the stencil decides, through an ordered sample interlock (needs VK_EXT_fragment_shader_interlock); arrival: the first to claim, which may change from run to run and so flicker; auto: draw where the device has the interlock, else arrival. Refused on a pass whose depth has stencil (the stencil decides, in draw order)" },
+            ],
+            slots_from_shader: false,
+        }
+    }
+
+    fn validate(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        sample_owner_error(check).into_iter().collect()
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(GbufferCompressedPass::new(s.ctx, s.shaders, s.pass, s.plan)?))
+    }
+}
+
+/// A depth format and `sample_claim` binding that leave no way, or two ways, to decide each
+/// sample's fragment ([`SampleOwner`]), or a claim order the pass would ignore.
+fn sample_owner_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
+    let pass = check.pass;
+    let depth = check.binding("depth")?;
+    let ResourceDesc::Image { format, .. } = check.graph.resources[depth.resource].desc else { return None };
+    if !crate::graph::formats::is_depth(format) {
+        return None; // reported as a format error
+    }
+    let claim = check.binding("sample_claim");
+    let count = check.samples.get(depth.resource).copied().unwrap_or(1);
+    match SampleOwner::for_depth(format, count, claim.is_some()) {
+        // At the binding to change: the claim buffer when there is one, else the depth.
+        Err(message) => {
+            Some((claim.map_or(depth.pos, |c| c.pos), format!("pass '{}' (gbuffer_compressed): {message}", pass.name)))
+        }
+        // A claim order the pass would ignore is refused rather than dropped silently.
+        Ok(SampleOwner::Stencil) => pass.settings.iter().find(|s| s.name == "claim_order").map(|order| {
+            let message = format!(
+                "pass '{}' (gbuffer_compressed): claim_order applies to sample claims, but the depth has \
+                 stencil, which settles ties in draw order: remove claim_order",
+                pass.name
+            );
+            (order.pos, message)
+        }),
+        Ok(SampleOwner::Claim) => None,
     }
 }
 

@@ -1,5 +1,5 @@
 //! Hi-Z build (kind `hiz_build`): the reversed-Z min pyramid of a (multisampled) depth buffer, in
-//! compute, equal bit for bit to [`crate::oracle::hiz::HiZPyramid`] from chain level 1 on.
+//! compute, equal bit for bit to [`crate::cull::hiz::HiZPyramid`] from chain level 1 on.
 //!
 //! Chain level 0 is the depth (the minimum, i.e. farthest reversed-Z, sample of each pixel); level
 //! `k + 1` is `max(1, size_k >> 1)` per axis and reduces the footprints of
@@ -78,12 +78,12 @@ use crate::gpu::barrier::{cmd_barriers, image_barrier_raw, memory_barrier};
 use crate::gpu::{
     Access, Bind, Buffer, BufferDesc, GpuContext, Image, MemoryLocation, Pipeline, Sampler, ShaderCompiler, Spirv,
 };
-use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::executor::PassContext;
 use crate::graph::plan::{PlannedPass, SettingValue};
 use ash::vk;
 
 /// Format of the pyramid.
-pub const HIZ_FORMAT: vk::Format = crate::graph::kinds::HIZ_FORMAT;
+pub use super::slots::HIZ_FORMAT;
 
 /// Most pyramid mips the pass writes (chain levels 1..=16: a 65536-pixel axis).
 pub const MAX_LEVELS: u32 = 16;
@@ -91,18 +91,23 @@ pub const MAX_LEVELS: u32 = 16;
 /// The chain level whose texels split the single-dispatch pyramid into workgroup tiles (64×64).
 pub const TILE_LEVEL: u32 = 6;
 
-pub use crate::oracle::hiz::FIRST_STORED_LEVEL;
+use super::slots::slot;
+pub use crate::cull::hiz::FIRST_STORED_LEVEL;
+use crate::graph::{
+    FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, SettingDecl, SettingDefault, SlotDecl,
+    Stages, Usage,
+};
 
 /// Size of the pyramid (its mip 0, chain level 1) for a depth of size `depth`: `max(1, w >> 1)` ×
 /// `max(1, h >> 1)`.
 pub fn pyramid_size(depth: vk::Extent2D) -> vk::Extent2D {
-    let s = crate::oracle::hiz::stored_size(glam::UVec2::new(depth.width, depth.height));
+    let s = crate::cull::hiz::stored_size(glam::UVec2::new(depth.width, depth.height));
     vk::Extent2D { width: s.x, height: s.y }
 }
 
 /// Mips of a full pyramid for a depth of size `depth`: the chain length − 1, at least 1.
 pub fn pyramid_mip_count(depth: vk::Extent2D) -> u32 {
-    crate::oracle::hiz::stored_mip_count(glam::UVec2::new(depth.width, depth.height))
+    crate::cull::hiz::stored_mip_count(glam::UVec2::new(depth.width, depth.height))
 }
 
 /// How the pyramid is built.
@@ -199,7 +204,7 @@ pub struct HizBuildPass {
 fn above_entries(max_dim: u32) -> u64 {
     let base = glam::UVec2::splat(max_dim);
     1 + (TILE_LEVEL + 1..=MAX_LEVELS)
-        .map(|k| crate::oracle::hiz::level_size(base, k))
+        .map(|k| crate::cull::hiz::level_size(base, k))
         .map(|s| u64::from(s.x) * u64::from(s.y))
         .sum::<u64>()
 }
@@ -323,7 +328,7 @@ impl HizBuildPass {
             Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
         match self.method {
             HizMethod::Single => {
-                let tiles = crate::oracle::hiz::level_size(glam::UVec2::from(base), TILE_LEVEL);
+                let tiles = crate::cull::hiz::level_size(glam::UVec2::from(base), TILE_LEVEL);
                 if levels > TILE_LEVEL {
                     self.prepare_above(device, cmd, above_ordered);
                 }
@@ -337,7 +342,7 @@ impl HizBuildPass {
                 unsafe { device.cmd_dispatch(cmd, tiles.x, tiles.y, 1) };
             }
             HizMethod::PerMip => {
-                let size = |k: u32| crate::oracle::hiz::level_size(glam::UVec2::from(base), k).to_array();
+                let size = |k: u32| crate::cull::hiz::level_size(glam::UVec2::from(base), k).to_array();
                 let dispatch = |pipeline: &Pipeline, binds: &[Bind], push: PerMipPush| {
                     pipeline.bind(cmd);
                     pipeline.push_bindings(cmd, binds);
@@ -416,4 +421,56 @@ impl PassNode for HizBuildPass {
         self.above_ordered = self.method == HizMethod::Single && self.above_filled;
         self.above_ordered.then_some((ABOVE_ACCESS, ABOVE_ACCESS))
     }
+}
+
+/// The `hiz_build` pass kind.
+pub struct HizBuildKind;
+
+impl PassKind for HizBuildKind {
+    fn info(&self) -> PassKindInfo {
+        PassKindInfo {
+            name: "hiz_build",
+            doc: "builds the reversed-Z Hi-Z pyramid (minimum = farthest depth per footprint, conservative for every size) from (MSAA) depth",
+            reads: vec![SlotDecl { multisample_ok: true, ..slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "depth, reduced across samples first") }],
+            writes: vec![slot("hiz", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(HIZ_FORMAT), "the pyramid from chain level 1: mip 0 at half the depth's size (max(1, width / 2) x max(1, height / 2)), at most the levels down to 1x1, every mip written")],
+            settings: vec![SettingDecl {
+                name: "method",
+                default: SettingDefault::Choice(&["single", "per_mip"]),
+                doc: "one dispatch for the whole pyramid, or one dispatch per mip (baseline)",
+            }],
+            slots_from_shader: false,
+        }
+    }
+
+    fn check_sizes(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        pyramid_error(check).into_iter().collect()
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(HizBuildPass::new(s.ctx, s.shaders, s.pass)?))
+    }
+}
+
+/// The pyramid of a `hiz_build` pass must be half its depth's size: level 0 of the chain is not
+/// stored.
+fn pyramid_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
+    let ((_, depth), (hiz_binding, hiz)) = (check.image_extent("depth")?, check.image_extent("hiz")?);
+    let want: vk::Extent2D = pyramid_size(depth);
+    if (hiz.width, hiz.height) == (want.width, want.height) {
+        // (A pyramid of this size cannot have more mips than the depth has levels below its own.)
+        return None;
+    }
+    let message = format!(
+        "pass '{}': the pyramid '{}' is {}x{}; it must be {}x{}, half the depth's size {}x{} (size: \
+         Fixed(\"max(1, width / 2)\", \"max(1, height / 2)\") for a full-screen depth)",
+        check.pass.name,
+        check.resource_name(hiz_binding),
+        hiz.width,
+        hiz.height,
+        want.width,
+        want.height,
+        depth.width,
+        depth.height
+    );
+    Some((hiz_binding.pos, message))
 }

@@ -29,11 +29,17 @@
 //! `cull_init.comp` then the test step appending with atomics; its order within a group varies
 //! from run to run.
 
+use super::slots::{sized, slot, COMMANDS_BYTES, COUNTERS_BYTES, COUNT_BYTES, HIZ_FORMAT, IDS_BYTES};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
-use crate::graph::executor::{PassContext, PassNode, LIST_COUNT_SLOT, LIST_STATS_SLOT};
+use crate::graph::executor::{PassContext, LIST_COUNT_SLOT, LIST_STATS_SLOT};
 use crate::graph::plan::{PlannedPass, SettingValue};
-use crate::render::face_cull::DRAW_COUNT_BYTES;
+use crate::graph::{
+    FormatRule, KindCheck, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, SettingDecl, SettingDefault,
+    Stages, Usage,
+};
+use crate::passes::shared::face_cull::DRAW_COUNT_BYTES;
+use crate::passes::shared::SceneInputs;
 use ash::vk;
 
 /// Slots per block of the prefix sum (`CULL_BLOCK` in `cull_common.glsl`).
@@ -265,14 +271,14 @@ fn step_barrier(ctx: &GpuContext, cmd: vk::CommandBuffer) {
 
 impl PassNode for InstanceCullPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
-        let (ctx, cmd, frame) = (rec.ctx, rec.cmd, rec.frame);
-        let scene = frame.scene;
+        let (ctx, cmd, frame) = (rec.ctx, rec.cmd, SceneInputs::of(rec)?);
+        let scene = &frame.scene;
         let slots = scene.instance_count;
         let groups = scene.regions.groups();
-        if slots as usize > crate::render::cull_data::MAX_CULL_SLOTS {
+        if slots as usize > crate::passes::shared::cull_data::MAX_CULL_SLOTS {
             return Err(crate::Error::Invalid(format!(
                 "instance_cull handles at most {} instances per pass; the scene has {slots}",
-                crate::render::cull_data::MAX_CULL_SLOTS
+                crate::passes::shared::cull_data::MAX_CULL_SLOTS
             )));
         }
         let need = |slot: &str| {
@@ -324,7 +330,7 @@ impl PassNode for InstanceCullPass {
 
         let mut test_binds = vec![
             Bind::Buffer(0, scene.cull_records.handle()),
-            Bind::Buffer(1, frame.constants.handle()),
+            Bind::Buffer(1, frame.constants().handle()),
             Bind::Buffer(2, scene.draw_groups.handle()),
         ];
         if let Some(prev) = rec.slots.buffer("visibility_prev") {
@@ -430,5 +436,59 @@ impl PassNode for InstanceCullPass {
             unsafe { device.cmd_dispatch(cmd, blocks + 1, 1, 1) };
         }
         Ok(())
+    }
+}
+
+/// The `instance_cull` pass kind.
+pub struct InstanceCullKind;
+
+impl PassKind for InstanceCullKind {
+    fn info(&self) -> PassKindInfo {
+        PassKindInfo {
+            name: "instance_cull",
+            doc: "tests every instance's world bound (frustum, optionally Hi-Z occlusion) and compacts the survivors per draw group in slot order (the unculled draw order) into draw commands for vkCmdDrawIndexedIndirectCount",
+            reads: vec![
+                sized(slot("visibility_prev", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "last frame's visibility bits (early and late phases)"), MinBytes::InstanceBits),
+                slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid to test against (none: frustum only)"),
+            ],
+            writes: vec![
+                sized(slot("draw_commands", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "one command per draw group (size: meshes * 20)"), COMMANDS_BYTES),
+                sized(slot("draw_count", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "number of commands of each face-cull region (12 bytes)"), COUNT_BYTES),
+                sized(slot("draw_instance_ids", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "survivors, one slice per draw group (size: instances * 4)"), IDS_BYTES),
+                sized(slot("visibility", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits (late phase)"), MinBytes::InstanceBits),
+                sized(slot("visible_ids", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group: the next frame's early draw list, which that frame draws as it is with no cull pass (size: instances * 4, history; the draw binds `.prev`)"), IDS_BYTES),
+                sized(slot("list_commands", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: the commands of that list (size: meshes * 20, history)"), COMMANDS_BYTES),
+                sized(slot("list_count", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: their number per face-cull region (size: 12, history)"), COUNT_BYTES),
+                sized(slot("list_stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: that list's counters, reported as the next frame's early draw (size: 64, history)"), COUNTERS_BYTES),
+                sized(slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "counters of this pass (size: 64)"), COUNTERS_BYTES),
+            ],
+            settings: vec![
+                SettingDecl { name: "phase", default: SettingDefault::Choice(&["all", "early", "late", "occluders", "rest"]), doc: "which instances the pass draws: all survivors; last frame's visible ones (early); newly visible ones (late); chosen occluders; all but the occluders" },
+                SettingDecl { name: "frustum", default: SettingDefault::Bool(true), doc: "test against the view frustum (false: keep everything, the no-cull baseline)" },
+                SettingDecl { name: "bound", default: SettingDefault::Choice(&["box", "sphere"]), doc: "world bound tested: axis-aligned box or sphere" },
+                SettingDecl { name: "hiz_test", default: SettingDefault::Choice(&["coarse", "finer"]), doc: "occlusion footprint: at most 2x2 texels, or up to 3x3 one level finer (culls more)" },
+                SettingDecl { name: "hiz_view", default: SettingDefault::Choice(&["current", "previous"]), doc: "project with this frame's camera, or last frame's (a test against last frame's pyramid)" },
+                SettingDecl { name: "compaction", default: SettingDefault::Choice(&["ordered", "atomic"]), doc: "prefix-sum compaction in slot order (the unculled draw order), or the thesis's atomic append (order varies, measured only)" },
+                SettingDecl { name: "occluder_distance", default: SettingDefault::Float(200.0), doc: "occluders phase: farthest distance of an occluder's bound" },
+                SettingDecl { name: "occluder_size", default: SettingDefault::Float(0.02), doc: "occluders phase: smallest projected radius, as a fraction of the view height" },
+                SettingDecl { name: "occluder_triangles", default: SettingDefault::Int(1024), doc: "occluders phase: instances of meshes with at most this many triangles are candidates too, besides those flagged as occluders (0: flagged ones only)" },
+            ],
+            slots_from_shader: false,
+        }
+    }
+
+    fn validate(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        // The late phase writes the next frame's early draw list whole: ids, commands, count
+        // and counters, with the visibility.
+        let pass = check.pass;
+        let Some((slot, message)) = list_binding_error(|slot| check.binding(slot).is_some()) else {
+            return Vec::new();
+        };
+        let pos = check.binding(slot).map_or(pass.pos, |b| b.pos);
+        vec![(pos, format!("pass '{}' (instance_cull): {message}", pass.name))]
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(InstanceCullPass::new(s.ctx, s.shaders, s.pass)?))
     }
 }

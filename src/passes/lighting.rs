@@ -1,10 +1,15 @@
 //! Deferred lighting in compute: sun, point lights and sky ambient over the G-buffer, tone
 //! mapped and written sRGB-encoded into an RGBA8 storage image.
 
+use super::slots::{
+    lighting_settings, ms, slot, GBUFFER_ALBEDO_FORMAT, GBUFFER_NORMAL_FORMATS, LIT_OUTPUT_FORMAT, NORMAL_SLOT_DOC,
+};
 use crate::gpu::{Bind, Buffer, GpuContext, Image, Pipeline, Sampler, ShaderCompiler};
-use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
+use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Stages, Usage};
 use crate::passes::gbuffer::{bound_image, normal_defines};
+use crate::passes::shared::SceneInputs;
 use ash::vk;
 
 /// Format of the lit output (values are sRGB-encoded by the shader).
@@ -63,7 +68,7 @@ pub struct LightingPass {
 
 impl LightingPass {
     /// Compiles the shader for G-buffer images of `samples` samples whose normal image has
-    /// `normal_format` (one of [`GBUFFER_NORMAL_FORMATS`](crate::graph::kinds::GBUFFER_NORMAL_FORMATS))
+    /// `normal_format` (one of [`crate::passes::slots::GBUFFER_NORMAL_FORMATS`])
     /// and creates the pipeline.
     pub fn new(
         ctx: &GpuContext,
@@ -91,7 +96,7 @@ impl LightingPass {
         plan: &CompiledGraph,
     ) -> crate::Result<Self> {
         let samples = bound_image(plan, pass, "depth").map_or(vk::SampleCountFlags::TYPE_1, |(_, s)| s);
-        let normal = bound_image(plan, pass, "normal").map_or(crate::graph::kinds::GBUFFER_NORMAL_PACKED, |(f, _)| f);
+        let normal = bound_image(plan, pass, "normal").map_or(crate::passes::slots::GBUFFER_NORMAL_PACKED, |(f, _)| f);
         Ok(Self { settings: LightingSettings::from_plan(pass), ..Self::new(ctx, shaders, samples, normal)? })
     }
 
@@ -126,16 +131,65 @@ impl LightingPass {
 
 impl PassNode for LightingPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
+        let inputs = SceneInputs::of(rec)?;
         let slots = &rec.slots;
         let io = LightingInputs {
             depth: slots.required_image("depth")?,
             albedo: slots.required_image("albedo")?,
             normal: slots.required_image("normal")?,
-            frame: rec.frame.constants,
-            lights: rec.frame.lights,
+            frame: inputs.constants(),
+            lights: inputs.lights(),
             output: slots.required_image("output")?,
         };
         LightingPass::record(self, rec.cmd, rec.ctx, &io, &self.settings);
         Ok(())
+    }
+}
+
+/// The `lighting` pass kind.
+pub struct LightingKind;
+
+impl PassKind for LightingKind {
+    fn info(&self) -> PassKindInfo {
+        PassKindInfo {
+            name: "lighting",
+            doc: "deferred lighting in compute: sun, point lights and sky ambient, tone-mapped, sRGB-encoded",
+            reads: vec![
+                ms(slot(
+                    "depth",
+                    Usage::Sampled(Stages::Compute),
+                    true,
+                    FormatRule::Depth,
+                    "reversed-Z depth (multisampled: every sample is lit)",
+                )),
+                ms(slot(
+                    "albedo",
+                    Usage::Sampled(Stages::Compute),
+                    true,
+                    FormatRule::Exact(GBUFFER_ALBEDO_FORMAT),
+                    "albedo, metallic",
+                )),
+                ms(slot(
+                    "normal",
+                    Usage::Sampled(Stages::Compute),
+                    true,
+                    FormatRule::OneOf(GBUFFER_NORMAL_FORMATS),
+                    NORMAL_SLOT_DOC,
+                )),
+            ],
+            writes: vec![slot(
+                "output",
+                Usage::StorageImageWrite(Stages::Compute),
+                true,
+                FormatRule::Exact(LIT_OUTPUT_FORMAT),
+                "lit image",
+            )],
+            settings: lighting_settings(),
+            slots_from_shader: false,
+        }
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(LightingPass::for_plan(s.ctx, s.shaders, s.pass, s.plan)?))
     }
 }

@@ -6,10 +6,15 @@
 use super::gbuffer::bound_samples;
 use super::gbuffer_compressed::BoundGbuffer;
 use super::lighting::LightingSettings;
+use super::slots::{lighting_settings, ms, sized, slot, COUNTERS_BYTES, LIT_OUTPUT_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
-use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
+use crate::graph::{
+    FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, Stages, Usage,
+};
+use crate::passes::shared::SceneInputs;
 use ash::vk;
 
 /// Pool blocks a tile shades together unless the graph says otherwise (`shared_blocks`).
@@ -103,6 +108,7 @@ impl LightingCompressedPass {
 
 impl PassNode for LightingCompressedPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
+        let inputs = SceneInputs::of(rec)?;
         let slots = &rec.slots;
         let depth = slots.required_image("depth")?;
         let output = slots.required_image("output")?;
@@ -126,8 +132,8 @@ impl PassNode for LightingCompressedPass {
         let mut binds = vec![
             Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), read),
             Bind::Buffer(1, gbuffer.handle()),
-            Bind::Buffer(2, rec.frame.constants.handle()),
-            Bind::Buffer(3, rec.frame.lights.handle()),
+            Bind::Buffer(2, inputs.constants().handle()),
+            Bind::Buffer(3, inputs.lights().handle()),
             Bind::StorageImage(4, output.view()),
         ];
         if let Some(stats) = stats {
@@ -143,5 +149,45 @@ impl PassNode for LightingCompressedPass {
         // SAFETY: cmd recording with this pipeline bound.
         unsafe { device.cmd_dispatch(rec.cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
         Ok(())
+    }
+}
+
+/// The `lighting_compressed` pass kind.
+pub struct LightingCompressedKind;
+
+impl PassKind for LightingCompressedKind {
+    fn info(&self) -> PassKindInfo {
+        PassKindInfo {
+            name: "lighting_compressed",
+            doc: "lights the compressed G-buffer in compute: every block shaded once with tile-culled point lights, tone-mapped, weighted by the samples it covers, averaged",
+            reads: vec![
+                ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the MSAA depth (positions are rebuilt from each block's sample)")),
+                slot("gbuffer", Usage::StorageBufferRead(Stages::Compute), true, FormatRule::Any, "the compressed G-buffer"),
+                slot("sample_claim", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "the samples gbuffer_compressed's fragments claimed (with a depth without stencil): the covered samples in one word instead of a read of every depth sample"),
+            ],
+            writes: vec![
+                slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image"),
+                sized(slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "pool counters and a blocks-per-pixel histogram (size: 64)"), COUNTERS_BYTES),
+            ],
+            settings: {
+                let mut settings = lighting_settings();
+                settings.push(SettingDecl {
+                    name: "shared_blocks",
+                    default: SettingDefault::Int(512),
+                    doc: "pool blocks a 16x16 tile gathers and shades with all its invocations per round, in up to four rounds (0..=1024; 0: each pixel loops over its own list, the thesis's resolve)",
+                });
+                settings.push(SettingDecl {
+                    name: "shared_min_blocks",
+                    default: SettingDefault::Int(0),
+                    doc: "a tile with at most this many pool blocks leaves them to their pixels' own loops (0: every tile shares its blocks, the fastest on the H100)",
+                });
+                settings
+            },
+            slots_from_shader: false,
+        }
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(LightingCompressedPass::new(s.ctx, s.shaders, s.pass, s.plan)?))
     }
 }

@@ -5,9 +5,12 @@
 
 use super::gbuffer::{bound_image, bound_samples, packed_id_bits, visibility_defines};
 use super::lighting::LightingSettings;
+use super::slots::{lighting_settings, ms, slot, LIT_OUTPUT_FORMAT, VISIBILITY_FORMATS};
 use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
-use crate::graph::executor::{PassContext, PassNode};
+use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
+use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Stages, Usage};
+use crate::passes::shared::SceneInputs;
 use ash::vk;
 
 /// The `lighting_visibility` pass.
@@ -39,7 +42,7 @@ impl LightingVisibilityPass {
             pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
             sampler: Sampler::nearest_clamp(ctx)?,
             settings: LightingSettings::from_plan(pass),
-            packed_ids: format == Some(crate::graph::kinds::VISIBILITY_PACKED),
+            packed_ids: format == Some(crate::passes::slots::VISIBILITY_PACKED),
         })
     }
 }
@@ -49,7 +52,8 @@ impl PassNode for LightingVisibilityPass {
         let slots = &rec.slots;
         let (depth, ids, output) =
             (slots.required_image("depth")?, slots.required_image("ids")?, slots.required_image("output")?);
-        let scene = rec.frame.scene;
+        let inputs = SceneInputs::of(rec)?;
+        let scene = &inputs.scene;
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         self.pipeline.bind(rec.cmd);
         self.pipeline.push_bindings(
@@ -57,8 +61,8 @@ impl PassNode for LightingVisibilityPass {
             &[
                 Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), read),
                 Bind::Sampled(1, ids.sampled_view(), self.sampler.handle(), read),
-                Bind::Buffer(2, rec.frame.constants.handle()),
-                Bind::Buffer(3, rec.frame.lights.handle()),
+                Bind::Buffer(2, inputs.constants().handle()),
+                Bind::Buffer(3, inputs.lights().handle()),
                 Bind::StorageImage(4, output.view()),
                 Bind::Buffer(5, scene.instances.handle()),
                 Bind::Buffer(6, scene.materials.handle()),
@@ -74,5 +78,28 @@ impl PassNode for LightingVisibilityPass {
         // SAFETY: cmd recording with this pipeline bound.
         unsafe { rec.ctx.device().cmd_dispatch(rec.cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
         Ok(())
+    }
+}
+
+/// The `lighting_visibility` pass kind.
+pub struct LightingVisibilityKind;
+
+impl PassKind for LightingVisibilityKind {
+    fn info(&self) -> PassKindInfo {
+        PassKindInfo {
+            name: "lighting_visibility",
+            doc: "shades from a visibility buffer in compute (seed 003): each distinct (instance, triangle) id of a pixel's samples is rebuilt from the shared pools (barycentrics of the pixel-center ray) and shaded once, weighted by its samples",
+            reads: vec![
+                ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the depth the ids were drawn with")),
+                ms(slot("ids", Usage::Sampled(Stages::Compute), true, FormatRule::OneOf(VISIBILITY_FORMATS), "instance id and triangle id per sample (packed R32_UINT or R32G32_UINT)")),
+            ],
+            writes: vec![slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image")],
+            settings: lighting_settings(),
+            slots_from_shader: false,
+        }
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(LightingVisibilityPass::new(s.ctx, s.shaders, s.pass, s.plan)?))
     }
 }

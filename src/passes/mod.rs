@@ -1,5 +1,6 @@
-//! Built-in passes. Each records its own commands; the render graph decides their order and
-//! the barriers between them, and instantiates them by kind name.
+//! The built-in pass kinds. Each kind lives in one module (its declaration, checks and node) and
+//! one shader folder, and registers through the same [`PassKind`](crate::graph::PassKind)
+//! interface as an engine's own kinds; [`builtin_kinds`] lists them, one line each.
 
 pub mod aa_edges;
 pub mod compute;
@@ -12,36 +13,34 @@ pub mod lighting;
 pub mod lighting_compressed;
 pub mod lighting_visibility;
 pub mod overlay;
+pub mod shared;
+pub mod slots;
 pub mod visibility_ids;
 
-use crate::gpu::{GpuContext, ShaderCompiler};
-use crate::graph::executor::PassNode;
-use crate::graph::plan::{CompiledGraph, PlannedPass};
+use crate::graph::KindRegistry;
 use gbuffer::GeometryMode;
-use std::path::Path;
 
-/// Creates the pass instance for a planned pass of kind `pass.kind`.
-pub fn create_node(
-    ctx: &GpuContext,
-    shaders: &ShaderCompiler,
-    pass: &PlannedPass,
-    plan: &CompiledGraph,
-    graph_dir: Option<&Path>,
-) -> crate::Result<Box<dyn PassNode>> {
-    Ok(match pass.kind.as_str() {
-        "gbuffer" => Box::new(gbuffer::GbufferPass::for_plan(ctx, shaders, pass, plan, GeometryMode::Clear)?),
-        "gbuffer_append" => Box::new(gbuffer::GbufferPass::for_plan(ctx, shaders, pass, plan, GeometryMode::Append)?),
-        "gbuffer_equal" => Box::new(gbuffer::GbufferPass::for_plan(ctx, shaders, pass, plan, GeometryMode::Equal)?),
-        "gbuffer_compressed" => Box::new(gbuffer_compressed::GbufferCompressedPass::new(ctx, shaders, pass, plan)?),
-        "lighting_compressed" => Box::new(lighting_compressed::LightingCompressedPass::new(ctx, shaders, pass, plan)?),
-        "lighting_visibility" => Box::new(lighting_visibility::LightingVisibilityPass::new(ctx, shaders, pass, plan)?),
-        "aa_edges" => Box::new(aa_edges::AaEdgesPass::new(ctx, shaders, pass, plan)?),
-        "instance_cull" => Box::new(instance_cull::InstanceCullPass::new(ctx, shaders, pass)?),
-        "fxaa" => Box::new(fxaa::FxaaPass::new(ctx, shaders, pass)?),
-        "lighting" => Box::new(lighting::LightingPass::for_plan(ctx, shaders, pass, plan)?),
-        "hiz_build" => Box::new(hiz_build::HizBuildPass::new(ctx, shaders, pass)?),
-        "overlay" => Box::new(overlay::OverlayPass::new(ctx, shaders, pass, plan)?),
-        crate::graph::kinds::COMPUTE_KIND => Box::new(compute::ComputePass::new(ctx, shaders, pass, graph_dir)?),
-        other => return Err(crate::Error::Invalid(format!("pass '{}': no executor for kind '{other}'", pass.name))),
-    })
+/// A registry holding every built-in pass kind; register an engine's own kinds on top of it.
+pub fn builtin_kinds() -> KindRegistry {
+    let mut kinds = KindRegistry::new();
+    register_builtin_kinds(&mut kinds).expect("the built-in pass kinds have distinct, valid names");
+    kinds
+}
+
+/// Registers every built-in pass kind in `kinds` (an error if one of their names is taken).
+pub fn register_builtin_kinds(kinds: &mut KindRegistry) -> crate::Result<()> {
+    kinds.register(gbuffer::GbufferKind(GeometryMode::Clear))?;
+    kinds.register(gbuffer::GbufferKind(GeometryMode::Equal))?;
+    kinds.register(gbuffer_compressed::GbufferCompressedKind)?;
+    kinds.register(lighting_visibility::LightingVisibilityKind)?;
+    kinds.register(aa_edges::AaEdgesKind)?;
+    kinds.register(lighting_compressed::LightingCompressedKind)?;
+    kinds.register(lighting::LightingKind)?;
+    kinds.register(fxaa::FxaaKind)?;
+    kinds.register(gbuffer::GbufferKind(GeometryMode::Append))?;
+    kinds.register(hiz_build::HizBuildKind)?;
+    kinds.register(instance_cull::InstanceCullKind)?;
+    kinds.register(overlay::OverlayKind)?;
+    kinds.register(compute::ComputeKind)?;
+    Ok(())
 }

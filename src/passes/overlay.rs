@@ -15,7 +15,7 @@
 //!
 //! **Timings.** GPU times are known only once a frame has completed. The renderer writes the
 //! newest completed frame's times, in plan order, into a small host-visible buffer per frame in
-//! flight ([`GpuPassTimes`], [`crate::graph::executor::FrameData::pass_times`]); the panel says
+//! flight ([`GpuPassTimes`], [`crate::passes::shared::SceneInputs::pass_times`]); the panel says
 //! which frame they are from and draws a bar per pass proportional to its time.
 //!
 //! **Cost.** View `stats` dispatches over the panel's largest possible extent only (and leaves
@@ -27,12 +27,17 @@
 //! tint whose depth grows with the number of overlapping rectangles and a bright edge where the
 //! count changes. Deterministic: the same frame gives the same pixels.
 
+use super::slots::{sized, slot, COUNTERS_BYTES, HIZ_FORMAT, LIT_OUTPUT_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{
     Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, PassTiming, Pipeline, Sampler, ShaderCompiler,
 };
-use crate::graph::executor::{PassContext, PassNode, LIST_STATS_SLOT};
+use crate::graph::executor::{PassContext, LIST_STATS_SLOT};
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind, SettingValue, Version};
+use crate::graph::{
+    FormatRule, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, Stages, Usage,
+};
+use crate::passes::shared::SceneInputs;
 use ash::vk;
 
 /// Most rows of the panel.
@@ -487,8 +492,6 @@ pub struct OverlayPass {
     text: Buffer,
     /// Bound to stats slots the graph left empty (never read).
     no_stats: Buffer,
-    /// Used when the frame carries no times.
-    no_times: Buffer,
     /// View `culled`: header + per-row coverage counts, for the size it was made for.
     coverage: Option<(vk::Extent2D, Buffer)>,
 }
@@ -564,7 +567,6 @@ impl OverlayPass {
             font: Buffer::with_data(ctx, &name("font8x8"), storage, &font)?,
             text,
             no_stats: Buffer::with_data(ctx, &name("no stats"), storage, &[0u8; 64])?,
-            no_times: Buffer::with_data(ctx, &name("no times"), storage, bytemuck::bytes_of(&GpuPassTimes::none()))?,
             coverage: None,
         })
     }
@@ -609,7 +611,7 @@ const OWN: Access = Access {
 
 impl PassNode for OverlayPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
-        let (ctx, cmd, frame) = (rec.ctx, rec.cmd, rec.frame);
+        let (ctx, cmd, frame) = (rec.ctx, rec.cmd, SceneInputs::of(rec)?);
         let device = ctx.device().clone();
         let output = rec.slots.required_image("output")?;
         let extent = output.extent();
@@ -623,7 +625,7 @@ impl PassNode for OverlayPass {
                 small.size()
             )));
         }
-        let scene = frame.scene;
+        let scene = &frame.scene;
         // The previous frame's uses of the pass's own buffers finish before this frame's.
         cmd_barriers(&device, cmd, &[memory_barrier(OWN, OWN)], &[]);
 
@@ -641,7 +643,7 @@ impl PassNode for OverlayPass {
             }
             let coverage = self.coverage(ctx, extent)?.handle();
             let (records, constants, vis) =
-                (scene.cull_records.handle(), frame.constants.handle(), visibility.handle());
+                (scene.cull_records.handle(), frame.constants().handle(), visibility.handle());
             let (Some(mark), Some(scan)) = (&self.mark, &self.scan) else {
                 return Err(invalid("view \"culled\" without its pipelines".into()));
             };
@@ -670,7 +672,7 @@ impl PassNode for OverlayPass {
             cmd_barriers(&device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::COMPUTE_WRITE)], &[]);
         }
 
-        let times = frame.pass_times.unwrap_or(&self.no_times);
+        let times = frame.pass_times();
         let mut binds: Vec<Bind> = (0..MAX_STATS)
             .map(|k| Bind::Buffer(k as u32, stats.get(k).copied().unwrap_or(&self.no_stats).handle()))
             .collect();
@@ -735,6 +737,49 @@ impl PassNode for OverlayPass {
     }
 }
 
+/// The `overlay` pass kind.
+pub struct OverlayKind;
+
+impl PassKind for OverlayKind {
+    fn info(&self) -> PassKindInfo {
+        PassKindInfo {
+            name: "overlay",
+            doc: "draws this frame's culling counters (formatted on the GPU), with `gbuffer_stats` the compressed G-buffer's, per-pass GPU milliseconds and optional debug views (a Hi-Z mip, occlusion-culled instances) over the lit image",
+            reads: vec![
+                sized(slot("stats0", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a cull pass (its `stats` buffer, 64 bytes)"), COUNTERS_BYTES),
+                sized(slot("stats1", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a second cull pass"), COUNTERS_BYTES),
+                sized(slot("stats2", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a third cull pass"), COUNTERS_BYTES),
+                sized(slot("stats3", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a fourth cull pass"), COUNTERS_BYTES),
+                slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid (view \"hiz\")"),
+                sized(slot("visibility", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits from the late cull pass (view \"culled\")"), MinBytes::InstanceBits),
+                sized(slot("gbuffer_stats", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "a compressed G-buffer's counters (a lighting_compressed pass's `stats`): pool blocks in use, overflowed samples, pixels with several surfaces"), COUNTERS_BYTES),
+            ],
+            writes: vec![slot(
+                "output",
+                Usage::StorageImageReadWrite(Stages::Compute),
+                true,
+                FormatRule::Exact(LIT_OUTPUT_FORMAT),
+                "the lit image, drawn on in place",
+            )],
+            settings: vec![
+                SettingDecl {
+                    name: "view",
+                    default: SettingDefault::Choice(&["stats", "hiz", "culled"]),
+                    doc: "the counter panel only; plus a Hi-Z mip in grey over the whole image; plus occlusion-culled instances tinted red",
+                },
+                SettingDecl { name: "hiz_level", default: SettingDefault::Int(0), doc: "mip of the Hi-Z pyramid shown by view \"hiz\" (clamped to the last)" },
+                SettingDecl { name: "scale", default: SettingDefault::Int(0), doc: "text size in pixels per font pixel (0: max(1, height / 720))" },
+                SettingDecl { name: "timings", default: SettingDefault::Bool(true), doc: "show GPU milliseconds per pass (of the newest completed frame)" },
+            ],
+            slots_from_shader: false,
+        }
+    }
+
+    fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
+        Ok(Box::new(OverlayPass::new(s.ctx, s.shaders, s.pass, s.plan)?))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -776,6 +821,7 @@ mod tests {
             resources: vec![resource("a"), resource("b")],
             outputs: vec![],
             memory: MemoryPlan::default(),
+            kinds: Default::default(),
         }
     }
 

@@ -3,7 +3,9 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::{GpuContext, ShaderCompiler};
-use crate::graph::{builtin_kinds, compile, load_in, CompiledGraph, DeviceEnv, FrameInputs};
+use crate::graph::{compile, load_in, CompiledGraph, DeviceEnv, KindRegistry};
+use crate::passes::builtin_kinds;
+use crate::passes::shared::frame_inputs;
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -40,12 +42,20 @@ pub struct GraphSpec {
     pub dir: Option<PathBuf>,
     /// `name=value` parameter overrides (CLI `--param`, API).
     pub overrides: Vec<(String, String)>,
+    /// The pass kinds its passes may use (the built-in ones unless an engine registered more).
+    pub kinds: KindRegistry,
 }
 
 impl GraphSpec {
     /// The embedded default graph.
     pub fn default_graph() -> Self {
-        Self { text: DEFAULT_GRAPH.into(), file: "graph/default.ron".into(), dir: None, overrides: Vec::new() }
+        Self {
+            text: DEFAULT_GRAPH.into(),
+            file: "graph/default.ron".into(),
+            dir: None,
+            overrides: Vec::new(),
+            kinds: builtin_kinds(),
+        }
     }
 
     /// A graph shipped in `graph/` by name (`default`, `no_cull`, `frustum`, ...).
@@ -54,7 +64,13 @@ impl GraphSpec {
             let names: Vec<&str> = BUILTIN_GRAPHS.iter().map(|(n, _)| *n).collect();
             Error::Invalid(format!("unknown built-in graph '{name}' (built-in graphs: {})", names.join(", ")))
         })?;
-        Ok(Self { text: text.to_string(), file: format!("graph/{name}.ron"), dir: None, overrides: Vec::new() })
+        Ok(Self {
+            text: text.to_string(),
+            file: format!("graph/{name}.ron"),
+            dir: None,
+            overrides: Vec::new(),
+            kinds: builtin_kinds(),
+        })
     }
 
     /// `builtin:NAME` or a path.
@@ -74,12 +90,19 @@ impl GraphSpec {
             file: path.display().to_string(),
             dir: path.parent().map(Path::to_path_buf),
             overrides: Vec::new(),
+            kinds: builtin_kinds(),
         })
     }
 
     /// The same graph with `overrides` added (later ones win).
     pub fn with_overrides(mut self, overrides: impl IntoIterator<Item = (String, String)>) -> Self {
         self.overrides.extend(overrides);
+        self
+    }
+
+    /// The same graph, loaded with `kinds` (for example the built-in kinds and an engine's own).
+    pub fn with_kinds(mut self, kinds: KindRegistry) -> Self {
+        self.kinds = kinds;
         self
     }
 }
@@ -96,7 +119,7 @@ impl GraphSpec {
         height: u32,
     ) -> Result<CompiledGraph> {
         let env = DeviceEnv::new(ctx, shaders);
-        let graph = load_in(&self.text, &self.file, self.dir.as_deref(), &self.overrides, &env, builtin_kinds())?;
-        Ok(compile(&graph, &FrameInputs::from_scene(scene, width, height))?)
+        let graph = load_in(&self.text, &self.file, self.dir.as_deref(), &self.overrides, &env, &self.kinds)?;
+        Ok(compile(&graph, &frame_inputs(scene, width, height))?)
     }
 }

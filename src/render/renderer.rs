@@ -4,21 +4,19 @@
 //! Every pass is a node of the graph (`graph/default.ron` unless told otherwise); the renderer
 //! only provides what all passes share: scene buffers, per-frame constants and lights.
 
-use super::gpu_types::{FrameConstants, GpuPointLight};
 use super::graph_spec::GraphSpec;
 use super::output::{rgba_from_bytes, RgbaImage};
 use super::pool_adapt::PoolAdapter;
-use super::scene_buffers::GpuScene;
 use crate::error::{Error, Result};
 use crate::gpu::transfer::record_image_to_buffer;
 use crate::gpu::{
     Access, Buffer, BufferDesc, GpuContext, Image, MemoryLocation, PassTiming, ShaderCompiler, UploadBatch,
 };
-use crate::graph::executor::DrawnInstances;
-use crate::graph::executor::{FrameData, GraphRuntime, Imports, FRAMES_IN_FLIGHT};
-use crate::graph::plan::{CompiledGraph, ResolvedKind};
+use crate::graph::{CompiledGraph, FrameData, GraphRuntime, Imports, ResolvedKind, FRAMES_IN_FLIGHT};
 use crate::oracle::visibility::VisibilityOracle;
-use crate::passes::overlay::{GpuPassTimes, PASS_TIMES_BYTES};
+use crate::passes::overlay::GpuPassTimes;
+use crate::passes::shared::gpu_types::{DrawIndexedIndirect, FrameConstants, GpuPointLight};
+use crate::passes::shared::{GpuScene, SceneInputs};
 use crate::scene::{Camera, Scene};
 use crate::stats::{CullCounters, CullPassStats, FrameStats, GbufferCounters, GbufferPassStats, VerifyStats};
 use ash::vk;
@@ -48,26 +46,18 @@ impl RenderSettings {
     }
 }
 
-/// Host-visible data of one frame in flight.
-struct FrameSlot {
-    constants: Buffer,
-    lights: Buffer,
-    /// The newest completed frame's GPU times, for an overlay pass.
-    pass_times: Buffer,
-}
-
 /// Renders a scene through a render graph.
 pub struct Renderer {
     ctx: GpuContext,
     scene: Scene,
-    gpu_scene: GpuScene,
+    /// The scene on the GPU and the per-frame buffers every built-in pass reads.
+    inputs: SceneInputs,
     runtime: GraphRuntime,
     /// Renderer frame at which `runtime` recorded its first frame.
     runtime_start: u64,
     /// Runtimes replaced by a reload: (first frame, first frame of the next runtime, runtime),
     /// kept until their last frame can no longer be executing.
     retired: Vec<(u64, u64, GraphRuntime)>,
-    slots: Vec<FrameSlot>,
     frame_index: u64,
     pending_uploads: Option<UploadBatch>,
     /// Upload batches recorded into frame N, kept until frame N + FRAMES_IN_FLIGHT is recorded.
@@ -107,37 +97,14 @@ impl Renderer {
         let runtime = build_runtime(ctx, shaders, &scene, &settings, spec)?;
         let mut uploads = UploadBatch::default();
         let gpu_scene = GpuScene::upload(ctx, &scene, &mut uploads)?;
-        let light_bytes = (scene.lights.len().max(1) * std::mem::size_of::<GpuPointLight>()) as u64;
-        let slots = (0..FRAMES_IN_FLIGHT)
-            .map(|i| -> Result<FrameSlot> {
-                let host = |name: &str, size| {
-                    Buffer::new(
-                        ctx,
-                        &BufferDesc {
-                            name,
-                            size,
-                            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
-                            location: MemoryLocation::CpuToGpu,
-                        },
-                    )
-                };
-                let mut pass_times = host(&format!("pass times {i}"), PASS_TIMES_BYTES)?;
-                pass_times.write_bytes(0, bytemuck::bytes_of(&GpuPassTimes::none()))?;
-                Ok(FrameSlot {
-                    constants: host(&format!("frame constants {i}"), std::mem::size_of::<FrameConstants>() as u64)?,
-                    lights: host(&format!("lights {i}"), light_bytes)?,
-                    pass_times,
-                })
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let inputs = SceneInputs::new(ctx, gpu_scene, scene.lights.len())?;
         Ok(Self {
             ctx: ctx.clone(),
             scene,
-            gpu_scene,
+            inputs,
             runtime,
             runtime_start: 0,
             retired: Vec::new(),
-            slots,
             frame_index: 0,
             pending_uploads: Some(uploads),
             retiring_uploads: Vec::new(),
@@ -218,7 +185,7 @@ impl Renderer {
         let samples = depth_samples(self.runtime.plan());
         self.oracle =
             Some(VisibilityOracle::new(&self.ctx, shaders, self.settings.width, self.settings.height, samples)?);
-        self.runtime.set_draw_capture(true)
+        self.runtime.set_capture(&DRAW_LIST_SLOTS)
     }
 
     /// The scene being rendered.
@@ -248,9 +215,10 @@ impl Renderer {
     }
 
     /// What each draw pass drew in the last completed frame (`None` unless verification is
-    /// on): see [`GraphRuntime::drawn`].
-    pub fn drawn(&self) -> Result<Option<Vec<crate::graph::executor::DrawnInstances>>> {
-        self.runtime.drawn(&self.gpu_scene.regions)
+    /// on), from the draw lists captured through [`GraphRuntime::set_capture`].
+    pub fn drawn(&self) -> Result<Option<Vec<DrawnInstances>>> {
+        let Some(captured) = self.runtime.captured()? else { return Ok(None) };
+        Ok(Some(captured.into_iter().map(|(_, lists)| drawn_instances(&self.inputs.scene, lists)).collect()))
     }
 
     /// The graph's first output image as left by the last recorded frame, and the access it was
@@ -273,30 +241,32 @@ impl Renderer {
         profiling::scope!("cullgraph::Renderer::record");
         camera.validate().map_err(|e| Error::Invalid(format!("camera: {e}")))?;
         let frame = self.frame_index;
-        let slot_index = (frame % FRAMES_IN_FLIGHT as u64) as usize;
-        self.write_frame_data(slot_index, camera)?;
-        self.write_pass_times(slot_index, frame)?;
+        // All or nothing: until the graph has recorded, nothing is consumed, so that a host may
+        // discard this command buffer after an error and record the frame again.
+        let constants = self.frame_constants(camera);
+        self.write_frame_data(frame, &constants, camera)?;
+        self.write_pass_times(frame)?;
+        if let Some(batch) = &self.pending_uploads {
+            self.ctx.begin_label(cmd, "upload scene");
+            batch.record(&self.ctx, cmd);
+            self.ctx.end_label(cmd);
+        }
+        self.inputs.select(frame);
+        let data = FrameData {
+            frame,
+            extent: vk::Extent2D { width: self.settings.width, height: self.settings.height },
+            shared: &self.inputs,
+        };
+        self.runtime.record(cmd, &data, imports)?;
 
         // Uploads and replaced graphs recorded FRAMES_IN_FLIGHT frames ago have executed by now.
         let in_flight = FRAMES_IN_FLIGHT as u64;
         self.retiring_uploads.retain(|(f, _)| frame < f + in_flight);
         self.retired.retain(|(_, end, _)| frame < end + in_flight);
         if let Some(batch) = self.pending_uploads.take() {
-            self.ctx.begin_label(cmd, "upload scene");
-            batch.record(&self.ctx, cmd);
-            self.ctx.end_label(cmd);
             self.retiring_uploads.push((frame, batch));
         }
-        let slot = &self.slots[slot_index];
-        let inputs = FrameData {
-            scene: &self.gpu_scene,
-            constants: &slot.constants,
-            lights: &slot.lights,
-            pass_times: Some(&slot.pass_times),
-            frame,
-            extent: vk::Extent2D { width: self.settings.width, height: self.settings.height },
-        };
-        self.runtime.record(cmd, &inputs, imports)?;
+        self.previous_camera = Some(camera.clone());
         self.frame_index += 1;
         Ok(frame)
     }
@@ -383,11 +353,11 @@ impl Renderer {
     /// exactly visible instances.
     fn verify(&self, frame: u64) -> Result<(VerifyStats, BTreeSet<u32>)> {
         let Some(oracle) = &self.oracle else { return Ok(Default::default()) };
-        let constants = &self.slots[(frame % FRAMES_IN_FLIGHT as u64) as usize].constants;
-        let visible = oracle.render(&self.ctx, &self.gpu_scene, constants)?.visible;
+        let constants = &self.inputs.slot(frame).constants;
+        let visible = oracle.render(&self.ctx, &self.inputs.scene, constants)?.visible;
         let lists = self.drawn()?.unwrap_or_default();
         let drawn: BTreeSet<u32> = if lists.contains(&DrawnInstances::All) {
-            (0..self.gpu_scene.instance_count).collect()
+            (0..self.inputs.scene.instance_count).collect()
         } else {
             lists
                 .into_iter()
@@ -430,10 +400,10 @@ impl Renderer {
             .collect();
         let mut stats = FrameStats {
             frame,
-            instances: self.gpu_scene.instance_count,
-            drawn: self.gpu_scene.instance_count,
-            draws: self.gpu_scene.regions.groups(),
-            triangles: self.gpu_scene.triangles,
+            instances: self.inputs.scene.instance_count,
+            drawn: self.inputs.scene.instance_count,
+            draws: self.inputs.scene.regions.groups(),
+            triangles: self.inputs.scene.triangles,
             gpu_ms: timings.into_iter().filter(|t| t.name != "frame").collect(),
             gpu_total_ms: total,
             ..Default::default()
@@ -449,7 +419,7 @@ impl Renderer {
 
     /// For a graph with an overlay pass: the newest completed frame's GPU times (of this graph),
     /// without waiting (a frame still executing has no results yet and is skipped).
-    fn write_pass_times(&mut self, slot: usize, frame: u64) -> Result<()> {
+    fn write_pass_times(&mut self, frame: u64) -> Result<()> {
         let plan = self.runtime.plan();
         if !plan.passes.iter().any(|p| p.kind == "overlay") {
             return Ok(());
@@ -465,22 +435,62 @@ impl Renderer {
             Some((f, timings)) => GpuPassTimes::from_timings(plan, f, &timings),
             None => GpuPassTimes::none(),
         };
-        self.slots[slot].pass_times.write_bytes(0, bytemuck::bytes_of(&times))?;
+        self.inputs.slot_mut(frame).pass_times.write_bytes(0, bytemuck::bytes_of(&times))?;
         Ok(())
     }
 
-    fn write_frame_data(&mut self, slot: usize, camera: &Camera) -> Result<()> {
-        let previous = self.previous_camera.clone().unwrap_or_else(|| camera.clone());
-        let constants = FrameConstants::new(&self.scene, camera, &previous, self.settings.width, self.settings.height);
-        self.previous_camera = Some(camera.clone());
+    /// This frame's constants: the camera, and last frame's for passes that test against last
+    /// frame's pyramid.
+    fn frame_constants(&self, camera: &Camera) -> FrameConstants {
+        let previous = self.previous_camera.as_ref().unwrap_or(camera);
+        FrameConstants::new(&self.scene, camera, previous, self.settings.width, self.settings.height)
+    }
+
+    fn write_frame_data(&mut self, frame: u64, constants: &FrameConstants, camera: &Camera) -> Result<()> {
         let lights: Vec<GpuPointLight> = self.scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();
-        let slot = &mut self.slots[slot];
-        slot.constants.write_bytes(0, bytemuck::bytes_of(&constants))?;
+        let slot = self.inputs.slot_mut(frame);
+        slot.constants.write_bytes(0, bytemuck::bytes_of(constants))?;
         if !lights.is_empty() {
             slot.lights.write_bytes(0, bytemuck::cast_slice(&lights))?;
         }
         Ok(())
     }
+}
+
+/// The slots through which a draw pass reads its draw list; `--verify` copies them to the host.
+const DRAW_LIST_SLOTS: [&str; 3] = ["draw_commands", "draw_count", "draw_instance_ids"];
+
+/// What one draw pass drew.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum DrawnInstances {
+    /// The scene's unculled list: every instance.
+    All,
+    /// These instance ids (in draw order).
+    Some(Vec<u32>),
+}
+
+/// The instances a draw pass's captured list (commands, counts, ids) drew; `None`: the pass
+/// binds no list and draws the scene's unculled one.
+fn drawn_instances(scene: &GpuScene, lists: Option<Vec<Vec<u8>>>) -> DrawnInstances {
+    let Some([commands, counts, ids]) = lists.and_then(|l| <[Vec<u8>; 3]>::try_from(l).ok()) else {
+        return DrawnInstances::All;
+    };
+    // Whole elements only: a graph may size a buffer to any number of bytes.
+    let commands: Vec<DrawIndexedIndirect> = whole(&commands);
+    let counts: Vec<u32> = whole(&counts);
+    let ids: Vec<u32> = whole(&ids);
+    let mut out = Vec::new();
+    for c in scene.regions.drawn(&commands, &counts) {
+        let start = c.first_instance as usize;
+        let end = (start + c.instance_count as usize).min(ids.len());
+        out.extend_from_slice(&ids[start.min(end)..end]);
+    }
+    DrawnInstances::Some(out)
+}
+
+/// The whole `T`s at the start of `bytes` (a trailing partial one is left out).
+fn whole<T: bytemuck::Pod>(bytes: &[u8]) -> Vec<T> {
+    bytes.chunks_exact(std::mem::size_of::<T>()).map(bytemuck::pod_read_unaligned).collect()
 }
 
 /// Samples of the graph's first depth image (what the oracle must match); 1 if none.
@@ -506,3 +516,9 @@ fn build_runtime(
     let plan = spec.compile(ctx, shaders, scene, settings.width, settings.height)?;
     GraphRuntime::new(ctx, shaders, plan, spec.dir.as_deref())
 }
+
+/// An engine records on its render thread: a renderer moves there whole.
+const _: () = {
+    const fn assert_send<T: Send>() {}
+    assert_send::<Renderer>();
+};

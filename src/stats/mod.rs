@@ -9,14 +9,7 @@ pub use gbuffer::{GbufferCounters, GbufferPassStats};
 
 use serde::{Deserialize, Serialize};
 
-/// Device memory of one graph resource.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ResourceBytes {
-    /// Resource name in the graph.
-    pub name: String,
-    /// Bytes (both copies of a history resource).
-    pub bytes: u64,
-}
+pub use crate::graph::ResourceBytes;
 
 /// What one frame did.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -95,7 +88,7 @@ pub struct RunStats {
     /// Error of the last frame (the saved image) against its supersampled reference (with
     /// `--reference`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reference: Option<crate::oracle::ImageError>,
+    pub reference: Option<ImageError>,
 }
 
 impl RunStats {
@@ -103,4 +96,21 @@ impl RunStats {
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
     }
+}
+
+/// How far a rendered image is from the supersampled reference of the same frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImageError {
+    /// Samples per pixel of the reference (N x N for an N-times-larger render).
+    pub samples_per_pixel: u32,
+    /// Mean LDR-FLIP error over the pixels (0: identical; 1: maximal).
+    pub mean_flip: f64,
+    /// PSNR in dB over RGB in 8-bit sRGB units (JSON `null` when identical, i.e. infinite).
+    #[serde(deserialize_with = "infinite_when_null")]
+    pub psnr_db: f64,
+}
+
+/// Reads a number, or `null` (how JSON writes an infinite PSNR) as +infinity.
+fn infinite_when_null<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
 }

@@ -3,8 +3,9 @@
 
 #![allow(dead_code)]
 
-use cullgraph::graph::kinds::{FormatRule, MinBytes, PassKindInfo, SlotDecl};
-use cullgraph::graph::{Stages, Usage};
+use cullgraph::graph::{
+    FormatRule, KindRegistry, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, SlotDecl, Stages, Usage,
+};
 
 const fn slot(name: &'static str, usage: Usage) -> SlotDecl {
     SlotDecl {
@@ -50,8 +51,29 @@ pub const BUFFER_WRITES: &[SlotDecl] = &[
     slot("transfer_dst", Usage::TransferDst),
 ];
 
+/// A kind that is only declared: graphs using it load and compile, and never run.
+struct Declared(PassKindInfo);
+
+impl PassKind for Declared {
+    fn info(&self) -> PassKindInfo {
+        self.0.clone()
+    }
+
+    fn create_node(&self, setup: &NodeSetup<'_>) -> cullgraph::Result<Box<dyn PassNode>> {
+        Err(cullgraph::Error::Invalid(format!("test kind of pass '{}' has no node", setup.pass.name)))
+    }
+}
+
 /// Kind `img` (image slots), `buf` (buffer slots) and `mix` (both, with prefixed names).
-pub fn test_kinds() -> Vec<PassKindInfo> {
+pub fn test_kinds() -> KindRegistry {
+    let mut kinds = KindRegistry::new();
+    for info in test_kind_infos() {
+        kinds.register(Declared(info)).expect("distinct test kinds");
+    }
+    kinds
+}
+
+fn test_kind_infos() -> Vec<PassKindInfo> {
     vec![
         PassKindInfo {
             name: "img",

@@ -12,10 +12,10 @@ pub mod prune;
 pub mod resolve;
 
 use super::error::{GraphErrors, Sink};
+use super::kinds::KindCheck;
 use super::plan::{Binding, CompiledGraph, MemoryPlan, PlannedPass, PlannedResource, ResolvedKind, ResourceClass};
 use super::validate::{apply_overrides, ParamOverride};
 use super::validated::{ParamValue, ValidatedGraph};
-use crate::scene::Scene;
 use ash::vk;
 use resolve::Resolved;
 use std::collections::HashMap;
@@ -30,8 +30,8 @@ pub struct FrameInputs {
     pub height: u32,
     /// Instances in the scene (`instances`).
     pub instances: u64,
-    /// Meshes (`meshes`), each counted once more per further face cull its instances need, so
-    /// that it bounds the draw groups ([`crate::render::face_cull::command_capacity`]).
+    /// Meshes (`meshes`): the draw groups a draw list may hold (cullgraph's renderer counts a
+    /// mesh once more per further face cull its instances need).
     pub meshes: u64,
     /// Point lights (`lights`).
     pub lights: u64,
@@ -47,20 +47,6 @@ impl FrameInputs {
     /// An output size with an empty scene.
     pub fn new(width: u32, height: u32) -> Self {
         Self { width, height, ..Default::default() }
-    }
-
-    /// An output size with the quantities of `scene`.
-    pub fn from_scene(scene: &Scene, width: u32, height: u32) -> Self {
-        Self {
-            width,
-            height,
-            instances: scene.instances.len() as u64,
-            meshes: crate::render::face_cull::command_capacity(scene) as u64,
-            lights: scene.lights.len() as u64,
-            materials: scene.materials.len() as u64,
-            triangles: scene.instanced_triangles(),
-            params: Vec::new(),
-        }
     }
 }
 
@@ -96,6 +82,13 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
         let errs = super::validate::slot_size_errors(graph, &pruning.keep, &resolved, frame.instances, frame.meshes);
         for (pos, message) in errs {
             sink.at(pos, message);
+        }
+        for (pass, _) in graph.passes.iter().zip(&pruning.keep).filter(|(_, keep)| **keep) {
+            let Some(kind) = graph.kinds.get(&pass.kind) else { continue };
+            let check = KindCheck { graph, pass, samples: &samples, resolved: &resolved };
+            for (pos, message) in kind.kind.check_sizes(&check) {
+                sink.at(pos, message);
+            }
         }
     }
     let kept: Vec<usize> = (0..graph.passes.len()).filter(|&p| pruning.keep[p]).collect();
@@ -190,5 +183,6 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
         resources,
         outputs: graph.outputs.clone(),
         memory,
+        kinds: graph.kinds.clone(),
     })
 }

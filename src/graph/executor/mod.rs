@@ -8,13 +8,23 @@ mod node;
 mod resources;
 mod tracker;
 
-pub use capture::DrawnInstances;
+pub use capture::Captured;
 pub use imports::{Import, Imports};
 pub use node::{FrameData, PassContext, PassNode, SlotBindings, StepTimer};
 pub use resources::{Physical, RuntimeResources};
 
+/// Device bytes of one resource of a graph (both copies of a history resource).
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ResourceBytes {
+    /// Resource name in the graph.
+    pub name: String,
+    /// Bytes (both copies of a history resource).
+    pub bytes: u64,
+}
+
 use crate::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
 use crate::gpu::{Access, Buffer, BufferDesc, GpuContext, GpuTimer, Image, MemoryLocation, PassTiming, ShaderCompiler};
+use crate::graph::kinds::NodeSetup;
 use crate::graph::plan::{CompiledGraph, MemoryPlan, Version};
 use ash::vk;
 use std::cell::RefCell;
@@ -115,8 +125,8 @@ pub struct GraphRuntime {
     /// are copied into (read a few frames later, never waited on).
     stats_sources: Vec<StatsSource>,
     stats_ring: Vec<Buffer>,
-    /// Copies of the draw lists, when verification asked for them.
-    capture: Option<capture::DrawCapture>,
+    /// Host copies of named slots, when a checking tool asked for them.
+    capture: Option<capture::SlotCapture>,
     /// The wrappers of host resources used by earlier frames, with the frame: kept until that
     /// frame has executed, because the views made for their mips and aspects go with them.
     retired_imports: Vec<(u64, Physical)>,
@@ -136,7 +146,12 @@ impl GraphRuntime {
         let nodes = plan
             .passes
             .iter()
-            .map(|p| crate::passes::create_node(ctx, shaders, p, &plan, graph_dir))
+            .map(|pass| {
+                let kind = plan.kinds.get(&pass.kind).ok_or_else(|| {
+                    crate::Error::Invalid(format!("pass '{}': no pass kind '{}' is registered", pass.name, pass.kind))
+                })?;
+                kind.kind.create_node(&NodeSetup { ctx, shaders, pass, plan: &plan, graph_dir })
+            })
             .collect::<crate::Result<Vec<_>>>()?;
         // The frame, each pass, and room for each pass's steps when step timing is on.
         let scopes = plan.passes.len() as u32 * (1 + MAX_TIMED_STEPS) + 1;
@@ -185,24 +200,43 @@ impl GraphRuntime {
 
     /// Device bytes of every resource the graph allocated (both copies of history resources),
     /// in declaration order; aliasing is not subtracted.
-    pub fn resource_bytes(&self) -> Vec<crate::stats::ResourceBytes> {
+    pub fn resource_bytes(&self) -> Vec<ResourceBytes> {
         self.plan
             .resources
             .iter()
             .zip(self.resources.bytes_per_resource(&self.ctx))
             .filter(|(_, bytes)| *bytes > 0)
-            .map(|(r, bytes)| crate::stats::ResourceBytes { name: r.name.clone(), bytes })
+            .map(|(r, bytes)| ResourceBytes { name: r.name.clone(), bytes })
             .collect()
     }
 
     /// Records one frame into `cmd`; returns the frame number. `imports` must hold every
     /// resource the graph declares `Imported(..)` (and a kept pass uses); they are left in the
     /// access each import asks for.
+    ///
+    /// All or nothing: on an error nothing is consumed (the frame number, what the executor
+    /// knows of each resource's state), so the host may discard `cmd` and record again.
     pub fn record(&mut self, cmd: vk::CommandBuffer, inputs: &FrameData<'_>, imports: &Imports) -> crate::Result<u64> {
         profiling::scope!("cullgraph::record_graph", self.plan.name.as_str());
+        self.bind_imports(imports)?;
+        let before = self.tracker.clone();
+        match self.record_passes(cmd, inputs, imports) {
+            Ok(frame) => Ok(frame),
+            Err(e) => {
+                self.tracker = before;
+                Err(e)
+            }
+        }
+    }
+
+    fn record_passes(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        inputs: &FrameData<'_>,
+        imports: &Imports,
+    ) -> crate::Result<u64> {
         let frame = self.frame;
         let device = self.ctx.device().clone();
-        self.bind_imports(imports)?;
         if frame == 0 {
             self.clear_history(cmd);
         }
@@ -260,7 +294,7 @@ impl GraphRuntime {
                 }
             }
             if let Some(capture) = &self.capture {
-                let copies: Vec<_> = capture.copies_of(index, pass).collect();
+                let copies: Vec<_> = capture.copies_of(index, &pass.bindings).collect();
                 for &(binding, host) in &copies {
                     copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, host, 0);
                 }
@@ -427,19 +461,24 @@ impl GraphRuntime {
         self.step_timing
     }
 
-    /// Starts or stops copying every draw pass's draw list to the host after it runs (for
-    /// verification; see [`GraphRuntime::drawn`]).
-    pub fn set_draw_capture(&mut self, on: bool) -> crate::Result<()> {
-        self.capture =
-            if on { Some(capture::DrawCapture::new(&self.ctx, &self.plan.passes, &self.resources)?) } else { None };
+    /// Starts copying, after every pass whose kind reads all of `slots`, the buffers bound
+    /// there to the host (a checking tool: `--verify` reads the draw lists this way); an empty
+    /// list stops it. See [`GraphRuntime::captured`].
+    pub fn set_capture(&mut self, slots: &[&'static str]) -> crate::Result<()> {
+        self.capture = if slots.is_empty() {
+            None
+        } else {
+            Some(capture::SlotCapture::new(&self.ctx, &self.plan, &self.resources, slots)?)
+        };
         Ok(())
     }
 
-    /// What each draw pass drew in the last recorded frame, once it has completed (`None`
-    /// without [`GraphRuntime::set_draw_capture`]), its command lists laid out in `regions`.
-    /// Read before recording the next frame.
-    pub fn drawn(&self, regions: &crate::render::face_cull::DrawRegions) -> crate::Result<Option<Vec<DrawnInstances>>> {
-        self.capture.as_ref().map(|c| c.drawn(regions)).transpose()
+    /// What the capturing passes bound to the captured slots in the last recorded frame, once
+    /// it has completed (`None` without [`GraphRuntime::set_capture`]): per pass, in pass order,
+    /// its index and each slot's bytes (`None` where the pass leaves a slot unbound). Read
+    /// before recording the next frame.
+    pub fn captured(&self) -> crate::Result<Option<Vec<Captured>>> {
+        self.capture.as_ref().map(|c| c.read()).transpose()
     }
 
     /// The counters each pass with a `stats` slot wrote in `frame`, once the frame has completed

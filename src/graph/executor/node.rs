@@ -4,25 +4,20 @@
 use super::resources::{Physical, RuntimeResources};
 use crate::gpu::{Access, Buffer, GpuContext, GpuTimer, Image};
 use crate::graph::plan::{Binding, PlannedPass};
-use crate::render::scene_buffers::GpuScene;
 use ash::vk;
+use std::any::Any;
 use std::cell::{Cell, RefCell};
 
-/// Inputs every pass of a frame may use, owned by the renderer.
+/// What every pass of a frame may use besides its slots.
 pub struct FrameData<'a> {
-    /// The scene on the GPU (pools, instances, materials, the unculled draw list).
-    pub scene: &'a GpuScene,
-    /// This frame's [`crate::render::gpu_types::FrameConstants`].
-    pub constants: &'a Buffer,
-    /// This frame's point lights.
-    pub lights: &'a Buffer,
-    /// GPU times of the newest completed frame, for passes that show them
-    /// ([`crate::passes::overlay::GpuPassTimes`], host-visible, one per frame in flight).
-    pub pass_times: Option<&'a Buffer>,
     /// Frame number.
     pub frame: u64,
     /// Output size.
     pub extent: vk::Extent2D,
+    /// Whatever the host of the graph shares with its passes (the scene on the GPU and this
+    /// frame's constants, for cullgraph's renderer). The graph never looks inside: each pass
+    /// kind downcasts it to the type it was written for.
+    pub shared: &'a dyn Any,
 }
 
 /// The resources bound to one pass's slots in this frame.
@@ -136,7 +131,7 @@ impl<'a> StepTimer<'a> {
 }
 
 /// A pass instance of a compiled graph (pipelines created, ready to record).
-pub trait PassNode {
+pub trait PassNode: Send {
     /// Records the pass's commands. Barriers around it are the executor's job.
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()>;
 

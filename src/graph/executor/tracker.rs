@@ -26,7 +26,7 @@ impl Default for PhysState {
 }
 
 /// Per physical resource state.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct Tracker {
     states: Vec<PhysState>,
 }

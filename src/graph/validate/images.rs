@@ -1,5 +1,4 @@
-//! Image checks: the formats each slot accepts, sample counts within a pass, what decides each
-//! sample's fragment in `gbuffer_compressed` (stencil or `sample_claim`), and the device's
+//! Image checks: the formats each slot accepts, sample counts within a pass, and the device's
 //! support for each image's format with the union of its usages and its sample count.
 
 use super::Validator;
@@ -16,9 +15,6 @@ pub(super) fn check(v: &mut Validator<'_>, graph: &ValidatedGraph, samples: &[u3
         v.err(pos, message);
     }
     for (pos, message) in sample_errors(graph, samples) {
-        v.err(pos, message);
-    }
-    for (pos, message) in sample_owner_errors(graph, samples) {
         v.err(pos, message);
     }
     for (r, res) in graph.resources.iter().enumerate() {
@@ -153,44 +149,6 @@ pub(crate) fn sample_errors(graph: &ValidatedGraph, samples: &[u32]) -> Vec<(Pos
                     ),
                 ));
             }
-        }
-    }
-    out
-}
-
-/// `gbuffer_compressed` passes whose depth format and `sample_claim` binding leave no way, or
-/// two ways, to decide each sample's fragment ([`crate::passes::gbuffer_compressed::SampleOwner`]).
-fn sample_owner_errors(graph: &ValidatedGraph, samples: &[u32]) -> Vec<(Pos, String)> {
-    use crate::passes::gbuffer_compressed::SampleOwner;
-    let mut out = Vec::new();
-    for pass in graph.passes.iter().filter(|p| p.kind == "gbuffer_compressed") {
-        let Some(depth) = pass.bindings.iter().find(|b| b.slot == "depth") else { continue };
-        let ResourceDesc::Image { format, .. } = graph.resources[depth.resource].desc else { continue };
-        if !formats::is_depth(format) {
-            continue; // reported as a format error
-        }
-        let claim = pass.bindings.iter().find(|b| b.slot == "sample_claim");
-        let count = samples.get(depth.resource).copied().unwrap_or(1);
-        match SampleOwner::for_depth(format, count, claim.is_some()) {
-            Err(message) => {
-                // At the binding to change: the claim buffer when there is one, else the depth.
-                let pos = claim.map_or(depth.pos, |c| c.pos);
-                out.push((pos, format!("pass '{}' (gbuffer_compressed): {message}", pass.name)));
-            }
-            // A claim order the pass would ignore is refused rather than dropped silently.
-            Ok(SampleOwner::Stencil) => {
-                if let Some(order) = pass.settings.iter().find(|s| s.name == "claim_order") {
-                    out.push((
-                        order.pos,
-                        format!(
-                            "pass '{}' (gbuffer_compressed): claim_order applies to sample claims, but the depth has \
-                             stencil, which settles ties in draw order: remove claim_order",
-                            pass.name
-                        ),
-                    ));
-                }
-            }
-            Ok(SampleOwner::Claim) => {}
         }
     }
     out

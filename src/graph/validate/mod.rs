@@ -10,7 +10,6 @@
 //! usage and sample count, sample counts within a pass).
 
 mod compute;
-mod cull_lists;
 mod dataflow;
 mod images;
 mod passes;
@@ -23,7 +22,7 @@ pub(crate) use slot_sizes::slot_size_errors;
 use super::env::Environment;
 use super::error::{list, GraphError, GraphErrors, Pos, Sink};
 use super::expr::{Expr, Num};
-use super::kinds::{builtin_kinds, PassKindInfo};
+use super::kinds::{KindCheck, KindRegistry};
 use super::locate::{Locator, Seg};
 use super::schema::{self, Literal, NumLit};
 use super::validated::{LocatedExpr, Param, ParamValue, ValidatedGraph};
@@ -44,36 +43,28 @@ pub fn parse_param_override(s: &str) -> Result<ParamOverride, String> {
     }
 }
 
-/// Loads and validates a graph with the built-in pass kinds. `file` names the text in messages
-/// and locates relative shader paths (its directory).
+/// Reads and validates the graph file at `path` with the pass kinds of `kinds`.
+pub fn load_file(
+    path: &Path,
+    overrides: &[ParamOverride],
+    env: &dyn Environment,
+    kinds: &KindRegistry,
+) -> Result<ValidatedGraph, GraphErrors> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| GraphErrors(vec![GraphError::new(&file, Pos::START, format!("cannot read the file: {e}"))]))?;
+    load(&text, &file, overrides, env, kinds)
+}
+
+/// Loads and validates a graph whose passes are of the kinds in `kinds` (the built-in ones are
+/// `cullgraph::passes::builtin_kinds()`). `file` names the text in messages and locates
+/// relative shader paths (its directory).
 pub fn load(
     text: &str,
     file: &str,
     overrides: &[ParamOverride],
     env: &dyn Environment,
-) -> Result<ValidatedGraph, GraphErrors> {
-    load_with_kinds(text, file, overrides, env, builtin_kinds())
-}
-
-/// Reads and validates the graph file at `path` with the built-in pass kinds.
-pub fn load_file(
-    path: &Path,
-    overrides: &[ParamOverride],
-    env: &dyn Environment,
-) -> Result<ValidatedGraph, GraphErrors> {
-    let file = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| GraphErrors(vec![GraphError::new(&file, Pos::START, format!("cannot read the file: {e}"))]))?;
-    load(&text, &file, overrides, env)
-}
-
-/// Like [`load`] with a custom list of pass kinds (tests, engines with their own passes).
-pub fn load_with_kinds(
-    text: &str,
-    file: &str,
-    overrides: &[ParamOverride],
-    env: &dyn Environment,
-    kinds: Vec<PassKindInfo>,
+    kinds: &KindRegistry,
 ) -> Result<ValidatedGraph, GraphErrors> {
     let dir = match Path::new(file).parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -90,7 +81,7 @@ pub fn load_in(
     dir: Option<&Path>,
     overrides: &[ParamOverride],
     env: &dyn Environment,
-    kinds: Vec<PassKindInfo>,
+    kinds: &KindRegistry,
 ) -> Result<ValidatedGraph, GraphErrors> {
     let parsed = match schema::parse(text) {
         Ok(g) => g,
@@ -103,7 +94,7 @@ pub fn load_in(
         loc: Locator::new(text),
         sink: Sink::new(file),
         env,
-        kinds: &kinds,
+        kinds,
         dir: dir.map(Path::to_path_buf),
         uncertain_writes: HashSet::new(),
     };
@@ -124,7 +115,13 @@ pub fn load_in(
     };
     dataflow::check(&mut v, &graph, &parsed);
     images::check(&mut v, &graph, &samples);
-    cull_lists::check(&mut v, &graph);
+    for pass in &graph.passes {
+        let Some(kind) = kinds.get(&pass.kind) else { continue };
+        let check = KindCheck { graph: &graph, pass, samples: &samples, resolved: &[] };
+        for (pos, message) in kind.kind.validate(&check) {
+            v.err(pos, message);
+        }
+    }
     v.sink.into_result(graph)
 }
 
@@ -165,7 +162,7 @@ pub(crate) struct Validator<'a> {
     pub loc: Locator,
     pub sink: Sink,
     pub env: &'a dyn Environment,
-    pub kinds: &'a [PassKindInfo],
+    pub kinds: &'a KindRegistry,
     pub dir: Option<PathBuf>,
     /// Resources written by passes whose bindings could not all be resolved: "nothing writes
     /// it" errors would only cascade.

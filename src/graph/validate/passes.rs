@@ -55,9 +55,9 @@ impl Validator<'_> {
                 let first = first.pos;
                 self.err(name_pos, format!("duplicate pass name '{}' (first declared at {first})", decl.name));
             }
-            let kind = self.kinds.iter().find(|k| k.name == decl.kind);
+            let kind = self.kinds.info(&decl.kind);
             if kind.is_none() {
-                let mut known: Vec<&str> = self.kinds.iter().map(|k| k.name).collect();
+                let mut known: Vec<&str> = self.kinds.infos().map(|k| k.name).collect();
                 known.sort_unstable();
                 self.err(
                     self.pos(&[path[0], path[1], Seg::Field("kind")]),

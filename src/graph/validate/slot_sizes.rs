@@ -1,14 +1,13 @@
-//! Resources too small for the slot they are bound to, for the output size and scene a graph is
-//! compiled for: buffers (a draw command per draw group, an id per instance, 64-byte counters...)
-//! and the Hi-Z pyramid (half its depth's size). Reported at
-//! the binding, instead of by the pass when it is built or first recorded.
+//! Buffers too small for the slot they are bound to, for the output size and scene a graph is
+//! compiled for (a draw command per draw group, an id per instance, 64-byte counters...), as each
+//! slot declares ([`MinBytes`]). Reported at the binding, instead of by the pass when it is built
+//! or first recorded. What a kind derives beyond that (a pyramid's size from its depth's) it
+//! checks itself ([`crate::graph::PassKind::check_sizes`]).
 
 use super::super::compile::resolve::Resolved;
 use super::super::error::Pos;
 use super::super::kinds::MinBytes;
-use super::super::validated::{Pass, PassBinding, ValidatedGraph};
-use crate::passes::hiz_build::pyramid_size;
-use ash::vk;
+use super::super::validated::{PassBinding, ValidatedGraph};
 
 /// `(position, message)` for every binding of a kept pass (`keep[p]`) whose resource is smaller
 /// than its slot takes; `resolved[r]` is resource `r` as compiled.
@@ -21,7 +20,7 @@ pub(crate) fn slot_size_errors(
 ) -> Vec<(Pos, String)> {
     let mut out = Vec::new();
     for (_, pass) in graph.passes.iter().enumerate().filter(|(p, _)| keep.get(*p).copied().unwrap_or(true)) {
-        let Some(kind) = graph.kinds.iter().find(|k| k.name == pass.kind) else { continue };
+        let Some(kind) = graph.kinds.info(&pass.kind) else { continue };
         for binding in &pass.bindings {
             let Some(Resolved::Buffer(bytes)) = resolved.get(binding.resource) else { continue };
             let min = kind.slot(&binding.slot).map_or(MinBytes::Any, |s| s.min_bytes);
@@ -32,9 +31,6 @@ pub(crate) fn slot_size_errors(
                 let message = too_small(&pass.name, binding, resource, *bytes, min, need, &scene);
                 out.push((binding.pos, message));
             }
-        }
-        if pass.kind == "hiz_build" {
-            out.extend(pyramid_error(graph, pass, resolved));
         }
     }
     out
@@ -60,29 +56,4 @@ pub(crate) fn too_small(
         "pass '{pass}' {dir} \"{}\": '{resource}' holds {bytes} bytes; the slot takes {rule}{need} bytes{scene}",
         binding.written_slot
     )
-}
-
-/// The pyramid of a `hiz_build` pass must be half its depth's size: level 0 of the chain is not
-/// stored.
-fn pyramid_error(graph: &ValidatedGraph, pass: &Pass, resolved: &[Resolved]) -> Option<(Pos, String)> {
-    let image = |slot: &str| {
-        let b = pass.bindings.iter().find(|b| b.slot == slot)?;
-        match resolved.get(b.resource)? {
-            Resolved::Image { extent, .. } => Some((b, *extent)),
-            Resolved::Buffer(_) => None,
-        }
-    };
-    let ((_, depth), (hiz_binding, hiz)) = (image("depth")?, image("hiz")?);
-    let want: vk::Extent2D = pyramid_size(depth);
-    if (hiz.width, hiz.height) == (want.width, want.height) {
-        // (A pyramid of this size cannot have more mips than the depth has levels below its own.)
-        return None;
-    }
-    let name = &graph.resources[hiz_binding.resource].name;
-    let message = format!(
-        "pass '{}': the pyramid '{name}' is {}x{}; it must be {}x{}, half the depth's size {}x{} (size: \
-         Fixed(\"max(1, width / 2)\", \"max(1, height / 2)\") for a full-screen depth)",
-        pass.name, hiz.width, hiz.height, want.width, want.height, depth.width, depth.height
-    );
-    Some((hiz_binding.pos, message))
 }

@@ -9,7 +9,7 @@
 //! set as dynamic state.
 
 use crate::gpu::Buffer;
-use crate::render::gpu_types::DrawIndexedIndirect;
+use crate::passes::shared::gpu_types::DrawIndexedIndirect;
 use crate::scene::{Instance, Scene};
 use ash::vk;
 
@@ -158,7 +158,7 @@ mod tests {
 
     #[test]
     fn draw_lists_group_by_face_cull_then_mesh() {
-        use crate::render::scene_buffers::DrawList;
+        use crate::passes::shared::scene_buffers::DrawList;
         use crate::scene::{Instance, Material, MeshData, Transform};
         use glam::{DVec3, Mat3, Vec3};
         let mut scene = Scene::default();

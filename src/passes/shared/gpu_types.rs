@@ -112,7 +112,7 @@ impl GpuPointLight {
 pub struct GpuCullView {
     /// World-to-view rotation, column-major.
     pub rotation: [f32; 9],
-    /// NDC scale (see [`crate::oracle::cull_math::CullView::scale`]).
+    /// NDC scale (see [`crate::cull::math::CullView::scale`]).
     pub scale: [f32; 2],
     /// Near-plane distance.
     pub near: f32,
@@ -127,7 +127,7 @@ pub struct GpuCullView {
 impl GpuCullView {
     /// The culling view of `camera` on a `width` x `height` target.
     pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
-        let v = crate::oracle::cull_math::CullView::from_camera(camera, width, height);
+        let v = crate::cull::math::CullView::from_camera(camera, width, height);
         Self {
             rotation: v.rotation.to_cols_array(),
             scale: v.scale.to_array(),

@@ -1,0 +1,127 @@
+//! What the built-in passes share besides their slots: the scene on the GPU, its GPU layouts,
+//! and this frame's constants, lights and GPU times ([`SceneInputs`]).
+//!
+//! The graph knows none of it: the renderer hands a [`SceneInputs`] to every frame as the graph's
+//! opaque shared data ([`crate::graph::FrameData::shared`]), and a pass reads it through
+//! [`SceneInputs::of`]. An engine's own pass kinds read it the same way, for example to draw
+//! the instances' bounds.
+
+pub mod cull_data;
+pub mod face_cull;
+pub mod gpu_types;
+pub mod scene_buffers;
+
+use crate::gpu::{Buffer, BufferDesc, GpuContext, MemoryLocation};
+use crate::graph::{FrameInputs, PassContext, FRAMES_IN_FLIGHT};
+use crate::passes::overlay::{GpuPassTimes, PASS_TIMES_BYTES};
+use crate::scene::Scene;
+use ash::vk;
+use gpu_types::{FrameConstants, GpuPointLight};
+pub use scene_buffers::GpuScene;
+
+/// Host-visible data of one frame in flight.
+pub struct FrameSlot {
+    /// This frame's [`FrameConstants`].
+    pub constants: Buffer,
+    /// This frame's point lights ([`GpuPointLight`] each).
+    pub lights: Buffer,
+    /// The newest completed frame's GPU times ([`GpuPassTimes`]), for an overlay pass.
+    pub pass_times: Buffer,
+}
+
+/// The scene on the GPU and the per-frame buffers of each frame in flight; the renderer picks
+/// the frame's slot before recording it.
+pub struct SceneInputs {
+    /// The scene on the GPU (pools, instances, materials, the unculled draw list).
+    pub scene: GpuScene,
+    frames: Vec<FrameSlot>,
+    current: usize,
+}
+
+impl SceneInputs {
+    /// Wraps `scene`, with per-frame buffers for up to `lights` point lights.
+    pub fn new(ctx: &GpuContext, scene: GpuScene, lights: usize) -> crate::Result<Self> {
+        let light_bytes = (lights.max(1) * std::mem::size_of::<GpuPointLight>()) as u64;
+        let frames = (0..FRAMES_IN_FLIGHT)
+            .map(|i| -> crate::Result<FrameSlot> {
+                let host = |name: &str, size| {
+                    Buffer::new(
+                        ctx,
+                        &BufferDesc {
+                            name,
+                            size,
+                            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                            location: MemoryLocation::CpuToGpu,
+                        },
+                    )
+                };
+                let mut pass_times = host(&format!("pass times {i}"), PASS_TIMES_BYTES)?;
+                pass_times.write_bytes(0, bytemuck::bytes_of(&GpuPassTimes::none()))?;
+                Ok(FrameSlot {
+                    constants: host(&format!("frame constants {i}"), std::mem::size_of::<FrameConstants>() as u64)?,
+                    lights: host(&format!("lights {i}"), light_bytes)?,
+                    pass_times,
+                })
+            })
+            .collect::<crate::Result<Vec<_>>>()?;
+        Ok(Self { scene, frames, current: 0 })
+    }
+
+    /// The shared inputs of the frame `rec` records, or an error naming the pass when the host
+    /// gave the graph something else (a graph run by another host than cullgraph's renderer).
+    pub fn of<'a>(rec: &PassContext<'a>) -> crate::Result<&'a SceneInputs> {
+        rec.frame.shared.downcast_ref::<SceneInputs>().ok_or_else(|| {
+            crate::Error::Invalid(format!(
+                "pass '{}' reads the scene, but the frame's shared data is not cullgraph's SceneInputs",
+                rec.slots.pass_name()
+            ))
+        })
+    }
+
+    /// Makes frame `frame`'s slot the current one.
+    pub(crate) fn select(&mut self, frame: u64) {
+        self.current = (frame % FRAMES_IN_FLIGHT as u64) as usize;
+    }
+
+    /// The slot of frame `frame` (for writing it before the frame is recorded, or reading what
+    /// it held once the frame has completed).
+    pub(crate) fn slot_mut(&mut self, frame: u64) -> &mut FrameSlot {
+        &mut self.frames[(frame % FRAMES_IN_FLIGHT as u64) as usize]
+    }
+
+    /// The slot of frame `frame`.
+    pub(crate) fn slot(&self, frame: u64) -> &FrameSlot {
+        &self.frames[(frame % FRAMES_IN_FLIGHT as u64) as usize]
+    }
+
+    /// This frame's constants ([`FrameConstants`]).
+    pub fn constants(&self) -> &Buffer {
+        &self.frames[self.current].constants
+    }
+
+    /// This frame's point lights.
+    pub fn lights(&self) -> &Buffer {
+        &self.frames[self.current].lights
+    }
+
+    /// The newest completed frame's GPU times ([`GpuPassTimes`]).
+    pub fn pass_times(&self) -> &Buffer {
+        &self.frames[self.current].pass_times
+    }
+}
+
+/// What a graph is compiled for with `scene` at `width` x `height`: the output size and the
+/// scene's quantities. Meshes count once more per further face cull their instances need, so
+/// that they bound the draw groups ([`face_cull::command_capacity`]).
+pub fn frame_inputs(scene: &Scene, width: u32, height: u32) -> FrameInputs {
+    FrameInputs {
+        width,
+        height,
+        instances: scene.instances.len() as u64,
+        meshes: face_cull::command_capacity(scene) as u64,
+        lights: scene.lights.len() as u64,
+        materials: scene.materials.len() as u64,
+        triangles: scene.instanced_triangles(),
+        params: Vec::new(),
+    }
+}
