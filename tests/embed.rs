@@ -188,80 +188,17 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
 
 #[test]
 fn the_graph_lights_straight_into_an_image_the_host_owns() {
-    let (w, h) = (80, 48);
-    let reference = {
-        let gpu = GpuTest::new();
-        let mut r = Renderer::new(&gpu, &gpu.shaders(), boxes_scene(), RenderSettings::new(w, h)).unwrap();
-        r.render_to_image(&boxes_camera()).unwrap().1
-    };
-    let host = Host::new();
-    let allocator = host.allocator();
-    // The engine's own image and view, made with its own allocator.
-    let d = host.device.clone();
-    let target = HostOwnedImage::new(
-        &d,
-        &allocator,
-        vk::Format::R8G8B8A8_UNORM,
-        (w, h, 1),
-        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-    );
-    {
-        let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
-        let mut renderer = example_renderer(&ctx, "host_target", w, h);
-        let readback = readback_buffer(&ctx, "host readback", (w * h * 4) as u64);
-        // Missing imports are an error before anything is recorded.
-        ctx.submit_and_wait(|cmd| {
-            let err = renderer.record(cmd, &boxes_camera()).unwrap_err().to_string();
-            assert!(err.contains("imported resource 'color' was not provided"), "{err}");
-            cullgraph::gpu::GpuResult::Ok(())
-        })
-        .unwrap();
-        unsafe {
-            let pool = d
-                .create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(host.family), None)
-                .unwrap();
-            let cmd = d
-                .allocate_command_buffers(
-                    &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
-                )
-                .unwrap()[0];
-            d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
-            let imports = Imports::new().image("color", target.host, Access::NONE, Access::TRANSFER_READ);
-            renderer.record_with_imports(cmd, &boxes_camera(), &imports).unwrap();
-            // The engine copies its image, which cullgraph left in TRANSFER_SRC_OPTIMAL.
-            let region = vk::BufferImageCopy::default()
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
-                )
-                .image_extent(vk::Extent3D { width: w, height: h, depth: 1 });
-            d.cmd_copy_image_to_buffer(
-                cmd,
-                target.image,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                readback.handle(),
-                &[region],
-            );
-            let to_host = vk::MemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
-                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-                .dst_access_mask(vk::AccessFlags2::HOST_READ);
-            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[to_host]));
-            d.end_command_buffer(cmd).unwrap();
-            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
-            d.queue_submit(host.queue, &[vk::SubmitInfo::default().command_buffers(&[cmd])], fence).unwrap();
-            d.wait_for_fences(&[fence], true, u64::MAX).unwrap();
-            d.destroy_fence(fence, None);
-            d.destroy_command_pool(pool, None);
-        }
-        assert_eq!(readback.read_bytes().unwrap(), reference.as_raw().as_slice());
-    }
-    target.destroy(&d, &allocator);
-    host.shut_down_clean(allocator);
+    lights_into_a_host_image(false);
 }
 
 #[test]
 fn a_failed_record_consumes_nothing_so_the_host_can_discard_its_command_buffer() {
+    lights_into_a_host_image(true);
+}
+
+/// The graph lights into the host's image; a first record without the import fails, and its
+/// command buffer is either submitted as it is or (`discard_failed`) thrown away unsubmitted.
+fn lights_into_a_host_image(discard_failed: bool) {
     let (w, h) = (80, 48);
     let reference = {
         let gpu = GpuTest::new();
@@ -283,6 +220,15 @@ fn a_failed_record_consumes_nothing_so_the_host_can_discard_its_command_buffer()
         let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
         let mut renderer = example_renderer(&ctx, "host_target", w, h);
         let readback = readback_buffer(&ctx, "host readback", (w * h * 4) as u64);
+        if !discard_failed {
+            // Missing imports are an error before anything is recorded.
+            ctx.submit_and_wait(|cmd| {
+                let err = renderer.record(cmd, &boxes_camera()).unwrap_err().to_string();
+                assert!(err.contains("imported resource 'color' was not provided"), "{err}");
+                cullgraph::gpu::GpuResult::Ok(())
+            })
+            .unwrap();
+        }
         unsafe {
             let pool = d
                 .create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(host.family), None)
@@ -292,18 +238,20 @@ fn a_failed_record_consumes_nothing_so_the_host_can_discard_its_command_buffer()
                     &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
                 )
                 .unwrap()[0];
-            // The first record fails (an import is missing) into a command buffer the host then
-            // throws away unsubmitted: the scene upload it would have carried is not lost.
-            let discarded = d
-                .allocate_command_buffers(
-                    &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
-                )
-                .unwrap()[0];
-            d.begin_command_buffer(discarded, &vk::CommandBufferBeginInfo::default()).unwrap();
-            let err = renderer.record(discarded, &boxes_camera()).unwrap_err().to_string();
-            assert!(err.contains("imported resource 'color' was not provided"), "{err}");
-            d.end_command_buffer(discarded).unwrap();
-            d.free_command_buffers(pool, &[discarded]);
+            if discard_failed {
+                // Recording is all or nothing: the scene upload this command buffer would have
+                // carried is not lost with it.
+                let discarded = d
+                    .allocate_command_buffers(
+                        &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
+                    )
+                    .unwrap()[0];
+                d.begin_command_buffer(discarded, &vk::CommandBufferBeginInfo::default()).unwrap();
+                let err = renderer.record(discarded, &boxes_camera()).unwrap_err().to_string();
+                assert!(err.contains("imported resource 'color' was not provided"), "{err}");
+                d.end_command_buffer(discarded).unwrap();
+                d.free_command_buffers(pool, &[discarded]);
+            }
             d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
             let imports = Imports::new().image("color", target.host, Access::NONE, Access::TRANSFER_READ);
             assert_eq!(renderer.record_with_imports(cmd, &boxes_camera(), &imports).unwrap(), 0);
