@@ -10,7 +10,7 @@
 //! `cargo run --release --example custom_pass -- [builtin:city|PATH.glb] [out.png]`
 
 use ash::vk;
-use cullgraph::gpu::{Bind, GpuContext, GraphicsDesc, Pipeline, ShaderCompiler, StencilRule};
+use cullgraph::gpu::{cmd_set_full_viewport, Bind, GpuContext, GraphicsDesc, Pipeline, ShaderCompiler, StencilRule};
 use cullgraph::graph::{
     FormatRule, MinBytes, NodeSetup, PassContext, PassKind, PassKindInfo, PassNode, ResolvedKind, SettingDecl,
     SettingDefault, SlotDecl, Stages, Usage,
@@ -125,14 +125,6 @@ impl PassNode for InstanceBoundsPass {
             .load_op(vk::AttachmentLoadOp::LOAD)
             .store_op(vk::AttachmentStoreOp::STORE)];
         let rendering = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&color);
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: extent.width as f32,
-            height: extent.height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
         let mut binds =
             vec![Bind::Buffer(0, inputs.constants().handle()), Bind::Buffer(1, inputs.scene.cull_records.handle())];
         if self.visibility {
@@ -143,8 +135,7 @@ impl PassNode for InstanceBoundsPass {
         // the scene alive until the frame has executed.
         unsafe {
             device.cmd_begin_rendering(rec.cmd, &rendering);
-            device.cmd_set_viewport(rec.cmd, 0, &[viewport]);
-            device.cmd_set_scissor(rec.cmd, 0, &[area]);
+            cmd_set_full_viewport(device, rec.cmd, extent);
             device.cmd_set_cull_mode(rec.cmd, vk::CullModeFlags::NONE);
             self.pipeline.bind(rec.cmd);
             self.pipeline.push_bindings(rec.cmd, &binds);

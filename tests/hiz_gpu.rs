@@ -15,6 +15,7 @@ use ash::vk;
 use common::{boxes_camera, boxes_scene, readback_buffer, GpuTest};
 use cullgraph::cull::hiz::{level_offset, level_size, stored_mip_count, stored_size, HiZPyramid};
 use cullgraph::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
+use cullgraph::gpu::cmd_set_full_viewport;
 use cullgraph::gpu::{Access, Bind, Buffer, GraphicsDesc, Image, ImageDesc, Pipeline, Sampler, ShaderCompiler};
 use cullgraph::passes::hiz_build::{HizBuildPass, HizMethod, HIZ_FORMAT};
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
@@ -247,20 +248,11 @@ impl Tools {
             _ => (fullscreen, 3),
         };
         let push = FillPush { size: [e.width, e.height], pattern: pattern as u32, seed, samples };
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: e.width as f32,
-            height: e.height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
         // SAFETY: cmd recording; the image is in DEPTH_ATTACHMENT_OPTIMAL with attachment usage.
         unsafe {
             device.cmd_begin_rendering(cmd, &rendering);
-            device.cmd_set_viewport(cmd, 0, &[viewport]);
+            cmd_set_full_viewport(device, cmd, e);
             device.cmd_set_cull_mode(cmd, vk::CullModeFlags::NONE);
-            device.cmd_set_scissor(cmd, 0, &[area]);
             pipeline.bind(cmd);
             pipeline.push_constants(cmd, &push);
             device.cmd_draw(cmd, vertices, 1, 0, 0);

@@ -19,6 +19,25 @@ pub enum Bind {
     Sampled(u32, vk::ImageView, vk::Sampler, vk::ImageLayout),
 }
 
+/// Sets the dynamic viewport (depth range 0..1) and scissor of a [`Pipeline::graphics`] draw to the
+/// whole of `extent`.
+pub fn cmd_set_full_viewport(device: &ash::Device, cmd: vk::CommandBuffer, extent: vk::Extent2D) {
+    let viewport = vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: extent.width as f32,
+        height: extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    };
+    let scissor = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+    // SAFETY: the caller's command buffer is recording.
+    unsafe {
+        device.cmd_set_viewport(cmd, 0, &[viewport]);
+        device.cmd_set_scissor(cmd, 0, &[scissor]);
+    }
+}
+
 /// Fixed-function state of a graphics pipeline (dynamic rendering; viewport, scissor and cull
 /// mode are dynamic state, counter-clockwise is the front face).
 #[derive(Clone, Debug)]

@@ -4,6 +4,7 @@
 //! all of them (no false negatives), and what it draws beyond them are false positives.
 
 use crate::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
+use crate::gpu::cmd_set_full_viewport;
 use crate::gpu::{
     Access, Bind, Buffer, BufferDesc, GpuContext, GraphicsDesc, Image, ImageDesc, MemoryLocation, Pipeline, Sampler,
     ShaderCompiler,
@@ -117,14 +118,6 @@ impl VisibilityOracle {
                 .load_op(vk::AttachmentLoadOp::CLEAR)
                 .store_op(vk::AttachmentStoreOp::DONT_CARE)
                 .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } });
-            let viewport = vk::Viewport {
-                x: 0.0,
-                y: 0.0,
-                width: self.extent.width as f32,
-                height: self.extent.height as f32,
-                min_depth: 0.0,
-                max_depth: 1.0,
-            };
             // SAFETY: cmd recording; every handle outlives the submission (we wait below).
             unsafe {
                 device.cmd_begin_rendering(
@@ -135,8 +128,7 @@ impl VisibilityOracle {
                         .color_attachments(&color)
                         .depth_attachment(&depth),
                 );
-                device.cmd_set_viewport(cmd, 0, &[viewport]);
-                device.cmd_set_scissor(cmd, 0, &[area]);
+                cmd_set_full_viewport(device, cmd, self.extent);
                 self.draw.bind(cmd);
                 self.draw.push_bindings(
                     cmd,

@@ -18,6 +18,7 @@ use super::slots::{
     NORMAL_SLOT_DOC, VISIBILITY_FORMATS,
 };
 use crate::gpu::barrier::layout_for_format;
+use crate::gpu::cmd_set_full_viewport;
 use crate::gpu::{Bind, Buffer, GpuContext, GraphicsDesc, Image, Pipeline, ShaderCompiler, StencilRule};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind};
@@ -196,19 +197,10 @@ pub fn record_geometry(
     if has_stencil {
         rendering = rendering.stencil_attachment(&depth_info);
     }
-    let viewport = vk::Viewport {
-        x: 0.0,
-        y: 0.0,
-        width: extent.width as f32,
-        height: extent.height as f32,
-        min_depth: 0.0,
-        max_depth: 1.0,
-    };
     // SAFETY: cmd is recording; every handle is alive for the command buffer's execution.
     unsafe {
         device.cmd_begin_rendering(cmd, &rendering);
-        device.cmd_set_viewport(cmd, 0, &[viewport]);
-        device.cmd_set_scissor(cmd, 0, &[area]);
+        cmd_set_full_viewport(device, cmd, extent);
         pipeline.bind(cmd);
         pipeline.push_constant_bytes(cmd, push);
         device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
