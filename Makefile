@@ -17,11 +17,13 @@ demo: deps
 	$(CARGO) run --release -- render --scene builtin:city --size 1280x720 --frames 3 --out out/demo.png --stats out/demo.json
 
 test: deps
+	CARGO=$(CARGO) ./scripts/check-lean-lib
 	$(CARGO) test --all-targets
 
 lint:
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --all-targets -- -D warnings
+	$(CARGO) clippy --lib --no-default-features -- -D warnings
 
 fmt:
 	$(CARGO) fmt --all

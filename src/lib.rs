@@ -10,14 +10,21 @@
 //! - [`cull`], [`scene`], [`stats`]: the culling math on the CPU, the scene model, plain figures;
 //! - [`passes`]: the built-in pass kinds ([`passes::builtin_kinds`]);
 //! - [`render`]: the renderer, headless or recording into an engine's command buffer;
-//! - [`oracle`] and [`bench`](mod@bench): verification (exact visibility, image metrics) and benchmarks.
+//! - `oracle` and `bench`: verification (exact visibility, image metrics) and benchmarks.
+//!
+//! Cargo features: `cli` (the default: the `cullgraph` command line, `bench`, and all below),
+//! `verify` (`oracle`, `Renderer::enable_verification`, reference renders) and `images` (frames
+//! as `image::RgbaImage`, PNG output). An engine depends with `default-features = false` and
+//! links none of the command line's crates.
 #![warn(missing_docs)]
 
+#[cfg(feature = "cli")]
 pub mod bench;
 pub mod cull;
 pub mod error;
 pub mod gpu;
 pub mod graph;
+#[cfg(feature = "verify")]
 pub mod oracle;
 pub mod passes;
 pub mod render;

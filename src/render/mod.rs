@@ -3,13 +3,16 @@
 
 pub mod frame_pipeline;
 pub mod graph_spec;
+#[cfg(feature = "images")]
 pub mod output;
 pub mod pool_adapt;
+#[cfg(feature = "verify")]
 pub mod reference;
 pub mod renderer;
 
 pub use crate::graph::FRAMES_IN_FLIGHT;
 pub use frame_pipeline::FramePipeline;
 pub use graph_spec::GraphSpec;
+#[cfg(feature = "verify")]
 pub use reference::{reference_error, render_reference, DEFAULT_REFERENCE_SCALE};
 pub use renderer::{DrawnInstances, RenderSettings, Renderer};

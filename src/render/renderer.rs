@@ -5,6 +5,7 @@
 //! only provides what all passes share: scene buffers, per-frame constants and lights.
 
 use super::graph_spec::GraphSpec;
+#[cfg(feature = "images")]
 use super::output::{rgba_from_bytes, RgbaImage};
 use super::pool_adapt::PoolAdapter;
 use crate::error::{Error, Result};
@@ -12,14 +13,18 @@ use crate::gpu::transfer::record_image_to_buffer;
 use crate::gpu::{
     Access, Buffer, BufferDesc, GpuContext, Image, MemoryLocation, PassTiming, ShaderCompiler, UploadBatch,
 };
-use crate::graph::{CompiledGraph, FrameData, GraphRuntime, Imports, ResolvedKind, FRAMES_IN_FLIGHT};
+use crate::graph::{CompiledGraph, FrameData, GraphRuntime, Imports, FRAMES_IN_FLIGHT};
+#[cfg(feature = "verify")]
 use crate::oracle::visibility::VisibilityOracle;
 use crate::passes::overlay::GpuPassTimes;
 use crate::passes::shared::gpu_types::{DrawIndexedIndirect, FrameConstants, GpuPointLight};
 use crate::passes::shared::{GpuScene, SceneInputs};
 use crate::scene::{Camera, Scene};
-use crate::stats::{CullCounters, CullPassStats, FrameStats, GbufferCounters, GbufferPassStats, VerifyStats};
+#[cfg(feature = "verify")]
+use crate::stats::VerifyStats;
+use crate::stats::{CullCounters, CullPassStats, FrameStats, GbufferCounters, GbufferPassStats};
 use ash::vk;
+#[cfg(feature = "verify")]
 use std::collections::BTreeSet;
 use std::time::Instant;
 
@@ -66,8 +71,10 @@ pub struct Renderer {
     /// The camera of the last recorded frame.
     previous_camera: Option<Camera>,
     /// Exact-visibility oracle, when verification is on.
+    #[cfg(feature = "verify")]
     oracle: Option<VisibilityOracle>,
     /// What the oracle saw in the last verified frame.
+    #[cfg(feature = "verify")]
     exactly_visible: BTreeSet<u32>,
     /// The graph being run, for re-planning it with another pool size.
     spec: GraphSpec,
@@ -110,7 +117,9 @@ impl Renderer {
             retiring_uploads: Vec::new(),
             settings,
             previous_camera: None,
+            #[cfg(feature = "verify")]
             oracle: None,
+            #[cfg(feature = "verify")]
             exactly_visible: BTreeSet::new(),
             spec: spec.clone(),
             pool: None,
@@ -181,6 +190,7 @@ impl Renderer {
     /// Checks every headless frame against exact visibility (an unculled instance-id render
     /// at the frame's sample count): [`FrameStats::verify`] then reports false negatives and
     /// false positives. Costs an extra render and readbacks per frame.
+    #[cfg(feature = "verify")]
     pub fn enable_verification(&mut self, shaders: &ShaderCompiler) -> Result<()> {
         let samples = depth_samples(self.runtime.plan());
         self.oracle =
@@ -210,6 +220,7 @@ impl Renderer {
 
     /// The instances seen by some sample of the last frame rendered with verification on (the
     /// unculled instance-id render; empty before).
+    #[cfg(feature = "verify")]
     pub fn exactly_visible(&self) -> &BTreeSet<u32> {
         &self.exactly_visible
     }
@@ -297,8 +308,16 @@ impl Renderer {
         self.render_inner(camera, None)
     }
 
-    /// Renders one frame headlessly and reads the graph's first output back.
+    /// Renders one frame headlessly and reads the graph's first output back as an image.
+    #[cfg(feature = "images")]
     pub fn render_to_image(&mut self, camera: &Camera) -> Result<(FrameStats, RgbaImage)> {
+        let (stats, bytes) = self.render_to_rgba8(camera)?;
+        Ok((stats, rgba_from_bytes(self.settings.width, self.settings.height, bytes)?))
+    }
+
+    /// Renders one frame headlessly and reads the graph's first output (an `R8G8B8A8_UNORM`
+    /// image of the output size) back: tightly packed rows, top to bottom.
+    pub fn render_to_rgba8(&mut self, camera: &Camera) -> Result<(FrameStats, Vec<u8>)> {
         let (w, h) = (self.settings.width, self.settings.height);
         let readback = Buffer::new(
             &self.ctx,
@@ -310,8 +329,7 @@ impl Renderer {
             },
         )?;
         let stats = self.render_inner(camera, Some(&readback))?;
-        let image = rgba_from_bytes(w, h, readback.read_bytes()?.to_vec())?;
-        Ok((stats, image))
+        Ok((stats, readback.read_bytes()?.to_vec()))
     }
 
     fn render_inner(&mut self, camera: &Camera, readback: Option<&Buffer>) -> Result<FrameStats> {
@@ -341,6 +359,7 @@ impl Renderer {
         })?;
         let mut stats = self.completed_stats(frame)?;
         stats.cpu_record_ms = record_ms;
+        #[cfg(feature = "verify")]
         if self.oracle.is_some() {
             let (verify, visible) = self.verify(frame)?;
             stats.verify = Some(verify);
@@ -351,6 +370,7 @@ impl Renderer {
 
     /// Compares what `frame` (just completed) drew with exact visibility; also returns the
     /// exactly visible instances.
+    #[cfg(feature = "verify")]
     fn verify(&self, frame: u64) -> Result<(VerifyStats, BTreeSet<u32>)> {
         let Some(oracle) = &self.oracle else { return Ok(Default::default()) };
         let constants = &self.inputs.slot(frame).constants;
@@ -458,6 +478,7 @@ impl Renderer {
 }
 
 /// The slots through which a draw pass reads its draw list; `--verify` copies them to the host.
+#[cfg(feature = "verify")]
 const DRAW_LIST_SLOTS: [&str; 3] = ["draw_commands", "draw_count", "draw_instance_ids"];
 
 /// What one draw pass drew.
@@ -493,12 +514,15 @@ fn whole<T: bytemuck::Pod>(bytes: &[u8]) -> Vec<T> {
     bytes.chunks_exact(std::mem::size_of::<T>()).map(bytemuck::pod_read_unaligned).collect()
 }
 
+#[cfg(feature = "verify")]
 /// Samples of the graph's first depth image (what the oracle must match); 1 if none.
 fn depth_samples(plan: &CompiledGraph) -> vk::SampleCountFlags {
     plan.resources
         .iter()
         .find_map(|r| match r.kind {
-            ResolvedKind::Image { format, samples, .. } if crate::graph::formats::is_depth(format) => Some(samples),
+            crate::graph::ResolvedKind::Image { format, samples, .. } if crate::graph::formats::is_depth(format) => {
+                Some(samples)
+            }
             _ => None,
         })
         .unwrap_or(vk::SampleCountFlags::TYPE_1)

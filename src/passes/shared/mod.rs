@@ -89,8 +89,8 @@ impl SceneInputs {
         &mut self.frames[(frame % FRAMES_IN_FLIGHT as u64) as usize]
     }
 
-    /// The slot of frame `frame`.
-    pub(crate) fn slot(&self, frame: u64) -> &FrameSlot {
+    /// The slot of frame `frame` (what it held once that frame has completed).
+    pub fn slot(&self, frame: u64) -> &FrameSlot {
         &self.frames[(frame % FRAMES_IN_FLIGHT as u64) as usize]
     }
 

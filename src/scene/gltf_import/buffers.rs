@@ -91,10 +91,15 @@ pub(super) fn load_buffers(
             Source::Bin => blob
                 .take()
                 .ok_or_else(|| format!("buffer {i} refers to the GLB binary chunk, which the file does not have"))?,
-            Source::Uri(uri) if uri.starts_with("data:") || uri.starts_with("file:") => {
-                gltf::buffer::Data::from_source(buffer.source(), Some(base))
-                    .map(|d| d.0)
-                    .map_err(|e| format!("buffer {i} ({}): {}", shorten(uri), describe_error(e)))?
+            Source::Uri(uri) if uri.starts_with("data:") => {
+                decode_data_uri(uri).map_err(|e| format!("buffer {i} ({}): {e}", shorten(uri)))?
+            }
+            Source::Uri(uri) if uri.starts_with("file:") => {
+                let rest = uri.strip_prefix("file://").unwrap_or(&uri["file:".len()..]);
+                let relative = percent_decode(rest).ok_or_else(|| format!("buffer {i}: malformed URI '{uri}'"))?;
+                let path = base.join(&relative);
+                std::fs::read(&path)
+                    .map_err(|e| format!("buffer {i}: cannot read '{uri}' ({}): {e}", path.display()))?
             }
             Source::Uri(uri) if uri.contains(':') => {
                 return Err(format!("buffer {i}: unsupported URI scheme in '{}'", shorten(uri)))
@@ -129,8 +134,17 @@ pub(super) fn describe_error(error: gltf::Error) -> String {
         gltf::Error::Deserialize(e) => format!("not a valid glTF 2.0 document: {e}"),
         gltf::Error::Binary(e) => format!("not a valid GLB container: {e}"),
         gltf::Error::Io(e) => format!("I/O error: {e}"),
-        other => other.to_string(),
     }
+}
+
+/// The bytes of a `data:[<media type>];base64,<data>` URI (glTF embeds buffers so).
+fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
+    use base64::Engine;
+    let (header, data) = uri.split_once(',').ok_or("a data URI needs a ',' before its data")?;
+    if !header.ends_with(";base64") {
+        return Err("only base64 data URIs are supported".into());
+    }
+    base64::engine::general_purpose::STANDARD.decode(data).map_err(|e| format!("invalid base64: {e}"))
 }
 
 /// Decodes `%XX` escapes of a relative URI; `None` when an escape is malformed or the result is
@@ -171,5 +185,37 @@ mod tests {
         assert_eq!(percent_decode("bad%2"), None);
         assert_eq!(percent_decode("bad%zz"), None);
         assert_eq!(percent_decode("%FF"), None);
+    }
+}
+
+#[cfg(test)]
+mod uri_tests {
+    use super::*;
+
+    fn document(uri: &str, length: usize) -> Document {
+        let json =
+            format!(r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"byteLength": {length}, "uri": "{uri}"}}]}}"#);
+        Gltf::from_slice(json.as_bytes()).unwrap().document
+    }
+
+    #[test]
+    fn data_uris_decode_base64() {
+        let doc = document("data:application/octet-stream;base64,AQID", 3);
+        assert_eq!(load_buffers(&doc, Path::new("."), None).unwrap(), vec![vec![1u8, 2, 3]]);
+        let err = load_buffers(&document("data:application/octet-stream;base64,A*ID", 3), Path::new("."), None);
+        assert!(err.unwrap_err().contains("invalid base64"));
+        assert!(decode_data_uri("data:text/plain,abc").unwrap_err().contains("base64"));
+        assert!(decode_data_uri("data:;base64").unwrap_err().contains("','"));
+    }
+
+    #[test]
+    fn file_uris_read_relative_to_the_document() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("a b.bin"), [7u8, 8]).unwrap();
+        for uri in ["file:a%20b.bin", "file://a%20b.bin"] {
+            assert_eq!(load_buffers(&document(uri, 2), dir.path(), None).unwrap(), vec![vec![7u8, 8]], "{uri}");
+        }
+        let short = load_buffers(&document("file:a%20b.bin", 3), dir.path(), None).unwrap_err();
+        assert!(short.contains("byteLength 3"), "{short}");
     }
 }
