@@ -98,7 +98,8 @@ impl InstanceBoundsPass {
                 topology: vk::PrimitiveTopology::LINE_LIST,
             },
         )?;
-        let show = SHOW.iter().position(|w| *w == pass.choice_setting("show", SHOW[0])).unwrap_or(0) as u32;
+        let show = pass.choice_setting("show")?;
+        let show = SHOW.iter().position(|w| *w == show).unwrap_or(0) as u32;
         Ok(Self { pipeline, visibility, show })
     }
 }

@@ -3,6 +3,32 @@
 //! GPU-driven culling and deferred rendering of huge scenes through Vulkan (`ash`), scheduled by a
 //! declarative render graph. See `README.md` for the quick start and the design notes in `docs/`.
 //!
+//! # Embedding, in short
+//!
+//! ```no_run
+//! use cullgraph::prelude::*;
+//! use cullgraph::scene::source::LoadOptions;
+//!
+//! # fn main() -> std::result::Result<(), Box<dyn std::error::Error>> {
+//! // An engine that owns the device passes its handles: GpuContext::from_host(HostHandles { .. }).
+//! let ctx = GpuContext::new(&ContextOptions::default())?;
+//! let shaders = ShaderCompiler::new(ShaderRoot::Embedded)?;
+//! let scene = "builtin:city".parse::<SceneSource>()?.load(&LoadOptions::default())?;
+//! let camera = scene.default_camera(16.0 / 9.0);
+//! let mut renderer = Renderer::new(&ctx, &shaders, scene, RenderSettings::new(1280, 720))?;
+//! # let cmd = ash::vk::CommandBuffer::null();
+//! // Every frame, into the engine's command buffer (cullgraph never submits or waits there):
+//! let frame = renderer.record(cmd, &camera)?;
+//! // Once the engine's fence says that frame has executed:
+//! let stats = renderer.completed_stats(frame)?;
+//! println!("{} of {} instances drawn", stats.drawn, stats.instances);
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! `examples/embed.rs` embeds into an engine's own device, and `examples/custom_pass.rs` adds a
+//! pass kind of the engine's own.
+//!
 //! Layers, each using only those below it (`tests/layers.rs` checks it):
 //! - [`gpu`]: Vulkan context, memory, shaders, pipelines, timestamps;
 //! - [`graph`]: the render graph (RON, validation, compiler, executor), which knows no pass kind:
@@ -27,6 +53,7 @@ pub mod graph;
 #[cfg(feature = "verify")]
 pub mod oracle;
 pub mod passes;
+pub mod prelude;
 pub mod render;
 pub mod scene;
 pub mod stats;

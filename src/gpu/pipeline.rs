@@ -340,6 +340,19 @@ impl Pipeline {
         unsafe { self.shared.push_descriptor.cmd_push_descriptor_set(cmd, self.bind_point, self.layout, 0, &writes) };
     }
 
+    /// Records a compute pass of one invocation per texel of `extent`: binds the pipeline, pushes
+    /// `binds` and the push constants `push`, and dispatches enough workgroups of the shader's
+    /// local size to cover `extent`.
+    pub fn dispatch_over(&self, cmd: vk::CommandBuffer, binds: &[Bind], push: &[u8], extent: vk::Extent2D) {
+        self.bind(cmd);
+        self.push_bindings(cmd, binds);
+        self.push_constant_bytes(cmd, push);
+        let [x, y, _] = self.interface.local_size.unwrap_or([1, 1, 1]);
+        let groups = (extent.width.div_ceil(x.max(1)).max(1), extent.height.div_ceil(y.max(1)).max(1));
+        // SAFETY: cmd recording (caller contract), with this pipeline and its bindings just set.
+        unsafe { self.shared.device.cmd_dispatch(cmd, groups.0, groups.1, 1) };
+    }
+
     /// Sets push constants from a plain-old-data value.
     pub fn push_constants<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, value: &T) {
         self.push_constant_bytes(cmd, bytemuck::bytes_of(value));

@@ -10,7 +10,7 @@
 use super::compile::resolve::Resolved;
 use super::error::Pos;
 use super::executor::PassNode;
-use super::plan::{CompiledGraph, PlannedPass};
+use super::plan::{CompiledGraph, PlannedPass, SettingValue};
 use super::usage::Usage;
 use super::validated::{Pass, PassBinding, ValidatedGraph};
 use crate::gpu::{GpuContext, ShaderCompiler};
@@ -104,6 +104,18 @@ pub enum SettingDefault {
     Choice(&'static [&'static str]),
 }
 
+impl SettingDefault {
+    /// The default as a setting's value (a choice's first word).
+    pub fn value(&self) -> SettingValue {
+        match self {
+            SettingDefault::Bool(b) => SettingValue::Bool(*b),
+            SettingDefault::Int(i) => SettingValue::Int(*i),
+            SettingDefault::Float(f) => SettingValue::Float(*f),
+            SettingDefault::Choice(c) => SettingValue::Choice(c.first().copied().unwrap_or("").to_string()),
+        }
+    }
+}
+
 /// One setting a pass kind takes (`settings: {"exposure": 0.8}` in RON).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SettingDecl {
@@ -133,6 +145,11 @@ pub struct PassKindInfo {
 }
 
 impl PassKindInfo {
+    /// Every setting at its declared default (what a pass that sets none of them gets).
+    pub fn default_settings(&self) -> std::collections::BTreeMap<String, SettingValue> {
+        self.settings.iter().map(|decl| (decl.name.to_string(), decl.default.value())).collect()
+    }
+
     /// The slot named `name` among reads and writes.
     pub fn slot(&self, name: &str) -> Option<&SlotDecl> {
         self.reads.iter().chain(&self.writes).find(|s| s.name == name)

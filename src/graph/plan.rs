@@ -99,30 +99,47 @@ pub enum SettingValue {
     Choice(String),
 }
 
+/// Typed reads of a planned pass's settings. The compiler fills every setting the kind declares
+/// (with its one declared default where the graph gives none), so a read fails only for a setting
+/// the kind does not declare as that type: a mistake of the kind's code, named in the error.
 impl PlannedPass {
-    /// The real-valued setting `name` (a whole number counts), or `default` when it is absent or
-    /// of another type (validation has already checked types against the kind).
-    pub fn float_setting(&self, name: &str, default: f64) -> f64 {
+    fn undeclared(&self, name: &str, ty: &str) -> crate::Error {
+        crate::Error::Invalid(format!(
+            "pass '{}' ({}): no {ty} setting '{name}' (its kind does not declare one)",
+            self.name, self.kind
+        ))
+    }
+
+    /// The real-valued setting `name` (a whole number counts).
+    pub fn float_setting(&self, name: &str) -> crate::Result<f64> {
         match self.settings.get(name) {
-            Some(SettingValue::Float(f)) => *f,
-            Some(SettingValue::Int(i)) => *i as f64,
-            _ => default,
+            Some(SettingValue::Float(f)) => Ok(*f),
+            Some(SettingValue::Int(i)) => Ok(*i as f64),
+            _ => Err(self.undeclared(name, "real")),
         }
     }
 
-    /// The word chosen for setting `name`, or `default`.
-    pub fn choice_setting<'a>(&'a self, name: &str, default: &'a str) -> &'a str {
+    /// The whole-number setting `name`.
+    pub fn int_setting(&self, name: &str) -> crate::Result<i64> {
         match self.settings.get(name) {
-            Some(SettingValue::Choice(c)) => c,
-            _ => default,
+            Some(SettingValue::Int(i)) => Ok(*i),
+            _ => Err(self.undeclared(name, "whole-number")),
         }
     }
 
-    /// The boolean setting `name`, or `default`.
-    pub fn bool_setting(&self, name: &str, default: bool) -> bool {
+    /// The word chosen for setting `name`.
+    pub fn choice_setting(&self, name: &str) -> crate::Result<&str> {
         match self.settings.get(name) {
-            Some(SettingValue::Bool(b)) => *b,
-            _ => default,
+            Some(SettingValue::Choice(c)) => Ok(c),
+            _ => Err(self.undeclared(name, "choice")),
+        }
+    }
+
+    /// The boolean setting `name`.
+    pub fn bool_setting(&self, name: &str) -> crate::Result<bool> {
+        match self.settings.get(name) {
+            Some(SettingValue::Bool(b)) => Ok(*b),
+            _ => Err(self.undeclared(name, "boolean")),
         }
     }
 }

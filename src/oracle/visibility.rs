@@ -146,17 +146,11 @@ impl VisibilityOracle {
             }
             let sampled = Access { access: vk::AccessFlags2::SHADER_SAMPLED_READ, ..Access::COMPUTE_READ };
             cmd_barriers(device, cmd, &[], &[image_barrier(&self.ids, Access::COLOR_ATTACHMENT, sampled)]);
-            self.readback.bind(cmd);
-            self.readback.push_bindings(
-                cmd,
-                &[
-                    Bind::Sampled(0, self.ids.view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-                    Bind::Buffer(1, self.out.handle()),
-                ],
-            );
-            self.readback.push_constants(cmd, &[self.extent.width, self.extent.height, self.samples.as_raw()]);
-            // SAFETY: as above.
-            unsafe { device.cmd_dispatch(cmd, self.extent.width.div_ceil(8), self.extent.height.div_ceil(8), 1) };
+            let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+            let binds =
+                [Bind::Sampled(0, self.ids.view(), self.sampler.handle(), read), Bind::Buffer(1, self.out.handle())];
+            let push = [self.extent.width, self.extent.height, self.samples.as_raw()];
+            self.readback.dispatch_over(cmd, &binds, bytemuck::cast_slice(&push), self.extent);
             cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::HOST_READ)], &[]);
             crate::gpu::GpuResult::Ok(())
         })?;

@@ -31,7 +31,7 @@ impl AaEdgesPass {
     ) -> crate::Result<Self> {
         let samples = bound_samples(plan, pass, "depth").to_string();
         let spirv = shaders.compile("aa/aa_edges.comp", &[("SAMPLES", &samples)])?;
-        let threshold = pass.float_setting("threshold", 0.01) as f32;
+        let threshold = pass.float_setting("threshold")? as f32;
         Ok(Self {
             pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
             sampler: Sampler::nearest_clamp(ctx)?,
@@ -44,23 +44,10 @@ impl PassNode for AaEdgesPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let depth = rec.slots.required_image("depth")?;
         let mask = rec.slots.required_image("mask")?;
-        self.pipeline.bind(rec.cmd);
-        self.pipeline.push_bindings(
-            rec.cmd,
-            &[
-                Bind::Sampled(
-                    0,
-                    depth.sampled_view(),
-                    self.sampler.handle(),
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                ),
-                Bind::StorageImage(1, mask.view()),
-            ],
-        );
-        self.pipeline.push_constants(rec.cmd, &self.threshold);
-        let e = mask.extent();
-        // SAFETY: cmd recording with this pipeline bound.
-        unsafe { rec.ctx.device().cmd_dispatch(rec.cmd, e.width.div_ceil(8), e.height.div_ceil(8), 1) };
+        let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let binds =
+            [Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), read), Bind::StorageImage(1, mask.view())];
+        self.pipeline.dispatch_over(rec.cmd, &binds, bytemuck::bytes_of(&self.threshold), mask.extent());
         Ok(())
     }
 }

@@ -4,7 +4,7 @@
 
 use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
-use crate::graph::plan::{PlannedPass, SettingValue};
+use crate::graph::plan::PlannedPass;
 use ash::vk;
 
 /// FXAA's search schedules (`FXAA_QUALITY__PRESET`), the `preset` words; the first
@@ -28,22 +28,14 @@ pub struct FxaaSettings {
     pub edge_threshold_min: f32,
 }
 
-impl Default for FxaaSettings {
-    fn default() -> Self {
-        Self { subpix: 0.75, edge_threshold: 0.166, edge_threshold_min: 0.0833 }
-    }
-}
-
 impl FxaaSettings {
     /// From the pass's graph settings (`subpix`, `edge_threshold`, `edge_threshold_min`).
-    pub fn from_plan(pass: &PlannedPass) -> Self {
-        let d = Self::default();
-        let float = |name: &str, default: f32| pass.float_setting(name, default as f64) as f32;
-        Self {
-            subpix: float("subpix", d.subpix),
-            edge_threshold: float("edge_threshold", d.edge_threshold),
-            edge_threshold_min: float("edge_threshold_min", d.edge_threshold_min),
-        }
+    pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
+        Ok(Self {
+            subpix: pass.float_setting("subpix")? as f32,
+            edge_threshold: pass.float_setting("edge_threshold")? as f32,
+            edge_threshold_min: pass.float_setting("edge_threshold_min")? as f32,
+        })
     }
 }
 
@@ -57,18 +49,9 @@ pub struct FxaaPass {
 impl FxaaPass {
     /// Compiles the shader for the pass's `preset` and creates a bilinear clamp-to-edge sampler.
     pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler, pass: &PlannedPass) -> crate::Result<Self> {
-        let preset = match pass.settings.get("preset") {
-            Some(SettingValue::Choice(c)) if PRESETS.contains(&c.as_str()) => c.clone(),
-            Some(other) => {
-                return Err(crate::Error::Invalid(format!(
-                    "pass '{}': FXAA preset {other:?} is not one of {}",
-                    pass.name,
-                    PRESETS.join(", ")
-                )))
-            }
-            None => PRESETS[0].to_string(),
-        };
-        let spirv = shaders.compile("fxaa/fxaa.comp", &[("PRESET", &preset)])?;
+        // Validation keeps the word to one of PRESETS, each a define fxaa.comp knows.
+        let preset = pass.choice_setting("preset")?;
+        let spirv = shaders.compile("fxaa/fxaa.comp", &[("PRESET", preset)])?;
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::LINEAR)
             .min_filter(vk::Filter::LINEAR)
@@ -80,7 +63,7 @@ impl FxaaPass {
         Ok(Self {
             pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
             sampler: Sampler::new(ctx, &info)?,
-            settings: FxaaSettings::from_plan(pass),
+            settings: FxaaSettings::from_plan(pass)?,
         })
     }
 }
@@ -89,23 +72,10 @@ impl PassNode for FxaaPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let input = rec.slots.required_image("input")?;
         let output = rec.slots.required_image("output")?;
-        self.pipeline.bind(rec.cmd);
-        self.pipeline.push_bindings(
-            rec.cmd,
-            &[
-                Bind::Sampled(
-                    0,
-                    input.sampled_view(),
-                    self.sampler.handle(),
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                ),
-                Bind::StorageImage(1, output.view()),
-            ],
-        );
-        self.pipeline.push_constants(rec.cmd, &self.settings);
-        let e = output.extent();
-        // SAFETY: cmd recording with this pipeline bound.
-        unsafe { rec.ctx.device().cmd_dispatch(rec.cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
+        let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let binds =
+            [Bind::Sampled(0, input.sampled_view(), self.sampler.handle(), read), Bind::StorageImage(1, output.view())];
+        self.pipeline.dispatch_over(rec.cmd, &binds, bytemuck::bytes_of(&self.settings), output.extent());
         Ok(())
     }
 }

@@ -7,8 +7,8 @@
 //!   one stencil bit per sample so each sample is written once.
 //!
 //! The color targets are cleared only with the `clear_colors` setting. Readers tell background
-//! from geometry by depth (0 = nothing drawn), so a clear would only write texels nobody reads;
-//! on the H100 that full-screen write was a quarter of the culled frame (0.44 of 1.88 ms).
+//! from geometry by depth (0 = nothing drawn), so a clear would only write texels nobody reads,
+//! a full-screen write that is a large share of a culled frame (`docs/history.md`).
 //!
 //! Formats and the sample count come from the bound images, so one pass serves no AA and every
 //! MSAA rate.
@@ -281,7 +281,8 @@ impl GbufferPass {
             name: pass.name.clone(),
             pipeline,
             mode,
-            clear_colors: pass.bool_setting("clear_colors", false),
+            // gbuffer_append loads its targets and declares no clear_colors.
+            clear_colors: mode != GeometryMode::Append && pass.bool_setting("clear_colors")?,
             packed_ids,
         })
     }

@@ -174,18 +174,18 @@ pub struct SelectiveAa {
 
 impl SelectiveAa {
     /// From a pass's settings.
-    pub fn from_plan(pass: &PlannedPass) -> Self {
-        let region = match pass.choice_setting("aa_region", "all") {
+    pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
+        let region = match pass.choice_setting("aa_region")? {
             "ellipse" => 1,
             "rectangle" => 2,
             _ => 0,
         };
-        Self {
+        Ok(Self {
             region,
-            region_size: pass.float_setting("aa_region_size", 0.6) as f32,
-            max_distance: pass.float_setting("aa_max_depth_distance", 0.0) as f32,
-            object_flags: pass.bool_setting("aa_object_flags", false),
-        }
+            region_size: pass.float_setting("aa_region_size")? as f32,
+            max_distance: pass.float_setting("aa_max_depth_distance")? as f32,
+            object_flags: pass.bool_setting("aa_object_flags")?,
+        })
     }
 }
 
@@ -193,7 +193,7 @@ impl SelectiveAa {
 /// needs the device's ordered sample interlock, `auto` uses it where there is one.
 fn claims_in_draw_order(ctx: &GpuContext, pass: &PlannedPass) -> Result<bool, String> {
     let interlock = ctx.caps().sample_interlock;
-    match pass.choice_setting("claim_order", "auto") {
+    match pass.choice_setting("claim_order").map_err(|e| e.to_string())? {
         "arrival" => return Ok(false),
         "auto" => {
             let order = if interlock { "draw" } else { "arrival (no ordered sample interlock)" };
@@ -265,7 +265,7 @@ impl GbufferCompressedPass {
             draw,
             clear,
             claim: owner == SampleOwner::Claim,
-            aa: SelectiveAa::from_plan(pass),
+            aa: SelectiveAa::from_plan(pass)?,
             sampler: crate::gpu::Sampler::nearest_clamp(ctx)?,
         })
     }

@@ -36,31 +36,14 @@
 //!   finishes last copies those levels into their mips and resets the buffer for the next build. No
 //!   subgroup operations, so no assumption on the subgroup size.
 //!
-//!   Measured on an H100 (`cullgraph bench`, 3840×2160 / 1920×1080, stop 16): 0.041 / 0.0153
-//!   ms, against 0.041 / 0.0188 with a second, one-workgroup dispatch that reduced levels 7..
-//!   level by level from the tiles' level 6 (the drain before it, and a barrier per level).
-//!   Tried at the same time, not kept: the merges with a one-workgroup copy dispatch instead of
-//!   the last tile (0.040 / 0.017); counting the tiles per level-9 group so that no address
-//!   takes more than 64 atomics (0.042 / 0.017: the group step lengthens the tail); copying
-//!   four texels per thread per round (0.042 at 4K). Earlier: 0.090 / 0.029 ms when levels
-//!   3..=6 were reduced straight from level 2 (one thread read up to 961 shared values in a
-//!   row), and 0.057 / 0.021 ms when the last tile reduced the top levels itself from level 6
-//!   (every thread's release then waited for its image stores under full memory load). Reading
-//!   the depth and writing level 1 alone (`mips: 1`) takes 0.025 / 0.009 ms and the tiles'
-//!   levels up to 6 (`mips: 6`) 0.030 / 0.012; `textureGather` beats four `texelFetch`es
-//!   (0.047 / 0.015 ms) and a bilinear fetch through a min-reduction sampler, one value per
-//!   quad instead of four (level 1 alone 0.030 / 0.0107, stop 17).
-//!
-//!   Since stop 17 the dependency of a build on the previous one's use of the merge buffer rides
-//!   in the executor's barrier before the pass ([`PassNode::own_dependency`]) instead of a
-//!   barrier of the pass's own: 0.0396 / 0.0141 ms, and 1.1 µs less for the frame less its
-//!   depth pass. Where the 4K time goes (stop 17, timing-only shader variants, `mips: 1`): an
-//!   empty dispatch of the same tiles 0.0050 ms (the hand-over after the depth pass and the
-//!   launch), reading the depth with no stores 0.0227, the stores with no reads 0.0130, both
-//!   0.0251. So reading the 33 MB of depth takes about 0.018 ms (1.9 TB/s, 470 G texels/s):
-//!   about 45 % of the texel rate the H100 is quoted at (528 texture units at up to 1.98 GHz),
-//!   which a one-value-per-quad min-reduction fetch did not raise. Together with the hand-over,
-//!   that is above the 0.02 ms that issue 5 asks for the whole 4K pyramid.
+//!   Why this shape (the measurements are in `docs/culling.md` and `docs/history.md`): merging
+//!   levels 7.. with atomics in the tiles and a copy by the last one saves the second dispatch,
+//!   its drain and its barriers; levels 3..=6 go through shared memory because reducing them
+//!   serially from level 2 costs more than reading the whole depth; `textureGather` beats four
+//!   `texelFetch`es. A build's dependency on the previous build's use of the merge buffer rides in
+//!   the barrier the executor records before the pass anyway ([`PassNode::own_dependency`]), not
+//!   in a barrier of its own. At 4K the pyramid is bound by reading the depth once at the
+//!   device's texture rate, plus the hand-over after the depth pass.
 //! - `per_mip` (baseline, `shaders/hiz/hiz_build_per_mip.comp`): one dispatch per level (level 1
 //!   from the depth's footprints, then level `k + 1` from level `k` through storage-image mip
 //!   views), with a barrier on the written mip between dispatches.
@@ -79,7 +62,7 @@ use crate::gpu::{
     Access, Bind, Buffer, BufferDesc, GpuContext, Image, MemoryLocation, Pipeline, Sampler, ShaderCompiler, Spirv,
 };
 use crate::graph::executor::PassContext;
-use crate::graph::plan::{PlannedPass, SettingValue};
+use crate::graph::plan::PlannedPass;
 use ash::vk;
 
 /// Format of the pyramid.
@@ -124,14 +107,9 @@ pub enum HizMethod {
 impl HizMethod {
     /// From a graph node's `method` setting (`"single"` or `"per_mip"`).
     pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
-        match pass.settings.get("method") {
-            None => Ok(Self::Single),
-            Some(SettingValue::Choice(c)) if c == "single" => Ok(Self::Single),
-            Some(SettingValue::Choice(c)) if c == "per_mip" => Ok(Self::PerMip),
-            Some(other) => Err(crate::Error::Invalid(format!(
-                "pass '{}': method must be \"single\" or \"per_mip\", not {other:?}",
-                pass.name
-            ))),
+        match pass.choice_setting("method")? {
+            "per_mip" => Ok(Self::PerMip),
+            _ => Ok(Self::Single),
         }
     }
 }

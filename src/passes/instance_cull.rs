@@ -33,7 +33,7 @@ use super::slots::{sized, slot, COMMANDS_BYTES, COUNTERS_BYTES, COUNT_BYTES, HIZ
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::{PassContext, LIST_COUNT_SLOT, LIST_STATS_SLOT};
-use crate::graph::plan::{PlannedPass, SettingValue};
+use crate::graph::plan::PlannedPass;
 use crate::graph::{
     FormatRule, KindCheck, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, SettingDecl, SettingDefault,
     Stages, Usage,
@@ -70,23 +70,18 @@ pub struct CullSettings {
 
 impl CullSettings {
     /// Reads the planned pass's settings (validation filled every default).
-    pub fn from_plan(pass: &PlannedPass) -> Self {
-        let choice = |k: &str, d: &str| match pass.settings.get(k) {
-            Some(SettingValue::Choice(c)) => c.clone(),
-            _ => d.to_string(),
-        };
-        let float = |k: &str, d: f32| pass.float_setting(k, d as f64) as f32;
-        Self {
-            phase: choice("phase", "all"),
-            frustum: !matches!(pass.settings.get("frustum"), Some(SettingValue::Bool(false))),
-            boxes: choice("bound", "box") == "box",
-            finer: choice("hiz_test", "coarse") == "finer",
-            previous_view: choice("hiz_view", "current") == "previous",
-            atomic: choice("compaction", "ordered") == "atomic",
-            occluder_distance: float("occluder_distance", 200.0),
-            occluder_size: float("occluder_size", 0.02),
-            occluder_triangles: pass.float_setting("occluder_triangles", 1024.0).clamp(0.0, u32::MAX as f64) as u32,
-        }
+    pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
+        Ok(Self {
+            phase: pass.choice_setting("phase")?.to_string(),
+            frustum: pass.bool_setting("frustum")?,
+            boxes: pass.choice_setting("bound")? == "box",
+            finer: pass.choice_setting("hiz_test")? == "finer",
+            previous_view: pass.choice_setting("hiz_view")? == "previous",
+            atomic: pass.choice_setting("compaction")? == "atomic",
+            occluder_distance: pass.float_setting("occluder_distance")? as f32,
+            occluder_size: pass.float_setting("occluder_size")? as f32,
+            occluder_triangles: pass.float_setting("occluder_triangles")?.clamp(0.0, u32::MAX as f64) as u32,
+        })
     }
 }
 
@@ -122,7 +117,7 @@ pub struct InstanceCullPass {
 impl InstanceCullPass {
     /// Compiles the variant the pass's settings and bindings ask for.
     pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler, pass: &PlannedPass) -> crate::Result<Self> {
-        let settings = CullSettings::from_plan(pass);
+        let settings = CullSettings::from_plan(pass)?;
         let ops = ctx.caps().subgroup_compute_ops;
         let needed = vk::SubgroupFeatureFlags::BASIC
             | vk::SubgroupFeatureFlags::VOTE

@@ -45,17 +45,17 @@ pub struct LightingSettings {
 
 impl LightingSettings {
     /// From the pass's graph settings (`exposure`, `debug_view`).
-    pub fn from_plan(pass: &PlannedPass) -> Self {
-        let exposure = pass.float_setting("exposure", 0.8) as f32;
-        let debug_view = match pass.choice_setting("debug_view", "none") {
+    pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
+        let exposure = pass.float_setting("exposure")? as f32;
+        let debug_view = match pass.choice_setting("debug_view")? {
             "normals" => 1,
             "albedo" => 2,
             "depth" => 3,
             "samples" => 4,
             _ => 0,
         };
-        let light_tiles = pass.bool_setting("light_tiles", true);
-        Self { exposure, debug_view, light_tiles: light_tiles as u32 }
+        let light_tiles = pass.bool_setting("light_tiles")?;
+        Ok(Self { exposure, debug_view, light_tiles: light_tiles as u32 })
     }
 }
 
@@ -97,35 +97,22 @@ impl LightingPass {
     ) -> crate::Result<Self> {
         let samples = bound_image(plan, pass, "depth").map_or(vk::SampleCountFlags::TYPE_1, |(_, s)| s);
         let normal = bound_image(plan, pass, "normal").map_or(crate::passes::slots::GBUFFER_NORMAL_PACKED, |(f, _)| f);
-        Ok(Self { settings: LightingSettings::from_plan(pass), ..Self::new(ctx, shaders, samples, normal)? })
+        Ok(Self { settings: LightingSettings::from_plan(pass)?, ..Self::new(ctx, shaders, samples, normal)? })
     }
 
     /// Records one dispatch over the output.
-    pub fn record(
-        &self,
-        cmd: vk::CommandBuffer,
-        ctx: &GpuContext,
-        io: &LightingInputs<'_>,
-        settings: &LightingSettings,
-    ) {
+    pub fn record(&self, cmd: vk::CommandBuffer, io: &LightingInputs<'_>, settings: &LightingSettings) {
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let s = self.sampler.handle();
-        self.pipeline.bind(cmd);
-        self.pipeline.push_bindings(
-            cmd,
-            &[
-                Bind::Sampled(0, io.depth.sampled_view(), s, read),
-                Bind::Sampled(1, io.albedo.sampled_view(), s, read),
-                Bind::Sampled(2, io.normal.sampled_view(), s, read),
-                Bind::Buffer(3, io.frame.handle()),
-                Bind::Buffer(4, io.lights.handle()),
-                Bind::StorageImage(5, io.output.view()),
-            ],
-        );
-        self.pipeline.push_constants(cmd, settings);
-        let e = io.output.extent();
-        // SAFETY: cmd recording with this pipeline bound.
-        unsafe { ctx.device().cmd_dispatch(cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
+        let binds = [
+            Bind::Sampled(0, io.depth.sampled_view(), s, read),
+            Bind::Sampled(1, io.albedo.sampled_view(), s, read),
+            Bind::Sampled(2, io.normal.sampled_view(), s, read),
+            Bind::Buffer(3, io.frame.handle()),
+            Bind::Buffer(4, io.lights.handle()),
+            Bind::StorageImage(5, io.output.view()),
+        ];
+        self.pipeline.dispatch_over(cmd, &binds, bytemuck::bytes_of(settings), io.output.extent());
     }
 }
 
@@ -141,7 +128,7 @@ impl PassNode for LightingPass {
             lights: inputs.lights(),
             output: slots.required_image("output")?,
         };
-        LightingPass::record(self, rec.cmd, rec.ctx, &io, &self.settings);
+        LightingPass::record(self, rec.cmd, &io, &self.settings);
         Ok(())
     }
 }

@@ -45,8 +45,8 @@ pub struct LightingCompressedPass {
 }
 
 /// Setting `name` of `pass`, a block count within 0..=MAX_SHARED_BLOCKS.
-fn block_count_setting(pass: &PlannedPass, name: &str, default: u32) -> crate::Result<u32> {
-    let value = pass.float_setting(name, default as f64);
+fn block_count_setting(pass: &PlannedPass, name: &str) -> crate::Result<u32> {
+    let value = pass.float_setting(name)?;
     if !(0.0..=MAX_SHARED_BLOCKS as f64).contains(&value) {
         return Err(crate::Error::Invalid(format!(
             "pass '{}': {name} must be between 0 and {MAX_SHARED_BLOCKS}, got {value}",
@@ -66,7 +66,7 @@ impl LightingCompressedPass {
     ) -> crate::Result<Self> {
         let samples = bound_samples(plan, pass, "depth").to_string();
         let with_stats = pass.bindings.iter().any(|b| b.slot == "stats");
-        let shared_blocks = block_count_setting(pass, "shared_blocks", DEFAULT_SHARED_BLOCKS)?;
+        let shared_blocks = block_count_setting(pass, "shared_blocks")?;
         let shared_bytes = shared_blocks * SHARED_BYTES_PER_BLOCK + SHARED_BYTES_OTHER;
         let limit = ctx.caps().limits.max_compute_shared_memory_size;
         if shared_bytes > limit {
@@ -76,8 +76,7 @@ impl LightingCompressedPass {
             )));
         }
         let shared_blocks = shared_blocks.to_string();
-        let shared_min_blocks =
-            format!("{}u", block_count_setting(pass, "shared_min_blocks", DEFAULT_SHARED_MIN_BLOCKS)?);
+        let shared_min_blocks = format!("{}u", block_count_setting(pass, "shared_min_blocks")?);
         let mut defines = vec![
             ("SAMPLES", samples.as_str()),
             ("SHARED_BLOCKS", shared_blocks.as_str()),
@@ -101,7 +100,7 @@ impl LightingCompressedPass {
             pipeline,
             stats_clear,
             sampler: Sampler::nearest_clamp(ctx)?,
-            settings: LightingSettings::from_plan(pass),
+            settings: LightingSettings::from_plan(pass)?,
         })
     }
 }
@@ -142,12 +141,8 @@ impl PassNode for LightingCompressedPass {
         if let Some(claim) = bound.sample_claim {
             binds.push(Bind::Buffer(6, claim.handle()));
         }
-        self.pipeline.bind(rec.cmd);
-        self.pipeline.push_bindings(rec.cmd, &binds);
-        self.pipeline.push_constants(rec.cmd, &Push { settings: self.settings, pool_blocks: bound.pool_blocks });
-        let e = output.extent();
-        // SAFETY: cmd recording with this pipeline bound.
-        unsafe { device.cmd_dispatch(rec.cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
+        let push = Push { settings: self.settings, pool_blocks: bound.pool_blocks };
+        self.pipeline.dispatch_over(rec.cmd, &binds, bytemuck::bytes_of(&push), output.extent());
         Ok(())
     }
 }
@@ -173,12 +168,12 @@ impl PassKind for LightingCompressedKind {
                 let mut settings = lighting_settings();
                 settings.push(SettingDecl {
                     name: "shared_blocks",
-                    default: SettingDefault::Int(512),
+                    default: SettingDefault::Int(DEFAULT_SHARED_BLOCKS as i64),
                     doc: "pool blocks a 16x16 tile gathers and shades with all its invocations per round, in up to four rounds (0..=1024; 0: each pixel loops over its own list, the thesis's resolve)",
                 });
                 settings.push(SettingDecl {
                     name: "shared_min_blocks",
-                    default: SettingDefault::Int(0),
+                    default: SettingDefault::Int(DEFAULT_SHARED_MIN_BLOCKS as i64),
                     doc: "a tile with at most this many pool blocks leaves them to their pixels' own loops (0: every tile shares its blocks, the fastest on the H100)",
                 });
                 settings

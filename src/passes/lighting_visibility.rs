@@ -41,7 +41,7 @@ impl LightingVisibilityPass {
             name: pass.name.clone(),
             pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
             sampler: Sampler::nearest_clamp(ctx)?,
-            settings: LightingSettings::from_plan(pass),
+            settings: LightingSettings::from_plan(pass)?,
             packed_ids: format == Some(crate::passes::slots::VISIBILITY_PACKED),
         })
     }
@@ -55,28 +55,21 @@ impl PassNode for LightingVisibilityPass {
         let inputs = SceneInputs::of(rec)?;
         let scene = &inputs.scene;
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        self.pipeline.bind(rec.cmd);
-        self.pipeline.push_bindings(
-            rec.cmd,
-            &[
-                Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), read),
-                Bind::Sampled(1, ids.sampled_view(), self.sampler.handle(), read),
-                Bind::Buffer(2, inputs.constants().handle()),
-                Bind::Buffer(3, inputs.lights().handle()),
-                Bind::StorageImage(4, output.view()),
-                Bind::Buffer(5, scene.instances.handle()),
-                Bind::Buffer(6, scene.materials.handle()),
-                Bind::Buffer(7, scene.vertices.handle()),
-                Bind::Buffer(8, scene.indices.handle()),
-                Bind::Buffer(9, scene.instance_triangles.handle()),
-            ],
-        );
+        let binds = [
+            Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), read),
+            Bind::Sampled(1, ids.sampled_view(), self.sampler.handle(), read),
+            Bind::Buffer(2, inputs.constants().handle()),
+            Bind::Buffer(3, inputs.lights().handle()),
+            Bind::StorageImage(4, output.view()),
+            Bind::Buffer(5, scene.instances.handle()),
+            Bind::Buffer(6, scene.materials.handle()),
+            Bind::Buffer(7, scene.vertices.handle()),
+            Bind::Buffer(8, scene.indices.handle()),
+            Bind::Buffer(9, scene.instance_triangles.handle()),
+        ];
         let triangle_bits = if self.packed_ids { packed_id_bits(&self.name, scene)? } else { 0 };
         let push = [bytemuck::bytes_of(&self.settings), &triangle_bits.to_ne_bytes()].concat();
-        self.pipeline.push_constant_bytes(rec.cmd, &push);
-        let e = output.extent();
-        // SAFETY: cmd recording with this pipeline bound.
-        unsafe { rec.ctx.device().cmd_dispatch(rec.cmd, e.width.div_ceil(16), e.height.div_ceil(16), 1) };
+        self.pipeline.dispatch_over(rec.cmd, &binds, &push, output.extent());
         Ok(())
     }
 }

@@ -209,16 +209,8 @@ pub fn settings(
     vars: &BTreeMap<String, Num>,
     errors: &mut Errors<'_>,
 ) -> BTreeMap<String, SettingValue> {
-    let mut out = BTreeMap::new();
-    for decl in declared {
-        let default = match &decl.default {
-            SettingDefault::Bool(b) => SettingValue::Bool(*b),
-            SettingDefault::Int(i) => SettingValue::Int(*i),
-            SettingDefault::Float(f) => SettingValue::Float(*f),
-            SettingDefault::Choice(c) => SettingValue::Choice(c.first().copied().unwrap_or("").to_string()),
-        };
-        out.insert(decl.name.to_string(), default);
-    }
+    let mut out: BTreeMap<String, SettingValue> =
+        declared.iter().map(|decl| (decl.name.to_string(), decl.default.value())).collect();
     for s in &pass.settings {
         let what = format!("setting '{}' of pass '{}'", s.name, pass.name);
         let value = match &s.source {

@@ -139,7 +139,7 @@ pub trait PassNode: Send {
     /// not see (a buffer the pass owns): the (source, destination) of a global memory barrier.
     /// Called right before [`PassNode::record`]; the executor folds it into the barrier it
     /// records before the pass anyway, so the pass records none of its own (a separate barrier
-    /// cost about 1.2 µs on an H100). `None` (the default): nothing to wait for.
+    /// costs more than widening that one). `None` (the default): nothing to wait for.
     fn own_dependency(&mut self) -> Option<(Access, Access)> {
         None
     }

@@ -27,111 +27,33 @@
 //! tint whose depth grows with the number of overlapping rectangles and a bright edge where the
 //! count changes. Deterministic: the same frame gives the same pixels.
 
+mod panel;
+mod times;
+
+pub use panel::{
+    glyph, glyph_origin, panel_rect, BAR_CHARS, GLYPH, LABEL_COLOR, LINE, MARGIN, MAX_COLS, MAX_LABEL, MAX_NAME,
+    MAX_ROWS, NUMBER_COLOR, PADDING,
+};
+pub use times::{GpuPassTimes, MAX_TIMED, PASS_TIMES_BYTES};
+
 use super::slots::{sized, slot, COUNTERS_BYTES, HIZ_FORMAT, LIT_OUTPUT_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
-use crate::gpu::{
-    Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, PassTiming, Pipeline, Sampler, ShaderCompiler,
-};
-use crate::graph::executor::{PassContext, LIST_STATS_SLOT};
-use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind, SettingValue, Version};
+use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
+use crate::graph::executor::PassContext;
+use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::graph::{
     FormatRule, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, Stages, Usage,
 };
 use crate::passes::shared::SceneInputs;
 use ash::vk;
+use panel::*;
 
-/// Most rows of the panel.
-pub const MAX_ROWS: usize = 48;
-/// Most characters per row.
-pub const MAX_COLS: usize = 96;
 /// Cull passes whose counters the panel can show (slots `stats0`..`stats3`).
 pub const MAX_STATS: usize = 4;
-/// Passes whose GPU time the per-frame buffer carries.
-pub const MAX_TIMED: usize = 64;
-/// Font pixels per glyph side.
-pub const GLYPH: u32 = 8;
-/// Font pixels per text line.
-pub const LINE: u32 = 10;
-/// Font pixels between the panel's edge and its text.
-pub const PADDING: u32 = 4;
-/// Screen pixels between the image's top-left corner and the panel.
-pub const MARGIN: u32 = 8;
-/// Length of the longest time bar, in characters.
-pub const BAR_CHARS: u32 = 12;
-/// Color of label glyphs (sRGB-encoded RGB).
-pub const LABEL_COLOR: [u8; 3] = [215, 215, 215];
-/// Color of number glyphs (sRGB-encoded RGB).
-pub const NUMBER_COLOR: [u8; 3] = [255, 224, 112];
-/// Longest pass name shown in the timings (longer ones are cut).
-pub const MAX_NAME: usize = 20;
-/// Longest cull-pass label in the drawn line.
-pub const MAX_LABEL: usize = 12;
-
 /// The stats slots, in the order the panel lists them.
 pub const STATS_SLOTS: [&str; MAX_STATS] = ["stats0", "stats1", "stats2", "stats3"];
 /// The slot of a compressed G-buffer's counters (a `lighting_compressed` pass's `stats`).
 pub const GBUFFER_STATS_SLOT: &str = "gbuffer_stats";
-
-const TOKEN_END: u32 = 0xFFFF_FFFF;
-const TOKEN_FIELD: u32 = 0x1000_0000;
-const FIELD_INSTANCES: u32 = 0;
-const FIELD_TESTED: u32 = 1;
-const FIELD_FRUSTUM: u32 = 2;
-const FIELD_OCCLUSION: u32 = 3;
-const FIELD_DRAWN: u32 = 4;
-const FIELD_DRAWS: u32 = 5;
-const FIELD_TRIANGLES: u32 = 6;
-const FIELD_TOTAL_MS: u32 = 7;
-const FIELD_TIMED_FRAME: u32 = 8;
-const FIELD_MARKED: u32 = 9;
-const FIELD_POOL_USED: u32 = 10;
-const FIELD_POOL_BLOCKS: u32 = 11;
-const FIELD_OVERFLOW: u32 = 12;
-const FIELD_EDGE_PIXELS: u32 = 13;
-const FIELD_PASS_DRAWN: u32 = 16;
-const FIELD_PASS_MS: u32 = 32;
-/// Characters of a time field.
-const MS_WIDTH: usize = 8;
-
-/// The newest completed frame's GPU times as the overlay reads them (`OverlayTimes` in
-/// `shaders/overlay/overlay_common.glsl`); one host-visible buffer per frame in flight.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuPassTimes {
-    /// Entries of `ms` in use (the plan's passes, in execution order).
-    pub count: u32,
-    /// The frame they were measured in; `u32::MAX` when none has completed yet.
-    pub frame: u32,
-    /// The whole frame, milliseconds; negative when unknown.
-    pub total_ms: f32,
-    /// Unused.
-    pub pad: f32,
-    /// Per pass, milliseconds; negative when unknown.
-    pub ms: [f32; MAX_TIMED],
-}
-
-/// Bytes of [`GpuPassTimes`].
-pub const PASS_TIMES_BYTES: u64 = std::mem::size_of::<GpuPassTimes>() as u64;
-
-impl GpuPassTimes {
-    /// No times yet.
-    pub fn none() -> Self {
-        Self { count: 0, frame: u32::MAX, total_ms: -1.0, pad: 0.0, ms: [-1.0; MAX_TIMED] }
-    }
-
-    /// The times of `frame` (scopes named as the plan's passes, plus "frame") in `plan`'s order.
-    pub fn from_timings(plan: &CompiledGraph, frame: u64, timings: &[PassTiming]) -> Self {
-        let mut out = Self::none();
-        out.frame = u32::try_from(frame).unwrap_or(u32::MAX - 1);
-        out.count = plan.passes.len().min(MAX_TIMED) as u32;
-        let find = |name: &str| timings.iter().find(|t| t.name == name).map(|t| t.ms as f32);
-        for (slot, pass) in out.ms.iter_mut().zip(&plan.passes) {
-            *slot = find(&pass.name).unwrap_or(-1.0);
-        }
-        out.total_ms = find("frame").unwrap_or(-1.0);
-        out
-    }
-}
 
 /// What the overlay shows (setting `view`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -159,23 +81,14 @@ pub struct OverlaySettings {
 
 impl OverlaySettings {
     /// Reads a planned pass's settings (validation filled every default).
-    pub fn from_plan(pass: &PlannedPass) -> Self {
-        let int = |k: &str| match pass.settings.get(k) {
-            Some(SettingValue::Int(i)) => (*i).clamp(0, u32::MAX as i64) as u32,
-            Some(SettingValue::Float(f)) => f.clamp(0.0, u32::MAX as f64) as u32,
-            _ => 0,
-        };
-        let view = match pass.settings.get("view") {
-            Some(SettingValue::Choice(c)) if c == "hiz" => OverlayView::Hiz,
-            Some(SettingValue::Choice(c)) if c == "culled" => OverlayView::Culled,
+    pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
+        let int = |k: &str| pass.int_setting(k).map(|i| i.clamp(0, u32::MAX as i64) as u32);
+        let view = match pass.choice_setting("view")? {
+            "hiz" => OverlayView::Hiz,
+            "culled" => OverlayView::Culled,
             _ => OverlayView::Stats,
         };
-        Self {
-            view,
-            hiz_level: int("hiz_level"),
-            scale: int("scale"),
-            timings: !matches!(pass.settings.get("timings"), Some(SettingValue::Bool(false))),
-        }
+        Ok(Self { view, hiz_level: int("hiz_level")?, scale: int("scale")?, timings: pass.bool_setting("timings")? })
     }
 
     /// The text scale for an image `height` pixels high.
@@ -188,266 +101,10 @@ impl OverlaySettings {
     }
 }
 
-/// The panel's rectangle for `cols` x `rows` characters at `scale`: (x0, y0, x1, y1), the end
-/// exclusive, before clipping to the image.
-pub fn panel_rect(cols: u32, rows: u32, scale: u32) -> (u32, u32, u32, u32) {
-    let w = (cols * GLYPH + 2 * PADDING) * scale;
-    let h = (rows * LINE + 2 * PADDING) * scale;
-    (MARGIN, MARGIN, MARGIN + w, MARGIN + h)
-}
-
-/// Screen position of the top-left pixel of the glyph at (`row`, `col`) of the panel.
-pub fn glyph_origin(row: u32, col: u32, scale: u32) -> (u32, u32) {
-    (MARGIN + (PADDING + col * GLYPH) * scale, MARGIN + (PADDING + row * LINE) * scale)
-}
-
-/// font8x8's bitmap of `c` (ASCII; others show as '?'): 8 rows, bit `x` of a row is column `x`.
-pub fn glyph(c: char) -> [u8; 8] {
-    let code = if c.is_ascii() { c as usize } else { '?' as usize };
-    font8x8::legacy::BASIC_LEGACY[code]
-}
-
-/// One piece of a template row.
-#[derive(Clone, Debug, PartialEq)]
-enum Piece {
-    Text(String),
-    /// A field and its widest rendering in characters.
-    Field(u32, usize),
-}
-
-/// A template row: pieces, and the pass whose time bar it draws.
-#[derive(Clone, Debug, Default, PartialEq)]
-struct Row {
-    pieces: Vec<Piece>,
-    bar: Option<usize>,
-}
-
-impl Row {
-    fn text(mut self, s: &str) -> Self {
-        self.pieces.push(Piece::Text(s.to_string()));
-        self
-    }
-
-    fn field(mut self, field: u32, widest: usize) -> Self {
-        self.pieces.push(Piece::Field(field, widest));
-        self
-    }
-
-    fn count(self, field: u32) -> Self {
-        self.field(field, 10)
-    }
-
-    fn tokens(&self) -> Vec<u32> {
-        let mut out = Vec::new();
-        for p in &self.pieces {
-            match p {
-                Piece::Text(s) => out.extend(s.chars().map(|c| if c.is_ascii() { c as u32 } else { '?' as u32 })),
-                Piece::Field(f, _) => out.push(TOKEN_FIELD | f),
-            }
-        }
-        out.truncate(MAX_COLS);
-        out
-    }
-
-    fn widest(&self) -> usize {
-        self.pieces
-            .iter()
-            .map(|p| match p {
-                Piece::Text(s) => s.chars().count(),
-                Piece::Field(_, widest) => *widest,
-            })
-            .sum()
-    }
-}
-
-/// The panel's layout as the GPU reads it (`OverlayTemplate`).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuTemplate {
-    rows: u32,
-    bar_col: u32,
-    bar_chars: u32,
-    pad: u32,
-    row_bar: [i32; MAX_ROWS],
-    tokens: [[u32; MAX_COLS]; MAX_ROWS],
-}
-
-/// The panel's rows for a pass of `plan`.
-struct Panel {
-    rows: Vec<Row>,
-    bar_col: usize,
-    /// Widest possible row, in characters (the region view `stats` dispatches over).
-    widest: usize,
-}
-
-impl Panel {
-    fn new(plan: &CompiledGraph, pass: &PlannedPass, settings: &OverlaySettings, labels: &[String]) -> Self {
-        let mut rows = Vec::new();
-        let n = labels.len();
-        if n == 0 {
-            rows.push(Row::default().text("instances ").count(FIELD_INSTANCES).text("  (no cull counters)"));
-        } else {
-            rows.push(Row::default().text("instances ").count(FIELD_INSTANCES).text("  tested ").count(FIELD_TESTED));
-            rows.push(Row::default().text("frustum culled ").count(FIELD_FRUSTUM));
-            rows.push(Row::default().text("occlusion culled ").count(FIELD_OCCLUSION));
-        }
-        let drawn = Row::default().text("drawn ").count(FIELD_DRAWN);
-        match n {
-            0 | 1 => rows.push(drawn),
-            2 => rows.push(
-                drawn
-                    .text(&format!(" ({} ", labels[0]))
-                    .count(FIELD_PASS_DRAWN)
-                    .text(&format!(", {} ", labels[1]))
-                    .count(FIELD_PASS_DRAWN + 1)
-                    .text(")"),
-            ),
-            _ => {
-                rows.push(drawn);
-                for (k, label) in labels.iter().enumerate() {
-                    rows.push(Row::default().text(&format!("  {label} ")).count(FIELD_PASS_DRAWN + k as u32));
-                }
-            }
-        }
-        rows.push(Row::default().text("draws ").count(FIELD_DRAWS).text("  triangles ").field(FIELD_TRIANGLES, 20));
-        if pass.bindings.iter().any(|b| b.slot == GBUFFER_STATS_SLOT) {
-            rows.push(
-                Row::default()
-                    .text("pool blocks ")
-                    .count(FIELD_POOL_USED)
-                    .text(" / ")
-                    .count(FIELD_POOL_BLOCKS)
-                    .text("  overflow ")
-                    .count(FIELD_OVERFLOW)
-                    .text(" samples"),
-            );
-            rows.push(Row::default().text("pixels with 2+ surfaces ").count(FIELD_EDGE_PIXELS));
-        }
-        match settings.view {
-            OverlayView::Stats => {}
-            OverlayView::Hiz => {
-                let (level, last, size) = hiz_info(plan, pass, settings.hiz_level);
-                rows.push(
-                    Row::default().text(&format!("hi-z mip {level}/{last} ({}x{}), white = near", size.0, size.1)),
-                );
-            }
-            OverlayView::Culled => {
-                rows.push(Row::default().text("red: ").count(FIELD_MARKED).text(" occlusion-culled instances"));
-            }
-        }
-        let mut bar_col = 0;
-        if settings.timings {
-            let names: Vec<String> = plan.passes.iter().map(|p| p.name.chars().take(MAX_NAME).collect()).collect();
-            let width = names.iter().map(|n| n.chars().count()).max().unwrap_or(0).max("total".len());
-            rows.push(Row::default().text("gpu ms (frame ").field(FIELD_TIMED_FRAME, 10).text(")"));
-            let room = MAX_ROWS.saturating_sub(rows.len() + 2);
-            let shown = names.len().min(MAX_TIMED).min(room);
-            for (k, name) in names.iter().take(shown).enumerate() {
-                let row = Row::default().text(&format!("{name:width$} ")).field(FIELD_PASS_MS + k as u32, MS_WIDTH);
-                rows.push(Row { bar: Some(k), ..row });
-            }
-            if shown < names.len() {
-                rows.push(Row::default().text(&format!("({} more passes)", names.len() - shown)));
-            }
-            rows.push(Row::default().text(&format!("{:width$} ", "total")).field(FIELD_TOTAL_MS, MS_WIDTH));
-            bar_col = width + 1 + MS_WIDTH + 1;
-        }
-        rows.truncate(MAX_ROWS);
-        let bars = rows.iter().any(|r| r.bar.is_some());
-        let widest = rows
-            .iter()
-            .map(|r| if r.bar.is_some() { r.widest().max(bar_col + BAR_CHARS as usize) } else { r.widest() })
-            .max()
-            .unwrap_or(0)
-            .min(MAX_COLS);
-        Self { rows, bar_col: if bars { bar_col } else { 0 }, widest }
-    }
-
-    fn gpu(&self) -> GpuTemplate {
-        let mut t = GpuTemplate {
-            rows: self.rows.len() as u32,
-            bar_col: self.bar_col as u32,
-            bar_chars: if self.bar_col > 0 { BAR_CHARS } else { 0 },
-            pad: 0,
-            row_bar: [-1; MAX_ROWS],
-            tokens: [[TOKEN_END; MAX_COLS]; MAX_ROWS],
-        };
-        for (i, row) in self.rows.iter().enumerate() {
-            t.row_bar[i] = row.bar.map_or(-1, |b| b as i32);
-            for (slot, token) in t.tokens[i].iter_mut().zip(row.tokens()) {
-                *slot = token;
-            }
-        }
-        t
-    }
-}
-
 /// Which level of the image's chain (level 0: the image, level k + 1: `max(1, size_k >> 1)`) the
 /// pyramid's mip 0 is (a Hi-Z pyramid may start at half resolution), if any.
 fn pyramid_shift(image: vk::Extent2D, pyramid: vk::Extent2D) -> Option<u32> {
     (0..16).find(|&k| (image.width >> k).max(1) == pyramid.width && (image.height >> k).max(1) == pyramid.height)
-}
-
-/// The mip view `hiz` shows (clamped), the last mip and the mip's size, from the plan.
-fn hiz_info(plan: &CompiledGraph, pass: &PlannedPass, level: u32) -> (u32, u32, (u32, u32)) {
-    let image = pass.bindings.iter().find(|b| b.slot == "hiz").map(|b| &plan.resources[b.resource].kind);
-    match image {
-        Some(ResolvedKind::Image { extent, mip_levels, .. }) => {
-            let last = mip_levels.saturating_sub(1);
-            let level = level.min(last);
-            let size = ((extent.width >> level).max(1), (extent.height >> level).max(1));
-            (level, last, size)
-        }
-        _ => (0, 0, (0, 0)),
-    }
-}
-
-/// Labels of the cull passes whose counters are bound, in slot order: each writer's `phase`
-/// when that tells them apart, else its name. Last frame's `list_stats` (the early draw list a
-/// late phase wrote for this frame) is the early phase.
-fn stats_labels(plan: &CompiledGraph, pass: &PlannedPass) -> Vec<String> {
-    let position = plan.passes.iter().position(|p| p.name == pass.name).unwrap_or(plan.passes.len());
-    // (writer, whether it is last frame's early draw list)
-    let writers: Vec<(Option<&PlannedPass>, bool)> = STATS_SLOTS
-        .iter()
-        .filter_map(|slot| pass.bindings.iter().find(|b| b.slot == *slot))
-        .map(|b| {
-            let writes_it = |p: &&PlannedPass| {
-                p.bindings.iter().any(|w| w.resource == b.resource && w.version == Version::Current && w.usage.writes())
-            };
-            if b.version == Version::Previous {
-                let writer = plan.passes.iter().find(writes_it);
-                let list = writer
-                    .is_some_and(|w| w.bindings.iter().any(|l| l.slot == LIST_STATS_SLOT && l.resource == b.resource));
-                (writer, list)
-            } else {
-                (plan.passes[..position].iter().rev().find(writes_it), false)
-            }
-        })
-        .collect();
-    let phases: Vec<Option<String>> = writers
-        .iter()
-        .map(|(w, list)| match (list, w.and_then(|w| w.settings.get("phase"))) {
-            (true, _) => Some("early".to_string()),
-            (false, Some(SettingValue::Choice(c))) if c != "all" => Some(c.clone()),
-            _ => None,
-        })
-        .collect();
-    let distinct = phases.iter().all(|p| p.is_some())
-        && phases.iter().enumerate().all(|(i, p)| phases[..i].iter().all(|q| q != p));
-    writers
-        .iter()
-        .zip(&phases)
-        .enumerate()
-        .map(|(k, ((w, _), phase))| {
-            let label = match (distinct, phase, w) {
-                (true, Some(phase), _) => phase.clone(),
-                (_, _, Some(w)) => w.name.clone(),
-                _ => format!("stats{k}"),
-            };
-            label.chars().take(MAX_LABEL).collect()
-        })
-        .collect()
 }
 
 /// Push constants of `overlay_text.comp`.
@@ -505,7 +162,7 @@ impl OverlayPass {
         pass: &PlannedPass,
         plan: &CompiledGraph,
     ) -> crate::Result<Self> {
-        let settings = OverlaySettings::from_plan(pass);
+        let settings = OverlaySettings::from_plan(pass)?;
         let bound = |slot: &str| pass.bindings.iter().any(|b| b.slot == slot);
         let invalid = |m: &str| crate::Error::Invalid(format!("pass '{}': {m}", pass.name));
         match settings.view {
@@ -728,11 +385,9 @@ impl PassNode for OverlayPass {
             }
             _ => (extent.width, extent.height),
         };
-        self.draw.bind(cmd);
-        self.draw.push_bindings(cmd, &binds);
-        self.draw.push_constants(cmd, &DrawPush { size: [extent.width, extent.height], scale, hiz_mip, hiz_shift });
-        // SAFETY: as above.
-        unsafe { device.cmd_dispatch(cmd, region.0.div_ceil(8).max(1), region.1.div_ceil(8).max(1), 1) };
+        let push = DrawPush { size: [extent.width, extent.height], scale, hiz_mip, hiz_shift };
+        let region = vk::Extent2D { width: region.0, height: region.1 };
+        self.draw.dispatch_over(cmd, &binds, bytemuck::bytes_of(&push), region);
         Ok(())
     }
 }
@@ -783,7 +438,9 @@ impl PassKind for OverlayKind {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gpu::PassTiming;
     use crate::graph::plan::{Binding, MemoryPlan, PlannedResource, ResourceClass};
+    use crate::graph::plan::{ResolvedKind, SettingValue, Version};
     use crate::graph::usage::{Stages, Usage};
 
     fn plan(phases: [&str; 2]) -> CompiledGraph {
@@ -809,7 +466,7 @@ mod tests {
             name: "overlay".into(),
             kind: "overlay".into(),
             bindings: vec![bind("stats1", 1, read), bind("stats0", 0, read)],
-            settings: Default::default(),
+            settings: OverlayKind.info().default_settings(),
             shader: None,
             dispatch: None,
             barriers: vec![],
@@ -838,7 +495,7 @@ mod tests {
     #[test]
     fn the_panel_has_a_row_per_figure_and_pass_and_fits_its_limits() {
         let p = plan(["early", "late"]);
-        let settings = OverlaySettings::from_plan(&p.passes[2]);
+        let settings = OverlaySettings::from_plan(&p.passes[2]).unwrap();
         assert_eq!((settings.view, settings.scale_for(1080), settings.scale_for(2160)), (OverlayView::Stats, 1, 3));
         let panel = Panel::new(&p, &p.passes[2], &settings, &stats_labels(&p, &p.passes[2]));
         // 5 figures, the timings header, 3 passes, the total.

@@ -1,0 +1,25 @@
+//! What an engine that embeds cullgraph needs, in one import: `use cullgraph::prelude::*;`.
+//!
+//! - the device: [`GpuContext`] (owned, or [`GpuContext::from_host`] with the engine's
+//!   [`HostHandles`]), [`ShaderCompiler`];
+//! - the scene: [`Scene`], [`Instance`], [`Material`], [`Camera`], [`SceneSource`];
+//! - rendering: [`Renderer`] with a [`GraphSpec`], [`Imports`] of the engine's own images and
+//!   buffers, [`FrameStats`] and [`PassTiming`] as plain data;
+//! - an engine's own pass kinds: [`PassKind`] registered in a [`KindRegistry`] (on top of
+//!   [`builtin_kinds`]), with the pieces a kind declares and records with.
+
+pub use crate::error::{Error, Result};
+pub use crate::gpu::{
+    cmd_set_full_viewport, Access, Bind, Buffer, BufferDesc, ContextOptions, GpuContext, GraphicsDesc, HostHandles,
+    HostImage, Image, MemoryLocation, PassTiming, Pipeline, RequiredFeatures, ShaderCompiler, ShaderRoot, StencilRule,
+    OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS,
+};
+pub use crate::graph::{
+    FormatRule, Imports, KindCheck, KindRegistry, MinBytes, NodeSetup, PassContext, PassKind, PassKindInfo, PassNode,
+    ResolvedKind, SettingDecl, SettingDefault, SlotDecl, Stages, Usage, FRAMES_IN_FLIGHT,
+};
+pub use crate::passes::builtin_kinds;
+pub use crate::passes::shared::SceneInputs;
+pub use crate::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
+pub use crate::scene::{Camera, Instance, Material, MeshData, PointLight, Projection, Scene, SceneSource, Transform};
+pub use crate::stats::FrameStats;
