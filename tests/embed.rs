@@ -10,7 +10,7 @@ use cullgraph::gpu::{
     Access, Buffer, BufferDesc, GpuContext, HostHandles, HostImage, MemoryLocation, RequiredFeatures, ShaderCompiler,
     ShaderRoot, ValidationLog, OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS,
 };
-use cullgraph::graph::executor::Imports;
+use cullgraph::graph::Imports;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::sync::{Arc, Mutex};

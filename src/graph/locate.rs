@@ -236,8 +236,6 @@ pub enum NodeKind {
     Map(Vec<(Node, Node)>),
     /// A string literal.
     Str {
-        /// Decoded contents.
-        value: String,
         /// Whether a character offset inside the contents maps to `pos.col + 1 + offset`.
         plain: bool,
     },
@@ -274,11 +272,6 @@ impl Locator {
         p.skip_attributes();
         let root = p.value();
         Self { root }
-    }
-
-    /// The root value (the `Graph(..)` struct).
-    pub fn root(&self) -> Option<&Node> {
-        self.root.as_ref()
     }
 
     /// The node at `path`, if all of it exists.
@@ -402,9 +395,9 @@ impl Parser<'_> {
                     Some(Node { pos: t.pos, kind: NodeKind::Scalar(name.clone()) })
                 }
             }
-            Tok::Str { value, plain } => {
+            Tok::Str { plain, .. } => {
                 self.i += 1;
-                Some(Node { pos: t.pos, kind: NodeKind::Str { value: value.clone(), plain: *plain } })
+                Some(Node { pos: t.pos, kind: NodeKind::Str { plain: *plain } })
             }
             Tok::Other(s) => {
                 self.i += 1;

@@ -19,33 +19,35 @@
 //! [`KindRegistry`] a graph is loaded with; this module imports nothing from the layers above it
 //! (`tests/layers.rs` checks it).
 //!
-//! Pipeline: [`schema`] (serde types of the RON file) -> [`validate`] (all errors at once, with
-//! positions from [`locate`]) -> [`ValidatedGraph`] -> [`compile()`] for one output size and scene
-//! -> [`CompiledGraph`] (printable through `Display`, [`report::to_dot`]).
+//! Pipeline: [`load`] (parse the RON, then report all errors at once, each at its position) ->
+//! [`ValidatedGraph`] -> [`compile()`] for one output size and scene -> [`CompiledGraph`]
+//! (printable through `Display`, [`to_dot`]) -> [`GraphRuntime`], which records it.
 
 pub mod compile;
-pub mod env;
-pub mod error;
-pub mod executor;
-pub mod expr;
+pub(crate) mod env;
+pub(crate) mod error;
+pub(crate) mod executor;
+pub(crate) mod expr;
 pub mod formats;
-pub mod kinds;
-pub mod locate;
+pub(crate) mod kinds;
+pub(crate) mod locate;
 pub mod plan;
-pub mod report;
-pub mod schema;
-pub mod usage;
-pub mod validate;
-pub mod validated;
+pub(crate) mod report;
+pub(crate) mod schema;
+pub(crate) mod usage;
+pub(crate) mod validate;
+pub(crate) mod validated;
 
 pub use compile::resolve::Resolved;
 pub use compile::{compile, FrameInputs};
 pub use env::{DeviceEnv, Environment, NoDevice};
-pub use error::{GraphError, GraphErrors, Pos};
+pub use error::{GraphError, GraphErrors, Pos, COMMAND_LINE};
+pub use executor::{Captured, LIST_COUNT_SLOT, LIST_STATS_SLOT, MAX_TIMED_STEPS};
 pub use executor::{
     FrameData, GraphRuntime, Import, Imports, PassContext, PassNode, ResourceBytes, SlotBindings, StepTimer,
     FRAMES_IN_FLIGHT, STATS_BYTES, STATS_SLOT,
 };
+pub use expr::{Expr, Num};
 pub use kinds::{
     FormatRule, KindCheck, KindRegistry, MinBytes, NodeSetup, PassKind, PassKindInfo, RegisteredKind, SettingDecl,
     SettingDefault, SlotDecl, COMPUTE_KIND,
@@ -56,5 +58,8 @@ pub use plan::{
 };
 pub use report::to_dot;
 pub use usage::{Stages, Usage};
-pub use validate::{load, load_file, load_in, parse_param_override, ParamOverride};
-pub use validated::{Pass, PassBinding, ResourceDesc, ValidatedGraph};
+pub use validate::{load, load_file, load_in, parse_param_override, ParamOverride, FRAME_VARIABLES};
+pub use validated::{
+    DispatchSpec, ImageSize, LocatedExpr, Mips, Param, ParamValue, Pass, PassBinding, PassSetting, Resource,
+    ResourceDesc, SettingSource, ValidatedGraph,
+};

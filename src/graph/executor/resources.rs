@@ -151,11 +151,6 @@ impl RuntimeResources {
         self.physical.len()
     }
 
-    /// Whether there are none.
-    pub fn is_empty(&self) -> bool {
-        self.physical.is_empty()
-    }
-
     /// The physical index of `resource`'s `version` in frame `frame`.
     pub fn index(&self, resource: ResourceId, version: Version, frame: u64) -> Option<usize> {
         let copies = self.copies.get(resource).copied().flatten()?;
