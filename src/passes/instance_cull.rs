@@ -177,11 +177,6 @@ impl InstanceCullPass {
         })
     }
 
-    /// The settings in use.
-    pub fn settings(&self) -> &CullSettings {
-        &self.settings
-    }
-
     /// Scratch buffers for `slots` instances and `groups` draw groups (created on first use).
     fn ensure_scratch(&mut self, ctx: &GpuContext, slots: u32, groups: u32) -> crate::Result<()> {
         if self.scratch.as_ref().is_none_or(|s| s.slots != slots || s.groups != groups) {

@@ -12,9 +12,6 @@ use crate::passes::gbuffer::{bound_image, normal_defines};
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 
-/// Format of the lit output (values are sRGB-encoded by the shader).
-pub const OUTPUT_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
-
 /// What the pass reads and writes.
 pub struct LightingInputs<'a> {
     /// Depth, in `SHADER_READ_ONLY_OPTIMAL`.

@@ -2,20 +2,20 @@
 //! one shader folder, and registers through the same [`PassKind`](crate::graph::PassKind)
 //! interface as an engine's own kinds; [`builtin_kinds`] lists them, one line each.
 
-pub mod aa_edges;
-pub mod compute;
-pub mod fxaa;
-pub mod gbuffer;
-pub mod gbuffer_compressed;
+pub(crate) mod aa_edges;
+pub(crate) mod compute;
+pub(crate) mod fxaa;
+pub(crate) mod gbuffer;
+pub(crate) mod gbuffer_compressed;
 pub mod hiz_build;
-pub mod instance_cull;
-pub mod lighting;
-pub mod lighting_compressed;
-pub mod lighting_visibility;
+pub(crate) mod instance_cull;
+pub(crate) mod lighting;
+pub(crate) mod lighting_compressed;
+pub(crate) mod lighting_visibility;
 pub mod overlay;
 pub mod shared;
-pub mod slots;
-pub mod visibility_ids;
+pub(crate) mod slots;
+pub(crate) mod visibility_ids;
 
 use crate::graph::KindRegistry;
 use gbuffer::GeometryMode;
