@@ -174,15 +174,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ctx = GpuContext::new(&ContextOptions::default())?;
     let shaders = ShaderCompiler::new(ShaderRoot::Embedded)?;
     let mut renderer = Renderer::with_graph(&ctx, &shaders, scene, settings, &spec)?;
-    // Two frames: the first has no visibility history yet.
+    // The first frames have no visibility history yet: two-phase culling settles by the third.
+    renderer.render(&camera)?;
     renderer.render(&camera)?;
     let (stats, image) = renderer.render_to_image(&camera)?;
     save_png(&image, out.as_ref())?;
     println!(
-        "{} instances, {} drawn (green boxes), {} culled (red boxes) -> {out}",
-        stats.instances,
-        stats.drawn,
-        stats.instances - stats.drawn
+        "{} instances: {} drawn (green boxes), {} occlusion-culled (red boxes), {} outside the view -> {out}",
+        stats.instances, stats.drawn, stats.occlusion_culled, stats.frustum_culled
     );
     Ok(())
 }
