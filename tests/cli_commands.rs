@@ -143,3 +143,35 @@ fn devices_lists_what_the_loader_sees() {
     let line = stdout.lines().find(|l| l.contains(&device)).unwrap();
     assert!(line.contains("compressed G-buffer: yes, draw-order sample claims: "), "{line}");
 }
+
+/// Special files never reach memory: each is refused at once, naming what it was meant to be.
+#[test]
+fn special_files_are_refused_instead_of_read() {
+    for (args, what) in [
+        (vec!["graph", "check", "/dev/zero"], "graph file"),
+        (vec!["render", "--graph", "/dev/zero", "--size", "16x16", "--out", "/dev/null"], "graph file"),
+        (vec!["render", "--scene", "/dev/zero", "--size", "16x16", "--out", "/dev/null"], "scene file"),
+    ] {
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert!(err.contains(&format!("the {what} is not a regular file")), "{args:?}: {err}");
+    }
+}
+
+/// A failed write of the image or the statistics is an error with a non-zero exit, not a silently
+/// short file.
+#[test]
+fn a_failed_write_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("frame.png");
+    let png = png.to_str().unwrap();
+    for (flag, args) in
+        [("--out", ["--out", "/dev/full", "--stats", "/dev/null"]), ("--stats", ["--out", png, "--stats", "/dev/full"])]
+    {
+        let mut all = vec!["render", "--size", "16x16", "--frames", "1"];
+        all.extend(args);
+        let (code, _, err) = run(&all);
+        assert_eq!(code, 1, "{flag}: {err}");
+        assert!(err.contains("/dev/full") && err.contains("No space left"), "{flag}: {err}");
+    }
+}

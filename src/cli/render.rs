@@ -193,7 +193,7 @@ fn watch(
     mut spec: GraphSpec,
     camera: &Camera,
 ) -> Result<()> {
-    let deadline = args.watch_for.map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
+    let deadline = watch_deadline(args.watch_for);
     let render_once = |renderer: &mut Renderer| -> Result<()> {
         let (stats, image) = renderer.render_to_image(camera)?;
         save_png(&image, &args.out)?;
@@ -292,4 +292,29 @@ fn progress(len: Option<u64>, message: &'static str) -> ProgressBar {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
     bar.with_message(message)
+}
+
+/// When `--watch-for SECONDS` ends, from now. A duration too long for the clock (`1e300`)
+/// watches until stopped, as with no limit; a negative or NaN one ends at once.
+fn watch_deadline(seconds: Option<f64>) -> Option<Instant> {
+    let seconds = seconds?;
+    let duration = Duration::try_from_secs_f64(if seconds > 0.0 { seconds } else { 0.0 }).ok()?;
+    Instant::now().checked_add(duration)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn any_watch_duration_gives_a_deadline_or_none_without_panicking() {
+        assert!(watch_deadline(None).is_none());
+        for huge in [1e300, f64::INFINITY, f64::MAX] {
+            assert!(watch_deadline(Some(huge)).is_none(), "{huge}");
+        }
+        for now in [0.0, -5.0, f64::NAN, f64::NEG_INFINITY] {
+            assert!(watch_deadline(Some(now)).is_some_and(|d| d <= Instant::now()), "{now}");
+        }
+        assert!(watch_deadline(Some(60.0)).is_some_and(|d| d > Instant::now()));
+    }
 }

@@ -105,7 +105,7 @@ struct ReadLog(Arc<Mutex<BTreeSet<PathBuf>>>);
 impl ReadLog {
     /// Reads `path`, noting it when it exists.
     fn read(&self, path: &Path) -> Option<String> {
-        let text = std::fs::read_to_string(path).ok()?;
+        let text = crate::files::read_limited_text(path, crate::files::SHADER_LIMIT, "shader").ok()?;
         self.0.lock().unwrap_or_else(|p| p.into_inner()).insert(path.to_path_buf());
         Some(text)
     }
@@ -159,8 +159,8 @@ impl ShaderCompiler {
         if !path.is_file() {
             return self.compile(&path.to_string_lossy(), defines);
         }
-        let source = std::fs::read_to_string(path)
-            .map_err(|source| ShaderError::Read { path: path.display().to_string(), source })?;
+        let source = crate::files::read_limited_text(path, crate::files::SHADER_LIMIT, "shader")
+            .map_err(|e| ShaderError::Read { path: path.display().to_string(), source: std::io::Error::other(e) })?;
         self.read_log.0.lock().unwrap_or_else(|p| p.into_inner()).insert(path.to_path_buf());
         self.compile_source(&path.display().to_string(), &source, defines)
     }

@@ -77,7 +77,7 @@ const MAX_INCLUDE_DEPTH: u32 = 16;
 /// (relative to the including file) inlined, so that bindings declared in such headers have
 /// names; includes from the shader library stay as they are. `None` if `path` cannot be read.
 fn source_with_local_includes(path: &Path, depth: u32) -> Option<String> {
-    let source = std::fs::read_to_string(path).ok()?;
+    let source = crate::files::read_limited_text(path, crate::files::SHADER_LIMIT, "shader").ok()?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let mut out = String::with_capacity(source.len());
     for line in source.lines() {

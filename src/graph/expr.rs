@@ -86,11 +86,20 @@ pub struct Expr {
 
 const FUNCTIONS: &[&str] = &["ceil", "ceil_div", "floor", "max", "min", "round"];
 
+/// Most tokens of one expression. Bounds the tree, and with it the recursion of evaluating and
+/// dropping it: a size in a graph file needs a few dozen.
+pub const MAX_TOKENS: usize = 1024;
+/// Deepest nesting of parentheses, calls and signs the parser descends into (its recursion).
+pub const MAX_NESTING: usize = 64;
+
 impl Expr {
     /// Parses `text`.
     pub fn parse(text: &str) -> Result<Expr, ExprError> {
         let tokens = lex(text)?;
-        let mut p = Parser { tokens: &tokens, i: 0, end: text.chars().count() };
+        if let Some(t) = tokens.get(MAX_TOKENS) {
+            return err(t.offset, format!("the expression has more than {MAX_TOKENS} tokens"));
+        }
+        let mut p = Parser { tokens: &tokens, i: 0, end: text.chars().count(), depth: 0 };
         let root = p.expr()?;
         if let Some(t) = p.tokens.get(p.i) {
             return err(t.offset, format!("unexpected '{}'", t.text));
@@ -193,6 +202,8 @@ struct Parser<'t> {
     tokens: &'t [Token],
     i: usize,
     end: usize,
+    /// Current nesting (see [`MAX_NESTING`]).
+    depth: usize,
 }
 
 impl Parser<'_> {
@@ -228,15 +239,26 @@ impl Parser<'_> {
         Ok(left)
     }
 
+    /// Runs `f` one nesting level deeper, refusing past [`MAX_NESTING`].
+    fn nested<T>(&mut self, f: impl FnOnce(&mut Self) -> Result<T, ExprError>) -> Result<T, ExprError> {
+        if self.depth >= MAX_NESTING {
+            return err(self.offset(), format!("nested more than {MAX_NESTING} levels deep"));
+        }
+        self.depth += 1;
+        let out = f(self);
+        self.depth -= 1;
+        out
+    }
+
     fn unary(&mut self) -> Result<Node, ExprError> {
         if self.peek() == Some("-") {
             let at = self.offset();
             self.i += 1;
-            return Ok(Node::Neg(Box::new(self.unary()?), at));
+            return Ok(Node::Neg(Box::new(self.nested(Self::unary)?), at));
         }
         if self.peek() == Some("+") {
             self.i += 1;
-            return self.unary();
+            return self.nested(Self::unary);
         }
         self.primary()
     }
@@ -249,7 +271,7 @@ impl Parser<'_> {
         self.i += 1;
         let first = tok.text.chars().next().unwrap_or(' ');
         if tok.text == "(" {
-            let inner = self.expr()?;
+            let inner = self.nested(Self::expr)?;
             if self.peek() != Some(")") {
                 return err(self.offset(), "missing ')'");
             }
@@ -267,10 +289,10 @@ impl Parser<'_> {
                     return err(at, format!("unknown function '{}' (functions: {})", tok.text, FUNCTIONS.join(", ")));
                 }
                 self.i += 1;
-                let mut args = vec![self.expr()?];
+                let mut args = vec![self.nested(Self::expr)?];
                 while self.peek() == Some(",") {
                     self.i += 1;
-                    args.push(self.expr()?);
+                    args.push(self.nested(Self::expr)?);
                 }
                 if self.peek() != Some(")") {
                     return err(self.offset(), "missing ')'");
@@ -406,6 +428,26 @@ mod tests {
         let vars: BTreeMap<String, Num> =
             [("instances".to_string(), Num::Int(1001)), ("x".to_string(), Num::Float(0.5))].into_iter().collect();
         Expr::parse(text)?.eval(&vars)
+    }
+
+    #[test]
+    fn deep_nesting_and_long_expressions_are_refused_at_their_place() {
+        // Each would overflow the stack of a recursive parser or evaluator without a bound.
+        let nested = |open: &str, close: &str, n: usize| open.repeat(n) + "1" + &close.repeat(n);
+        for text in [nested("(", ")", 200), nested("-", "", 200), nested("+", "", 200), nested("max(", ", 1)", 200)] {
+            let e = Expr::parse(&text).unwrap_err();
+            assert!(e.message.contains("nested more than 64 levels"), "{}", e.message);
+            assert!(e.offset > 0 && e.offset <= 5 * MAX_NESTING, "{}", e.offset);
+        }
+        for text in [nested("(", ")", 100_000), nested("-", "", 100_000), "1".to_string() + &"+1".repeat(100_000)] {
+            let e = Expr::parse(&text).unwrap_err();
+            assert_eq!((e.offset, e.message.contains("more than 1024 tokens")), (MAX_TOKENS, true), "{}", e.message);
+        }
+        // Right at the limits, still fine.
+        let deep = "(".repeat(MAX_NESTING - 1) + "1" + &")".repeat(MAX_NESTING - 1);
+        assert_eq!(ev(&deep), Ok(Num::Int(1)));
+        let long = "1".to_string() + &"+1".repeat((MAX_TOKENS - 1) / 2);
+        assert_eq!(ev(&long), Ok(Num::Int(1 + (MAX_TOKENS as i64 - 1) / 2)));
     }
 
     #[test]

@@ -83,8 +83,8 @@ impl GraphSpec {
 
     /// A graph file on disk.
     pub fn from_file(path: &Path) -> Result<Self> {
-        let text =
-            std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.display().to_string(), source })?;
+        let text = crate::files::read_limited_text(path, crate::files::GRAPH_LIMIT, "graph file")
+            .map_err(|e| Error::Io { path: path.display().to_string(), source: std::io::Error::other(e) })?;
         Ok(Self {
             text,
             file: path.display().to_string(),

@@ -95,7 +95,7 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
         return Err(import_err(format!("lights = {light_count} is out of range (at most {})", procedural::MAX_LIGHTS)));
     }
 
-    let bytes = std::fs::read(path).map_err(|e| import_err(format!("cannot read the file: {e}")))?;
+    let bytes = crate::files::read_limited(path, crate::files::SCENE_LIMIT, "scene file").map_err(import_err)?;
     let gltf = buffers::parse(&bytes, &mut report.notes).map_err(import_err)?;
     drop(bytes);
     let document = gltf.document;
@@ -237,6 +237,6 @@ mod tests {
     fn missing_file_is_an_import_error() {
         let e = load(Path::new("/nonexistent/x.glb"), &LoadOptions::default()).unwrap_err();
         assert!(matches!(e, SceneError::Import { .. }), "{e}");
-        assert!(e.to_string().contains("cannot read the file"), "{e}");
+        assert!(e.to_string().contains("cannot read the scene file"), "{e}");
     }
 }

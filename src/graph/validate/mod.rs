@@ -51,8 +51,8 @@ pub fn load_file(
     kinds: &KindRegistry,
 ) -> Result<ValidatedGraph, GraphErrors> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| GraphErrors(vec![GraphError::new(&file, Pos::START, format!("cannot read the file: {e}"))]))?;
+    let text = crate::files::read_limited_text(path, crate::files::GRAPH_LIMIT, "graph file")
+        .map_err(|e| GraphErrors(vec![GraphError::new(&file, Pos::START, e)]))?;
     load(&text, &file, overrides, env, kinds)
 }
 

@@ -98,7 +98,7 @@ pub(super) fn load_buffers(
                 let rest = uri.strip_prefix("file://").unwrap_or(&uri["file:".len()..]);
                 let relative = percent_decode(rest).ok_or_else(|| format!("buffer {i}: malformed URI '{uri}'"))?;
                 let path = base.join(&relative);
-                std::fs::read(&path)
+                read_buffer_file(&path, buffer.length())
                     .map_err(|e| format!("buffer {i}: cannot read '{uri}' ({}): {e}", path.display()))?
             }
             Source::Uri(uri) if uri.contains(':') => {
@@ -107,7 +107,7 @@ pub(super) fn load_buffers(
             Source::Uri(uri) => {
                 let relative = percent_decode(uri).ok_or_else(|| format!("buffer {i}: malformed URI '{uri}'"))?;
                 let path = base.join(&relative);
-                std::fs::read(&path)
+                read_buffer_file(&path, buffer.length())
                     .map_err(|e| format!("buffer {i}: cannot read '{uri}' ({}): {e}", path.display()))?
             }
         };
@@ -121,6 +121,12 @@ pub(super) fn load_buffers(
         out.push(data);
     }
     Ok(out)
+}
+
+/// The bytes of a buffer's file, up to the `byteLength` the document declares: a file that is
+/// larger (or endless, like `/dev/zero`) never costs more memory than the buffer.
+fn read_buffer_file(path: &Path, length: usize) -> Result<Vec<u8>, String> {
+    crate::files::read_prefix(path, length as u64, "buffer file")
 }
 
 /// A readable description of a `gltf` error (JSON, GLB container or schema validation).
@@ -217,5 +223,12 @@ mod uri_tests {
         }
         let short = load_buffers(&document("file:a%20b.bin", 3), dir.path(), None).unwrap_err();
         assert!(short.contains("byteLength 3"), "{short}");
+        // A buffer is read up to its byteLength, and a special file not at all.
+        std::fs::write(dir.path().join("long.bin"), [1u8; 64]).unwrap();
+        assert_eq!(load_buffers(&document("long.bin", 4), dir.path(), None).unwrap(), vec![vec![1u8; 4]]);
+        for uri in ["file:///dev/zero", "/dev/zero"] {
+            let err = load_buffers(&document(uri, 4), dir.path(), None).unwrap_err();
+            assert!(err.contains("not a regular file") && err.contains("buffer 0"), "{err}");
+        }
     }
 }
