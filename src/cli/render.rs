@@ -58,7 +58,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     stats.graph = renderer.plan().name.clone();
     if args.watch {
-        return watch(args, &mut renderer, &shaders, spec, &camera);
+        watch(args, &mut renderer, &shaders, spec, &camera)?;
+        return validation_verdict(&ctx);
     }
     renderer.set_step_timing(args.step_times);
     if args.pool_adapt {
@@ -67,6 +68,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     let bar = progress(Some(args.frames as u64), "rendering");
     let mut last_frame = None;
+    // Every frame's figures are kept only for `--stats`, which writes them all; otherwise a long
+    // run keeps the last frame's and the verification totals, so its memory stays flat.
+    let keep_frames = args.stats.is_some();
+    let mut last_stats = FrameStats::default();
+    let mut verified = VerifyTotals::default();
     // Without --verify (which checks each frame once it has executed), frames do not wait for
     // each other: their figures come back a few frames late. The last frame is read back whole.
     let mut pipeline = (!args.verify).then(|| FramePipeline::new(&ctx)).transpose()?;
@@ -78,7 +84,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         if let Some(fraction) = renderer.adapt_pool(&shaders, &frame_stats)? {
             bar.println(format!("frame {frame}: compressed G-buffer pool re-planned at {fraction} blocks per pixel"));
         }
-        stats.frames.push(frame_stats);
+        if let Some(v) = &frame_stats.verify {
+            verified.add(v);
+        }
+        if keep_frames {
+            stats.frames.push(frame_stats.clone());
+        }
+        last_stats = frame_stats;
         Ok(())
     };
     for frame in 0..args.frames {
@@ -117,12 +129,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         spinner.finish_and_clear();
         stats.reference = Some(error);
     }
-    let validation_messages = ctx.validation_log().count();
-
     if let Some(path) = &args.stats {
         write_file(path, stats.to_json().as_bytes())?;
     }
-    let last = stats.frames.last().cloned().unwrap_or_default();
+    let last = last_stats;
     println!(
         "{} through '{}': {}x{} on {}, {} instances, {} drawn ({} frustum-culled, {} occlusion-culled), {} draws, {} triangles, GPU {:.3} ms -> {}",
         stats.scene,
@@ -146,22 +156,42 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         );
     }
     if args.verify {
-        let checked: Vec<_> = stats.frames.iter().filter_map(|f| f.verify.as_ref()).collect();
-        let missed: u32 = checked.iter().map(|v| v.false_negatives).sum();
-        let extra: u32 = checked.iter().map(|v| v.false_positives).sum();
-        let visible: u32 = checked.iter().map(|v| v.visible).sum();
+        let VerifyTotals { frames, visible, missed, extra } = verified;
         println!(
-            "verify: {} frame(s), {visible} visible instance-frames, {missed} false negatives, {extra} false positives",
-            checked.len()
+            "verify: {frames} frame(s), {visible} visible instance-frames, {missed} false negatives, {extra} false positives"
         );
         if missed > 0 {
             return Err(Error::Invalid(format!("culling removed {missed} visible instance-frame(s)")));
         }
     }
-    if validation_messages > 0 {
-        return Err(Error::Invalid(format!("the validation layer reported {validation_messages} message(s)")));
+    validation_verdict(&ctx)
+}
+
+/// An error when the validation layer reported anything during the run (with `--validation`).
+fn validation_verdict(ctx: &GpuContext) -> Result<()> {
+    let messages = ctx.validation_log().count();
+    if messages > 0 {
+        return Err(Error::Invalid(format!("the validation layer reported {messages} message(s)")));
     }
     Ok(())
+}
+
+/// The sums of the verified frames' figures.
+#[derive(Clone, Copy, Default)]
+struct VerifyTotals {
+    frames: u32,
+    visible: u64,
+    missed: u64,
+    extra: u64,
+}
+
+impl VerifyTotals {
+    fn add(&mut self, v: &cullgraph::stats::VerifyStats) {
+        self.frames += 1;
+        self.visible += v.visible as u64;
+        self.missed += v.false_negatives as u64;
+        self.extra += v.false_positives as u64;
+    }
 }
 
 /// The graph to run: `--graph FILE`, the built-in default or (`--overlay`) the built-in overlay
