@@ -487,7 +487,8 @@ fn tiny_odd_and_large_outputs() {
 fn extreme_fields_of_view_and_orthographic() {
     let gpu = GpuTest::new();
     let scene = wall_scene();
-    for fov in [1.0f32, 170.0] {
+    // Down to the extremes a user can type: no visible instance is lost, the image is the unculled one.
+    for fov in [1.0f32, 170.0, 1e-30, 1e-6, 179.999] {
         let camera = Camera { projection: Projection::Perspective { fov_y_deg: fov }, ..wall_camera() };
         check(&gpu, &scene, &camera, (48, 36), 2, CameraPath::Still);
     }
