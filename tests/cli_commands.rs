@@ -175,3 +175,28 @@ fn a_failed_write_is_an_error() {
         assert!(err.contains("/dev/full") && err.contains("No space left"), "{flag}: {err}");
     }
 }
+
+/// A world offset or eye beyond the range where positions stay precise on the GPU is refused
+/// with the range, not rendered wrong.
+#[test]
+fn world_offsets_beyond_the_precise_range_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = |offset: &str| {
+        let out = dir.path().join(format!("{offset}.png"));
+        let base = ["render", "--scene", "builtin:city", "--instances", "500", "--size", "32x18", "--frames", "1"];
+        let (code, _, err) = run(&[&base[..], &["--world-offset", offset, "--out", out.to_str().unwrap()]].concat());
+        (code, err, std::fs::read(&out).ok())
+    };
+    let (code, err, origin) = image("0,0,0");
+    assert_eq!(code, 0, "{err}");
+    // Whole-unit offsets below 2^24 change no bit; up to 2^40 positions keep 1/256 unit.
+    let (code, err, far) = image("10000000,0,-10000000");
+    assert_eq!((code, far.as_ref() == origin.as_ref()), (0, true), "{err}");
+    let (code, err, farther) = image("1e12,0,-1e12");
+    assert_eq!((code, farther.is_some()), (0, true), "{err}");
+    for offset in ["1e16,0,0", "0,-3e12,0", "1e30,1e30,1e30"] {
+        let (code, err, _) = image(offset);
+        assert_eq!(code, 1, "{offset}: {err}");
+        assert!(err.contains("is beyond ±1099511627776 (2^40) units"), "{offset}: {err}");
+    }
+}

@@ -343,6 +343,14 @@ fn non_finite_node_transforms_name_the_node() {
     );
     let m = load_err(&write(&dir, &doc, &bin));
     assert!(m.starts_with("scene.gltf: node 'bigger' (#1): world transform is not finite"), "{m}");
+    // Finite, but farther than positions stay precise on the GPU: refused at the node.
+    let (doc, bin) = document(
+        &[triangle()],
+        json!([{"name": "far", "children": [1], "translation": [1e12, 0.0, 0.0]}, {"name": "farther", "mesh": 0, "translation": [1e12, 0.0, 0.0]}]),
+    );
+    let m = load_err(&write(&dir, &doc, &bin));
+    assert!(m.starts_with("scene.gltf: node 'farther' (#1): world translation ["), "{m}");
+    assert!(m.contains("is beyond ±1099511627776 (2^40) units"), "{m}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

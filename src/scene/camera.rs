@@ -155,6 +155,11 @@ impl Camera {
         if !self.eye.is_finite() || !self.target.is_finite() || !self.up.is_finite() {
             return Err("camera position, target or up is not finite".into());
         }
+        for (what, p) in [("position", self.eye), ("target", self.target)] {
+            if let Some(e) = super::position_error(what, p) {
+                return Err(format!("camera {e}"));
+            }
+        }
         if (self.target - self.eye).length_squared() == 0.0 {
             return Err("camera eye and target are the same point".into());
         }

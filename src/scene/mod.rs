@@ -26,6 +26,26 @@ use glam::{DVec3, Mat3, Vec3};
 /// Instance flag: a large, cheap object that the occluder pre-pass may draw first. In glTF:
 /// node extras `{"cullgraph": {"occluder": true}}` (that node and those below it).
 pub const FLAG_OCCLUDER: u32 = 1 << 0;
+
+/// The largest world coordinate (of an instance, light or camera) a scene may use: 2^40, about
+/// 1.1e12 units. The GPU gets positions as a float on a power-of-two grid plus a float
+/// remainder, subtracted from the eye's exactly; below 2^24 the grid is whole units and
+/// whole-unit offsets change no bit, and up to 2^40 a position keeps 1/256 unit or better.
+/// Farther out the remainder rounds to whole units and more, so the image would be wrong.
+pub const MAX_COORDINATE: f64 = (1u64 << 40) as f64;
+
+/// Why a world position is refused, if it is: not finite, or beyond [`MAX_COORDINATE`].
+pub fn position_error(what: &str, p: glam::DVec3) -> Option<String> {
+    if !p.is_finite() {
+        Some(format!("{what} {p} is not finite"))
+    } else if p.abs().max_element() > MAX_COORDINATE {
+        Some(format!(
+            "{what} {p} is beyond ±{MAX_COORDINATE:.0} (2^40) units, where positions stop keeping 1/256 unit of precision on the GPU"
+        ))
+    } else {
+        None
+    }
+}
 /// Instance flag: render this object with one sample per pixel (selective anti-aliasing). In
 /// glTF: node extras `{"cullgraph": {"no_aa": true}}`.
 pub const FLAG_NO_AA: u32 = 1 << 1;

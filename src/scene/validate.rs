@@ -38,8 +38,8 @@ pub fn validate_scene(scene: &Scene) -> Result<(), SceneError> {
     }
     for (i, l) in scene.lights.iter().enumerate() {
         let place = format!("light #{i}");
-        if !l.position.is_finite() || !l.position.as_vec3().is_finite() {
-            return Err(SceneError::invalid(place, format!("position {} is not finite", l.position)));
+        if let Some(e) = super::position_error("position", l.position) {
+            return Err(SceneError::invalid(place, e));
         }
         if !l.color.is_finite() || l.color.min_element() < 0.0 {
             return Err(SceneError::invalid(place, format!("color {} must be finite and non-negative", l.color)));
@@ -93,8 +93,8 @@ fn check_instance(scene: &Scene, instance: &Instance) -> Result<(), String> {
     if !instance.transform.is_finite() {
         return Err("transform is not finite".into());
     }
-    if !instance.transform.translation.as_vec3().is_finite() {
-        return Err(format!("translation {} is beyond the range of f32", instance.transform.translation));
+    if let Some(e) = super::position_error("translation", instance.transform.translation) {
+        return Err(e);
     }
     if instance.flags >> MAX_FLAG_BITS != 0 {
         return Err(format!("flags {:#x} use bits above the {MAX_FLAG_BITS} that the GPU keeps", instance.flags));
@@ -205,8 +205,14 @@ mod tests {
         s.instances[1].flags = 1 << 9;
         assert!(validate_scene(&s).unwrap_err().to_string().starts_with("instance #1: flags"));
         s.instances[1].flags = 0;
-        s.instances[1].transform.translation.x = 1e300;
-        assert!(validate_scene(&s).unwrap_err().to_string().contains("beyond the range of f32"));
+        // Beyond f32, and farther than positions keep their precision on the GPU.
+        for far in [1e300, 1.1e12] {
+            s.instances[1].transform.translation.x = far;
+            let e = validate_scene(&s).unwrap_err().to_string();
+            assert!(e.starts_with("instance #1: translation") && e.contains("beyond ±1099511627776 (2^40)"), "{e}");
+        }
+        s.instances[1].transform.translation.x = 1e12;
+        assert!(validate_scene(&s).is_ok());
         assert!(s.validate_instance(7).is_err());
     }
 

@@ -89,6 +89,9 @@ pub(super) fn walk<'a>(
                 "world transform is not finite (the composed transforms overflow)",
             ));
         }
+        if let Some(e) = crate::scene::position_error("world translation", world.translation) {
+            return Err(SceneError::invalid(place(), e));
+        }
         let flags = parent_flags | super::flags::node_flags(&node).map_err(|m| SceneError::invalid(place(), m))?;
         let children: Vec<Node<'a>> = node.children().collect();
         for child in children.into_iter().rev() {
