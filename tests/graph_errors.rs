@@ -1,7 +1,9 @@
 //! Bad graphs: every file under `tests/graphs/bad/` starts with one or more lines
 //! `// expect: LINE:COL: MESSAGE` (and optionally `// params: name=value, ...` for `--param`
-//! overrides). Loading the file must give exactly those errors, in that order. CPU only: format
-//! support comes from a fake device, shaders are compiled with shaderc and reflected.
+//! overrides, and `// compile: WIDTHxHEIGHT` to compile after loading, for an empty scene).
+//! Loading (and compiling) the file must give exactly those errors, in that order. CPU only:
+//! format support and limits come from a fake device, shaders are compiled with shaderc and
+//! reflected.
 //!
 //! `GRAPH_BLESS=1 cargo test --test graph_errors` rewrites the expectations from the actual
 //! errors (review the diff!).
@@ -14,7 +16,8 @@ use cullgraph::passes::builtin_kinds;
 use std::path::{Path, PathBuf};
 
 /// A device that cannot use sRGB formats as storage images, has no 8x MSAA and no
-/// `D24_UNORM_S8_UINT`, like some real ones.
+/// `D24_UNORM_S8_UINT`, like some real ones; it binds at most 128 MiB of storage buffer (as
+/// lavapipe) and 64 KiB of uniform buffer, and makes images and render areas of at most 8192.
 struct FakeDevice {
     shaders: NoDevice,
 }
@@ -48,6 +51,16 @@ impl Environment for FakeDevice {
     fn shader_interface(&self, path: &Path) -> Result<ShaderInterface, String> {
         self.shaders.shader_interface(path)
     }
+
+    fn limits(&self) -> Option<graph::DeviceLimits> {
+        Some(graph::DeviceLimits {
+            device: "the fake device".into(),
+            max_storage_buffer_range: 1 << 27,
+            max_uniform_buffer_range: 1 << 16,
+            max_image_dimension_2d: 8192,
+            max_framebuffer: vk::Extent2D { width: 8192, height: 8192 },
+        })
+    }
 }
 
 fn bad_dir() -> PathBuf {
@@ -57,17 +70,20 @@ fn bad_dir() -> PathBuf {
 struct Case {
     expected: Vec<String>,
     params: Vec<(String, String)>,
+    compile: Option<String>,
     header_lines: usize,
 }
 
 fn header(text: &str) -> Case {
-    let mut case = Case { expected: Vec::new(), params: Vec::new(), header_lines: 0 };
+    let mut case = Case { expected: Vec::new(), params: Vec::new(), compile: None, header_lines: 0 };
     for line in text.lines() {
         if let Some(e) = line.strip_prefix("// expect: ") {
             case.expected.push(e.to_string());
         } else if let Some(p) = line.strip_prefix("// params: ") {
             case.params =
                 p.split(", ").map(|kv| graph::parse_param_override(kv).expect("params line is name=value")).collect();
+        } else if let Some(size) = line.strip_prefix("// compile: ") {
+            case.compile = Some(size.to_string());
         } else {
             break;
         }
@@ -76,9 +92,15 @@ fn header(text: &str) -> Case {
     case
 }
 
-fn actual(text: &str, path: &Path, params: &[(String, String)]) -> Result<(), GraphErrors> {
+fn actual(text: &str, path: &Path, case: &Case) -> Result<(), GraphErrors> {
     let env = FakeDevice::new();
-    graph::load(text, &path.display().to_string(), params, &env, &builtin_kinds()).map(|_| ())
+    let loaded = graph::load(text, &path.display().to_string(), &case.params, &env, &builtin_kinds())?;
+    if let Some(size) = &case.compile {
+        let (w, h) = size.split_once('x').expect("compile line is WIDTHxHEIGHT");
+        let frame = graph::FrameInputs::new(w.parse().expect("width"), h.parse().expect("height"));
+        graph::compile(&loaded, &frame)?;
+    }
+    Ok(())
 }
 
 #[test]
@@ -97,7 +119,7 @@ fn every_bad_graph_reports_its_exact_errors() {
         let case = header(&text);
         let file = path.display().to_string();
         let root = format!("{}/", env!("CARGO_MANIFEST_DIR"));
-        let got: Vec<String> = match actual(&text, path, &case.params) {
+        let got: Vec<String> = match actual(&text, path, &case) {
             Ok(()) => Vec::new(),
             Err(errors) => errors
                 .iter()
@@ -114,6 +136,9 @@ fn every_bad_graph_reports_its_exact_errors() {
             if !case.params.is_empty() {
                 let p: Vec<String> = case.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
                 out.push(format!("// params: {}", p.join(", ")));
+            }
+            if let Some(size) = &case.compile {
+                out.push(format!("// compile: {size}"));
             }
             out.extend(rest.iter().map(|s| s.to_string()));
             std::fs::write(path, out.join("\n") + "\n").expect("bless");

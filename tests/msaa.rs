@@ -35,27 +35,28 @@ fn with_owner(text: &str, owner: Owner) -> String {
         return text.to_string();
     }
     let claim = r#""sample_claim": Buffer(size: "ceil_div(width * height, 4) * 4"),"#;
-    let reads = r#"reads: {"depth": "depth", "gbuffer": "gbuffer"},"#;
+    let reads = r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool"},"#;
     let check = r#"shader: "compressed_check.comp","#;
     // The check graph's check pass also reads the oracle's ids.
-    let check_reads = r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "ids": "ids"},"#;
+    let check_reads =
+        r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "ids": "ids"},"#;
     // (from, to, the times `from` may occur)
     let edits = [
         (r#""depth": Image(format: D32_SFLOAT_S8_UINT,"#, r#""depth": Image(format: D32_SFLOAT,"#.to_string(), 1..=1),
         (r#""gbuffer": Buffer(size:"#, format!("{claim}\n        \"gbuffer\": Buffer(size:"), 1..=1),
         (
-            r#"writes: {"depth": "depth", "gbuffer": "gbuffer"}"#,
-            r#"writes: {"depth": "depth", "gbuffer": "gbuffer", "sample_claim": "sample_claim"}"#.to_string(),
+            r#"writes: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool"}"#,
+            r#"writes: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "sample_claim": "sample_claim"}"#.to_string(),
             1..=1,
         ),
         (
             reads,
-            r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "sample_claim": "sample_claim"},"#.to_string(),
+            r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "sample_claim": "sample_claim"},"#.to_string(),
             1..=usize::MAX,
         ),
         (
             check_reads,
-            r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "ids": "ids", "sample_claim": "sample_claim"},"#
+            r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "ids": "ids", "sample_claim": "sample_claim"},"#
                 .to_string(),
             0..=1,
         ),
@@ -424,13 +425,13 @@ fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
             kind: "compute",
             shader: "reverse_lists.comp",
             reads: {"depth": "depth"},
-            writes: {"gbuffer": "gbuffer", "marks": "marks"},
+            writes: {"gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "marks": "marks"},
             dispatch: PerPixel("depth"),
         ),
         Pass(
             name: "lighting_reversed",
             kind: "lighting_compressed",
-            reads: {"depth": "depth", "gbuffer": "gbuffer"},
+            reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool"},
             writes: {"output": "color_reversed"},
             settings: {"exposure": "exposure", "light_tiles": "light_tiles", "shared_blocks": "shared_blocks"},
         ),
@@ -536,11 +537,17 @@ fn claimed_samples_give_the_image_of_scanning_every_depth_sample() {
     let gpu = GpuTest::new();
     let source =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("graph/msaa_compressed_claim.ron")).unwrap();
-    let with_claims = r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "sample_claim": "sample_claim"},"#;
+    let with_claims = r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "sample_claim": "sample_claim"},"#;
     assert_eq!(source.matches(with_claims).count(), 1, "the lighting pass reads sample_claim");
     let scanning = Path::new(env!("CARGO_TARGET_TMPDIR")).join("msaa_compressed_claim_scanning.ron");
-    std::fs::write(&scanning, source.replace(with_claims, r#"reads: {"depth": "depth", "gbuffer": "gbuffer"},"#))
-        .unwrap();
+    std::fs::write(
+        &scanning,
+        source.replace(
+            with_claims,
+            r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool"},"#,
+        ),
+    )
+    .unwrap();
     let cases = [(city(1500).0, city(1500).1, "city"), (intersecting_scene(), boxes_camera(), "cubes")];
     for (scene, camera, what) in &cases {
         let claimed = render(&gpu, scene, camera, (96, 64), &spec("builtin:msaa_compressed_claim", &[]), 1);
@@ -880,4 +887,58 @@ fn per_sample_msaa_shades_parallel_surfaces_at_their_own_depths() {
     let (mean, max) = mean_and_max_difference(&per_sample, &compressed);
     println!("per-sample vs compressed on parallel surfaces: mean {mean:.4}, max {max}");
     assert!(max <= 2, "per-sample MSAA shades parallel surfaces apart: mean {mean}, max {max}");
+}
+
+/// At 3840x2160 the compressed G-buffer (174 MB at the shipped half a pool block per pixel)
+/// is more than lavapipe binds at once (maxStorageBufferRange 128 MiB): its heads and its pool
+/// are separate buffers, so every shipped compressed graph renders there without a validation
+/// message, with the pool the graph asks for and the same image for stencil and claims.
+#[test]
+fn the_shipped_compressed_graphs_render_at_4k() {
+    let gpu = GpuTest::new();
+    let (scene, _) = city(300);
+    let size = (3840, 2160);
+    let camera = scene.default_camera(size.0 as f32 / size.1 as f32);
+    let pixels = size.0 * size.1;
+    let mut images = Vec::new();
+    for (graph, params) in [
+        ("builtin:msaa_compressed", &[][..]),
+        ("builtin:msaa_compressed_claim", &[("claim_order", "arrival")][..]),
+        ("builtin:msaa_compressed_edges", &[][..]),
+    ] {
+        let (image, stats) = render(&gpu, &scene, &camera, size, &spec(graph, params), 1);
+        let g = &stats[0].gbuffer[0];
+        assert_eq!(g.pool_blocks, pixels / 2, "{graph}: the pool of pool_fraction 0.5");
+        assert!(g.pool_used > 10_000, "{graph}: edge pixels keep blocks ({g:?})");
+        assert_eq!(g.overflow_fragments, 0, "{graph}: {g:?}");
+        assert_eq!(g.surfaces_per_pixel.iter().sum::<u32>(), pixels);
+        images.push(image);
+    }
+    assert_eq!(mean_and_max_difference(&images[0], &images[1]), (0.0, 0), "stencil and claims: same image");
+}
+
+/// A G-buffer laid out as one buffer (heads and pool together) is more than lavapipe binds at
+/// 4K: compiling refuses it at the buffer's declaration, naming the limit, before anything is
+/// created or recorded.
+#[test]
+fn a_buffer_beyond_the_devices_binding_range_is_refused_at_its_declaration() {
+    let gpu = GpuTest::new();
+    let mut spec = spec("builtin:msaa_compressed", &[]);
+    let heads = r#""gbuffer": Buffer(size: "16 + ceil_div(width * height, 2) * 28")"#;
+    let line = spec.text.lines().position(|l| l.contains(heads)).expect("the shipped heads buffer") + 1;
+    spec.text = spec.text.replace(heads, r#""gbuffer": Buffer(size: "16 + ceil_div(width * height * 3 / 2, 2) * 28")"#);
+    let limit = gpu.caps().limits.max_storage_buffer_range;
+    if limit as u64 >= 174_182_416 {
+        return; // a device that binds it all (NVIDIA: 4 GiB) has nothing to refuse
+    }
+    let scene = boxes_scene();
+    let settings = RenderSettings::new(3840, 2160);
+    let error = Renderer::with_graph(&gpu, &gpu.shaders(), scene, settings, &spec).err().expect("refused").to_string();
+    let expected = format!(
+        ":{line}:9: buffer 'gbuffer' is 174182416 bytes, but pass 'gbuffer' binds it as \"gbuffer\" and {} lets one \
+         binding address at most {limit} bytes (maxStorageBufferRange)",
+        gpu.caps().name
+    );
+    assert!(error.contains(&expected), "{error}");
+    gpu.assert_clean();
 }

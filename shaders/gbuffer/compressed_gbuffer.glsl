@@ -1,6 +1,8 @@
-// The compressed G-buffer (thesis 000 section 5, paper 002): one storage buffer holding a
-// header, one 14-byte head block per pixel, then a pool of blocks for the other distinct
-// surfaces of edge pixels, linked per pixel. Layout mirrors src/passes/gbuffer_compressed.rs.
+// The compressed G-buffer (thesis 000 section 5, paper 002): a storage buffer holding a header
+// and one 14-byte head block per pixel (`gbuffer`), and a second one holding the pool of blocks
+// for the other distinct surfaces of edge pixels (`gbuffer_pool`), linked per pixel. Two
+// buffers rather than one keep each binding within maxStorageBufferRange at 4K on devices that
+// address 128 MiB per binding. Layout mirrors src/passes/gbuffer_compressed.rs.
 #ifndef CULLGRAPH_COMPRESSED_GBUFFER_GLSL
 #define CULLGRAPH_COMPRESSED_GBUFFER_GLSL
 
@@ -40,18 +42,20 @@ struct BlockPair {
 #define GBUFFER_HEADER_OVERFLOW_FRAGMENTS 1u  // fragments dropped because the pool was full
 #define GBUFFER_HEADER_OVERFLOW_SAMPLES 2u    // samples they covered (the head took their weight)
 
-// Link word: 26-bit block index | 3-bit sample count | 3-bit sample index, the last two of the
-// block pointed to. Index 0 is the null link: links only ever point into the pool, which
-// starts after the heads.
+// Link word: 26-bit pool block index plus one | 3-bit sample count | 3-bit sample index, the
+// last two of the block pointed to. Links only ever point into the pool, so index 0 is free to
+// be the null link.
 #define LINK_INDEX_BITS 26u
 #define LINK_INDEX_MASK 0x3FFFFFFu
 #define LINK_NULL 0u
-#define MAX_BLOCKS 0x3FFFFFFu
+#define MAX_POOL_BLOCKS 0x3FFFFFFu
 
 uint link_index(uint link) { return link & LINK_INDEX_MASK; }
+// The pool block a non-null link points at.
+uint link_slot(uint link) { return (link & LINK_INDEX_MASK) - 1u; }
 uint link_count(uint link) { return (link >> 26) & 7u; }
 uint link_sample(uint link) { return link >> 29; }
-uint make_link(uint index, uint count, uint sample_index) { return index | (count << 26) | (sample_index << 29); }
+uint make_link(uint slot, uint count, uint sample_index) { return (slot + 1u) | (count << 26) | (sample_index << 29); }
 
 // The `sample_claim` buffer (no stencil): a byte per pixel of the samples claimed. Pixel p's
 // byte is byte p / W of word p % W, W = ceil(pixels / 4), so that neighbouring pixels, drawn

@@ -31,8 +31,9 @@ layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants fram
 layout(set = 0, binding = 3, scalar) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 4, scalar) buffer Gbuffer {
     uint header[GBUFFER_HEADER_WORDS];
-    BlockPair pairs[];
+    BlockPair pairs[];   // the heads
 } gb;
+layout(set = 0, binding = 6, scalar) buffer GbufferPool { BlockPair pairs[]; } pool;
 
 #ifdef AA_MASK
 // Selective AA by depth edges (an aa_edges pass): 0 = this pixel keeps one block.
@@ -42,7 +43,7 @@ layout(set = 0, binding = 5) uniform usampler2D aa_mask;
 layout(push_constant) uniform Push {
     uint width;
     uint height;
-    uint pool_blocks;        // usable pool blocks (clamped to the 26-bit index)
+    uint pool_blocks;        // usable pool blocks (clamped to MAX_POOL_BLOCKS)
     uint aa_region;          // 0 all, 1 ellipse, 2 rectangle
     float aa_region_size;    // fraction of the screen's width and height
     float aa_max_distance;   // 0: no limit
@@ -74,13 +75,21 @@ layout(location = 1) flat in uint in_material;
 layout(location = 2) flat in uint in_mirrored;
 layout(location = 3) flat in uint in_flags;
 
-// A block's attributes, but AO where the clear has put it already (heads).
-void write_block(uint index, GpuMaterial m, vec3 n, bool ao_cleared) {
-    uint pair = index >> 1, k = index & 1u;
+// A head block's attributes but AO, which the clear has put in place.
+void write_head(uint pixel, GpuMaterial m, vec3 n) {
+    uint pair = pixel >> 1, k = pixel & 1u;
     gb.pairs[pair].albedo_metallic[k] = packUnorm4x8(vec4(m.albedo, m.metallic));
     gb.pairs[pair].normal[k] = packSnorm2x16(oct_encode(n));
     gb.pairs[pair].roughness[k] = uint8_t(uint(clamp(m.roughness, 0.0, 1.0) * 255.0 + 0.5));
-    if (!ao_cleared) gb.pairs[pair].ao[k] = uint8_t(BLOCK_AO);
+}
+
+// A pool block's attributes.
+void write_pool_block(uint slot, GpuMaterial m, vec3 n) {
+    uint pair = slot >> 1, k = slot & 1u;
+    pool.pairs[pair].albedo_metallic[k] = packUnorm4x8(vec4(m.albedo, m.metallic));
+    pool.pairs[pair].normal[k] = packSnorm2x16(oct_encode(n));
+    pool.pairs[pair].roughness[k] = uint8_t(uint(clamp(m.roughness, 0.0, 1.0) * 255.0 + 0.5));
+    pool.pairs[pair].ao[k] = uint8_t(BLOCK_AO);
 }
 
 // Selective AA (paper 002 section 5): whether this fragment may take a pool block.
@@ -122,7 +131,7 @@ void main() {
     // flips the winding, so its outside shows as a back face.
     if (gl_FrontFacing == (in_mirrored != 0u)) n = -n;
     if (head) {
-        write_block(pixel, m, n, true);   // its link belongs to the list
+        write_head(pixel, m, n);   // its link belongs to the list
         return;
     }
     // The list's order is whichever order the fragments run in; the lighting does not depend on it.
@@ -132,9 +141,8 @@ void main() {
         atomicAdd(gb.header[GBUFFER_HEADER_OVERFLOW_SAMPLES], uint(bitCount(mask)));
         return;   // these samples fall to the head (or a listed block), as above
     }
-    uint index = pc.width * pc.height + slot;
-    write_block(index, m, n, false);
-    uint link = make_link(index, uint(bitCount(mask)), uint(findLSB(mask)));
+    write_pool_block(slot, m, n);
+    uint link = make_link(slot, uint(bitCount(mask)), uint(findLSB(mask)));
     uint head_link = atomicExchange(gb.pairs[pixel >> 1].link[pixel & 1u], link);
-    gb.pairs[index >> 1].link[index & 1u] = head_link;
+    pool.pairs[slot >> 1].link[slot & 1u] = head_link;
 }

@@ -33,8 +33,9 @@ layout(set = 0, binding = 0) uniform sampler2D depth_tex;
 #endif
 layout(set = 0, binding = 1, scalar) readonly buffer Gbuffer {
     uint header[GBUFFER_HEADER_WORDS];
-    BlockPair pairs[];
+    BlockPair pairs[];   // the heads
 } gb;
+layout(set = 0, binding = 7, scalar) readonly buffer GbufferPool { BlockPair pairs[]; } pool;
 layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
 layout(set = 0, binding = 3, scalar) readonly buffer Lights { GpuPointLight lights[]; };
 layout(set = 0, binding = 4, rgba8) uniform writeonly image2D out_color;
@@ -96,8 +97,8 @@ struct BlockWords {
     uint k;              // which block of the pair
 };
 
-BlockWords load_block(uint index) {
-    uint pair = index >> 1, k = index & 1u;
+BlockWords load_head_block(uint pixel) {
+    uint pair = pixel >> 1, k = pixel & 1u;
     BlockWords w;
     w.albedo_metallic = gb.pairs[pair].albedo_metallic[k];
     w.normal = gb.pairs[pair].normal[k];
@@ -105,6 +106,19 @@ BlockWords load_block(uint index) {
     w.k = k;
     return w;
 }
+
+BlockWords load_pool_block(uint slot) {
+    uint pair = slot >> 1, k = slot & 1u;
+    BlockWords w;
+    w.albedo_metallic = pool.pairs[pair].albedo_metallic[k];
+    w.normal = pool.pairs[pair].normal[k];
+    w.roughness_ao = uint(pool.pairs[pair].roughness[k]) | (uint(pool.pairs[pair].ao[k]) << 8);
+    w.k = k;
+    return w;
+}
+
+// The link stored in pool block `slot` (the next of its pixel's list).
+uint pool_link(uint slot) { return pool.pairs[slot >> 1].link[slot & 1u]; }
 
 Block decode_block(BlockWords w) {
     vec4 am = unpackUnorm4x8(w.albedo_metallic);
@@ -117,7 +131,8 @@ Block decode_block(BlockWords w) {
     return b;
 }
 
-Block read_block(uint index) { return decode_block(load_block(index)); }
+// The pool block a non-null link points at.
+Block read_linked_block(uint link) { return decode_block(load_pool_block(link_slot(link))); }
 
 vec3 shade_block(Block b, vec2 center, float depth) {
     Surface s;
@@ -186,7 +201,7 @@ HeadLoads load_head(ivec2 pixel) {
     uint head = head_index(pixel);
     HeadLoads h;
     h.link = gb.pairs[head >> 1].link[head & 1u];
-    h.block = load_block(head);
+    h.block = load_head_block(head);
 #ifdef SAMPLE_CLAIM
     h.depth = DEPTH_AT(pixel, 0u);
     h.claim_word = sample_claim[claim_word(head, pixel_count())];
@@ -266,8 +281,7 @@ PixelList gather_pixel(ivec2 pixel, HeadLoads h, inout DepthRange range) {
         // Blocks past a full list wait for the next round (`shade_remaining_rounds`), in order.
         if (list.next_link == LINK_NULL && !push_block(link, list.first_entry, last_entry)) list.next_link = link;
 #endif
-        uint index = link_index(link);
-        link = gb.pairs[index >> 1].link[index & 1u];
+        link = pool_link(link_slot(link));
     }
     // The head stands for every covered sample no listed block has: its own, and those of
     // fragments that kept no block (a full pool, an AA cap).
@@ -288,7 +302,7 @@ void shade_shared_blocks() {
         uint local_pixel = entry_meta_pixel(sh_block_meta[e]);  // every entry below the total was pushed
         ivec2 pixel = ivec2(gl_WorkGroupID.xy * TILE_SIZE + uvec2(local_pixel % TILE_SIZE, local_pixel / TILE_SIZE));
         uint link = sh_block_link[e];
-        sh_block_color[e] = pack_color(shade_block(read_block(link_index(link)), vec2(pixel) + 0.5, DEPTH_AT(pixel, link_sample(link))));
+        sh_block_color[e] = pack_color(shade_block(read_linked_block(link), vec2(pixel) + 0.5, DEPTH_AT(pixel, link_sample(link))));
     }
 #endif
 }
@@ -332,8 +346,7 @@ uvec3 shade_remaining_rounds(bool inside, inout PixelList list, uvec3 sum, inout
         uint last_entry = ENTRY_NONE;
         for (uint guard = 0u; guard < SAMPLES && link_index(link) != LINK_NULL; ++guard) {
             if (!push_block(link, list.first_entry, last_entry)) break;
-            uint index = link_index(link);
-            link = gb.pairs[index >> 1].link[index & 1u];
+            link = pool_link(link_slot(link));
         }
         list.next_link = link;
         barrier();
@@ -352,12 +365,11 @@ uvec3 shade_remaining_rounds(bool inside, inout PixelList list, uvec3 sum, inout
 void resolve_pixel(ivec2 pixel, vec2 center, PixelList list, uvec3 sum, uint link, uint n) {
     bool has_head = list.head_depth > 0.0;
     for (; n < list.blocks && link_index(link) != LINK_NULL; ++n) {
-        vec3 c = shade_block(read_block(link_index(link)), center, DEPTH_AT(pixel, link_sample(link)));
+        vec3 c = shade_block(read_linked_block(link), center, DEPTH_AT(pixel, link_sample(link)));
         // Rounded as the shared list stores its colors: which blocks a tile shares depends on
         // the order of its lists, and the image must not.
         add_weighted(sum, unpack_color(pack_color(c)), listed_weight(list, link));
-        uint index = link_index(link);
-        link = gb.pairs[index >> 1].link[index & 1u];
+        link = pool_link(link_slot(link));
     }
     // Sky: the background samples, and the head's when the pixel has no surface at all.
     uint sky_weight = list.background + (!has_head && list.blocks == 0u ? list.kept : 0u);

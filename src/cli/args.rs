@@ -60,6 +60,13 @@ pub struct GraphCheckArgs {
     /// Vulkan device by name substring or index; env CULLGRAPH_DEVICE.
     #[arg(long, value_name = "NAME|INDEX")]
     pub device: Option<String>,
+    /// Also compile for this output size, WIDTHxHEIGHT, and `--scene`: checks what depends on
+    /// the size and the device's limits (buffer ranges, image and attachment sizes).
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// The scene whose quantities size the graph (with --size).
+    #[command(flatten)]
+    pub scene: SceneArgs,
 }
 
 /// `cullgraph bench` flags.
@@ -163,6 +170,9 @@ pub struct GraphFrameArgs {
     /// The scene whose quantities (instances, meshes, lights, materials, triangles) size the graph.
     #[command(flatten)]
     pub scene: SceneArgs,
+    /// Vulkan device whose limits the sizes are checked against; env CULLGRAPH_DEVICE.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub device: Option<String>,
 }
 
 /// `cullgraph graph plan` flags.

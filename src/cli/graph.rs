@@ -2,7 +2,7 @@
 //! as graphviz. Graph errors are printed one per line as `file:line:col: message` with exit
 //! status 1.
 
-use super::args::{GraphArgs, GraphCommand, GraphFrameArgs};
+use super::args::{GraphArgs, GraphCheckArgs, GraphCommand, GraphFrameArgs};
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::graph::{self, CompiledGraph, DeviceEnv, Environment, GraphErrors, NoDevice};
 use cullgraph::passes::builtin_kinds;
@@ -13,7 +13,7 @@ use std::process::ExitCode;
 /// Runs a `graph` subcommand.
 pub fn run(args: &GraphArgs) -> ExitCode {
     let result = match &args.command {
-        GraphCommand::Check(a) => check(&a.file, &a.params, a.device.as_deref()),
+        GraphCommand::Check(a) => check(a),
         GraphCommand::Plan(a) => compiled(&a.file, &a.params, &a.frame).map(|plan| {
             println!("{plan}");
         }),
@@ -62,34 +62,52 @@ fn shader_root() -> ShaderRoot {
     ShaderRoot::from_env()
 }
 
-/// Loads against the real device when Vulkan is available (format support is then checked),
-/// otherwise without one.
-fn check(file: &Path, params: &[(String, String)], device: Option<&str>) -> Result<(), Failure> {
+/// Loads `file` against the real device when Vulkan is available (formats are then checked
+/// against it, and compiling checks sizes against its limits), otherwise without one.
+fn load(file: &Path, params: &[(String, String)], device: Option<&str>) -> Result<graph::ValidatedGraph, Failure> {
     let options = ContextOptions {
         device: DeviceSelector::or_from_env(device.map(|d| d.parse().unwrap_or_default())),
         validation: false,
-        app_name: "cullgraph graph check".into(),
+        app_name: "cullgraph graph".into(),
     };
-    let graph = match GpuContext::new(&options) {
+    Ok(match GpuContext::new(&options) {
         Ok(ctx) => {
             let shaders = ShaderCompiler::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
             let env = DeviceEnv::new(&ctx, &shaders);
             graph::load_file(file, params, &env, &builtin_kinds())?
         }
         Err(e) => {
-            eprintln!("note: no Vulkan device ({e}); image formats are not checked against a device");
+            eprintln!("note: no Vulkan device ({e}); formats and sizes are not checked against a device");
             let env = NoDevice::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
             graph::load_file(file, params, &env as &dyn Environment, &builtin_kinds())?
         }
+    })
+}
+
+/// Validates `file`; with a size, also compiles it for that size and scene.
+fn check(args: &GraphCheckArgs) -> Result<(), Failure> {
+    let graph = load(&args.file, &args.params, args.device.as_deref())?;
+    let compiled = match args.size {
+        Some((width, height)) => {
+            let scene = args.scene.load().map_err(|e| Failure::Other(e.to_string()))?;
+            graph::compile(&graph, &frame_inputs(&scene, width, height))?;
+            format!(", compiles at {width}x{height}")
+        }
+        None => String::new(),
     };
-    println!("{}: ok ({} passes, {} resources)", file.display(), graph.passes.len(), graph.resources.len());
+    println!(
+        "{}: ok ({} passes, {} resources{compiled})",
+        args.file.display(),
+        graph.passes.len(),
+        graph.resources.len()
+    );
     Ok(())
 }
 
-/// Loads (without a device) and compiles for the requested size and scene.
+/// Loads (against the device when there is one) and compiles for the requested size and scene.
 fn compiled(file: &Path, params: &[(String, String)], frame: &GraphFrameArgs) -> Result<CompiledGraph, Failure> {
+    let graph = load(file, params, frame.device.as_deref())?;
     let env = NoDevice::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
-    let graph = graph::load_file(file, params, &env, &builtin_kinds())?;
     let scene = frame.scene.load().map_err(|e| Failure::Other(e.to_string()))?;
     let (width, height) = frame.size;
     let inputs = frame_inputs(&scene, width, height);

@@ -21,6 +21,12 @@ pub trait Environment {
     /// (relative paths resolve against the graph file's directory, then the shader library).
     /// `Err` carries the compile or reflection error.
     fn shader_interface(&self, path: &Path) -> Result<ShaderInterface, String>;
+
+    /// The device's limits that compiled sizes are checked against; `None` (the default)
+    /// checks none.
+    fn limits(&self) -> Option<super::compile::device_limits::DeviceLimits> {
+        None
+    }
 }
 
 /// An environment without a device: every format is accepted, shaders are compiled and reflected
@@ -199,6 +205,11 @@ impl<'a> DeviceEnv<'a> {
 }
 
 impl Environment for DeviceEnv<'_> {
+    fn limits(&self) -> Option<super::compile::device_limits::DeviceLimits> {
+        let caps = self.ctx.caps();
+        Some(super::compile::device_limits::DeviceLimits::from_vulkan(&caps.name, &caps.limits))
+    }
+
     fn check_image_format(
         &self,
         format: vk::Format,

@@ -48,7 +48,8 @@ pub struct SlotDecl {
     pub multisample_ok: bool,
     /// What the slot is for, for `graph/README.md`-style listings and errors.
     pub doc: &'static str,
-    /// The least a buffer bound here must hold; checked when the graph is compiled for a scene.
+    /// The least a buffer bound here must hold (or exactly what, for [`MinBytes::Exact`]);
+    /// checked when the graph is compiled for a scene.
     pub min_bytes: MinBytes,
 }
 
@@ -59,6 +60,9 @@ pub enum MinBytes {
     Any,
     /// This many bytes.
     Fixed(u64),
+    /// Exactly this many bytes: a fixed-size record that the pass writes and the host reads
+    /// whole (counters). A larger buffer is refused too, since its tail would mean nothing.
+    Exact(u64),
     /// This many bytes per instance (`instances * n`).
     PerInstance(u64),
     /// This many bytes per draw group (`meshes * n`).
@@ -72,7 +76,7 @@ impl MinBytes {
     pub fn bytes(self, instances: u64, meshes: u64) -> u64 {
         match self {
             MinBytes::Any => 0,
-            MinBytes::Fixed(n) => n,
+            MinBytes::Fixed(n) | MinBytes::Exact(n) => n,
             MinBytes::PerInstance(n) => instances * n,
             MinBytes::PerMesh(n) => meshes * n,
             MinBytes::InstanceBits => instances.div_ceil(32) * 4,
@@ -84,6 +88,7 @@ impl MinBytes {
         match self {
             MinBytes::Any => "any size".into(),
             MinBytes::Fixed(n) => n.to_string(),
+            MinBytes::Exact(n) => format!("exactly {n}"),
             MinBytes::PerInstance(n) => format!("instances * {n}"),
             MinBytes::PerMesh(n) => format!("meshes * {n}"),
             MinBytes::InstanceBits => "ceil_div(instances, 32) * 4".into(),

@@ -38,6 +38,7 @@ pub(crate) mod usage;
 pub(crate) mod validate;
 pub(crate) mod validated;
 
+pub use compile::device_limits::DeviceLimits;
 pub use compile::resolve::Resolved;
 pub use compile::{compile, FrameInputs};
 pub use env::{DeviceEnv, Environment, NoDevice};

@@ -277,6 +277,9 @@ pub struct ValidatedGraph {
     pub outputs: Vec<ResourceId>,
     /// The pass kinds it was validated against.
     pub kinds: KindRegistry,
+    /// The limits of the device it was validated for (none without a device): compiling checks
+    /// sizes against them.
+    pub limits: Option<super::compile::device_limits::DeviceLimits>,
 }
 
 impl ValidatedGraph {

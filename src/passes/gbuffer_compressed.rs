@@ -10,10 +10,13 @@
 //! (`claim_order` `draw`, or `auto` on a device that has one), otherwise to whichever fragment
 //! claims first.
 //!
-//! The `gbuffer` buffer: a 16-byte header (pool blocks asked for, fragments and samples dropped
-//! because the pool was full), then `width * height` head blocks, then the pool, all as 28-byte
-//! pairs of blocks (`shaders/gbuffer/compressed_gbuffer.glsl`). Its size sets the pool; block
-//! indices have 26 bits, so at most 2^26 blocks are used whatever the size.
+//! The `gbuffer` buffer holds a 16-byte header (pool blocks asked for, fragments and samples
+//! dropped because the pool was full) and `width * height` head blocks; the `gbuffer_pool`
+//! buffer holds the pool. Both store 28-byte pairs of blocks
+//! (`shaders/gbuffer/compressed_gbuffer.glsl`). Two buffers keep each binding within
+//! `maxStorageBufferRange` at 3840x2160 on devices that address 128 MiB per binding (lavapipe):
+//! the heads take 116 MB there, heads and pool together 174 MB. The pool's size sets its blocks;
+//! links have 26 bits, so at most 2^26 - 1 pool blocks are used whatever the size.
 
 use super::gbuffer::{bound_image, geometry_pipeline, record_geometry, DrawSource};
 use super::slots::{ms, redraw_list_slots, slot, AA_MASK_FORMAT};
@@ -32,31 +35,29 @@ use ash::vk;
 pub const HEADER_BYTES: u64 = 16;
 /// Bytes of one pair of blocks.
 pub const PAIR_BYTES: u64 = 28;
-/// Blocks one link can address (26-bit index).
-pub const MAX_BLOCKS: u64 = 1 << 26;
+/// Pool blocks one link can address (a 26-bit index; 0 is the null link).
+pub const MAX_POOL_BLOCKS: u64 = (1 << 26) - 1;
 
-/// Bytes of a compressed G-buffer for `pixels` heads and `pool_blocks` pool blocks.
-pub fn buffer_bytes(pixels: u64, pool_blocks: u64) -> u64 {
-    HEADER_BYTES + (pixels + pool_blocks).div_ceil(2) * PAIR_BYTES
+/// Bytes of the `gbuffer` buffer (header and heads) for `pixels` pixels.
+pub fn heads_bytes(pixels: u64) -> u64 {
+    HEADER_BYTES + pixels.div_ceil(2) * PAIR_BYTES
 }
 
-/// Pool blocks a buffer of `bytes` gives an image of `pixels`, within the 26-bit index; an
-/// error when even the heads do not fit.
-pub fn pool_blocks(bytes: u64, pixels: u64) -> Result<u64, String> {
-    if pixels >= MAX_BLOCKS {
+/// Pool blocks a `gbuffer_pool` buffer of `bytes` holds, within the links' 26-bit index.
+pub fn pool_blocks(bytes: u64) -> u64 {
+    (bytes / PAIR_BYTES * 2).min(MAX_POOL_BLOCKS)
+}
+
+/// An error when a `gbuffer` buffer of `bytes` cannot hold the heads of `pixels` pixels.
+pub fn check_heads(bytes: u64, pixels: u64) -> Result<(), String> {
+    let need = heads_bytes(pixels);
+    if bytes < need {
         return Err(format!(
-            "{pixels} pixels need more head blocks than a 26-bit link can address ({} at most); render smaller",
-            MAX_BLOCKS - 1
+            "the gbuffer buffer holds {bytes} bytes; the header and {pixels} head blocks take {need} (size: 16 + \
+             ceil_div(width * height, 2) * 28)"
         ));
     }
-    let blocks = bytes.saturating_sub(HEADER_BYTES) / PAIR_BYTES * 2;
-    if blocks < pixels {
-        return Err(format!(
-            "the gbuffer buffer holds {blocks} blocks, fewer than the {pixels} heads (size it with at least {} bytes)",
-            buffer_bytes(pixels, 0)
-        ));
-    }
-    Ok(blocks.min(MAX_BLOCKS) - pixels)
+    Ok(())
 }
 
 /// Bytes of the `sample_claim` buffer: one byte per pixel, in whole words.
@@ -106,11 +107,13 @@ impl SampleOwner {
     }
 }
 
-/// The compressed G-buffer bound to a pass's `gbuffer` slot, with the pool its size gives an
-/// image the size of `depth`, and the `sample_claim` buffer when one is bound.
+/// The compressed G-buffer bound to a pass's `gbuffer` and `gbuffer_pool` slots, for an image
+/// the size of `depth`, and the `sample_claim` buffer when one is bound.
 pub struct BoundGbuffer<'a> {
-    /// The buffer.
+    /// The header and heads.
     pub buffer: &'a crate::gpu::Buffer,
+    /// The pool.
+    pub pool: &'a crate::gpu::Buffer,
     /// Pixels (head blocks).
     pub pixels: u64,
     /// Pool blocks, within the 26-bit index.
@@ -129,9 +132,10 @@ impl<'a> BoundGbuffer<'a> {
     ) -> crate::Result<Self> {
         let invalid = |m: String| crate::Error::Invalid(format!("{kind}: {m}"));
         let buffer = slots.buffer("gbuffer").ok_or_else(|| invalid("no gbuffer buffer bound".into()))?;
+        let pool = slots.buffer("gbuffer_pool").ok_or_else(|| invalid("no gbuffer_pool buffer bound".into()))?;
         let extent = depth.extent();
         let pixels = extent.width as u64 * extent.height as u64;
-        let pool = pool_blocks(buffer.size(), pixels).map_err(invalid)?;
+        check_heads(buffer.size(), pixels).map_err(invalid)?;
         let sample_claim = slots.buffer("sample_claim");
         if let Some(claim) = sample_claim {
             if claim.size() < sample_claim_bytes(pixels) {
@@ -142,7 +146,7 @@ impl<'a> BoundGbuffer<'a> {
                 )));
             }
         }
-        Ok(Self { buffer, pixels, pool_blocks: pool as u32, sample_claim })
+        Ok(Self { buffer, pool, pixels, pool_blocks: pool_blocks(pool.size()) as u32, sample_claim })
     }
 }
 
@@ -318,7 +322,7 @@ impl PassNode for GbufferCompressedPass {
         let inputs = SceneInputs::of(rec)?;
         let scene = &inputs.scene;
         let lists = DrawSource::redraw_lists(slots, scene)?;
-        let mut extra = vec![Bind::Buffer(4, gbuffer.handle())];
+        let mut extra = vec![Bind::Buffer(4, gbuffer.handle()), Bind::Buffer(6, bound.pool.handle())];
         if let Some(claim) = claim {
             extra.push(Bind::Buffer(7, claim.handle()));
         }
@@ -362,7 +366,8 @@ impl PassKind for GbufferCompressedKind {
             },
             writes: vec![
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished MSAA depth: with stencil (its stencil is written), or without stencil and a sample_claim buffer")),
-                slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header, width x height head blocks, then the pool (size: compressed_gbuffer_bytes(pool_blocks))"),
+                slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header and a head block per pixel (size: 16 + ceil_div(width * height, 2) * 28)"),
+                slot("gbuffer_pool", Usage::StorageBufferWrite(Stages::Fragment), true, FormatRule::Any, "the pool of blocks for the other surfaces of edge pixels, 14 bytes a block (size: ceil_div(blocks, 2) * 28; at most 2^26 - 1 blocks are used)"),
                 slot("sample_claim", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "with a depth format without stencil: the samples already claimed, one byte per pixel (size: ceil_div(width * height, 4) * 4; at most 8 samples)"),
             ],
             settings: vec![
@@ -380,9 +385,23 @@ impl PassKind for GbufferCompressedKind {
         sample_owner_error(check).into_iter().collect()
     }
 
+    fn check_sizes(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        heads_size_error(check).into_iter().collect()
+    }
+
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
         Ok(Box::new(GbufferCompressedPass::new(s.ctx, s.shaders, s.pass, s.plan)?))
     }
+}
+
+/// A `gbuffer` buffer too small for a head block per pixel of the depth, at the binding.
+pub(crate) fn heads_size_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
+    let (_, extent) = check.image_extent("depth")?;
+    let gbuffer = check.binding("gbuffer")?;
+    let crate::graph::Resolved::Buffer(bytes) = check.resolved.get(gbuffer.resource)? else { return None };
+    let pixels = extent.width as u64 * extent.height as u64;
+    let message = check_heads(*bytes, pixels).err()?;
+    Some((gbuffer.pos, format!("pass '{}' ({}): {message}", check.pass.name, check.pass.kind)))
 }
 
 /// A depth format and `sample_claim` binding that leave no way, or two ways, to decide each
@@ -418,16 +437,31 @@ fn sample_owner_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
 mod tests {
     use super::*;
 
+    /// Bytes of a `gbuffer_pool` buffer of `blocks` blocks, as the shipped graphs size it.
+    fn pool_bytes(blocks: u64) -> u64 {
+        blocks.div_ceil(2) * PAIR_BYTES
+    }
+
     #[test]
     fn pool_sizes_respect_the_26_bit_index() {
-        assert_eq!(buffer_bytes(3, 0), 16 + 2 * 28);
-        assert_eq!(pool_blocks(buffer_bytes(100, 50), 100), Ok(50));
-        assert_eq!(pool_blocks(buffer_bytes(101, 50), 101), Ok(51)); // the odd pair's spare block
-        assert!(pool_blocks(buffer_bytes(100, 0) - 28, 100).is_err());
+        assert_eq!(heads_bytes(3), 16 + 2 * 28);
+        assert!(check_heads(heads_bytes(101), 101).is_ok());
+        assert!(check_heads(heads_bytes(101) - 1, 101).unwrap_err().contains("take 1444"));
+        assert_eq!(pool_blocks(pool_bytes(50)), 50);
+        assert_eq!(pool_blocks(pool_bytes(51)), 52); // the odd pair's spare block
+        assert_eq!(pool_blocks(27), 0);
         // 8K at 8x: the buffer could hold more, the index cannot.
         let pixels = 7680 * 4320;
-        assert_eq!(pool_blocks(buffer_bytes(pixels, 7 * pixels), pixels), Ok(MAX_BLOCKS - pixels));
-        assert!(pool_blocks(u64::MAX / 2, MAX_BLOCKS).is_err());
+        assert_eq!(pool_blocks(pool_bytes(7 * pixels)), MAX_POOL_BLOCKS);
+    }
+
+    /// The shipped compressed graphs' buffers at 3840x2160 each fit a 128 MiB binding
+    /// (lavapipe's maxStorageBufferRange), with the shipped pool of half a block per pixel.
+    #[test]
+    fn every_binding_fits_128_mib_at_4k() {
+        let pixels = 3840 * 2160;
+        assert!(heads_bytes(pixels) <= 1 << 27, "{}", heads_bytes(pixels));
+        assert!(pool_bytes(pixels / 2) <= 1 << 27);
     }
 
     /// Whether `spirv` has an instruction `opcode` whose operand `operand` (counted from the

@@ -12,7 +12,7 @@ use crate::gpu::{Access, Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::graph::{
-    FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, Stages, Usage,
+    FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, SettingDecl, SettingDefault, Stages, Usage,
 };
 use crate::passes::shared::SceneInputs;
 use ash::vk;
@@ -131,6 +131,7 @@ impl PassNode for LightingCompressedPass {
         let mut binds = vec![
             Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), read),
             Bind::Buffer(1, gbuffer.handle()),
+            Bind::Buffer(7, bound.pool.handle()),
             Bind::Buffer(2, inputs.constants().handle()),
             Bind::Buffer(3, inputs.lights().handle()),
             Bind::StorageImage(4, output.view()),
@@ -157,7 +158,8 @@ impl PassKind for LightingCompressedKind {
             doc: "lights the compressed G-buffer in compute: every block shaded once with tile-culled point lights, tone-mapped, weighted by the samples it covers, averaged",
             reads: vec![
                 ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the MSAA depth (positions are rebuilt from each block's sample)")),
-                slot("gbuffer", Usage::StorageBufferRead(Stages::Compute), true, FormatRule::Any, "the compressed G-buffer"),
+                slot("gbuffer", Usage::StorageBufferRead(Stages::Compute), true, FormatRule::Any, "the compressed G-buffer's header and heads"),
+                slot("gbuffer_pool", Usage::StorageBufferRead(Stages::Compute), true, FormatRule::Any, "its pool"),
                 slot("sample_claim", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "the samples gbuffer_compressed's fragments claimed (with a depth without stencil): the covered samples in one word instead of a read of every depth sample"),
             ],
             writes: vec![
@@ -180,6 +182,10 @@ impl PassKind for LightingCompressedKind {
             },
             slots_from_shader: false,
         }
+    }
+
+    fn check_sizes(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        super::gbuffer_compressed::heads_size_error(check).into_iter().collect()
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

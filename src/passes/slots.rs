@@ -50,8 +50,9 @@ pub(crate) const COMMANDS_BYTES: MinBytes =
 pub(crate) const COUNT_BYTES: MinBytes = MinBytes::Fixed(crate::passes::shared::face_cull::DRAW_COUNT_BYTES);
 /// An instance id per instance.
 pub(crate) const IDS_BYTES: MinBytes = MinBytes::PerInstance(4);
-/// A cull pass's counters (`CullCounters`), and the compressed G-buffer's.
-pub(crate) const COUNTERS_BYTES: MinBytes = MinBytes::Fixed(crate::graph::STATS_BYTES as u64);
+/// A cull pass's counters (`CullCounters`), and the compressed G-buffer's: a fixed record the
+/// host reads whole.
+pub(crate) const COUNTERS_BYTES: MinBytes = MinBytes::Exact(crate::graph::STATS_BYTES as u64);
 
 pub(crate) const fn ms(s: SlotDecl) -> SlotDecl {
     SlotDecl { multisample_ok: true, ..s }

@@ -4,6 +4,7 @@
 //! memory placed ([`memory`]) and barriers planned ([`barriers`]); values come from [`resolve`].
 
 pub mod barriers;
+pub mod device_limits;
 pub mod flow;
 pub mod lifetimes;
 pub mod memory;
@@ -81,6 +82,9 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
     if errors.list.is_empty() {
         let errs = super::validate::slot_size_errors(graph, &pruning.keep, &resolved, frame.instances, frame.meshes);
         for (pos, message) in errs {
+            sink.at(pos, message);
+        }
+        for (pos, message) in device_limits::limit_errors(graph, &pruning.keep, &resolved) {
             sink.at(pos, message);
         }
         for (pass, _) in graph.passes.iter().zip(&pruning.keep).filter(|(_, keep)| **keep) {

@@ -78,7 +78,8 @@ fn stats_sources(plan: &CompiledGraph) -> Vec<StatsSource> {
     sources.into_iter().map(|(_, s)| s).collect()
 }
 
-/// Copies the buffer bound by `binding` in `frame` into the host buffer `dst` at `offset`, after
+/// Copies the buffer bound by `binding` in `frame` (at most `max_bytes` of it) into the host
+/// buffer `dst` at `offset`, after
 /// whatever last touched it, and records the read so later writes wait for the copy. The caller
 /// makes the copy visible to the host (one barrier for all copies of a frame).
 #[allow(clippy::too_many_arguments)]
@@ -91,12 +92,13 @@ pub(crate) fn copy_to_host(
     binding: &crate::graph::plan::Binding,
     dst: &Buffer,
     offset: u64,
+    max_bytes: u64,
 ) {
     let Some(phys) = resources.index(binding.resource, binding.version, frame) else { return };
     let Physical::Buffer(src) = resources.get(phys) else { return };
     let device = ctx.device();
     cmd_barriers(device, cmd, &[memory_barrier(tracker.pending(&[phys]), Access::TRANSFER_READ)], &[]);
-    let size = src.size().min(dst.size().saturating_sub(offset));
+    let size = src.size().min(max_bytes).min(dst.size().saturating_sub(offset));
     if size > 0 {
         let region = vk::BufferCopy { src_offset: 0, dst_offset: offset, size };
         // SAFETY: both buffers live and large enough; cmd recording.
@@ -296,7 +298,7 @@ impl GraphRuntime {
             if let Some(capture) = &self.capture {
                 let copies: Vec<_> = capture.copies_of(index, &pass.bindings).collect();
                 for &(binding, host) in &copies {
-                    copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, host, 0);
+                    copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, host, 0, u64::MAX);
                 }
                 if !copies.is_empty() {
                     cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
@@ -305,7 +307,9 @@ impl GraphRuntime {
             let ring = &self.stats_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize];
             for (k, source) in self.stats_sources.iter().enumerate().filter(|(_, s)| s.pass == index) {
                 let offset = (k * STATS_BYTES) as u64;
-                copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, &source.binding, ring, offset);
+                // Exactly one record: each source has its own STATS_BYTES of the ring.
+                let (binding, record) = (&source.binding, STATS_BYTES as u64);
+                copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, ring, offset, record);
             }
         }
         if !self.stats_sources.is_empty() {

@@ -112,6 +112,7 @@ pub fn load_in(
         passes,
         outputs,
         kinds: kinds.clone(),
+        limits: env.limits(),
     };
     dataflow::check(&mut v, &graph, &parsed);
     images::check(&mut v, &graph, &samples);

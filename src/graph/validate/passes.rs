@@ -259,9 +259,13 @@ impl Validator<'_> {
                 pos: val_pos,
             };
             // A fixed minimum against a constant size needs no scene: say it now, not at compile.
-            if let (MinBytes::Fixed(need), ResourceDesc::Buffer { size }) = (slot.min_bytes, &res.desc) {
+            if let (MinBytes::Fixed(need) | MinBytes::Exact(need), ResourceDesc::Buffer { size }) =
+                (slot.min_bytes, &res.desc)
+            {
+                let exact = matches!(slot.min_bytes, MinBytes::Exact(_));
                 let bytes = size.expr.eval(&BTreeMap::new()).ok().map(|n| n.as_f64());
-                if let Some(bytes) = bytes.filter(|b| *b >= 0.0 && *b < need as f64) {
+                let wrong = |b: f64| b >= 0.0 && (b < need as f64 || (exact && b != need as f64));
+                if let Some(bytes) = bytes.filter(|b| wrong(*b)) {
                     let message = too_small(&decl.name, &binding, &res.name, bytes as u64, slot.min_bytes, need, "");
                     self.err(val_pos, message);
                 }

@@ -1,6 +1,6 @@
 //! Buffers too small for the slot they are bound to, for the output size and scene a graph is
 //! compiled for (a draw command per draw group, an id per instance, 64-byte counters...), as each
-//! slot declares ([`MinBytes`]). Reported at the binding, instead of by the pass when it is built
+//! slot declares ([`MinBytes`]), or not exactly the size of a fixed record (counters). Reported at the binding, instead of by the pass when it is built
 //! or first recorded. What a kind derives beyond that (a pyramid's size from its depth's) it
 //! checks itself ([`crate::graph::PassKind::check_sizes`]).
 
@@ -25,7 +25,7 @@ pub(crate) fn slot_size_errors(
             let Some(Resolved::Buffer(bytes)) = resolved.get(binding.resource) else { continue };
             let min = kind.slot(&binding.slot).map_or(MinBytes::Any, |s| s.min_bytes);
             let need = min.bytes(instances, meshes);
-            if *bytes < need {
+            if *bytes < need || (matches!(min, MinBytes::Exact(_)) && *bytes != need) {
                 let resource = &graph.resources[binding.resource].name;
                 let scene = format!(" for this scene ({instances} instances, {meshes} meshes)");
                 let message = too_small(&pass.name, binding, resource, *bytes, min, need, &scene);
@@ -50,6 +50,7 @@ pub(crate) fn too_small(
     let dir = if binding.in_writes { "writes" } else { "reads" };
     let rule = match min {
         MinBytes::Fixed(_) => String::new(),
+        MinBytes::Exact(_) => "exactly ".into(),
         _ => format!("{} = ", min.rule()),
     };
     format!(

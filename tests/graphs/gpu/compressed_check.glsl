@@ -24,6 +24,7 @@ layout(set = 0, binding = 1, scalar) readonly buffer Gbuffer {
     uint header[GBUFFER_HEADER_WORDS];
     BlockPair pairs[];
 } gbuffer;
+layout(set = 0, binding = 5, scalar) readonly buffer GbufferPool { BlockPair pairs[]; } gbuffer_pool;
 layout(set = 0, binding = 2, rgba8) uniform writeonly image2D check;
 #ifdef SAMPLE_CLAIM
 layout(set = 0, binding = 3) readonly buffer SampleClaim { uint words[]; } sample_claim;
@@ -50,15 +51,15 @@ void main() {
         if (texelFetch(depth, p, int(s)).r > 0.0) covered |= 1u << s;
     }
     uint pixels = uint(size.x * size.y);
-    uint blocks = uint(gbuffer.pairs.length()) * 2u;
+    uint pool_blocks = uint(gbuffer_pool.pairs.length()) * 2u;
     uint head = uint(p.y * size.x + p.x);
     uint link = gbuffer.pairs[head >> 1].link[head & 1u];
     uint errors = 0u, listed = 0u, sum = 0u, used = 0u;
     // The oracle's view: listed samples per triangle, kept at the triangle's lowest sample.
     uint per_triangle[8] = uint[8](0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u);
     while (link_index(link) != LINK_NULL && listed <= samples) {
-        uint index = link_index(link), count = link_count(link), sample_index = link_sample(link);
-        if (index < pixels || index >= blocks) { errors |= 1u; break; }
+        uint slot = link_slot(link), count = link_count(link), sample_index = link_sample(link);
+        if (slot >= pool_blocks) { errors |= 1u; break; }
         if (count == 0u || count >= samples) errors |= 2u;
         uint bit = 1u << sample_index;
         if (sample_index == 0u || sample_index >= samples || (covered & bit) == 0u || (used & bit) != 0u) errors |= 4u;
@@ -68,7 +69,7 @@ void main() {
         used |= bit;
         sum += count;
         listed += 1u;
-        link = gbuffer.pairs[index >> 1].link[index & 1u];
+        link = gbuffer_pool.pairs[slot >> 1].link[slot & 1u];
     }
     uint head_owned = (covered & 1u) != 0u ? 1u : 0u;
     for (uint s = 0u; s < samples; ++s) {

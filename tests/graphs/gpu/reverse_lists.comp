@@ -12,6 +12,7 @@ layout(set = 0, binding = 1, scalar) buffer Gbuffer {
     uint header[GBUFFER_HEADER_WORDS];
     BlockPair pairs[];
 } gbuffer;
+layout(set = 0, binding = 3, scalar) buffer GbufferPool { BlockPair pairs[]; } gbuffer_pool;
 layout(set = 0, binding = 2, rgba8) uniform writeonly image2D marks;
 
 void main() {
@@ -26,8 +27,8 @@ void main() {
     while (link_index(link) != LINK_NULL && n < 8u) {
         listed += link_count(link);
         links[n++] = link;
-        uint index = link_index(link);
-        link = gbuffer.pairs[index >> 1].link[index & 1u];
+        uint slot = link_slot(link);
+        link = gbuffer_pool.pairs[slot >> 1].link[slot & 1u];
     }
     uint covered = 0u;
     for (int s = 0; s < textureSamples(depth); ++s) covered += texelFetch(depth, p, s).r > 0.0 ? 1u : 0u;
@@ -37,9 +38,9 @@ void main() {
     // head -> last, each block -> the one listed before it, the first -> null.
     gbuffer.pairs[head >> 1].link[head & 1u] = links[n - 1u];
     for (uint i = n - 1u; i > 0u; --i) {
-        uint index = link_index(links[i]);
-        gbuffer.pairs[index >> 1].link[index & 1u] = links[i - 1u];
+        uint slot = link_slot(links[i]);
+        gbuffer_pool.pairs[slot >> 1].link[slot & 1u] = links[i - 1u];
     }
-    uint first = link_index(links[0]);
-    gbuffer.pairs[first >> 1].link[first & 1u] = LINK_NULL;
+    uint first = link_slot(links[0]);
+    gbuffer_pool.pairs[first >> 1].link[first & 1u] = LINK_NULL;
 }

@@ -1,0 +1,144 @@
+//! What the device would reject in a graph compiled for one output size and scene, found before
+//! anything is created: buffers bound beyond the range a descriptor can address, images and
+//! attachments beyond the device's dimensions, and attachments of one pass that do not cover
+//! the same area (its render area is one attachment's size). Reported at the resource's
+//! declaration, naming the pass, the slot and the limit.
+
+use super::resolve::Resolved;
+use crate::graph::error::Pos;
+use crate::graph::usage::Usage;
+use crate::graph::validated::ValidatedGraph;
+use ash::vk;
+
+/// The limits of the device a graph is loaded for ([`crate::graph::Environment::limits`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DeviceLimits {
+    /// The device's name, for messages.
+    pub device: String,
+    /// `maxStorageBufferRange`: the most bytes one storage-buffer binding addresses.
+    pub max_storage_buffer_range: u64,
+    /// `maxUniformBufferRange`: the most bytes one uniform-buffer binding addresses.
+    pub max_uniform_buffer_range: u64,
+    /// `maxImageDimension2D`.
+    pub max_image_dimension_2d: u32,
+    /// `maxFramebufferWidth` and `maxFramebufferHeight`: the largest render area.
+    pub max_framebuffer: vk::Extent2D,
+}
+
+impl DeviceLimits {
+    /// The limits of `limits`, a device called `device`.
+    pub fn from_vulkan(device: &str, limits: &vk::PhysicalDeviceLimits) -> Self {
+        Self {
+            device: device.to_string(),
+            max_storage_buffer_range: limits.max_storage_buffer_range as u64,
+            max_uniform_buffer_range: limits.max_uniform_buffer_range as u64,
+            max_image_dimension_2d: limits.max_image_dimension2_d,
+            max_framebuffer: vk::Extent2D {
+                width: limits.max_framebuffer_width,
+                height: limits.max_framebuffer_height,
+            },
+        }
+    }
+}
+
+/// `(position, message)` for everything of the kept passes (`keep[p]`) the device would reject,
+/// `resolved[r]` being resource `r` as compiled. Attachment areas are checked without a device
+/// too; the rest needs `graph.limits`.
+pub(crate) fn limit_errors(graph: &ValidatedGraph, keep: &[bool], resolved: &[Resolved]) -> Vec<(Pos, String)> {
+    let mut out = Vec::new();
+    let limits = graph.limits.as_ref();
+    let at = |r: usize| graph.resources[r].pos;
+    let name = |r: usize| graph.resources[r].name.as_str();
+    if let Some(limits) = limits {
+        for (r, res) in resolved.iter().enumerate() {
+            let Resolved::Image { extent, .. } = res else { continue };
+            let largest = extent.width.max(extent.height);
+            if largest > limits.max_image_dimension_2d {
+                let message = format!(
+                    "image '{}' is {}x{}; {} allows at most {} in each dimension (maxImageDimension2D)",
+                    name(r),
+                    extent.width,
+                    extent.height,
+                    limits.device,
+                    limits.max_image_dimension_2d
+                );
+                out.push((at(r), message));
+            }
+        }
+    }
+    for (pass, _) in graph.passes.iter().zip(keep).filter(|(_, k)| **k) {
+        let mut attachments: Vec<(usize, &str, vk::Extent2D)> = Vec::new();
+        for binding in &pass.bindings {
+            let r = binding.resource;
+            match (resolved.get(r), binding.usage) {
+                (Some(Resolved::Buffer(bytes)), usage) => {
+                    let Some(limits) = limits else { continue };
+                    let (limit, what) = match usage {
+                        Usage::StorageBufferRead(_)
+                        | Usage::StorageBufferWrite(_)
+                        | Usage::StorageBufferReadWrite(_) => {
+                            (limits.max_storage_buffer_range, "maxStorageBufferRange")
+                        }
+                        Usage::Uniform(_) => (limits.max_uniform_buffer_range, "maxUniformBufferRange"),
+                        _ => continue,
+                    };
+                    if *bytes > limit {
+                        let message = format!(
+                            "buffer '{}' is {bytes} bytes, but pass '{}' binds it as \"{}\" and {} lets one binding \
+                             address at most {limit} bytes ({what}): size it down, or split it over several buffers",
+                            name(r),
+                            pass.name,
+                            binding.written_slot,
+                            limits.device
+                        );
+                        out.push((at(r), message));
+                    }
+                }
+                (Some(Resolved::Image { extent, .. }), usage) if usage.is_attachment() => {
+                    if let Some(limits) = limits {
+                        let max = limits.max_framebuffer;
+                        if extent.width > max.width || extent.height > max.height {
+                            let message = format!(
+                                "pass '{}' renders into '{}' ({}x{}); {} renders at most {}x{} \
+                                 (maxFramebufferWidth/Height)",
+                                pass.name,
+                                name(r),
+                                extent.width,
+                                extent.height,
+                                limits.device,
+                                max.width,
+                                max.height
+                            );
+                            out.push((at(r), message));
+                        }
+                    }
+                    attachments.push((r, binding.written_slot.as_str(), *extent));
+                }
+                _ => {}
+            }
+        }
+        // The render area covers the largest attachment; every other must be as large.
+        let Some(&(largest, slot, area)) =
+            attachments.iter().max_by_key(|(_, _, e)| (e.width as u64) * (e.height as u64))
+        else {
+            continue;
+        };
+        for &(r, smaller_slot, extent) in attachments.iter().filter(|a| a.2 != area) {
+            let message = format!(
+                "pass '{}' renders {}x{} (\"{slot}\" '{}'), but its \"{smaller_slot}\" '{}' is {}x{}: the \
+                 attachments of one pass must be the same size",
+                pass.name,
+                area.width,
+                area.height,
+                name(largest),
+                name(r),
+                extent.width,
+                extent.height
+            );
+            out.push((at(r), message));
+        }
+    }
+    out.sort_by_key(|(pos, m)| (*pos, m.clone()));
+    out.dedup();
+    out
+}
