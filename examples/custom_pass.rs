@@ -49,7 +49,7 @@ impl PassKind for InstanceBoundsKind {
             settings: vec![SettingDecl {
                 name: "show",
                 default: SettingDefault::Choice(SHOW),
-                doc: "which boxes: all, the visible ones or the culled ones",
+                range: None, doc: "which boxes: all, the visible ones or the culled ones",
             }],
             slots_from_shader: false,
         }

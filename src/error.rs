@@ -24,6 +24,16 @@ pub enum Error {
     /// An argument or setting that cannot work (size 0, NaN camera, ...), with the reason.
     #[error("{0}")]
     Invalid(String),
+    /// A failure of something a graph declares (creating a resource's memory, importing it),
+    /// at its declaration.
+    #[error("{at}: {source}")]
+    Declared {
+        /// `file:line:col: resource 'name'`.
+        at: String,
+        /// What went wrong.
+        #[source]
+        source: Box<Error>,
+    },
 }
 
 impl From<crate::gpu::ShaderError> for Error {

@@ -36,6 +36,34 @@ fn bad_flags_and_files_are_reported_clearly() {
     assert!(!std::path::Path::new(out).exists(), "nothing is written when the frame cannot be made");
 }
 
+/// Memory the device cannot give is reported at the declaration of the resource that asked for
+/// it (two 4 GiB images: more than lavapipe allocates at once).
+#[test]
+fn a_failed_allocation_names_the_resource_and_its_declaration() {
+    let tmp = tempfile::tempdir().unwrap();
+    let shader = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/graphs/shaders/rw_image.comp");
+    let graph = tmp.path().join("huge.ron");
+    let pass = |name: &str, image: &str| {
+        format!(
+            "Pass(name: \"{name}\", kind: \"compute\", shader: \"{shader}\", writes: {{\"img\": \"{image}\"}}, \
+             dispatch: PerPixel(\"{image}\")),"
+        )
+    };
+    let text = format!(
+        "Graph(\n    name: \"huge\",\n    resources: {{\n        \"small\": Image(format: R8G8B8A8_UNORM),\n        \
+         \"huge\": Image(format: R32G32B32A32_SFLOAT, size: Fixed(16384, 16384)),\n    }},\n    passes: [{} {}],\n    \
+         outputs: [\"small\", \"huge\"],\n)\n",
+        pass("a", "small"),
+        pass("b", "huge")
+    );
+    std::fs::write(&graph, text).unwrap();
+    let out = tmp.path().join("x.png");
+    let (code, _, err) =
+        run(&["render", "--graph", graph.to_str().unwrap(), "--size", "8x8", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("huge.ron:5:9: resource 'huge': memory allocation for 'huge' failed"), "{err}");
+}
+
 #[test]
 fn renders_an_image_and_stats() {
     let tmp = tempfile::tempdir().unwrap();
@@ -247,7 +275,11 @@ fn watch_reloads_on_change_and_keeps_the_last_good_graph_on_error() {
     let host = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/graph/examples/host_target.ron")).unwrap();
     std::fs::write(&graph, host).unwrap();
     assert!(watch.wait_for("back to the last good graph"), "no fallback: {:?}", watch.seen);
-    assert!(watch.seen.iter().any(|l| l.contains("imported resource 'color' was not provided")), "{:?}", watch.seen);
+    assert!(
+        watch.seen.iter().any(|l| l.contains("14:9: resource 'color': is imported, but the host provided nothing")),
+        "{:?}",
+        watch.seen
+    );
     assert!(watch.wait_for("rendered 'default'"), "the last good graph renders again: {:?}", watch.seen);
     drop(watch);
     assert!(png.exists());

@@ -128,8 +128,24 @@ pub struct SettingDecl {
     pub name: &'static str,
     /// Type and default.
     pub default: SettingDefault,
+    /// The values a whole or real setting may take, inclusive; `None`: any (finite) value. A
+    /// value outside is an error at the setting's position when the graph is compiled.
+    pub range: Option<(f64, f64)>,
     /// What it does.
     pub doc: &'static str,
+}
+
+impl SettingDecl {
+    /// Why `value` is outside the declared range, if it is.
+    pub fn range_error(&self, value: &SettingValue) -> Option<String> {
+        let (min, max) = self.range?;
+        let v = match value {
+            SettingValue::Int(i) => *i as f64,
+            SettingValue::Float(f) => *f,
+            _ => return None,
+        };
+        (!(min..=max).contains(&v)).then(|| format!("is {v}, outside {min} to {max}"))
+    }
 }
 
 /// Everything the graph needs to know about a pass kind.

@@ -71,6 +71,8 @@ pub struct PlannedResource {
     /// First and last position (in execution order) of a pass that uses the current version;
     /// `None` when no kept pass uses it.
     pub lifetime: Option<(usize, usize)>,
+    /// Where it is declared in the graph file (errors of creating or importing it name it).
+    pub pos: super::error::Pos,
 }
 
 /// A resource bound to a slot of a pass.
@@ -221,6 +223,8 @@ pub struct MemoryPlan {
 pub struct CompiledGraph {
     /// Graph name.
     pub name: String,
+    /// The file it was loaded from, as given to the loader.
+    pub file: String,
     /// Passes in execution order.
     pub passes: Vec<PlannedPass>,
     /// Removed passes.
@@ -235,4 +239,18 @@ pub struct CompiledGraph {
     /// The pass kinds the graph was loaded with (the executor creates each pass's node through
     /// its kind).
     pub kinds: super::kinds::KindRegistry,
+}
+
+impl CompiledGraph {
+    /// `file:line:col: resource 'name'`: where resource `id` is declared, for errors of what
+    /// is done with it after compiling (creating its memory, importing it).
+    pub fn declaration(&self, id: ResourceId) -> String {
+        let r = &self.resources[id];
+        format!("{}:{}: resource '{}'", self.file, r.pos, r.name)
+    }
+
+    /// `error` of resource `id`, prefixed with where it is declared.
+    pub fn error_at(&self, id: ResourceId, error: impl Into<crate::Error>) -> crate::Error {
+        crate::Error::Declared { at: self.declaration(id), source: Box::new(error.into()) }
+    }
 }

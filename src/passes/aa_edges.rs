@@ -62,7 +62,7 @@ impl PassKind for AaEdgesKind {
             doc: "selective AA by depth-edge detection: marks the pixels whose depth samples mix background and surface or differ by more than a relative threshold",
             reads: vec![ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the finished MSAA depth"))],
             writes: vec![slot("mask", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(AA_MASK_FORMAT), "1 on depth edges, 0 elsewhere")],
-            settings: vec![SettingDecl { name: "threshold", default: SettingDefault::Float(0.01), doc: "relative view-depth difference between a pixel's samples that makes it an edge" }],
+            settings: vec![SettingDecl { name: "threshold", default: SettingDefault::Float(0.01), range: None, doc: "relative view-depth difference between a pixel's samples that makes it an edge" }],
             slots_from_shader: false,
         }
     }

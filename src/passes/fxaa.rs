@@ -91,10 +91,10 @@ impl PassKind for FxaaKind {
             reads: vec![slot("input", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "the lit image (sRGB-encoded), sampled bilinearly")],
             writes: vec![slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "the anti-aliased image (same size as the input)")],
             settings: vec![
-                SettingDecl { name: "preset", default: SettingDefault::Choice(PRESETS), doc: "FXAA_QUALITY__PRESET: the edge search schedule (39: extreme quality, 12: FXAA's default)" },
-                SettingDecl { name: "subpix", default: SettingDefault::Float(0.75), doc: "amount of subpixel aliasing removal (0: off, 1: softest)" },
-                SettingDecl { name: "edge_threshold", default: SettingDefault::Float(0.166), doc: "minimum local contrast, relative to the local maximum luma, to process a pixel" },
-                SettingDecl { name: "edge_threshold_min", default: SettingDefault::Float(0.0833), doc: "minimum absolute local contrast (skips dark areas)" },
+                SettingDecl { name: "preset", default: SettingDefault::Choice(PRESETS), range: None, doc: "FXAA_QUALITY__PRESET: the edge search schedule (39: extreme quality, 12: FXAA's default)" },
+                SettingDecl { name: "subpix", default: SettingDefault::Float(0.75), range: None, doc: "amount of subpixel aliasing removal (0: off, 1: softest)" },
+                SettingDecl { name: "edge_threshold", default: SettingDefault::Float(0.166), range: None, doc: "minimum local contrast, relative to the local maximum luma, to process a pixel" },
+                SettingDecl { name: "edge_threshold_min", default: SettingDefault::Float(0.0833), range: None, doc: "minimum absolute local contrast (skips dark areas)" },
             ],
             slots_from_shader: false,
         }

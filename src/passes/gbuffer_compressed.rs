@@ -371,11 +371,11 @@ impl PassKind for GbufferCompressedKind {
                 slot("sample_claim", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "with a depth format without stencil: the samples already claimed, one byte per pixel (size: ceil_div(width * height, 4) * 4; at most 8 samples)"),
             ],
             settings: vec![
-                SettingDecl { name: "aa_region", default: SettingDefault::Choice(&["all", "ellipse", "rectangle"]), doc: "selective AA: only pixels inside this screen region (centered, aa_region_size of the screen) keep more than one block" },
-                SettingDecl { name: "aa_region_size", default: SettingDefault::Float(0.6), doc: "size of the AA region as a fraction of the screen's width and height" },
-                SettingDecl { name: "aa_max_depth_distance", default: SettingDefault::Float(0.0), doc: "selective AA: pixels farther than this distance keep one block (0: no limit)" },
-                SettingDecl { name: "aa_object_flags", default: SettingDefault::Bool(false), doc: "selective AA: instances flagged no-AA keep one block" },
-                SettingDecl { name: "claim_order", default: SettingDefault::Choice(&["auto", "draw", "arrival"]), doc: "with sample_claim: who wins an exactly coplanar tie. draw: the first fragment in draw order, as the stencil decides, through an ordered sample interlock (needs VK_EXT_fragment_shader_interlock); arrival: the first to claim, which may change from run to run and so flicker; auto: draw where the device has the interlock, else arrival. Refused on a pass whose depth has stencil (the stencil decides, in draw order)" },
+                SettingDecl { name: "aa_region", default: SettingDefault::Choice(&["all", "ellipse", "rectangle"]), range: None, doc: "selective AA: only pixels inside this screen region (centered, aa_region_size of the screen) keep more than one block" },
+                SettingDecl { name: "aa_region_size", default: SettingDefault::Float(0.6), range: None, doc: "size of the AA region as a fraction of the screen's width and height" },
+                SettingDecl { name: "aa_max_depth_distance", default: SettingDefault::Float(0.0), range: None, doc: "selective AA: pixels farther than this distance keep one block (0: no limit)" },
+                SettingDecl { name: "aa_object_flags", default: SettingDefault::Bool(false), range: None, doc: "selective AA: instances flagged no-AA keep one block" },
+                SettingDecl { name: "claim_order", default: SettingDefault::Choice(&["auto", "draw", "arrival"]), range: None, doc: "with sample_claim: who wins an exactly coplanar tie. draw: the first fragment in draw order, as the stencil decides, through an ordered sample interlock (needs VK_EXT_fragment_shader_interlock); arrival: the first to claim, which may change from run to run and so flicker; auto: draw where the device has the interlock, else arrival. Refused on a pass whose depth has stencil (the stencil decides, in draw order)" },
             ],
             slots_from_shader: false,
         }

@@ -414,7 +414,7 @@ impl PassKind for HizBuildKind {
             settings: vec![SettingDecl {
                 name: "method",
                 default: SettingDefault::Choice(&["single", "per_mip"]),
-                doc: "one dispatch for the whole pyramid, or one dispatch per mip (baseline)",
+                range: None, doc: "one dispatch for the whole pyramid, or one dispatch per mip (baseline)",
             }],
             slots_from_shader: false,
         }

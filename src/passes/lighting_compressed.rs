@@ -44,16 +44,9 @@ pub struct LightingCompressedPass {
     settings: LightingSettings,
 }
 
-/// Setting `name` of `pass`, a block count within 0..=MAX_SHARED_BLOCKS.
+/// Setting `name` of `pass`, a block count (its declared range keeps it within a u32).
 fn block_count_setting(pass: &PlannedPass, name: &str) -> crate::Result<u32> {
-    let value = pass.float_setting(name)?;
-    if !(0.0..=MAX_SHARED_BLOCKS as f64).contains(&value) {
-        return Err(crate::Error::Invalid(format!(
-            "pass '{}': {name} must be between 0 and {MAX_SHARED_BLOCKS}, got {value}",
-            pass.name
-        )));
-    }
-    Ok(value as u32)
+    Ok(pass.int_setting(name)?.clamp(0, u32::MAX as i64) as u32)
 }
 
 impl LightingCompressedPass {
@@ -171,12 +164,12 @@ impl PassKind for LightingCompressedKind {
                 settings.push(SettingDecl {
                     name: "shared_blocks",
                     default: SettingDefault::Int(DEFAULT_SHARED_BLOCKS as i64),
-                    doc: "pool blocks a 16x16 tile gathers and shades with all its invocations per round, in up to four rounds (0..=1024; 0: each pixel loops over its own list, the thesis's resolve)",
+                    range: Some((0.0, MAX_SHARED_BLOCKS as f64)), doc: "pool blocks a 16x16 tile gathers and shades with all its invocations per round, in up to four rounds (0..=1024; 0: each pixel loops over its own list, the thesis's resolve)",
                 });
                 settings.push(SettingDecl {
                     name: "shared_min_blocks",
                     default: SettingDefault::Int(DEFAULT_SHARED_MIN_BLOCKS as i64),
-                    doc: "a tile with at most this many pool blocks leaves them to their pixels' own loops (0: every tile shares its blocks, the fastest on the H100)",
+                    range: Some((0.0, u32::MAX as f64)), doc: "a tile with at most this many pool blocks leaves them to their pixels' own loops (0: every tile shares its blocks, the fastest on the H100)",
                 });
                 settings
             },

@@ -92,15 +92,22 @@ pub(crate) fn redraw_list_slots() -> Vec<SlotDecl> {
 
 pub(crate) fn lighting_settings() -> Vec<SettingDecl> {
     vec![
-        SettingDecl { name: "exposure", default: SettingDefault::Float(0.8), doc: "scale applied before tone mapping" },
+        SettingDecl {
+            name: "exposure",
+            default: SettingDefault::Float(0.8),
+            range: Some((0.0, 1.0e6)),
+            doc: "scale applied before tone mapping",
+        },
         SettingDecl {
             name: "debug_view",
             default: SettingDefault::Choice(&["none", "normals", "albedo", "depth", "samples"]),
+            range: None,
             doc: "show a G-buffer channel instead of the lit image (samples: distinct surfaces per pixel as a heatmap)",
         },
         SettingDecl {
             name: "light_tiles",
             default: SettingDefault::Bool(true),
+            range: None,
             doc: "cull point lights per 16x16 tile (false: every light for every pixel, the thesis's loop)",
         },
     ]
@@ -110,6 +117,6 @@ pub(crate) fn clear_colors_setting() -> SettingDecl {
     SettingDecl {
         name: "clear_colors",
         default: SettingDefault::Bool(false),
-        doc: "clear the color targets first; off, texels no fragment wrote keep whatever they held (every built-in reader masks them by depth = 0), which saves a full-screen write",
+        range: None, doc: "clear the color targets first; off, texels no fragment wrote keep whatever they held (every built-in reader masks them by depth = 0), which saves a full-screen write",
     }
 }

@@ -155,7 +155,7 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
                 ResolvedKind::Buffer { size, usage }
             }
         };
-        resources.push(PlannedResource { name: res.name.clone(), kind, class, lifetime: lifetimes[r] });
+        resources.push(PlannedResource { name: res.name.clone(), kind, class, lifetime: lifetimes[r], pos: res.pos });
     }
 
     let items: Vec<Option<memory::MemoryItem>> = resources
@@ -182,6 +182,7 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
     sink.errors.extend(errors.list);
     sink.into_result(CompiledGraph {
         name: graph.name.clone(),
+        file: graph.file.clone(),
         passes,
         pruned: pruning.pruned,
         resources,

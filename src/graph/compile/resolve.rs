@@ -243,6 +243,12 @@ pub fn settings(
             },
         };
         if let Some(v) = value {
+            // Literal values were checked at load time; what params and expressions give, here.
+            let literal = matches!(s.source, SettingSource::Value(_));
+            let decl = declared.iter().find(|d| d.name == s.name);
+            if let Some(why) = decl.filter(|_| !literal).and_then(|d| d.range_error(&v)) {
+                errors.push(s.pos, format!("{what} {why}"));
+            }
             out.insert(s.name.clone(), v);
         }
     }

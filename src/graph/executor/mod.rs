@@ -324,19 +324,19 @@ impl GraphRuntime {
     /// Checks the host's resources against the graph's declarations and binds them for this frame.
     fn bind_imports(&mut self, imports: &Imports) -> crate::Result<()> {
         use crate::graph::plan::ResolvedKind;
-        let invalid = |m: String| crate::Error::Invalid(format!("graph '{}': {m}", self.plan.name));
         for &(id, phys) in self.resources.imported().to_vec().iter() {
+            // Errors name the resource's declaration.
+            let invalid = |m: String| self.plan.error_at(id, crate::Error::Invalid(m));
             let declared = &self.plan.resources[id];
             let name = &declared.name;
             let given = imports.get(name).ok_or_else(|| {
                 let provided: Vec<_> = imports.names().collect();
                 invalid(if provided.is_empty() {
-                    format!(
-                        "imported resource '{name}' was not provided (none were: a graph with `Imported(...)` \
-                         resources runs embedded, its host handing them to `Renderer::record_with_imports`)"
-                    )
+                    "is imported, but the host provided nothing (a graph with `Imported(...)` resources runs \
+                     embedded, its host handing them to `Renderer::record_with_imports`)"
+                        .to_string()
                 } else {
-                    format!("imported resource '{name}' was not provided (provided: {})", provided.join(", "))
+                    format!("is imported, but the host did not provide it (provided: {})", provided.join(", "))
                 })
             })?;
             let (resource, current) = match (given, &declared.kind) {
@@ -350,7 +350,7 @@ impl GraphRuntime {
                         || host.mip_levels < *mip_levels
                     {
                         return Err(invalid(format!(
-                            "imported image '{name}' is declared {format:?} {}x{} x{} samples, {mip_levels} mips; the host gave {:?} {}x{} x{} samples, {} mips",
+                            "is declared {format:?} {}x{} x{} samples, {mip_levels} mips; the host gave {:?} {}x{} x{} samples, {} mips",
                             extent.width,
                             extent.height,
                             samples.as_raw(),
@@ -368,17 +368,11 @@ impl GraphRuntime {
                 }
                 (Import::Buffer { buffer, size, current, .. }, ResolvedKind::Buffer { size: needed, .. }) => {
                     if size < needed {
-                        return Err(invalid(format!(
-                            "imported buffer '{name}' needs {needed} bytes; the host gave {size}"
-                        )));
+                        return Err(invalid(format!("needs {needed} bytes; the host gave {size}")));
                     }
                     (Physical::Buffer(crate::gpu::Buffer::from_host(&self.ctx, name, *buffer, *size)), *current)
                 }
-                _ => {
-                    return Err(invalid(format!(
-                        "imported resource '{name}' is an image in one place and a buffer in the other"
-                    )))
-                }
+                _ => return Err(invalid("is an image in one place and a buffer in the other".into())),
             };
             // Normally unbound; a frame whose recording failed before its end left its wrapper.
             let stale = self.resources.bind_import(phys, resource);

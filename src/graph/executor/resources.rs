@@ -70,8 +70,9 @@ impl RuntimeResources {
             .enumerate()
             .map(|(i, (&size, &(align, bits, linear)))| {
                 MemoryBlock::new(ctx, &format!("{} transient heap {i}", plan.name), size, align, bits, linear)
+                    .map_err(|e| heap_error(plan, &placements, i, e))
             })
-            .collect::<crate::gpu::GpuResult<Vec<_>>>()?;
+            .collect::<crate::Result<Vec<_>>>()?;
 
         let mut physical = Vec::new();
         let mut copies = vec![None; n];
@@ -93,28 +94,30 @@ impl RuntimeResources {
                     let (Some(p), Some(req)) = (placements[id], requirements[id]) else { continue };
                     let block = &blocks[p.heap];
                     let res = match &r.kind {
-                        ResolvedKind::Image { .. } => {
-                            Physical::Image(Image::new_in(ctx, &image_desc(&r.name, &r.kind, false), block, p.offset)?)
-                        }
-                        ResolvedKind::Buffer { .. } => Physical::Buffer(Buffer::new_in(
-                            ctx,
-                            &buffer_desc(&r.name, &r.kind, false),
-                            block,
-                            p.offset,
-                        )?),
+                        ResolvedKind::Image { .. } => Physical::Image(
+                            Image::new_in(ctx, &image_desc(&r.name, &r.kind, false), block, p.offset)
+                                .map_err(|e| plan.error_at(id, e))?,
+                        ),
+                        ResolvedKind::Buffer { .. } => Physical::Buffer(
+                            Buffer::new_in(ctx, &buffer_desc(&r.name, &r.kind, false), block, p.offset)
+                                .map_err(|e| plan.error_at(id, e))?,
+                        ),
                     };
                     physical.push(res);
                     placed_at.push(Some((p.heap, p.offset, req.size)));
                     copies[id] = Some([physical.len() - 1; 2]);
                 }
                 ResourceClass::Output => {
-                    physical.push(create_owned(ctx, &r.name, &r.kind, false)?);
+                    physical.push(create_owned(ctx, &r.name, &r.kind, false).map_err(|e| plan.error_at(id, e))?);
                     placed_at.push(None);
                     copies[id] = Some([physical.len() - 1; 2]);
                 }
                 ResourceClass::History => {
-                    let a = create_owned(ctx, &format!("{} (even frames)", r.name), &r.kind, true)?;
-                    let b = create_owned(ctx, &format!("{} (odd frames)", r.name), &r.kind, true)?;
+                    let owned = |copy: &str| {
+                        create_owned(ctx, &format!("{} ({copy} frames)", r.name), &r.kind, true)
+                            .map_err(|e| plan.error_at(id, e))
+                    };
+                    let (a, b) = (owned("even")?, owned("odd")?);
                     physical.push(a);
                     physical.push(b);
                     placed_at.push(None);
@@ -230,6 +233,23 @@ fn buffer_desc<'a>(name: &'a str, kind: &ResolvedKind, extra_transfer: bool) -> 
         usage |= vk::BufferUsageFlags::TRANSFER_DST;
     }
     BufferDesc { name, size: *size, usage, location: MemoryLocation::GpuOnly }
+}
+
+/// The failure to create transient heap `heap`, naming the resources placed in it and where
+/// they are declared.
+fn heap_error(
+    plan: &CompiledGraph,
+    placements: &[Option<crate::graph::plan::Placement>],
+    heap: usize,
+    error: crate::gpu::GpuError,
+) -> crate::Error {
+    let held: Vec<String> = placements
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.is_some_and(|p| p.heap == heap))
+        .map(|(id, _)| plan.declaration(id))
+        .collect();
+    crate::Error::Invalid(format!("the memory shared by {}: {error}", held.join("; ")))
 }
 
 fn create_owned(ctx: &GpuContext, name: &str, kind: &ResolvedKind, cleared: bool) -> crate::Result<Physical> {

@@ -409,6 +409,11 @@ impl Validator<'_> {
                     None
                 }
             };
+            if let Some(SettingSource::Value(value)) = &source {
+                if let Some(why) = s.range_error(value) {
+                    self.err(val_pos, format!("{what} {why}"));
+                }
+            }
             if let Some(source) = source {
                 out.push(PassSetting { name: name.clone(), ty: s.default.clone(), source, pos: val_pos });
             }

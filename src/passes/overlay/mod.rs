@@ -82,6 +82,7 @@ pub struct OverlaySettings {
 impl OverlaySettings {
     /// Reads a planned pass's settings (validation filled every default).
     pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
+        // The declared ranges keep these within a u32.
         let int = |k: &str| pass.int_setting(k).map(|i| i.clamp(0, u32::MAX as i64) as u32);
         let view = match pass.choice_setting("view")? {
             "hiz" => OverlayView::Hiz,
@@ -420,11 +421,11 @@ impl PassKind for OverlayKind {
                 SettingDecl {
                     name: "view",
                     default: SettingDefault::Choice(&["stats", "hiz", "culled"]),
-                    doc: "the counter panel only; plus a Hi-Z mip in grey over the whole image; plus occlusion-culled instances tinted red",
+                    range: None, doc: "the counter panel only; plus a Hi-Z mip in grey over the whole image; plus occlusion-culled instances tinted red",
                 },
-                SettingDecl { name: "hiz_level", default: SettingDefault::Int(0), doc: "mip of the Hi-Z pyramid shown by view \"hiz\" (clamped to the last)" },
-                SettingDecl { name: "scale", default: SettingDefault::Int(0), doc: "text size in pixels per font pixel (0: max(1, height / 720))" },
-                SettingDecl { name: "timings", default: SettingDefault::Bool(true), doc: "show GPU milliseconds per pass (of the newest completed frame)" },
+                SettingDecl { name: "hiz_level", default: SettingDefault::Int(0), range: Some((0.0, 15.0)), doc: "mip of the Hi-Z pyramid shown by view \"hiz\" (clamped to the last)" },
+                SettingDecl { name: "scale", default: SettingDefault::Int(0), range: Some((0.0, 64.0)), doc: "text size in pixels per font pixel (0: max(1, height / 720))" },
+                SettingDecl { name: "timings", default: SettingDefault::Bool(true), range: None, doc: "show GPU milliseconds per pass (of the newest completed frame)" },
             ],
             slots_from_shader: false,
         }
@@ -449,6 +450,7 @@ mod tests {
             kind: ResolvedKind::Buffer { size: 64, usage: vk::BufferUsageFlags::STORAGE_BUFFER },
             class: ResourceClass::Transient,
             lifetime: None,
+            pos: Default::default(),
         };
         let bind =
             |slot: &str, resource, usage| Binding { slot: slot.into(), resource, version: Version::Current, usage };
@@ -473,6 +475,7 @@ mod tests {
         };
         CompiledGraph {
             name: "test".into(),
+            file: "test.ron".into(),
             passes: vec![cull("cull_a", phases[0], 0), cull("cull_b", phases[1], 1), overlay],
             pruned: vec![],
             resources: vec![resource("a"), resource("b")],
