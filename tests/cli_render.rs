@@ -174,7 +174,7 @@ fn pool_adaptation_grows_a_pool_that_overflows() {
 #[test]
 fn pool_adaptation_is_reflected_in_the_reported_memory() {
     let tmp = tempfile::tempdir().unwrap();
-    let gbuffer_bytes = |adapt: bool, frames: &str| -> (u64, u64) {
+    let pool_bytes = |adapt: bool, frames: &str| -> (u64, u64) {
         let (png, json) = (tmp.path().join("f.png"), tmp.path().join("f.json"));
         // A pool far larger than the frame needs (4 blocks per pixel), so adapting shrinks it.
         let mut args = vec!["render", "--graph", "builtin:msaa_compressed", "--instances", "1000", "--size", "32x24"];
@@ -188,14 +188,14 @@ fn pool_adaptation_is_reflected_in_the_reported_memory() {
         assert_eq!(code, 0, "{stdout}{err}");
         let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
         let resources = stats["resources"].as_array().unwrap();
-        let gbuffer = resources.iter().find(|r| r["name"] == "gbuffer").unwrap()["bytes"].as_u64().unwrap();
+        let gbuffer = resources.iter().find(|r| r["name"] == "gbuffer_pool").unwrap()["bytes"].as_u64().unwrap();
         let frames = stats["frames"].as_array().unwrap();
         let pool = frames.last().unwrap()["gbuffer"][0]["pool_blocks"].as_u64().unwrap();
         (gbuffer, pool)
     };
-    let (fixed_bytes, fixed_pool) = gbuffer_bytes(false, "1");
+    let (fixed_bytes, fixed_pool) = pool_bytes(false, "1");
     // The pool shrinks after 30 mostly empty frames; the new graph runs from the next frame.
-    let (adapted_bytes, adapted_pool) = gbuffer_bytes(true, "36");
+    let (adapted_bytes, adapted_pool) = pool_bytes(true, "36");
     assert!(adapted_pool < fixed_pool, "the pool did not shrink: {adapted_pool} of {fixed_pool} blocks");
     assert!(adapted_bytes < fixed_bytes, "reported {adapted_bytes} bytes after adapting, {fixed_bytes} before");
 }

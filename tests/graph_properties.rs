@@ -404,7 +404,14 @@ proptest! {
         }
         let mut frame = FrameInputs::new(640, 360);
         frame.instances = 1000;
-        let c = graph::compile(&g, &frame).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        // Random sizes may give one pass attachments of different sizes, which compiling
+        // refuses (no device renders that); anything else must compile.
+        let c = match graph::compile(&g, &frame) {
+            Err(e) if e.iter().all(|e| e.message.contains("attachments of one pass must be the same size")) => {
+                return Ok(());
+            }
+            other => other.unwrap_or_else(|e| panic!("{e}\n{text}")),
+        };
         check_order(&g, &c);
         check_lifetimes(&c);
         check_memory(&c);
