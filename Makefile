@@ -5,7 +5,7 @@ CARGO ?= cargo
 
 
 
-.PHONY: deps demo test build release lint fmt clean
+.PHONY: deps demo test build release lint fmt clean fuzz
 
 deps:
 	./scripts/install-deps
@@ -19,6 +19,17 @@ demo: deps
 test: deps
 	CARGO=$(CARGO) ./scripts/check-lean-lib
 	$(CARGO) test --all-targets
+
+# Fuzz the graph loader and compiler and the glTF importer, MINUTES each (both at once), with
+# the repository's graphs and the shared game levels as seeds; see docs/fuzzing.md.
+MINUTES ?= 10
+fuzz: deps
+	$(CARGO) build --release
+	./target/release/cullgraph fuzz graph --seconds $$(( $(MINUTES) * 60 )) --out out/fuzz \
+		--seeds graph/examples --seeds tests/graphs/bad --seeds tests/graphs/gpu & \
+	./target/release/cullgraph fuzz gltf --seconds $$(( $(MINUTES) * 60 )) --out out/fuzz \
+		$$(test -d ../shared/assets && echo --seeds ../shared/assets); \
+	gltf=$$?; wait $$!; graph=$$?; test $$gltf = 0 && test $$graph = 0
 
 lint:
 	$(CARGO) fmt --all -- --check

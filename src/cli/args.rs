@@ -24,6 +24,57 @@ pub enum Command {
     Bench(BenchArgs),
     /// Check a render graph (RON), print its compiled plan, or export it as graphviz.
     Graph(GraphArgs),
+    /// Fuzz the graph loader and compiler or the glTF importer for a while and report the
+    /// outcomes by class; inputs that break a promise are kept (exit status 1 if any).
+    Fuzz(FuzzArgs),
+}
+
+/// What `cullgraph fuzz` feeds mutated inputs to.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FuzzTarget {
+    /// RON graphs: load, compile at 64x48 and 3840x2160, render two frames with validation.
+    Graph,
+    /// glTF files: import, render two frames with validation.
+    Gltf,
+}
+
+impl FuzzTarget {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            FuzzTarget::Graph => "graph",
+            FuzzTarget::Gltf => "gltf",
+        }
+    }
+}
+
+/// `cullgraph fuzz` flags.
+#[derive(Args, Debug, Clone)]
+pub struct FuzzArgs {
+    /// What to fuzz.
+    #[arg(value_enum)]
+    pub target: FuzzTarget,
+    /// How long, in seconds.
+    #[arg(long, default_value_t = 60.0)]
+    pub seconds: f64,
+    /// Seed of the mutations (a run is reproducible from it).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Folders of further seeds (`.ron` graphs, `.glb` scenes), repeatable.
+    #[arg(long = "seeds", value_name = "DIR")]
+    pub seed_dirs: Vec<PathBuf>,
+    /// Where failing inputs and the report go.
+    #[arg(long, default_value = "out/fuzz")]
+    pub out: PathBuf,
+    /// Run one saved input again and print its outcome.
+    #[arg(long, value_name = "FILE")]
+    pub replay: Option<PathBuf>,
+    /// Internal: run inputs in this process (the supervisor starts workers).
+    #[arg(long, hide = true)]
+    pub worker: bool,
+    /// Internal: the worker's first input.
+    #[arg(long, hide = true, default_value_t = 0)]
+    pub start: u64,
 }
 
 /// `cullgraph graph` subcommands.

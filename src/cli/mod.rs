@@ -2,6 +2,7 @@
 
 mod args;
 mod bench;
+mod fuzz;
 mod graph;
 mod render;
 mod watch;
@@ -19,6 +20,7 @@ pub fn main() -> ExitCode {
         args::Command::Render(r) => render::run(&r),
         args::Command::Devices => list_devices(),
         args::Command::Bench(b) => bench::run(&b),
+        args::Command::Fuzz(f) => fuzz::run(&f),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -386,7 +386,7 @@ impl PassKind for GbufferCompressedKind {
     }
 
     fn check_sizes(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
-        heads_size_error(check).into_iter().collect()
+        size_errors(check)
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
@@ -394,14 +394,35 @@ impl PassKind for GbufferCompressedKind {
     }
 }
 
-/// A `gbuffer` buffer too small for a head block per pixel of the depth, at the binding.
-pub(crate) fn heads_size_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
-    let (_, extent) = check.image_extent("depth")?;
-    let gbuffer = check.binding("gbuffer")?;
-    let crate::graph::Resolved::Buffer(bytes) = check.resolved.get(gbuffer.resource)? else { return None };
+/// A `gbuffer` buffer too small for a head block per pixel of the depth, or a `sample_claim`
+/// buffer too small for a byte per pixel, at the binding.
+pub(crate) fn size_errors(check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+    let Some((_, extent)) = check.image_extent("depth") else { return Vec::new() };
     let pixels = extent.width as u64 * extent.height as u64;
-    let message = check_heads(*bytes, pixels).err()?;
-    Some((gbuffer.pos, format!("pass '{}' ({}): {message}", check.pass.name, check.pass.kind)))
+    let bytes_of = |slot: &str| {
+        let binding = check.binding(slot)?;
+        match check.resolved.get(binding.resource)? {
+            crate::graph::Resolved::Buffer(bytes) => Some((binding, *bytes)),
+            _ => None,
+        }
+    };
+    let at = |binding: &crate::graph::PassBinding, message: String| {
+        (binding.pos, format!("pass '{}' ({}): {message}", check.pass.name, check.pass.kind))
+    };
+    let mut out = Vec::new();
+    if let Some((binding, bytes)) = bytes_of("gbuffer") {
+        out.extend(check_heads(bytes, pixels).err().map(|m| at(binding, m)));
+    }
+    if let Some((binding, bytes)) = bytes_of("sample_claim") {
+        if bytes < sample_claim_bytes(pixels) {
+            let need = sample_claim_bytes(pixels);
+            let message = format!(
+                "sample_claim holds {bytes} bytes; {pixels} pixels need {need} (size: ceil_div(width * height, 4) * 4)"
+            );
+            out.push(at(binding, message));
+        }
+    }
+    out
 }
 
 /// A depth format and `sample_claim` binding that leave no way, or two ways, to decide each

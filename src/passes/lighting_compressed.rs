@@ -178,7 +178,7 @@ impl PassKind for LightingCompressedKind {
     }
 
     fn check_sizes(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
-        super::gbuffer_compressed::heads_size_error(check).into_iter().collect()
+        super::gbuffer_compressed::size_errors(check)
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

@@ -80,7 +80,14 @@ impl RuntimeResources {
         let mut imported = Vec::new();
         let mut placed_at: Vec<Option<(usize, u64, u64)>> = Vec::new();
         for (id, r) in plan.resources.iter().enumerate() {
-            if r.lifetime.is_none() && r.class != ResourceClass::History {
+            // A history resource lives across frames even where no pass uses this frame's
+            // version, but one that no kept pass touches at all (neither version) has no usage
+            // to create it with.
+            let untouched = match &r.kind {
+                ResolvedKind::Image { usage, .. } => usage.is_empty(),
+                ResolvedKind::Buffer { usage, .. } => usage.is_empty(),
+            };
+            if (r.lifetime.is_none() && r.class != ResourceClass::History) || untouched {
                 continue;
             }
             match r.class {
