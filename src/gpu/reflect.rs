@@ -16,6 +16,47 @@ pub struct BindingInfo {
     pub count: u32,
     /// Whether the shader may write through it (storage buffers and images not declared readonly).
     pub writes: bool,
+    /// For an image: what the shader declares of it.
+    pub image: Option<ImageDecl>,
+}
+
+/// What a shader declares of an image it binds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageDecl {
+    /// Multisampled (`sampler2DMS`, `image2DMS`).
+    pub multisampled: bool,
+    /// The scalar type a sampled image returns (`sampler2D`: float, `usampler2D`: uint,
+    /// `isampler2D`: int); `None` for storage images, whose format qualifier decides.
+    pub sampled: Option<SampledScalar>,
+}
+
+/// The scalar type a sampled image returns; the bound image's format must give the same.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampledScalar {
+    /// `sampler*`: float (UNORM, SNORM, SFLOAT, SRGB and depth formats).
+    Float,
+    /// `isampler*`: signed integer (SINT formats).
+    Int,
+    /// `usampler*`: unsigned integer (UINT formats).
+    Uint,
+}
+
+/// What `ty`, a descriptor's type, declares of an image.
+fn image_decl(ty: &Type) -> Option<ImageDecl> {
+    let sampled = |t: &spirq::ty::SampledImageType| {
+        let scalar = match t.scalar_ty {
+            spirq::ty::ScalarType::Integer { is_signed: true, .. } => SampledScalar::Int,
+            spirq::ty::ScalarType::Integer { is_signed: false, .. } => SampledScalar::Uint,
+            _ => SampledScalar::Float,
+        };
+        ImageDecl { multisampled: t.is_multisampled, sampled: Some(scalar) }
+    };
+    match ty {
+        Type::CombinedImageSampler(t) => Some(sampled(&t.sampled_image_ty)),
+        Type::SampledImage(t) => Some(sampled(t)),
+        Type::StorageImage(t) => Some(ImageDecl { multisampled: t.is_multisampled, sampled: None }),
+        _ => None,
+    }
 }
 
 /// What one shader module declares.
@@ -70,7 +111,7 @@ pub fn reflect(spirv: &[u32]) -> Result<ShaderInterface, ReflectError> {
     let mut out = ShaderInterface::default();
     for var in &entry.vars {
         match var {
-            Variable::Descriptor { name, desc_bind, desc_ty, nbind, .. } => {
+            Variable::Descriptor { name, desc_bind, desc_ty, nbind, ty, .. } => {
                 if desc_bind.set() != 0 {
                     return Err(ReflectError::WrongSet {
                         name: name.clone().unwrap_or_default(),
@@ -78,8 +119,10 @@ pub fn reflect(spirv: &[u32]) -> Result<ShaderInterface, ReflectError> {
                     });
                 }
                 let (kind, writes) = descriptor_kind(desc_ty);
-                out.bindings
-                    .insert(desc_bind.bind(), BindingInfo { name: name.clone(), kind, count: (*nbind).max(1), writes });
+                out.bindings.insert(
+                    desc_bind.bind(),
+                    BindingInfo { name: name.clone(), kind, count: (*nbind).max(1), writes, image: image_decl(ty) },
+                );
             }
             Variable::PushConstant { ty, .. } => {
                 out.push_constant_bytes = ty.nbyte().unwrap_or(0) as u32;

@@ -109,3 +109,17 @@ mod tests {
         assert!(!is_depth(vk::Format::R32_SFLOAT));
     }
 }
+
+/// The scalar type sampling an image of `format` returns: integer formats give their integers,
+/// every other format (normalized, float, sRGB, depth) floats.
+pub fn sampled_scalar(format: vk::Format) -> crate::gpu::reflect::SampledScalar {
+    use crate::gpu::reflect::SampledScalar;
+    let name = name(format);
+    if name.ends_with("_UINT") && !is_depth(format) {
+        SampledScalar::Uint
+    } else if name.ends_with("_SINT") {
+        SampledScalar::Int
+    } else {
+        SampledScalar::Float
+    }
+}

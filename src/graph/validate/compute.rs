@@ -19,7 +19,7 @@ use crate::graph::locate::Seg;
 use crate::graph::plan::Version;
 use crate::graph::schema::{DispatchDecl, PassDecl};
 use crate::graph::usage::{Stages, Usage};
-use crate::graph::validated::{DispatchSpec, Pass, PassBinding, Resource};
+use crate::graph::validated::{DispatchSpec, Pass, PassBinding, Resource, ResourceDesc};
 use ash::vk;
 use std::collections::HashMap;
 
@@ -199,6 +199,23 @@ impl Validator<'_> {
                 self.drop_binding(e.target);
                 continue;
             }
+            // A sampled image returns the scalar type of its format: a usampler2D over a UNORM
+            // image (or a sampler2D over a UINT one) reads undefined values.
+            if let (Some(declared), ResourceDesc::Image { format, .. }) =
+                (info.image.and_then(|i| i.sampled), &res.desc)
+            {
+                let gives = crate::graph::formats::sampled_scalar(*format);
+                if *format != vk::Format::UNDEFINED && gives != declared {
+                    let message = format!(
+                        "{head} samples {declared:?} values but '{}' is {}, which gives {gives:?} values",
+                        res.name,
+                        crate::graph::formats::name(*format)
+                    );
+                    self.err(val_pos, message);
+                    self.drop_binding(e.target);
+                    continue;
+                }
+            }
             let c = Stages::Compute;
             let usage = match (info.kind, e.in_writes) {
                 (vk::DescriptorType::STORAGE_IMAGE, false) | (vk::DescriptorType::STORAGE_BUFFER, false)
@@ -235,7 +252,9 @@ impl Validator<'_> {
                 resource: r,
                 version,
                 usage,
-                multisample_ok: true,
+                // Compute shaders are not recompiled per sample count: a multisampled
+                // declaration takes multisampled images only, a single-sampled one the others.
+                multisample_ok: info.image.is_some_and(|i| i.multisampled),
                 in_writes: e.in_writes,
                 pos: val_pos,
             });

@@ -139,6 +139,18 @@ pub(crate) fn sample_errors(graph: &ValidatedGraph, samples: &[u32]) -> Vec<(Pos
                     _ => {}
                 }
             }
+            if n == 1 && b.multisample_ok && pass.kind == crate::graph::kinds::COMPUTE_KIND {
+                let dir = if b.in_writes { "writes" } else { "reads" };
+                out.push((
+                    b.pos,
+                    format!(
+                        "pass '{}' {dir} \"{}\": the shader declares a multisampled image (sampler2DMS) but '{}' \
+                         has 1 sample",
+                        pass.name, b.written_slot, res.name
+                    ),
+                ));
+                continue;
+            }
             if n > 1 && !b.multisample_ok {
                 let dir = if b.in_writes { "writes" } else { "reads" };
                 out.push((
