@@ -93,6 +93,20 @@ pub fn suggestions(name: &str, max: usize) -> Vec<&'static str> {
     scored.into_iter().take(max).map(|(_, n)| n).collect()
 }
 
+/// The scalar type sampling an image of `format` returns: integer formats give their integers,
+/// every other format (normalized, float, sRGB, depth) floats.
+pub fn sampled_scalar(format: vk::Format) -> crate::gpu::reflect::SampledScalar {
+    use crate::gpu::reflect::SampledScalar;
+    let name = name(format);
+    if name.ends_with("_UINT") && !is_depth(format) {
+        SampledScalar::Uint
+    } else if name.ends_with("_SINT") {
+        SampledScalar::Int
+    } else {
+        SampledScalar::Float
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -107,19 +121,5 @@ mod tests {
         assert_eq!(suggestions("R8G8B8A8_UNROM", 3)[0], "R8G8B8A8_UNORM");
         assert!(is_depth(vk::Format::D24_UNORM_S8_UINT));
         assert!(!is_depth(vk::Format::R32_SFLOAT));
-    }
-}
-
-/// The scalar type sampling an image of `format` returns: integer formats give their integers,
-/// every other format (normalized, float, sRGB, depth) floats.
-pub fn sampled_scalar(format: vk::Format) -> crate::gpu::reflect::SampledScalar {
-    use crate::gpu::reflect::SampledScalar;
-    let name = name(format);
-    if name.ends_with("_UINT") && !is_depth(format) {
-        SampledScalar::Uint
-    } else if name.ends_with("_SINT") {
-        SampledScalar::Int
-    } else {
-        SampledScalar::Float
     }
 }
