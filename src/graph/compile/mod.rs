@@ -56,8 +56,9 @@ impl FrameInputs {
 pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGraph, GraphErrors> {
     profiling::scope!("cullgraph::compile_graph", graph.name.as_str());
     let mut sink = Sink::new(&graph.file);
-    if frame.width == 0 || frame.height == 0 || frame.width > 16384 || frame.height > 16384 {
-        sink.command_line(format!("output size {}x{} must be 1 to 16384 in each dimension", frame.width, frame.height));
+    let max = resolve::MAX_IMAGE_DIMENSION;
+    if frame.width == 0 || frame.height == 0 || frame.width > max || frame.height > max {
+        sink.command_line(format!("output size {}x{} must be 1 to {max} in each dimension", frame.width, frame.height));
     }
     let mut params = graph.params.clone();
     apply_overrides(&mut params, &frame.params, &mut sink);
