@@ -1,7 +1,7 @@
 //! Errors of scene loading and generation; each names the place (file, node, accessor).
 
 /// Why a scene could not be loaded or generated.
-#[derive(Debug, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SceneError {
     /// The file could not be read or parsed as glTF.
     #[error("{file}: {message}")]

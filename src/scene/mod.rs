@@ -13,6 +13,7 @@ pub mod mesh;
 pub mod procedural;
 pub mod source;
 pub mod validate;
+pub mod world;
 
 pub use bounds::{Aabb, Sphere};
 pub use camera::{Camera, Projection};

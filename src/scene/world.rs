@@ -1,0 +1,525 @@
+//! A scene that changes while it is rendered: instances inserted, changed and removed through
+//! persistent handles, meshes and materials registered at run time, point lights added, moved
+//! and removed.
+//!
+//! An instance's handle is its index in the instance table plus a generation: a removed index
+//! goes on a free list and is reused by a later insert with the next generation, so a handle kept
+//! past its removal is refused ([`WorldError::Stale`]) rather than reaching the instance that
+//! took its place. The GPU keeps an instance at its index, so that per-instance culling history
+//! stays attached to it across frames.
+//!
+//! Every change is recorded in a journal with the world's version. A renderer remembers the
+//! version it last applied and takes only the changes after it ([`World::changes_since`]); one
+//! world can serve several renderers, each at its own version. The journal is trimmed with
+//! [`World::trim_journal`] (to the oldest version a consumer still needs); a consumer whose
+//! version was trimmed away reloads everything.
+//!
+//! Every method checks its input before changing anything: a bulk change is applied whole or
+//! not at all.
+
+use super::{Instance, Material, MeshData, PointLight, Scene, SceneError, Transform};
+use std::fmt;
+
+/// A persistent reference to one instance of a [`World`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct InstanceHandle {
+    index: u32,
+    generation: u32,
+}
+
+impl InstanceHandle {
+    /// The instance's index: where the GPU keeps it (its slot in the instance buffers).
+    pub fn index(self) -> u32 {
+        self.index
+    }
+
+    /// How many instances held this index before this one.
+    pub fn generation(self) -> u32 {
+        self.generation
+    }
+}
+
+impl fmt::Display for InstanceHandle {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "instance #{} (generation {})", self.index, self.generation)
+    }
+}
+
+/// A persistent reference to one point light of a [`World`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct LightHandle {
+    index: u32,
+    generation: u32,
+}
+
+impl LightHandle {
+    /// The light's index in the light table.
+    pub fn index(self) -> u32 {
+        self.index
+    }
+}
+
+impl fmt::Display for LightHandle {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "light #{} (generation {})", self.index, self.generation)
+    }
+}
+
+/// Why a change to a [`World`] was refused. Nothing was changed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum WorldError {
+    /// The handle's instance or light was removed (or never belonged to this world).
+    #[error("{handle}: stale handle (removed, or from another world)")]
+    Stale {
+        /// The handle, as displayed.
+        handle: String,
+    },
+    /// A mesh index that names no registered mesh.
+    #[error("{handle}: mesh {mesh} does not exist ({meshes} meshes are registered)")]
+    UnknownMesh {
+        /// What referred to it.
+        handle: String,
+        /// The index given.
+        mesh: u32,
+        /// Meshes there are.
+        meshes: usize,
+    },
+    /// A material index that names no registered material.
+    #[error("{handle}: material {material} does not exist ({materials} materials are registered)")]
+    UnknownMaterial {
+        /// What referred to it.
+        handle: String,
+        /// The index given.
+        material: u32,
+        /// Materials there are.
+        materials: usize,
+    },
+    /// A value the GPU cannot use: not finite, beyond the world's range, flags beyond 8 bits.
+    #[error("{handle}: {message}")]
+    Invalid {
+        /// What it was given to.
+        handle: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A mesh or material that instances still use cannot be unregistered.
+    #[error("{what} is used by {users} instance(s), the first {first}; remove or re-mesh them first")]
+    InUse {
+        /// The mesh or material.
+        what: String,
+        /// How many instances use it.
+        users: usize,
+        /// One of them.
+        first: InstanceHandle,
+    },
+    /// Mesh data or a material the scene refuses.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+}
+
+/// One change, by what it touched: the renderer reloads that entry whole.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Change {
+    /// The instance at this index was inserted, changed or removed.
+    Instance(u32),
+    /// The point light at this index was added, moved or removed.
+    Light(u32),
+    /// This mesh was registered or unregistered.
+    Mesh(u32),
+    /// This material was registered, changed or unregistered.
+    Material(u32),
+}
+
+/// Slots of a table with generations and a free list.
+#[derive(Clone, Debug, Default)]
+struct Slots {
+    generations: Vec<u32>,
+    alive: Vec<bool>,
+    /// Free indices, reused last-freed first.
+    free: Vec<u32>,
+    live: usize,
+}
+
+impl Slots {
+    /// A table of `n` live entries.
+    fn full(n: usize) -> Self {
+        Self { generations: vec![0; n], alive: vec![true; n], free: Vec::new(), live: n }
+    }
+
+    fn check(&self, index: u32, generation: u32) -> bool {
+        let i = index as usize;
+        self.alive.get(i).copied().unwrap_or(false) && self.generations[i] == generation
+    }
+
+    /// The index the next insert takes, and its generation.
+    fn next(&self) -> (u32, u32) {
+        match self.free.last() {
+            Some(&i) => (i, self.generations[i as usize]),
+            None => (self.alive.len() as u32, 0),
+        }
+    }
+
+    fn take(&mut self) -> (u32, u32) {
+        let (index, generation) = self.next();
+        if self.free.pop().is_none() {
+            self.generations.push(0);
+            self.alive.push(true);
+        } else {
+            self.alive[index as usize] = true;
+        }
+        self.live += 1;
+        (index, generation)
+    }
+
+    fn release(&mut self, index: u32) {
+        let i = index as usize;
+        self.alive[i] = false;
+        self.generations[i] = self.generations[i].wrapping_add(1);
+        self.free.push(index);
+        self.live -= 1;
+    }
+}
+
+/// A scene that changes between frames; see the module documentation.
+#[derive(Clone, Debug)]
+pub struct World {
+    /// Meshes, materials, the sun and the camera as in a [`Scene`]; `instances` and `lights`
+    /// hold every index ever used, removed ones included (see [`World::is_live`]).
+    scene: Scene,
+    instances: Slots,
+    lights: Slots,
+    /// Whether each mesh is registered (unregistered meshes keep their place in the pools).
+    meshes_live: Vec<bool>,
+    materials_live: Vec<bool>,
+    /// Changes in order; the first is the change that made version `journal_start + 1`.
+    journal: Vec<Change>,
+    journal_start: u64,
+}
+
+impl World {
+    /// A world holding `scene` (checked as at load), every instance live: the handle of instance
+    /// `i` of the scene is `handles[i]`.
+    pub fn new(scene: Scene) -> Result<(Self, Vec<InstanceHandle>), SceneError> {
+        super::validate::validate_scene(&scene)?;
+        let n = scene.instances.len();
+        let world = Self {
+            instances: Slots::full(n),
+            lights: Slots::full(scene.lights.len()),
+            meshes_live: vec![true; scene.meshes.len()],
+            materials_live: vec![true; scene.materials.len()],
+            scene,
+            journal: Vec::new(),
+            journal_start: 0,
+        };
+        let handles = (0..n as u32).map(|index| InstanceHandle { index, generation: 0 }).collect();
+        Ok((world, handles))
+    }
+
+    /// The scene as the GPU mirrors it: every instance index ever used, removed ones included.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Whether the instance at `index` is live.
+    pub fn is_live(&self, index: u32) -> bool {
+        self.instances.alive.get(index as usize).copied().unwrap_or(false)
+    }
+
+    /// Live instances.
+    pub fn live_instances(&self) -> usize {
+        self.instances.live
+    }
+
+    /// Instance indices in use so far (live or removed): the size of the GPU's instance table.
+    pub fn instance_slots(&self) -> usize {
+        self.instances.alive.len()
+    }
+
+    /// The handles of every live instance, in index order.
+    pub fn handles(&self) -> impl Iterator<Item = InstanceHandle> + '_ {
+        (0..self.instances.alive.len() as u32)
+            .filter(|&i| self.is_live(i))
+            .map(|index| InstanceHandle { index, generation: self.instances.generations[index as usize] })
+    }
+
+    /// The instance `handle` refers to.
+    pub fn instance(&self, handle: InstanceHandle) -> Result<&Instance, WorldError> {
+        self.check_instance(handle)?;
+        Ok(&self.scene.instances[handle.index as usize])
+    }
+
+    /// The version: how many changes the world has had.
+    pub fn version(&self) -> u64 {
+        self.journal_start + self.journal.len() as u64
+    }
+
+    /// The changes after `version`, oldest first (one entry per change, so an instance changed
+    /// twice appears twice); `None` when the journal no longer reaches back that far.
+    pub fn changes_since(&self, version: u64) -> Option<&[Change]> {
+        let from = version.checked_sub(self.journal_start)? as usize;
+        self.journal.get(from..)
+    }
+
+    /// Forgets the changes up to `version` (the oldest version a consumer still needs).
+    pub fn trim_journal(&mut self, version: u64) {
+        let n = (version.saturating_sub(self.journal_start) as usize).min(self.journal.len());
+        self.journal.drain(..n);
+        self.journal_start += n as u64;
+    }
+
+    fn check_instance(&self, handle: InstanceHandle) -> Result<(), WorldError> {
+        if self.instances.check(handle.index, handle.generation) {
+            Ok(())
+        } else {
+            Err(WorldError::Stale { handle: handle.to_string() })
+        }
+    }
+
+    /// What is wrong with `instance` for the world, named as `who`.
+    fn instance_error(&self, who: &dyn fmt::Display, instance: &Instance) -> Option<WorldError> {
+        let handle = who.to_string();
+        if !self.meshes_live.get(instance.mesh as usize).copied().unwrap_or(false) {
+            let meshes = self.meshes_live.iter().filter(|l| **l).count();
+            return Some(WorldError::UnknownMesh { handle, mesh: instance.mesh, meshes });
+        }
+        if !self.materials_live.get(instance.material as usize).copied().unwrap_or(false) {
+            let materials = self.materials_live.iter().filter(|l| **l).count();
+            return Some(WorldError::UnknownMaterial { handle, material: instance.material, materials });
+        }
+        transform_error(&instance.transform)
+            .or_else(|| {
+                (instance.flags >> super::validate::MAX_FLAG_BITS != 0)
+                    .then(|| format!("flags {:#x} use more than 8 bits", instance.flags))
+            })
+            .map(|message| WorldError::Invalid { handle, message })
+    }
+
+    /// Adds an instance; its handle stays valid until it is removed.
+    pub fn insert(&mut self, instance: Instance) -> Result<InstanceHandle, WorldError> {
+        let (index, generation) = self.instances.next();
+        let handle = InstanceHandle { index, generation };
+        if let Some(e) = self.instance_error(&handle, &instance) {
+            return Err(e);
+        }
+        self.instances.take();
+        if index as usize == self.scene.instances.len() {
+            self.scene.instances.push(instance);
+        } else {
+            self.scene.instances[index as usize] = instance;
+        }
+        self.journal.push(Change::Instance(index));
+        Ok(handle)
+    }
+
+    /// Removes an instance; its handle (and every copy of it) becomes stale.
+    pub fn remove(&mut self, handle: InstanceHandle) -> Result<Instance, WorldError> {
+        self.check_instance(handle)?;
+        self.instances.release(handle.index);
+        self.journal.push(Change::Instance(handle.index));
+        Ok(self.scene.instances[handle.index as usize])
+    }
+
+    /// Replaces whole instances: each `(handle, instance)` is checked first, then all are applied.
+    pub fn set_instances(&mut self, changes: &[(InstanceHandle, Instance)]) -> Result<(), WorldError> {
+        for (handle, instance) in changes {
+            self.check_instance(*handle)?;
+            if let Some(e) = self.instance_error(handle, instance) {
+                return Err(e);
+            }
+        }
+        for (handle, instance) in changes {
+            self.scene.instances[handle.index as usize] = *instance;
+            self.journal.push(Change::Instance(handle.index));
+        }
+        Ok(())
+    }
+
+    /// Applies `edit` to the instances of `handles` (checked first, applied all or none).
+    fn edit<T: Copy>(
+        &mut self,
+        changes: &[(InstanceHandle, T)],
+        edit: impl Fn(&mut Instance, T),
+    ) -> Result<(), WorldError> {
+        let mut edited = Vec::with_capacity(changes.len());
+        for &(handle, value) in changes {
+            let mut instance = *self.instance(handle)?;
+            edit(&mut instance, value);
+            edited.push((handle, instance));
+        }
+        self.set_instances(&edited)
+    }
+
+    /// Moves instances: `(handle, transform)` each.
+    pub fn set_transforms(&mut self, changes: &[(InstanceHandle, Transform)]) -> Result<(), WorldError> {
+        self.edit(changes, |i, t| i.transform = t)
+    }
+
+    /// Moves one instance.
+    pub fn set_transform(&mut self, handle: InstanceHandle, transform: Transform) -> Result<(), WorldError> {
+        self.set_transforms(&[(handle, transform)])
+    }
+
+    /// Gives instances other meshes.
+    pub fn set_meshes(&mut self, changes: &[(InstanceHandle, u32)]) -> Result<(), WorldError> {
+        self.edit(changes, |i, m| i.mesh = m)
+    }
+
+    /// Gives instances other materials.
+    pub fn set_materials(&mut self, changes: &[(InstanceHandle, u32)]) -> Result<(), WorldError> {
+        self.edit(changes, |i, m| i.material = m)
+    }
+
+    /// Sets instances' `FLAG_*` bits.
+    pub fn set_flags(&mut self, changes: &[(InstanceHandle, u32)]) -> Result<(), WorldError> {
+        self.edit(changes, |i, f| i.flags = f)
+    }
+
+    /// Registers a mesh (appended to the vertex and index pools) and returns its index.
+    pub fn add_mesh(&mut self, name: &str, data: &MeshData) -> Result<u32, WorldError> {
+        let mesh = self.scene.add_mesh(name, data, &format!("mesh '{name}'"))?;
+        self.meshes_live.push(true);
+        self.journal.push(Change::Mesh(mesh));
+        Ok(mesh)
+    }
+
+    /// Unregisters a mesh no live instance uses. Its vertices and indices keep their place in
+    /// the pools (a later registration does not reuse them).
+    pub fn remove_mesh(&mut self, mesh: u32) -> Result<(), WorldError> {
+        if !self.meshes_live.get(mesh as usize).copied().unwrap_or(false) {
+            let meshes = self.meshes_live.iter().filter(|l| **l).count();
+            return Err(WorldError::UnknownMesh { handle: "remove_mesh".into(), mesh, meshes });
+        }
+        self.refuse_in_use(&format!("mesh {mesh} '{}'", self.scene.meshes[mesh as usize].name), |i| i.mesh == mesh)?;
+        self.meshes_live[mesh as usize] = false;
+        self.journal.push(Change::Mesh(mesh));
+        Ok(())
+    }
+
+    /// Registers a material and returns its index.
+    pub fn add_material(&mut self, material: Material) -> Result<u32, WorldError> {
+        material_error(&material).map_or(Ok(()), |message| {
+            Err(WorldError::Invalid { handle: format!("material '{}'", material.name), message })
+        })?;
+        if self.scene.materials.len() >= super::validate::MAX_MATERIALS {
+            let message = format!("more than {} materials", super::validate::MAX_MATERIALS);
+            return Err(WorldError::Invalid { handle: format!("material '{}'", material.name), message });
+        }
+        let index = self.scene.add_material(material);
+        self.materials_live.push(true);
+        self.journal.push(Change::Material(index));
+        Ok(index)
+    }
+
+    /// Changes a registered material's parameters.
+    pub fn set_material(&mut self, index: u32, material: Material) -> Result<(), WorldError> {
+        if !self.materials_live.get(index as usize).copied().unwrap_or(false) {
+            let materials = self.materials_live.iter().filter(|l| **l).count();
+            return Err(WorldError::UnknownMaterial { handle: "set_material".into(), material: index, materials });
+        }
+        if let Some(message) = material_error(&material) {
+            return Err(WorldError::Invalid { handle: format!("material {index} '{}'", material.name), message });
+        }
+        self.scene.materials[index as usize] = material;
+        self.journal.push(Change::Material(index));
+        Ok(())
+    }
+
+    /// Unregisters a material no live instance uses.
+    pub fn remove_material(&mut self, index: u32) -> Result<(), WorldError> {
+        if !self.materials_live.get(index as usize).copied().unwrap_or(false) {
+            let materials = self.materials_live.iter().filter(|l| **l).count();
+            return Err(WorldError::UnknownMaterial { handle: "remove_material".into(), material: index, materials });
+        }
+        let name = format!("material {index} '{}'", self.scene.materials[index as usize].name);
+        self.refuse_in_use(&name, |i| i.material == index)?;
+        self.materials_live[index as usize] = false;
+        self.journal.push(Change::Material(index));
+        Ok(())
+    }
+
+    fn refuse_in_use(&self, what: &str, uses: impl Fn(&Instance) -> bool) -> Result<(), WorldError> {
+        let users: Vec<InstanceHandle> =
+            self.handles().filter(|h| uses(&self.scene.instances[h.index as usize])).collect();
+        match users.first() {
+            Some(&first) => Err(WorldError::InUse { what: what.to_string(), users: users.len(), first }),
+            None => Ok(()),
+        }
+    }
+
+    /// Whether light `index` is live.
+    pub fn is_light_live(&self, index: u32) -> bool {
+        self.lights.alive.get(index as usize).copied().unwrap_or(false)
+    }
+
+    /// Adds a point light.
+    pub fn insert_light(&mut self, light: PointLight) -> Result<LightHandle, WorldError> {
+        let (index, generation) = self.lights.next();
+        let handle = LightHandle { index, generation };
+        if let Some(message) = light_error(&light) {
+            return Err(WorldError::Invalid { handle: handle.to_string(), message });
+        }
+        self.lights.take();
+        if index as usize == self.scene.lights.len() {
+            self.scene.lights.push(light);
+        } else {
+            self.scene.lights[index as usize] = light;
+        }
+        self.journal.push(Change::Light(index));
+        Ok(handle)
+    }
+
+    /// Changes a point light (position, color, range).
+    pub fn set_light(&mut self, handle: LightHandle, light: PointLight) -> Result<(), WorldError> {
+        if !self.lights.check(handle.index, handle.generation) {
+            return Err(WorldError::Stale { handle: handle.to_string() });
+        }
+        if let Some(message) = light_error(&light) {
+            return Err(WorldError::Invalid { handle: handle.to_string(), message });
+        }
+        self.scene.lights[handle.index as usize] = light;
+        self.journal.push(Change::Light(handle.index));
+        Ok(())
+    }
+
+    /// Removes a point light.
+    pub fn remove_light(&mut self, handle: LightHandle) -> Result<PointLight, WorldError> {
+        if !self.lights.check(handle.index, handle.generation) {
+            return Err(WorldError::Stale { handle: handle.to_string() });
+        }
+        self.lights.release(handle.index);
+        self.journal.push(Change::Light(handle.index));
+        Ok(self.scene.lights[handle.index as usize])
+    }
+
+    /// The handles of the lights the world started with (index order).
+    pub fn light_handles(&self) -> impl Iterator<Item = LightHandle> + '_ {
+        (0..self.lights.alive.len() as u32)
+            .filter(|&i| self.is_light_live(i))
+            .map(|index| LightHandle { index, generation: self.lights.generations[index as usize] })
+    }
+}
+
+/// Why a transform is refused: not finite, or its translation beyond the world's range.
+fn transform_error(t: &Transform) -> Option<String> {
+    if !t.linear.is_finite() {
+        return Some(format!("transform {:?} is not finite", t.linear));
+    }
+    super::position_error("translation", t.translation)
+}
+
+fn material_error(m: &Material) -> Option<String> {
+    if !m.albedo.is_finite() || m.albedo.min_element() < 0.0 {
+        return Some(format!("albedo {} must be finite and non-negative", m.albedo));
+    }
+    (!(m.roughness.is_finite() && m.metallic.is_finite())).then(|| "roughness and metallic must be finite".into())
+}
+
+fn light_error(l: &PointLight) -> Option<String> {
+    if let Some(e) = super::position_error("position", l.position) {
+        return Some(e);
+    }
+    if !l.color.is_finite() || l.color.min_element() < 0.0 {
+        return Some(format!("color {} must be finite and non-negative", l.color));
+    }
+    (!(l.range.is_finite() && l.range > 0.0)).then(|| format!("range {} must be positive and finite", l.range))
+}

@@ -1,0 +1,193 @@
+//! The living world on the CPU: persistent handles, stale handles refused, bad values refused
+//! with the handle named and nothing changed, bulk changes all or nothing, and a journal that
+//! replays to the same world.
+
+use cullgraph::scene::world::{Change, InstanceHandle, World, WorldError};
+use cullgraph::scene::{Instance, Material, MeshData, PointLight, Scene, Transform};
+use glam::{DVec3, Mat3, Vec3};
+use proptest::prelude::*;
+use std::collections::BTreeMap;
+
+fn cube() -> MeshData {
+    let p = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 0.0, 1.0],
+        [1.0, 1.0, 1.0],
+        [0.0, 1.0, 1.0],
+    ];
+    MeshData {
+        positions: p.iter().map(|v| Vec3::from_array(*v)).collect(),
+        normals: vec![],
+        indices: vec![
+            0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 3, 6, 2, 3, 7, 6, 0, 4, 7, 0, 7, 3, 1, 2, 6, 1, 6, 5,
+        ],
+    }
+}
+
+fn at(x: f64) -> Transform {
+    Transform { linear: Mat3::IDENTITY, translation: DVec3::new(x, 0.0, 0.0) }
+}
+
+/// A world of `n` cubes in a row, one material.
+fn world(n: usize) -> (World, Vec<InstanceHandle>) {
+    let mut scene = Scene::default();
+    let mesh = scene.add_mesh("cube", &cube(), "cube").unwrap();
+    let material = scene.add_material(Material::default());
+    for i in 0..n {
+        scene.instances.push(Instance { transform: at(i as f64 * 2.0), mesh, material, flags: 0 });
+    }
+    World::new(scene).unwrap()
+}
+
+#[test]
+fn removed_handles_are_stale_and_their_index_is_reused_with_a_new_generation() {
+    let (mut w, h) = world(3);
+    let removed = w.remove(h[1]).unwrap();
+    assert_eq!(removed.transform, at(2.0));
+    let stale = w.set_transform(h[1], at(5.0)).unwrap_err();
+    assert_eq!(stale, WorldError::Stale { handle: "instance #1 (generation 0)".into() });
+    assert_eq!(stale.to_string(), "instance #1 (generation 0): stale handle (removed, or from another world)");
+    assert!(w.remove(h[1]).is_err(), "removed twice");
+    let again = w.insert(Instance { transform: at(9.0), mesh: 0, material: 0, flags: 0 }).unwrap();
+    assert_eq!((again.index(), again.generation()), (1, 1), "the freed index, one generation on");
+    assert!(w.instance(h[1]).is_err(), "the old handle does not reach the new instance");
+    assert_eq!(w.instance(again).unwrap().transform, at(9.0));
+    assert_eq!(w.live_instances(), 3);
+    assert_eq!(w.instance_slots(), 3);
+}
+
+#[test]
+fn bad_values_name_the_handle_and_change_nothing() {
+    let (mut w, h) = world(2);
+    let version = w.version();
+    let nan = Transform { linear: Mat3::IDENTITY, translation: DVec3::new(f64::NAN, 0.0, 0.0) };
+    let far = at(1e16);
+    let e = w.set_transforms(&[(h[0], at(7.0)), (h[1], nan)]).unwrap_err();
+    assert!(e.to_string().starts_with("instance #1 (generation 0): translation"), "{e}");
+    assert_eq!(w.instance(h[0]).unwrap().transform, at(0.0), "bulk changes are all or nothing");
+    assert!(w.set_transform(h[0], far).unwrap_err().to_string().contains("beyond"));
+    let e = w.set_meshes(&[(h[0], 7)]).unwrap_err();
+    assert_eq!(e, WorldError::UnknownMesh { handle: "instance #0 (generation 0)".into(), mesh: 7, meshes: 1 });
+    assert!(matches!(w.set_materials(&[(h[1], 3)]), Err(WorldError::UnknownMaterial { material: 3, .. })));
+    assert!(w.set_flags(&[(h[1], 1 << 9)]).unwrap_err().to_string().contains("more than 8 bits"));
+    let mut bad_light = PointLight { position: DVec3::ZERO, color: Vec3::ONE, range: 0.0 };
+    assert!(w.insert_light(bad_light).unwrap_err().to_string().contains("range 0"));
+    bad_light.range = 1.0;
+    bad_light.color = Vec3::NAN;
+    assert!(w.insert_light(bad_light).is_err());
+    assert_eq!(w.version(), version, "nothing was recorded");
+}
+
+#[test]
+fn meshes_and_materials_in_use_are_not_unregistered() {
+    let (mut w, h) = world(2);
+    let e = w.remove_mesh(0).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "mesh 0 'cube' is used by 2 instance(s), the first instance #0 (generation 0); remove or re-mesh them first"
+    );
+    let other = w.add_mesh("other", &cube()).unwrap();
+    w.set_meshes(&[(h[0], other), (h[1], other)]).unwrap();
+    w.remove_mesh(0).unwrap();
+    assert!(matches!(w.set_meshes(&[(h[0], 0)]), Err(WorldError::UnknownMesh { mesh: 0, .. })));
+    let red = w.add_material(Material { name: "red".into(), albedo: Vec3::X, ..Default::default() }).unwrap();
+    assert!(w.remove_material(0).is_err());
+    w.set_materials(&[(h[0], red), (h[1], red)]).unwrap();
+    w.remove_material(0).unwrap();
+    assert!(w.add_material(Material { albedo: Vec3::NEG_ONE, ..Default::default() }).is_err());
+}
+
+#[test]
+fn the_journal_lists_each_change_and_is_trimmed_to_what_consumers_need() {
+    let (mut w, h) = world(2);
+    assert_eq!(w.version(), 0);
+    w.set_transform(h[1], at(3.0)).unwrap();
+    let light = w.insert_light(PointLight { position: DVec3::Y, color: Vec3::ONE, range: 5.0 }).unwrap();
+    w.remove(h[0]).unwrap();
+    assert_eq!(w.changes_since(0).unwrap(), [Change::Instance(1), Change::Light(light.index()), Change::Instance(0)]);
+    assert_eq!(w.changes_since(2).unwrap(), [Change::Instance(0)]);
+    w.trim_journal(2);
+    assert_eq!(w.changes_since(2).unwrap(), [Change::Instance(0)]);
+    assert!(w.changes_since(1).is_none(), "trimmed: the consumer reloads everything");
+    assert_eq!(w.changes_since(3).unwrap(), []);
+}
+
+/// One operation of a random sequence.
+#[derive(Clone, Debug)]
+enum Op {
+    Insert(f64),
+    Remove(usize),
+    Move(usize, f64),
+    /// Uses a handle that was removed (if any).
+    Stale(usize),
+}
+
+fn op() -> impl Strategy<Value = Op> {
+    prop_oneof![
+        (-100.0..100.0f64).prop_map(Op::Insert),
+        any::<usize>().prop_map(Op::Remove),
+        (any::<usize>(), -100.0..100.0f64).prop_map(|(i, x)| Op::Move(i, x)),
+        any::<usize>().prop_map(Op::Stale),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+    /// Against a model (a map from live handles to positions): live handles reach their own
+    /// instance, removed ones are stale forever, and replaying the journal's changes onto a
+    /// snapshot gives the same instances as the world.
+    #[test]
+    fn random_edits_match_a_model(ops in proptest::collection::vec(op(), 1..60)) {
+        let (mut w, handles) = world(4);
+        let mut model: BTreeMap<InstanceHandle, f64> = handles.iter().enumerate().map(|(i, h)| (*h, i as f64 * 2.0)).collect();
+        let mut removed: Vec<InstanceHandle> = Vec::new();
+        let snapshot = w.scene().instances.clone();
+        for op in ops {
+            match op {
+                Op::Insert(x) => {
+                    let h = w.insert(Instance { transform: at(x), mesh: 0, material: 0, flags: 0 }).unwrap();
+                    prop_assert!(!model.contains_key(&h) && !removed.contains(&h), "a handle is never given twice");
+                    model.insert(h, x);
+                }
+                Op::Remove(i) if !model.is_empty() => {
+                    let h = *model.keys().nth(i % model.len()).unwrap();
+                    w.remove(h).unwrap();
+                    model.remove(&h);
+                    removed.push(h);
+                }
+                Op::Move(i, x) if !model.is_empty() => {
+                    let h = *model.keys().nth(i % model.len()).unwrap();
+                    w.set_transform(h, at(x)).unwrap();
+                    model.insert(h, x);
+                }
+                Op::Stale(i) if !removed.is_empty() => {
+                    let h = removed[i % removed.len()];
+                    prop_assert!(w.set_transform(h, at(0.0)).is_err());
+                    prop_assert!(w.remove(h).is_err());
+                }
+                _ => {}
+            }
+        }
+        prop_assert_eq!(w.live_instances(), model.len());
+        for (h, x) in &model {
+            prop_assert_eq!(w.instance(*h).unwrap().transform, at(*x));
+        }
+        let live: Vec<InstanceHandle> = w.handles().collect();
+        prop_assert_eq!(live, model.keys().copied().collect::<Vec<_>>());
+        // Replaying: every changed index takes the world's current entry.
+        let mut replayed = snapshot;
+        for change in w.changes_since(0).unwrap() {
+            if let Change::Instance(i) = change {
+                let i = *i as usize;
+                if i >= replayed.len() { replayed.resize(i + 1, w.scene().instances[i]); }
+                replayed[i] = w.scene().instances[i];
+            }
+        }
+        prop_assert_eq!(&replayed, &w.scene().instances);
+    }
+}
