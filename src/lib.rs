@@ -60,3 +60,31 @@ pub mod scene;
 pub mod stats;
 
 pub use error::{Error, Result};
+
+#[cfg(test)]
+mod readme_limits {
+    use crate::files;
+
+    /// The limits the README states are the ones enforced.
+    #[test]
+    fn the_readme_states_the_enforced_limits() {
+        let readme = include_str!("../README.md").split_whitespace().collect::<Vec<_>>().join(" ");
+        let files = format!(
+            "a graph {} MiB, a shader {} MiB, a scene {} GiB",
+            files::GRAPH_LIMIT >> 20,
+            files::SHADER_LIMIT >> 20,
+            files::SCENE_LIMIT >> 30
+        );
+        let expressions = format!(
+            "nest at most {} deep and have at most {} tokens",
+            crate::graph::expr::MAX_NESTING,
+            crate::graph::expr::MAX_TOKENS
+        );
+        let world = format!("up to 2^{} (about", crate::scene::MAX_COORDINATE.log2());
+        let max = crate::graph::compile::resolve::MAX_IMAGE_DIMENSION;
+        let size = format!("up to {max}x{max}");
+        for stated in [files, expressions, world, size] {
+            assert!(readme.contains(&stated), "the README does not say \"{stated}\"");
+        }
+    }
+}
