@@ -73,7 +73,7 @@ fn bad_values_name_the_handle_and_change_nothing() {
     let e = w.set_meshes(&[(h[0], 7)]).unwrap_err();
     assert_eq!(e, WorldError::UnknownMesh { handle: "instance #0 (generation 0)".into(), mesh: 7, meshes: 1 });
     assert!(matches!(w.set_materials(&[(h[1], 3)]), Err(WorldError::UnknownMaterial { material: 3, .. })));
-    assert!(w.set_flags(&[(h[1], 1 << 9)]).unwrap_err().to_string().contains("more than 8 bits"));
+    assert!(w.set_flags(&[(h[1], 1 << 6)]).unwrap_err().to_string().contains("more than 6 bits"));
     let mut bad_light = PointLight { position: DVec3::ZERO, color: Vec3::ONE, range: 0.0 };
     assert!(w.insert_light(bad_light).unwrap_err().to_string().contains("range 0"));
     bad_light.range = 1.0;

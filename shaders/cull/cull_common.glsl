@@ -71,6 +71,9 @@ struct CullStats {
 };
 
 #define FLAG_OCCLUDER 1u
+// A slot without an instance (src/scene/mod.rs FLAG_EMPTY_SLOT): never visible, never drawn.
+#define FLAG_EMPTY_SLOT 64u
+bool record_empty(CullRecord r) { return ((r.group_flags >> 24) & FLAG_EMPTY_SLOT) != 0u; }
 
 // Blocks per superblock: a block's survivors-before is the sum of the superblock counts before
 // its superblock plus the block counts before it in its superblock, read from what the test

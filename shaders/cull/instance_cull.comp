@@ -232,6 +232,9 @@ void main() {
 #endif
     CullRecord r = CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u);
     if (evaluated) r = load_record(slot);
+    // An empty slot is not tested: its visibility bit is written 0, so an instance that takes
+    // the slot later inherits nothing.
+    if (evaluated && record_empty(r)) evaluated = false;
     Decision d = decide(r, evaluated, was_visible);
     barrier();
 

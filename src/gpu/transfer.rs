@@ -148,3 +148,86 @@ pub fn record_image_to_buffer(ctx: &GpuContext, cmd: vk::CommandBuffer, image: &
         &[image_barrier(image, Access::TRANSFER_READ, state)],
     );
 }
+
+/// Host-visible staging memory reused frame after frame for scattered updates of device
+/// buffers: writes are gathered on the host, and each frame copies them through its own
+/// segment (one per frame in flight, so a frame never overwrites what an executing one reads),
+/// which grows geometrically when a frame needs more and is otherwise never reallocated.
+pub struct StagingRing {
+    segments: Vec<Option<Buffer>>,
+    /// Bytes waiting for the next frame.
+    data: Vec<u8>,
+    /// Per destination buffer, its copies (source offsets into `data`).
+    copies: Vec<(vk::Buffer, Vec<vk::BufferCopy>)>,
+}
+
+impl StagingRing {
+    /// A ring for `frames` frames in flight.
+    pub fn new(frames: usize) -> Self {
+        Self { segments: (0..frames.max(1)).map(|_| None).collect(), data: Vec::new(), copies: Vec::new() }
+    }
+
+    /// Queues `bytes` for `dst` at `offset` (in bytes) for the next recorded frame.
+    pub fn write(&mut self, dst: &Buffer, offset: u64, bytes: &[u8]) {
+        let src_offset = self.data.len() as u64;
+        self.data.extend_from_slice(bytes);
+        let region = vk::BufferCopy { src_offset, dst_offset: offset, size: bytes.len() as u64 };
+        match self.copies.iter_mut().find(|(b, _)| *b == dst.handle()) {
+            Some((_, regions)) => regions.push(region),
+            None => self.copies.push((dst.handle(), vec![region])),
+        }
+    }
+
+    /// Bytes queued for the next frame.
+    pub fn bytes(&self) -> u64 {
+        self.data.len() as u64
+    }
+
+    /// Forgets what is queued (the buffers it was meant for were replaced).
+    pub fn clear(&mut self) {
+        self.data.clear();
+        self.copies.clear();
+    }
+
+    /// Records the queued copies for frame `frame` into `cmd`: after every earlier use of their
+    /// destinations, before every later one. The segment of `frame` must be free: the frame
+    /// that last used it (`frame - frames in flight`) has completed. The queue is kept until
+    /// [`StagingRing::clear`], so that a frame whose recording failed can be recorded again.
+    pub fn record(&mut self, ctx: &GpuContext, cmd: vk::CommandBuffer, frame: u64) -> GpuResult<()> {
+        if self.copies.is_empty() {
+            return Ok(());
+        }
+        let k = (frame % self.segments.len() as u64) as usize;
+        let need = self.data.len() as u64;
+        let current = self.segments[k].as_ref().map_or(0, |b| b.size());
+        if current < need {
+            let size = need.max(current * 2).max(64 << 10);
+            let desc = BufferDesc {
+                name: &format!("staging ring {k}"),
+                size,
+                usage: vk::BufferUsageFlags::TRANSFER_SRC,
+                location: MemoryLocation::CpuToGpu,
+            };
+            self.segments[k] = Some(Buffer::new(ctx, &desc)?);
+        }
+        let segment = self.segments[k].as_mut().expect("sized above");
+        segment.write_bytes(0, &self.data)?;
+        let device = ctx.device();
+        let all = Access {
+            stage: vk::PipelineStageFlags2::ALL_COMMANDS,
+            access: vk::AccessFlags2::from_raw(
+                vk::AccessFlags2::MEMORY_READ.as_raw() | vk::AccessFlags2::MEMORY_WRITE.as_raw(),
+            ),
+            layout: vk::ImageLayout::UNDEFINED,
+        };
+        // Earlier frames may still read or write what these copies overwrite.
+        cmd_barriers(device, cmd, &[memory_barrier(all, Access::TRANSFER_WRITE)], &[]);
+        for (dst, regions) in &self.copies {
+            // SAFETY: the segment holds every source range and each destination range lies in
+            // its buffer (the caller's offsets); cmd is recording.
+            unsafe { device.cmd_copy_buffer(cmd, segment.handle(), *dst, regions) };
+        }
+        cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, all)], &[]);
+        Ok(())
+    }
+}

@@ -118,8 +118,18 @@ impl GraphSpec {
         width: u32,
         height: u32,
     ) -> Result<CompiledGraph> {
+        self.compile_for(ctx, shaders, &frame_inputs(scene, width, height))
+    }
+
+    /// Loads, validates (against `ctx`'s device) and compiles the graph for `inputs`.
+    pub fn compile_for(
+        &self,
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        inputs: &crate::graph::FrameInputs,
+    ) -> Result<CompiledGraph> {
         let env = DeviceEnv::new(ctx, shaders);
         let graph = load_in(&self.text, &self.file, self.dir.as_deref(), &self.overrides, &env, &self.kinds)?;
-        Ok(compile(&graph, &frame_inputs(scene, width, height))?)
+        Ok(compile(&graph, inputs)?)
     }
 }

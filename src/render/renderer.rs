@@ -28,6 +28,9 @@ use ash::vk;
 use std::collections::BTreeSet;
 use std::time::Instant;
 
+mod world_sync;
+pub use world_sync::SyncStats;
+
 /// Output size.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RenderSettings {
@@ -82,6 +85,10 @@ pub struct Renderer {
     pool: Option<PoolAdapter>,
     /// The spec the last reload replaced (for [`Renderer::revert_reload`]).
     replaced_spec: Option<GraphSpec>,
+    /// The world this renderer mirrors, when made from one ([`Renderer::from_world`]).
+    world: Option<world_sync::WorldMirror>,
+    /// Scene inputs a relayout replaced, with the frame they were last used by.
+    retired_inputs: Vec<(u64, SceneInputs)>,
 }
 
 impl Renderer {
@@ -105,7 +112,20 @@ impl Renderer {
         let mut uploads = UploadBatch::default();
         let gpu_scene = GpuScene::upload(ctx, &scene, &mut uploads)?;
         let inputs = SceneInputs::new(ctx, gpu_scene, scene.lights.len())?;
-        Ok(Self {
+        Ok(Self::assemble(ctx, scene, inputs, uploads, runtime, settings, spec))
+    }
+
+    /// A renderer of `scene` (as the GPU holds it) with its inputs, first uploads and runtime.
+    fn assemble(
+        ctx: &GpuContext,
+        scene: Scene,
+        inputs: SceneInputs,
+        uploads: UploadBatch,
+        runtime: GraphRuntime,
+        settings: RenderSettings,
+        spec: &GraphSpec,
+    ) -> Self {
+        Self {
             ctx: ctx.clone(),
             scene,
             inputs,
@@ -124,17 +144,36 @@ impl Renderer {
             spec: spec.clone(),
             pool: None,
             replaced_spec: None,
-        })
+            world: None,
+            retired_inputs: Vec::new(),
+        }
     }
 
     /// Replaces the graph. On error the current graph stays in place and keeps rendering.
     pub fn reload_graph(&mut self, shaders: &ShaderCompiler, spec: &GraphSpec) -> Result<()> {
-        let mut runtime = build_runtime(&self.ctx, shaders, &self.scene, &self.settings, spec)?;
+        let mut runtime = match &self.world {
+            // Compiled for the world's layout with its room to grow, as before.
+            Some(world) => build_runtime_for(&self.ctx, shaders, world.compiled(), spec)?,
+            None => build_runtime(&self.ctx, shaders, &self.scene, &self.settings, spec)?,
+        };
         runtime.set_step_timing(self.runtime.step_timing());
+        self.install_runtime(runtime)?;
+        self.replaced_spec = Some(std::mem::replace(&mut self.spec, spec.clone()));
+        Ok(())
+    }
+
+    /// Makes `runtime` the one that records from the next frame on, with what the current one
+    /// was asked for (step timing, the captures verification reads); the current one is kept
+    /// until its frames can no longer be executing.
+    fn install_runtime(&mut self, mut runtime: GraphRuntime) -> Result<()> {
+        runtime.set_step_timing(self.runtime.step_timing());
+        #[cfg(feature = "verify")]
+        if self.oracle.is_some() {
+            runtime.set_capture(&DRAW_LIST_SLOTS)?;
+        }
         let old = std::mem::replace(&mut self.runtime, runtime);
         self.retired.push((self.runtime_start, self.frame_index, old));
         self.runtime_start = self.frame_index;
-        self.replaced_spec = Some(std::mem::replace(&mut self.spec, spec.clone()));
         Ok(())
     }
 
@@ -262,6 +301,11 @@ impl Renderer {
             batch.record(&self.ctx, cmd);
             self.ctx.end_label(cmd);
         }
+        if let Some(world) = &mut self.world {
+            self.ctx.begin_label(cmd, "update scene");
+            world.staging.record(&self.ctx, cmd, frame)?;
+            self.ctx.end_label(cmd);
+        }
         self.inputs.select(frame);
         let data = FrameData {
             frame,
@@ -274,6 +318,10 @@ impl Renderer {
         let in_flight = FRAMES_IN_FLIGHT as u64;
         self.retiring_uploads.retain(|(f, _)| frame < f + in_flight);
         self.retired.retain(|(_, end, _)| frame < end + in_flight);
+        self.retired_inputs.retain(|(last, _)| frame < last + in_flight);
+        if let Some(world) = &mut self.world {
+            world.recorded(frame);
+        }
         if let Some(batch) = self.pending_uploads.take() {
             self.retiring_uploads.push((frame, batch));
         }
@@ -387,6 +435,12 @@ impl Renderer {
                 })
                 .collect()
         };
+        // An empty slot of a changing world (an instance just removed, still on last frame's
+        // visible list) has an all-zero record: drawing it puts nothing on screen.
+        let empty = |id: &u32| {
+            self.scene.instances.get(*id as usize).is_some_and(|i| i.flags & crate::scene::FLAG_EMPTY_SLOT != 0)
+        };
+        let drawn: BTreeSet<u32> = drawn.into_iter().filter(|id| !empty(id)).collect();
         let missed: Vec<u32> = visible.difference(&drawn).copied().collect();
         let stats = VerifyStats {
             visible: visible.len() as u32,
@@ -538,6 +592,18 @@ fn build_runtime(
 ) -> Result<GraphRuntime> {
     profiling::scope!("cullgraph::build_graph");
     let plan = spec.compile(ctx, shaders, scene, settings.width, settings.height)?;
+    GraphRuntime::new(ctx, shaders, plan, spec.dir.as_deref())
+}
+
+/// Compiles `spec` for `inputs` and instantiates it.
+fn build_runtime_for(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    inputs: &crate::graph::FrameInputs,
+    spec: &GraphSpec,
+) -> Result<GraphRuntime> {
+    profiling::scope!("cullgraph::build_graph");
+    let plan = spec.compile_for(ctx, shaders, inputs)?;
     GraphRuntime::new(ctx, shaders, plan, spec.dir.as_deref())
 }
 

@@ -51,6 +51,11 @@ pub fn position_error(what: &str, p: glam::DVec3) -> Option<String> {
 /// glTF: node extras `{"cullgraph": {"no_aa": true}}`.
 pub const FLAG_NO_AA: u32 = 1 << 1;
 
+/// Set by the renderer, never by scenes: a GPU slot that holds no instance (room a draw group
+/// keeps for instances to come, or one removed). Its instance record is all zeros, which draws
+/// nothing, and culling skips it.
+pub const FLAG_EMPTY_SLOT: u32 = 1 << 6;
+
 /// A range of the shared index pool with its local-space bounds; one draw group.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mesh {

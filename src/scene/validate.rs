@@ -7,8 +7,9 @@ use super::{Instance, Scene};
 
 /// Material indices the GPU instance record can hold (24 bits).
 pub const MAX_MATERIALS: usize = 1 << 24;
-/// Flag bits the GPU instance record keeps (8 bits).
-pub const MAX_FLAG_BITS: u32 = 8;
+/// Flag bits a scene's instances may use: the cull records keep 7 bits, and the last of them is
+/// [`super::FLAG_EMPTY_SLOT`], which only the renderer sets.
+pub const MAX_FLAG_BITS: u32 = 6;
 
 /// Checks cross references and finiteness of a scene: a non-empty instance list, mesh ranges
 /// inside the pools, every index inside its mesh, instance mesh/material indices in range,
@@ -97,7 +98,7 @@ fn check_instance(scene: &Scene, instance: &Instance) -> Result<(), String> {
         return Err(e);
     }
     if instance.flags >> MAX_FLAG_BITS != 0 {
-        return Err(format!("flags {:#x} use bits above the {MAX_FLAG_BITS} that the GPU keeps", instance.flags));
+        return Err(format!("flags {:#x} use bits above the {MAX_FLAG_BITS} that instances may use", instance.flags));
     }
     Ok(())
 }

@@ -242,6 +242,11 @@ impl World {
             .map(|index| InstanceHandle { index, generation: self.instances.generations[index as usize] })
     }
 
+    /// The handle of the live instance at `index`.
+    pub fn handle_at(&self, index: u32) -> Option<InstanceHandle> {
+        self.is_live(index).then(|| InstanceHandle { index, generation: self.instances.generations[index as usize] })
+    }
+
     /// The instance `handle` refers to.
     pub fn instance(&self, handle: InstanceHandle) -> Result<&Instance, WorldError> {
         self.check_instance(handle)?;
@@ -288,8 +293,9 @@ impl World {
         }
         transform_error(&instance.transform)
             .or_else(|| {
-                (instance.flags >> super::validate::MAX_FLAG_BITS != 0)
-                    .then(|| format!("flags {:#x} use more than 8 bits", instance.flags))
+                (instance.flags >> super::validate::MAX_FLAG_BITS != 0).then(|| {
+                    format!("flags {:#x} use more than {} bits", instance.flags, super::validate::MAX_FLAG_BITS)
+                })
             })
             .map(|message| WorldError::Invalid { handle, message })
     }

@@ -133,6 +133,8 @@ pub struct GraphRuntime {
     /// frame has executed, because the views made for their mips and aspects go with them.
     retired_imports: Vec<(u64, Physical)>,
     frame: u64,
+    /// Clear the history resources at the start of the next frame, as before the first.
+    history_reset: bool,
 }
 
 impl GraphRuntime {
@@ -187,6 +189,7 @@ impl GraphRuntime {
             capture: None,
             retired_imports: Vec::new(),
             frame: 0,
+            history_reset: false,
         })
     }
 
@@ -239,8 +242,9 @@ impl GraphRuntime {
     ) -> crate::Result<u64> {
         let frame = self.frame;
         let device = self.ctx.device().clone();
-        if frame == 0 {
+        if frame == 0 || self.history_reset {
             self.clear_history(cmd);
+            self.history_reset = false;
         }
         let timer = &self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
         timer.borrow_mut().reset(cmd);
@@ -508,14 +512,23 @@ impl GraphRuntime {
         Ok(self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize].borrow().results()?)
     }
 
+    /// Makes the next recorded frame start from cleared history, as the first frame does: what
+    /// last frame left (`.prev`) no longer describes this frame's world, for example after the
+    /// scene's instances were laid out anew. Culling then tests everything once.
+    pub fn reset_history(&mut self) {
+        self.history_reset = true;
+    }
+
     /// Clears both copies of every history resource to zero (reversed-Z "far", empty bits), so
-    /// the first frame's `.prev` reads see defined contents.
+    /// the first frame's `.prev` reads see defined contents (and after [`Self::reset_history`],
+    /// contents that claim nothing), after whatever last touched them.
     fn clear_history(&mut self, cmd: vk::CommandBuffer) {
         let device = self.ctx.device();
         for &phys in self.resources.history() {
+            let before = Access { layout: self.tracker.state(phys).layout, ..self.tracker.pending(&[phys]) };
             match self.resources.get(phys) {
                 Physical::Image(image) => {
-                    cmd_barriers(device, cmd, &[], &[image_barrier(image, Access::NONE, Access::TRANSFER_WRITE)]);
+                    cmd_barriers(device, cmd, &[], &[image_barrier(image, before, Access::TRANSFER_WRITE)]);
                     let range = image.subresource_range();
                     // SAFETY: image in TRANSFER_DST layout with TRANSFER_DST usage; cmd recording.
                     unsafe {
@@ -542,6 +555,7 @@ impl GraphRuntime {
                 }
                 Physical::Unbound => continue,
                 Physical::Buffer(buffer) => {
+                    cmd_barriers(device, cmd, &[memory_barrier(before, Access::TRANSFER_WRITE)], &[]);
                     // SAFETY: buffer with TRANSFER_DST usage; cmd recording.
                     unsafe { device.cmd_fill_buffer(cmd, buffer.handle(), 0, vk::WHOLE_SIZE, 0) };
                 }

@@ -135,21 +135,23 @@ impl CullData {
             .instance_ids
             .iter()
             .zip(group_of_slot.iter())
-            .map(|(&id, &group)| {
-                let inst = &scene.instances[id as usize];
-                let mesh = &scene.meshes[inst.mesh as usize];
-                let linear = inst.transform.linear;
-                let center = inst.transform.apply(mesh.bounds.center());
-                let (hi, lo) = split_hi_lo(center);
-                let abs = Mat3::from_cols(linear.x_axis.abs(), linear.y_axis.abs(), linear.z_axis.abs());
-                let half = abs.mul_vec3(mesh.bounds.half_extent());
-                let max_scale = linear.x_axis.length().max(linear.y_axis.length()).max(linear.z_axis.length());
-                let local_radius = mesh.sphere.center.distance(mesh.bounds.center()) + mesh.sphere.radius;
-                GpuCullRecord::new(hi, lo, local_radius * max_scale, widen(half), group, inst.flags)
-            })
+            .map(|(&id, &group)| cull_record(scene, &scene.instances[id as usize], group))
             .collect();
         Self { records, groups }
     }
+}
+
+/// The cull record of `inst` (an instance of `scene`) in draw group `group`.
+pub fn cull_record(scene: &Scene, inst: &crate::scene::Instance, group: u32) -> GpuCullRecord {
+    let mesh = &scene.meshes[inst.mesh as usize];
+    let linear = inst.transform.linear;
+    let center = inst.transform.apply(mesh.bounds.center());
+    let (hi, lo) = split_hi_lo(center);
+    let abs = Mat3::from_cols(linear.x_axis.abs(), linear.y_axis.abs(), linear.z_axis.abs());
+    let half = abs.mul_vec3(mesh.bounds.half_extent());
+    let max_scale = linear.x_axis.length().max(linear.y_axis.length()).max(linear.z_axis.length());
+    let local_radius = mesh.sphere.center.distance(mesh.bounds.center()) + mesh.sphere.radius;
+    GpuCullRecord::new(hi, lo, local_radius * max_scale, widen(half), group, inst.flags)
 }
 
 /// One part in 2^20 more, so that the f32 box of a rotated instance never ends inside a vertex.

@@ -49,8 +49,12 @@ pub struct GpuInstance {
 }
 
 impl GpuInstance {
-    /// Packs a scene instance.
+    /// Packs a scene instance; an empty slot ([`crate::scene::FLAG_EMPTY_SLOT`]) packs as all
+    /// zeros: every vertex lands on one point, so it draws nothing.
     pub fn new(instance: &Instance) -> Self {
+        if instance.flags & crate::scene::FLAG_EMPTY_SLOT != 0 {
+            return Self::zeroed();
+        }
         let (hi, lo) = split_hi_lo(instance.transform.translation);
         let m = instance.transform.linear;
         let row = |r: usize, t: f32| [m.col(0)[r], m.col(1)[r], m.col(2)[r], t];

@@ -10,6 +10,7 @@ pub mod cull_data;
 pub mod face_cull;
 pub mod gpu_types;
 pub mod scene_buffers;
+pub mod slot_layout;
 
 use crate::gpu::{Buffer, BufferDesc, GpuContext, MemoryLocation};
 use crate::graph::{FrameInputs, PassContext, FRAMES_IN_FLIGHT};

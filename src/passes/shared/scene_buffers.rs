@@ -102,7 +102,7 @@ impl DrawList {
 }
 
 /// Morton code (21 bits per axis) of each instance's origin within the box of all origins.
-fn spatial_keys(scene: &Scene) -> Vec<u64> {
+pub(crate) fn spatial_keys(scene: &Scene) -> Vec<u64> {
     let origins = || scene.instances.iter().map(|i| i.transform.translation).filter(|t| t.is_finite());
     let lo = origins().fold(glam::DVec3::splat(f64::INFINITY), |a, b| a.min(b));
     let hi = origins().fold(glam::DVec3::splat(f64::NEG_INFINITY), |a, b| a.max(b));
@@ -134,11 +134,21 @@ fn spatial_keys(scene: &Scene) -> Vec<u64> {
 impl GpuScene {
     /// Creates the device buffers and queues their contents on `batch`.
     pub fn upload(ctx: &GpuContext, scene: &Scene, batch: &mut UploadBatch) -> crate::Result<Self> {
+        Self::upload_with(ctx, scene, DrawList::all_instances(scene), batch)
+    }
+
+    /// Like [`GpuScene::upload`], with the unculled draw list given (a changing world's slot
+    /// layout, where `scene`'s instances are its slots).
+    pub fn upload_with(
+        ctx: &GpuContext,
+        scene: &Scene,
+        draws: DrawList,
+        batch: &mut UploadBatch,
+    ) -> crate::Result<Self> {
         profiling::scope!("cullgraph::upload_scene");
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let instances: Vec<GpuInstance> = scene.instances.iter().map(GpuInstance::new).collect();
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();
-        let draws = DrawList::all_instances(scene);
         let cull = super::cull_data::CullData::new(scene, &draws);
         let count = draws.regions.len;
         Ok(Self {
@@ -184,7 +194,12 @@ impl GpuScene {
             )?,
             regions: draws.regions,
             instance_count: scene.instances.len() as u32,
-            triangles: scene.instanced_triangles(),
+            triangles: scene
+                .instances
+                .iter()
+                .filter(|i| i.flags & crate::scene::FLAG_EMPTY_SLOT == 0)
+                .map(|i| scene.meshes[i.mesh as usize].index_count as u64 / 3)
+                .sum(),
             max_mesh_triangles: scene.meshes.iter().map(|m| m.index_count / 3).max().unwrap_or(0),
         })
     }

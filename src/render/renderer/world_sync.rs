@@ -1,0 +1,276 @@
+//! A renderer that mirrors a [`World`]: [`Renderer::from_world`] lays the world out in slots
+//! ([`SlotLayout`]) and [`Renderer::sync`] applies the world's changes since the last sync.
+//!
+//! A change of instances rewrites only their slots: their instance records (64 bytes) and cull
+//! bounds (32 bytes) go through a staging ring that is reused frame after frame and are copied
+//! into place at the start of the next recorded frame, after every earlier frame's use of those
+//! buffers. Frames in flight are not disturbed: the copies are ordered after them on the queue.
+//!
+//! What a slot change cannot express is laid out anew: an instance whose group has no free
+//! slot or no range yet, a registered or unregistered mesh or material (a material's sidedness
+//! decides its instances' groups), more lights than the light buffers hold, or a journal that no
+//! longer reaches back to the last sync. The new layout leaves room to grow; the graph is
+//! recompiled only when the slots or groups outgrow what it was compiled for (both grow by half
+//! again), and otherwise only its culling history is cleared.
+
+use super::{build_runtime_for, Renderer};
+use crate::error::{Error, Result};
+use crate::gpu::{GpuContext, ShaderCompiler, StagingRing, UploadBatch};
+use crate::graph::{FrameInputs, FRAMES_IN_FLIGHT};
+use crate::passes::shared::cull_data::cull_record;
+use crate::passes::shared::gpu_types::GpuInstance;
+use crate::passes::shared::slot_layout::{group_key, SlotLayout};
+use crate::passes::shared::{GpuScene, SceneInputs};
+use crate::render::{GraphSpec, RenderSettings};
+use crate::scene::world::{Change, InstanceHandle, World};
+use crate::scene::Scene;
+use std::collections::BTreeSet;
+use std::time::Instant;
+
+/// What one [`Renderer::sync`] did.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SyncStats {
+    /// Instances whose slot was rewritten (inserted, changed or removed).
+    pub instances_changed: u64,
+    /// Bytes queued for upload (a relayout counts the whole scene it uploads).
+    pub bytes_uploaded: u64,
+    /// CPU milliseconds the sync took.
+    pub cpu_ms: f64,
+    /// Whether the world was laid out anew.
+    pub relayout: bool,
+}
+
+/// What a renderer keeps of the world it mirrors.
+pub(super) struct WorldMirror {
+    /// The world version applied last.
+    version: u64,
+    layout: SlotLayout,
+    /// Point lights the per-frame light buffers hold.
+    light_capacity: usize,
+    /// What the graph was compiled for (slots and groups with room to grow).
+    compiled: FrameInputs,
+    /// The handle each world instance index had when its slot was written: a new handle at an
+    /// index (removed and inserted between two syncs) is a new instance and takes a new slot.
+    handles: Vec<Option<InstanceHandle>>,
+    pub(super) staging: StagingRing,
+}
+
+impl WorldMirror {
+    /// What the graph is compiled for.
+    pub(super) fn compiled(&self) -> &FrameInputs {
+        &self.compiled
+    }
+
+    /// The frame `frame` was recorded: its queued copies are in it.
+    pub(super) fn recorded(&mut self, _frame: u64) {
+        self.staging.clear();
+    }
+}
+
+/// `n` with room to grow by half again.
+fn with_room(n: u64) -> u64 {
+    n + n / 2 + 16
+}
+
+/// The handle of every world instance index (`None`: removed).
+fn world_handles(world: &World) -> Vec<Option<InstanceHandle>> {
+    (0..world.instance_slots() as u32).map(|i| world.handle_at(i)).collect()
+}
+
+/// The world's live lights, in index order.
+fn live_lights(world: &World) -> Vec<crate::scene::PointLight> {
+    let scene = world.scene();
+    (0..scene.lights.len() as u32).filter(|&i| world.is_light_live(i)).map(|i| scene.lights[i as usize]).collect()
+}
+
+/// The world laid out in slots: the layout, the scene in slot order (live lights only) and its
+/// unculled draw list.
+fn lay_out(world: &World) -> (SlotLayout, Scene) {
+    let layout = SlotLayout::new(world.scene(), |i| world.is_live(i));
+    let mut scene = layout.slot_scene(world.scene());
+    scene.lights = live_lights(world);
+    (layout, scene)
+}
+
+/// What a graph for `scene` laid out as `layout` is compiled for, with room to grow.
+fn frame_inputs(scene: &Scene, layout: &SlotLayout, settings: &RenderSettings) -> FrameInputs {
+    FrameInputs {
+        width: settings.width,
+        height: settings.height,
+        instances: with_room(layout.slots() as u64),
+        meshes: with_room(layout.groups.len() as u64),
+        lights: scene.lights.len() as u64,
+        materials: scene.materials.len() as u64,
+        triangles: scene.instances.iter().map(|i| scene.meshes[i.mesh as usize].index_count as u64 / 3).sum(),
+        params: Vec::new(),
+    }
+}
+
+impl Renderer {
+    /// Prepares `world` for rendering through the graph `spec`; [`Renderer::sync`] then
+    /// applies its changes. Slot ids (what draw lists, culling history and verification report)
+    /// are the renderer's own: [`Renderer::slot_of`] maps a world instance to its slot.
+    pub fn from_world(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        world: &World,
+        settings: RenderSettings,
+        spec: &GraphSpec,
+    ) -> Result<Self> {
+        settings.validate()?;
+        if world.live_instances() == 0 {
+            return Err(Error::Invalid("the world has no instances".into()));
+        }
+        let (layout, scene) = lay_out(world);
+        let compiled = frame_inputs(&scene, &layout, &settings);
+        let runtime = build_runtime_for(ctx, shaders, &compiled, spec)?;
+        let mut uploads = UploadBatch::default();
+        let gpu_scene = GpuScene::upload_with(ctx, &scene, layout.draw_list(&scene), &mut uploads)?;
+        let light_capacity = with_room(scene.lights.len() as u64) as usize;
+        let inputs = SceneInputs::new(ctx, gpu_scene, light_capacity)?;
+        let mut renderer = Self::assemble(ctx, scene, inputs, uploads, runtime, settings, spec);
+        renderer.world = Some(WorldMirror {
+            version: world.version(),
+            layout,
+            light_capacity,
+            compiled,
+            handles: world_handles(world),
+            staging: StagingRing::new(FRAMES_IN_FLIGHT),
+        });
+        Ok(renderer)
+    }
+
+    /// The slot world instance `index` holds in this renderer (`None`: removed, or not a world
+    /// renderer).
+    pub fn slot_of(&self, index: u32) -> Option<u32> {
+        self.world.as_ref()?.layout.slot_of(index)
+    }
+
+    /// Applies the changes `world` had since the last sync; they take effect at the next
+    /// recorded frame.
+    pub fn sync(&mut self, shaders: &ShaderCompiler, world: &World) -> Result<SyncStats> {
+        let start = Instant::now();
+        let mirror = self.world.as_mut().ok_or_else(|| {
+            Error::Invalid("sync: this renderer was made from a scene, not a world (Renderer::from_world)".into())
+        })?;
+        let Some(changes) = world.changes_since(mirror.version) else {
+            return self.relayout(shaders, world, start);
+        };
+        if changes.is_empty() {
+            return Ok(SyncStats::default());
+        }
+        let mut instances = BTreeSet::new();
+        let mut lights = false;
+        for change in changes {
+            match *change {
+                Change::Instance(i) => {
+                    instances.insert(i);
+                }
+                Change::Light(_) => lights = true,
+                Change::Mesh(_) | Change::Material(_) => return self.relayout(shaders, world, start),
+            }
+        }
+        if lights {
+            let live = live_lights(world);
+            if live.len() > mirror.light_capacity {
+                return self.relayout(shaders, world, start);
+            }
+            self.scene.lights = live;
+        }
+        mirror.layout.release_quarantine(self.frame_index);
+        // Plan the slots first: a group without room means a relayout, and nothing is written.
+        let mut layout = mirror.layout.clone();
+        let mut touched = BTreeSet::new();
+        for &i in &instances {
+            let old = layout.slot_of(i);
+            let key = world.is_live(i).then(|| group_key(world.scene(), &world.scene().instances[i as usize]));
+            let same_instance = mirror.handles.get(i as usize).copied().flatten() == world.handle_at(i);
+            match (old, key) {
+                (Some(slot), Some(key)) if same_instance && layout.key_of_slot(slot) == key => {
+                    touched.insert(slot);
+                }
+                (old, key) => {
+                    if old.is_some() {
+                        touched.extend(layout.vacate(i, self.frame_index));
+                    }
+                    if let Some(key) = key {
+                        match layout.place(i, key) {
+                            Some(slot) => touched.insert(slot),
+                            None => return self.relayout(shaders, world, start),
+                        };
+                    }
+                }
+            }
+        }
+        mirror.layout = layout;
+        for &i in &instances {
+            if mirror.handles.len() <= i as usize {
+                mirror.handles.resize(i as usize + 1, None);
+            }
+            mirror.handles[i as usize] = world.handle_at(i);
+        }
+        let gpu = &self.inputs.scene;
+        for &slot in &touched {
+            let contents = mirror.layout.slot_contents(slot, world.scene());
+            let group = mirror.layout.group_of_slot(slot) as u32;
+            mirror.staging.write(&gpu.instances, slot as u64 * 64, bytemuck::bytes_of(&GpuInstance::new(&contents)));
+            let record = cull_record(world.scene(), &contents, group);
+            mirror.staging.write(&gpu.cull_records, slot as u64 * 32, bytemuck::bytes_of(&record));
+            self.scene.instances[slot as usize] = contents;
+        }
+        mirror.version = world.version();
+        Ok(SyncStats {
+            instances_changed: instances.len() as u64,
+            bytes_uploaded: mirror.staging.bytes(),
+            cpu_ms: start.elapsed().as_secs_f64() * 1e3,
+            relayout: false,
+        })
+    }
+
+    /// Lays the world out anew (see the module documentation).
+    fn relayout(&mut self, shaders: &ShaderCompiler, world: &World, start: Instant) -> Result<SyncStats> {
+        if world.live_instances() == 0 {
+            return Err(Error::Invalid("sync: the world has no instances".into()));
+        }
+        let (layout, scene) = lay_out(world);
+        let mirror = self.world.as_ref().expect("a world renderer");
+        let needed = frame_inputs(&scene, &layout, &self.settings);
+        let outgrown = layout.slots() as u64 > mirror.compiled.instances
+            || layout.groups.len() as u64 > mirror.compiled.meshes
+            || needed.materials != mirror.compiled.materials
+            || needed.lights > mirror.light_capacity as u64;
+        let mut uploads = UploadBatch::default();
+        let gpu_scene = GpuScene::upload_with(&self.ctx, &scene, layout.draw_list(&scene), &mut uploads)?;
+        let light_capacity = with_room(scene.lights.len() as u64).max(mirror.light_capacity as u64) as usize;
+        let inputs = SceneInputs::new(&self.ctx, gpu_scene, light_capacity)?;
+        if outgrown {
+            let runtime = build_runtime_for(&self.ctx, shaders, &needed, &self.spec)?;
+            self.install_runtime(runtime)?;
+        } else {
+            // Slots were given out anew: last frame's visibility and draw lists name other
+            // instances now.
+            self.runtime.reset_history();
+        }
+        let bytes = uploads.bytes();
+        let old = std::mem::replace(&mut self.inputs, inputs);
+        self.retired_inputs.push((self.frame_index.saturating_sub(1), old));
+        // A batch not recorded yet would fill the buffers being replaced: it goes unrecorded.
+        self.pending_uploads = Some(uploads);
+        let mirror = self.world.as_mut().expect("a world renderer");
+        if outgrown {
+            mirror.compiled = needed;
+        }
+        mirror.staging.clear();
+        mirror.layout = layout;
+        mirror.handles = world_handles(world);
+        mirror.light_capacity = light_capacity;
+        mirror.version = world.version();
+        self.scene = scene;
+        Ok(SyncStats {
+            instances_changed: world.live_instances() as u64,
+            bytes_uploaded: bytes,
+            cpu_ms: start.elapsed().as_secs_f64() * 1e3,
+            relayout: true,
+        })
+    }
+}
