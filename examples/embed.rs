@@ -6,6 +6,9 @@
 //! cullgraph's frame into its own command buffer, which it submits itself. cullgraph never
 //! submits or waits here; the output image is left in `GENERAL` for the engine to sample or copy.
 //!
+//! The world changes every frame, as a game's does: some buildings move, one is added and one
+//! removed, and the renderer takes only those changes (`Renderer::sync`).
+//!
 //! `cargo run --release --example embed`
 
 use ash::vk;
@@ -15,7 +18,8 @@ use cullgraph::gpu::{
 };
 use cullgraph::render::{RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::SceneSource;
+use cullgraph::scene::world::World;
+use cullgraph::scene::{Instance, SceneSource};
 use std::ffi::CStr;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -66,23 +70,51 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let scene = SceneSource::Builtin("city".into()).load(&LoadOptions::default())?;
         let settings = RenderSettings::new(640, 360);
         let camera = scene.default_camera(640.0 / 360.0);
-        let mut renderer = Renderer::new(&ctx, &ShaderCompiler::new(ShaderRoot::Embedded)?, scene, settings)?;
+        let (mut world, mut handles) = World::new(scene)?;
+        let shaders = ShaderCompiler::new(ShaderRoot::Embedded)?;
+        let spec = cullgraph::render::GraphSpec::default_graph();
+        let mut renderer = Renderer::from_world(&ctx, &shaders, &world, settings, &spec)?;
 
-        // --- the engine's frame: its command buffer, its submit ---
+        // --- the engine's frames: its command buffer, its submit ---
         unsafe {
             let pool =
                 device.create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(family), None)?;
             let cmd = device.allocate_command_buffers(
                 &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
             )?[0];
-            device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())?;
-            let frame = renderer.record(cmd, &camera)?;
-            device.end_command_buffer(cmd)?;
             let fence = device.create_fence(&vk::FenceCreateInfo::default(), None)?;
-            device.queue_submit(queue, &[vk::SubmitInfo::default().command_buffers(&[cmd])], fence)?;
-            device.wait_for_fences(&[fence], true, u64::MAX)?;
-            for t in renderer.completed_timings(frame)? {
-                println!("{:>10}: {:.3} ms", t.name, t.ms);
+            for step in 0..4u32 {
+                // The game's update: every 50th building rises a little, one more is built
+                // beside the first, and the oldest added one is torn down.
+                let moved: Vec<_> = handles
+                    .iter()
+                    .step_by(50)
+                    .map(|&h| {
+                        let mut t = world.instance(h).map(|i| i.transform)?;
+                        t.translation.y += 0.5;
+                        Ok((h, t))
+                    })
+                    .collect::<Result<_, cullgraph::scene::world::WorldError>>()?;
+                world.set_transforms(&moved)?;
+                let mut built: Instance = *world.instance(handles[0])?;
+                built.transform.translation.x += 3.0 * (step + 1) as f64;
+                handles.push(world.insert(built)?);
+                if step > 1 {
+                    world.remove(handles.remove(1))?;
+                }
+                let update = renderer.sync(&shaders, &world)?;
+
+                device.reset_fences(&[fence])?;
+                device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())?;
+                let frame = renderer.record(cmd, &camera)?;
+                device.end_command_buffer(cmd)?;
+                device.queue_submit(queue, &[vk::SubmitInfo::default().command_buffers(&[cmd])], fence)?;
+                device.wait_for_fences(&[fence], true, u64::MAX)?;
+                let total = renderer.completed_timings(frame)?.iter().find(|t| t.name == "frame").map_or(0.0, |t| t.ms);
+                println!(
+                    "frame {frame}: {} instances changed, {} bytes uploaded, {:.3} ms CPU to sync, GPU {total:.3} ms",
+                    update.instances_changed, update.bytes_uploaded, update.cpu_ms
+                );
             }
             device.destroy_fence(fence, None);
             device.destroy_command_pool(pool, None);

@@ -21,5 +21,6 @@ pub use crate::graph::{
 pub use crate::passes::builtin_kinds;
 pub use crate::passes::shared::SceneInputs;
 pub use crate::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
+pub use crate::scene::world::{InstanceHandle, LightHandle, World, WorldError};
 pub use crate::scene::{Camera, Instance, Material, MeshData, PointLight, Projection, Scene, SceneSource, Transform};
-pub use crate::stats::FrameStats;
+pub use crate::stats::{FrameStats, UpdateStats};

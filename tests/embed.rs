@@ -591,3 +591,65 @@ void main() {
     }
     assert!(plain.as_raw().chunks(4).any(|p| p[0] > 40 && p[1] > 40), "the frame has colour to scale");
 }
+
+/// A world renderer on the host's device: the red cube moved between two host-recorded frames
+/// shows where it moved to, exactly as an owned-context renderer of the moved world draws it.
+#[test]
+fn a_moved_object_shows_in_the_hosts_next_frame() {
+    use cullgraph::scene::world::World;
+    let (w, h) = (96, 64);
+    let moved =
+        cullgraph::scene::Transform { linear: glam::Mat3::IDENTITY, translation: glam::DVec3::new(-1.5, 0.5, -2.5) };
+    let spec = GraphSpec::default_graph();
+    let (reference_before, reference_after) = {
+        let gpu = GpuTest::new();
+        let (mut world, handles) = World::new(boxes_scene()).unwrap();
+        let mut r = Renderer::from_world(&gpu, &gpu.shaders(), &world, RenderSettings::new(w, h), &spec).unwrap();
+        let before = r.render_to_image(&boxes_camera()).unwrap().1;
+        world.set_transform(handles[1], moved).unwrap();
+        let (fresh_world, _) = World::new(world.scene().clone()).unwrap();
+        let mut fresh =
+            Renderer::from_world(&gpu, &gpu.shaders(), &fresh_world, RenderSettings::new(w, h), &spec).unwrap();
+        (before, fresh.render_to_image(&boxes_camera()).unwrap().1)
+    };
+    assert_ne!(reference_before, reference_after, "the move shows");
+
+    let host = Host::new();
+    let allocator = host.allocator();
+    {
+        let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
+        let shaders =
+            ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
+        let (mut world, handles) = World::new(boxes_scene()).unwrap();
+        let mut renderer = Renderer::from_world(&ctx, &shaders, &world, RenderSettings::new(w, h), &spec).unwrap();
+        let readback = readback_buffer(&ctx, "host readback", (w * h * 4) as u64);
+        let d = &host.device;
+        let frame = |renderer: &mut Renderer| unsafe {
+            let pool = d
+                .create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(host.family), None)
+                .unwrap();
+            let cmd = d
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
+                )
+                .unwrap()[0];
+            d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
+            renderer.record(cmd, &boxes_camera()).unwrap();
+            let (output, state) = renderer.output().unwrap();
+            record_image_to_buffer(&ctx, cmd, output, state, &readback);
+            d.end_command_buffer(cmd).unwrap();
+            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
+            d.queue_submit(host.queue, &[vk::SubmitInfo::default().command_buffers(&[cmd])], fence).unwrap();
+            d.wait_for_fences(&[fence], true, u64::MAX).unwrap();
+            d.destroy_fence(fence, None);
+            d.destroy_command_pool(pool, None);
+            readback.read_bytes().unwrap().to_vec()
+        };
+        assert_eq!(frame(&mut renderer), reference_before.as_raw().as_slice());
+        world.set_transform(handles[1], moved).unwrap();
+        let update = renderer.sync(&shaders, &world).unwrap();
+        assert_eq!((update.instances_changed, update.relayout), (1, false));
+        assert_eq!(frame(&mut renderer), reference_after.as_raw().as_slice(), "the host's frame after the move");
+    }
+    host.shut_down_clean(allocator);
+}

@@ -488,6 +488,7 @@ impl Renderer {
         }
         stats.culling = culling;
         stats.gbuffer = gbuffer;
+        stats.update = self.world.as_ref().and_then(|w| w.update_of(frame));
         Ok(stats)
     }
 

@@ -42,6 +42,34 @@ pub struct FrameStats {
     pub gpu_total_ms: f64,
     /// CPU milliseconds spent recording the frame's commands.
     pub cpu_record_ms: f64,
+    /// The world changes this frame applied (a renderer made from a world; summed over the
+    /// syncs before the frame).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub update: Option<UpdateStats>,
+}
+
+/// What applying a world's changes cost ([`crate::render::Renderer::sync`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct UpdateStats {
+    /// Instances whose slot was rewritten (inserted, changed or removed); all of them when the
+    /// world was laid out anew.
+    pub instances_changed: u64,
+    /// Bytes queued for upload (a relayout counts the whole scene it uploads).
+    pub bytes_uploaded: u64,
+    /// CPU milliseconds the sync took.
+    pub cpu_ms: f64,
+    /// Whether the world was laid out anew.
+    pub relayout: bool,
+}
+
+impl UpdateStats {
+    /// `self` and `other` together (two syncs before one frame).
+    pub fn add(&mut self, other: &UpdateStats) {
+        self.instances_changed += other.instances_changed;
+        self.bytes_uploaded += other.bytes_uploaded;
+        self.cpu_ms += other.cpu_ms;
+        self.relayout |= other.relayout;
+    }
 }
 
 /// How a frame's culling compares with exact visibility (an unculled instance-id render).

@@ -28,17 +28,7 @@ use std::collections::BTreeSet;
 use std::time::Instant;
 
 /// What one [`Renderer::sync`] did.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
-pub struct SyncStats {
-    /// Instances whose slot was rewritten (inserted, changed or removed).
-    pub instances_changed: u64,
-    /// Bytes queued for upload (a relayout counts the whole scene it uploads).
-    pub bytes_uploaded: u64,
-    /// CPU milliseconds the sync took.
-    pub cpu_ms: f64,
-    /// Whether the world was laid out anew.
-    pub relayout: bool,
-}
+pub use crate::stats::UpdateStats as SyncStats;
 
 /// What a renderer keeps of the world it mirrors.
 pub(super) struct WorldMirror {
@@ -53,6 +43,10 @@ pub(super) struct WorldMirror {
     /// index (removed and inserted between two syncs) is a new instance and takes a new slot.
     handles: Vec<Option<InstanceHandle>>,
     pub(super) staging: StagingRing,
+    /// What the syncs since the last recorded frame did, for that frame's figures.
+    pending: Option<SyncStats>,
+    /// Recent frames' figures, by frame.
+    recent: std::collections::VecDeque<(u64, SyncStats)>,
 }
 
 impl WorldMirror {
@@ -61,9 +55,26 @@ impl WorldMirror {
         &self.compiled
     }
 
-    /// The frame `frame` was recorded: its queued copies are in it.
-    pub(super) fn recorded(&mut self, _frame: u64) {
+    /// The frame `frame` was recorded: its queued copies are in it, and the syncs before it
+    /// are its figures.
+    pub(super) fn recorded(&mut self, frame: u64) {
         self.staging.clear();
+        if let Some(stats) = self.pending.take() {
+            self.recent.push_back((frame, stats));
+            // Kept while the frame's other figures can still be read back.
+            while self.recent.len() > 2 * FRAMES_IN_FLIGHT {
+                self.recent.pop_front();
+            }
+        }
+    }
+
+    /// The world changes frame `frame` applied.
+    pub(super) fn update_of(&self, frame: u64) -> Option<SyncStats> {
+        self.recent.iter().find(|(f, _)| *f == frame).map(|(_, s)| s.clone())
+    }
+
+    fn note(&mut self, stats: &SyncStats) {
+        self.pending.get_or_insert_with(Default::default).add(stats);
     }
 }
 
@@ -136,6 +147,8 @@ impl Renderer {
             compiled,
             handles: world_handles(world),
             staging: StagingRing::new(FRAMES_IN_FLIGHT),
+            pending: None,
+            recent: Default::default(),
         });
         Ok(renderer)
     }
@@ -178,8 +191,9 @@ impl Renderer {
             self.scene.lights = live;
         }
         mirror.layout.release_quarantine(self.frame_index);
-        // Plan the slots first: a group without room means a relayout, and nothing is written.
-        let mut layout = mirror.layout.clone();
+        // Slots first: a group without room means a relayout, which replaces the layout whole
+        // (so a half-updated one does not matter), before anything is written.
+        let layout = &mut mirror.layout;
         let mut touched = BTreeSet::new();
         for &i in &instances {
             let old = layout.slot_of(i);
@@ -202,7 +216,6 @@ impl Renderer {
                 }
             }
         }
-        mirror.layout = layout;
         for &i in &instances {
             if mirror.handles.len() <= i as usize {
                 mirror.handles.resize(i as usize + 1, None);
@@ -219,12 +232,14 @@ impl Renderer {
             self.scene.instances[slot as usize] = contents;
         }
         mirror.version = world.version();
-        Ok(SyncStats {
+        let stats = SyncStats {
             instances_changed: instances.len() as u64,
-            bytes_uploaded: mirror.staging.bytes(),
+            bytes_uploaded: touched.len() as u64 * 96,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
             relayout: false,
-        })
+        };
+        mirror.note(&stats);
+        Ok(stats)
     }
 
     /// Lays the world out anew (see the module documentation).
@@ -266,11 +281,13 @@ impl Renderer {
         mirror.light_capacity = light_capacity;
         mirror.version = world.version();
         self.scene = scene;
-        Ok(SyncStats {
+        let stats = SyncStats {
             instances_changed: world.live_instances() as u64,
             bytes_uploaded: bytes,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
             relayout: true,
-        })
+        };
+        mirror.note(&stats);
+        Ok(stats)
     }
 }
