@@ -1,4 +1,4 @@
-# Quick start: `make demo` renders the built-in city and writes out/demo.png + out/demo.json;
+# Quick start: `make demo` renders the built-in city with traffic and writes out/demo.png + out/demo.json;
 # `make test` runs the whole suite on lavapipe with validation on. Both install what is missing.
 
 CARGO ?= cargo
@@ -14,7 +14,7 @@ build: deps
 	$(CARGO) build --release
 
 demo: deps
-	$(CARGO) run --release -- render --scene builtin:city --size 1280x720 --frames 3 --out out/demo.png --stats out/demo.json
+	$(CARGO) run --release -- render --scene builtin:city --animate --size 1280x720 --frames 30 --out out/demo.png --stats out/demo.json
 
 test: deps
 	CARGO=$(CARGO) ./scripts/check-lean-lib

@@ -12,6 +12,9 @@ pub enum Error {
     /// Scene loading or validation failure.
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// A change to a world that was refused (naming the handle).
+    #[error(transparent)]
+    World(#[from] crate::scene::world::WorldError),
     /// A file could not be read or written.
     #[error("{path}: {source}")]
     Io {

@@ -339,3 +339,27 @@ fn reference_reports_flip_and_psnr_and_refuses_what_the_device_cannot_render() {
     let (code, _, err) = run(&[&base[..], &["--reference", "0"]].concat());
     assert_eq!(code, 2, "{err}");
 }
+
+/// `--animate`: traffic through the city, every frame verified against exact visibility, and
+/// each frame's stats report the world changes it applied.
+#[test]
+fn animate_drives_traffic_and_culling_stays_exact() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (png, json) = (tmp.path().join("f.png"), tmp.path().join("f.json"));
+    #[rustfmt::skip]
+    let (code, stdout, err) = run(&[
+        "render", "--animate", "--instances", "2000", "--size", "64x48", "--frames", "6", "--verify",
+        "--out", png.to_str().unwrap(), "--stats", json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}{err}");
+    assert!(stdout.contains("0 false negatives"), "{stdout}");
+    let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    for frame in stats["frames"].as_array().unwrap() {
+        let update = &frame["update"];
+        assert!(update["instances_changed"].as_u64().unwrap() >= 40, "every vehicle moves: {update}");
+        assert!(update["bytes_uploaded"].as_u64().unwrap() > 0, "{update}");
+    }
+    let (code, _, err) = run(&["render", "--animate", "--scene", "builtin:field", "--out", png.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(err.contains("--animate drives traffic through builtin:city"), "{err}");
+}

@@ -337,6 +337,11 @@ pub struct RenderArgs {
     /// Move the camera over the frames: still, orbit, dolly or shake.
     #[arg(long, default_value = "still", value_parser = parse_camera_path)]
     pub camera_path: cullgraph::scene::CameraPath,
+    /// `builtin:city` with traffic: vehicles drive along the streets (one per 50 instances),
+    /// leave at the edge and are replaced, and a few are removed and added mid-street every
+    /// second; the renderer applies the changes each frame (30 frames a second of traffic).
+    #[arg(long)]
+    pub animate: bool,
     /// Override a graph parameter, NAME=VALUE (repeatable), e.g. `--param exposure=1.2`.
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
     pub params: Vec<(String, String)>,

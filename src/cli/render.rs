@@ -52,7 +52,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         meshes: scene.meshes.len() as u32,
         ..Default::default()
     };
-    let mut renderer = Renderer::with_graph(&ctx, &shaders, scene, RenderSettings::new(width, height), &spec)?;
+    let settings = RenderSettings::new(width, height);
+    let (mut animation, mut renderer) = if args.animate {
+        let animation = Animation::new(args, scene)?;
+        let renderer = Renderer::from_world(&ctx, &shaders, &animation.world, settings, &spec)?;
+        (Some(animation), renderer)
+    } else {
+        (None, Renderer::with_graph(&ctx, &shaders, scene, settings, &spec)?)
+    };
     if args.verify {
         renderer.enable_verification(&shaders)?;
     }
@@ -95,6 +102,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     };
     for frame in 0..args.frames {
         let camera = args.camera_path.camera_at(&camera, frame);
+        if let Some(animation) = animation.as_mut() {
+            animation.step(&mut renderer, &shaders)?;
+        }
         if frame + 1 == args.frames {
             for earlier in pipeline.as_mut().map_or(Ok(Vec::new()), |p| p.finish(&renderer))? {
                 take(earlier, &mut renderer)?;
@@ -330,6 +340,44 @@ fn watch_deadline(seconds: Option<f64>) -> Option<Instant> {
     let seconds = seconds?;
     let duration = Duration::try_from_secs_f64(if seconds > 0.0 { seconds } else { 0.0 }).ok()?;
     Instant::now().checked_add(duration)
+}
+
+/// `--animate`: the city's world and its traffic, stepped once a frame.
+struct Animation {
+    world: cullgraph::scene::world::World,
+    traffic: cullgraph::scene::procedural::traffic::Traffic,
+}
+
+impl Animation {
+    /// Seconds of traffic per frame.
+    const STEP: f64 = 1.0 / 30.0;
+
+    fn new(args: &RenderArgs, scene: cullgraph::scene::Scene) -> Result<Self> {
+        if scene.name != "builtin:city" {
+            return Err(cullgraph::Error::Invalid(format!(
+                "--animate drives traffic through builtin:city; the scene is {}",
+                scene.name
+            )));
+        }
+        let instances = scene.instances.len();
+        let (mut world, _) = cullgraph::scene::world::World::new(scene)?;
+        let vehicles = (instances / 50).max(20);
+        let churn = vehicles as f64 / 20.0;
+        let traffic = cullgraph::scene::procedural::traffic::Traffic::new(
+            &mut world,
+            instances,
+            vehicles,
+            churn,
+            args.scene.seed,
+        )?;
+        Ok(Self { world, traffic })
+    }
+
+    fn step(&mut self, renderer: &mut Renderer, shaders: &ShaderCompiler) -> Result<()> {
+        self.traffic.step(&mut self.world, Self::STEP)?;
+        renderer.sync(shaders, &self.world)?;
+        Ok(())
+    }
 }
 
 #[cfg(test)]

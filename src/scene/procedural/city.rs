@@ -45,7 +45,8 @@ const SIDEWALK_TOP: f64 = CURB - SINK;
 const ON_SIDEWALK: f64 = SIDEWALK_TOP - SINK;
 /// Average instances per block that sizes the grid.
 pub const INSTANCES_PER_BLOCK: f64 = 40.0;
-const PITCH: f64 = BLOCK + STREET;
+/// Distance from one block to the next (a block and a street).
+pub const PITCH: f64 = BLOCK + STREET;
 /// Height of the street lamps (m).
 const LAMP_HEIGHT: f32 = 6.0;
 /// Every `LAMP_EVERY`-th prop of a block is a street lamp.
@@ -62,11 +63,10 @@ pub fn generate(options: &LoadOptions) -> Result<Scene, SceneError> {
 
     // One instance is the ground; the rest is shared out over a g x g grid of blocks.
     let rest = n - 1;
-    let g = ((rest as f64 / INSTANCES_PER_BLOCK).sqrt().round() as usize).max(1);
+    let (origin, g) = grid(n);
     let blocks = g * g;
     let (per_block, extra) = (rest / blocks, rest % blocks);
     let size = g as f64 * PITCH - STREET;
-    let origin = DVec3::new(-size * 0.5, 0.0, -size * 0.5);
     let ground_size = size + 2.0 * PITCH;
     push(
         &mut scene.instances,
@@ -89,6 +89,15 @@ pub fn generate(options: &LoadOptions) -> Result<Scene, SceneError> {
     scene.lights = street_lights(&mut lamps, light_count, options.seed, &scene);
     scene.camera = Some(street_camera(origin, g));
     Ok(scene)
+}
+
+/// The minimum corner and the side (in blocks) of the grid of a city of `instances` instances.
+/// Each block is followed by a street on its east and north side.
+pub fn grid(instances: usize) -> (DVec3, usize) {
+    let rest = instances.saturating_sub(1);
+    let g = ((rest as f64 / INSTANCES_PER_BLOCK).sqrt().round() as usize).max(1);
+    let size = g as f64 * PITCH - STREET;
+    (DVec3::new(-size * 0.5, 0.0, -size * 0.5), g)
 }
 
 /// Fills one block whose minimum corner is `corner` with exactly `quota` instances.

@@ -5,6 +5,8 @@
 //! - `builtin:field`: many distinct mesh kinds scattered with random rotations and scales,
 //!   mirrored ones included ([`field`]).
 //!
+//! [`traffic`] drives vehicles through a world made from the city.
+//!
 //! Instances share a few dozen meshes (or `kinds` meshes for the field), so generation is O(n)
 //! in the instance count with little work per instance.
 
@@ -12,6 +14,7 @@ pub mod city;
 pub mod field;
 pub mod lights;
 pub mod shapes;
+pub mod traffic;
 
 use super::error::SceneError;
 use super::source::LoadOptions;
