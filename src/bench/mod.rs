@@ -5,6 +5,8 @@
 //!   frame time against no culling in an occluded street view, the share of invisible instances
 //!   each scheme culls (exact visibility as the oracle), and the bytes each pass moves against
 //!   the device's measured copy bandwidth and a naive atomic-append frustum peer.
+//! - [`dynamic`]: the living world's update path (instances moved, inserted and removed every
+//!   frame) against standing still, rebuilding, and a plain host-to-device copy.
 //! - [`hiz`]: the Hi-Z pyramid, single dispatch against one dispatch per mip, at several sizes.
 //! - [`msaa`]: speed against error of every anti-aliasing method (GPU ms, G-buffer memory, mean
 //!   FLIP and PSNR against a supersampled reference), the compressed G-buffer against its
@@ -12,6 +14,7 @@
 //! - [`plot`]: SVG plots of the culling and MSAA figures.
 
 pub mod culling;
+pub mod dynamic;
 pub mod hiz;
 pub mod msaa;
 pub mod peer;

@@ -125,9 +125,13 @@ pub struct GraphCheckArgs {
 pub struct BenchArgs {
     /// What to measure, comma-separated: `culling` (the culling graphs on cities of growing
     /// size), `hiz` (the pyramid builds), `msaa` (speed against error of every anti-aliasing
-    /// method).
+    /// method), `dynamic` (instances moved, inserted and removed every frame).
     #[arg(long, value_delimiter = ',', default_values_t = ["culling".to_string(), "hiz".into()])]
     pub suites: Vec<String>,
+    /// Instances moved per frame in the `dynamic` suite (on the largest `--instances` city),
+    /// comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [1_000usize, 10_000, 100_000, 1_000_000])]
+    pub moved: Vec<usize>,
     /// City sizes to measure (instances), comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [10_000usize, 100_000, 1_000_000])]
     pub instances: Vec<usize>,

@@ -1,13 +1,13 @@
 //! `cullgraph bench`: runs the benchmarks and writes JSON, Markdown and SVG plots next to each other.
 
 use super::args::BenchArgs;
-use cullgraph::bench::{culling, hiz, msaa, plot};
+use cullgraph::bench::{culling, dynamic, hiz, msaa, plot};
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::scene::SceneSource;
 use cullgraph::{Error, Result};
 
 /// The suites `--suites` takes.
-const SUITES: &[&str] = &["culling", "hiz", "msaa"];
+const SUITES: &[&str] = &["culling", "hiz", "msaa", "dynamic"];
 
 /// Runs the command.
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -118,6 +118,18 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         )?;
         finish_suite("msaa", serde_json::to_value(&report).unwrap_or_default(), report.markdown())?;
         plot("msaa.svg", plot::msaa_svg(&report))?;
+    }
+    if suite("dynamic") {
+        let bench = dynamic::DynamicBench {
+            instances: args.instances.iter().copied().max().unwrap_or(1_000_000),
+            moved: args.moved.clone(),
+            width,
+            height,
+            warmup: args.warmup,
+            frames: args.frames,
+        };
+        let report = dynamic::run(&ctx, &shaders, &bench, &progress)?;
+        finish_suite("dynamic", serde_json::to_value(&report).unwrap_or_default(), report.markdown())?;
     }
     println!("{}", markdown.join("\n"));
     match ctx.validation_log().count() {

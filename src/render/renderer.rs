@@ -237,7 +237,12 @@ impl Renderer {
         self.runtime.set_capture(&DRAW_LIST_SLOTS)
     }
 
-    /// The scene being rendered.
+    /// Frames recorded so far (the index the next one gets).
+    pub fn frames_recorded(&self) -> u64 {
+        self.frame_index
+    }
+
+    /// The scene being rendered (for a renderer of a world: its slots, empty ones included).
     pub fn scene(&self) -> &Scene {
         &self.scene
     }
@@ -303,7 +308,7 @@ impl Renderer {
         }
         if let Some(world) = &mut self.world {
             self.ctx.begin_label(cmd, "update scene");
-            world.staging.record(&self.ctx, cmd, frame)?;
+            world.record_copies(&self.ctx, cmd, frame)?;
             self.ctx.end_label(cmd);
         }
         self.inputs.select(frame);
@@ -488,7 +493,10 @@ impl Renderer {
         }
         stats.culling = culling;
         stats.gbuffer = gbuffer;
-        stats.update = self.world.as_ref().and_then(|w| w.update_of(frame));
+        stats.update = match &self.world {
+            Some(world) => world.update_of(frame)?,
+            None => None,
+        };
         Ok(stats)
     }
 

@@ -15,7 +15,7 @@
 
 use super::{build_runtime_for, Renderer};
 use crate::error::{Error, Result};
-use crate::gpu::{GpuContext, ShaderCompiler, StagingRing, UploadBatch};
+use crate::gpu::{GpuContext, GpuTimer, ShaderCompiler, StagingRing, UploadBatch};
 use crate::graph::{FrameInputs, FRAMES_IN_FLIGHT};
 use crate::passes::shared::cull_data::cull_record;
 use crate::passes::shared::gpu_types::GpuInstance;
@@ -47,12 +47,25 @@ pub(super) struct WorldMirror {
     pending: Option<SyncStats>,
     /// Recent frames' figures, by frame.
     recent: std::collections::VecDeque<(u64, SyncStats)>,
+    /// Per frame in flight, a timer of the copies and the frame it timed.
+    timers: Vec<(GpuTimer, Option<u64>)>,
 }
 
 impl WorldMirror {
     /// What the graph is compiled for.
     pub(super) fn compiled(&self) -> &FrameInputs {
         &self.compiled
+    }
+
+    /// Records frame `frame`'s queued copies into `cmd`, timed.
+    pub(super) fn record_copies(&mut self, ctx: &GpuContext, cmd: ash::vk::CommandBuffer, frame: u64) -> Result<()> {
+        let (timer, timed) = &mut self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+        timer.reset(cmd);
+        timer.begin(cmd, "update scene");
+        self.staging.record(ctx, cmd, frame)?;
+        timer.end(cmd);
+        *timed = Some(frame);
+        Ok(())
     }
 
     /// The frame `frame` was recorded: its queued copies are in it, and the syncs before it
@@ -68,9 +81,17 @@ impl WorldMirror {
         }
     }
 
-    /// The world changes frame `frame` applied.
-    pub(super) fn update_of(&self, frame: u64) -> Option<SyncStats> {
-        self.recent.iter().find(|(f, _)| *f == frame).map(|(_, s)| s.clone())
+    /// The world changes frame `frame` applied, once it has completed (with the GPU time of
+    /// its copies).
+    pub(super) fn update_of(&self, frame: u64) -> Result<Option<SyncStats>> {
+        let Some(mut stats) = self.recent.iter().find(|(f, _)| *f == frame).map(|(_, s)| s.clone()) else {
+            return Ok(None);
+        };
+        let (timer, timed) = &self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+        if *timed == Some(frame) {
+            stats.gpu_ms = timer.results()?.first().map_or(0.0, |t| t.ms);
+        }
+        Ok(Some(stats))
     }
 
     fn note(&mut self, stats: &SyncStats) {
@@ -149,6 +170,9 @@ impl Renderer {
             staging: StagingRing::new(FRAMES_IN_FLIGHT),
             pending: None,
             recent: Default::default(),
+            timers: (0..FRAMES_IN_FLIGHT)
+                .map(|_| GpuTimer::new(ctx, 1).map(|t| (t, None)))
+                .collect::<std::result::Result<_, _>>()?,
         });
         Ok(renderer)
     }
@@ -236,6 +260,7 @@ impl Renderer {
             instances_changed: instances.len() as u64,
             bytes_uploaded: touched.len() as u64 * 96,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
+            gpu_ms: 0.0,
             relayout: false,
         };
         mirror.note(&stats);
@@ -285,6 +310,7 @@ impl Renderer {
             instances_changed: world.live_instances() as u64,
             bytes_uploaded: bytes,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
+            gpu_ms: 0.0,
             relayout: true,
         };
         mirror.note(&stats);
