@@ -54,10 +54,10 @@ fn a_moved_inserted_and_removed_box_shows_where_it_is_at_the_next_frame() {
     let moved = Transform { linear: Mat3::IDENTITY, translation: DVec3::new(-1.5, 0.5, -3.0) };
     world.set_transform(red_cube, moved).unwrap();
     let stats = r.sync(&shaders, &world).unwrap();
-    assert_eq!((stats.instances_changed, stats.relayout, stats.bytes_uploaded), (1, false, 96));
+    assert_eq!((stats.instances_changed, stats.relayout, stats.bytes_uploaded), (1, false, 100));
     let (frame_stats, after) = r.render_to_image(&camera).unwrap();
     let update = frame_stats.update.expect("the frame reports the update it applied");
-    assert_eq!((update.instances_changed, update.bytes_uploaded, update.cpu_ms), (1, 96, stats.cpu_ms));
+    assert_eq!((update.instances_changed, update.bytes_uploaded, update.cpu_ms), (1, 100, stats.cpu_ms));
     assert_ne!(pixel(&after, old.0, old.1), red, "nothing red left where the cube was");
     let new = project(&camera, DVec3::new(-1.5, 0.5, -3.0));
     let p = pixel(&after, new.0, new.1);

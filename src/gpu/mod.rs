@@ -30,5 +30,5 @@ pub use pipeline::{cmd_set_full_viewport, Bind, GraphicsDesc, Pipeline, StencilR
 pub use sampler::Sampler;
 pub use shader::{ShaderCompiler, ShaderError, ShaderRoot, Spirv};
 pub use timestamps::{GpuTimer, PassTiming};
-pub use transfer::{StagingRing, UploadBatch};
+pub use transfer::UploadBatch;
 pub use validation::ValidationLog;

@@ -308,7 +308,7 @@ impl Renderer {
         }
         if let Some(world) = &mut self.world {
             self.ctx.begin_label(cmd, "update scene");
-            world.record_copies(&self.ctx, cmd, frame)?;
+            world.record_updates(&self.ctx, cmd, frame, &self.inputs.scene)?;
             self.ctx.end_label(cmd);
         }
         self.inputs.select(frame);

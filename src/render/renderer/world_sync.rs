@@ -1,10 +1,13 @@
 //! A renderer that mirrors a [`World`]: [`Renderer::from_world`] lays the world out in slots
 //! ([`SlotLayout`]) and [`Renderer::sync`] applies the world's changes since the last sync.
 //!
-//! A change of instances rewrites only their slots: their instance records (64 bytes) and cull
-//! bounds (32 bytes) go through a staging ring that is reused frame after frame and are copied
-//! into place at the start of the next recorded frame, after every earlier frame's use of those
-//! buffers. Frames in flight are not disturbed: the copies are ordered after them on the queue.
+//! A change of instances rewrites only their slots: each changed slot's index, instance record
+//! (64 bytes) and cull bound (32 bytes) go into a host-visible update list, one per frame in
+//! flight, reused frame after frame and grown geometrically when a frame needs more. At the
+//! start of the next recorded frame one compute dispatch (`shaders/world/scatter.comp`) scatters
+//! them into the scene buffers, after every earlier frame's use of those buffers: frames in
+//! flight are not disturbed. (Copy regions, one per record, cost the copy engine about a
+//! microsecond each on an H100, thousands of times the bytes they move.)
 //!
 //! What a slot change cannot express is laid out anew: an instance whose group has no free
 //! slot or no range yet, a registered or unregistered mesh or material (a material's sidedness
@@ -15,20 +18,35 @@
 
 use super::{build_runtime_for, Renderer};
 use crate::error::{Error, Result};
-use crate::gpu::{GpuContext, GpuTimer, ShaderCompiler, StagingRing, UploadBatch};
+use crate::gpu::barrier::{cmd_barriers, memory_barrier};
+use crate::gpu::{
+    Access, Bind, Buffer, BufferDesc, GpuContext, GpuTimer, MemoryLocation, Pipeline, ShaderCompiler, UploadBatch,
+};
 use crate::graph::{FrameInputs, FRAMES_IN_FLIGHT};
 use crate::passes::shared::cull_data::cull_record;
+use crate::passes::shared::cull_data::GpuCullRecord;
 use crate::passes::shared::gpu_types::GpuInstance;
 use crate::passes::shared::slot_layout::{group_key, SlotLayout};
 use crate::passes::shared::{GpuScene, SceneInputs};
 use crate::render::{GraphSpec, RenderSettings};
 use crate::scene::world::{Change, InstanceHandle, World};
 use crate::scene::Scene;
-use std::collections::BTreeSet;
 use std::time::Instant;
 
 /// What one [`Renderer::sync`] did.
 pub use crate::stats::UpdateStats as SyncStats;
+
+/// One slot's new contents, as `shaders/world/scatter.comp` reads it (100 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct SlotUpdate {
+    slot: u32,
+    instance: GpuInstance,
+    record: GpuCullRecord,
+}
+
+/// Bytes uploaded per changed slot.
+const UPDATE_BYTES: u64 = std::mem::size_of::<SlotUpdate>() as u64;
 
 /// What a renderer keeps of the world it mirrors.
 pub(super) struct WorldMirror {
@@ -42,7 +60,13 @@ pub(super) struct WorldMirror {
     /// The handle each world instance index had when its slot was written: a new handle at an
     /// index (removed and inserted between two syncs) is a new instance and takes a new slot.
     handles: Vec<Option<InstanceHandle>>,
-    pub(super) staging: StagingRing,
+    /// The slot updates waiting for the next recorded frame, and where each slot's is.
+    updates: Vec<SlotUpdate>,
+    /// Per slot, the index of its queued update (`u32::MAX`: none).
+    update_of_slot: Vec<u32>,
+    /// Per frame in flight, the host-visible buffer its updates are read from.
+    segments: Vec<Option<Buffer>>,
+    scatter: Pipeline,
     /// What the syncs since the last recorded frame did, for that frame's figures.
     pending: Option<SyncStats>,
     /// Recent frames' figures, by frame.
@@ -57,21 +81,91 @@ impl WorldMirror {
         &self.compiled
     }
 
-    /// Records frame `frame`'s queued copies into `cmd`, timed.
-    pub(super) fn record_copies(&mut self, ctx: &GpuContext, cmd: ash::vk::CommandBuffer, frame: u64) -> Result<()> {
-        let (timer, timed) = &mut self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+    /// Queues `slot`'s new contents for the next recorded frame (replacing any queued before).
+    fn queue(&mut self, slot: u32, instance: GpuInstance, record: GpuCullRecord) {
+        let update = SlotUpdate { slot, instance, record };
+        if self.update_of_slot.len() <= slot as usize {
+            self.update_of_slot.resize(slot as usize + 1, u32::MAX);
+        }
+        match self.update_of_slot[slot as usize] {
+            u32::MAX => {
+                self.update_of_slot[slot as usize] = self.updates.len() as u32;
+                self.updates.push(update);
+            }
+            i => self.updates[i as usize] = update,
+        }
+    }
+
+    /// Forgets the queued updates (recorded, or for buffers being replaced).
+    fn clear_updates(&mut self) {
+        for u in &self.updates {
+            self.update_of_slot[u.slot as usize] = u32::MAX;
+        }
+        self.updates.clear();
+    }
+
+    /// Records frame `frame`'s scatter of the queued updates into `cmd`, timed. The buffer of
+    /// `frame` is free: the frame that last read it (`frame - FRAMES_IN_FLIGHT`) has completed.
+    /// The queue is kept until the frame is recorded whole ([`Self::recorded`]), so that a frame
+    /// whose recording failed can be recorded again.
+    pub(super) fn record_updates(
+        &mut self,
+        ctx: &GpuContext,
+        cmd: ash::vk::CommandBuffer,
+        frame: u64,
+        scene: &GpuScene,
+    ) -> Result<()> {
+        let k = (frame % FRAMES_IN_FLIGHT as u64) as usize;
+        let (timer, timed) = &mut self.timers[k];
         timer.reset(cmd);
-        timer.begin(cmd, "update scene");
-        self.staging.record(ctx, cmd, frame)?;
-        timer.end(cmd);
         *timed = Some(frame);
+        if self.updates.is_empty() {
+            return Ok(());
+        }
+        let bytes: &[u8] = bytemuck::cast_slice(&self.updates);
+        let current = self.segments[k].as_ref().map_or(0, |b| b.size());
+        if current < bytes.len() as u64 {
+            let desc = BufferDesc {
+                name: &format!("world updates {k}"),
+                size: (bytes.len() as u64).max(current * 2).max(64 << 10),
+                usage: ash::vk::BufferUsageFlags::STORAGE_BUFFER,
+                location: MemoryLocation::CpuToGpu,
+            };
+            self.segments[k] = Some(Buffer::new(ctx, &desc)?);
+        }
+        let segment = self.segments[k].as_mut().expect("sized above");
+        segment.write_bytes(0, bytes)?;
+        let device = ctx.device();
+        let all = Access {
+            stage: ash::vk::PipelineStageFlags2::ALL_COMMANDS,
+            access: ash::vk::AccessFlags2::MEMORY_READ | ash::vk::AccessFlags2::MEMORY_WRITE,
+            layout: ash::vk::ImageLayout::UNDEFINED,
+        };
+        timer.begin(cmd, "update scene");
+        // Earlier frames may still read what this overwrites.
+        cmd_barriers(device, cmd, &[memory_barrier(all, Access::COMPUTE_WRITE)], &[]);
+        self.scatter.bind(cmd);
+        self.scatter.push_bindings(
+            cmd,
+            &[
+                Bind::Buffer(0, segment.handle()),
+                Bind::Buffer(1, scene.instances.handle()),
+                Bind::Buffer(2, scene.cull_records.handle()),
+            ],
+        );
+        let count = self.updates.len() as u32;
+        self.scatter.push_constants(cmd, &count);
+        // SAFETY: cmd recording with the scatter pipeline bound.
+        unsafe { device.cmd_dispatch(cmd, count.div_ceil(64), 1, 1) };
+        cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, all)], &[]);
+        timer.end(cmd);
         Ok(())
     }
 
     /// The frame `frame` was recorded: its queued copies are in it, and the syncs before it
     /// are its figures.
     pub(super) fn recorded(&mut self, frame: u64) {
-        self.staging.clear();
+        self.clear_updates();
         if let Some(stats) = self.pending.take() {
             self.recent.push_back((frame, stats));
             // Kept while the frame's other figures can still be read back.
@@ -167,7 +261,10 @@ impl Renderer {
             light_capacity,
             compiled,
             handles: world_handles(world),
-            staging: StagingRing::new(FRAMES_IN_FLIGHT),
+            updates: Vec::new(),
+            update_of_slot: Vec::new(),
+            segments: (0..FRAMES_IN_FLIGHT).map(|_| None).collect(),
+            scatter: Pipeline::compute(ctx, "world scatter", &shaders.compile("world/scatter.comp", &[])?)?,
             pending: None,
             recent: Default::default(),
             timers: (0..FRAMES_IN_FLIGHT)
@@ -196,13 +293,11 @@ impl Renderer {
         if changes.is_empty() {
             return Ok(SyncStats::default());
         }
-        let mut instances = BTreeSet::new();
+        let mut instances = Vec::with_capacity(changes.len());
         let mut lights = false;
         for change in changes {
             match *change {
-                Change::Instance(i) => {
-                    instances.insert(i);
-                }
+                Change::Instance(i) => instances.push(i),
                 Change::Light(_) => lights = true,
                 Change::Mesh(_) | Change::Material(_) => return self.relayout(shaders, world, start),
             }
@@ -214,18 +309,20 @@ impl Renderer {
             }
             self.scene.lights = live;
         }
+        instances.sort_unstable();
+        instances.dedup();
         mirror.layout.release_quarantine(self.frame_index);
         // Slots first: a group without room means a relayout, which replaces the layout whole
         // (so a half-updated one does not matter), before anything is written.
         let layout = &mut mirror.layout;
-        let mut touched = BTreeSet::new();
+        let mut touched = Vec::with_capacity(instances.len());
         for &i in &instances {
             let old = layout.slot_of(i);
             let key = world.is_live(i).then(|| group_key(world.scene(), &world.scene().instances[i as usize]));
             let same_instance = mirror.handles.get(i as usize).copied().flatten() == world.handle_at(i);
             match (old, key) {
                 (Some(slot), Some(key)) if same_instance && layout.key_of_slot(slot) == key => {
-                    touched.insert(slot);
+                    touched.push(slot);
                 }
                 (old, key) => {
                     if old.is_some() {
@@ -233,7 +330,7 @@ impl Renderer {
                     }
                     if let Some(key) = key {
                         match layout.place(i, key) {
-                            Some(slot) => touched.insert(slot),
+                            Some(slot) => touched.push(slot),
                             None => return self.relayout(shaders, world, start),
                         };
                     }
@@ -246,19 +343,16 @@ impl Renderer {
             }
             mirror.handles[i as usize] = world.handle_at(i);
         }
-        let gpu = &self.inputs.scene;
         for &slot in &touched {
             let contents = mirror.layout.slot_contents(slot, world.scene());
             let group = mirror.layout.group_of_slot(slot) as u32;
-            mirror.staging.write(&gpu.instances, slot as u64 * 64, bytemuck::bytes_of(&GpuInstance::new(&contents)));
-            let record = cull_record(world.scene(), &contents, group);
-            mirror.staging.write(&gpu.cull_records, slot as u64 * 32, bytemuck::bytes_of(&record));
+            mirror.queue(slot, GpuInstance::new(&contents), cull_record(world.scene(), &contents, group));
             self.scene.instances[slot as usize] = contents;
         }
         mirror.version = world.version();
         let stats = SyncStats {
             instances_changed: instances.len() as u64,
-            bytes_uploaded: touched.len() as u64 * 96,
+            bytes_uploaded: touched.len() as u64 * UPDATE_BYTES,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
             gpu_ms: 0.0,
             relayout: false,
@@ -300,7 +394,7 @@ impl Renderer {
         if outgrown {
             mirror.compiled = needed;
         }
-        mirror.staging.clear();
+        mirror.clear_updates();
         mirror.layout = layout;
         mirror.handles = world_handles(world);
         mirror.light_capacity = light_capacity;
