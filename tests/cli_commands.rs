@@ -20,7 +20,8 @@ fn bench_writes_speed_against_error_as_json_markdown_and_plots() {
     let scene_count = scenes.split(',').count();
     #[rustfmt::skip]
     let (code, stdout, err) = run(&[
-        "bench", "--suites", "culling,hiz,msaa", "--out", out, "--size", "64x36", "--warmup", "1", "--frames", "2",
+        "bench", "--suites", "culling,hiz,msaa,dynamic", "--out", out, "--size", "64x36", "--warmup", "1", "--frames", "2",
+        "--moved", "10,100",
         "--instances", "1000,2000", "--graphs", "no_cull,two_phase", "--verify", "--hiz-sizes", "33x17",
         "--msaa-scenes", &scenes, "--msaa-lights", "5", "--msaa-samples", "4", "--reference", "2",
         "--msaa-methods", "two_phase,msaa_per_sample,msaa_zprepass,msaa_compressed_claim",
@@ -42,6 +43,16 @@ fn bench_writes_speed_against_error_as_json_markdown_and_plots() {
         let two_phase = &graphs[1];
         assert!(two_phase["drawn"].as_u64().unwrap() < graphs[0]["drawn"].as_u64().unwrap(), "two_phase culls");
     }
+    // Dynamic: a row per moved count on the largest city, the update's bytes and times measured.
+    let dynamic = &json["dynamic"];
+    assert_eq!(dynamic["instances"], 2000);
+    let moved: Vec<u64> = dynamic["rows"].as_array().unwrap().iter().map(|r| r["moved"].as_u64().unwrap()).collect();
+    assert_eq!(moved, [10, 100]);
+    for r in dynamic["rows"].as_array().unwrap() {
+        assert!(r["bytes"].as_u64().unwrap() >= 100 * r["moved"].as_u64().unwrap() / 2, "{r}");
+        assert!(r["frame_ms"].as_f64().unwrap() > 0.0 && r["host_copy_ms"].as_f64().unwrap() > 0.0, "{r}");
+    }
+    assert!(dynamic["rebuild_cpu_ms"].as_f64().unwrap() > 0.0);
     // Hi-Z: the size asked for, both methods.
     let hiz = json["hiz"].as_array().unwrap();
     assert!(hiz.iter().any(|h| h["method"] == "single") && hiz.iter().any(|h| h["method"] == "per_mip"));
@@ -84,7 +95,7 @@ fn bench_writes_speed_against_error_as_json_markdown_and_plots() {
 
     let (code, _, err) = run(&["bench", "--suites", "culling,speed", "--out", out]);
     assert_eq!(code, 1);
-    assert!(err.contains("unknown suite 'speed' (known: culling, hiz, msaa)"), "{err}");
+    assert!(err.contains("unknown suite 'speed' (known: culling, hiz, msaa, dynamic)"), "{err}");
 }
 
 #[test]

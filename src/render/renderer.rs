@@ -477,10 +477,12 @@ impl Renderer {
             .filter(|(_, kind, _)| kind == "lighting_compressed")
             .map(|(name, _, bytes)| GbufferPassStats::new(name, bytemuck::from_bytes::<GbufferCounters>(bytes)))
             .collect();
+        // A world renderer's empty slots are no instances.
+        let instances = self.world.as_ref().map_or(self.inputs.scene.instance_count, |w| w.instances());
         let mut stats = FrameStats {
             frame,
-            instances: self.inputs.scene.instance_count,
-            drawn: self.inputs.scene.instance_count,
+            instances,
+            drawn: instances,
             draws: self.inputs.scene.regions.groups(),
             triangles: self.inputs.scene.triangles,
             gpu_ms: timings.into_iter().filter(|t| t.name != "frame").collect(),

@@ -59,6 +59,8 @@ pub struct SlotLayout {
     free: Vec<Vec<u32>>,
     /// Freed slots with the frame from which they may be reused.
     quarantine: Vec<(u64, u32)>,
+    /// Slots that hold an instance.
+    occupied: u32,
 }
 
 impl SlotLayout {
@@ -79,6 +81,7 @@ impl SlotLayout {
             instance_slot: vec![None; scene.instances.len()],
             free: Vec::new(),
             quarantine: Vec::new(),
+            occupied: 0,
         };
         for (key, mut ids) in ordered {
             ids.sort_unstable_by_key(|&id| (keys[id as usize], id));
@@ -88,6 +91,7 @@ impl SlotLayout {
                 layout.instance_slot[id as usize] = Some(layout.slot_instance.len() as u32);
                 layout.slot_instance.push(Some(id));
             }
+            layout.occupied += ids.len() as u32;
             let spare = first_slot + ids.len() as u32..first_slot + capacity;
             layout.slot_instance.extend(spare.clone().map(|_| None));
             // Lowest slots first.
@@ -101,6 +105,11 @@ impl SlotLayout {
     /// Slots in all.
     pub fn slots(&self) -> u32 {
         self.slot_instance.len() as u32
+    }
+
+    /// Slots that hold an instance.
+    pub fn occupied(&self) -> u32 {
+        self.occupied
     }
 
     /// The slot of world instance `instance`, if it has one.
@@ -134,6 +143,7 @@ impl SlotLayout {
         let slot = self.instance_slot.get_mut(instance as usize)?.take()?;
         self.slot_instance[slot as usize] = None;
         self.quarantine.push((next_frame + 1, slot));
+        self.occupied -= 1;
         Some(slot)
     }
 
@@ -147,6 +157,7 @@ impl SlotLayout {
         }
         self.instance_slot[instance as usize] = Some(slot);
         self.slot_instance[slot as usize] = Some(instance);
+        self.occupied += 1;
         Some(slot)
     }
 

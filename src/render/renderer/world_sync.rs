@@ -76,6 +76,11 @@ pub(super) struct WorldMirror {
 }
 
 impl WorldMirror {
+    /// Instances the GPU holds (occupied slots).
+    pub(super) fn instances(&self) -> u32 {
+        self.layout.occupied()
+    }
+
     /// What the graph is compiled for.
     pub(super) fn compiled(&self) -> &FrameInputs {
         &self.compiled
