@@ -58,7 +58,8 @@ pub struct UpdateStats {
     pub bytes_uploaded: u64,
     /// CPU milliseconds the sync took.
     pub cpu_ms: f64,
-    /// GPU milliseconds of the frame's copies into the scene buffers (0 when not timed).
+    /// GPU milliseconds of the scatter of the changed slots into the scene buffers (0 when not
+    /// timed).
     pub gpu_ms: f64,
     /// Whether the world was laid out anew.
     pub relayout: bool,

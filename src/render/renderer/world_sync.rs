@@ -71,7 +71,7 @@ pub(super) struct WorldMirror {
     pending: Option<SyncStats>,
     /// Recent frames' figures, by frame.
     recent: std::collections::VecDeque<(u64, SyncStats)>,
-    /// Per frame in flight, a timer of the copies and the frame it timed.
+    /// Per frame in flight, a timer of the scatter and the frame it timed.
     timers: Vec<(GpuTimer, Option<u64>)>,
 }
 
@@ -167,7 +167,7 @@ impl WorldMirror {
         Ok(())
     }
 
-    /// The frame `frame` was recorded: its queued copies are in it, and the syncs before it
+    /// The frame `frame` was recorded: the queued updates are in it, and the syncs before it
     /// are its figures.
     pub(super) fn recorded(&mut self, frame: u64) {
         self.clear_updates();
@@ -181,7 +181,7 @@ impl WorldMirror {
     }
 
     /// The world changes frame `frame` applied, once it has completed (with the GPU time of
-    /// its copies).
+    /// its scatter).
     pub(super) fn update_of(&self, frame: u64) -> Result<Option<SyncStats>> {
         let Some(mut stats) = self.recent.iter().find(|(f, _)| *f == frame).map(|(_, s)| s.clone()) else {
             return Ok(None);
