@@ -282,14 +282,16 @@ impl World {
 
     /// What is wrong with `instance` for the world, named as `who`.
     fn instance_error(&self, who: &dyn fmt::Display, instance: &Instance) -> Option<WorldError> {
-        let handle = who.to_string();
+        // Named only once something is wrong: formatting the handle for every change would
+        // cost more than the checks.
+        let handle = || who.to_string();
         if !self.meshes_live.get(instance.mesh as usize).copied().unwrap_or(false) {
             let meshes = self.meshes_live.iter().filter(|l| **l).count();
-            return Some(WorldError::UnknownMesh { handle, mesh: instance.mesh, meshes });
+            return Some(WorldError::UnknownMesh { handle: handle(), mesh: instance.mesh, meshes });
         }
         if !self.materials_live.get(instance.material as usize).copied().unwrap_or(false) {
             let materials = self.materials_live.iter().filter(|l| **l).count();
-            return Some(WorldError::UnknownMaterial { handle, material: instance.material, materials });
+            return Some(WorldError::UnknownMaterial { handle: handle(), material: instance.material, materials });
         }
         transform_error(&instance.transform)
             .or_else(|| {
@@ -297,7 +299,7 @@ impl World {
                     format!("flags {:#x} use more than {} bits", instance.flags, super::validate::MAX_FLAG_BITS)
                 })
             })
-            .map(|message| WorldError::Invalid { handle, message })
+            .map(|message| WorldError::Invalid { handle: handle(), message })
     }
 
     /// Adds an instance; its handle stays valid until it is removed.
