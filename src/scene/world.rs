@@ -357,9 +357,21 @@ impl World {
         self.set_instances(&edited)
     }
 
-    /// Moves instances: `(handle, transform)` each.
+    /// Moves instances: `(handle, transform)` each. (Only the transforms need checking: the
+    /// rest of each instance was checked when it was set.)
     pub fn set_transforms(&mut self, changes: &[(InstanceHandle, Transform)]) -> Result<(), WorldError> {
-        self.edit(changes, |i, t| i.transform = t)
+        for (handle, transform) in changes {
+            self.check_instance(*handle)?;
+            if let Some(message) = transform_error(transform) {
+                return Err(WorldError::Invalid { handle: handle.to_string(), message });
+            }
+        }
+        self.journal.reserve(changes.len());
+        for (handle, transform) in changes {
+            self.scene.instances[handle.index as usize].transform = *transform;
+            self.journal.push(Change::Instance(handle.index));
+        }
+        Ok(())
     }
 
     /// Moves one instance.
