@@ -103,6 +103,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     world.remove(handles.remove(1))?;
                 }
                 let update = renderer.sync(&shaders, &world)?;
+                // This world has one renderer: what it applied is no longer needed.
+                world.trim_journal(renderer.synced_version().unwrap_or(0));
 
                 device.reset_fences(&[fence])?;
                 device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())?;

@@ -229,3 +229,17 @@ fn city_traffic_drives_on_the_streets_deterministically() {
         assert!(in_street(t.x, origin.x) || in_street(t.z, origin.z), "{h} at {t} is off the streets");
     }
 }
+
+/// A journal nobody trims stays bounded; a consumer left behind is told to reload everything.
+#[test]
+fn an_untrimmed_journal_stays_bounded() {
+    let (mut w, h) = world(2);
+    let limit = w.journal_limit();
+    for k in 0..(3 * limit) {
+        w.set_transform(h[k % 2], at(k as f64 * 1e-3)).unwrap();
+    }
+    assert_eq!(w.version(), 3 * limit as u64);
+    assert!(w.changes_since(w.version() - (limit / 2) as u64).is_some(), "recent changes are kept");
+    assert!(w.changes_since(0).is_none(), "a consumer at version 0 reloads everything");
+    assert!(w.changes_since(w.version() - limit as u64 - 1).is_none());
+}

@@ -173,6 +173,7 @@ pub fn run(
             }
             world_ms.push(start.elapsed().as_secs_f64() * 1e3);
             let update = renderer.sync(shaders, &world)?;
+            world.trim_journal(renderer.synced_version().unwrap_or(0));
             sync_ms.push(update.cpu_ms);
             Ok(())
         })?;

@@ -376,6 +376,8 @@ impl Animation {
     fn step(&mut self, renderer: &mut Renderer, shaders: &ShaderCompiler) -> Result<()> {
         self.traffic.step(&mut self.world, Self::STEP)?;
         renderer.sync(shaders, &self.world)?;
+        // The only renderer of this world has applied everything.
+        self.world.trim_journal(renderer.synced_version().unwrap_or(0));
         Ok(())
     }
 }

@@ -265,7 +265,26 @@ impl World {
         self.journal.get(from..)
     }
 
-    /// Forgets the changes up to `version` (the oldest version a consumer still needs).
+    /// Records one change. The journal stays bounded even if nobody trims it: past
+    /// [`World::journal_limit`] entries the older half is forgotten, and a consumer that had not
+    /// caught up reloads everything (which is always correct, only slower).
+    fn record(&mut self, change: Change) {
+        self.journal.push(change);
+        let limit = self.journal_limit();
+        if self.journal.len() > limit {
+            self.trim_journal(self.version() - (limit / 2) as u64);
+        }
+    }
+
+    /// The most changes the journal keeps: twice the instance and light tables, and at least
+    /// 2^16 (a renderer that syncs every frame falls behind only in a frame that changes every
+    /// instance more than once).
+    pub fn journal_limit(&self) -> usize {
+        (2 * (self.instances.alive.len() + self.lights.alive.len())).max(1 << 16)
+    }
+
+    /// Forgets the changes up to `version`: the oldest version a consumer still needs (for
+    /// renderers, the least of their `Renderer::synced_version`).
     pub fn trim_journal(&mut self, version: u64) {
         let n = (version.saturating_sub(self.journal_start) as usize).min(self.journal.len());
         self.journal.drain(..n);
@@ -315,7 +334,7 @@ impl World {
         } else {
             self.scene.instances[index as usize] = instance;
         }
-        self.journal.push(Change::Instance(index));
+        self.record(Change::Instance(index));
         Ok(handle)
     }
 
@@ -323,7 +342,7 @@ impl World {
     pub fn remove(&mut self, handle: InstanceHandle) -> Result<Instance, WorldError> {
         self.check_instance(handle)?;
         self.instances.release(handle.index);
-        self.journal.push(Change::Instance(handle.index));
+        self.record(Change::Instance(handle.index));
         Ok(self.scene.instances[handle.index as usize])
     }
 
@@ -337,7 +356,7 @@ impl World {
         }
         for (handle, instance) in changes {
             self.scene.instances[handle.index as usize] = *instance;
-            self.journal.push(Change::Instance(handle.index));
+            self.record(Change::Instance(handle.index));
         }
         Ok(())
     }
@@ -369,7 +388,7 @@ impl World {
         self.journal.reserve(changes.len());
         for (handle, transform) in changes {
             self.scene.instances[handle.index as usize].transform = *transform;
-            self.journal.push(Change::Instance(handle.index));
+            self.record(Change::Instance(handle.index));
         }
         Ok(())
     }
@@ -398,7 +417,7 @@ impl World {
     pub fn add_mesh(&mut self, name: &str, data: &MeshData) -> Result<u32, WorldError> {
         let mesh = self.scene.add_mesh(name, data, &format!("mesh '{name}'"))?;
         self.meshes_live.push(true);
-        self.journal.push(Change::Mesh(mesh));
+        self.record(Change::Mesh(mesh));
         Ok(mesh)
     }
 
@@ -411,7 +430,7 @@ impl World {
         }
         self.refuse_in_use(&format!("mesh {mesh} '{}'", self.scene.meshes[mesh as usize].name), |i| i.mesh == mesh)?;
         self.meshes_live[mesh as usize] = false;
-        self.journal.push(Change::Mesh(mesh));
+        self.record(Change::Mesh(mesh));
         Ok(())
     }
 
@@ -426,7 +445,7 @@ impl World {
         }
         let index = self.scene.add_material(material);
         self.materials_live.push(true);
-        self.journal.push(Change::Material(index));
+        self.record(Change::Material(index));
         Ok(index)
     }
 
@@ -440,7 +459,7 @@ impl World {
             return Err(WorldError::Invalid { handle: format!("material {index} '{}'", material.name), message });
         }
         self.scene.materials[index as usize] = material;
-        self.journal.push(Change::Material(index));
+        self.record(Change::Material(index));
         Ok(())
     }
 
@@ -453,7 +472,7 @@ impl World {
         let name = format!("material {index} '{}'", self.scene.materials[index as usize].name);
         self.refuse_in_use(&name, |i| i.material == index)?;
         self.materials_live[index as usize] = false;
-        self.journal.push(Change::Material(index));
+        self.record(Change::Material(index));
         Ok(())
     }
 
@@ -484,7 +503,7 @@ impl World {
         } else {
             self.scene.lights[index as usize] = light;
         }
-        self.journal.push(Change::Light(index));
+        self.record(Change::Light(index));
         Ok(handle)
     }
 
@@ -497,7 +516,7 @@ impl World {
             return Err(WorldError::Invalid { handle: handle.to_string(), message });
         }
         self.scene.lights[handle.index as usize] = light;
-        self.journal.push(Change::Light(handle.index));
+        self.record(Change::Light(handle.index));
         Ok(())
     }
 
@@ -507,7 +526,7 @@ impl World {
             return Err(WorldError::Stale { handle: handle.to_string() });
         }
         self.lights.release(handle.index);
-        self.journal.push(Change::Light(handle.index));
+        self.record(Change::Light(handle.index));
         Ok(self.scene.lights[handle.index as usize])
     }
 

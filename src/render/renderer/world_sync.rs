@@ -279,6 +279,12 @@ impl Renderer {
         Ok(renderer)
     }
 
+    /// The world version this renderer applied last (`None`: not a world renderer); the world's
+    /// journal may be trimmed up to the least of its renderers' ([`World::trim_journal`]).
+    pub fn synced_version(&self) -> Option<u64> {
+        self.world.as_ref().map(|w| w.version)
+    }
+
     /// The slot world instance `index` holds in this renderer (`None`: removed, or not a world
     /// renderer).
     pub fn slot_of(&self, index: u32) -> Option<u32> {
