@@ -49,7 +49,7 @@ fn bench_writes_speed_against_error_as_json_markdown_and_plots() {
     let moved: Vec<u64> = dynamic["rows"].as_array().unwrap().iter().map(|r| r["moved"].as_u64().unwrap()).collect();
     assert_eq!(moved, [10, 100]);
     for r in dynamic["rows"].as_array().unwrap() {
-        assert!(r["bytes"].as_u64().unwrap() >= 100 * r["moved"].as_u64().unwrap() / 2, "{r}");
+        assert!(r["bytes"].as_u64().unwrap() >= 32 * r["moved"].as_u64().unwrap(), "{r}");
         assert!(r["frame_ms"].as_f64().unwrap() > 0.0 && r["host_copy_ms"].as_f64().unwrap() > 0.0, "{r}");
     }
     assert!(dynamic["rebuild_cpu_ms"].as_f64().unwrap() > 0.0);

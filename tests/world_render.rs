@@ -54,10 +54,10 @@ fn a_moved_inserted_and_removed_box_shows_where_it_is_at_the_next_frame() {
     let moved = Transform { linear: Mat3::IDENTITY, translation: DVec3::new(-1.5, 0.5, -3.0) };
     world.set_transform(red_cube, moved).unwrap();
     let stats = r.sync(&shaders, &world).unwrap();
-    assert_eq!((stats.instances_changed, stats.relayout, stats.bytes_uploaded), (1, false, 100));
+    assert_eq!((stats.instances_changed, stats.relayout, stats.bytes_uploaded), (1, false, 64));
     let (frame_stats, after) = r.render_to_image(&camera).unwrap();
     let update = frame_stats.update.expect("the frame reports the update it applied");
-    assert_eq!((update.instances_changed, update.bytes_uploaded, update.cpu_ms), (1, 100, stats.cpu_ms));
+    assert_eq!((update.instances_changed, update.bytes_uploaded, update.cpu_ms), (1, 64, stats.cpu_ms));
     assert_ne!(pixel(&after, old.0, old.1), red, "nothing red left where the cube was");
     let new = project(&camera, DVec3::new(-1.5, 0.5, -3.0));
     let p = pixel(&after, new.0, new.1);
@@ -271,5 +271,58 @@ fn a_reused_slot_inherits_no_visibility() {
     assert_ne!(r.slot_of(new.index()), Some(old_slot), "the freed slot waits a frame");
     let s = r.render(&camera).unwrap().verify.unwrap();
     assert_eq!((s.false_negatives, s.false_positives), (0, 0), "nothing hidden is drawn: {s:?}");
+    gpu.assert_clean();
+}
+
+/// The cull bound the GPU derives for a moved instance (from its record and its mesh's local
+/// bounds, so that a move uploads 64 bytes) contains every vertex of the moved instance, and is
+/// not much larger than the one the CPU packs: rotated, scaled and far from the origin.
+#[test]
+fn moved_instances_get_bounds_that_contain_them() {
+    use cullgraph::passes::shared::cull_data::GpuCullRecord;
+    let gpu = GpuTest::new();
+    let (mut world, handles) = World::new(boxes_scene()).unwrap();
+    let mut r = renderer(&gpu, &world, "two_phase", false);
+    let shaders = gpu.shaders();
+    r.render(&boxes_camera()).unwrap();
+    let moves = [
+        (
+            handles[1],
+            Mat3::from_rotation_y(0.7) * Mat3::from_diagonal(Vec3::new(2.0, 0.5, 1.0)),
+            DVec3::new(3.0, 1.0, -2.0),
+        ),
+        (
+            handles[2],
+            Mat3::from_rotation_x(-1.1) * Mat3::from_diagonal(Vec3::new(1.0, 3.0, 0.2)),
+            DVec3::new(1.0e6 + 0.3, 7.0, 2.0e5),
+        ),
+        (handles[3], Mat3::from_diagonal(Vec3::splat(40.0)), DVec3::new(-3.0e4, 0.0, 12.5)),
+    ];
+    let changes: Vec<_> = moves.iter().map(|(h, l, t)| (*h, Transform { linear: *l, translation: *t })).collect();
+    world.set_transforms(&changes).unwrap();
+    let update = r.sync(&shaders, &world).unwrap();
+    assert_eq!(update.bytes_uploaded, 3 * 64, "moves upload 64 bytes each");
+    r.render(&boxes_camera()).unwrap();
+    let bytes = cullgraph::gpu::transfer::read_buffer(&gpu, &r.gpu_scene().cull_records).unwrap();
+    let records: &[GpuCullRecord] = bytemuck::cast_slice(&bytes);
+    let scene = world.scene();
+    for (h, _, _) in &moves {
+        let slot = r.slot_of(h.index()).unwrap() as usize;
+        let instance = world.instance(*h).unwrap();
+        let (hi, lo, radius, half) = records[slot].unpack();
+        assert_eq!(records[slot].group_flags & cullgraph::passes::shared::cull_data::CULL_HUGE, 0, "{h}");
+        let center = hi.as_dvec3() + lo.as_dvec3();
+        let mesh = &scene.meshes[instance.mesh as usize];
+        let vertices = &scene.vertices[mesh.vertex_offset as usize..(mesh.vertex_offset + mesh.vertex_count) as usize];
+        for v in vertices {
+            let p = instance.transform.apply(Vec3::from_array(v.position));
+            assert!(((p - center).abs()).cmple(half.as_dvec3()).all(), "{h}: {p} outside the box {center} ± {half}");
+            assert!((p - center).length() <= radius as f64, "{h}: {p} outside the sphere");
+        }
+        // As tight as the CPU's bound, up to half-float rounding.
+        let group = records[slot].group_flags & 0xFF_FFFF;
+        let cpu = cullgraph::passes::shared::cull_data::cull_record(scene, instance, group).unpack();
+        assert!((half - cpu.3).abs().max_element() <= 1e-2 * cpu.3.max_element().max(1.0), "{h}: {half} vs {}", cpu.3);
+    }
     gpu.assert_clean();
 }

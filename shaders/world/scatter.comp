@@ -1,28 +1,121 @@
 #version 460
-// A changing world's slot updates (src/render/renderer/world_sync.rs): each thread copies one
-// slot's instance record (64 bytes) and cull bound (32 bytes) from the host-visible update
-// list into the scene buffers. One dispatch replaces thousands of tiny copy regions, which cost
-// the copy engine far more than the bytes they move.
+// A changing world's slot updates (src/render/renderer/world_sync.rs): each thread writes one
+// slot's new instance record, or for a move only its transform (60 bytes), and derives the
+// slot's cull bound from it and its draw group's local bounds, so that a moved instance costs
+// 64 bytes of upload. One dispatch replaces thousands of tiny copy regions, which cost the copy
+// engine far more than the bytes they move.
+//
+// The bound is packed as src/passes/shared/cull_data.rs packs it (GpuCullRecord), from the
+// instance's own hi/lo split of its translation: center = hi + (linear * local center + lo).
+// The lo part is stored as half floats, and the radius and half extents grow by its rounding
+// error and are rounded up, so the bound contains the exact one; a bound beyond half floats is
+// flagged CULL_HUGE (never culled).
 #extension GL_EXT_scalar_block_layout : require
+#include "../cull/cull_common.glsl"
 
 layout(local_size_x = 64) in;
 
-struct SlotUpdate {
+#ifdef MOVES
+// A transform only: the rows of the linear part with the translation's hi part in w, and its
+// lo part. Material and flags stay.
+struct Update {
     uint slot;
-    uint instance[16];   // GpuInstance
-    uint record[8];      // GpuCullRecord
+    vec4 rows[3];
+    vec3 translation_lo;
+};
+#else
+// The whole instance record.
+struct Update {
+    uint slot;
+    uint instance[16];
+};
+#endif
+
+// Local bounds of a draw group's mesh: box center and the radius of the sphere around it, box
+// half extents.
+struct GroupBounds {
+    vec4 center_radius;
+    vec4 half_extent;
 };
 
-layout(set = 0, binding = 0, scalar) readonly buffer Updates { SlotUpdate updates[]; };
-layout(set = 0, binding = 1) writeonly buffer Instances { uint instance_words[]; };
-layout(set = 0, binding = 2) writeonly buffer Records { uint record_words[]; };
+layout(set = 0, binding = 0, scalar) readonly buffer Updates { Update updates[]; };
+layout(set = 0, binding = 1) buffer Instances { uint instance_words[]; };
+layout(set = 0, binding = 2) buffer Records { uint record_words[]; };
+layout(set = 0, binding = 3, scalar) readonly buffer Bounds { GroupBounds group_bounds[]; };
 
 layout(push_constant) uniform Push { uint count; } pc;
+
+// The half float not below x (x >= 0), as bits.
+uint half_up(float x) {
+    uint h = packHalf2x16(vec2(x, 0.0)) & 0xFFFFu;
+    if (unpackHalf2x16(h).x < x) h += 1u;
+    return h;
+}
+
+const float HALF_MAX = 65504.0;
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= pc.count) return;
     uint slot = updates[i].slot;
-    for (uint k = 0u; k < 16u; ++k) instance_words[slot * 16u + k] = updates[i].instance[k];
-    for (uint k = 0u; k < 8u; ++k) record_words[slot * 8u + k] = updates[i].record[k];
+    uint base = slot * 16u;
+#ifdef MOVES
+    for (uint r = 0u; r < 3u; ++r) {
+        for (uint c = 0u; c < 4u; ++c) instance_words[base + r * 4u + c] = floatBitsToUint(updates[i].rows[r][c]);
+    }
+    for (uint c = 0u; c < 3u; ++c) instance_words[base + 12u + c] = floatBitsToUint(updates[i].translation_lo[c]);
+#else
+    for (uint k = 0u; k < 16u; ++k) instance_words[base + k] = updates[i].instance[k];
+#endif
+    vec4 rows[3];
+    for (uint r = 0u; r < 3u; ++r) {
+        rows[r] = vec4(uintBitsToFloat(instance_words[base + r * 4u]), uintBitsToFloat(instance_words[base + r * 4u + 1u]),
+                       uintBitsToFloat(instance_words[base + r * 4u + 2u]), uintBitsToFloat(instance_words[base + r * 4u + 3u]));
+    }
+    vec3 lo_t = vec3(uintBitsToFloat(instance_words[base + 12u]), uintBitsToFloat(instance_words[base + 13u]),
+                     uintBitsToFloat(instance_words[base + 14u]));
+    uint flags = (instance_words[base + 15u] >> 24) & 0x7Fu;
+
+    // The slot's group never changes while the layout lives: its old record names it.
+    uint rec = slot * 8u;
+    uint group = record_words[rec + 3u] & 0xFFFFFFu;
+    GroupBounds b = group_bounds[group];
+    vec3 c = b.center_radius.xyz;
+    vec3 h = b.half_extent.xyz;
+    vec3 lo = vec3(dot(rows[0].xyz, c), dot(rows[1].xyz, c), dot(rows[2].xyz, c)) + lo_t;
+    vec3 half_extent = vec3(dot(abs(rows[0].xyz), h), dot(abs(rows[1].xyz), h), dot(abs(rows[2].xyz), h))
+                       * (1.0 + 1.0 / 1048576.0);
+    vec3 col0 = vec3(rows[0].x, rows[1].x, rows[2].x);
+    vec3 col1 = vec3(rows[0].y, rows[1].y, rows[2].y);
+    vec3 col2 = vec3(rows[0].z, rows[1].z, rows[2].z);
+    float radius = b.center_radius.w * max(length(col0), max(length(col1), length(col2)));
+
+    uint lo_xy = packHalf2x16(lo.xy);
+    uint lo_z = packHalf2x16(vec2(lo.z, 0.0)) & 0xFFFFu;
+    vec3 stored = vec3(unpackHalf2x16(lo_xy), unpackHalf2x16(lo_z).x);
+    // The stored center's error, and the float products' (a few units in the last place).
+    vec3 d = abs(lo - stored);
+    float err = max(d.x, max(d.y, d.z)) + max(abs(lo.x), max(abs(lo.y), abs(lo.z))) / 1048576.0;
+    radius += err;
+    half_extent += vec3(err);
+    bool finite = !any(isnan(lo)) && !any(isinf(lo)) && !isnan(radius) && !isinf(radius)
+                  && !any(isnan(half_extent)) && !any(isinf(half_extent));
+    bool huge = !finite || any(greaterThan(abs(lo), vec3(HALF_MAX))) || radius > HALF_MAX
+                || any(greaterThan(half_extent, vec3(HALF_MAX)));
+
+    record_words[rec + 0u] = floatBitsToUint(rows[0].w);
+    record_words[rec + 1u] = floatBitsToUint(rows[1].w);
+    record_words[rec + 2u] = floatBitsToUint(rows[2].w);
+    record_words[rec + 3u] = group | (flags << 24) | (huge ? CULL_HUGE : 0u);
+    if (huge) {
+        record_words[rec + 4u] = 0u;
+        record_words[rec + 5u] = 0u;
+        record_words[rec + 6u] = 0u;
+        record_words[rec + 7u] = 0u;
+        return;
+    }
+    record_words[rec + 4u] = lo_xy;
+    record_words[rec + 5u] = lo_z | (half_up(radius) << 16);
+    record_words[rec + 6u] = half_up(half_extent.x) | (half_up(half_extent.y) << 16);
+    record_words[rec + 7u] = half_up(half_extent.z);
 }

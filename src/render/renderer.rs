@@ -276,6 +276,12 @@ impl Renderer {
         Ok(Some(captured.into_iter().map(|(_, lists)| drawn_instances(&self.inputs.scene, lists)).collect()))
     }
 
+    /// The scene as the GPU holds it (buffers of instances, cull bounds, draw lists), for an
+    /// engine's own passes and for checks.
+    pub fn gpu_scene(&self) -> &GpuScene {
+        &self.inputs.scene
+    }
+
     /// The graph's first output image as left by the last recorded frame, and the access it was
     /// last used with. `None` before the first frame or when the first output is a buffer.
     pub fn output(&self) -> Option<(&Image, Access)> {

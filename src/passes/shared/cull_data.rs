@@ -101,12 +101,29 @@ pub struct GpuDrawGroup {
     pub pad: [u32; 3],
 }
 
+/// The local bounds of one draw group's mesh (32 bytes; `GroupBounds` in
+/// `shaders/world/scatter.comp`, which derives a moved instance's cull bound from them).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuGroupBounds {
+    /// Local box center.
+    pub center: [f32; 3],
+    /// Radius of the local sphere around the box center.
+    pub radius: f32,
+    /// Local box half extents.
+    pub half_extent: [f32; 3],
+    /// Padding.
+    pub pad: f32,
+}
+
 /// The culling view of the scene.
 pub struct CullData {
     /// One record per slot.
     pub records: Vec<GpuCullRecord>,
     /// One entry per non-empty draw group, in draw-list order.
     pub groups: Vec<GpuDrawGroup>,
+    /// The local bounds of each group's mesh.
+    pub bounds: Vec<GpuGroupBounds>,
 }
 
 impl CullData {
@@ -137,7 +154,21 @@ impl CullData {
             .zip(group_of_slot.iter())
             .map(|(&id, &group)| cull_record(scene, &scene.instances[id as usize], group))
             .collect();
-        Self { records, groups }
+        let bounds = draws
+            .commands
+            .iter()
+            .map(|c| {
+                let inst = &scene.instances[draws.instance_ids[c.first_instance as usize] as usize];
+                let mesh = &scene.meshes[inst.mesh as usize];
+                GpuGroupBounds {
+                    center: mesh.bounds.center().to_array(),
+                    radius: local_radius(mesh),
+                    half_extent: mesh.bounds.half_extent().to_array(),
+                    pad: 0.0,
+                }
+            })
+            .collect();
+        Self { records, groups, bounds }
     }
 }
 
@@ -150,8 +181,12 @@ pub fn cull_record(scene: &Scene, inst: &crate::scene::Instance, group: u32) -> 
     let abs = Mat3::from_cols(linear.x_axis.abs(), linear.y_axis.abs(), linear.z_axis.abs());
     let half = abs.mul_vec3(mesh.bounds.half_extent());
     let max_scale = linear.x_axis.length().max(linear.y_axis.length()).max(linear.z_axis.length());
-    let local_radius = mesh.sphere.center.distance(mesh.bounds.center()) + mesh.sphere.radius;
-    GpuCullRecord::new(hi, lo, local_radius * max_scale, widen(half), group, inst.flags)
+    GpuCullRecord::new(hi, lo, local_radius(mesh) * max_scale, widen(half), group, inst.flags)
+}
+
+/// The radius of the sphere around `mesh`'s box center that contains its bounding sphere.
+fn local_radius(mesh: &crate::scene::Mesh) -> f32 {
+    mesh.sphere.center.distance(mesh.bounds.center()) + mesh.sphere.radius
 }
 
 /// One part in 2^20 more, so that the f32 box of a rotated instance never ends inside a vertex.

@@ -49,11 +49,12 @@ pub struct GpuInstance {
 }
 
 impl GpuInstance {
-    /// Packs a scene instance; an empty slot ([`crate::scene::FLAG_EMPTY_SLOT`]) packs as all
-    /// zeros: every vertex lands on one point, so it draws nothing.
+    /// Packs a scene instance; an empty slot ([`crate::scene::FLAG_EMPTY_SLOT`]) packs as zeros
+    /// but its flags: every vertex lands on one point, so it draws nothing, and a cull bound
+    /// derived from it on the GPU keeps the flag.
     pub fn new(instance: &Instance) -> Self {
         if instance.flags & crate::scene::FLAG_EMPTY_SLOT != 0 {
-            return Self::zeroed();
+            return Self { material_flags: crate::scene::FLAG_EMPTY_SLOT << 24, ..Self::zeroed() };
         }
         let (hi, lo) = split_hi_lo(instance.transform.translation);
         let m = instance.transform.linear;

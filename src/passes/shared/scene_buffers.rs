@@ -31,6 +31,9 @@ pub struct GpuScene {
     pub cull_records: Buffer,
     /// [`super::cull_data::GpuDrawGroup`] per non-empty draw group.
     pub draw_groups: Buffer,
+    /// [`super::cull_data::GpuGroupBounds`] per non-empty draw group: the local bounds that
+    /// a changing world's moved instances get their cull bounds from.
+    pub group_bounds: Buffer,
     /// Per instance: its mesh's first index and vertex offset (`uvec2`), for passes that rebuild
     /// a triangle from its id (the visibility buffer).
     pub instance_triangles: Buffer,
@@ -184,8 +187,15 @@ impl GpuScene {
                 vk::BufferUsageFlags::INDIRECT_BUFFER | storage,
                 bytemuck::cast_slice(&count),
             )?,
-            cull_records: batch.buffer(ctx, "cull records", storage, bytemuck::cast_slice(&cull.records))?,
+            // Readable back, for checks of the bounds a changing world's updates derive.
+            cull_records: batch.buffer(
+                ctx,
+                "cull records",
+                storage | vk::BufferUsageFlags::TRANSFER_SRC,
+                bytemuck::cast_slice(&cull.records),
+            )?,
             draw_groups: batch.buffer(ctx, "draw groups", storage, bytemuck::cast_slice(&cull.groups))?,
+            group_bounds: batch.buffer(ctx, "group bounds", storage, bytemuck::cast_slice(&cull.bounds))?,
             instance_triangles: batch.buffer(
                 ctx,
                 "instance triangle bases",

@@ -1,14 +1,16 @@
 //! A renderer that mirrors a [`World`]: [`Renderer::from_world`] lays the world out in slots
 //! ([`SlotLayout`]) and [`Renderer::sync`] applies the world's changes since the last sync.
 //!
-//! A change of instances rewrites only their slots: each changed slot's index, instance record
-//! (64 bytes) and cull bound (32 bytes) go into a host-visible update list, one per frame in
+//! A change of instances rewrites only their slots. A moved instance (same instance, mesh,
+//! material and flags) queues its slot and transform, 64 bytes; any other change its slot and
+//! whole instance record, 68. The lists live in host-visible buffers, one pair per frame in
 //! flight, reused frame after frame and grown geometrically when a frame needs more. At the
-//! start of the next recorded frame one compute dispatch (`shaders/world/scatter.comp`) scatters
-//! them into the scene buffers, after every earlier frame's use of those buffers: frames in
-//! flight are not disturbed. (Copy regions, one per record, cost the copy engine about a
-//! microsecond each on an H100, thousands of times the bytes they move.)
-//!
+//! start of the next recorded frame a compute dispatch per list (`shaders/world/scatter.comp`)
+//! writes them into the instance records and derives each slot's cull bound from its record and
+//! its group's local bounds, after every earlier frame's use of those buffers: frames in flight
+//! are not disturbed. (Copy regions, one per record, cost the copy engine about a microsecond
+//! each on an H100, thousands of times the bytes they move.)
+
 //! What a slot change cannot express is laid out anew: an instance whose group has no free
 //! slot or no range yet, a registered or unregistered mesh or material (a material's sidedness
 //! decides its instances' groups), more lights than the light buffers hold, or a journal that no
@@ -23,8 +25,6 @@ use crate::gpu::{
     Access, Bind, Buffer, BufferDesc, GpuContext, GpuTimer, MemoryLocation, Pipeline, ShaderCompiler, UploadBatch,
 };
 use crate::graph::{FrameInputs, FRAMES_IN_FLIGHT};
-use crate::passes::shared::cull_data::cull_record;
-use crate::passes::shared::cull_data::GpuCullRecord;
 use crate::passes::shared::gpu_types::GpuInstance;
 use crate::passes::shared::slot_layout::{group_key, SlotLayout};
 use crate::passes::shared::{GpuScene, SceneInputs};
@@ -36,17 +36,26 @@ use std::time::Instant;
 /// What one [`Renderer::sync`] did.
 pub use crate::stats::UpdateStats as SyncStats;
 
-/// One slot's new contents, as `shaders/world/scatter.comp` reads it (100 bytes).
+/// A moved instance's new transform, as `shaders/world/scatter.comp` (`MOVES`) reads it: 64
+/// bytes, the cull bound being derived on the GPU.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct MoveUpdate {
+    slot: u32,
+    rows: [[f32; 4]; 3],
+    translation_lo: [f32; 3],
+}
+
+/// A slot's whole new instance record (another instance, material or flags): 68 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct SlotUpdate {
     slot: u32,
     instance: GpuInstance,
-    record: GpuCullRecord,
 }
 
-/// Bytes uploaded per changed slot.
-const UPDATE_BYTES: u64 = std::mem::size_of::<SlotUpdate>() as u64;
+/// Marks an [`WorldMirror::update_of_slot`] entry as an index into the whole-record list.
+const WHOLE: u32 = 1 << 31;
 
 /// What a renderer keeps of the world it mirrors.
 pub(super) struct WorldMirror {
@@ -60,13 +69,16 @@ pub(super) struct WorldMirror {
     /// The handle each world instance index had when its slot was written: a new handle at an
     /// index (removed and inserted between two syncs) is a new instance and takes a new slot.
     handles: Vec<Option<InstanceHandle>>,
-    /// The slot updates waiting for the next recorded frame, and where each slot's is.
-    updates: Vec<SlotUpdate>,
-    /// Per slot, the index of its queued update (`u32::MAX`: none).
+    /// The slot updates waiting for the next recorded frame: moves, whole records, and per
+    /// slot where its update is (an index into `moves`, or into `whole` with [`WHOLE`] set;
+    /// `u32::MAX`: none).
+    moves: Vec<MoveUpdate>,
+    whole: Vec<SlotUpdate>,
     update_of_slot: Vec<u32>,
-    /// Per frame in flight, the host-visible buffer its updates are read from.
-    segments: Vec<Option<Buffer>>,
-    scatter: Pipeline,
+    /// Per frame in flight, the host-visible buffers its moves and whole records are read from.
+    segments: Vec<[Option<Buffer>; 2]>,
+    /// The scatter of moves and of whole records.
+    scatter: [Pipeline; 2],
     /// What the syncs since the last recorded frame did, for that frame's figures.
     pending: Option<SyncStats>,
     /// Recent frames' figures, by frame.
@@ -86,27 +98,67 @@ impl WorldMirror {
         &self.compiled
     }
 
-    /// Queues `slot`'s new contents for the next recorded frame (replacing any queued before).
-    fn queue(&mut self, slot: u32, instance: GpuInstance, record: GpuCullRecord) {
-        let update = SlotUpdate { slot, instance, record };
+    /// Where `slot`'s queued update is, growing the table to hold it.
+    fn entry(&mut self, slot: u32) -> &mut u32 {
         if self.update_of_slot.len() <= slot as usize {
             self.update_of_slot.resize(slot as usize + 1, u32::MAX);
         }
-        match self.update_of_slot[slot as usize] {
+        &mut self.update_of_slot[slot as usize]
+    }
+
+    /// Queues a move of the instance in `slot` to the transform of `instance` (its material
+    /// and flags unchanged).
+    fn queue_move(&mut self, slot: u32, instance: &GpuInstance) {
+        let update = MoveUpdate { slot, rows: instance.rows, translation_lo: instance.translation_lo };
+        let next = self.moves.len() as u32;
+        match *self.entry(slot) {
             u32::MAX => {
-                self.update_of_slot[slot as usize] = self.updates.len() as u32;
-                self.updates.push(update);
+                self.update_of_slot[slot as usize] = next;
+                self.moves.push(update);
             }
-            i => self.updates[i as usize] = update,
+            i if i & WHOLE != 0 => {
+                let queued = &mut self.whole[(i & !WHOLE) as usize].instance;
+                queued.rows = instance.rows;
+                queued.translation_lo = instance.translation_lo;
+            }
+            i => self.moves[i as usize] = update,
         }
+    }
+
+    /// Queues `slot`'s whole new record (replacing any update queued before).
+    fn queue_whole(&mut self, slot: u32, instance: GpuInstance) {
+        let index = self.whole.len() as u32 | WHOLE;
+        let entry = *self.entry(slot);
+        match entry {
+            u32::MAX => {}
+            i if i & WHOLE != 0 => {
+                self.whole[(i & !WHOLE) as usize].instance = instance;
+                return;
+            }
+            i => {
+                // The whole record supersedes the queued move.
+                self.moves.swap_remove(i as usize);
+                if let Some(moved) = self.moves.get(i as usize) {
+                    self.update_of_slot[moved.slot as usize] = i;
+                }
+            }
+        }
+        self.update_of_slot[slot as usize] = index;
+        self.whole.push(SlotUpdate { slot, instance });
     }
 
     /// Forgets the queued updates (recorded, or for buffers being replaced).
     fn clear_updates(&mut self) {
-        for u in &self.updates {
-            self.update_of_slot[u.slot as usize] = u32::MAX;
+        for slot in self.moves.iter().map(|u| u.slot).chain(self.whole.iter().map(|u| u.slot)) {
+            self.update_of_slot[slot as usize] = u32::MAX;
         }
-        self.updates.clear();
+        self.moves.clear();
+        self.whole.clear();
+    }
+
+    /// Bytes queued.
+    fn queued_bytes(&self) -> u64 {
+        (std::mem::size_of_val(self.moves.as_slice()) + std::mem::size_of_val(self.whole.as_slice())) as u64
     }
 
     /// Records frame `frame`'s scatter of the queued updates into `cmd`, timed. The buffer of
@@ -124,22 +176,9 @@ impl WorldMirror {
         let (timer, timed) = &mut self.timers[k];
         timer.reset(cmd);
         *timed = Some(frame);
-        if self.updates.is_empty() {
+        if self.moves.is_empty() && self.whole.is_empty() {
             return Ok(());
         }
-        let bytes: &[u8] = bytemuck::cast_slice(&self.updates);
-        let current = self.segments[k].as_ref().map_or(0, |b| b.size());
-        if current < bytes.len() as u64 {
-            let desc = BufferDesc {
-                name: &format!("world updates {k}"),
-                size: (bytes.len() as u64).max(current * 2).max(64 << 10),
-                usage: ash::vk::BufferUsageFlags::STORAGE_BUFFER,
-                location: MemoryLocation::CpuToGpu,
-            };
-            self.segments[k] = Some(Buffer::new(ctx, &desc)?);
-        }
-        let segment = self.segments[k].as_mut().expect("sized above");
-        segment.write_bytes(0, bytes)?;
         let device = ctx.device();
         let all = Access {
             stage: ash::vk::PipelineStageFlags2::ALL_COMMANDS,
@@ -148,21 +187,52 @@ impl WorldMirror {
         };
         timer.begin(cmd, "update scene");
         // Earlier frames may still read what this overwrites.
-        cmd_barriers(device, cmd, &[memory_barrier(all, Access::COMPUTE_WRITE)], &[]);
-        self.scatter.bind(cmd);
-        self.scatter.push_bindings(
-            cmd,
-            &[
-                Bind::Buffer(0, segment.handle()),
-                Bind::Buffer(1, scene.instances.handle()),
-                Bind::Buffer(2, scene.cull_records.handle()),
-            ],
-        );
-        let count = self.updates.len() as u32;
-        self.scatter.push_constants(cmd, &count);
-        // SAFETY: cmd recording with the scatter pipeline bound.
-        unsafe { device.cmd_dispatch(cmd, count.div_ceil(64), 1, 1) };
-        cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, all)], &[]);
+        let compute_rw = Access {
+            stage: ash::vk::PipelineStageFlags2::COMPUTE_SHADER,
+            access: ash::vk::AccessFlags2::SHADER_STORAGE_READ | ash::vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            layout: ash::vk::ImageLayout::UNDEFINED,
+        };
+        cmd_barriers(device, cmd, &[memory_barrier(all, compute_rw)], &[]);
+        // Whole records first: a move queued for the same slot was folded into its record.
+        let lists: [(&[u8], usize); 2] = [
+            (bytemuck::cast_slice(&self.whole), self.whole.len()),
+            (bytemuck::cast_slice(&self.moves), self.moves.len()),
+        ];
+        for (list, (bytes, count)) in [1usize, 0].into_iter().zip(lists) {
+            if count == 0 {
+                continue;
+            }
+            let segment = &mut self.segments[k][list];
+            let current = segment.as_ref().map_or(0, |b| b.size());
+            if current < bytes.len() as u64 {
+                let desc = BufferDesc {
+                    name: &format!("world updates {k}.{list}"),
+                    size: (bytes.len() as u64).max(current * 2).max(64 << 10),
+                    usage: ash::vk::BufferUsageFlags::STORAGE_BUFFER,
+                    location: MemoryLocation::CpuToGpu,
+                };
+                *segment = Some(Buffer::new(ctx, &desc)?);
+            }
+            let segment = segment.as_mut().expect("sized above");
+            segment.write_bytes(0, bytes)?;
+            let pipeline = &self.scatter[list];
+            pipeline.bind(cmd);
+            pipeline.push_bindings(
+                cmd,
+                &[
+                    Bind::Buffer(0, segment.handle()),
+                    Bind::Buffer(1, scene.instances.handle()),
+                    Bind::Buffer(2, scene.cull_records.handle()),
+                    Bind::Buffer(3, scene.group_bounds.handle()),
+                ],
+            );
+            pipeline.push_constants(cmd, &(count as u32));
+            // SAFETY: cmd recording with the scatter pipeline bound.
+            unsafe { device.cmd_dispatch(cmd, (count as u32).div_ceil(64), 1, 1) };
+            // The two lists touch different slots, but the barrier keeps the tools sure of it.
+            cmd_barriers(device, cmd, &[memory_barrier(compute_rw, compute_rw)], &[]);
+        }
+        cmd_barriers(device, cmd, &[memory_barrier(compute_rw, all)], &[]);
         timer.end(cmd);
         Ok(())
     }
@@ -266,10 +336,18 @@ impl Renderer {
             light_capacity,
             compiled,
             handles: world_handles(world),
-            updates: Vec::new(),
+            moves: Vec::new(),
+            whole: Vec::new(),
             update_of_slot: Vec::new(),
-            segments: (0..FRAMES_IN_FLIGHT).map(|_| None).collect(),
-            scatter: Pipeline::compute(ctx, "world scatter", &shaders.compile("world/scatter.comp", &[])?)?,
+            segments: (0..FRAMES_IN_FLIGHT).map(|_| [None, None]).collect(),
+            scatter: [
+                Pipeline::compute(
+                    ctx,
+                    "world scatter (moves)",
+                    &shaders.compile("world/scatter.comp", &[("MOVES", "1")])?,
+                )?,
+                Pipeline::compute(ctx, "world scatter", &shaders.compile("world/scatter.comp", &[])?)?,
+            ],
             pending: None,
             recent: Default::default(),
             timers: (0..FRAMES_IN_FLIGHT)
@@ -327,6 +405,7 @@ impl Renderer {
         // (so a half-updated one does not matter), before anything is written.
         let layout = &mut mirror.layout;
         let mut touched = Vec::with_capacity(instances.len());
+        let mut moved_in_place = Vec::new();
         for &i in &instances {
             let old = layout.slot_of(i);
             let key = world.is_live(i).then(|| group_key(world.scene(), &world.scene().instances[i as usize]));
@@ -334,6 +413,7 @@ impl Renderer {
             match (old, key) {
                 (Some(slot), Some(key)) if same_instance && layout.key_of_slot(slot) == key => {
                     touched.push(slot);
+                    moved_in_place.push(slot);
                 }
                 (old, key) => {
                     if old.is_some() {
@@ -354,16 +434,28 @@ impl Renderer {
             }
             mirror.handles[i as usize] = world.handle_at(i);
         }
+        moved_in_place.sort_unstable();
+        let queued_before = mirror.queued_bytes();
         for &slot in &touched {
             let contents = mirror.layout.slot_contents(slot, world.scene());
-            let group = mirror.layout.group_of_slot(slot) as u32;
-            mirror.queue(slot, GpuInstance::new(&contents), cull_record(world.scene(), &contents, group));
+            let before = &self.scene.instances[slot as usize];
+            // The same instance in the same slot with its material and flags: a move.
+            let moved = before.mesh == contents.mesh
+                && before.material == contents.material
+                && before.flags == contents.flags
+                && moved_in_place.binary_search(&slot).is_ok();
+            let record = GpuInstance::new(&contents);
+            if moved {
+                mirror.queue_move(slot, &record);
+            } else {
+                mirror.queue_whole(slot, record);
+            }
             self.scene.instances[slot as usize] = contents;
         }
         mirror.version = world.version();
         let stats = SyncStats {
             instances_changed: instances.len() as u64,
-            bytes_uploaded: touched.len() as u64 * UPDATE_BYTES,
+            bytes_uploaded: mirror.queued_bytes() - queued_before,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
             gpu_ms: 0.0,
             relayout: false,
