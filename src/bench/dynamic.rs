@@ -90,7 +90,9 @@ pub struct DynamicReport {
     pub full_upload_copy_ms: f64,
 }
 
-/// Median GPU milliseconds of a host-to-device copy of `bytes` in one region.
+/// Median GPU milliseconds of a copy of `bytes` in one region from host-visible memory (the
+/// kind the world's update lists live in) to device memory, after a few unmeasured copies (the
+/// GPU may have idled, and clocked down, while the CPU prepared the frames before).
 pub fn host_copy_ms(ctx: &GpuContext, bytes: u64, runs: u32) -> Result<f64> {
     let bytes = bytes.max(4);
     let desc = |name, usage, location| BufferDesc { name, size: bytes, usage, location };
@@ -99,7 +101,8 @@ pub fn host_copy_ms(ctx: &GpuContext, bytes: u64, runs: u32) -> Result<f64> {
     let dst = Buffer::new(ctx, &desc("copy destination", vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuOnly))?;
     let mut timer = GpuTimer::new(ctx, 1)?;
     let mut times = Vec::new();
-    for _ in 0..runs.max(1) {
+    const WARMUP: u32 = 4;
+    for run in 0..runs.max(1) + WARMUP {
         ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
             timer.begin(cmd, "copy");
@@ -109,7 +112,9 @@ pub fn host_copy_ms(ctx: &GpuContext, bytes: u64, runs: u32) -> Result<f64> {
             timer.end(cmd);
             crate::gpu::GpuResult::Ok(())
         })?;
-        times.extend(timer.results()?.first().map(|t| t.ms));
+        if run >= WARMUP {
+            times.extend(timer.results()?.first().map(|t| t.ms));
+        }
     }
     Ok(median(&mut times))
 }
