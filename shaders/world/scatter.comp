@@ -39,11 +39,23 @@ struct GroupBounds {
 };
 
 layout(set = 0, binding = 0, scalar) readonly buffer Updates { Update updates[]; };
-layout(set = 0, binding = 1) buffer Instances { uint instance_words[]; };
+layout(set = 0, binding = 1) writeonly buffer Instances { uint instance_words[]; };
 layout(set = 0, binding = 2) buffer Records { uint record_words[]; };
 layout(set = 0, binding = 3, scalar) readonly buffer Bounds { GroupBounds group_bounds[]; };
+layout(set = 0, binding = 4, scalar) readonly buffer Groups { DrawGroup groups[]; };
 
-layout(push_constant) uniform Push { uint count; } pc;
+layout(push_constant) uniform Push { uint count; uint group_count; } pc;
+
+// The draw group whose slot range holds `slot` (the ranges are in slot order): a search of a
+// small, cached table instead of a read of the slot's old record.
+uint group_of(uint slot) {
+    uint lo = 0u, hi = pc.group_count;
+    while (hi - lo > 1u) {
+        uint mid = (lo + hi) / 2u;
+        if (groups[mid].first_slot <= slot) lo = mid; else hi = mid;
+    }
+    return lo;
+}
 
 // The half float not below x (x >= 0), as bits.
 uint half_up(float x) {
@@ -59,26 +71,26 @@ void main() {
     if (i >= pc.count) return;
     uint slot = updates[i].slot;
     uint base = slot * 16u;
-#ifdef MOVES
-    for (uint r = 0u; r < 3u; ++r) {
-        for (uint c = 0u; c < 4u; ++c) instance_words[base + r * 4u + c] = floatBitsToUint(updates[i].rows[r][c]);
-    }
-    for (uint c = 0u; c < 3u; ++c) instance_words[base + 12u + c] = floatBitsToUint(updates[i].translation_lo[c]);
-#else
-    for (uint k = 0u; k < 16u; ++k) instance_words[base + k] = updates[i].instance[k];
-#endif
     vec4 rows[3];
+    vec3 lo_t;
+#ifdef MOVES
+    rows = updates[i].rows;
+    lo_t = updates[i].translation_lo;
     for (uint r = 0u; r < 3u; ++r) {
-        rows[r] = vec4(uintBitsToFloat(instance_words[base + r * 4u]), uintBitsToFloat(instance_words[base + r * 4u + 1u]),
-                       uintBitsToFloat(instance_words[base + r * 4u + 2u]), uintBitsToFloat(instance_words[base + r * 4u + 3u]));
+        for (uint c = 0u; c < 4u; ++c) instance_words[base + r * 4u + c] = floatBitsToUint(rows[r][c]);
     }
-    vec3 lo_t = vec3(uintBitsToFloat(instance_words[base + 12u]), uintBitsToFloat(instance_words[base + 13u]),
-                     uintBitsToFloat(instance_words[base + 14u]));
-    uint flags = (instance_words[base + 15u] >> 24) & 0x7Fu;
-
-    // The slot's group never changes while the layout lives: its old record names it.
+    for (uint c = 0u; c < 3u; ++c) instance_words[base + 12u + c] = floatBitsToUint(lo_t[c]);
+#else
+    uint words[16] = updates[i].instance;
+    for (uint k = 0u; k < 16u; ++k) instance_words[base + k] = words[k];
+    for (uint r = 0u; r < 3u; ++r) {
+        rows[r] = vec4(uintBitsToFloat(words[r * 4u]), uintBitsToFloat(words[r * 4u + 1u]),
+                       uintBitsToFloat(words[r * 4u + 2u]), uintBitsToFloat(words[r * 4u + 3u]));
+    }
+    lo_t = vec3(uintBitsToFloat(words[12]), uintBitsToFloat(words[13]), uintBitsToFloat(words[14]));
+#endif
     uint rec = slot * 8u;
-    uint group = record_words[rec + 3u] & 0xFFFFFFu;
+    uint group = group_of(slot);
     GroupBounds b = group_bounds[group];
     vec3 c = b.center_radius.xyz;
     vec3 h = b.half_extent.xyz;
@@ -106,7 +118,13 @@ void main() {
     record_words[rec + 0u] = floatBitsToUint(rows[0].w);
     record_words[rec + 1u] = floatBitsToUint(rows[1].w);
     record_words[rec + 2u] = floatBitsToUint(rows[2].w);
+#ifdef MOVES
+    // A move keeps the group and flags: only the huge bit may change.
+    if (huge) atomicOr(record_words[rec + 3u], CULL_HUGE); else atomicAnd(record_words[rec + 3u], ~CULL_HUGE);
+#else
+    uint flags = (words[15] >> 24) & 0x7Fu;
     record_words[rec + 3u] = group | (flags << 24) | (huge ? CULL_HUGE : 0u);
+#endif
     if (huge) {
         record_words[rec + 4u] = 0u;
         record_words[rec + 5u] = 0u;

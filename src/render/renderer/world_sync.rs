@@ -224,9 +224,10 @@ impl WorldMirror {
                     Bind::Buffer(1, scene.instances.handle()),
                     Bind::Buffer(2, scene.cull_records.handle()),
                     Bind::Buffer(3, scene.group_bounds.handle()),
+                    Bind::Buffer(4, scene.draw_groups.handle()),
                 ],
             );
-            pipeline.push_constants(cmd, &(count as u32));
+            pipeline.push_constants(cmd, &[count as u32, scene.regions.groups()]);
             // SAFETY: cmd recording with the scatter pipeline bound.
             unsafe { device.cmd_dispatch(cmd, (count as u32).div_ceil(64), 1, 1) };
             // The two lists touch different slots, but the barrier keeps the tools sure of it.
