@@ -29,7 +29,6 @@ use std::collections::BTreeSet;
 use std::time::Instant;
 
 mod world_sync;
-pub use world_sync::SyncStats;
 
 /// Output size.
 #[derive(Clone, Debug, PartialEq, Eq)]

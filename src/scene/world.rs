@@ -299,18 +299,36 @@ impl World {
         }
     }
 
+    /// An error when `mesh` is not registered, naming `who` (formatted only then).
+    fn unknown_mesh(&self, who: impl FnOnce() -> String, mesh: u32) -> Option<WorldError> {
+        let live = |l: &&bool| **l;
+        (!self.meshes_live.get(mesh as usize).copied().unwrap_or(false)).then(|| WorldError::UnknownMesh {
+            handle: who(),
+            mesh,
+            meshes: self.meshes_live.iter().filter(live).count(),
+        })
+    }
+
+    /// An error when `material` is not registered, naming `who` (formatted only then).
+    fn unknown_material(&self, who: impl FnOnce() -> String, material: u32) -> Option<WorldError> {
+        let live = |l: &&bool| **l;
+        (!self.materials_live.get(material as usize).copied().unwrap_or(false)).then(|| WorldError::UnknownMaterial {
+            handle: who(),
+            material,
+            materials: self.materials_live.iter().filter(live).count(),
+        })
+    }
+
     /// What is wrong with `instance` for the world, named as `who`.
     fn instance_error(&self, who: &dyn fmt::Display, instance: &Instance) -> Option<WorldError> {
         // Named only once something is wrong: formatting the handle for every change would
         // cost more than the checks.
         let handle = || who.to_string();
-        if !self.meshes_live.get(instance.mesh as usize).copied().unwrap_or(false) {
-            let meshes = self.meshes_live.iter().filter(|l| **l).count();
-            return Some(WorldError::UnknownMesh { handle: handle(), mesh: instance.mesh, meshes });
+        if let Some(e) = self.unknown_mesh(handle, instance.mesh) {
+            return Some(e);
         }
-        if !self.materials_live.get(instance.material as usize).copied().unwrap_or(false) {
-            let materials = self.materials_live.iter().filter(|l| **l).count();
-            return Some(WorldError::UnknownMaterial { handle: handle(), material: instance.material, materials });
+        if let Some(e) = self.unknown_material(handle, instance.material) {
+            return Some(e);
         }
         transform_error(&instance.transform)
             .or_else(|| {
@@ -329,11 +347,7 @@ impl World {
             return Err(e);
         }
         self.instances.take();
-        if index as usize == self.scene.instances.len() {
-            self.scene.instances.push(instance);
-        } else {
-            self.scene.instances[index as usize] = instance;
-        }
+        put(&mut self.scene.instances, index, instance);
         self.record(Change::Instance(index));
         Ok(handle)
     }
@@ -424,9 +438,8 @@ impl World {
     /// Unregisters a mesh no live instance uses. Its vertices and indices keep their place in
     /// the pools (a later registration does not reuse them).
     pub fn remove_mesh(&mut self, mesh: u32) -> Result<(), WorldError> {
-        if !self.meshes_live.get(mesh as usize).copied().unwrap_or(false) {
-            let meshes = self.meshes_live.iter().filter(|l| **l).count();
-            return Err(WorldError::UnknownMesh { handle: "remove_mesh".into(), mesh, meshes });
+        if let Some(e) = self.unknown_mesh(|| "remove_mesh".into(), mesh) {
+            return Err(e);
         }
         self.refuse_in_use(&format!("mesh {mesh} '{}'", self.scene.meshes[mesh as usize].name), |i| i.mesh == mesh)?;
         self.meshes_live[mesh as usize] = false;
@@ -451,9 +464,8 @@ impl World {
 
     /// Changes a registered material's parameters.
     pub fn set_material(&mut self, index: u32, material: Material) -> Result<(), WorldError> {
-        if !self.materials_live.get(index as usize).copied().unwrap_or(false) {
-            let materials = self.materials_live.iter().filter(|l| **l).count();
-            return Err(WorldError::UnknownMaterial { handle: "set_material".into(), material: index, materials });
+        if let Some(e) = self.unknown_material(|| "set_material".into(), index) {
+            return Err(e);
         }
         if let Some(message) = material_error(&material) {
             return Err(WorldError::Invalid { handle: format!("material {index} '{}'", material.name), message });
@@ -465,9 +477,8 @@ impl World {
 
     /// Unregisters a material no live instance uses.
     pub fn remove_material(&mut self, index: u32) -> Result<(), WorldError> {
-        if !self.materials_live.get(index as usize).copied().unwrap_or(false) {
-            let materials = self.materials_live.iter().filter(|l| **l).count();
-            return Err(WorldError::UnknownMaterial { handle: "remove_material".into(), material: index, materials });
+        if let Some(e) = self.unknown_material(|| "remove_material".into(), index) {
+            return Err(e);
         }
         let name = format!("material {index} '{}'", self.scene.materials[index as usize].name);
         self.refuse_in_use(&name, |i| i.material == index)?;
@@ -498,11 +509,7 @@ impl World {
             return Err(WorldError::Invalid { handle: handle.to_string(), message });
         }
         self.lights.take();
-        if index as usize == self.scene.lights.len() {
-            self.scene.lights.push(light);
-        } else {
-            self.scene.lights[index as usize] = light;
-        }
+        put(&mut self.scene.lights, index, light);
         self.record(Change::Light(index));
         Ok(handle)
     }
@@ -535,6 +542,14 @@ impl World {
         (0..self.lights.alive.len() as u32)
             .filter(|&i| self.is_light_live(i))
             .map(|index| LightHandle { index, generation: self.lights.generations[index as usize] })
+    }
+}
+
+/// Stores `value` at `index` of a table that an insert grows by one or refills at a freed index.
+fn put<T>(items: &mut Vec<T>, index: u32, value: T) {
+    match items.get_mut(index as usize) {
+        Some(slot) => *slot = value,
+        None => items.push(value),
     }
 }
 

@@ -204,15 +204,20 @@ impl GpuScene {
             )?,
             regions: draws.regions,
             instance_count: scene.instances.len() as u32,
-            triangles: scene
-                .instances
-                .iter()
-                .filter(|i| i.flags & crate::scene::FLAG_EMPTY_SLOT == 0)
-                .map(|i| scene.meshes[i.mesh as usize].index_count as u64 / 3)
-                .sum(),
+            triangles: drawn_triangles(scene),
             max_mesh_triangles: scene.meshes.iter().map(|m| m.index_count / 3).max().unwrap_or(0),
         })
     }
+}
+
+/// Triangles over the instances of `scene` (a changing world's empty slots draw none).
+pub(crate) fn drawn_triangles(scene: &Scene) -> u64 {
+    scene
+        .instances
+        .iter()
+        .filter(|i| i.flags & crate::scene::FLAG_EMPTY_SLOT == 0)
+        .map(|i| scene.meshes[i.mesh as usize].index_count as u64 / 3)
+        .sum()
 }
 
 /// Per instance: `[first_index, vertex_offset]` of its mesh in the shared pools.

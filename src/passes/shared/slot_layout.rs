@@ -129,12 +129,16 @@ impl SlotLayout {
 
     /// Makes the slots freed before `frame` reusable.
     pub fn release_quarantine(&mut self, frame: u64) {
-        let (ready, waiting): (Vec<_>, Vec<_>) = self.quarantine.iter().partition(|(from, _)| *from <= frame);
-        self.quarantine = waiting;
-        for (_, slot) in ready {
-            let g = self.group_of_slot(slot);
-            self.free[g].push(slot);
-        }
+        let mut quarantine = std::mem::take(&mut self.quarantine);
+        quarantine.retain(|&(from, slot)| {
+            let ready = from <= frame;
+            if ready {
+                let g = self.group_of_slot(slot);
+                self.free[g].push(slot);
+            }
+            !ready
+        });
+        self.quarantine = quarantine;
     }
 
     /// Empties the slot of world instance `instance` (if it has one), reusable from frame

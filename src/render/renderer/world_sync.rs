@@ -26,15 +26,14 @@ use crate::gpu::{
 };
 use crate::graph::{FrameInputs, FRAMES_IN_FLIGHT};
 use crate::passes::shared::gpu_types::GpuInstance;
+use crate::passes::shared::scene_buffers::drawn_triangles;
 use crate::passes::shared::slot_layout::{group_key, SlotLayout};
 use crate::passes::shared::{GpuScene, SceneInputs};
 use crate::render::{GraphSpec, RenderSettings};
 use crate::scene::world::{Change, InstanceHandle, World};
 use crate::scene::Scene;
+use crate::stats::UpdateStats;
 use std::time::Instant;
-
-/// What one [`Renderer::sync`] did.
-pub use crate::stats::UpdateStats as SyncStats;
 
 /// A moved instance's new transform, as `shaders/world/scatter.comp` (`MOVES`) reads it: 64
 /// bytes, the cull bound being derived on the GPU.
@@ -80,9 +79,9 @@ pub(super) struct WorldMirror {
     /// The scatter of moves and of whole records.
     scatter: [Pipeline; 2],
     /// What the syncs since the last recorded frame did, for that frame's figures.
-    pending: Option<SyncStats>,
+    pending: Option<UpdateStats>,
     /// Recent frames' figures, by frame.
-    recent: std::collections::VecDeque<(u64, SyncStats)>,
+    recent: std::collections::VecDeque<(u64, UpdateStats)>,
     /// Per frame in flight, a timer of the scatter and the frame it timed.
     timers: Vec<(GpuTimer, Option<u64>)>,
 }
@@ -253,7 +252,7 @@ impl WorldMirror {
 
     /// The world changes frame `frame` applied, once it has completed (with the GPU time of
     /// its scatter).
-    pub(super) fn update_of(&self, frame: u64) -> Result<Option<SyncStats>> {
+    pub(super) fn update_of(&self, frame: u64) -> Result<Option<UpdateStats>> {
         let Some(mut stats) = self.recent.iter().find(|(f, _)| *f == frame).map(|(_, s)| s.clone()) else {
             return Ok(None);
         };
@@ -264,7 +263,7 @@ impl WorldMirror {
         Ok(Some(stats))
     }
 
-    fn note(&mut self, stats: &SyncStats) {
+    fn note(&mut self, stats: &UpdateStats) {
         self.pending.get_or_insert_with(Default::default).add(stats);
     }
 }
@@ -303,7 +302,7 @@ fn frame_inputs(scene: &Scene, layout: &SlotLayout, settings: &RenderSettings) -
         meshes: with_room(layout.groups.len() as u64),
         lights: scene.lights.len() as u64,
         materials: scene.materials.len() as u64,
-        triangles: scene.instances.iter().map(|i| scene.meshes[i.mesh as usize].index_count as u64 / 3).sum(),
+        triangles: drawn_triangles(scene),
         params: Vec::new(),
     }
 }
@@ -372,7 +371,7 @@ impl Renderer {
 
     /// Applies the changes `world` had since the last sync; they take effect at the next
     /// recorded frame.
-    pub fn sync(&mut self, shaders: &ShaderCompiler, world: &World) -> Result<SyncStats> {
+    pub fn sync(&mut self, shaders: &ShaderCompiler, world: &World) -> Result<UpdateStats> {
         let start = Instant::now();
         let mirror = self.world.as_mut().ok_or_else(|| {
             Error::Invalid("sync: this renderer was made from a scene, not a world (Renderer::from_world)".into())
@@ -381,7 +380,7 @@ impl Renderer {
             return self.relayout(shaders, world, start);
         };
         if changes.is_empty() {
-            return Ok(SyncStats::default());
+            return Ok(UpdateStats::default());
         }
         let mut instances = Vec::with_capacity(changes.len());
         let mut lights = false;
@@ -454,7 +453,7 @@ impl Renderer {
             self.scene.instances[slot as usize] = contents;
         }
         mirror.version = world.version();
-        let stats = SyncStats {
+        let stats = UpdateStats {
             instances_changed: instances.len() as u64,
             bytes_uploaded: mirror.queued_bytes() - queued_before,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
@@ -466,7 +465,7 @@ impl Renderer {
     }
 
     /// Lays the world out anew (see the module documentation).
-    fn relayout(&mut self, shaders: &ShaderCompiler, world: &World, start: Instant) -> Result<SyncStats> {
+    fn relayout(&mut self, shaders: &ShaderCompiler, world: &World, start: Instant) -> Result<UpdateStats> {
         if world.live_instances() == 0 {
             return Err(Error::Invalid("sync: the world has no instances".into()));
         }
@@ -504,7 +503,7 @@ impl Renderer {
         mirror.light_capacity = light_capacity;
         mirror.version = world.version();
         self.scene = scene;
-        let stats = SyncStats {
+        let stats = UpdateStats {
             instances_changed: world.live_instances() as u64,
             bytes_uploaded: bytes,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
