@@ -108,7 +108,7 @@ fn the_journal_lists_each_change_and_is_trimmed_to_what_consumers_need() {
     w.set_transform(h[1], at(3.0)).unwrap();
     let light = w.insert_light(PointLight { position: DVec3::Y, color: Vec3::ONE, range: 5.0 }).unwrap();
     w.remove(h[0]).unwrap();
-    assert_eq!(w.changes_since(0).unwrap(), [Change::Instance(1), Change::Light(light.index()), Change::Instance(0)]);
+    assert_eq!(w.changes_since(0).unwrap(), [Change::Transform(1), Change::Light(light.index()), Change::Instance(0)]);
     assert_eq!(w.changes_since(2).unwrap(), [Change::Instance(0)]);
     w.trim_journal(2);
     assert_eq!(w.changes_since(2).unwrap(), [Change::Instance(0)]);
@@ -182,7 +182,7 @@ proptest! {
         // Replaying: every changed index takes the world's current entry.
         let mut replayed = snapshot;
         for change in w.changes_since(0).unwrap() {
-            if let Change::Instance(i) = change {
+            if let Change::Instance(i) | Change::Transform(i) = change {
                 let i = *i as usize;
                 if i >= replayed.len() { replayed.resize(i + 1, w.scene().instances[i]); }
                 replayed[i] = w.scene().instances[i];

@@ -9,7 +9,7 @@ use common::{boxes_camera, boxes_scene, cube_mesh, GpuTest};
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::world::{InstanceHandle, World};
-use cullgraph::scene::{Camera, Instance, Transform};
+use cullgraph::scene::{Camera, Instance, Material, Transform};
 use glam::{DVec3, Mat3, Vec3};
 use proptest::prelude::*;
 
@@ -87,6 +87,11 @@ enum Op {
     Move { which: usize, x: f64, z: f64 },
     Remesh(usize),
     Recolor(usize),
+    /// Registers a material (double-sided or not, so its instances may change face-cull
+    /// region) and gives it to an instance.
+    NewMaterial { which: usize, double_sided: bool },
+    /// Registers a mesh and gives it to an instance (a draw group the layout lacks).
+    NewMesh(usize),
 }
 
 fn op() -> impl Strategy<Value = Op> {
@@ -96,6 +101,8 @@ fn op() -> impl Strategy<Value = Op> {
         (any::<usize>(), -4.0..4.0f64, -4.0..4.0f64).prop_map(|(which, x, z)| Op::Move { which, x, z }),
         any::<usize>().prop_map(Op::Remesh),
         any::<usize>().prop_map(Op::Recolor),
+        (any::<usize>(), any::<bool>()).prop_map(|(which, double_sided)| Op::NewMaterial { which, double_sided }),
+        any::<usize>().prop_map(Op::NewMesh),
     ]
 }
 
@@ -129,6 +136,16 @@ fn apply(world: &mut World, handles: &mut Vec<InstanceHandle>, op: &Op, meshes: 
             let h = pick(i, handles);
             let material = world.instance(h).unwrap().material;
             world.set_materials(&[(h, if material == 1 { 2 } else { 1 })]).unwrap();
+        }
+        Op::NewMaterial { which, double_sided } if !handles.is_empty() => {
+            let albedo = Vec3::new(0.2, 0.5 + 0.4 * double_sided as u32 as f32, 0.9);
+            let material = Material { name: "new".into(), albedo, double_sided, ..Default::default() };
+            let m = world.add_material(material).unwrap();
+            world.set_materials(&[(pick(which, handles), m)]).unwrap();
+        }
+        Op::NewMesh(i) if !handles.is_empty() => {
+            let mesh = world.add_mesh("cube 3", &cube_mesh()).unwrap();
+            world.set_meshes(&[(pick(i, handles), mesh)]).unwrap();
         }
         _ => {}
     }
@@ -201,32 +218,47 @@ fn the_same_changes_give_the_same_images_bit_for_bit() {
     assert_eq!(run(&gpu, &ops), run(&gpu, &ops));
 }
 
-/// Inserting more instances than a group has room for lays the world out anew (with cleared
-/// culling history), and the graph is recompiled only once the slots outgrow it.
+/// Inserting more instances than a group has room for grows the layout at its end: every slot
+/// keeps its instance and the culling history stays, so the late phase draws only the boxes
+/// new this round (a cleared history would make it draw everything visible), and the images
+/// stay exact. The graph is recompiled only once the slots outgrow it.
 #[test]
-fn growing_past_the_room_relays_out_and_stays_exact() {
+fn growing_past_the_room_keeps_every_slot_and_the_culling_history() {
     let gpu = GpuTest::new();
     let (mut world, _) = World::new(boxes_scene()).unwrap();
     let mut culled = renderer(&gpu, &world, "two_phase", true);
     let mut unculled = renderer(&gpu, &world, "no_cull", false);
     let shaders = gpu.shaders();
     let camera = boxes_camera();
-    let mut relayouts = 0;
+    culled.render_to_image(&camera).unwrap();
+    let slots_before = culled.scene().instances.len();
     for round in 0..6 {
+        let mut inserted = Vec::new();
         for k in 0..8 {
             let x = -3.0 + k as f64 * 0.8;
             let z = -2.0 - round as f64 * 0.9;
             let t = Transform { linear: Mat3::from_diagonal(Vec3::splat(0.5)), translation: DVec3::new(x, 0.25, z) };
-            world.insert(Instance { transform: t, mesh: 0, material: 2, flags: 0 }).unwrap();
+            inserted.push(world.insert(Instance { transform: t, mesh: 0, material: 2, flags: 0 }).unwrap());
         }
+        let kept: Vec<_> = (0..world.instance_slots() as u32)
+            .filter(|i| !inserted.iter().any(|h| h.index() == *i))
+            .map(|i| culled.slot_of(i))
+            .collect();
         let stats = culled.sync(&shaders, &world).unwrap();
-        relayouts += stats.relayout as u32;
+        assert!(!stats.relayout, "round {round}: growth is not a new layout");
+        let after: Vec<_> = (0..world.instance_slots() as u32)
+            .filter(|i| !inserted.iter().any(|h| h.index() == *i))
+            .map(|i| culled.slot_of(i))
+            .collect();
+        assert_eq!(kept, after, "round {round}: every instance keeps its slot");
         unculled.sync(&shaders, &world).unwrap();
         let (s, image) = culled.render_to_image(&camera).unwrap();
         assert_eq!(s.verify.unwrap().false_negatives, 0, "round {round}");
         assert!(image == unculled.render_to_image(&camera).unwrap().1, "round {round}");
+        let late = s.culling.iter().find(|c| c.pass == "cull_late").unwrap();
+        assert!(late.drawn <= 8, "round {round}: the late phase drew {} (history lost?)", late.drawn);
     }
-    assert!(relayouts >= 1, "48 inserts into a group of 4 outgrow its room");
+    assert!(culled.scene().instances.len() > slots_before + 16, "48 inserts into a group of 4 grow the slots");
     gpu.assert_clean();
 }
 

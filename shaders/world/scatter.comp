@@ -1,8 +1,8 @@
 #version 460
 // A changing world's slot updates (src/render/renderer/world_sync.rs): each thread writes one
-// slot's new instance record, or for a move only its transform (60 bytes), and derives the
-// slot's cull bound from it and its draw group's local bounds, so that a moved instance costs
-// 64 bytes of upload. One dispatch replaces thousands of tiny copy regions, which cost the copy
+// slot's new instance record, or for a move only its transform (60 bytes, keeping the material
+// and flags it reads), and derives the slot's cull bound from it and its draw group's local
+// bounds, so that a moved instance costs 64 bytes of upload. One dispatch replaces thousands of tiny copy regions, which cost the copy
 // engine far more than the bytes they move.
 //
 // The bound is packed as src/passes/shared/cull_data.rs packs it (GpuCullRecord), from the
@@ -16,20 +16,22 @@
 layout(local_size_x = 64) in;
 
 #ifdef MOVES
-// A transform only: the rows of the linear part with the translation's hi part in w, and its
-// lo part. Material and flags stay.
+// A transform only: the rows of the linear part with the translation's hi part in w, then its
+// lo part and the slot, as four 16-byte words so that each is one vector load. The material
+// and flags stay.
 struct Update {
-    uint slot;
-    vec4 rows[3];
-    vec3 translation_lo;
+    uvec4 words[4];
 };
 #else
-// The whole instance record.
+// The slot, its draw group and the whole instance record.
 struct Update {
     uint slot;
+    uint group;
     uint instance[16];
 };
 #endif
+
+layout(set = 0, binding = 0, scalar) readonly buffer Updates { Update updates[]; };
 
 // Local bounds of a draw group's mesh: box center and the radius of the sphere around it, box
 // half extents.
@@ -38,24 +40,13 @@ struct GroupBounds {
     vec4 half_extent;
 };
 
-layout(set = 0, binding = 0, scalar) readonly buffer Updates { Update updates[]; };
-layout(set = 0, binding = 1) writeonly buffer Instances { uint instance_words[]; };
-layout(set = 0, binding = 2) buffer Records { uint record_words[]; };
+// Instance records are 64 bytes and cull records 32: whole 16-byte words are written, so that
+// a thread's scattered writes take a few vector stores rather than a store per word.
+layout(set = 0, binding = 1) buffer Instances { uvec4 instance_vec[]; };
+layout(set = 0, binding = 2) buffer Records { uvec4 record_vec[]; };
 layout(set = 0, binding = 3, scalar) readonly buffer Bounds { GroupBounds group_bounds[]; };
-layout(set = 0, binding = 4, scalar) readonly buffer Groups { DrawGroup groups[]; };
 
-layout(push_constant) uniform Push { uint count; uint group_count; } pc;
-
-// The draw group whose slot range holds `slot` (the ranges are in slot order): a search of a
-// small, cached table instead of a read of the slot's old record.
-uint group_of(uint slot) {
-    uint lo = 0u, hi = pc.group_count;
-    while (hi - lo > 1u) {
-        uint mid = (lo + hi) / 2u;
-        if (groups[mid].first_slot <= slot) lo = mid; else hi = mid;
-    }
-    return lo;
-}
+layout(push_constant) uniform Push { uint count; } pc;
 
 // The half float not below x (x >= 0), as bits.
 uint half_up(float x) {
@@ -69,28 +60,35 @@ const float HALF_MAX = 65504.0;
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= pc.count) return;
-    uint slot = updates[i].slot;
-    uint base = slot * 16u;
     vec4 rows[3];
     vec3 lo_t;
 #ifdef MOVES
-    rows = updates[i].rows;
-    lo_t = updates[i].translation_lo;
+    uvec4 w[4] = updates[i].words;
+    uint slot = w[3].w;
+    uint base = slot * 4u;
     for (uint r = 0u; r < 3u; ++r) {
-        for (uint c = 0u; c < 4u; ++c) instance_words[base + r * 4u + c] = floatBitsToUint(rows[r][c]);
+        rows[r] = uintBitsToFloat(w[r]);
+        instance_vec[base + r] = w[r];
     }
-    for (uint c = 0u; c < 3u; ++c) instance_words[base + 12u + c] = floatBitsToUint(lo_t[c]);
+    lo_t = uintBitsToFloat(w[3].xyz);
+    uint material_flags = instance_vec[base + 3u].w;
+    instance_vec[base + 3u] = uvec4(w[3].xyz, material_flags);
+    // A move keeps the slot's draw group and flags.
+    uint group = record_vec[slot * 2u].w & 0xFFFFFFu;
 #else
+    uint slot = updates[i].slot;
+    uint base = slot * 4u;
     uint words[16] = updates[i].instance;
-    for (uint k = 0u; k < 16u; ++k) instance_words[base + k] = words[k];
-    for (uint r = 0u; r < 3u; ++r) {
-        rows[r] = vec4(uintBitsToFloat(words[r * 4u]), uintBitsToFloat(words[r * 4u + 1u]),
-                       uintBitsToFloat(words[r * 4u + 2u]), uintBitsToFloat(words[r * 4u + 3u]));
+    for (uint r = 0u; r < 4u; ++r) {
+        instance_vec[base + r] = uvec4(words[r * 4u], words[r * 4u + 1u], words[r * 4u + 2u], words[r * 4u + 3u]);
     }
-    lo_t = vec3(uintBitsToFloat(words[12]), uintBitsToFloat(words[13]), uintBitsToFloat(words[14]));
+    for (uint r = 0u; r < 3u; ++r) {
+        rows[r] = uintBitsToFloat(uvec4(words[r * 4u], words[r * 4u + 1u], words[r * 4u + 2u], words[r * 4u + 3u]));
+    }
+    lo_t = uintBitsToFloat(uvec3(words[12], words[13], words[14]));
+    uint material_flags = words[15];
+    uint group = updates[i].group;
 #endif
-    uint rec = slot * 8u;
-    uint group = group_of(slot);
     GroupBounds b = group_bounds[group];
     vec3 c = b.center_radius.xyz;
     vec3 h = b.half_extent.xyz;
@@ -115,25 +113,11 @@ void main() {
     bool huge = !finite || any(greaterThan(abs(lo), vec3(HALF_MAX))) || radius > HALF_MAX
                 || any(greaterThan(half_extent, vec3(HALF_MAX)));
 
-    record_words[rec + 0u] = floatBitsToUint(rows[0].w);
-    record_words[rec + 1u] = floatBitsToUint(rows[1].w);
-    record_words[rec + 2u] = floatBitsToUint(rows[2].w);
-#ifdef MOVES
-    // A move keeps the group and flags: only the huge bit may change.
-    if (huge) atomicOr(record_words[rec + 3u], CULL_HUGE); else atomicAnd(record_words[rec + 3u], ~CULL_HUGE);
-#else
-    uint flags = (words[15] >> 24) & 0x7Fu;
-    record_words[rec + 3u] = group | (flags << 24) | (huge ? CULL_HUGE : 0u);
-#endif
-    if (huge) {
-        record_words[rec + 4u] = 0u;
-        record_words[rec + 5u] = 0u;
-        record_words[rec + 6u] = 0u;
-        record_words[rec + 7u] = 0u;
-        return;
-    }
-    record_words[rec + 4u] = lo_xy;
-    record_words[rec + 5u] = lo_z | (half_up(radius) << 16);
-    record_words[rec + 6u] = half_up(half_extent.x) | (half_up(half_extent.y) << 16);
-    record_words[rec + 7u] = half_up(half_extent.z);
+    uint flags = (material_flags >> 24) & 0x7Fu;
+    uint group_flags = group | (flags << 24) | (huge ? CULL_HUGE : 0u);
+    record_vec[slot * 2u] = uvec4(floatBitsToUint(rows[0].w), floatBitsToUint(rows[1].w),
+                                  floatBitsToUint(rows[2].w), group_flags);
+    record_vec[slot * 2u + 1u] = huge ? uvec4(0u)
+        : uvec4(lo_xy, lo_z | (half_up(radius) << 16), half_up(half_extent.x) | (half_up(half_extent.y) << 16),
+                half_up(half_extent.z));
 }

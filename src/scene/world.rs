@@ -122,6 +122,9 @@ pub enum WorldError {
 pub enum Change {
     /// The instance at this index was inserted, changed or removed.
     Instance(u32),
+    /// The instance at this index moved: only its transform changed (the cheap path of a
+    /// renderer's sync).
+    Transform(u32),
     /// The point light at this index was added, moved or removed.
     Light(u32),
     /// This mesh was registered or unregistered.
@@ -270,6 +273,11 @@ impl World {
     /// caught up reloads everything (which is always correct, only slower).
     fn record(&mut self, change: Change) {
         self.journal.push(change);
+        self.bound_journal();
+    }
+
+    /// Forgets the older half of the journal once it is past [`World::journal_limit`].
+    fn bound_journal(&mut self) {
         let limit = self.journal_limit();
         if self.journal.len() > limit {
             self.trim_journal(self.version() - (limit / 2) as u64);
@@ -399,11 +407,12 @@ impl World {
                 return Err(WorldError::Invalid { handle: handle.to_string(), message });
             }
         }
-        self.journal.reserve(changes.len());
-        for (handle, transform) in changes {
-            self.scene.instances[handle.index as usize].transform = *transform;
-            self.record(Change::Instance(handle.index));
-        }
+        let instances = &mut self.scene.instances;
+        self.journal.extend(changes.iter().map(|(handle, transform)| {
+            instances[handle.index as usize].transform = *transform;
+            Change::Transform(handle.index)
+        }));
+        self.bound_journal();
         Ok(())
     }
 

@@ -51,8 +51,9 @@ pub struct FrameStats {
 /// What applying a world's changes cost ([`crate::render::Renderer::sync`]).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct UpdateStats {
-    /// Instances whose slot was rewritten (inserted, changed or removed); all of them when the
-    /// world was laid out anew.
+    /// Instance changes applied: each instance inserted, changed or removed, plus each move
+    /// (an instance moved twice between frames counts twice); every instance when the world was
+    /// laid out anew.
     pub instances_changed: u64,
     /// Bytes queued for upload (a relayout counts the whole scene it uploads).
     pub bytes_uploaded: u64,

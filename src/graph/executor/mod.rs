@@ -25,7 +25,7 @@ pub struct ResourceBytes {
 use crate::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
 use crate::gpu::{Access, Buffer, BufferDesc, GpuContext, GpuTimer, Image, MemoryLocation, PassTiming, ShaderCompiler};
 use crate::graph::kinds::NodeSetup;
-use crate::graph::plan::{CompiledGraph, MemoryPlan, Version};
+use crate::graph::plan::{CompiledGraph, MemoryPlan, ResourceClass, ResourceId, Version};
 use ash::vk;
 use std::cell::RefCell;
 use std::path::Path;
@@ -135,6 +135,9 @@ pub struct GraphRuntime {
     frame: u64,
     /// Clear the history resources at the start of the next frame, as before the first.
     history_reset: bool,
+    /// History buffers to start from instead of cleared ones ([`Self::inherit_history`]): per
+    /// history resource, a buffer of the runtime this one replaces and the bytes to take.
+    inherited: Vec<(ResourceId, vk::Buffer, u64)>,
 }
 
 impl GraphRuntime {
@@ -190,6 +193,7 @@ impl GraphRuntime {
             retired_imports: Vec::new(),
             frame: 0,
             history_reset: false,
+            inherited: Vec::new(),
         })
     }
 
@@ -245,6 +249,9 @@ impl GraphRuntime {
         if frame == 0 || self.history_reset {
             self.clear_history(cmd);
             self.history_reset = false;
+        }
+        if frame == 0 {
+            self.copy_inherited(cmd, frame);
         }
         let timer = &self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
         timer.borrow_mut().reset(cmd);
@@ -517,6 +524,58 @@ impl GraphRuntime {
     /// scene's instances were laid out anew. Culling then tests everything once.
     pub fn reset_history(&mut self) {
         self.history_reset = true;
+    }
+
+    /// Starts this runtime's first frame from the history `old` (a runtime of the same graph,
+    /// compiled for smaller inputs) last wrote, instead of cleared: each history buffer of the
+    /// same name gets the old one's bytes at its start, and the rest is cleared. For resources
+    /// indexed by something that kept its meaning, as a changing world's slots and draw groups
+    /// do when the world grows; history images are cleared as in a first frame. `old` must stay
+    /// alive until this runtime's first frame has executed.
+    pub fn inherit_history(&mut self, old: &GraphRuntime) {
+        self.inherited.clear();
+        let Some(last) = old.frame.checked_sub(1) else { return };
+        for id in 0..self.plan.resources.len() {
+            let r = &self.plan.resources[id];
+            if r.class != ResourceClass::History {
+                continue;
+            }
+            let Some(old_id) = old.plan.resources.iter().position(|o| o.name == r.name && o.class == r.class) else {
+                continue;
+            };
+            if let (Some(from), Some(to)) = (old.resources.buffer(old_id, last), self.resources.buffer(id, 0)) {
+                self.inherited.push((id, from.handle(), from.size().min(to.size())));
+            }
+        }
+    }
+
+    /// Copies the inherited history ([`Self::inherit_history`]) into the copies that `frame`
+    /// reads as `.prev`, after [`Self::clear_history`] and the old runtime's last frame.
+    fn copy_inherited(&mut self, cmd: vk::CommandBuffer, frame: u64) {
+        if self.inherited.is_empty() {
+            return;
+        }
+        let device = self.ctx.device();
+        let any_write = Access {
+            stage: vk::PipelineStageFlags2::ALL_COMMANDS,
+            access: vk::AccessFlags2::MEMORY_WRITE,
+            layout: vk::ImageLayout::UNDEFINED,
+        };
+        let transfer = Access {
+            stage: vk::PipelineStageFlags2::COPY,
+            access: vk::AccessFlags2::TRANSFER_READ | vk::AccessFlags2::TRANSFER_WRITE,
+            layout: vk::ImageLayout::UNDEFINED,
+        };
+        cmd_barriers(device, cmd, &[memory_barrier(any_write, transfer)], &[]);
+        for (id, from, bytes) in std::mem::take(&mut self.inherited) {
+            let Some(phys) = self.resources.index(id, Version::Previous, frame) else { continue };
+            let Physical::Buffer(to) = self.resources.get(phys) else { continue };
+            let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes };
+            // SAFETY: `from` is alive until this frame has executed (inherit_history's contract)
+            // and holds `bytes`; `to` has TRANSFER_DST usage and as many; cmd recording.
+            unsafe { device.cmd_copy_buffer(cmd, from, to.handle(), &[region]) };
+            self.tracker.apply(phys, Access::TRANSFER_WRITE, true);
+        }
     }
 
     /// Clears both copies of every history resource to zero (reversed-Z "far", empty bits), so

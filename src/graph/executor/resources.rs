@@ -207,6 +207,15 @@ impl RuntimeResources {
         &self.history
     }
 
+    /// The buffer holding planned resource `id` in `frame` (for a history resource, the copy
+    /// that frame writes), if it is a buffer this graph created.
+    pub fn buffer(&self, id: ResourceId, frame: u64) -> Option<&Buffer> {
+        match self.get(self.index(id, Version::Current, frame)?) {
+            Physical::Buffer(b) => Some(b),
+            _ => None,
+        }
+    }
+
     /// (planned resource, physical index) of the imported resources.
     pub fn imported(&self) -> &[(ResourceId, usize)] {
         &self.imported

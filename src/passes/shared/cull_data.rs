@@ -120,7 +120,7 @@ pub struct GpuGroupBounds {
 pub struct CullData {
     /// One record per slot.
     pub records: Vec<GpuCullRecord>,
-    /// One entry per non-empty draw group, in draw-list order.
+    /// One entry per draw group, in draw-list order (a changing world's reserved groups are empty).
     pub groups: Vec<GpuDrawGroup>,
     /// The local bounds of each group's mesh.
     pub bounds: Vec<GpuGroupBounds>,
@@ -158,6 +158,10 @@ impl CullData {
             .commands
             .iter()
             .map(|c| {
+                // A changing world's reserved groups hold no slots and no mesh.
+                if c.instance_count == 0 {
+                    return GpuGroupBounds::default();
+                }
                 let inst = &scene.instances[draws.instance_ids[c.first_instance as usize] as usize];
                 let mesh = &scene.meshes[inst.mesh as usize];
                 GpuGroupBounds {

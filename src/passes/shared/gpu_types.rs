@@ -1,6 +1,6 @@
 //! GPU-side layouts of scene and frame data; mirrors `shaders/common/scene.glsl`.
 
-use crate::scene::{Camera, Instance, Material, PointLight, Scene};
+use crate::scene::{Camera, Instance, Material, PointLight, Scene, Transform};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Mat4, Vec3};
 
@@ -56,14 +56,17 @@ impl GpuInstance {
         if instance.flags & crate::scene::FLAG_EMPTY_SLOT != 0 {
             return Self { material_flags: crate::scene::FLAG_EMPTY_SLOT << 24, ..Self::zeroed() };
         }
-        let (hi, lo) = split_hi_lo(instance.transform.translation);
-        let m = instance.transform.linear;
+        let (rows, translation_lo) = Self::transform_words(&instance.transform);
+        Self { rows, translation_lo, material_flags: (instance.material & 0xFF_FFFF) | (instance.flags << 24) }
+    }
+
+    /// The record's transform part: rows of the linear part with the translation's hi part in
+    /// `w`, and the translation's lo part.
+    pub fn transform_words(transform: &Transform) -> ([[f32; 4]; 3], [f32; 3]) {
+        let (hi, lo) = split_hi_lo(transform.translation);
+        let m = transform.linear;
         let row = |r: usize, t: f32| [m.col(0)[r], m.col(1)[r], m.col(2)[r], t];
-        Self {
-            rows: [row(0, hi.x), row(1, hi.y), row(2, hi.z)],
-            translation_lo: lo.to_array(),
-            material_flags: (instance.material & 0xFF_FFFF) | (instance.flags << 24),
-        }
+        ([row(0, hi.x), row(1, hi.y), row(2, hi.z)], lo.to_array())
     }
 }
 

@@ -20,18 +20,18 @@ pub struct GpuScene {
     /// Instance ids grouped by draw group (face cull, mesh), each group in spatial order (Morton
     /// order of the instances' origins, equal codes in instance order).
     pub draw_instance_ids: Buffer,
-    /// One [`DrawIndexedIndirect`] per non-empty draw group.
+    /// One [`DrawIndexedIndirect`] per draw group (empty for a changing world's reserved groups).
     pub draw_commands: Buffer,
     /// The number of commands of each face-cull region (read by `vkCmdDrawIndexedIndirectCount`).
     pub draw_count: Buffer,
     /// Where each face cull's groups are, in every command list of this scene; their total is
-    /// the number of non-empty draw groups (the most commands a frame can issue).
+    /// the number of draw groups (the most commands a frame can issue).
     pub regions: DrawRegions,
     /// [`super::cull_data::GpuCullRecord`] per slot (draw-list order).
     pub cull_records: Buffer,
-    /// [`super::cull_data::GpuDrawGroup`] per non-empty draw group.
+    /// [`super::cull_data::GpuDrawGroup`] per draw group (empty for a changing world's reserved groups).
     pub draw_groups: Buffer,
-    /// [`super::cull_data::GpuGroupBounds`] per non-empty draw group: the local bounds that
+    /// [`super::cull_data::GpuGroupBounds`] per draw group (empty for a changing world's reserved groups): the local bounds that
     /// a changing world's moved instances get their cull bounds from.
     pub group_bounds: Buffer,
     /// Per instance: its mesh's first index and vertex offset (`uvec2`), for passes that rebuild

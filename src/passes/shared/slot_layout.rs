@@ -14,8 +14,13 @@
 //! the late phase would take it for drawn by the early one.) An instance that changes group
 //! moves to a new slot for the same reason: the early list would otherwise draw its old mesh.
 //!
-//! When a group has no free slot, or an instance needs a group the layout lacks, the world is
-//! laid out anew ([`SlotLayout::new`]), with the culling history cleared.
+//! When a group has no free slot, or an instance needs a group the layout lacks, the layout
+//! grows at its end ([`SlotLayout::grow`]): a new slot range, as large as the key's slots so
+//! far, becomes a new draw group with the same key. Every slot and every group keeps its index,
+//! so the culling history stays valid. The new group takes one of the empty groups that each
+//! face-cull region keeps in reserve after its own (the regions' commands stay contiguous); a
+//! region that has used them all is laid out anew ([`SlotLayout::new`]), with the culling
+//! history cleared.
 
 use super::face_cull::{FaceCull, FACE_CULL_REGIONS};
 use super::scene_buffers::{spatial_keys, DrawList};
@@ -36,8 +41,25 @@ pub struct GroupRange {
     pub key: (usize, u32),
     /// First slot.
     pub first_slot: u32,
-    /// Slots of the range, used or not.
+    /// Slots of the range, used or not; 0 for a group held in reserve ([`GroupRange::spare`]).
     pub capacity: u32,
+}
+
+impl GroupRange {
+    /// A group its region holds in reserve for growth: no slots, no mesh.
+    fn reserve(region: usize) -> Self {
+        Self { key: (region, u32::MAX), first_slot: 0, capacity: 0 }
+    }
+
+    /// Whether the group is held in reserve (draws nothing).
+    pub fn spare(&self) -> bool {
+        self.capacity == 0
+    }
+}
+
+/// Groups a region holds in reserve beyond its `groups`: half again, and at least 4.
+fn reserve_for(groups: usize) -> usize {
+    groups / 2 + 4
 }
 
 /// Slots of a group with `count` instances: room for a quarter more, and at least 4 spare.
@@ -48,9 +70,14 @@ fn capacity_for(count: usize) -> u32 {
 /// The slot layout of one renderer's copy of a world.
 #[derive(Clone, Debug)]
 pub struct SlotLayout {
-    /// The groups in command-list order.
+    /// The groups in command-list order (each face-cull region's, then its reserve).
     pub groups: Vec<GroupRange>,
-    group_of_key: HashMap<(usize, u32), usize>,
+    /// The groups of each key, oldest first.
+    groups_of_key: HashMap<(usize, u32), Vec<usize>>,
+    /// The groups with slots, in slot order.
+    by_slot: Vec<usize>,
+    /// Per face-cull region, its groups held in reserve, last to be used first.
+    reserve: [Vec<usize>; FACE_CULL_REGIONS],
     /// The world instance index each slot holds.
     slot_instance: Vec<Option<u32>>,
     /// The slot of each world instance index.
@@ -65,7 +92,7 @@ pub struct SlotLayout {
 
 impl SlotLayout {
     /// Lays out the instances of `scene` for which `live` holds: each group's slots in spatial
-    /// order, with room to spare.
+    /// order, with room to spare, and each face-cull region's groups followed by its reserve.
     pub fn new(scene: &Scene, live: impl Fn(u32) -> bool) -> Self {
         let mut members: HashMap<(usize, u32), Vec<u32>> = HashMap::new();
         for (i, inst) in scene.instances.iter().enumerate().filter(|(i, _)| live(*i as u32)) {
@@ -76,30 +103,71 @@ impl SlotLayout {
         ordered.sort_by_key(|(k, _)| *k);
         let mut layout = Self {
             groups: Vec::new(),
-            group_of_key: HashMap::new(),
+            groups_of_key: HashMap::new(),
+            by_slot: Vec::new(),
+            reserve: Default::default(),
             slot_instance: Vec::new(),
             instance_slot: vec![None; scene.instances.len()],
             free: Vec::new(),
             quarantine: Vec::new(),
             occupied: 0,
         };
-        for (key, mut ids) in ordered {
-            ids.sort_unstable_by_key(|&id| (keys[id as usize], id));
-            let first_slot = layout.slot_instance.len() as u32;
-            let capacity = capacity_for(ids.len());
-            for &id in &ids {
-                layout.instance_slot[id as usize] = Some(layout.slot_instance.len() as u32);
-                layout.slot_instance.push(Some(id));
+        let mut ordered = ordered.into_iter().peekable();
+        for region in 0..FACE_CULL_REGIONS {
+            let mut groups = 0;
+            while let Some((key, mut ids)) = ordered.next_if(|(key, _)| key.0 == region) {
+                ids.sort_unstable_by_key(|&id| (keys[id as usize], id));
+                let capacity = capacity_for(ids.len());
+                let g = layout.add_range(key, capacity);
+                let first_slot = layout.groups[g].first_slot;
+                for (slot, &id) in (first_slot..).zip(&ids) {
+                    layout.instance_slot[id as usize] = Some(slot);
+                    layout.slot_instance[slot as usize] = Some(id);
+                    layout.free[g].pop();
+                }
+                layout.occupied += ids.len() as u32;
+                groups += 1;
             }
-            layout.occupied += ids.len() as u32;
-            let spare = first_slot + ids.len() as u32..first_slot + capacity;
-            layout.slot_instance.extend(spare.clone().map(|_| None));
-            // Lowest slots first.
-            layout.free.push(spare.rev().collect());
-            layout.group_of_key.insert(key, layout.groups.len());
-            layout.groups.push(GroupRange { key, first_slot, capacity });
+            for _ in 0..reserve_for(groups) {
+                layout.reserve[region].push(layout.groups.len());
+                layout.groups.push(GroupRange::reserve(region));
+                layout.free.push(Vec::new());
+            }
+            layout.reserve[region].reverse();
         }
         layout
+    }
+
+    /// Appends a range of `capacity` empty slots as a new group of `key`; returns the group.
+    fn add_range(&mut self, key: (usize, u32), capacity: u32) -> usize {
+        let g = self.groups.len();
+        self.groups.push(GroupRange::reserve(key.0));
+        self.free.push(Vec::new());
+        self.open_range(g, key, capacity);
+        g
+    }
+
+    /// Makes group `g` (new or reserved) a range of `capacity` empty slots of `key` at the end.
+    fn open_range(&mut self, g: usize, key: (usize, u32), capacity: u32) {
+        let first_slot = self.slots();
+        self.slot_instance.extend((0..capacity).map(|_| None));
+        self.groups[g] = GroupRange { key, first_slot, capacity };
+        // Lowest slots first.
+        self.free[g] = (first_slot..first_slot + capacity).rev().collect();
+        self.groups_of_key.entry(key).or_default().push(g);
+        self.by_slot.push(g);
+    }
+
+    /// Makes room for more instances of `key`: a new range at the end of the slots, as large as
+    /// the key's slots so far (at least 4), in one of its face-cull region's reserved groups.
+    /// Every slot and group keeps its index. `false` when the region has no reserve left (lay
+    /// the world out anew).
+    pub fn grow(&mut self, key: (usize, u32)) -> bool {
+        let Some(g) = self.reserve[key.0].pop() else { return false };
+        let so_far: u32 =
+            self.groups_of_key.get(&key).map_or(0, |gs| gs.iter().map(|&g| self.groups[g].capacity).sum());
+        self.open_range(g, key, so_far.max(capacity_for(0)));
+        true
     }
 
     /// Slots in all.
@@ -124,7 +192,8 @@ impl SlotLayout {
 
     /// The group `slot` belongs to (its index in [`SlotLayout::groups`], the command order).
     pub fn group_of_slot(&self, slot: u32) -> usize {
-        self.groups.partition_point(|g| g.first_slot + g.capacity <= slot)
+        let k = self.by_slot.partition_point(|&g| self.groups[g].first_slot + self.groups[g].capacity <= slot);
+        self.by_slot[k]
     }
 
     /// Makes the slots freed before `frame` reusable.
@@ -154,8 +223,9 @@ impl SlotLayout {
     /// Puts world instance `instance` into a free slot of group `key`; `None` when the layout
     /// has no such group or no free slot in it (lay the world out anew).
     pub fn place(&mut self, instance: u32, key: (usize, u32)) -> Option<u32> {
-        let g = *self.group_of_key.get(&key)?;
-        let slot = self.free[g].pop()?;
+        let groups = self.groups_of_key.get(&key)?;
+        // The newest range first: the older ones are full more often.
+        let slot = groups.iter().rev().find_map(|&g| self.free[g].pop())?;
         if self.instance_slot.len() <= instance as usize {
             self.instance_slot.resize(instance as usize + 1, None);
         }
@@ -200,6 +270,9 @@ impl SlotLayout {
             .iter()
             .map(|g| {
                 region_len[g.key.0] += 1;
+                if g.spare() {
+                    return DrawIndexedIndirect::default();
+                }
                 let mesh = &scene.meshes[g.key.1 as usize];
                 DrawIndexedIndirect {
                     index_count: mesh.index_count,

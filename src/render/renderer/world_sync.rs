@@ -2,21 +2,24 @@
 //! ([`SlotLayout`]) and [`Renderer::sync`] applies the world's changes since the last sync.
 //!
 //! A change of instances rewrites only their slots. A moved instance (same instance, mesh,
-//! material and flags) queues its slot and transform, 64 bytes; any other change its slot and
-//! whole instance record, 68. The lists live in host-visible buffers, one pair per frame in
-//! flight, reused frame after frame and grown geometrically when a frame needs more. At the
-//! start of the next recorded frame a compute dispatch per list (`shaders/world/scatter.comp`)
-//! writes them into the instance records and derives each slot's cull bound from its record and
-//! its group's local bounds, after every earlier frame's use of those buffers: frames in flight
-//! are not disturbed. (Copy regions, one per record, cost the copy engine about a microsecond
-//! each on an H100, thousands of times the bytes they move.)
-
-//! What a slot change cannot express is laid out anew: an instance whose group has no free
-//! slot or no range yet, a registered or unregistered mesh or material (a material's sidedness
-//! decides its instances' groups), more lights than the light buffers hold, or a journal that no
-//! longer reaches back to the last sync. The new layout leaves room to grow; the graph is
-//! recompiled only when the slots or groups outgrow what it was compiled for (both grow by half
-//! again), and otherwise only its culling history is cleared.
+//! material and flags) queues its slot and transform, 64 bytes; any other change its slot,
+//! draw group and whole instance record, 72. The lists live in host-visible buffers, one pair
+//! per frame in flight, reused frame after frame and grown geometrically when a frame needs
+//! more. At the start of the next recorded frame a compute dispatch per list
+//! (`shaders/world/scatter.comp`) writes them into the instance records and derives each
+//! slot's cull bound from its record and its group's local bounds, after every earlier frame's
+//! use of those buffers: frames in flight are not disturbed. (Copy regions, one per record,
+//! cost the copy engine about a microsecond each on an H100, thousands of times the bytes they
+//! move.)
+//!
+//! A group without a free slot, or an instance of a group the layout lacks, grows the layout
+//! at its end ([`SlotLayout::grow`]); a registered mesh or material, or more lights than the
+//! light buffers hold, also makes the scene's buffers anew. Every slot and group keeps its
+//! index, so the culling history stays valid: it is kept, and when the slots or groups outgrow
+//! what the graph was compiled for (both grow by half again), the recompiled graph inherits it
+//! ([`crate::graph::GraphRuntime::inherit_history`]). Only a face-cull region out of reserved
+//! groups, or a journal that no longer reaches back to the last sync, lays the world out anew
+//! in spatial order, with the history cleared.
 
 use super::{build_runtime_for, Renderer};
 use crate::error::{Error, Result};
@@ -36,20 +39,23 @@ use crate::stats::UpdateStats;
 use std::time::Instant;
 
 /// A moved instance's new transform, as `shaders/world/scatter.comp` (`MOVES`) reads it: 64
-/// bytes, the cull bound being derived on the GPU.
+/// bytes in four 16-byte words (the slot last, so that each word is one vector load), the cull
+/// bound being derived on the GPU.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct MoveUpdate {
-    slot: u32,
     rows: [[f32; 4]; 3],
     translation_lo: [f32; 3],
+    slot: u32,
 }
 
-/// A slot's whole new instance record (another instance, material or flags): 68 bytes.
+/// A slot's whole new instance record (another instance, material or flags) and its draw
+/// group: 72 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct SlotUpdate {
     slot: u32,
+    group: u32,
     instance: GpuInstance,
 }
 
@@ -107,8 +113,8 @@ impl WorldMirror {
 
     /// Queues a move of the instance in `slot` to the transform of `instance` (its material
     /// and flags unchanged).
-    fn queue_move(&mut self, slot: u32, instance: &GpuInstance) {
-        let update = MoveUpdate { slot, rows: instance.rows, translation_lo: instance.translation_lo };
+    fn queue_move(&mut self, slot: u32, rows: [[f32; 4]; 3], translation_lo: [f32; 3]) {
+        let update = MoveUpdate { rows, translation_lo, slot };
         let next = self.moves.len() as u32;
         match *self.entry(slot) {
             u32::MAX => {
@@ -117,21 +123,21 @@ impl WorldMirror {
             }
             i if i & WHOLE != 0 => {
                 let queued = &mut self.whole[(i & !WHOLE) as usize].instance;
-                queued.rows = instance.rows;
-                queued.translation_lo = instance.translation_lo;
+                queued.rows = rows;
+                queued.translation_lo = translation_lo;
             }
             i => self.moves[i as usize] = update,
         }
     }
 
     /// Queues `slot`'s whole new record (replacing any update queued before).
-    fn queue_whole(&mut self, slot: u32, instance: GpuInstance) {
+    fn queue_whole(&mut self, slot: u32, group: u32, instance: GpuInstance) {
         let index = self.whole.len() as u32 | WHOLE;
         let entry = *self.entry(slot);
         match entry {
             u32::MAX => {}
             i if i & WHOLE != 0 => {
-                self.whole[(i & !WHOLE) as usize].instance = instance;
+                self.whole[(i & !WHOLE) as usize] = SlotUpdate { slot, group, instance };
                 return;
             }
             i => {
@@ -143,7 +149,7 @@ impl WorldMirror {
             }
         }
         self.update_of_slot[slot as usize] = index;
-        self.whole.push(SlotUpdate { slot, instance });
+        self.whole.push(SlotUpdate { slot, group, instance });
     }
 
     /// Forgets the queued updates (recorded, or for buffers being replaced).
@@ -223,10 +229,9 @@ impl WorldMirror {
                     Bind::Buffer(1, scene.instances.handle()),
                     Bind::Buffer(2, scene.cull_records.handle()),
                     Bind::Buffer(3, scene.group_bounds.handle()),
-                    Bind::Buffer(4, scene.draw_groups.handle()),
                 ],
             );
-            pipeline.push_constants(cmd, &[count as u32, scene.regions.groups()]);
+            pipeline.push_constants(cmd, &[count as u32]);
             // SAFETY: cmd recording with the scatter pipeline bound.
             unsafe { device.cmd_dispatch(cmd, (count as u32).div_ceil(64), 1, 1) };
             // The two lists touch different slots, but the barrier keeps the tools sure of it.
@@ -377,35 +382,53 @@ impl Renderer {
             Error::Invalid("sync: this renderer was made from a scene, not a world (Renderer::from_world)".into())
         })?;
         let Some(changes) = world.changes_since(mirror.version) else {
-            return self.relayout(shaders, world, start);
+            return self.rebuild(shaders, world, start, Layout::Fresh);
         };
         if changes.is_empty() {
             return Ok(UpdateStats::default());
         }
-        let mut instances = Vec::with_capacity(changes.len());
+        // Moves take the cheap path below; anything else about an instance the general one.
+        let mut instances = Vec::new();
+        let mut materials = Vec::new();
+        // Meshes, materials or lights beyond the light buffers: the scene's buffers are made
+        // anew (the slots stay).
+        let mut reupload = false;
         let mut lights = false;
+        let mut moves = 0usize;
         for change in changes {
             match *change {
                 Change::Instance(i) => instances.push(i),
+                Change::Transform(_) => moves += 1,
                 Change::Light(_) => lights = true,
-                Change::Mesh(_) | Change::Material(_) => return self.relayout(shaders, world, start),
+                Change::Mesh(_) => reupload = true,
+                Change::Material(m) => {
+                    reupload = true;
+                    materials.push(m);
+                }
             }
+        }
+        if !materials.is_empty() {
+            // A material's sidedness decides its instances' draw groups: they are re-placed
+            // where it changed (a rare event, so a pass over the instances is fine).
+            materials.sort_unstable();
+            instances.extend((0..world.instance_slots() as u32).filter(|&i| {
+                world.is_live(i) && materials.binary_search(&world.scene().instances[i as usize].material).is_ok()
+            }));
         }
         if lights {
             let live = live_lights(world);
-            if live.len() > mirror.light_capacity {
-                return self.relayout(shaders, world, start);
-            }
+            reupload |= live.len() > mirror.light_capacity;
             self.scene.lights = live;
         }
         instances.sort_unstable();
         instances.dedup();
         mirror.layout.release_quarantine(self.frame_index);
-        // Slots first: a group without room means a relayout, which replaces the layout whole
-        // (so a half-updated one does not matter), before anything is written.
+        // Slots first: a region without reserve lays the world out anew, which replaces the
+        // layout whole (so a half-updated one does not matter), before anything is written.
         let layout = &mut mirror.layout;
         let mut touched = Vec::with_capacity(instances.len());
         let mut moved_in_place = Vec::new();
+        let mut grew = false;
         for &i in &instances {
             let old = layout.slot_of(i);
             let key = world.is_live(i).then(|| group_key(world.scene(), &world.scene().instances[i as usize]));
@@ -420,10 +443,15 @@ impl Renderer {
                         touched.extend(layout.vacate(i, self.frame_index));
                     }
                     if let Some(key) = key {
-                        match layout.place(i, key) {
-                            Some(slot) => touched.push(slot),
-                            None => return self.relayout(shaders, world, start),
+                        let slot = match layout.place(i, key) {
+                            Some(slot) => slot,
+                            None if layout.grow(key) => {
+                                grew = true;
+                                layout.place(i, key).expect("a grown group has free slots")
+                            }
+                            None => return self.rebuild(shaders, world, start, Layout::Fresh),
                         };
+                        touched.push(slot);
                     }
                 }
             }
@@ -433,6 +461,9 @@ impl Renderer {
                 mirror.handles.resize(i as usize + 1, None);
             }
             mirror.handles[i as usize] = world.handle_at(i);
+        }
+        if grew || reupload {
+            return self.rebuild(shaders, world, start, Layout::Kept);
         }
         moved_in_place.sort_unstable();
         let queued_before = mirror.queued_bytes();
@@ -446,15 +477,30 @@ impl Renderer {
                 && moved_in_place.binary_search(&slot).is_ok();
             let record = GpuInstance::new(&contents);
             if moved {
-                mirror.queue_move(slot, &record);
+                mirror.queue_move(slot, record.rows, record.translation_lo);
             } else {
-                mirror.queue_whole(slot, record);
+                let group = mirror.layout.group_of_slot(slot) as u32;
+                mirror.queue_whole(slot, group, record);
             }
             self.scene.instances[slot as usize] = contents;
         }
+        if moves > 0 {
+            mirror.moves.reserve(moves);
+            // A move of an instance that was also inserted, removed or changed since the last
+            // sync is applied after the general path has given it its slot (or none); the
+            // world's transform is the latest either way.
+            for change in changes {
+                let Change::Transform(i) = *change else { continue };
+                let Some(slot) = mirror.layout.slot_of(i) else { continue };
+                let transform = world.scene().instances[i as usize].transform;
+                let (rows, translation_lo) = GpuInstance::transform_words(&transform);
+                mirror.queue_move(slot, rows, translation_lo);
+                self.scene.instances[slot as usize].transform = transform;
+            }
+        }
         mirror.version = world.version();
         let stats = UpdateStats {
-            instances_changed: instances.len() as u64,
+            instances_changed: (instances.len() + moves) as u64,
             bytes_uploaded: mirror.queued_bytes() - queued_before,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
             gpu_ms: 0.0,
@@ -464,13 +510,21 @@ impl Renderer {
         Ok(stats)
     }
 
-    /// Lays the world out anew (see the module documentation).
-    fn relayout(&mut self, shaders: &ShaderCompiler, world: &World, start: Instant) -> Result<UpdateStats> {
+    /// Makes the scene's buffers anew from `world`: with the slots laid out anew
+    /// ([`Layout::Fresh`], culling history cleared) or as the mirror's layout has them
+    /// ([`Layout::Kept`], history kept: every slot and group holds what it held). The graph is
+    /// recompiled when the scene outgrew what it was compiled for.
+    fn rebuild(&mut self, shaders: &ShaderCompiler, world: &World, start: Instant, how: Layout) -> Result<UpdateStats> {
         if world.live_instances() == 0 {
             return Err(Error::Invalid("sync: the world has no instances".into()));
         }
-        let (layout, scene) = lay_out(world);
         let mirror = self.world.as_ref().expect("a world renderer");
+        let layout = match how {
+            Layout::Fresh => SlotLayout::new(world.scene(), |i| world.is_live(i)),
+            Layout::Kept => mirror.layout.clone(),
+        };
+        let mut scene = layout.slot_scene(world.scene());
+        scene.lights = live_lights(world);
         let needed = frame_inputs(&scene, &layout, &self.settings);
         let outgrown = layout.slots() as u64 > mirror.compiled.instances
             || layout.groups.len() as u64 > mirror.compiled.meshes
@@ -481,9 +535,13 @@ impl Renderer {
         let light_capacity = with_room(scene.lights.len() as u64).max(mirror.light_capacity as u64) as usize;
         let inputs = SceneInputs::new(&self.ctx, gpu_scene, light_capacity)?;
         if outgrown {
-            let runtime = build_runtime_for(&self.ctx, shaders, &needed, &self.spec)?;
+            let mut runtime = build_runtime_for(&self.ctx, shaders, &needed, &self.spec)?;
+            if how == Layout::Kept {
+                // Slots and groups kept their indices: last frame's visibility still holds.
+                runtime.inherit_history(&self.runtime);
+            }
             self.install_runtime(runtime)?;
-        } else {
+        } else if how == Layout::Fresh {
             // Slots were given out anew: last frame's visibility and draw lists name other
             // instances now.
             self.runtime.reset_history();
@@ -508,9 +566,18 @@ impl Renderer {
             bytes_uploaded: bytes,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
             gpu_ms: 0.0,
-            relayout: true,
+            relayout: how == Layout::Fresh,
         };
         mirror.note(&stats);
         Ok(stats)
     }
+}
+
+/// How [`Renderer::rebuild`] places the world's instances.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Layout {
+    /// Laid out anew, each group in spatial order.
+    Fresh,
+    /// Where the renderer's layout has them.
+    Kept,
 }
