@@ -131,7 +131,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     stats.transient_bytes = memory.bytes_with_aliasing;
     stats.transient_bytes_without_aliasing = memory.bytes_without_aliasing;
     stats.resources = renderer.runtime().resource_bytes();
-    let scene = args.reference.is_some().then(|| renderer.scene().clone());
+    let scene = args.reference.is_some().then(|| match &animation {
+        Some(animation) => animation.world.live_scene(),
+        None => renderer.scene().clone(),
+    });
     drop(renderer);
     if let (Some(n), Some(scene), Some((camera, image))) = (args.reference, scene, &last_frame) {
         let spinner = progress(None, "rendering the reference");

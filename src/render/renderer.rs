@@ -241,7 +241,10 @@ impl Renderer {
         self.frame_index
     }
 
-    /// The scene being rendered (for a renderer of a world: its slots, empty ones included).
+    /// The scene being rendered. For a renderer of a world ([`Renderer::from_world`]): its
+    /// slots, empty ones included, each with its instance's mesh, material and flags, but with
+    /// the transform it had when it was last written whole: moves are applied to the GPU only.
+    /// The world's current state is [`crate::scene::world::World::live_scene`].
     pub fn scene(&self) -> &Scene {
         &self.scene
     }

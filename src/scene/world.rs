@@ -223,6 +223,22 @@ impl World {
         &self.scene
     }
 
+    /// The world as a plain scene: its live instances (in index order) and live lights.
+    pub fn live_scene(&self) -> Scene {
+        let scene = &self.scene;
+        Scene {
+            instances: (0..scene.instances.len() as u32)
+                .filter(|&i| self.is_live(i))
+                .map(|i| scene.instances[i as usize])
+                .collect(),
+            lights: (0..scene.lights.len() as u32)
+                .filter(|&i| self.is_light_live(i))
+                .map(|i| scene.lights[i as usize])
+                .collect(),
+            ..scene.clone()
+        }
+    }
+
     /// Whether the instance at `index` is live.
     pub fn is_live(&self, index: u32) -> bool {
         self.instances.alive.get(index as usize).copied().unwrap_or(false)

@@ -492,10 +492,12 @@ impl Renderer {
             for change in changes {
                 let Change::Transform(i) = *change else { continue };
                 let Some(slot) = mirror.layout.slot_of(i) else { continue };
-                let transform = world.scene().instances[i as usize].transform;
-                let (rows, translation_lo) = GpuInstance::transform_words(&transform);
+                // The renderer's own copy of the slot keeps its old transform: a random write
+                // per move into a table of every slot would cost more than the rest of the
+                // move (see `Renderer::scene`).
+                let (rows, translation_lo) =
+                    GpuInstance::transform_words(&world.scene().instances[i as usize].transform);
                 mirror.queue_move(slot, rows, translation_lo);
-                self.scene.instances[slot as usize].transform = transform;
             }
         }
         mirror.version = world.version();
