@@ -172,6 +172,16 @@ fn living_boxes() -> (World, Vec<InstanceHandle>, [u32; 2]) {
     (world, handles[1..].to_vec(), [0, other])
 }
 
+/// Pixels the culled and unculled images of random boxes may differ in: where two boxes
+/// interpenetrate, their surfaces' depths can tie exactly at a pixel on the intersection, and
+/// the draw order, which culling changes, then decides the pixel. A culling error (a box missed
+/// or drawn with stale data) differs in dozens of pixels at the least.
+const DEPTH_TIE_PIXELS: usize = 2;
+
+fn differing_pixels(a: &RgbaImage, b: &RgbaImage) -> usize {
+    a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count()
+}
+
 /// Runs `ops`, two per frame, with the camera circling, through two-phase culling with
 /// verification and through no culling; every frame's images must be equal with no false
 /// negative. Returns the culled images.
@@ -197,7 +207,11 @@ fn run(gpu: &GpuTest, ops: &[Op]) -> Vec<RgbaImage> {
         let verify = stats.verify.expect("verified");
         assert_eq!(verify.false_negatives, 0, "frame {frame}: missed {:?}", verify.missed);
         let reference = unculled.render_to_image(&camera).unwrap().1;
-        assert!(image == reference, "frame {frame}: the culled image differs from the unculled one");
+        let differ = differing_pixels(&image, &reference);
+        assert!(
+            differ <= DEPTH_TIE_PIXELS,
+            "frame {frame}: the culled image differs from the unculled one in {differ} pixels"
+        );
         images.push(image);
     }
     gpu.assert_clean();
