@@ -130,6 +130,7 @@ fn wall_scene() -> Scene {
         roughness: 0.5,
         metallic: 0.0,
         double_sided: false,
+        ..Default::default()
     });
     let mut place = |scale: Vec3, at: DVec3, material: u32, flags: u32| {
         scene.instances.push(Instance {
@@ -555,6 +556,8 @@ fn the_occluder_prepass_chooses_cheap_meshes_where_the_scene_flags_none() {
 /// A quad (-0.8..0.8 in x and y), front face toward +z.
 fn quad_mesh() -> MeshData {
     MeshData {
+        uvs: Vec::new(),
+        tangents: Vec::new(),
         positions: vec![
             Vec3::new(-0.8, -0.8, 0.0),
             Vec3::new(0.8, -0.8, 0.0),
@@ -581,7 +584,7 @@ fn tetrahedron_mesh() -> MeshData {
         let outward = (pb - pa).cross(pc - pa).dot(pa + pb + pc) > 0.0;
         indices.extend(if outward { [a, b, c] } else { [a, c, b] });
     }
-    MeshData { positions, normals: vec![], indices }
+    MeshData { uvs: Vec::new(), tangents: Vec::new(), positions, normals: vec![], indices }
 }
 
 /// The culling of a random case: bound, Hi-Z footprint, pyramid method, and the exact graph

@@ -28,6 +28,7 @@ fn scene() -> (Scene, [(DVec3, Vec3); 2]) {
         roughness: 0.9,
         metallic: 0.0,
         double_sided: false,
+        ..Default::default()
     });
     let mut place = |scale: Vec3, at: DVec3| {
         scene.instances.push(Instance {

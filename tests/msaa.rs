@@ -141,6 +141,7 @@ fn intersecting_scene() -> Scene {
         roughness: 0.5,
         metallic: 0.0,
         double_sided: false,
+        ..Default::default()
     });
     let cube = scene.instances[1].mesh;
     let tilted =
@@ -375,13 +376,21 @@ fn claimed_samples_give_the_stencils_image_except_at_coplanar_ties() {
 fn headless_pixel_scene() -> (Scene, Camera) {
     let mut scene = Scene { name: "headless pixel".into(), ..Default::default() };
     let tri = MeshData {
+        uvs: Vec::new(),
+        tangents: Vec::new(),
         positions: vec![Vec3::new(-0.1, -0.1, 0.0), Vec3::new(0.1, -0.1, 0.0), Vec3::new(0.0, 0.1, 0.0)],
         normals: vec![],
         indices: vec![0, 1, 2],
     };
     let mesh = scene.add_mesh("sliver", &tri, "sliver").unwrap();
-    let material =
-        |albedo: Vec3| Material { name: "m".into(), albedo, roughness: 0.5, metallic: 0.0, double_sided: true };
+    let material = |albedo: Vec3| Material {
+        name: "m".into(),
+        albedo,
+        roughness: 0.5,
+        metallic: 0.0,
+        double_sided: true,
+        ..Default::default()
+    };
     // Pixel (3, 3) of an 8x8 view of x, y in -4..4 (rows from the top): its corner is (-1, 1).
     let sample = |sx: f64, sy: f64| DVec3::new(-1.0 + sx, 1.0 - sy, 0.0);
     for (at, albedo, flags) in [
@@ -826,6 +835,8 @@ fn packed_visibility_ids_shade_like_two_words_and_refuse_what_does_not_fit() {
     // 2^18 + 1 instances need 19 bits, a mesh of 2^14 + 1 triangles 15: 34 in all.
     let mut big = Scene { name: "big ids".into(), ..Default::default() };
     let strip = cullgraph::scene::MeshData {
+        uvs: Vec::new(),
+        tangents: Vec::new(),
         positions: (0..=(1u32 << 14) + 2).map(|i| Vec3::new(i as f32 * 1e-4, (i % 2) as f32 * 1e-4, 0.0)).collect(),
         normals: vec![],
         indices: (0..=(1u32 << 14)).flat_map(|i| [i, i + 1, i + 2]).collect(),
@@ -866,6 +877,7 @@ fn per_sample_msaa_shades_parallel_surfaces_at_their_own_depths() {
         roughness: 0.5,
         metallic: 0.0,
         double_sided: false,
+        ..Default::default()
     });
     let place = |scale: Vec3, at: DVec3| Instance {
         transform: Transform { linear: Mat3::from_diagonal(scale), translation: at },

@@ -179,6 +179,7 @@ fn wall_scene() -> Scene {
         roughness: 0.5,
         metallic: 0.0,
         double_sided: false,
+        ..Default::default()
     });
     let mut place = |scale: Vec3, at: DVec3, material: u32| {
         scene.instances.push(Instance {

@@ -193,17 +193,22 @@ fn broken_assimp_files_name_their_problem() {
 #[test]
 fn valid_assimp_oddities_load() {
     let dir = assimp_dir();
-    // An extension value of the wrong type in an extension cullgraph ignores: still a valid scene.
-    let (_, report) = load(&dir.join("wrongTypes/badExtension.gltf")).unwrap();
-    assert!(report.notes.iter().any(|n| n.contains("KHR_texture_transform")), "{report:?}");
+    // A texture transform (KHR_texture_transform, which the import applies) that is not an
+    // object: an error at its line and column.
+    let m = load_err(&dir.join("wrongTypes/badExtension.gltf"));
+    assert!(m.contains("expected struct TextureTransform at line 130 column 46"), "{m}");
     // Skins, morph targets and animations are reported, the rest pose drawn.
     let (_, report) = load(&dir.join("simple_skin/simple_skin.gltf")).unwrap();
     assert!(report.notes.iter().any(|n| n.contains("skins are ignored")), "{report:?}");
     let (_, report) = load(&dir.join("glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf")).unwrap();
     assert!(report.notes.iter().any(|n| n.contains("morph targets")), "{report:?}");
-    // Textures are reported as ignored.
-    let (_, report) = load(&dir.join("BoxTextured-glTF-Binary/BoxTextured.glb")).unwrap();
-    assert!(report.notes.iter().any(|n| n.contains("textures are ignored")), "{report:?}");
+    // Textures load: BoxTextured's one image, its material's base colour texture, and texture
+    // coordinates on the vertices.
+    let (scene, report) = load(&dir.join("BoxTextured-glTF-Binary/BoxTextured.glb")).unwrap();
+    assert_eq!(scene.textures.len(), 1, "{report:?}");
+    assert!(scene.textures[0].width > 1 && !scene.textures[0].name.contains("placeholder"));
+    assert!(scene.materials.iter().any(|m| m.texture(cullgraph::scene::TextureSlot::BaseColor).is_some()));
+    assert!(scene.vertices.iter().any(|v| v.uv != [0.0, 0.0]));
     // Zero normals are recomputed from the faces (and reported); short ones are normalised.
     let (scene, report) = load(&dir.join("BoxBadNormals-glTF-Binary/BoxBadNormals.glb")).unwrap();
     assert!(report.notes.iter().any(|n| n.contains("NORMAL accessor 1: 4 of 24 normals are zero")), "{report:?}");

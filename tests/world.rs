@@ -20,6 +20,8 @@ fn cube() -> MeshData {
         [0.0, 1.0, 1.0],
     ];
     MeshData {
+        uvs: Vec::new(),
+        tangents: Vec::new(),
         positions: p.iter().map(|v| Vec3::from_array(*v)).collect(),
         normals: vec![],
         indices: vec![

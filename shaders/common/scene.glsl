@@ -14,13 +14,52 @@ struct GpuInstance {
     uint material_flags;  // material index (low 24 bits) | flags << 24
 };
 
+// A vertex of the shared pool (src/scene/mesh.rs Vertex, 32 bytes), for passes that read the
+// pool as a buffer rather than through vertex input.
+struct PoolVertex {
+    vec3 position;
+    uint normal_oct;   // two snorm16
+    vec2 uv;
+    uint tangent_xy;   // snorm16 x, y
+    uint tangent_zw;   // snorm16 z, handedness sign
+};
+
+// One texture of a material (src/passes/shared/gpu_types.rs GpuMaterialTexture).
+struct MaterialTexture {
+    vec4 row0;        // u' = dot(row0.xy, uv) + row0.z
+    vec4 row1;        // v' = dot(row1.xy, uv) + row1.z
+    uint placement;   // class << 16 | layer, NO_TEXTURE for none
+    uint sampling;    // wrap u (bits 0-1), wrap v (2-3), nearest mag (4), nearest min (5)
+    uint pad0;
+    uint pad1;
+};
+
+#define NO_TEXTURE 0xFFFFFFFFu
+#define ALPHA_OPAQUE 0u
+#define ALPHA_MASK 1u
+#define ALPHA_BLEND 2u
+
+// Texture slots, in the order of GpuMaterial::textures (src/scene/texture.rs TextureSlot).
+#define TEX_BASE_COLOR 0
+#define TEX_METALLIC_ROUGHNESS 1
+#define TEX_NORMAL 2
+#define TEX_OCCLUSION 3
+#define TEX_EMISSIVE 4
+
 struct GpuMaterial {
     vec3 albedo;
     float roughness;
     float metallic;
+    float alpha;
+    float alpha_cutoff;
+    uint alpha_mode;
+    vec3 emissive;
+    float normal_scale;
+    float occlusion_strength;
     float pad0;
     float pad1;
     float pad2;
+    MaterialTexture textures[5];
 };
 
 #include "cull_math.glsl"

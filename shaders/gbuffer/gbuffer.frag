@@ -1,7 +1,8 @@
 #version 460
 // G-buffer geometry pass, fragment stage: albedo + metallic, normal + roughness (its two formats:
-// ../common/gbuffer_normal.glsl).
-#include "../common/scene.glsl"
+// ../common/gbuffer_normal.glsl), from the material's factors and textures. Masked materials'
+// fragments below their alpha cutoff are discarded.
+#include "../common/material_surface.glsl"
 #include "../common/gbuffer_normal.glsl"
 
 layout(set = 0, binding = 3, scalar) readonly buffer Materials { GpuMaterial materials[]; };
@@ -9,17 +10,22 @@ layout(set = 0, binding = 3, scalar) readonly buffer Materials { GpuMaterial mat
 layout(location = 0) in vec3 in_normal;
 layout(location = 1) flat in uint in_material;
 layout(location = 2) flat in uint in_mirrored;
+layout(location = 5) in vec2 in_uv;
+layout(location = 6) in vec4 in_tangent;
 
 layout(location = 0) out vec4 out_albedo_metallic;
 layout(location = 1) out NORMAL_TEXEL out_normal_roughness;
 
 void main() {
     GpuMaterial m = materials[in_material];
+    vec2 dx = dFdx(in_uv), dy = dFdy(in_uv);
+    if (material_cuts(m, in_uv, dx, dy)) discard;
     vec3 n = normalize(in_normal);
-    // Seen from behind (open meshes): light the side that faces the eye. A mirrored instance
-    // flips the winding, so its outside shows as a back face.
+    // Seen from behind (open meshes, double-sided materials): light the side that faces the
+    // eye. A mirrored instance flips the winding, so its outside shows as a back face.
     bool front = gl_FrontFacing != (in_mirrored != 0u);
     if (!front) n = -n;
-    out_albedo_metallic = vec4(m.albedo, m.metallic);
-    out_normal_roughness = encode_normal_roughness(n, m.roughness);
+    Surface s = material_surface(m, in_uv, dx, dy, n, in_tangent, front);
+    out_albedo_metallic = vec4(s.albedo, s.metallic);
+    out_normal_roughness = encode_normal_roughness(s.normal, s.roughness);
 }

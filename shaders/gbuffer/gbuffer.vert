@@ -6,6 +6,8 @@
 
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec2 in_normal_oct;
+layout(location = 2) in vec2 in_uv;
+layout(location = 3) in vec4 in_tangent;
 
 layout(set = 0, binding = 0, scalar) readonly buffer Instances { GpuInstance instances[]; };
 layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
@@ -18,6 +20,8 @@ layout(location = 1) flat out uint out_material;
 layout(location = 2) flat out uint out_mirrored;
 layout(location = 3) flat out uint out_flags;      // FLAG_* of the instance (selective AA reads FLAG_NO_AA)
 layout(location = 4) flat out uint out_instance;   // instance id (the visibility buffer stores it)
+layout(location = 5) out vec2 out_uv;
+layout(location = 6) out vec4 out_tangent;         // world tangent, w: bitangent sign
 
 void main() {
     uint id = draw_instance_ids[gl_InstanceIndex];
@@ -27,6 +31,11 @@ void main() {
     gl_Position = frame.view_proj * vec4(rel, 1.0);
     out_normal = instance_normal(inst, oct_decode(in_normal_oct));
     out_material = instance_material(inst);
-    out_mirrored = instance_is_mirrored(inst) ? 1u : 0u;
+    bool mirrored = instance_is_mirrored(inst);
+    out_mirrored = mirrored ? 1u : 0u;
     out_flags = instance_flags(inst);
+    out_uv = in_uv;
+    mat3 m = transpose(mat3(inst.row0.xyz, inst.row1.xyz, inst.row2.xyz));
+    // A mirrored instance flips the bitangent along with the winding.
+    out_tangent = vec4(m * in_tangent.xyz, (in_tangent.w < 0.0) != mirrored ? -1.0 : 1.0);
 }

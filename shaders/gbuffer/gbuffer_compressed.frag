@@ -12,7 +12,7 @@
 #ifdef CLAIM_IN_DRAW_ORDER
 #extension GL_ARB_fragment_shader_interlock : require
 #endif
-#include "../common/scene.glsl"
+#include "../common/material_surface.glsl"
 #include "../common/octahedral.glsl"
 #include "compressed_gbuffer.glsl"
 
@@ -73,6 +73,8 @@ uint claim_samples(uint pixel, uint mask) { return mask; }   // the stencil alre
 layout(location = 0) in vec3 in_normal;
 layout(location = 1) flat in uint in_material;
 layout(location = 2) flat in uint in_mirrored;
+layout(location = 5) in vec2 in_uv;
+layout(location = 6) in vec4 in_tangent;
 layout(location = 3) flat in uint in_flags;
 
 // A head block's attributes but AO, which the clear has put in place.
@@ -110,6 +112,8 @@ bool may_allocate() {
 }
 
 void main() {
+    // Derivatives while every invocation of the quad is still running.
+    vec2 duv_dx = dFdx(in_uv), duv_dy = dFdy(in_uv);
     uint mask = uint(gl_SampleMaskIn[0]);
     uint pixel = uint(gl_FragCoord.y) * pc.width + uint(gl_FragCoord.x);
 #ifdef CLAIM_IN_DRAW_ORDER
@@ -129,7 +133,15 @@ void main() {
     vec3 n = normalize(in_normal);
     // Seen from behind (open meshes): light the side that faces the eye. A mirrored instance
     // flips the winding, so its outside shows as a back face.
-    if (gl_FrontFacing == (in_mirrored != 0u)) n = -n;
+    bool front = gl_FrontFacing != (in_mirrored != 0u);
+    if (!front) n = -n;
+    // The textured surface. (No alpha test here: the depth EQUAL test against a depth that has
+    // the masked holes already rejects their fragments.)
+    Surface s = material_surface(m, in_uv, duv_dx, duv_dy, n, in_tangent, front);
+    m.albedo = s.albedo;
+    m.metallic = s.metallic;
+    m.roughness = s.roughness;
+    n = s.normal;
     if (head) {
         write_head(pixel, m, n);   // its link belongs to the list
         return;

@@ -28,7 +28,6 @@ layout(set = 0, binding = 3, scalar) readonly buffer Lights { GpuPointLight ligh
 layout(set = 0, binding = 4, rgba8) uniform writeonly image2D out_color;
 layout(set = 0, binding = 5, scalar) readonly buffer Instances { GpuInstance instances[]; };
 layout(set = 0, binding = 6, scalar) readonly buffer Materials { GpuMaterial materials[]; };
-struct PoolVertex { vec3 position; uint normal_oct; };
 layout(set = 0, binding = 7, scalar) readonly buffer Vertices { PoolVertex vertices[]; };
 layout(set = 0, binding = 8) readonly buffer Indices { uint indices[]; };
 layout(set = 0, binding = 9) readonly buffer TriangleBases { uvec2 triangle_bases[]; };

@@ -4,6 +4,7 @@
 #include "../common/scene.glsl"
 
 layout(location = 0) in vec3 in_position;
+layout(location = 2) in vec2 in_uv;
 
 layout(set = 0, binding = 0, scalar) readonly buffer Instances { GpuInstance instances[]; };
 layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
@@ -12,6 +13,8 @@ layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants fram
 invariant gl_Position;  // identical to shaders/gbuffer/gbuffer.vert
 
 layout(location = 0) flat out uint out_instance;
+layout(location = 1) flat out uint out_material;
+layout(location = 2) out vec2 out_uv;
 
 void main() {
     uint id = draw_instance_ids[gl_InstanceIndex];
@@ -19,4 +22,6 @@ void main() {
     vec3 rel = instance_rel_eye(inst, in_position, frame.eye_hi.xyz, frame.eye_lo.xyz);
     gl_Position = frame.view_proj * vec4(rel, 1.0);
     out_instance = id;
+    out_material = instance_material(inst);
+    out_uv = in_uv;
 }

@@ -131,6 +131,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     stats.transient_bytes = memory.bytes_with_aliasing;
     stats.transient_bytes_without_aliasing = memory.bytes_without_aliasing;
     stats.resources = renderer.runtime().resource_bytes();
+    stats.texture_bytes = renderer.gpu_scene().textures.bytes();
     let scene = args.reference.is_some().then(|| match &animation {
         Some(animation) => animation.world.live_scene(),
         None => renderer.scene().clone(),

@@ -48,6 +48,8 @@ impl RequiredFeatures {
         // Fragment shaders read gl_PrimitiveID (the visibility buffer), which needs it.
         f.core.geometry_shader = vk::TRUE;
         f.core.shader_storage_image_write_without_format = vk::TRUE;
+        // Textures seen at grazing angles (floors, terrain) stay sharp.
+        f.core.sampler_anisotropy = vk::TRUE;
         f.v11.shader_draw_parameters = vk::TRUE;
         f.v12.draw_indirect_count = vk::TRUE;
         f.v12.scalar_block_layout = vk::TRUE;
@@ -81,6 +83,7 @@ impl RequiredFeatures {
             h.shader_storage_image_write_without_format,
             "shaderStorageImageWriteWithoutFormat",
         );
+        check(w.sampler_anisotropy, h.sampler_anisotropy, "samplerAnisotropy");
         check(self.v11.shader_draw_parameters, available.v11.shader_draw_parameters, "shaderDrawParameters");
         let (w, h) = (&self.v12, &available.v12);
         check(w.draw_indirect_count, h.draw_indirect_count, "drawIndirectCount");

@@ -1,6 +1,6 @@
 //! Moving data between host and device: batched uploads that anyone can record, and readbacks.
 
-use super::barrier::{cmd_barriers, image_barrier, memory_barrier, Access};
+use super::barrier::{cmd_barriers, image_barrier, image_barrier_raw, memory_barrier, Access};
 use super::buffer::{Buffer, BufferDesc};
 use super::context::GpuContext;
 use super::error::GpuResult;
@@ -16,7 +16,23 @@ use gpu_allocator::MemoryLocation;
 #[derive(Default)]
 pub struct UploadBatch {
     copies: Vec<(Buffer, vk::Buffer, u64)>,
+    images: Vec<ImageUpload>,
 }
+
+/// Texels for an image: a staging buffer and where each part of it goes.
+struct ImageUpload {
+    staging: Buffer,
+    image: vk::Image,
+    range: vk::ImageSubresourceRange,
+    regions: Vec<vk::BufferImageCopy>,
+}
+
+/// The state uploaded images are left in: sampled by any shader.
+const SAMPLED: Access = Access {
+    stage: vk::PipelineStageFlags2::ALL_COMMANDS,
+    access: vk::AccessFlags2::SHADER_SAMPLED_READ,
+    layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+};
 
 impl UploadBatch {
     /// Creates a device-local buffer of `data.len()` bytes and queues its upload.
@@ -45,23 +61,74 @@ impl UploadBatch {
         Ok(dst)
     }
 
+    /// Queues `data` into `image` (`range`: what it covers, left in `SHADER_READ_ONLY_OPTIMAL`
+    /// for sampling), each region reading its part of `data`. The image must stay alive until
+    /// the batch has executed.
+    pub fn image(
+        &mut self,
+        ctx: &GpuContext,
+        name: &str,
+        image: vk::Image,
+        range: vk::ImageSubresourceRange,
+        data: &[u8],
+        regions: Vec<vk::BufferImageCopy>,
+    ) -> GpuResult<()> {
+        let staging = Buffer::with_data(ctx, &format!("{name} (staging)"), vk::BufferUsageFlags::TRANSFER_SRC, data)?;
+        self.images.push(ImageUpload { staging, image, range, regions });
+        Ok(())
+    }
+
     /// True when nothing is queued.
     pub fn is_empty(&self) -> bool {
-        self.copies.is_empty()
+        self.copies.is_empty() && self.images.is_empty()
     }
 
     /// Bytes queued for upload.
     pub fn bytes(&self) -> u64 {
-        self.copies.iter().map(|c| c.2).sum()
+        self.copies.iter().map(|c| c.2).sum::<u64>() + self.images.iter().map(|i| i.staging.size()).sum::<u64>()
     }
 
     /// Records the copies and a barrier that orders them before every later access (read or
     /// write: an uploaded buffer may be a counter that shaders update).
     pub fn record(&self, ctx: &GpuContext, cmd: vk::CommandBuffer) {
-        if self.copies.is_empty() {
+        if self.is_empty() {
             return;
         }
         let device = ctx.device();
+        if !self.images.is_empty() {
+            let undefined = Access {
+                stage: vk::PipelineStageFlags2::NONE,
+                access: vk::AccessFlags2::NONE,
+                layout: vk::ImageLayout::UNDEFINED,
+            };
+            let to_dst: Vec<_> = self
+                .images
+                .iter()
+                .map(|i| image_barrier_raw(i.image, i.range, undefined, Access::TRANSFER_WRITE))
+                .collect();
+            cmd_barriers(device, cmd, &[], &to_dst);
+            for upload in &self.images {
+                // SAFETY: the staging buffer holds every region; the image is in TRANSFER_DST.
+                unsafe {
+                    device.cmd_copy_buffer_to_image(
+                        cmd,
+                        upload.staging.handle(),
+                        upload.image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &upload.regions,
+                    )
+                };
+            }
+            let to_sampled: Vec<_> = self
+                .images
+                .iter()
+                .map(|i| image_barrier_raw(i.image, i.range, Access::TRANSFER_WRITE, SAMPLED))
+                .collect();
+            cmd_barriers(device, cmd, &[], &to_sampled);
+        }
+        if self.copies.is_empty() {
+            return;
+        }
         for (staging, dst, size) in &self.copies {
             let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: *size };
             // SAFETY: both buffers are live and large enough; cmd is recording.
@@ -79,7 +146,7 @@ impl UploadBatch {
 
     /// Records, submits and waits (headless use only).
     pub fn submit_and_wait(self, ctx: &GpuContext) -> GpuResult<()> {
-        if self.copies.is_empty() {
+        if self.is_empty() {
             return Ok(());
         }
         ctx.submit_and_wait(|cmd| {

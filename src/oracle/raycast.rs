@@ -348,6 +348,8 @@ mod tests {
     /// seen from +z.
     fn quad() -> MeshData {
         MeshData {
+            uvs: Vec::new(),
+            tangents: Vec::new(),
             positions: vec![
                 Vec3::new(-1.0, -1.0, 0.0),
                 Vec3::new(1.0, -1.0, 0.0),

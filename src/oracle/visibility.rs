@@ -59,7 +59,7 @@ impl VisibilityOracle {
                 vertex: &vertex,
                 fragment: Some(&fragment),
                 vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-                vertex_attributes: &[(0, vk::Format::R32G32B32_SFLOAT, 0)],
+                vertex_attributes: &crate::passes::gbuffer::VERTEX_ATTRIBUTES,
                 color_formats: &[vk::Format::R32_UINT],
                 depth_format: vk::Format::D32_SFLOAT,
                 depth_compare: vk::CompareOp::GREATER,
@@ -130,14 +130,14 @@ impl VisibilityOracle {
                 );
                 cmd_set_full_viewport(device, cmd, self.extent);
                 self.draw.bind(cmd);
-                self.draw.push_bindings(
-                    cmd,
-                    &[
-                        Bind::Buffer(0, scene.instances.handle()),
-                        Bind::Buffer(1, scene.draw_instance_ids.handle()),
-                        Bind::Buffer(2, constants.handle()),
-                    ],
-                );
+                let mut binds = vec![
+                    Bind::Buffer(0, scene.instances.handle()),
+                    Bind::Buffer(1, scene.draw_instance_ids.handle()),
+                    Bind::Buffer(2, constants.handle()),
+                    Bind::Buffer(3, scene.materials.handle()),
+                ];
+                binds.extend(scene.textures.bindings(crate::passes::gbuffer::TEXTURE_BINDING));
+                self.draw.push_bindings(cmd, &binds);
                 device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
                 device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
                 // The same faces as the frame's draws: one-sided materials lose their back faces.

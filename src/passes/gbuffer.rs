@@ -122,6 +122,15 @@ pub fn bound_samples(plan: &CompiledGraph, pass: &PlannedPass, slot: &str) -> u3
     bound_image(plan, pass, slot).map_or(1, |(_, s)| s.as_raw().max(1))
 }
 
+/// The pool's vertex layout ([`crate::scene::Vertex`]) as `gbuffer.vert` reads it: position,
+/// octahedral normal, texture coordinates, tangent.
+pub const VERTEX_ATTRIBUTES: [(u32, vk::Format, u32); 4] = [
+    (0, vk::Format::R32G32B32_SFLOAT, 0),
+    (1, vk::Format::R16G16_SNORM, 12),
+    (2, vk::Format::R32G32_SFLOAT, 16),
+    (3, vk::Format::R16G16B16A16_SNORM, 24),
+];
+
 /// Creates a graphics pipeline over `gbuffer.vert` (whose invariant position every geometry
 /// pass shares, so depth EQUAL against another pass's depth holds exactly). `equal`: depth
 /// EQUAL without writes and, where the format has stencil, stencil first-fragment-wins.
@@ -143,7 +152,7 @@ pub fn geometry_pipeline(
             vertex: &vertex,
             fragment: fragment.as_ref(),
             vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-            vertex_attributes: &[(0, vk::Format::R32G32B32_SFLOAT, 0), (1, vk::Format::R16G16_SNORM, 12)],
+            vertex_attributes: &VERTEX_ATTRIBUTES,
             color_formats,
             depth_format: depth.0,
             depth_compare: if equal { vk::CompareOp::EQUAL } else { vk::CompareOp::GREATER },
@@ -212,6 +221,7 @@ pub fn record_geometry(
                 Bind::Buffer(2, frame.handle()),
                 Bind::Buffer(3, scene.materials.handle()),
             ];
+            binds.extend(scene.textures.bindings(TEXTURE_BINDING));
             binds.extend_from_slice(extra);
             pipeline.push_bindings(cmd, &binds);
             scene.regions.record(device, cmd, list.commands, list.count);
@@ -219,6 +229,10 @@ pub fn record_geometry(
         device.cmd_end_rendering(cmd);
     }
 }
+
+/// The first binding of the scene's textures (`TEXTURE_BINDING` in
+/// `shaders/common/textures.glsl`).
+pub const TEXTURE_BINDING: u32 = 16;
 
 /// How a geometry pass treats what is already in its targets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -273,7 +287,8 @@ impl GbufferPass {
         let packed_ids = ids.is_some_and(|(format, _)| format == crate::passes::slots::VISIBILITY_PACKED);
         let (fragment, colors) = match ids {
             Some((format, _)) => (Some(("gbuffer/visibility.frag", visibility_defines(Some(format)))), vec![format]),
-            None => ((!colors.is_empty()).then_some(("gbuffer/gbuffer.frag", normal_defines(normal))), colors),
+            None if colors.is_empty() => (Some(("gbuffer/depth_alpha.frag", &[][..])), colors),
+            None => (Some(("gbuffer/gbuffer.frag", normal_defines(normal))), colors),
         };
         let pipeline =
             geometry_pipeline(ctx, shaders, &pass.name, fragment, &colors, depth, mode == GeometryMode::Equal)?;

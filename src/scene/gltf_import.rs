@@ -2,13 +2,18 @@
 //! shared by all nodes that use that mesh, every node with a mesh becomes one [`Instance`] per
 //! drawable primitive.
 //!
+//! Materials keep their textures (every glTF image becomes a scene texture, decoded to RGBA8),
+//! samplers, texture transforms and alpha modes.
+//!
 //! Broken files give a [`SceneError`] whose place names the file, the node or the mesh,
-//! primitive and accessor; they never panic. What is dropped on the way (non-triangle
-//! primitives, textures, animations, unused meshes) is listed in an [`ImportReport`].
+//! primitive and accessor; they never panic. What is dropped or replaced on the way
+//! (non-triangle primitives, unusable images, animations, unused meshes) is listed in an
+//! [`ImportReport`].
 
 mod accessor;
 mod buffers;
 mod flags;
+mod images;
 mod materials;
 mod nodes;
 mod primitive;
@@ -21,6 +26,7 @@ use glam::Vec3;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
+pub use images::MAX_IMAGE_SIDE;
 pub use primitive::{fan_to_list, strip_to_list};
 
 /// Point lights placed in a file that has none when [`LoadOptions::lights`] is `None`.
@@ -104,7 +110,10 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
     note_ignored_features(&document, &mut report.notes);
 
     let mut scene = Scene { name: short.clone(), ..Default::default() };
-    for material in materials::convert(&document, &mut report.notes) {
+    let textures = images::load(&document, base, &buffers, &mut report.notes);
+    let placeholder: Vec<bool> = textures.iter().map(|(_, p)| *p).collect();
+    scene.textures = textures.into_iter().map(|(t, _)| t).collect();
+    for material in materials::convert(&document, &placeholder, &mut report.notes) {
         scene.add_material(material);
     }
     let mut default_material = None;
@@ -175,8 +184,8 @@ fn import_mesh(
                 report.skipped_primitives.push(format!("{place}: {why}"));
                 prims.push(None);
             }
-            primitive::Converted::Mesh(data, mesh_place, normal_note) => {
-                report.notes.extend(normal_note);
+            primitive::Converted::Mesh(data, mesh_place, notes) => {
+                report.notes.extend(notes);
                 let id = scene.add_mesh(&format!("{base_name}/{}", prim.index()), &data, &mesh_place)?;
                 // glTF materials were added first, in file order, so their indices carry over.
                 let material = match prim.material().index() {
@@ -218,9 +227,12 @@ fn camera_of(placed: &nodes::Placed<'_>, notes: &mut Vec<String>) -> Option<Came
     }
 }
 
+/// Extensions the import applies.
+const SUPPORTED_EXTENSIONS: [&str; 1] = ["KHR_texture_transform"];
+
 /// Notes for parts of the file that cullgraph does not use.
 fn note_ignored_features(document: &gltf::Document, notes: &mut Vec<String>) {
-    let used: Vec<&str> = document.extensions_used().collect();
+    let used: Vec<&str> = document.extensions_used().filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
     if !used.is_empty() {
         notes.push(format!("extensions are ignored: {}", used.join(", ")));
     }

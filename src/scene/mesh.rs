@@ -4,7 +4,8 @@ use super::bounds::{Aabb, Sphere};
 use super::error::SceneError;
 use glam::{Vec2, Vec3};
 
-/// A vertex of the shared pool: position and octahedral-encoded unit normal (16 bytes).
+/// A vertex of the shared pool (32 bytes): position, octahedral-encoded unit normal, texture
+/// coordinates and tangent.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Vertex {
@@ -12,6 +13,17 @@ pub struct Vertex {
     pub position: [f32; 3],
     /// Normal, octahedral-encoded as two snorm16 values (see [`encode_octahedral`]).
     pub normal: [i16; 2],
+    /// Texture coordinates (glTF `TEXCOORD_0`; 0 where the mesh has none).
+    pub uv: [f32; 2],
+    /// Tangent as snorm16: xyz the direction of increasing u, w the handedness of the
+    /// bitangent (glTF `TANGENT`, or generated with MikkTSpace).
+    pub tangent: [i16; 4],
+}
+
+/// Packs a unit tangent and its handedness as [`Vertex::tangent`] stores them.
+pub fn encode_tangent(t: glam::Vec4) -> [i16; 4] {
+    let q = |v: f32| (v.clamp(-1.0, 1.0) * 32767.0).round() as i16;
+    [q(t.x), q(t.y), q(t.z), if t.w < 0.0 { -32767 } else { 32767 }]
 }
 
 /// Encodes a unit vector into two snorm16 values (octahedral map; error below 0.01 degrees).
@@ -45,6 +57,11 @@ pub struct MeshData {
     pub normals: Vec<Vec3>,
     /// Triangle list indices into `positions`.
     pub indices: Vec<u32>,
+    /// Texture coordinates, one per position; empty for none (all zero).
+    pub uvs: Vec<Vec2>,
+    /// Tangents (xyz unit, w ±1 handedness), one per position; empty to generate them from the
+    /// texture coordinates (MikkTSpace).
+    pub tangents: Vec<glam::Vec4>,
 }
 
 impl MeshData {
@@ -71,16 +88,37 @@ impl MeshData {
         if !self.normals.is_empty() && self.normals.len() != n {
             return Err(err(format!("{} normals for {} positions", self.normals.len(), n)));
         }
+        if !self.uvs.is_empty() && self.uvs.len() != n {
+            return Err(err(format!("{} texture coordinates for {} positions", self.uvs.len(), n)));
+        }
+        if let Some((at, uv)) = self.uvs.iter().enumerate().find(|(_, uv)| !uv.is_finite()) {
+            return Err(err(format!("vertex {at} has non-finite texture coordinates {uv}")));
+        }
+        if !self.tangents.is_empty() && self.tangents.len() != n {
+            return Err(err(format!("{} tangents for {} positions", self.tangents.len(), n)));
+        }
         let face_normals = self.area_weighted_normals();
         let has_area = face_normals.iter().any(|v| *v != Vec3::ZERO);
         if !has_area {
             return Err(err(format!("all {} triangles have zero area", self.indices.len() / 3)));
         }
-        let vertices = (0..n)
+        let normals: Vec<Vec3> = (0..n)
             .map(|i| {
                 let given = self.normals.get(i).copied().filter(|v| v.is_finite() && v.length_squared() > 1e-12);
-                let normal = given.map(Vec3::normalize).or_else(|| face_normals[i].try_normalize()).unwrap_or(Vec3::Y);
-                Vertex { position: self.positions[i].to_array(), normal: encode_octahedral(normal) }
+                given.map(Vec3::normalize).or_else(|| face_normals[i].try_normalize()).unwrap_or(Vec3::Y)
+            })
+            .collect();
+        let tangents = if self.tangents.is_empty() {
+            super::tangents::generate(&self.positions, &normals, &self.uvs, &self.indices)
+        } else {
+            self.tangents.iter().zip(&normals).map(|(t, n)| super::tangents::orthonormal(*t, *n)).collect()
+        };
+        let vertices = (0..n)
+            .map(|i| Vertex {
+                position: self.positions[i].to_array(),
+                normal: encode_octahedral(normals[i]),
+                uv: self.uvs.get(i).copied().unwrap_or(Vec2::ZERO).to_array(),
+                tangent: encode_tangent(tangents[i]),
             })
             .collect();
         // Bounds over referenced vertices only: an unused far-away vertex must not inflate them.
@@ -161,6 +199,8 @@ mod tests {
     #[test]
     fn detects_normals_that_ignore_the_geometry() {
         let mut wall = MeshData {
+            uvs: Vec::new(),
+            tangents: Vec::new(),
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ZERO, Vec3::Z, Vec3::X],
             normals: vec![Vec3::Z, Vec3::Z, Vec3::Z, -Vec3::Y, -Vec3::Y, -Vec3::Y],
             indices: vec![0, 1, 2, 3, 4, 5],
@@ -174,7 +214,13 @@ mod tests {
 
     #[test]
     fn refuses_bad_meshes_naming_the_place() {
-        let tri = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
+        let tri = MeshData {
+            uvs: Vec::new(),
+            tangents: Vec::new(),
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: vec![],
+            indices: vec![0, 1, 2],
+        };
         assert!(tri.validate("m").is_ok());
         let oob = MeshData { indices: vec![0, 1, 3], ..tri.clone() };
         let e = oob.validate("mesh 'x' (accessor 4)").unwrap_err().to_string();

@@ -12,6 +12,8 @@ pub mod gltf_import;
 pub mod mesh;
 pub mod procedural;
 pub mod source;
+mod tangents;
+pub mod texture;
 pub mod validate;
 pub mod world;
 
@@ -19,8 +21,9 @@ pub use bounds::{Aabb, Sphere};
 pub use camera::{Camera, Projection};
 pub use camera_path::CameraPath;
 pub use error::SceneError;
-pub use mesh::{decode_octahedral, encode_octahedral, MeshData, Vertex};
+pub use mesh::{decode_octahedral, encode_octahedral, encode_tangent, MeshData, Vertex};
 pub use source::SceneSource;
+pub use texture::{AlphaMode, Texture, TextureRef, TextureSlot};
 
 use glam::{DVec3, Mat3, Vec3};
 
@@ -75,25 +78,57 @@ pub struct Mesh {
     pub sphere: Sphere,
 }
 
-/// Surface parameters of the shading model (metallic-roughness, no textures).
+/// Surface parameters of the shading model (glTF metallic-roughness): factors, each multiplied
+/// by its texture where the material has one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Name for messages.
     pub name: String,
     /// Linear base color.
     pub albedo: Vec3,
+    /// Base colour alpha (coverage where [`Material::alpha_mode`] uses it).
+    pub alpha: f32,
     /// Perceptual roughness in [0, 1].
     pub roughness: f32,
     /// Metalness in [0, 1].
     pub metallic: f32,
+    /// Emitted linear radiance.
+    pub emissive: Vec3,
     /// Both sides are drawn (glTF `doubleSided`); otherwise back faces are culled, the winding
     /// that counts as front being flipped for mirrored instances as glTF specifies.
     pub double_sided: bool,
+    /// How alpha is used.
+    pub alpha_mode: AlphaMode,
+    /// The textures, indexed by [`TextureSlot`] (`textures[slot as usize]`).
+    pub textures: [Option<TextureRef>; 5],
+    /// Scale of the normal texture's x and y.
+    pub normal_scale: f32,
+    /// How much the occlusion texture darkens (0: not at all, 1: fully).
+    pub occlusion_strength: f32,
 }
 
 impl Default for Material {
     fn default() -> Self {
-        Self { name: "default".into(), albedo: Vec3::splat(0.8), roughness: 0.6, metallic: 0.0, double_sided: false }
+        Self {
+            name: "default".into(),
+            albedo: Vec3::splat(0.8),
+            alpha: 1.0,
+            roughness: 0.6,
+            metallic: 0.0,
+            emissive: Vec3::ZERO,
+            double_sided: false,
+            alpha_mode: AlphaMode::Opaque,
+            textures: [None; 5],
+            normal_scale: 1.0,
+            occlusion_strength: 1.0,
+        }
+    }
+}
+
+impl Material {
+    /// The texture of `slot`, if any.
+    pub fn texture(&self, slot: TextureSlot) -> Option<&TextureRef> {
+        self.textures[slot as usize].as_ref()
     }
 }
 
@@ -185,6 +220,9 @@ pub struct Scene {
     pub meshes: Vec<Mesh>,
     /// Materials.
     pub materials: Vec<Material>,
+    /// Decoded textures, shared (a scene is cloned where it is laid out anew; its pixels need
+    /// not be).
+    pub textures: Vec<std::sync::Arc<Texture>>,
     /// Instances.
     pub instances: Vec<Instance>,
     /// Point lights.

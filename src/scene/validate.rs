@@ -25,13 +25,14 @@ pub fn validate_scene(scene: &Scene) -> Result<(), SceneError> {
         ));
     }
     validate_meshes(scene)?;
-    for (i, m) in scene.materials.iter().enumerate() {
-        let place = || format!("material #{i} '{}'", m.name);
-        if !m.albedo.is_finite() || m.albedo.min_element() < 0.0 {
-            return Err(SceneError::invalid(place(), format!("albedo {} must be finite and non-negative", m.albedo)));
+    for (i, t) in scene.textures.iter().enumerate() {
+        if let Some(e) = texture_problem(t) {
+            return Err(SceneError::invalid(format!("texture #{i} '{}'", t.name), e));
         }
-        if !(m.roughness.is_finite() && m.metallic.is_finite()) {
-            return Err(SceneError::invalid(place(), "roughness and metallic must be finite"));
+    }
+    for (i, m) in scene.materials.iter().enumerate() {
+        if let Some(e) = material_problem(m, scene.textures.len()) {
+            return Err(SceneError::invalid(format!("material #{i} '{}'", m.name), e));
         }
     }
     for i in 0..scene.instances.len() {
@@ -160,6 +161,50 @@ fn scene_place(scene: &Scene) -> String {
     }
 }
 
+/// What is wrong with a texture's pixels, if anything.
+pub(crate) fn texture_problem(t: &super::Texture) -> Option<String> {
+    if t.width == 0 || t.height == 0 {
+        return Some(format!("size {}x{} is empty", t.width, t.height));
+    }
+    let side = super::gltf_import::MAX_IMAGE_SIDE;
+    if t.width > side || t.height > side {
+        return Some(format!("size {}x{} exceeds {side} texels a side", t.width, t.height));
+    }
+    let expected = t.width as usize * t.height as usize * 4;
+    (t.rgba.len() != expected)
+        .then(|| format!("{} bytes of RGBA8 for {}x{} texels ({expected} expected)", t.rgba.len(), t.width, t.height))
+}
+
+/// What is wrong with a material of a scene with `textures` textures, if anything.
+pub(crate) fn material_problem(m: &super::Material, textures: usize) -> Option<String> {
+    if !m.albedo.is_finite() || m.albedo.min_element() < 0.0 {
+        return Some(format!("albedo {} must be finite and non-negative", m.albedo));
+    }
+    if !m.emissive.is_finite() || m.emissive.min_element() < 0.0 {
+        return Some(format!("emissive {} must be finite and non-negative", m.emissive));
+    }
+    let factors = [m.roughness, m.metallic, m.alpha, m.normal_scale, m.occlusion_strength];
+    if !factors.iter().all(|f| f.is_finite()) {
+        return Some("roughness, metallic, alpha, normal scale and occlusion strength must be finite".into());
+    }
+    if let super::AlphaMode::Mask { cutoff } = m.alpha_mode {
+        if !cutoff.is_finite() {
+            return Some(format!("alpha cutoff {cutoff} must be finite"));
+        }
+    }
+    for (slot, t) in super::TextureSlot::ALL.iter().zip(&m.textures) {
+        let Some(t) = t else { continue };
+        if t.texture as usize >= textures {
+            return Some(format!("{}: texture {} does not exist (the scene has {textures})", slot.name(), t.texture));
+        }
+        let x = t.transform;
+        if !(x.offset.is_finite() && x.scale.is_finite() && x.rotation.is_finite()) {
+            return Some(format!("{}: the texture transform must be finite", slot.name()));
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -169,7 +214,13 @@ mod tests {
 
     fn one_triangle() -> Scene {
         let mut s = Scene::default();
-        let data = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
+        let data = MeshData {
+            uvs: Vec::new(),
+            tangents: Vec::new(),
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: vec![],
+            indices: vec![0, 1, 2],
+        };
         let mesh = s.add_mesh("tri", &data, "test").unwrap();
         let material = s.add_material(Material::default());
         s.instances.push(Instance { transform: Transform::default(), mesh, material, flags: 0 });

@@ -131,6 +131,8 @@ pub enum Change {
     Mesh(u32),
     /// This material was registered, changed or unregistered.
     Material(u32),
+    /// This texture was registered.
+    Texture(u32),
 }
 
 /// Slots of a table with generations and a free list.
@@ -472,9 +474,21 @@ impl World {
         Ok(())
     }
 
+    /// Registers a texture (decoded RGBA8) for materials to use and returns its index. Textures
+    /// stay registered: a material that no longer uses one does not free it.
+    pub fn add_texture(&mut self, texture: super::Texture) -> Result<u32, WorldError> {
+        if let Some(message) = super::validate::texture_problem(&texture) {
+            return Err(WorldError::Invalid { handle: format!("texture '{}'", texture.name), message });
+        }
+        self.scene.textures.push(std::sync::Arc::new(texture));
+        let index = (self.scene.textures.len() - 1) as u32;
+        self.record(Change::Texture(index));
+        Ok(index)
+    }
+
     /// Registers a material and returns its index.
     pub fn add_material(&mut self, material: Material) -> Result<u32, WorldError> {
-        material_error(&material).map_or(Ok(()), |message| {
+        super::validate::material_problem(&material, self.scene.textures.len()).map_or(Ok(()), |message| {
             Err(WorldError::Invalid { handle: format!("material '{}'", material.name), message })
         })?;
         if self.scene.materials.len() >= super::validate::MAX_MATERIALS {
@@ -492,7 +506,7 @@ impl World {
         if let Some(e) = self.unknown_material(|| "set_material".into(), index) {
             return Err(e);
         }
-        if let Some(message) = material_error(&material) {
+        if let Some(message) = super::validate::material_problem(&material, self.scene.textures.len()) {
             return Err(WorldError::Invalid { handle: format!("material {index} '{}'", material.name), message });
         }
         self.scene.materials[index as usize] = material;
@@ -584,13 +598,6 @@ fn transform_error(t: &Transform) -> Option<String> {
         return Some(format!("transform {:?} is not finite", t.linear));
     }
     super::position_error("translation", t.translation)
-}
-
-fn material_error(m: &Material) -> Option<String> {
-    if !m.albedo.is_finite() || m.albedo.min_element() < 0.0 {
-        return Some(format!("albedo {} must be finite and non-negative", m.albedo));
-    }
-    (!(m.roughness.is_finite() && m.metallic.is_finite())).then(|| "roughness and metallic must be finite".into())
 }
 
 fn light_error(l: &PointLight) -> Option<String> {

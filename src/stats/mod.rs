@@ -115,6 +115,9 @@ pub struct RunStats {
     /// Device bytes of every resource the graph allocated (G-buffer images or the compressed
     /// G-buffer, depth, ...), before aliasing.
     pub resources: Vec<ResourceBytes>,
+    /// Device bytes of the scene's textures (every size class's array with its mips).
+    #[serde(default)]
+    pub texture_bytes: u64,
     /// Per-frame figures.
     pub frames: Vec<FrameStats>,
     /// Error of the last frame (the saved image) against its supersampled reference (with

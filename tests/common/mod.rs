@@ -93,6 +93,7 @@ pub fn boxes_scene() -> cullgraph::scene::Scene {
         roughness: 0.9,
         metallic: 0.0,
         double_sided: false,
+        ..Default::default()
     });
     let red = scene.add_material(Material {
         name: "red".into(),
@@ -100,6 +101,7 @@ pub fn boxes_scene() -> cullgraph::scene::Scene {
         roughness: 0.4,
         metallic: 0.0,
         double_sided: false,
+        ..Default::default()
     });
     let blue = scene.add_material(Material {
         name: "blue".into(),
@@ -107,6 +109,7 @@ pub fn boxes_scene() -> cullgraph::scene::Scene {
         roughness: 0.3,
         metallic: 0.5,
         double_sided: false,
+        ..Default::default()
     });
     let place = |scale: Vec3, at: DVec3, material| Instance {
         transform: Transform { linear: Mat3::from_diagonal(scale), translation: at },

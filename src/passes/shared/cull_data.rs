@@ -225,8 +225,13 @@ mod tests {
     #[test]
     fn records_follow_the_draw_list_and_contain_every_vertex() {
         let mut scene = Scene::default();
-        let tri =
-            MeshData { positions: vec![Vec3::ZERO, Vec3::X * 2.0, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
+        let tri = MeshData {
+            uvs: Vec::new(),
+            tangents: Vec::new(),
+            positions: vec![Vec3::ZERO, Vec3::X * 2.0, Vec3::Y],
+            normals: vec![],
+            indices: vec![0, 1, 2],
+        };
         let a = scene.add_mesh("a", &tri, "a").unwrap();
         let b = scene.add_mesh("b", &tri, "b").unwrap();
         scene.add_material(Default::default());

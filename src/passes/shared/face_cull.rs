@@ -162,7 +162,13 @@ mod tests {
         use crate::scene::{Instance, Material, MeshData, Transform};
         use glam::{DVec3, Mat3, Vec3};
         let mut scene = Scene::default();
-        let tri = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
+        let tri = MeshData {
+            uvs: Vec::new(),
+            tangents: Vec::new(),
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: vec![],
+            indices: vec![0, 1, 2],
+        };
         let a = scene.add_mesh("a", &tri, "a").unwrap();
         let b = scene.add_mesh("b", &tri, "b").unwrap();
         let _unused = scene.add_mesh("c", &tri, "c").unwrap();

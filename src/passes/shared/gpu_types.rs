@@ -70,7 +70,45 @@ impl GpuInstance {
     }
 }
 
-/// A material as the shaders read it (32 bytes).
+/// One texture of a material as the shaders read it (48 bytes; `MaterialTexture` in
+/// `shaders/common/scene.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterialTexture {
+    /// The texture-coordinate transform's first row: `u' = x * u + y * v + z`.
+    pub row0: [f32; 4],
+    /// Its second row.
+    pub row1: [f32; 4],
+    /// `class << 16 | layer` in the texture arrays ([`super::textures::GpuTextures`]), or
+    /// [`super::textures::NO_TEXTURE`].
+    pub placement: u32,
+    /// Wrap of u (bits 0-1) and v (bits 2-3) as `Wrap` (0 repeat, 1 mirrored repeat, 2 clamp),
+    /// nearest magnification (bit 4) and minification (bit 5).
+    pub sampling: u32,
+    /// Padding.
+    pub pad: [u32; 2],
+}
+
+impl Default for GpuMaterialTexture {
+    fn default() -> Self {
+        Self {
+            row0: [1.0, 0.0, 0.0, 0.0],
+            row1: [0.0, 1.0, 0.0, 0.0],
+            placement: super::textures::NO_TEXTURE,
+            sampling: 0,
+            pad: [0; 2],
+        }
+    }
+}
+
+/// `alpha_mode` of [`GpuMaterial`].
+pub const ALPHA_OPAQUE: u32 = 0;
+/// See [`ALPHA_OPAQUE`].
+pub const ALPHA_MASK: u32 = 1;
+/// See [`ALPHA_OPAQUE`].
+pub const ALPHA_BLEND: u32 = 2;
+
+/// A material as the shaders read it (304 bytes; `GpuMaterial` in `shaders/common/scene.glsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
@@ -80,17 +118,60 @@ pub struct GpuMaterial {
     pub roughness: f32,
     /// Metalness.
     pub metallic: f32,
-    /// Padding to 32 bytes.
+    /// Base colour alpha.
+    pub alpha: f32,
+    /// Alpha below which a masked material's fragments are discarded.
+    pub alpha_cutoff: f32,
+    /// `ALPHA_*`.
+    pub alpha_mode: u32,
+    /// Emitted linear radiance.
+    pub emissive: [f32; 3],
+    /// Scale of the normal texture's x and y.
+    pub normal_scale: f32,
+    /// How much the occlusion texture darkens.
+    pub occlusion_strength: f32,
+    /// Padding.
     pub pad: [f32; 3],
+    /// Per [`crate::scene::TextureSlot`], in its order.
+    pub textures: [GpuMaterialTexture; 5],
 }
 
-impl From<&Material> for GpuMaterial {
-    fn from(m: &Material) -> Self {
+impl GpuMaterial {
+    /// `m` for the shaders, its textures placed as `placements` (by scene texture) says.
+    pub fn new(m: &Material, placements: &[u32]) -> Self {
+        let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
+            crate::scene::AlphaMode::Opaque => (ALPHA_OPAQUE, 0.0),
+            crate::scene::AlphaMode::Mask { cutoff } => (ALPHA_MASK, cutoff),
+            crate::scene::AlphaMode::Blend => (ALPHA_BLEND, 0.0),
+        };
+        let mut textures = [GpuMaterialTexture::default(); 5];
+        for (gpu, t) in textures.iter_mut().zip(&m.textures) {
+            let Some(t) = t else { continue };
+            let [r0, r1] = t.transform.rows();
+            let wrap = |w: crate::scene::texture::Wrap| w as u32;
+            *gpu = GpuMaterialTexture {
+                row0: r0.to_array(),
+                row1: r1.to_array(),
+                placement: placements.get(t.texture as usize).copied().unwrap_or(super::textures::NO_TEXTURE),
+                sampling: wrap(t.sampler.wrap_u)
+                    | wrap(t.sampler.wrap_v) << 2
+                    | (t.sampler.nearest_mag as u32) << 4
+                    | (t.sampler.nearest_min as u32) << 5,
+                pad: [0; 2],
+            };
+        }
         Self {
             albedo: m.albedo.to_array(),
             roughness: m.roughness.clamp(0.0, 1.0),
             metallic: m.metallic.clamp(0.0, 1.0),
+            alpha: m.alpha.clamp(0.0, 1.0),
+            alpha_cutoff,
+            alpha_mode,
+            emissive: m.emissive.to_array(),
+            normal_scale: m.normal_scale,
+            occlusion_strength: m.occlusion_strength.clamp(0.0, 1.0),
             pad: [0.0; 3],
+            textures,
         }
     }
 }
@@ -261,7 +342,8 @@ mod tests {
     #[test]
     fn layouts_match_the_shader_sizes() {
         assert_eq!(std::mem::size_of::<GpuInstance>(), 64);
-        assert_eq!(std::mem::size_of::<GpuMaterial>(), 32);
+        assert_eq!(std::mem::size_of::<GpuMaterialTexture>(), 48);
+        assert_eq!(std::mem::size_of::<GpuMaterial>(), 64 + 5 * 48);
         assert_eq!(std::mem::size_of::<GpuPointLight>(), 32);
         assert_eq!(std::mem::size_of::<GpuCullView>(), 64);
         assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16 + 2 * 64 + 2 * 16);

@@ -11,6 +11,7 @@ pub mod face_cull;
 pub mod gpu_types;
 pub mod scene_buffers;
 pub mod slot_layout;
+pub mod textures;
 
 use crate::gpu::{Buffer, BufferDesc, GpuContext, MemoryLocation};
 use crate::graph::{FrameInputs, PassContext, FRAMES_IN_FLIGHT};

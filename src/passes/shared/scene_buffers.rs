@@ -34,6 +34,8 @@ pub struct GpuScene {
     /// [`super::cull_data::GpuGroupBounds`] per draw group (empty for a changing world's reserved groups): the local bounds that
     /// a changing world's moved instances get their cull bounds from.
     pub group_bounds: Buffer,
+    /// The scene's textures, in size-class arrays.
+    pub textures: super::textures::GpuTextures,
     /// Per instance: its mesh's first index and vertex offset (`uvec2`), for passes that rebuild
     /// a triangle from its id (the visibility buffer).
     pub instance_triangles: Buffer,
@@ -151,7 +153,9 @@ impl GpuScene {
         profiling::scope!("cullgraph::upload_scene");
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let instances: Vec<GpuInstance> = scene.instances.iter().map(GpuInstance::new).collect();
-        let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();
+        let textures = super::textures::GpuTextures::upload(ctx, scene, batch)?;
+        let materials: Vec<GpuMaterial> =
+            scene.materials.iter().map(|m| GpuMaterial::new(m, textures.placements())).collect();
         let cull = super::cull_data::CullData::new(scene, &draws);
         let count = draws.regions.len;
         Ok(Self {
@@ -203,6 +207,7 @@ impl GpuScene {
                 bytemuck::cast_slice(&instance_triangle_bases(scene)),
             )?,
             regions: draws.regions,
+            textures,
             instance_count: scene.instances.len() as u32,
             triangles: drawn_triangles(scene),
             max_mesh_triangles: scene.meshes.iter().map(|m| m.index_count / 3).max().unwrap_or(0),
@@ -241,7 +246,13 @@ mod tests {
     /// A scene of `meshes` one-triangle meshes and one material, no instances yet.
     fn triangle_meshes(meshes: usize) -> (Scene, Vec<u32>) {
         let mut scene = Scene::default();
-        let tri = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], normals: vec![], indices: vec![0, 1, 2] };
+        let tri = MeshData {
+            uvs: Vec::new(),
+            tangents: Vec::new(),
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: vec![],
+            indices: vec![0, 1, 2],
+        };
         let ids = (0..meshes).map(|m| scene.add_mesh(&format!("m{m}"), &tri, "m").unwrap()).collect();
         scene.add_material(Default::default());
         (scene, ids)

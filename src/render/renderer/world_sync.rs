@@ -400,7 +400,7 @@ impl Renderer {
                 Change::Instance(i) => instances.push(i),
                 Change::Transform(_) => moves += 1,
                 Change::Light(_) => lights = true,
-                Change::Mesh(_) => reupload = true,
+                Change::Mesh(_) | Change::Texture(_) => reupload = true,
                 Change::Material(m) => {
                     reupload = true;
                     materials.push(m);

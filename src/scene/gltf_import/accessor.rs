@@ -17,6 +17,28 @@ pub(super) fn read_vec3(accessor: &Accessor<'_>, buffers: &[Vec<u8>]) -> Result<
     read(accessor, buffers, 12, |b| [f32_at(b, 0), f32_at(b, 4), f32_at(b, 8)])
 }
 
+/// Reads texture coordinates: a `VEC2` of `FLOAT`, or of normalized `UNSIGNED_BYTE` or
+/// `UNSIGNED_SHORT`.
+pub(super) fn read_uv(accessor: &Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<[f32; 2]>, String> {
+    let what = "VEC2 of FLOAT, or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT";
+    expect_type(accessor, Dimensions::Vec2, &[DataType::F32, DataType::U8, DataType::U16], what)?;
+    match accessor.data_type() {
+        DataType::F32 => read(accessor, buffers, 8, |b| [f32_at(b, 0), f32_at(b, 4)]),
+        _ if !accessor.normalized() => Err(format!("must be {what}, found integers that are not normalized")),
+        DataType::U8 => read(accessor, buffers, 2, |b| [b[0] as f32 / 255.0, b[1] as f32 / 255.0]),
+        _ => read(accessor, buffers, 4, |b| {
+            let u = |at: usize| u16::from_le_bytes([b[at], b[at + 1]]) as f32 / 65535.0;
+            [u(0), u(2)]
+        }),
+    }
+}
+
+/// Reads a `VEC4` of `FLOAT` accessor (tangents).
+pub(super) fn read_vec4(accessor: &Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<[f32; 4]>, String> {
+    expect_type(accessor, Dimensions::Vec4, &[DataType::F32], "VEC4 of FLOAT")?;
+    read(accessor, buffers, 16, |b| [f32_at(b, 0), f32_at(b, 4), f32_at(b, 8), f32_at(b, 12)])
+}
+
 /// Reads a `SCALAR` accessor of `UNSIGNED_BYTE`, `UNSIGNED_SHORT` or `UNSIGNED_INT` as indices.
 pub(super) fn read_indices(accessor: &Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
     expect_type(

@@ -1,7 +1,6 @@
 //! Reading a glTF/GLB file and its buffers (GLB `BIN` chunk, external `.bin` files, `data:` URIs).
-//!
-//! Images are never loaded: cullgraph ignores textures, and a missing texture must not stop a
-//! scene from loading.
+//! Images are read by `images.rs`, which turns any failure into a placeholder: a missing texture
+//! must not stop a scene from loading.
 
 use gltf::buffer::Source;
 use gltf::{Document, Gltf};
@@ -144,7 +143,7 @@ pub(super) fn describe_error(error: gltf::Error) -> String {
 }
 
 /// The bytes of a `data:[<media type>];base64,<data>` URI (glTF embeds buffers so).
-fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
+pub(super) fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
     use base64::Engine;
     let (header, data) = uri.split_once(',').ok_or("a data URI needs a ',' before its data")?;
     if !header.ends_with(";base64") {
@@ -155,7 +154,7 @@ fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
 
 /// Decodes `%XX` escapes of a relative URI; `None` when an escape is malformed or the result is
 /// not UTF-8.
-fn percent_decode(uri: &str) -> Option<String> {
+pub(super) fn percent_decode(uri: &str) -> Option<String> {
     let bytes = uri.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;
@@ -173,7 +172,7 @@ fn percent_decode(uri: &str) -> Option<String> {
 }
 
 /// A URI cut to a printable length (data URIs can be megabytes long).
-fn shorten(uri: &str) -> String {
+pub(super) fn shorten(uri: &str) -> String {
     match uri.char_indices().nth(48) {
         Some((at, _)) => format!("{}...", &uri[..at]),
         None => uri.to_string(),

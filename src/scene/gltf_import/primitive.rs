@@ -4,15 +4,16 @@
 use super::accessor;
 use crate::scene::error::SceneError;
 use crate::scene::mesh::MeshData;
-use glam::Vec3;
+use glam::{Vec2, Vec3, Vec4};
 use gltf::mesh::{Mode, Semantic};
 use gltf::Primitive;
 
 /// What became of a primitive.
 pub(super) enum Converted {
-    /// Triangle-list geometry, the place string to hand to `Scene::add_mesh`, and a note when
-    /// some of the file's normals were unusable and are recomputed from the faces.
-    Mesh(MeshData, String, Option<String>),
+    /// Triangle-list geometry, the place string to hand to `Scene::add_mesh`, and notes on
+    /// attributes that were unusable (normals recomputed from the faces, texture coordinates or
+    /// tangents dropped).
+    Mesh(MeshData, String, Vec<String>),
     /// A primitive that cannot be drawn as triangles, with the reason.
     Skipped(String),
 }
@@ -39,7 +40,7 @@ pub(super) fn convert(primitive: &Primitive<'_>, buffers: &[Vec<u8>], place: &st
     let n = positions.len();
 
     let mut place_for_mesh = pos_place.clone();
-    let mut normal_note = None;
+    let mut normal_note: Option<String> = None;
     let normals = match primitive.get(&Semantic::Normals) {
         None => Vec::new(),
         Some(acc) => {
@@ -100,19 +101,75 @@ pub(super) fn convert(primitive: &Primitive<'_>, buffers: &[Vec<u8>], place: &st
             format!("a TRIANGLES primitive needs a multiple of 3 {what}, it has {}", indices.len()),
         ));
     }
-    let mut mesh = MeshData { positions, normals, indices };
+    let (uvs, uv_note) = optional_attribute(primitive, Semantic::TexCoords(0), "TEXCOORD_0", n, place, |acc| {
+        accessor::read_uv(acc, buffers).map(|v| v.into_iter().map(Vec2::from_array).collect())
+    });
+    let (tangents, tangent_note) = optional_attribute(primitive, Semantic::Tangents, "TANGENT", n, place, |acc| {
+        accessor::read_vec4(acc, buffers).map(|v| v.into_iter().map(Vec4::from_array).collect())
+    });
+    let tangents = if uvs.is_empty() { Vec::new() } else { tangents };
+    let mut notes: Vec<String> = normal_note.into_iter().chain(uv_note).chain(tangent_note).collect();
+    let mut mesh = MeshData { uvs, tangents, positions, normals, indices };
     // Normals that contradict the faces (all +Y on walls, say) would light the mesh as if it
     // were flat; recompute them from the faces and say so.
     if let Some(share) = mesh.normal_disagreement().filter(|&s| s > NORMAL_DISAGREEMENT_LIMIT) {
         // Notes are printed after the file name already.
         let within_file = place.split_once(": ").map_or(place, |(_, rest)| rest);
-        normal_note = Some(format!(
+        notes.push(format!(
             "{within_file}: the file's normals are nearly perpendicular to {:.0}% of the surface area; they are ignored and computed from the faces",
             share * 100.0
         ));
         mesh.normals.clear();
     }
-    Ok(Converted::Mesh(mesh, place_for_mesh, normal_note))
+    Ok(Converted::Mesh(mesh, place_for_mesh, notes))
+}
+
+/// Reads an attribute the mesh can do without (texture coordinates, tangents): one that is
+/// unreadable, of the wrong type or count, or not finite is dropped with a note naming its
+/// accessor, and the primitive still loads.
+fn optional_attribute<T>(
+    primitive: &Primitive<'_>,
+    semantic: Semantic,
+    name: &str,
+    count: usize,
+    place: &str,
+    read: impl Fn(&gltf::Accessor<'_>) -> Result<Vec<T>, String>,
+) -> (Vec<T>, Option<String>)
+where
+    T: Finite,
+{
+    let Some(acc) = primitive.get(&semantic) else { return (Vec::new(), None) };
+    let at = format!("{place}, {name} accessor {}", acc.index());
+    let checked = read(&acc).and_then(|values| {
+        if values.len() != count {
+            Err(format!("{} values for {count} positions", values.len()))
+        } else if let Some(i) = values.iter().position(|v| !v.finite()) {
+            Err(format!("value {i} is not finite"))
+        } else {
+            Ok(values)
+        }
+    });
+    match checked {
+        Ok(values) => (values, None),
+        Err(why) => (Vec::new(), Some(format!("{at}: {why}; the attribute is ignored"))),
+    }
+}
+
+/// Values that can be checked for being finite.
+trait Finite {
+    fn finite(&self) -> bool;
+}
+
+impl Finite for Vec2 {
+    fn finite(&self) -> bool {
+        self.is_finite()
+    }
+}
+
+impl Finite for Vec4 {
+    fn finite(&self) -> bool {
+        self.is_finite()
+    }
 }
 
 /// Share of surface area with contradicting normals above which a primitive's normals are

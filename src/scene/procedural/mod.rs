@@ -71,7 +71,7 @@ pub(crate) fn instance_storage(scene: &str, n: usize) -> Result<Vec<Instance>, S
 
 /// A material shorthand.
 pub(crate) fn material(name: &str, albedo: [f32; 3], roughness: f32, metallic: f32) -> Material {
-    Material { name: name.into(), albedo: Vec3::from_array(albedo), roughness, metallic, double_sided: false }
+    Material { name: name.into(), albedo: Vec3::from_array(albedo), roughness, metallic, ..Default::default() }
 }
 
 #[cfg(test)]

@@ -1,0 +1,246 @@
+//! A scene's textures on the GPU, in a form every device we target can sample without
+//! descriptor indexing: one 2D array image per size class ([`TEXTURE_CLASSES`] square sides,
+//! 16 to 2048 texels), each texture resampled to its class's side and given a layer, with its
+//! full mip chain. A material names a texture by class and layer; shaders pick the class's
+//! array in a `switch` over constant indices (`shaders/common/textures.glsl`), and the layer as
+//! the array coordinate. Lavapipe (no dynamic indexing of sampled-image arrays) and NVIDIA take
+//! the same path, so both give the same image.
+//!
+//! Mips are box-filtered on the CPU at upload, in linear light for textures that some material
+//! uses as colour (base colour, emissive: sRGB) and in stored values otherwise.
+
+use crate::gpu::texture_array::TextureArray;
+use crate::gpu::{Bind, GpuContext, Sampler, UploadBatch};
+use crate::scene::{Scene, Texture, TextureSlot};
+use ash::vk;
+
+/// Size classes: sides 16, 32, ..., 2048.
+pub const TEXTURE_CLASSES: usize = 8;
+/// The smallest class's side (smaller textures are enlarged to it).
+pub const MIN_TEXTURE_SIDE: u32 = 16;
+/// The largest class's side (larger textures are reduced to it).
+pub const MAX_TEXTURE_SIDE: u32 = MIN_TEXTURE_SIDE << (TEXTURE_CLASSES - 1);
+/// Where a material has no texture in a slot.
+pub const NO_TEXTURE: u32 = u32::MAX;
+
+/// The class of a `width` x `height` texture: the smallest square side that holds its larger
+/// side, within the classes.
+pub fn class_of(width: u32, height: u32) -> usize {
+    let side = width.max(height).clamp(MIN_TEXTURE_SIDE, MAX_TEXTURE_SIDE).next_power_of_two();
+    (side / MIN_TEXTURE_SIDE).trailing_zeros() as usize
+}
+
+/// The side of class `class`.
+pub fn class_side(class: usize) -> u32 {
+    MIN_TEXTURE_SIDE << class
+}
+
+/// See the module documentation.
+pub struct GpuTextures {
+    /// One array per class (a 1x1 array of one layer for a class no texture uses).
+    arrays: Vec<TextureArray>,
+    sampler: Sampler,
+    /// Per scene texture: `class << 16 | layer`.
+    placement: Vec<u32>,
+}
+
+impl GpuTextures {
+    /// Resamples, mips and queues the upload of every texture of `scene`.
+    pub fn upload(ctx: &GpuContext, scene: &Scene, batch: &mut UploadBatch) -> crate::Result<Self> {
+        let srgb = srgb_uses(scene);
+        let mut members: Vec<Vec<usize>> = vec![Vec::new(); TEXTURE_CLASSES];
+        let mut placement = Vec::with_capacity(scene.textures.len());
+        for (i, t) in scene.textures.iter().enumerate() {
+            let class = class_of(t.width, t.height);
+            placement.push(((class as u32) << 16) | members[class].len() as u32);
+            members[class].push(i);
+        }
+        let mut arrays = Vec::with_capacity(TEXTURE_CLASSES);
+        for (class, ids) in members.iter().enumerate() {
+            if ids.is_empty() {
+                let array = TextureArray::new(ctx, &format!("textures {class} (unused)"), 1, 1)?;
+                queue(ctx, batch, &array, &[vec![255u8; 4]])?;
+                arrays.push(array);
+                continue;
+            }
+            let side = class_side(class);
+            let layers: Vec<Vec<u8>> =
+                ids.iter().map(|&i| mip_chain(&resample(&scene.textures[i], side), side, srgb[i])).collect();
+            let array = TextureArray::new(ctx, &format!("textures {side}x{side}"), side, ids.len() as u32)?;
+            queue(ctx, batch, &array, &layers)?;
+            arrays.push(array);
+        }
+        // Anisotropic filtering keeps grazing surfaces sharp where the GPU filters in hardware;
+        // a CPU rasterizer (lavapipe) takes dozens of times longer per texel with it, so there
+        // textures are filtered trilinearly.
+        let anisotropic = ctx.caps().kind != vk::PhysicalDeviceType::CPU;
+        let sampler = Sampler::new(
+            ctx,
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::LINEAR)
+                .min_filter(vk::Filter::LINEAR)
+                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+                .address_mode_u(vk::SamplerAddressMode::REPEAT)
+                .address_mode_v(vk::SamplerAddressMode::REPEAT)
+                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .anisotropy_enable(anisotropic)
+                .max_anisotropy(ctx.caps().limits.max_sampler_anisotropy.min(8.0))
+                .max_lod(vk::LOD_CLAMP_NONE),
+        )?;
+        Ok(Self { arrays, sampler, placement })
+    }
+
+    /// Where scene texture `texture` lives: `class << 16 | layer`.
+    pub fn placement(&self, texture: u32) -> u32 {
+        self.placement.get(texture as usize).copied().unwrap_or(NO_TEXTURE)
+    }
+
+    /// Every placement, by scene texture.
+    pub fn placements(&self) -> &[u32] {
+        &self.placement
+    }
+
+    /// The bindings of `shaders/common/textures.glsl` from binding `first` on: per class, its
+    /// sRGB view then its linear view.
+    pub fn bindings(&self, first: u32) -> Vec<Bind> {
+        let layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let sampler = self.sampler.handle();
+        self.arrays
+            .iter()
+            .enumerate()
+            .flat_map(|(c, a)| {
+                let at = first + 2 * c as u32;
+                [
+                    Bind::Sampled(at, a.srgb_view(), sampler, layout),
+                    Bind::Sampled(at + 1, a.linear_view(), sampler, layout),
+                ]
+            })
+            .collect()
+    }
+
+    /// Device bytes of the texture arrays.
+    pub fn bytes(&self) -> u64 {
+        self.arrays.iter().map(TextureArray::bytes).sum()
+    }
+}
+
+/// Per scene texture, whether a material samples it as sRGB colour.
+fn srgb_uses(scene: &Scene) -> Vec<bool> {
+    let mut srgb = vec![false; scene.textures.len()];
+    for m in &scene.materials {
+        for slot in TextureSlot::ALL.into_iter().filter(|s| s.srgb()) {
+            if let Some(t) = m.texture(slot).and_then(|t| srgb.get_mut(t.texture as usize)) {
+                *t = true;
+            }
+        }
+    }
+    srgb
+}
+
+/// `texture` as `side` x `side` RGBA8 texels.
+fn resample(texture: &Texture, side: u32) -> Vec<u8> {
+    if texture.width == side && texture.height == side {
+        return texture.rgba.clone();
+    }
+    let Some(image) = image::RgbaImage::from_raw(texture.width, texture.height, texture.rgba.clone()) else {
+        return vec![255; (side * side * 4) as usize];
+    };
+    image::imageops::resize(&image, side, side, image::imageops::FilterType::Triangle).into_raw()
+}
+
+fn srgb_to_linear(v: u8) -> f32 {
+    let c = v as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn linear_to_srgb(c: f32) -> u8 {
+    let s = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0).round().clamp(0.0, 255.0) as u8
+}
+
+/// Mip 0 (`side` x `side`) followed by every smaller mip down to 1x1, each the 2x2 box average
+/// of the one above (colour channels in linear light where `srgb`; alpha always linear).
+fn mip_chain(level0: &[u8], side: u32, srgb: bool) -> Vec<u8> {
+    let mut out = level0.to_vec();
+    let mut prev = level0.to_vec();
+    let mut size = side;
+    while size > 1 {
+        let half = size / 2;
+        let mut next = vec![0u8; (half * half * 4) as usize];
+        for y in 0..half {
+            for x in 0..half {
+                for c in 0..4 {
+                    let at = |dx: u32, dy: u32| prev[(((2 * y + dy) * size + 2 * x + dx) * 4 + c) as usize];
+                    let texels = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)];
+                    next[((y * half + x) * 4 + c) as usize] = if srgb && c < 3 {
+                        linear_to_srgb(texels.iter().map(|&v| srgb_to_linear(v)).sum::<f32>() / 4.0)
+                    } else {
+                        ((texels.iter().map(|&v| v as u32).sum::<u32>() + 2) / 4) as u8
+                    };
+                }
+            }
+        }
+        out.extend_from_slice(&next);
+        prev = next;
+        size = half;
+    }
+    out
+}
+
+/// Queues `layers` (each a whole mip chain as [`mip_chain`] lays it out) into `array`.
+fn queue(ctx: &GpuContext, batch: &mut UploadBatch, array: &TextureArray, layers: &[Vec<u8>]) -> crate::Result<()> {
+    let mut data = Vec::with_capacity(layers.iter().map(Vec::len).sum());
+    let mut regions = Vec::new();
+    for (layer, chain) in layers.iter().enumerate() {
+        let mut offset = data.len() as u64;
+        let mut size = array.size();
+        for mip in 0..array.mip_levels() {
+            regions.push(
+                vk::BufferImageCopy::default()
+                    .buffer_offset(offset)
+                    .image_subresource(
+                        vk::ImageSubresourceLayers::default()
+                            .aspect_mask(vk::ImageAspectFlags::COLOR)
+                            .mip_level(mip)
+                            .base_array_layer(layer as u32)
+                            .layer_count(1),
+                    )
+                    .image_extent(vk::Extent3D { width: size, height: size, depth: 1 }),
+            );
+            offset += (size * size * 4) as u64;
+            size = (size / 2).max(1);
+        }
+        data.extend_from_slice(chain);
+    }
+    batch.image(ctx, "textures", array.handle(), array.range(), &data, regions)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn classes_hold_the_larger_side() {
+        assert_eq!(class_of(1, 1), 0);
+        assert_eq!(class_of(16, 16), 0);
+        assert_eq!(class_of(17, 3), 1);
+        assert_eq!(class_of(256, 128), 4);
+        assert_eq!(class_of(100_000, 2), TEXTURE_CLASSES - 1);
+        assert_eq!(class_side(class_of(512, 512)), 512);
+    }
+
+    #[test]
+    fn mips_average_in_linear_light_for_colour() {
+        // Black and white texels average to mid-grey light: 188 in sRGB, 128 stored linearly.
+        let level0 = [0, 0, 0, 255, 255, 255, 255, 255, 0, 0, 0, 255, 255, 255, 255, 255];
+        let srgb = mip_chain(&level0, 2, true);
+        assert_eq!(srgb.len(), 20);
+        assert_eq!(&srgb[16..], &[188, 188, 188, 255]);
+        assert_eq!(&mip_chain(&level0, 2, false)[16..], &[128, 128, 128, 255]);
+    }
+}

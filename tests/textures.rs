@@ -1,0 +1,412 @@
+//! Textured and alpha-masked materials through the G-buffer, culling and the visibility oracle
+//! (lavapipe, validation on).
+
+mod common;
+
+use common::GpuTest;
+use cullgraph::render::output::RgbaImage;
+use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
+use cullgraph::scene::texture::{Sampler, Wrap};
+use cullgraph::scene::{AlphaMode, Camera, Instance, Material, MeshData, Scene, Texture, TextureRef, Transform};
+use glam::{DVec3, Mat3, Vec2, Vec3};
+use std::sync::Arc;
+
+const SIZE: (u32, u32) = (160, 120);
+
+/// A unit quad in the xy plane facing +z, u along +x and v down (glTF's image orientation).
+fn quad() -> MeshData {
+    MeshData {
+        positions: vec![
+            Vec3::new(-0.5, -0.5, 0.0),
+            Vec3::new(0.5, -0.5, 0.0),
+            Vec3::new(0.5, 0.5, 0.0),
+            Vec3::new(-0.5, 0.5, 0.0),
+        ],
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        tangents: Vec::new(),
+    }
+}
+
+fn camera() -> Camera {
+    Camera { eye: DVec3::new(0.0, 0.0, 3.0), target: DVec3::ZERO, ..Default::default() }
+}
+
+fn at(translation: DVec3, scale: f64) -> Transform {
+    Transform { linear: Mat3::from_diagonal(Vec3::splat(scale as f32)), translation }
+}
+
+fn render(gpu: &GpuTest, scene: &Scene, graph: &str, verify: bool) -> (cullgraph::stats::FrameStats, RgbaImage) {
+    let shaders = gpu.shaders();
+    let spec = GraphSpec::builtin(graph).unwrap();
+    let mut r = Renderer::with_graph(gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    if verify {
+        r.enable_verification(&shaders).unwrap();
+    }
+    // Two frames: the second has last frame's culling history.
+    r.render_to_image(&camera()).unwrap();
+    r.render_to_image(&camera()).unwrap()
+}
+
+fn pixel(image: &RgbaImage, x: u32, y: u32) -> [u8; 3] {
+    let p = image.get_pixel(x, y).0;
+    [p[0], p[1], p[2]]
+}
+
+/// The channel that dominates a pixel (0 red, 1 green, 2 blue).
+fn dominant(p: [u8; 3]) -> usize {
+    (0..3).max_by_key(|&c| p[c]).unwrap()
+}
+
+/// A lit scene with white light from the camera's side, so that texels keep their hue.
+fn lit_scene() -> Scene {
+    let mut scene = Scene { name: "textures".into(), ..Default::default() };
+    scene.sun.direction = Vec3::new(0.0, 0.0, -1.0);
+    scene
+}
+
+/// A 2x2 texture on a quad shows each texel in its quarter: red top left, green top right,
+/// blue bottom left, white bottom right (nearest filtering).
+#[test]
+fn a_textured_quad_shows_its_texels_where_its_coordinates_put_them() {
+    let gpu = GpuTest::new();
+    let mut scene = lit_scene();
+    let rgba = [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [255, 255, 255, 255]].concat();
+    scene.textures.push(Arc::new(Texture { name: "2x2".into(), width: 2, height: 2, rgba }));
+    let sampler = Sampler { nearest_mag: true, nearest_min: true, ..Default::default() };
+    let mut material = Material { name: "textured".into(), albedo: Vec3::ONE, ..Default::default() };
+    material.textures[0] = Some(TextureRef { sampler, ..TextureRef::new(0) });
+    let m = scene.add_material(material);
+    let mesh = scene.add_mesh("quad", &quad(), "quad").unwrap();
+    scene.instances.push(Instance { transform: at(DVec3::ZERO, 2.0), mesh, material: m, flags: 0 });
+    let (_, image) = render(&gpu, &scene, "default", false);
+    let (cx, cy) = (SIZE.0 / 2, SIZE.1 / 2);
+    let d = 20;
+    assert_eq!(dominant(pixel(&image, cx - d, cy - d)), 0, "top left red: {:?}", pixel(&image, cx - d, cy - d));
+    assert_eq!(dominant(pixel(&image, cx + d, cy - d)), 1, "top right green: {:?}", pixel(&image, cx + d, cy - d));
+    assert_eq!(dominant(pixel(&image, cx - d, cy + d)), 2, "bottom left blue: {:?}", pixel(&image, cx - d, cy + d));
+    let white = pixel(&image, cx + d, cy + d);
+    assert!(
+        white.iter().all(|&c| c > 60) && white.iter().max().unwrap() - white.iter().min().unwrap() < 30,
+        "{white:?}"
+    );
+    gpu.assert_clean();
+}
+
+/// A texture transform (KHR_texture_transform: scale 2 with repeat) tiles the texture: the quad
+/// shows it four times, so the colour left of the centre is the texture's right column.
+#[test]
+fn a_texture_transform_and_wrap_mode_tile_the_texture() {
+    let gpu = GpuTest::new();
+    let mut scene = lit_scene();
+    let rgba = [[255, 0, 0, 255], [0, 255, 0, 255], [255, 0, 0, 255], [0, 255, 0, 255]].concat();
+    scene.textures.push(Arc::new(Texture { name: "columns".into(), width: 2, height: 2, rgba }));
+    let sampler = Sampler { nearest_mag: true, nearest_min: true, wrap_u: Wrap::Repeat, ..Default::default() };
+    let mut tiled = TextureRef { sampler, ..TextureRef::new(0) };
+    tiled.transform.scale = Vec2::splat(2.0);
+    let mut material = Material { name: "tiled".into(), albedo: Vec3::ONE, ..Default::default() };
+    material.textures[0] = Some(tiled);
+    let m = scene.add_material(material);
+    let mesh = scene.add_mesh("quad", &quad(), "quad").unwrap();
+    scene.instances.push(Instance { transform: at(DVec3::ZERO, 2.0), mesh, material: m, flags: 0 });
+    let (_, image) = render(&gpu, &scene, "default", false);
+    let (cx, cy) = (SIZE.0 / 2, SIZE.1 / 2);
+    // u across the quad: 0..2, so columns red, green, red, green from left to right.
+    let quarter = 16;
+    let colours: Vec<usize> =
+        [-3, -1, 1, 3].iter().map(|&k| dominant(pixel(&image, (cx as i32 + k * quarter / 2) as u32, cy))).collect();
+    assert_eq!(
+        colours,
+        [0, 1, 0, 1],
+        "{:?}",
+        [-3, -1, 1, 3].map(|k: i32| pixel(&image, (cx as i32 + k * quarter / 2) as u32, cy))
+    );
+    gpu.assert_clean();
+}
+
+/// A fence of vertical bars (an alpha-masked material: opaque bars, transparent gaps) in front
+/// of a red box. The box shows through the gaps, the bars hide it elsewhere, and two-phase
+/// occlusion culling never culls it: the masked fence occludes only where it is opaque, so the
+/// culled image equals the unculled one and the oracle finds no false negative.
+#[test]
+fn a_box_behind_a_masked_fence_shows_through_its_holes_and_is_never_culled() {
+    let gpu = GpuTest::new();
+    let mut scene = lit_scene();
+    // 32 columns: opaque grey bars on even columns, alpha 0 on odd ones.
+    let rgba: Vec<u8> =
+        (0..32 * 2).flat_map(|i| if (i % 32) % 2 == 0 { [200, 200, 200, 255] } else { [0, 0, 0, 0] }).collect();
+    scene.textures.push(Arc::new(Texture { name: "bars".into(), width: 32, height: 2, rgba }));
+    let sampler = Sampler { nearest_mag: true, nearest_min: true, ..Default::default() };
+    let mut fence = Material {
+        name: "fence".into(),
+        albedo: Vec3::ONE,
+        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+        double_sided: true,
+        ..Default::default()
+    };
+    fence.textures[0] = Some(TextureRef { sampler, ..TextureRef::new(0) });
+    let fence = scene.add_material(fence);
+    let red =
+        scene.add_material(Material { name: "red".into(), albedo: Vec3::new(0.9, 0.05, 0.05), ..Default::default() });
+    let quad_mesh = scene.add_mesh("quad", &quad(), "quad").unwrap();
+    let cube = scene.add_mesh("cube", &common::cube_mesh(), "cube").unwrap();
+    // The fence fills the view; the box sits behind it.
+    scene.instances.push(Instance {
+        transform: at(DVec3::new(0.0, 0.0, 1.0), 4.0),
+        mesh: quad_mesh,
+        material: fence,
+        flags: 0,
+    });
+    scene.instances.push(Instance {
+        transform: at(DVec3::new(0.0, 0.0, -1.0), 1.0),
+        mesh: cube,
+        material: red,
+        flags: 0,
+    });
+    let (stats, culled) = render(&gpu, &scene, "two_phase", true);
+    let verify = stats.verify.expect("verified");
+    assert_eq!(verify.false_negatives, 0, "missed {:?}", verify.missed);
+    assert_eq!(verify.visible, 2, "the box is seen through the gaps");
+    let (_, unculled) = render(&gpu, &scene, "no_cull", false);
+    assert!(culled == unculled, "culling changed the image");
+    // Along the middle row: red pixels (the box through gaps) and grey ones (bars) alternate.
+    let cy = SIZE.1 / 2;
+    let row: Vec<[u8; 3]> = (SIZE.0 / 2 - 12..SIZE.0 / 2 + 12).map(|x| pixel(&culled, x, cy)).collect();
+    let reds = row.iter().filter(|p| p[0] as u32 > 2 * p[1] as u32 && p[0] > 40).count();
+    let greys = row.iter().filter(|p| p[0].abs_diff(p[1]) < 12 && p[1] > 40).count();
+    assert!(reds >= 6 && greys >= 6, "bars and gaps alternate over the box: {row:?}");
+    gpu.assert_clean();
+}
+
+/// Writes `json` as `scene.gltf` in a temporary folder.
+fn gltf_file(json: &serde_json::Value) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.gltf");
+    std::fs::write(&path, serde_json::to_vec(json).unwrap()).unwrap();
+    (dir, path)
+}
+
+fn data_uri(mime: &str, bytes: &[u8]) -> String {
+    use base64::Engine;
+    format!("data:{mime};base64,{}", base64::engine::general_purpose::STANDARD.encode(bytes))
+}
+
+fn png(width: u32, height: u32, rgba: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let encoder = image::codecs::png::PngEncoder::new(&mut out);
+    image::ImageEncoder::write_image(encoder, rgba, width, height, image::ExtendedColorType::Rgba8).unwrap();
+    out
+}
+
+/// One triangle with positions, normals and texture coordinates (FLOAT), and a second
+/// primitive whose TEXCOORD_0 accessor has the wrong type; two images, one a PNG and one not an
+/// image at all; a material with a texture transform and a clamping sampler, and a masked one
+/// on the broken image.
+fn textured_gltf() -> serde_json::Value {
+    let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let mut bin = f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]); // positions 0..36
+    bin.extend(f32s(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0])); // normals 36..72
+    bin.extend(f32s(&[0.0, 1.0, 1.0, 1.0, 0.0, 0.0])); // uvs 72..96
+    let texture = png(2, 1, &[255, 0, 0, 255, 0, 0, 255, 128]);
+    serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_texture_transform"],
+        "buffers": [{"byteLength": bin.len(), "uri": data_uri("application/octet-stream", &bin)}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 72, "byteLength": 24}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC2"}
+        ],
+        "images": [
+            {"uri": data_uri("image/png", &texture), "name": "red-blue"},
+            {"uri": data_uri("image/png", b"not a png at all"), "name": "broken"}
+        ],
+        "samplers": [{"wrapS": 33071, "wrapT": 33648, "magFilter": 9728}],
+        "textures": [{"source": 0, "sampler": 0}, {"source": 1}],
+        "materials": [
+            {"name": "tiled", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+                "extensions": {"KHR_texture_transform": {"scale": [2.0, 3.0], "offset": [0.5, 0.0]}}}}},
+            {"name": "leaves", "alphaMode": "MASK", "alphaCutoff": 0.3,
+             "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}}
+        ],
+        "meshes": [{"primitives": [
+            {"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "material": 0},
+            {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 1}
+        ]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0
+    })
+}
+
+/// The importer reads textures, samplers, texture transforms, alpha modes and texture
+/// coordinates; an image that is not an image becomes the placeholder, and a texture
+/// coordinate accessor of the wrong type is dropped, each with a note naming it, and the rest
+/// of the scene still loads.
+#[test]
+fn gltf_textures_samplers_transforms_and_bad_images_import_as_documented() {
+    use cullgraph::scene::gltf_import::load_with_report;
+    use cullgraph::scene::source::LoadOptions;
+    let (_dir, path) = gltf_file(&textured_gltf());
+    let (scene, report) = load_with_report(&path, &LoadOptions::default()).unwrap();
+    assert_eq!(scene.textures.len(), 2);
+    let t = &scene.textures[0];
+    assert_eq!((t.width, t.height), (2, 1));
+    assert_eq!(t.texel(1, 0), [0, 0, 255, 128]);
+    assert!(scene.textures[1].name.contains("placeholder"), "{}", scene.textures[1].name);
+    let notes = report.notes.join("\n");
+    assert!(notes.contains("image 1 'broken'") && notes.contains("placeholder"), "{notes}");
+    assert!(notes.contains("material 'leaves'") && notes.contains("baseColorTexture"), "{notes}");
+    assert!(notes.contains("TEXCOORD_0 accessor 1") && notes.contains("ignored"), "{notes}");
+    assert!(!notes.contains("extensions are ignored"), "{notes}");
+    let tiled = scene.materials.iter().find(|m| m.name == "tiled").unwrap();
+    let r = tiled.textures[0].unwrap();
+    assert_eq!(r.texture, 0);
+    assert_eq!((r.transform.scale, r.transform.offset), (Vec2::new(2.0, 3.0), Vec2::new(0.5, 0.0)));
+    assert_eq!(
+        (r.sampler.wrap_u, r.sampler.wrap_v, r.sampler.nearest_mag),
+        (Wrap::ClampToEdge, Wrap::MirroredRepeat, true)
+    );
+    let leaves = scene.materials.iter().find(|m| m.name == "leaves").unwrap();
+    assert_eq!(leaves.alpha_mode, AlphaMode::Mask { cutoff: 0.3 });
+    let uvs: Vec<[f32; 2]> = scene.vertices[..3].iter().map(|v| v.uv).collect();
+    assert_eq!(uvs, [[0.0, 1.0], [1.0, 1.0], [0.0, 0.0]]);
+    assert!(scene.vertices[3..6].iter().all(|v| v.uv == [0.0, 0.0]), "the dropped coordinates are zero");
+}
+
+/// A shared test asset.
+fn asset(name: &str) -> std::path::PathBuf {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets").join(name);
+    if path.exists() {
+        path
+    } else {
+        std::path::Path::new("/work/shared/assets").join(name)
+    }
+}
+
+/// The first player spawn of `map` in `nexuiz_spawns.txt`: (eye, target).
+fn spawn(map: &str) -> (DVec3, DVec3) {
+    let text = std::fs::read_to_string(asset("nexuiz_spawns.txt")).unwrap();
+    let line = text.lines().find(|l| l.starts_with(&format!("{map} "))).unwrap();
+    let v = |s: &str| {
+        let c: Vec<f64> = s.split(',').map(|x| x.parse().unwrap()).collect();
+        DVec3::new(c[0], c[1], c[2])
+    };
+    let parts: Vec<&str> = line.split_whitespace().collect();
+    (v(parts[1]), v(parts[2]))
+}
+
+/// The two real game levels render textured from a player's spawn point: many colours (flat
+/// white-grey materials would give few), no visible instance lost to two-phase culling, and the
+/// culled image equal to the unculled one (ons-reborn has alpha-masked foliage).
+#[test]
+fn the_real_levels_render_textured_from_a_spawn_and_culling_stays_exact() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    for (map, file) in [("aneurysm", "nexuiz_aneurysm.glb"), ("ons-reborn", "nexuiz_ons-reborn.glb")] {
+        let scene = cullgraph::scene::gltf_import::load(&asset(file), &Default::default()).unwrap();
+        assert!(scene.textures.len() >= 40, "{map}: {} textures", scene.textures.len());
+        let (eye, target) = spawn(map);
+        let camera = Camera { eye, target, ..Default::default() };
+        let render = |graph: &str, verify: bool| {
+            let spec = GraphSpec::builtin(graph).unwrap();
+            let settings = RenderSettings::new(SIZE.0, SIZE.1);
+            let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), settings, &spec).unwrap();
+            if verify {
+                r.enable_verification(&shaders).unwrap();
+            }
+            r.render_to_image(&camera).unwrap();
+            r.render_to_image(&camera).unwrap()
+        };
+        let (stats, culled) = render("two_phase", true);
+        let verify = stats.verify.expect("verified");
+        assert_eq!(verify.false_negatives, 0, "{map}: missed {:?}", verify.missed);
+        let (_, unculled) = render("no_cull", false);
+        assert!(culled == unculled, "{map}: culling changed the image");
+        let colours: std::collections::HashSet<[u8; 4]> = culled.pixels().map(|p| p.0).collect();
+        assert!(colours.len() > 1500, "{map}: only {} distinct colours: untextured?", colours.len());
+    }
+    gpu.assert_clean();
+}
+
+/// The stats JSON reports the textures' device memory: at least every texel of mip 0 once
+/// resampled to its class, and a third more for the mips.
+#[test]
+fn the_stats_report_texture_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let stats = dir.path().join("stats.json");
+    let scene = asset("nexuiz_aneurysm.glb");
+    let (code, out, err) = common::cli::run(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--size",
+        "64x36",
+        "--out",
+        dir.path().join("a.png").to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let bytes = json["texture_bytes"].as_u64().unwrap();
+    let loaded = cullgraph::scene::gltf_import::load(&scene, &Default::default()).unwrap();
+    let texels: u64 = loaded
+        .textures
+        .iter()
+        .map(|t| {
+            let side = cullgraph::passes::shared::textures::class_side(cullgraph::passes::shared::textures::class_of(
+                t.width, t.height,
+            )) as u64;
+            side * side * 4
+        })
+        .sum();
+    assert!(bytes >= texels * 4 / 3 && bytes < texels * 2, "{bytes} bytes for {texels} bytes of texels");
+}
+
+/// A live world registers a texture and a material that uses it; an instance given that
+/// material shows the texture at the next frame. A material naming a texture that does not
+/// exist is refused with an error naming the material.
+#[test]
+fn textured_materials_register_on_a_live_world() {
+    use cullgraph::scene::world::{World, WorldError};
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut scene = lit_scene();
+    let white = scene.add_material(Material { name: "white".into(), albedo: Vec3::ONE, ..Default::default() });
+    let mesh = scene.add_mesh("quad", &quad(), "quad").unwrap();
+    scene.instances.push(Instance { transform: at(DVec3::ZERO, 2.0), mesh, material: white, flags: 0 });
+    let (mut world, handles) = World::new(scene).unwrap();
+    let spec = GraphSpec::builtin("two_phase").unwrap();
+    let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    let centre = |image: &RgbaImage| pixel(image, SIZE.0 / 2, SIZE.1 / 2);
+    let before = centre(&r.render_to_image(&camera()).unwrap().1);
+    assert!(before.iter().all(|&c| c > 100), "white first: {before:?}");
+
+    let bad = Material {
+        name: "dangling".into(),
+        textures: [Some(TextureRef::new(7)), None, None, None, None],
+        ..Default::default()
+    };
+    match world.add_material(bad) {
+        Err(WorldError::Invalid { handle, message }) => {
+            assert!(handle.contains("dangling") && message.contains("texture 7 does not exist"), "{handle}: {message}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let blue = world.add_texture(Texture::solid("blue", [10, 20, 230, 255])).unwrap();
+    let mut material = Material { name: "blue".into(), albedo: Vec3::ONE, ..Default::default() };
+    material.textures[0] = Some(TextureRef::new(blue));
+    let m = world.add_material(material).unwrap();
+    world.set_materials(&[(handles[0], m)]).unwrap();
+    r.sync(&shaders, &world).unwrap();
+    let after = centre(&r.render_to_image(&camera()).unwrap().1);
+    assert_eq!(dominant(after), 2, "blue now: {after:?}");
+    gpu.assert_clean();
+}
