@@ -7,7 +7,7 @@
 
 #include "textures.glsl"
 
-struct Surface {
+struct MaterialSurface {
     vec3 albedo;
     float alpha;
     float roughness;
@@ -28,8 +28,8 @@ bool material_cuts(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy) {
 // The surface of `m` at `uv`. `geometric` is the interpolated normal already turned to the
 // side the eye sees, `tangent` the interpolated tangent (w: bitangent sign), `front` whether
 // the eye sees the front face (a back face flips the tangent frame with the normal).
-Surface material_surface(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy, vec3 geometric, vec4 tangent, bool front) {
-    Surface s;
+MaterialSurface material_surface(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy, vec3 geometric, vec4 tangent, bool front) {
+    MaterialSurface s;
     vec4 base = sample_material(m.textures[TEX_BASE_COLOR], true, uv, dx, dy);
     s.albedo = m.albedo * base.rgb;
     s.alpha = m.alpha * base.a;

@@ -25,7 +25,7 @@ void main() {
     // eye. A mirrored instance flips the winding, so its outside shows as a back face.
     bool front = gl_FrontFacing != (in_mirrored != 0u);
     if (!front) n = -n;
-    Surface s = material_surface(m, in_uv, dx, dy, n, in_tangent, front);
+    MaterialSurface s = material_surface(m, in_uv, dx, dy, n, in_tangent, front);
     out_albedo_metallic = vec4(s.albedo, s.metallic);
     out_normal_roughness = encode_normal_roughness(s.normal, s.roughness);
 }

@@ -137,7 +137,7 @@ void main() {
     if (!front) n = -n;
     // The textured surface. (No alpha test here: the depth EQUAL test against a depth that has
     // the masked holes already rejects their fragments.)
-    Surface s = material_surface(m, in_uv, duv_dx, duv_dy, n, in_tangent, front);
+    MaterialSurface s = material_surface(m, in_uv, duv_dx, duv_dy, n, in_tangent, front);
     m.albedo = s.albedo;
     m.metallic = s.metallic;
     m.roughness = s.roughness;

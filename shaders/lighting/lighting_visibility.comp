@@ -4,8 +4,10 @@
 // are each shaded once: the triangle is fetched from the shared pools, the camera ray through
 // the pixel center gives its barycentrics (the attributes a rasterizer interpolates at the pixel
 // center), and the tone-mapped result is weighted by the samples the id covers. The background
-// is sky. The scenes have no textures, so no UV gradients are rebuilt.
-#include "../common/scene.glsl"
+// is sky. Texture coordinates and their screen derivatives come from the same ray casts through
+// the pixel center and its right and lower neighbours' (the rasterizer's own derivatives are
+// the differences between neighbouring pixels, so both methods pick the same mips).
+#include "../common/material_surface.glsl"
 #include "../common/shading.glsl"
 #include "../common/octahedral.glsl"
 
@@ -51,44 +53,72 @@ uvec2 load_id(ivec2 pixel, uint s) {
 #endif
 }
 
+// Barycentric weights (of vertices 1 and 2) of the hit of the ray through `pixel` on the plane of
+// the triangle p0, p0 + e1, p0 + e2 (Moller-Trumbore without bounds); false when the ray runs
+// along the plane.
+bool plane_hit(vec2 pixel, vec3 p0, vec3 e1, vec3 e2, out vec2 uv) {
+    vec3 dir = view_direction(pixel);
+    vec3 pv = cross(dir, e2);
+    float det = dot(e1, pv);
+    if (abs(det) <= 1e-20) {
+        uv = vec2(0.0);
+        return false;
+    }
+    vec3 t = -p0;
+    uv = vec2(dot(t, pv), dot(dir, cross(t, e1))) / det;
+    return true;
+}
+
 // The surface of triangle `prim` of instance `id` seen through `center`, at `depth`.
 Surface rebuild(uint id, uint prim, vec2 center, float depth) {
     GpuInstance inst = instances[id];
     uvec2 base = triangle_bases[id];
     vec3 p[3];
     vec3 n[3];
+    vec2 t[3];
+    vec4 tangent[3];
+    mat3 m3 = transpose(mat3(inst.row0.xyz, inst.row1.xyz, inst.row2.xyz));
+    bool mirrored = instance_is_mirrored(inst);
     for (uint k = 0u; k < 3u; ++k) {
         PoolVertex v = vertices[indices[base.x + 3u * prim + k] + base.y];
         p[k] = instance_rel_eye(inst, v.position, frame.eye_hi.xyz, frame.eye_lo.xyz);
         n[k] = instance_normal(inst, oct_decode(unpackSnorm2x16(v.normal_oct)));
+        t[k] = v.uv;
+        vec4 local = vec4(unpackSnorm2x16(v.tangent_xy), unpackSnorm2x16(v.tangent_zw));
+        tangent[k] = vec4(m3 * local.xyz, (local.w < 0.0) != mirrored ? -1.0 : 1.0);
     }
-    // Moller-Trumbore without bounds: barycentrics of the ray's hit on the triangle's plane.
-    vec3 dir = view_direction(center);
     vec3 e1 = p[1] - p[0], e2 = p[2] - p[0];
-    vec3 pv = cross(dir, e2);
-    float det = dot(e1, pv);
+    vec2 b, bx, by;
     vec3 normal = n[0];
-    if (abs(det) > 1e-20) {
-        vec3 t = -p[0];
-        float u = dot(t, pv) / det;
-        float v = dot(dir, cross(t, e1)) / det;
-        normal = (1.0 - u - v) * n[0] + u * n[1] + v * n[2];
+    vec2 uv = t[0], duv_dx = vec2(0.0), duv_dy = vec2(0.0);
+    vec4 tan = tangent[0];
+    if (plane_hit(center, p[0], e1, e2, b)) {
+        float w = 1.0 - b.x - b.y;
+        normal = w * n[0] + b.x * n[1] + b.y * n[2];
+        uv = w * t[0] + b.x * t[1] + b.y * t[2];
+        tan = vec4(w * tangent[0].xyz + b.x * tangent[1].xyz + b.y * tangent[2].xyz, tangent[0].w);
+        if (plane_hit(center + vec2(1.0, 0.0), p[0], e1, e2, bx) && plane_hit(center + vec2(0.0, 1.0), p[0], e1, e2, by)) {
+            mat2 dt = mat2(t[1] - t[0], t[2] - t[0]);
+            duv_dx = dt * (bx - b);
+            duv_dy = dt * (by - b);
+        }
     }
     normal = normalize(normal);
     // As gl_FrontFacing: the winding seen on screen, flipped by a mirroring transform.
-    bool front = (dot(cross(e1, e2), dir) < 0.0) != instance_is_mirrored(inst);
+    bool front = (dot(cross(e1, e2), view_direction(center)) < 0.0) != mirrored;
     if (!front) normal = -normal;
     GpuMaterial m = materials[instance_material(inst)];
+    MaterialSurface textured_surface = material_surface(m, uv, duv_dx, duv_dy, normal, tan, front);
     Surface s;
     s.position = surface_position(center, depth);
-    s.normal = normal;
+    s.normal = textured_surface.normal;
     // The material as the G-buffer methods store it (albedo and metallic in RGBA8 UNORM, roughness
     // in 8 bits), so that every method shades the same inputs: the 8-bit steps of a dark albedo
     // alone shift whole surfaces by about one output level.
-    vec4 albedo_metallic = unpackUnorm4x8(packUnorm4x8(vec4(m.albedo, m.metallic)));
+    vec4 albedo_metallic = unpackUnorm4x8(packUnorm4x8(vec4(textured_surface.albedo, textured_surface.metallic)));
     s.albedo = albedo_metallic.rgb;
     s.metallic = albedo_metallic.a;
-    s.roughness = unpackUnorm4x8(packUnorm4x8(vec4(m.roughness))).x;
+    s.roughness = unpackUnorm4x8(packUnorm4x8(vec4(textured_surface.roughness))).x;
     return s;
 }
 

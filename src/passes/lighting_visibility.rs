@@ -55,7 +55,7 @@ impl PassNode for LightingVisibilityPass {
         let inputs = SceneInputs::of(rec)?;
         let scene = &inputs.scene;
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let binds = [
+        let mut binds = vec![
             Bind::Sampled(0, depth.sampled_view(), self.sampler.handle(), read),
             Bind::Sampled(1, ids.sampled_view(), self.sampler.handle(), read),
             Bind::Buffer(2, inputs.constants().handle()),
@@ -67,6 +67,7 @@ impl PassNode for LightingVisibilityPass {
             Bind::Buffer(8, scene.indices.handle()),
             Bind::Buffer(9, scene.instance_triangles.handle()),
         ];
+        binds.extend(scene.textures.bindings(super::gbuffer::TEXTURE_BINDING));
         let triangle_bits = if self.packed_ids { packed_id_bits(&self.name, scene)? } else { 0 };
         let push = [bytemuck::bytes_of(&self.settings), &triangle_bits.to_ne_bytes()].concat();
         self.pipeline.dispatch_over(rec.cmd, &binds, &push, output.extent());
