@@ -444,3 +444,29 @@ fn every_msaa_method_shades_the_same_textures() {
     }
     gpu.assert_clean();
 }
+
+/// Both levels from their first spawn at 320x180 through the default graph, first frame, match
+/// the images in `tests/reference/` (written by this test with `CULLGRAPH_UPDATE_REFERENCE=1`)
+/// within a small mean FLIP.
+#[test]
+fn the_real_levels_match_their_reference_images() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    for map in ["aneurysm", "ons-reborn"] {
+        let scene =
+            cullgraph::scene::gltf_import::load(&asset(&format!("nexuiz_{map}.glb")), &Default::default()).unwrap();
+        let (eye, target) = spawn(map);
+        let camera = Camera { eye, target, ..Default::default() };
+        let spec = GraphSpec::builtin("default").unwrap();
+        let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(320, 180), &spec).unwrap();
+        let image = r.render_to_image(&camera).unwrap().1;
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/reference/nexuiz_{map}.png"));
+        if std::env::var_os("CULLGRAPH_UPDATE_REFERENCE").is_some() {
+            image.save(&path).unwrap();
+        }
+        let reference = image::open(&path).unwrap().to_rgba8();
+        let flip = cullgraph::oracle::image_error::mean_flip(reference.as_raw(), image.as_raw(), 320, 180).unwrap();
+        assert!(flip < 0.01, "{map}: mean FLIP {flip:.4} against {}", path.display());
+    }
+    gpu.assert_clean();
+}

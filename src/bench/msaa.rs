@@ -34,6 +34,8 @@ pub const GBUFFER_RESOURCES: &[&str] =
 pub struct MsaaBench {
     /// Scenes, with the name they are reported under.
     pub scenes: Vec<(String, SceneSource)>,
+    /// Camera (eye, target) for every scene; `None`: each scene's own view.
+    pub view: Option<(glam::DVec3, glam::DVec3)>,
     /// Methods (built-in graph names); those in [`ONE_SAMPLE_METHODS`] run once per scene and
     /// light count, the others at every sample count.
     pub methods: Vec<String>,
@@ -145,7 +147,12 @@ pub fn run(
         for &lights in &bench.lights {
             progress(&format!("{scene_name}, {lights} lights: loading"));
             let scene = source.load(&LoadOptions { lights: Some(lights), ..Default::default() })?;
-            let camera = scene.default_camera(bench.width as f32 / bench.height as f32);
+            let mut camera = scene.default_camera(bench.width as f32 / bench.height as f32);
+            if let Some((eye, target)) = bench.view {
+                camera.eye = eye;
+                camera.target = target;
+                camera.validate().map_err(|e| crate::Error::Invalid(format!("MSAA bench camera: {e}")))?;
+            }
             // Every method first, their images kept, then one reference for all of them: the
             // reference's large render and the CPU's error would leave the GPU idle between
             // measurements, and a GPU that idles lowers its clocks.

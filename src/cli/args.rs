@@ -160,6 +160,12 @@ pub struct BenchArgs {
     /// MSAA suite: scenes, comma-separated (`builtin:city` or glTF files).
     #[arg(long, value_delimiter = ',', default_values_t = ["builtin:city".to_string()])]
     pub msaa_scenes: Vec<String>,
+    /// MSAA suite: camera position x,y,z for every scene (default: each scene's own view).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, requires = "msaa_target")]
+    pub msaa_eye: Option<DVec3>,
+    /// MSAA suite: the point the camera looks at, x,y,z (with `--msaa-eye`).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, requires = "msaa_eye")]
+    pub msaa_target: Option<DVec3>,
     /// MSAA suite: the methods (built-in graphs), comma-separated; `two_phase` (no AA) and
     /// `fxaa` run at one sample, the others at each of `--msaa-samples`.
     #[arg(long, value_delimiter = ',', default_values_t = cullgraph::bench::msaa::ONE_SAMPLE_METHODS.iter().chain(cullgraph::bench::msaa::MSAA_METHODS).map(|m| m.to_string()))]

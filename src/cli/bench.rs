@@ -105,6 +105,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             &shaders,
             &msaa::MsaaBench {
                 scenes: msaa_scenes,
+                view: args.msaa_eye.zip(args.msaa_target),
                 methods: args.msaa_methods.clone(),
                 samples: args.msaa_samples.clone(),
                 lights: args.msaa_lights.clone(),
