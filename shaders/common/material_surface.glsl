@@ -20,10 +20,39 @@ float material_alpha(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy) {
     return m.alpha * sample_material(m.textures[TEX_BASE_COLOR], true, uv, dx, dy).a;
 }
 
-// Whether a fragment of `m` at `uv` is cut away: alpha below a masked material's cutoff.
-bool material_cuts(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy) {
-    return m.alpha_mode == ALPHA_MASK && material_alpha(m, uv, dx, dy) < m.alpha_cutoff;
+#ifndef MSAA_SAMPLES
+#define MSAA_SAMPLES 1
+#endif
+
+// The samples of a fragment of `m` at `uv` that its alpha keeps (bit s: sample s), at
+// MSAA_SAMPLES samples per pixel. Opaque and blended materials keep every sample. A masked
+// material's alpha is sharpened around its cutoff over the pixel's change in alpha and turned
+// into a share of the samples (alpha-to-coverage), rotated by the pixel's position so that
+// layers of foliage do not all keep the same samples. The choice depends only on the fragment,
+// so every pass that draws the geometry (depth, G-buffer, ids, the visibility oracle) keeps the
+// same samples. With one sample it is the alpha test. Call it where every invocation of the
+// quad runs (it takes a screen derivative).
+uint material_coverage(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy) {
+    if (m.alpha_mode != ALPHA_MASK) return 0xFFFFFFFFu;
+    float a = material_alpha(m, uv, dx, dy);
+#if MSAA_SAMPLES > 1
+    float width = max(fwidth(a), 1.0 / 256.0);
+    float share = clamp((a - m.alpha_cutoff) / width + 0.5, 0.0, 1.0);
+    uint n = uint(share * float(MSAA_SAMPLES) + 0.5);
+    uint all_samples = (1u << MSAA_SAMPLES) - 1u;
+    uint mask = (1u << n) - 1u;
+    uint turn = (uint(gl_FragCoord.x) + 2u * uint(gl_FragCoord.y)) % uint(MSAA_SAMPLES);
+    return ((mask << turn) | (mask >> (uint(MSAA_SAMPLES) - turn))) & all_samples;
+#else
+    return a < m.alpha_cutoff ? 0u : 0xFFFFFFFFu;
+#endif
 }
+
+// Applies `material_coverage`: discards a fragment that keeps no sample, and limits the others
+// to the samples they keep.
+#define APPLY_MATERIAL_COVERAGE(coverage) \
+    if ((coverage) == 0u) discard; \
+    if (MSAA_SAMPLES > 1) gl_SampleMask[0] = int(coverage)
 
 // The surface of `m` at `uv`. `geometric` is the interpolated normal already turned to the
 // side the eye sees, `tangent` the interpolated tangent (w: bitangent sign), `front` whether

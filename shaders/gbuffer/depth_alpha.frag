@@ -9,5 +9,6 @@ layout(location = 1) flat in uint in_material;
 layout(location = 5) in vec2 in_uv;
 
 void main() {
-    if (material_cuts(materials[in_material], in_uv, dFdx(in_uv), dFdy(in_uv))) discard;
+    uint coverage = material_coverage(materials[in_material], in_uv, dFdx(in_uv), dFdy(in_uv));
+    APPLY_MATERIAL_COVERAGE(coverage);
 }

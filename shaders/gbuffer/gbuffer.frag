@@ -19,7 +19,8 @@ layout(location = 1) out NORMAL_TEXEL out_normal_roughness;
 void main() {
     GpuMaterial m = materials[in_material];
     vec2 dx = dFdx(in_uv), dy = dFdy(in_uv);
-    if (material_cuts(m, in_uv, dx, dy)) discard;
+    uint coverage = material_coverage(m, in_uv, dx, dy);
+    APPLY_MATERIAL_COVERAGE(coverage);
     vec3 n = normalize(in_normal);
     // Seen from behind (open meshes, double-sided materials): light the side that faces the
     // eye. A mirrored instance flips the winding, so its outside shows as a back face.

@@ -19,7 +19,8 @@ layout(location = 0) out uvec2 out_id;
 #endif
 
 void main() {
-    if (material_cuts(materials[in_material], in_uv, dFdx(in_uv), dFdy(in_uv))) discard;
+    uint coverage = material_coverage(materials[in_material], in_uv, dFdx(in_uv), dFdy(in_uv));
+    APPLY_MATERIAL_COVERAGE(coverage);
 #ifdef PACKED_IDS
     out_id = (in_instance << pc.triangle_bits) | uint(gl_PrimitiveID);
 #else

@@ -11,6 +11,7 @@ layout(location = 2) in vec2 in_uv;
 layout(location = 0) out uint out_id;
 
 void main() {
-    if (material_cuts(materials[in_material], in_uv, dFdx(in_uv), dFdy(in_uv))) discard;
+    uint coverage = material_coverage(materials[in_material], in_uv, dFdx(in_uv), dFdy(in_uv));
+    APPLY_MATERIAL_COVERAGE(coverage);
     out_id = in_instance + 1u;
 }

@@ -51,7 +51,8 @@ impl VisibilityOracle {
         samples: vk::SampleCountFlags,
     ) -> crate::Result<Self> {
         let vertex = shaders.compile("oracle/id.vert", &[])?;
-        let fragment = shaders.compile("oracle/id.frag", &[])?;
+        // The same share of a masked material's samples as the geometry passes keep.
+        let fragment = shaders.compile("oracle/id.frag", &[("MSAA_SAMPLES", &samples.as_raw().max(1).to_string())])?;
         let draw = Pipeline::graphics(
             ctx,
             "visibility oracle",

@@ -144,7 +144,15 @@ pub fn geometry_pipeline(
     equal: bool,
 ) -> crate::Result<Pipeline> {
     let vertex = shaders.compile("gbuffer/gbuffer.vert", &[])?;
-    let fragment = fragment.map(|(path, defines)| shaders.compile(path, defines)).transpose()?;
+    // Masked materials keep a share of the samples (shaders/common/material_surface.glsl).
+    let samples = depth.1.as_raw().max(1).to_string();
+    let fragment = fragment
+        .map(|(path, defines)| {
+            let mut all = defines.to_vec();
+            all.push(("MSAA_SAMPLES", samples.as_str()));
+            shaders.compile(path, &all)
+        })
+        .transpose()?;
     Ok(Pipeline::graphics(
         ctx,
         name,
