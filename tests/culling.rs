@@ -556,8 +556,6 @@ fn the_occluder_prepass_chooses_cheap_meshes_where_the_scene_flags_none() {
 /// A quad (-0.8..0.8 in x and y), front face toward +z.
 fn quad_mesh() -> MeshData {
     MeshData {
-        uvs: Vec::new(),
-        tangents: Vec::new(),
         positions: vec![
             Vec3::new(-0.8, -0.8, 0.0),
             Vec3::new(0.8, -0.8, 0.0),
@@ -566,6 +564,7 @@ fn quad_mesh() -> MeshData {
         ],
         normals: vec![],
         indices: vec![0, 1, 2, 0, 2, 3],
+        ..Default::default()
     }
 }
 
@@ -584,7 +583,7 @@ fn tetrahedron_mesh() -> MeshData {
         let outward = (pb - pa).cross(pc - pa).dot(pa + pb + pc) > 0.0;
         indices.extend(if outward { [a, b, c] } else { [a, c, b] });
     }
-    MeshData { uvs: Vec::new(), tangents: Vec::new(), positions, normals: vec![], indices }
+    MeshData { positions, normals: vec![], indices, ..Default::default() }
 }
 
 /// The culling of a random case: bound, Hi-Z footprint, pyramid method, and the exact graph

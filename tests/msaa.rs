@@ -376,11 +376,10 @@ fn claimed_samples_give_the_stencils_image_except_at_coplanar_ties() {
 fn headless_pixel_scene() -> (Scene, Camera) {
     let mut scene = Scene { name: "headless pixel".into(), ..Default::default() };
     let tri = MeshData {
-        uvs: Vec::new(),
-        tangents: Vec::new(),
         positions: vec![Vec3::new(-0.1, -0.1, 0.0), Vec3::new(0.1, -0.1, 0.0), Vec3::new(0.0, 0.1, 0.0)],
         normals: vec![],
         indices: vec![0, 1, 2],
+        ..Default::default()
     };
     let mesh = scene.add_mesh("sliver", &tri, "sliver").unwrap();
     let material = |albedo: Vec3| Material {
@@ -835,11 +834,10 @@ fn packed_visibility_ids_shade_like_two_words_and_refuse_what_does_not_fit() {
     // 2^18 + 1 instances need 19 bits, a mesh of 2^14 + 1 triangles 15: 34 in all.
     let mut big = Scene { name: "big ids".into(), ..Default::default() };
     let strip = cullgraph::scene::MeshData {
-        uvs: Vec::new(),
-        tangents: Vec::new(),
         positions: (0..=(1u32 << 14) + 2).map(|i| Vec3::new(i as f32 * 1e-4, (i % 2) as f32 * 1e-4, 0.0)).collect(),
         normals: vec![],
         indices: (0..=(1u32 << 14)).flat_map(|i| [i, i + 1, i + 2]).collect(),
+        ..Default::default()
     };
     let mesh = big.add_mesh("strip", &strip, "strip").unwrap();
     let material = big.add_material(Material::default());

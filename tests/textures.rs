@@ -125,19 +125,16 @@ fn a_texture_transform_and_wrap_mode_tile_the_texture() {
     gpu.assert_clean();
 }
 
-/// A fence of vertical bars (an alpha-masked material: opaque bars, transparent gaps) in front
-/// of a red box. The box shows through the gaps, the bars hide it elsewhere, and two-phase
-/// occlusion culling never culls it: the masked fence occludes only where it is opaque, so the
-/// culled image equals the unculled one and the oracle finds no false negative.
-#[test]
-fn a_box_behind_a_masked_fence_shows_through_its_holes_and_is_never_culled() {
-    let gpu = GpuTest::new();
+/// A fence of `columns` vertical bars (an alpha-masked material: opaque grey bars, transparent
+/// gaps; `nearest` or bilinear filtering) filling the view, and a red box of side `box_side`
+/// behind it.
+fn fence_and_box(columns: u32, nearest: bool, box_side: f64) -> Scene {
     let mut scene = lit_scene();
-    // 32 columns: opaque grey bars on even columns, alpha 0 on odd ones.
-    let rgba: Vec<u8> =
-        (0..32 * 2).flat_map(|i| if (i % 32) % 2 == 0 { [200, 200, 200, 255] } else { [0, 0, 0, 0] }).collect();
-    scene.textures.push(Arc::new(Texture { name: "bars".into(), width: 32, height: 2, rgba }));
-    let sampler = Sampler { nearest_mag: true, nearest_min: true, ..Default::default() };
+    let rgba: Vec<u8> = (0..columns * 2)
+        .flat_map(|i| if (i % columns) % 2 == 0 { [200, 200, 200, 255] } else { [0, 0, 0, 0] })
+        .collect();
+    scene.textures.push(Arc::new(Texture { name: "bars".into(), width: columns, height: 2, rgba }));
+    let sampler = Sampler { nearest_mag: nearest, nearest_min: nearest, ..Default::default() };
     let mut fence = Material {
         name: "fence".into(),
         albedo: Vec3::ONE,
@@ -151,7 +148,6 @@ fn a_box_behind_a_masked_fence_shows_through_its_holes_and_is_never_culled() {
         scene.add_material(Material { name: "red".into(), albedo: Vec3::new(0.9, 0.05, 0.05), ..Default::default() });
     let quad_mesh = scene.add_mesh("quad", &quad(), "quad").unwrap();
     let cube = scene.add_mesh("cube", &common::cube_mesh(), "cube").unwrap();
-    // The fence fills the view; the box sits behind it.
     scene.instances.push(Instance {
         transform: at(DVec3::new(0.0, 0.0, 1.0), 4.0),
         mesh: quad_mesh,
@@ -159,11 +155,22 @@ fn a_box_behind_a_masked_fence_shows_through_its_holes_and_is_never_culled() {
         flags: 0,
     });
     scene.instances.push(Instance {
-        transform: at(DVec3::new(0.0, 0.0, -1.0), 1.0),
+        transform: at(DVec3::new(0.0, 0.0, -1.0), box_side),
         mesh: cube,
         material: red,
         flags: 0,
     });
+    scene
+}
+
+/// A fence of vertical bars (an alpha-masked material: opaque bars, transparent gaps) in front
+/// of a red box. The box shows through the gaps, the bars hide it elsewhere, and two-phase
+/// occlusion culling never culls it: the masked fence occludes only where it is opaque, so the
+/// culled image equals the unculled one and the oracle finds no false negative.
+#[test]
+fn a_box_behind_a_masked_fence_shows_through_its_holes_and_is_never_culled() {
+    let gpu = GpuTest::new();
+    let scene = fence_and_box(32, true, 1.0);
     let (stats, culled) = render(&gpu, &scene, "two_phase", true);
     let verify = stats.verify.expect("verified");
     assert_eq!(verify.false_negatives, 0, "missed {:?}", verify.missed);
@@ -479,36 +486,8 @@ fn the_real_levels_match_their_reference_images() {
 fn msaa_methods_give_masked_edges_partial_coverage_and_stay_exact() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
-    let mut scene = lit_scene();
     // Wide bars, filtered bilinearly: alpha ramps across each edge over a texel.
-    let rgba: Vec<u8> =
-        (0..16 * 2).flat_map(|i| if (i % 16) % 2 == 0 { [200, 200, 200, 255] } else { [0, 0, 0, 0] }).collect();
-    scene.textures.push(Arc::new(Texture { name: "bars".into(), width: 16, height: 2, rgba }));
-    let mut fence = Material {
-        name: "fence".into(),
-        albedo: Vec3::ONE,
-        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
-        double_sided: true,
-        ..Default::default()
-    };
-    fence.textures[0] = Some(TextureRef::new(0));
-    let fence = scene.add_material(fence);
-    let red =
-        scene.add_material(Material { name: "red".into(), albedo: Vec3::new(0.9, 0.05, 0.05), ..Default::default() });
-    let quad_mesh = scene.add_mesh("quad", &quad(), "quad").unwrap();
-    let cube = scene.add_mesh("cube", &common::cube_mesh(), "cube").unwrap();
-    scene.instances.push(Instance {
-        transform: at(DVec3::new(0.0, 0.0, 1.0), 4.0),
-        mesh: quad_mesh,
-        material: fence,
-        flags: 0,
-    });
-    scene.instances.push(Instance {
-        transform: at(DVec3::new(0.0, 0.0, -1.0), 1.5),
-        mesh: cube,
-        material: red,
-        flags: 0,
-    });
+    let scene = fence_and_box(16, false, 1.5);
     let render = |graph: &str| {
         let spec = GraphSpec::builtin(graph).unwrap();
         let mut r =

@@ -20,13 +20,12 @@ fn cube() -> MeshData {
         [0.0, 1.0, 1.0],
     ];
     MeshData {
-        uvs: Vec::new(),
-        tangents: Vec::new(),
         positions: p.iter().map(|v| Vec3::from_array(*v)).collect(),
         normals: vec![],
         indices: vec![
             0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 3, 6, 2, 3, 7, 6, 0, 4, 7, 0, 7, 3, 1, 2, 6, 1, 6, 5,
         ],
+        ..Default::default()
     }
 }
 

@@ -348,8 +348,6 @@ mod tests {
     /// seen from +z.
     fn quad() -> MeshData {
         MeshData {
-            uvs: Vec::new(),
-            tangents: Vec::new(),
             positions: vec![
                 Vec3::new(-1.0, -1.0, 0.0),
                 Vec3::new(1.0, -1.0, 0.0),
@@ -358,6 +356,7 @@ mod tests {
             ],
             normals: vec![],
             indices: vec![0, 1, 2, 0, 2, 3],
+            ..Default::default()
         }
     }
 

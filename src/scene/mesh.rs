@@ -199,11 +199,10 @@ mod tests {
     #[test]
     fn detects_normals_that_ignore_the_geometry() {
         let mut wall = MeshData {
-            uvs: Vec::new(),
-            tangents: Vec::new(),
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ZERO, Vec3::Z, Vec3::X],
             normals: vec![Vec3::Z, Vec3::Z, Vec3::Z, -Vec3::Y, -Vec3::Y, -Vec3::Y],
             indices: vec![0, 1, 2, 3, 4, 5],
+            ..Default::default()
         };
         assert_eq!(wall.normal_disagreement(), Some(0.0));
         wall.normals = vec![Vec3::Y; 6]; // the floor triangle agrees (flipped), the wall does not
@@ -215,11 +214,10 @@ mod tests {
     #[test]
     fn refuses_bad_meshes_naming_the_place() {
         let tri = MeshData {
-            uvs: Vec::new(),
-            tangents: Vec::new(),
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
             normals: vec![],
             indices: vec![0, 1, 2],
+            ..Default::default()
         };
         assert!(tri.validate("m").is_ok());
         let oob = MeshData { indices: vec![0, 1, 3], ..tri.clone() };

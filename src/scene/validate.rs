@@ -215,11 +215,10 @@ mod tests {
     fn one_triangle() -> Scene {
         let mut s = Scene::default();
         let data = MeshData {
-            uvs: Vec::new(),
-            tangents: Vec::new(),
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
             normals: vec![],
             indices: vec![0, 1, 2],
+            ..Default::default()
         };
         let mesh = s.add_mesh("tri", &data, "test").unwrap();
         let material = s.add_material(Material::default());

@@ -226,11 +226,10 @@ mod tests {
     fn records_follow_the_draw_list_and_contain_every_vertex() {
         let mut scene = Scene::default();
         let tri = MeshData {
-            uvs: Vec::new(),
-            tangents: Vec::new(),
             positions: vec![Vec3::ZERO, Vec3::X * 2.0, Vec3::Y],
             normals: vec![],
             indices: vec![0, 1, 2],
+            ..Default::default()
         };
         let a = scene.add_mesh("a", &tri, "a").unwrap();
         let b = scene.add_mesh("b", &tri, "b").unwrap();

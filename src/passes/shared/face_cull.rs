@@ -163,11 +163,10 @@ mod tests {
         use glam::{DVec3, Mat3, Vec3};
         let mut scene = Scene::default();
         let tri = MeshData {
-            uvs: Vec::new(),
-            tangents: Vec::new(),
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
             normals: vec![],
             indices: vec![0, 1, 2],
+            ..Default::default()
         };
         let a = scene.add_mesh("a", &tri, "a").unwrap();
         let b = scene.add_mesh("b", &tri, "b").unwrap();

@@ -247,11 +247,10 @@ mod tests {
     fn triangle_meshes(meshes: usize) -> (Scene, Vec<u32>) {
         let mut scene = Scene::default();
         let tri = MeshData {
-            uvs: Vec::new(),
-            tangents: Vec::new(),
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
             normals: vec![],
             indices: vec![0, 1, 2],
+            ..Default::default()
         };
         let ids = (0..meshes).map(|m| scene.add_mesh(&format!("m{m}"), &tri, "m").unwrap()).collect();
         scene.add_material(Default::default());

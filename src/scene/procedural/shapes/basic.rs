@@ -154,10 +154,9 @@ pub fn wedge(size: Vec3) -> MeshData {
 pub fn ground(size: f32) -> MeshData {
     let h = size.max(1e-3) * 0.5;
     MeshData {
-        uvs: Vec::new(),
-        tangents: Vec::new(),
         positions: vec![Vec3::new(-h, 0.0, -h), Vec3::new(-h, 0.0, h), Vec3::new(h, 0.0, h), Vec3::new(h, 0.0, -h)],
         normals: vec![Vec3::Y; 4],
         indices: vec![0, 1, 2, 0, 2, 3],
+        ..Default::default()
     }
 }

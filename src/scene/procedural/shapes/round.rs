@@ -175,10 +175,9 @@ pub fn icosphere(radius: f32, subdivisions: u32) -> MeshData {
         faces = next;
     }
     MeshData {
-        uvs: Vec::new(),
-        tangents: Vec::new(),
         positions: points.iter().map(|p| *p * r + Vec3::new(0.0, r, 0.0)).collect(),
         normals: points,
         indices: faces.into_iter().flatten().collect(),
+        ..Default::default()
     }
 }
