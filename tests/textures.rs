@@ -131,7 +131,7 @@ fn a_texture_transform_and_wrap_mode_tile_the_texture() {
 fn fence_and_box(columns: u32, nearest: bool, box_side: f64) -> Scene {
     let mut scene = lit_scene();
     let rgba: Vec<u8> = (0..columns * 2)
-        .flat_map(|i| if (i % columns) % 2 == 0 { [200, 200, 200, 255] } else { [0, 0, 0, 0] })
+        .flat_map(|i| if (i % columns).is_multiple_of(2) { [200, 200, 200, 255] } else { [0, 0, 0, 0] })
         .collect();
     scene.textures.push(Arc::new(Texture { name: "bars".into(), width: columns, height: 2, rgba }));
     let sampler = Sampler { nearest_mag: nearest, nearest_min: nearest, ..Default::default() };
