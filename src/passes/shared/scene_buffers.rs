@@ -3,9 +3,11 @@
 
 use super::face_cull::{DrawRegions, FaceCull, FACE_CULL_REGIONS};
 use super::gpu_types::{DrawIndexedIndirect, GpuInstance, GpuMaterial};
+use super::textures::GpuTextures;
 use crate::gpu::{Buffer, GpuContext, UploadBatch};
 use crate::scene::Scene;
 use ash::vk;
+use std::sync::Arc;
 
 /// Scene buffers on the device.
 pub struct GpuScene {
@@ -34,8 +36,9 @@ pub struct GpuScene {
     /// [`super::cull_data::GpuGroupBounds`] per draw group (empty for a changing world's reserved groups): the local bounds that
     /// a changing world's moved instances get their cull bounds from.
     pub group_bounds: Buffer,
-    /// The scene's textures, in size-class arrays.
-    pub textures: super::textures::GpuTextures,
+    /// The scene's textures, in size-class arrays (shared with the next upload of a changing
+    /// world whose textures did not change).
+    pub textures: Arc<GpuTextures>,
     /// Per instance: its mesh's first index and vertex offset (`uvec2`), for passes that rebuild
     /// a triangle from its id (the visibility buffer).
     pub instance_triangles: Buffer,
@@ -150,10 +153,25 @@ impl GpuScene {
         draws: DrawList,
         batch: &mut UploadBatch,
     ) -> crate::Result<Self> {
+        Self::upload_reusing(ctx, scene, draws, batch, None)
+    }
+
+    /// As [`GpuScene::upload_with`], taking `textures` (the GPU textures of a scene with the
+    /// same textures) instead of uploading them again.
+    pub fn upload_reusing(
+        ctx: &GpuContext,
+        scene: &Scene,
+        draws: DrawList,
+        batch: &mut UploadBatch,
+        textures: Option<Arc<GpuTextures>>,
+    ) -> crate::Result<Self> {
         profiling::scope!("cullgraph::upload_scene");
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let instances: Vec<GpuInstance> = scene.instances.iter().map(GpuInstance::new).collect();
-        let textures = super::textures::GpuTextures::upload(ctx, scene, batch)?;
+        let textures = match textures {
+            Some(textures) => textures,
+            None => Arc::new(GpuTextures::upload(ctx, scene, batch)?),
+        };
         let materials: Vec<GpuMaterial> =
             scene.materials.iter().map(|m| GpuMaterial::new(m, textures.placements())).collect();
         let cull = super::cull_data::CullData::new(scene, &draws);

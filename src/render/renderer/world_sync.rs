@@ -382,7 +382,7 @@ impl Renderer {
             Error::Invalid("sync: this renderer was made from a scene, not a world (Renderer::from_world)".into())
         })?;
         let Some(changes) = world.changes_since(mirror.version) else {
-            return self.rebuild(shaders, world, start, Layout::Fresh);
+            return self.rebuild(shaders, world, start, Layout::Fresh, true);
         };
         if changes.is_empty() {
             return Ok(UpdateStats::default());
@@ -393,6 +393,7 @@ impl Renderer {
         // Meshes, materials or lights beyond the light buffers: the scene's buffers are made
         // anew (the slots stay).
         let mut reupload = false;
+        let mut textures_changed = false;
         let mut lights = false;
         let mut moves = 0usize;
         for change in changes {
@@ -400,7 +401,11 @@ impl Renderer {
                 Change::Instance(i) => instances.push(i),
                 Change::Transform(_) => moves += 1,
                 Change::Light(_) => lights = true,
-                Change::Mesh(_) | Change::Texture(_) => reupload = true,
+                Change::Mesh(_) => reupload = true,
+                Change::Texture(_) => {
+                    reupload = true;
+                    textures_changed = true;
+                }
                 Change::Material(m) => {
                     reupload = true;
                     materials.push(m);
@@ -449,7 +454,7 @@ impl Renderer {
                                 grew = true;
                                 layout.place(i, key).expect("a grown group has free slots")
                             }
-                            None => return self.rebuild(shaders, world, start, Layout::Fresh),
+                            None => return self.rebuild(shaders, world, start, Layout::Fresh, textures_changed),
                         };
                         touched.push(slot);
                     }
@@ -463,7 +468,7 @@ impl Renderer {
             mirror.handles[i as usize] = world.handle_at(i);
         }
         if grew || reupload {
-            return self.rebuild(shaders, world, start, Layout::Kept);
+            return self.rebuild(shaders, world, start, Layout::Kept, textures_changed);
         }
         moved_in_place.sort_unstable();
         let queued_before = mirror.queued_bytes();
@@ -516,7 +521,14 @@ impl Renderer {
     /// ([`Layout::Fresh`], culling history cleared) or as the mirror's layout has them
     /// ([`Layout::Kept`], history kept: every slot and group holds what it held). The graph is
     /// recompiled when the scene outgrew what it was compiled for.
-    fn rebuild(&mut self, shaders: &ShaderCompiler, world: &World, start: Instant, how: Layout) -> Result<UpdateStats> {
+    fn rebuild(
+        &mut self,
+        shaders: &ShaderCompiler,
+        world: &World,
+        start: Instant,
+        how: Layout,
+        textures_changed: bool,
+    ) -> Result<UpdateStats> {
         if world.live_instances() == 0 {
             return Err(Error::Invalid("sync: the world has no instances".into()));
         }
@@ -533,7 +545,12 @@ impl Renderer {
             || needed.materials != mirror.compiled.materials
             || needed.lights > mirror.light_capacity as u64;
         let mut uploads = UploadBatch::default();
-        let gpu_scene = GpuScene::upload_with(&self.ctx, &scene, layout.draw_list(&scene), &mut uploads)?;
+        // Textures are the slowest part of an upload (resampling and mips on the CPU): they are
+        // made again only when the world registered one, or when their upload has not been
+        // recorded yet (the batch that holds it is replaced below).
+        let reuse = !textures_changed && self.pending_uploads.is_none();
+        let textures = reuse.then(|| self.inputs.scene.textures.clone());
+        let gpu_scene = GpuScene::upload_reusing(&self.ctx, &scene, layout.draw_list(&scene), &mut uploads, textures)?;
         let light_capacity = with_room(scene.lights.len() as u64).max(mirror.light_capacity as u64) as usize;
         let inputs = SceneInputs::new(&self.ctx, gpu_scene, light_capacity)?;
         if outgrown {
