@@ -13,8 +13,9 @@
 //! move.)
 //!
 //! A group without a free slot, or an instance of a group the layout lacks, grows the layout
-//! at its end ([`SlotLayout::grow`]); a registered mesh or material, or more lights than the
-//! light buffers hold, also makes the scene's buffers anew. Every slot and group keeps its
+//! at its end ([`SlotLayout::grow`]); a registered mesh, material or texture, or more lights
+//! than the light buffers hold, also makes the scene's buffers anew (the textures only when one
+//! was registered). Every slot and group keeps its
 //! index, so the culling history stays valid: it is kept, and when the slots or groups outgrow
 //! what the graph was compiled for (both grow by half again), the recompiled graph inherits it
 //! ([`crate::graph::GraphRuntime::inherit_history`]). Only a face-cull region out of reserved
