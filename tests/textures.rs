@@ -515,3 +515,47 @@ fn msaa_methods_give_masked_edges_partial_coverage_and_stay_exact() {
     }
     gpu.assert_clean();
 }
+
+/// The glTF sample `TextureTransformTest` (Debian's assimp-testmodels) seen head-on: its top
+/// row shows a green, a blue and a teal check mark only where `KHR_texture_transform`'s offsets
+/// are applied.
+#[test]
+fn the_texture_transform_conformance_model_shows_its_check_marks() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let path = std::path::Path::new("/usr/share/assimp/models/glTF2/textureTransform/TextureTransformTest.gltf");
+    let scene = cullgraph::scene::gltf_import::load(path, &Default::default()).unwrap();
+    let camera = Camera { eye: DVec3::new(0.0, 0.0, 4.5), target: DVec3::ZERO, ..Default::default() };
+    let spec = GraphSpec::builtin("default").unwrap();
+    let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(320, 240), &spec).unwrap();
+    let image = r.render_to_image(&camera).unwrap().1;
+    let [green, blue, teal]: [[u8; 3]; 3] = [(97, 88), (160, 88), (222, 88)].map(|(x, y)| pixel(&image, x, y));
+    let over = |a: u8, b: u8| a as i32 - b as i32 > 80;
+    // Without the transforms these tiles are yellowish (the texture's unshifted corner).
+    assert!(over(green[1], green[0]) && over(green[1], green[2]), "the U tile: {green:?}");
+    assert!(over(blue[2], blue[0]) && over(blue[2], blue[1]), "the V tile: {blue:?}");
+    assert!(over(teal[1], teal[0]) && over(teal[2], teal[0]), "the UV tile: {teal:?}");
+    gpu.assert_clean();
+}
+
+/// The glTF sample `BoxTextured` (assimp-testmodels) renders its texture: the face toward the
+/// camera shows many colours, where its untextured material would show a few shades.
+#[test]
+fn the_box_textured_conformance_model_shows_its_texture() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let path = std::path::Path::new("/usr/share/assimp/models/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb");
+    let scene = cullgraph::scene::gltf_import::load(path, &Default::default()).unwrap();
+    let camera = Camera { eye: DVec3::new(1.5, 1.2, 2.0), target: DVec3::ZERO, ..Default::default() };
+    let spec = GraphSpec::builtin("default").unwrap();
+    let colours = |scene: Scene| {
+        let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+        let image = r.render_to_image(&camera).unwrap().1;
+        image.pixels().map(|p| p.0).collect::<std::collections::HashSet<[u8; 4]>>().len()
+    };
+    let mut untextured = scene.clone();
+    untextured.materials.iter_mut().for_each(|m| m.textures = [None; 5]);
+    let (textured, flat) = (colours(scene), colours(untextured));
+    assert!(textured > 3 * flat, "{textured} colours textured, {flat} untextured");
+    gpu.assert_clean();
+}
