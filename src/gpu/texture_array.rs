@@ -5,9 +5,8 @@
 
 use super::context::{DeviceShared, GpuContext};
 use super::error::{GpuError, GpuResult, VkResultExt};
+use super::memory::MemoryBlock;
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
-use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 /// The linear and sRGB formats of the same texels.
@@ -21,7 +20,8 @@ pub struct TextureArray {
     handle: vk::Image,
     linear_view: vk::ImageView,
     srgb_view: vk::ImageView,
-    allocation: Option<Allocation>,
+    /// Freed after the image (fields drop after `Drop::drop` destroys it).
+    memory: Option<MemoryBlock>,
     size: u32,
     layers: u32,
     mip_levels: u32,
@@ -64,7 +64,7 @@ impl TextureArray {
             handle,
             linear_view: vk::ImageView::null(),
             srgb_view: vk::ImageView::null(),
-            allocation: None,
+            memory: None,
             size,
             layers,
             mip_levels,
@@ -72,23 +72,19 @@ impl TextureArray {
         };
         // SAFETY: handle was just created.
         let requirements = unsafe { ctx.device().get_image_memory_requirements(handle) };
-        let allocation = ctx
-            .shared
-            .allocator()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|source| GpuError::Allocation { name: name.into(), source })?;
-        // SAFETY: the allocation lives as long as the image (dropped together).
-        let (memory, offset) = (unsafe { allocation.memory() }, allocation.offset());
+        let memory = MemoryBlock::new(
+            ctx,
+            name,
+            requirements.size,
+            requirements.alignment,
+            requirements.memory_type_bits,
+            false,
+        )?;
         array.bytes = requirements.size;
-        array.allocation = Some(allocation);
-        // SAFETY: memory fits the requirements.
-        unsafe { array.shared.device.bind_image_memory(handle, memory, offset) }.vk("vkBindImageMemory")?;
+        // SAFETY: the block fits the requirements and lives as long as the image.
+        unsafe { array.shared.device.bind_image_memory(handle, memory.memory(), memory.offset()) }
+            .vk("vkBindImageMemory")?;
+        array.memory = Some(memory);
         array.linear_view = array.view(LINEAR_FORMAT)?;
         array.srgb_view = array.view(SRGB_FORMAT)?;
         Ok(array)
@@ -158,9 +154,6 @@ impl Drop for TextureArray {
                 if view != vk::ImageView::null() {
                     self.shared.device.destroy_image_view(view, None);
                 }
-            }
-            if let Some(allocation) = self.allocation.take() {
-                let _ = self.shared.allocator().free(allocation);
             }
             self.shared.device.destroy_image(self.handle, None);
         }

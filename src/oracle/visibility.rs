@@ -137,7 +137,7 @@ impl VisibilityOracle {
                     Bind::Buffer(2, constants.handle()),
                     Bind::Buffer(3, scene.materials.handle()),
                 ];
-                binds.extend(scene.textures.bindings(crate::passes::gbuffer::TEXTURE_BINDING));
+                binds.extend_from_slice(scene.textures.bindings());
                 self.draw.push_bindings(cmd, &binds);
                 device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
                 device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);

@@ -229,7 +229,7 @@ pub fn record_geometry(
                 Bind::Buffer(2, frame.handle()),
                 Bind::Buffer(3, scene.materials.handle()),
             ];
-            binds.extend(scene.textures.bindings(TEXTURE_BINDING));
+            binds.extend_from_slice(scene.textures.bindings());
             binds.extend_from_slice(extra);
             pipeline.push_bindings(cmd, &binds);
             scene.regions.record(device, cmd, list.commands, list.count);
@@ -237,10 +237,6 @@ pub fn record_geometry(
         device.cmd_end_rendering(cmd);
     }
 }
-
-/// The first binding of the scene's textures (`TEXTURE_BINDING` in
-/// `shaders/common/textures.glsl`).
-pub const TEXTURE_BINDING: u32 = 16;
 
 /// How a geometry pass treats what is already in its targets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

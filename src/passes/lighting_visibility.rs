@@ -67,7 +67,7 @@ impl PassNode for LightingVisibilityPass {
             Bind::Buffer(8, scene.indices.handle()),
             Bind::Buffer(9, scene.instance_triangles.handle()),
         ];
-        binds.extend(scene.textures.bindings(super::gbuffer::TEXTURE_BINDING));
+        binds.extend_from_slice(scene.textures.bindings());
         let triangle_bits = if self.packed_ids { packed_id_bits(&self.name, scene)? } else { 0 };
         let push = [bytemuck::bytes_of(&self.settings), &triangle_bits.to_ne_bytes()].concat();
         self.pipeline.dispatch_over(rec.cmd, &binds, &push, output.extent());

@@ -22,6 +22,9 @@ pub const MIN_TEXTURE_SIDE: u32 = 16;
 pub const MAX_TEXTURE_SIDE: u32 = MIN_TEXTURE_SIDE << (TEXTURE_CLASSES - 1);
 /// Where a material has no texture in a slot.
 pub const NO_TEXTURE: u32 = u32::MAX;
+/// The first binding of the texture arrays (`TEXTURE_BINDING` in `shaders/common/textures.glsl`):
+/// per class, its sRGB view then its linear view.
+pub const TEXTURE_BINDING: u32 = 16;
 
 /// The class of a `width` x `height` texture: the smallest square side that holds its larger
 /// side, within the classes.
@@ -39,7 +42,10 @@ pub fn class_side(class: usize) -> u32 {
 pub struct GpuTextures {
     /// One array per class (a 1x1 array of one layer for a class no texture uses).
     arrays: Vec<TextureArray>,
-    sampler: Sampler,
+    /// Keeps the sampler the bindings name alive.
+    _sampler: Sampler,
+    /// The arrays' bindings, made once: every geometry pass pushes them per draw list.
+    bindings: Vec<Bind>,
     /// Per scene texture: `class << 16 | layer`.
     placement: Vec<u32>,
 }
@@ -87,7 +93,19 @@ impl GpuTextures {
                 .max_anisotropy(ctx.caps().limits.max_sampler_anisotropy.min(8.0))
                 .max_lod(vk::LOD_CLAMP_NONE),
         )?;
-        Ok(Self { arrays, sampler, placement })
+        let layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let bindings = arrays
+            .iter()
+            .enumerate()
+            .flat_map(|(c, a)| {
+                let at = TEXTURE_BINDING + 2 * c as u32;
+                [
+                    Bind::Sampled(at, a.srgb_view(), sampler.handle(), layout),
+                    Bind::Sampled(at + 1, a.linear_view(), sampler.handle(), layout),
+                ]
+            })
+            .collect();
+        Ok(Self { arrays, _sampler: sampler, bindings, placement })
     }
 
     /// Where scene texture `texture` lives: `class << 16 | layer`.
@@ -100,22 +118,9 @@ impl GpuTextures {
         &self.placement
     }
 
-    /// The bindings of `shaders/common/textures.glsl` from binding `first` on: per class, its
-    /// sRGB view then its linear view.
-    pub fn bindings(&self, first: u32) -> Vec<Bind> {
-        let layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let sampler = self.sampler.handle();
-        self.arrays
-            .iter()
-            .enumerate()
-            .flat_map(|(c, a)| {
-                let at = first + 2 * c as u32;
-                [
-                    Bind::Sampled(at, a.srgb_view(), sampler, layout),
-                    Bind::Sampled(at + 1, a.linear_view(), sampler, layout),
-                ]
-            })
-            .collect()
+    /// The bindings of `shaders/common/textures.glsl` ([`TEXTURE_BINDING`] on).
+    pub fn bindings(&self) -> &[Bind] {
+        &self.bindings
     }
 
     /// Device bytes of the texture arrays.
@@ -138,14 +143,16 @@ fn srgb_uses(scene: &Scene) -> Vec<bool> {
 }
 
 /// `texture` as `side` x `side` RGBA8 texels.
-fn resample(texture: &Texture, side: u32) -> Vec<u8> {
+fn resample(texture: &Texture, side: u32) -> std::borrow::Cow<'_, [u8]> {
     if texture.width == side && texture.height == side {
-        return texture.rgba.clone();
+        return texture.rgba.as_slice().into();
     }
-    let Some(image) = image::RgbaImage::from_raw(texture.width, texture.height, texture.rgba.clone()) else {
-        return vec![255; (side * side * 4) as usize];
+    let Some(image) =
+        image::ImageBuffer::<image::Rgba<u8>, &[u8]>::from_raw(texture.width, texture.height, &texture.rgba)
+    else {
+        return vec![255; (side * side * 4) as usize].into();
     };
-    image::imageops::resize(&image, side, side, image::imageops::FilterType::Triangle).into_raw()
+    image::imageops::resize(&image, side, side, image::imageops::FilterType::Triangle).into_raw().into()
 }
 
 fn srgb_to_linear(v: u8) -> f32 {
