@@ -96,6 +96,7 @@ impl InstanceBoundsPass {
                 samples,
                 stencil: StencilRule::Off,
                 topology: vk::PrimitiveTopology::LINE_LIST,
+                blend: false,
             },
         )?;
         let show = pass.choice_setting("show")?;

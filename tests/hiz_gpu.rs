@@ -178,6 +178,7 @@ impl Tools {
                 samples: vk::SampleCountFlags::from_raw(samples),
                 stencil: Default::default(),
                 topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                blend: false,
             };
             [
                 Pipeline::graphics(gpu, "fill pattern", &desc(&vert, Some(&frag), vk::CompareOp::ALWAYS)).unwrap(),

@@ -559,3 +559,72 @@ fn the_box_textured_conformance_model_shows_its_texture() {
     assert!(textured > 3 * flat, "{textured} colours textured, {flat} untextured");
     gpu.assert_clean();
 }
+
+/// Every lighting method uses the occlusion and emissive textures. Under sky light alone (no
+/// sun), a quad whose occlusion texture is 0 on its left half and 1 on its right is black on the
+/// left and lit on the right; a quad whose emissive texture is red on its left half and black on
+/// its right glows red on the left only.
+#[test]
+fn every_method_shades_occlusion_and_emissive_textures() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut scene = lit_scene();
+    scene.sun.color = Vec3::ZERO;
+    let halves = |left: [u8; 4], right: [u8; 4]| [left, right].concat();
+    scene.textures.push(Arc::new(Texture {
+        name: "ao".into(),
+        width: 2,
+        height: 1,
+        rgba: halves([0, 0, 0, 255], [255; 4]),
+    }));
+    scene.textures.push(Arc::new(Texture {
+        name: "glow".into(),
+        width: 2,
+        height: 1,
+        rgba: halves([255, 0, 0, 255], [0, 0, 0, 255]),
+    }));
+    let sampler = Sampler { nearest_mag: true, nearest_min: true, ..Default::default() };
+    let mut occluded = Material { name: "occluded".into(), albedo: Vec3::ONE, ..Default::default() };
+    occluded.textures[3] = Some(TextureRef { sampler, ..TextureRef::new(0) });
+    let mut glowing = Material { name: "glowing".into(), albedo: Vec3::ONE, emissive: Vec3::ONE, ..Default::default() };
+    glowing.textures[4] = Some(TextureRef { sampler, ..TextureRef::new(1) });
+    let occluded = scene.add_material(occluded);
+    let glowing = scene.add_material(glowing);
+    let mesh = scene.add_mesh("quad", &quad(), "quad").unwrap();
+    scene.instances.push(Instance {
+        transform: at(DVec3::new(0.0, 0.6, 0.0), 1.0),
+        mesh,
+        material: occluded,
+        flags: 0,
+    });
+    scene.instances.push(Instance {
+        transform: at(DVec3::new(0.0, -0.6, 0.0), 1.0),
+        mesh,
+        material: glowing,
+        flags: 0,
+    });
+    // 0.6 world units at 3 from the eye are about 25 pixels; the quads' halves are 20 wide.
+    let (cx, cy) = (SIZE.0 as i32 / 2, SIZE.1 as i32 / 2);
+    let (top, bottom, side) = ((cy - 25) as u32, (cy + 25) as u32, 10);
+    for graph in [
+        "default",
+        "fxaa",
+        "msaa_per_sample",
+        "msaa_zprepass",
+        "msaa_compressed",
+        "msaa_compressed_claim",
+        "visibility_buffer",
+    ] {
+        let spec = GraphSpec::builtin(graph).unwrap();
+        let mut r =
+            Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+        let image = r.render_to_image(&camera()).unwrap().1;
+        let (shadow, lit) = (pixel(&image, (cx - side) as u32, top), pixel(&image, (cx + side) as u32, top));
+        assert!(shadow.iter().all(|&c| c < 4), "{graph}: occluded half {shadow:?}");
+        assert!(lit.iter().all(|&c| c > 40), "{graph}: unoccluded half {lit:?}");
+        let (glow, plain) = (pixel(&image, (cx - side) as u32, bottom), pixel(&image, (cx + side) as u32, bottom));
+        assert!(glow[0] > 200 && glow[0] > plain[0] + 100, "{graph}: glowing half {glow:?}, plain half {plain:?}");
+        assert_eq!(dominant(plain), 2, "{graph}: the plain half has the sky's blue: {plain:?}");
+    }
+    gpu.assert_clean();
+}

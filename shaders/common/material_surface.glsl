@@ -1,5 +1,5 @@
-// A material's surface at a fragment of a geometry pass: its factors times its textures
-// (base colour and alpha, metallic-roughness, normal map), and the alpha test of masked
+// A material's surface at a fragment of a geometry pass: its factors times its five textures
+// (base colour and alpha, metallic-roughness, normal map, occlusion, emissive), and the alpha test of masked
 // materials. Shared by every pass that draws the scene's geometry, so that they agree on
 // which fragments exist (the oracle, the Hi-Z and the G-buffer see the same holes).
 #ifndef CULLGRAPH_MATERIAL_SURFACE_GLSL
@@ -13,6 +13,8 @@ struct MaterialSurface {
     float roughness;
     float metallic;
     vec3 normal;     // unit, facing the eye's side
+    float occlusion; // ambient occlusion, 1 = none
+    vec3 emissive;   // linear
 };
 
 // Base colour alpha at `uv` (with screen derivatives).
@@ -65,6 +67,9 @@ MaterialSurface material_surface(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy, vec3 
     vec4 mr = sample_material(m.textures[TEX_METALLIC_ROUGHNESS], false, uv, dx, dy);
     s.roughness = clamp(m.roughness * mr.g, 0.0, 1.0);
     s.metallic = clamp(m.metallic * mr.b, 0.0, 1.0);
+    float ao = sample_material(m.textures[TEX_OCCLUSION], false, uv, dx, dy).r;
+    s.occlusion = clamp(1.0 + m.occlusion_strength * (ao - 1.0), 0.0, 1.0);
+    s.emissive = m.emissive * sample_material(m.textures[TEX_EMISSIVE], true, uv, dx, dy).rgb;
     s.normal = geometric;
     if (m.textures[TEX_NORMAL].placement != NO_TEXTURE) {
         vec3 t = tangent.xyz - geometric * dot(geometric, tangent.xyz);

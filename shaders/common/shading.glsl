@@ -11,6 +11,8 @@ struct Surface {
     vec3 albedo;
     float roughness;
     float metallic;
+    float occlusion;   // ambient occlusion: scales the ambient term only (glTF)
+    vec3 emissive;     // radiance the surface emits, added after the lights
 };
 
 float d_ggx(float n_dot_h, float a) {
@@ -52,7 +54,7 @@ float light_falloff(float dist, float range) {
 vec3 ambient_light(Surface s, vec3 sky) {
     float up = s.normal.y * 0.5 + 0.5;
     vec3 hemi = mix(sky * 0.35, sky, up);
-    return hemi * s.albedo * (1.0 - 0.5 * s.metallic);
+    return hemi * s.albedo * (1.0 - 0.5 * s.metallic) * s.occlusion;
 }
 
 vec3 sky_color(vec3 dir) {

@@ -7,34 +7,23 @@
 #define CULLGRAPH_COMPRESSED_GBUFFER_GLSL
 
 #extension GL_EXT_scalar_block_layout : require
-#extension GL_EXT_shader_8bit_storage : require
-#extension GL_EXT_shader_explicit_arithmetic_types_int8 : require
 
-// Two 14-byte blocks interleaved in 28 bytes (thesis Fig. 5.3), so every field stays aligned:
-// albedo+metallic (RGBA8) x2, normal (two 16-bit octahedral coordinates) x2, roughness x2,
-// ambient occlusion x2, link x2. Roughness and AO are single bytes: 8-bit stores keep the two
-// blocks of a pair, written by different fragments at once, from racing on a shared word.
+#include "../common/emissive_occlusion.glsl"
+
+// Two 16-byte blocks interleaved in 32 bytes (thesis Fig. 5.3), so every field stays aligned
+// and a pair fills one 32-byte memory sector: albedo+metallic (RGBA8) x2, normal (two 16-bit
+// octahedral coordinates) x2, surface word (roughness, occlusion, emissive:
+// ../common/emissive_occlusion.glsl) x2, link x2. Each block's fields are whole words of its
+// own, so the two blocks of a pair, written by different fragments at once, never share one.
 struct BlockPair {
     uint albedo_metallic[2];
     uint normal[2];
-    uint8_t roughness[2];
-    uint8_t ao[2];
+    uint surface[2];
     uint link[2];
 };
 
-// The same 28 bytes as 7 words, for the clear pass: word 4 holds roughness[0], roughness[1],
-// ao[0], ao[1] (little-endian bytes), words 5 and 6 the links.
-#define PAIR_WORDS 7u
-#define PAIR_WORD_ROUGHNESS_AO 4u
-
-// Ambient occlusion of every block: no material carries an occlusion term yet. The clear writes
-// it into every head (with roughness 0, which the head's fragment overwrites), so that a head's
-// fragment stores one byte fewer: a head fragment's stores are scattered at the pairs' 28-byte
-// stride, and on GPUs that export fragments through few graphics units each store instruction
-// costs about the same whether it writes a byte or a word (docs/msaa.md). Pool blocks are not
-// cleared and store it.
-#define BLOCK_AO 255u
-#define HEAD_ROUGHNESS_AO_CLEARED ((BLOCK_AO << 16) | (BLOCK_AO << 24))
+// The same 32 bytes as 8 words, for the clear pass.
+#define PAIR_WORDS 8u
 
 // Header counters, then the blocks.
 #define GBUFFER_HEADER_WORDS 4u
@@ -69,7 +58,8 @@ struct Block {
     float metallic;
     vec3 normal;
     float roughness;
-    float ao;
+    float occlusion;
+    vec3 emissive;
 };
 
 #endif

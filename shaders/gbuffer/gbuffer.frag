@@ -1,7 +1,8 @@
 #version 460
 // G-buffer geometry pass, fragment stage: albedo + metallic, normal + roughness (its two formats:
-// ../common/gbuffer_normal.glsl), from the material's factors and textures. Masked materials'
-// fragments below their alpha cutoff are discarded.
+// ../common/gbuffer_normal.glsl) and, with EMISSIVE_OCCLUSION, emissive + occlusion, from the
+// material's factors and textures. Masked materials' fragments below their alpha cutoff are
+// discarded.
 #include "../common/material_surface.glsl"
 #include "../common/gbuffer_normal.glsl"
 
@@ -15,6 +16,9 @@ layout(location = 6) in vec4 in_tangent;
 
 layout(location = 0) out vec4 out_albedo_metallic;
 layout(location = 1) out NORMAL_TEXEL out_normal_roughness;
+#ifdef EMISSIVE_OCCLUSION
+layout(location = 2) out vec4 out_emissive_occlusion;   // R8G8B8A8_SRGB
+#endif
 
 void main() {
     GpuMaterial m = materials[in_material];
@@ -29,4 +33,7 @@ void main() {
     MaterialSurface s = material_surface(m, in_uv, dx, dy, n, in_tangent, front);
     out_albedo_metallic = vec4(s.albedo, s.metallic);
     out_normal_roughness = encode_normal_roughness(s.normal, s.roughness);
+#ifdef EMISSIVE_OCCLUSION
+    out_emissive_occlusion = vec4(s.emissive, s.occlusion);
+#endif
 }

@@ -77,21 +77,20 @@ layout(location = 5) in vec2 in_uv;
 layout(location = 6) in vec4 in_tangent;
 layout(location = 3) flat in uint in_flags;
 
-// A head block's attributes but AO, which the clear has put in place.
-void write_head(uint pixel, GpuMaterial m, vec3 n) {
+// A head block's attributes (its link belongs to the list).
+void write_head(uint pixel, MaterialSurface s) {
     uint pair = pixel >> 1, k = pixel & 1u;
-    gb.pairs[pair].albedo_metallic[k] = packUnorm4x8(vec4(m.albedo, m.metallic));
-    gb.pairs[pair].normal[k] = packSnorm2x16(oct_encode(n));
-    gb.pairs[pair].roughness[k] = uint8_t(uint(clamp(m.roughness, 0.0, 1.0) * 255.0 + 0.5));
+    gb.pairs[pair].albedo_metallic[k] = packUnorm4x8(vec4(s.albedo, s.metallic));
+    gb.pairs[pair].normal[k] = packSnorm2x16(oct_encode(s.normal));
+    gb.pairs[pair].surface[k] = pack_surface_word(s.roughness, s.occlusion, s.emissive);
 }
 
 // A pool block's attributes.
-void write_pool_block(uint slot, GpuMaterial m, vec3 n) {
+void write_pool_block(uint slot, MaterialSurface s) {
     uint pair = slot >> 1, k = slot & 1u;
-    pool.pairs[pair].albedo_metallic[k] = packUnorm4x8(vec4(m.albedo, m.metallic));
-    pool.pairs[pair].normal[k] = packSnorm2x16(oct_encode(n));
-    pool.pairs[pair].roughness[k] = uint8_t(uint(clamp(m.roughness, 0.0, 1.0) * 255.0 + 0.5));
-    pool.pairs[pair].ao[k] = uint8_t(BLOCK_AO);
+    pool.pairs[pair].albedo_metallic[k] = packUnorm4x8(vec4(s.albedo, s.metallic));
+    pool.pairs[pair].normal[k] = packSnorm2x16(oct_encode(s.normal));
+    pool.pairs[pair].surface[k] = pack_surface_word(s.roughness, s.occlusion, s.emissive);
 }
 
 // Selective AA (paper 002 section 5): whether this fragment may take a pool block.
@@ -138,12 +137,8 @@ void main() {
     // The textured surface. (No alpha test here: the depth EQUAL test against a depth that has
     // the masked holes already rejects their fragments.)
     MaterialSurface s = material_surface(m, in_uv, duv_dx, duv_dy, n, in_tangent, front);
-    m.albedo = s.albedo;
-    m.metallic = s.metallic;
-    m.roughness = s.roughness;
-    n = s.normal;
     if (head) {
-        write_head(pixel, m, n);   // its link belongs to the list
+        write_head(pixel, s);
         return;
     }
     // The list's order is whichever order the fragments run in; the lighting does not depend on it.
@@ -153,7 +148,7 @@ void main() {
         atomicAdd(gb.header[GBUFFER_HEADER_OVERFLOW_SAMPLES], uint(bitCount(mask)));
         return;   // these samples fall to the head (or a listed block), as above
     }
-    write_pool_block(slot, m, n);
+    write_pool_block(slot, s);
     uint link = make_link(slot, uint(bitCount(mask)), uint(findLSB(mask)));
     uint head_link = atomicExchange(gb.pairs[pixel >> 1].link[pixel & 1u], link);
     pool.pairs[slot >> 1].link[slot & 1u] = head_link;

@@ -1,12 +1,11 @@
 #version 460
 // Start of the compressed G-buffer pass: zero the header counters, every head's link (an
-// empty list) and, without stencil, the claimed samples, and put every head's AO in place
-// (BLOCK_AO; its fragment then stores only albedo, normal and roughness). The other head
-// attributes need no clearing (a head whose pixel has no surface at sample 0 is never read: the
-// lighting pass sees the background in the depth), but the pairs are written whole, all seven
-// words, so that a warp's stores fill contiguous 32-byte sectors: writing only the three words
-// that need it, at the pairs' 28-byte stride, would leave every sector partly written, and
-// partly written sectors cost more than the extra bytes of whole pairs (docs/msaa.md).
+// empty list) and, without stencil, the claimed samples. The other head attributes need no
+// clearing (a head whose pixel has no surface at sample 0 is never read: the lighting pass sees
+// the background in the depth), but the pairs are written whole, all eight words, so that a
+// warp's stores fill whole 32-byte sectors: writing only the links would leave every sector
+// partly written, and partly written sectors cost more than the extra bytes of whole pairs
+// (docs/msaa.md).
 #include "compressed_gbuffer.glsl"
 
 layout(local_size_x = 256) in;
@@ -33,7 +32,7 @@ void main() {
         for (uint j = 0u; j < PAIR_WORDS; ++j) {
             uint word = j * pc.head_pairs + i;
             // Zero is the null link and a harmless attribute.
-            gb.words[word] = word % PAIR_WORDS == PAIR_WORD_ROUGHNESS_AO ? HEAD_ROUGHNESS_AO_CLEARED : LINK_NULL;
+            gb.words[word] = LINK_NULL;
         }
     }
 #ifdef SAMPLE_CLAIM

@@ -109,7 +109,7 @@ void tile_cull_lights(bool enabled) {
 // (every light past the set's capacity too).
 vec3 shade_tile_lights(Surface s) {
     vec3 v = -normalize(s.position);
-    vec3 radiance = ambient_light(s, frame.ambient.rgb);
+    vec3 radiance = ambient_light(s, frame.ambient.rgb) + s.emissive;
     radiance += brdf_light(s, v, -frame.sun_direction.xyz, frame.sun_color.rgb);
     uint count = frame.size_lights.z;
     for (uint word = 0u; word < TILE_LIGHT_WORDS && word * 32u < count; ++word) {

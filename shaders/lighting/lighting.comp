@@ -1,6 +1,8 @@
 #version 460
-// Deferred lighting in compute over a G-buffer of images: sun, tile-culled point lights and a
-// sky ambient term, tone-mapped, written sRGB-encoded. With multisampled images (the per-sample
+// Deferred lighting in compute over a G-buffer of images: sun, tile-culled point lights, a
+// sky ambient term scaled by the surface's occlusion and its emissive colour (with
+// EMISSIVE_OCCLUSION: an image holds them; without, none and 1), tone-mapped, written
+// sRGB-encoded. With multisampled images (the per-sample
 // MSAA baseline) a pixel whose samples all hold the same surface (material, normal and plane)
 // is shaded once; otherwise every sample is shaded and the tone-mapped results averaged.
 #include "../common/scene.glsl"
@@ -16,11 +18,17 @@ layout(local_size_x = 16, local_size_y = 16) in;
 layout(set = 0, binding = 0) uniform sampler2DMS depth_tex;
 layout(set = 0, binding = 1) uniform sampler2DMS albedo_metallic_tex;
 layout(set = 0, binding = 2) uniform NORMAL_SAMPLER_2DMS normal_roughness_tex;
+#ifdef EMISSIVE_OCCLUSION
+layout(set = 0, binding = 6) uniform sampler2DMS emissive_occlusion_tex;
+#endif
 #define FETCH(tex, p, s) texelFetch(tex, p, int(s))
 #else
 layout(set = 0, binding = 0) uniform sampler2D depth_tex;
 layout(set = 0, binding = 1) uniform sampler2D albedo_metallic_tex;
 layout(set = 0, binding = 2) uniform NORMAL_SAMPLER_2D normal_roughness_tex;
+#ifdef EMISSIVE_OCCLUSION
+layout(set = 0, binding = 6) uniform sampler2D emissive_occlusion_tex;
+#endif
 #define FETCH(tex, p, s) texelFetch(tex, p, 0)
 #endif
 layout(set = 0, binding = 3, scalar) readonly buffer Frame { FrameConstants frame; };
@@ -47,6 +55,14 @@ vec3 shade_sample(ivec2 pixel, uint s, vec2 center) {
     surface.albedo = am.rgb;
     surface.metallic = am.a;
     surface.roughness = nr.a;
+#ifdef EMISSIVE_OCCLUSION
+    vec4 eo = FETCH(emissive_occlusion_tex, pixel, s);
+    surface.emissive = eo.rgb;
+    surface.occlusion = eo.a;
+#else
+    surface.emissive = vec3(0.0);
+    surface.occlusion = 1.0;
+#endif
     uint debug_view = settings.debug_view;
     if (debug_view == DEBUG_VIEW_NORMALS) return pow(surface.normal * 0.5 + 0.5, vec3(2.2));
     if (debug_view == DEBUG_VIEW_ALBEDO) return pow(am.rgb, vec3(2.2));
@@ -92,6 +108,9 @@ bool single_surface(ivec2 pixel) {
         if (bg != bg0) return false;
         if (bg) continue;
         if (FETCH(albedo_metallic_tex, pixel, s) != a0 || FETCH(normal_roughness_tex, pixel, s) != n0) return false;
+#ifdef EMISSIVE_OCCLUSION
+        if (FETCH(emissive_occlusion_tex, pixel, s) != FETCH(emissive_occlusion_tex, pixel, 0u)) return false;
+#endif
 #if SAMPLES > 1
         vec3 p = surface_position(vec2(pixel) + sample_location(s), d);
         if (abs(dot(p - p0, normal0)) > 1e-3 * length(p0)) return false;

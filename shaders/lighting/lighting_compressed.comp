@@ -88,13 +88,11 @@ layout(push_constant) uniform Settings {
     uint pool_blocks;
 } settings;
 
-// A block's words as loaded: albedo + metallic, normal, and the word holding the pair's
-// roughness and AO bytes.
+// A block's words as loaded: albedo + metallic, normal, and its surface word.
 struct BlockWords {
     uint albedo_metallic;
     uint normal;
-    uint roughness_ao;   // the pair's roughness[2], ao[2] bytes
-    uint k;              // which block of the pair
+    uint surface;
 };
 
 BlockWords load_head_block(uint pixel) {
@@ -102,8 +100,7 @@ BlockWords load_head_block(uint pixel) {
     BlockWords w;
     w.albedo_metallic = gb.pairs[pair].albedo_metallic[k];
     w.normal = gb.pairs[pair].normal[k];
-    w.roughness_ao = uint(gb.pairs[pair].roughness[k]) | (uint(gb.pairs[pair].ao[k]) << 8);
-    w.k = k;
+    w.surface = gb.pairs[pair].surface[k];
     return w;
 }
 
@@ -112,8 +109,7 @@ BlockWords load_pool_block(uint slot) {
     BlockWords w;
     w.albedo_metallic = pool.pairs[pair].albedo_metallic[k];
     w.normal = pool.pairs[pair].normal[k];
-    w.roughness_ao = uint(pool.pairs[pair].roughness[k]) | (uint(pool.pairs[pair].ao[k]) << 8);
-    w.k = k;
+    w.surface = pool.pairs[pair].surface[k];
     return w;
 }
 
@@ -126,8 +122,9 @@ Block decode_block(BlockWords w) {
     b.albedo = am.rgb;
     b.metallic = am.a;
     b.normal = oct_decode(unpackSnorm2x16(w.normal));
-    b.roughness = float(w.roughness_ao & 0xFFu) / 255.0;
-    b.ao = float((w.roughness_ao >> 8) & 0xFFu) / 255.0;
+    b.roughness = surface_word_roughness(w.surface);
+    b.occlusion = surface_word_occlusion(w.surface);
+    b.emissive = surface_word_emissive(w.surface);
     return b;
 }
 
@@ -141,7 +138,9 @@ vec3 shade_block(Block b, vec2 center, float depth) {
     s.albedo = b.albedo;
     s.metallic = b.metallic;
     s.roughness = b.roughness;
-    vec3 color = shade_tile_lights(s);   // ambient occlusion is stored but 1 in every scene so far
+    s.occlusion = b.occlusion;
+    s.emissive = b.emissive;
+    vec3 color = shade_tile_lights(s);
     if (settings.debug_view == DEBUG_VIEW_NORMALS) return pow(b.normal * 0.5 + 0.5, vec3(2.2));
     if (settings.debug_view == DEBUG_VIEW_ALBEDO) return pow(b.albedo, vec3(2.2));
     return tonemap_aces(color * settings.exposure);

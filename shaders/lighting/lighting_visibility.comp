@@ -10,6 +10,7 @@
 #include "../common/material_surface.glsl"
 #include "../common/shading.glsl"
 #include "../common/octahedral.glsl"
+#include "../common/emissive_occlusion.glsl"
 
 layout(local_size_x = 16, local_size_y = 16) in;
 
@@ -119,6 +120,9 @@ Surface rebuild(uint id, uint prim, vec2 center, float depth) {
     s.albedo = albedo_metallic.rgb;
     s.metallic = albedo_metallic.a;
     s.roughness = unpackUnorm4x8(packUnorm4x8(vec4(textured_surface.roughness))).x;
+    s.emissive = textured_surface.emissive;
+    s.occlusion = textured_surface.occlusion;
+    round_like_gbuffer(s.emissive, s.occlusion);
     return s;
 }
 

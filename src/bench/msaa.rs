@@ -26,8 +26,17 @@ const COMPRESSED_METHODS: &[&str] = &["msaa_compressed", "msaa_compressed_claim"
 
 /// Resources counted as the G-buffer's memory: its targets or buffers, the depth it is drawn
 /// against, and the compressed methods' claim bytes.
-pub const GBUFFER_RESOURCES: &[&str] =
-    &["albedo", "normal", "depth", "gbuffer", "gbuffer_pool", "head_samples", "sample_claim", "ids"];
+pub const GBUFFER_RESOURCES: &[&str] = &[
+    "albedo",
+    "normal",
+    "emissive_occlusion",
+    "depth",
+    "gbuffer",
+    "gbuffer_pool",
+    "head_samples",
+    "sample_claim",
+    "ids",
+];
 
 /// What to measure.
 #[derive(Clone, Debug)]

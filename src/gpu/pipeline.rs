@@ -64,6 +64,9 @@ pub struct GraphicsDesc<'a> {
     pub stencil: StencilRule,
     /// What the vertices make: triangles for geometry, lines for debug drawing.
     pub topology: vk::PrimitiveTopology,
+    /// Whether every color attachment blends the fragment over what it holds (source alpha,
+    /// one minus source alpha; the destination's alpha is kept).
+    pub blend: bool,
 }
 
 /// What a pipeline does with the stencil aspect.
@@ -206,7 +209,22 @@ impl Pipeline {
         let blend_attachments: Vec<_> = desc
             .color_formats
             .iter()
-            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
+            .map(|_| {
+                let state =
+                    vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
+                if desc.blend {
+                    state
+                        .blend_enable(true)
+                        .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+                        .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                        .color_blend_op(vk::BlendOp::ADD)
+                        .src_alpha_blend_factor(vk::BlendFactor::ZERO)
+                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .alpha_blend_op(vk::BlendOp::ADD)
+                } else {
+                    state
+                }
+            })
             .collect();
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         // The cull mode is per draw: each face-cull region of a command list sets its own.

@@ -68,6 +68,7 @@ impl VisibilityOracle {
                 samples,
                 stencil: Default::default(),
                 topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                blend: false,
             },
         )?;
         let defines: &[(&str, &str)] =

@@ -1,6 +1,7 @@
 //! Geometry passes that draw the culled draw lists with `vkCmdDrawIndexedIndirectCount`:
 //!
-//! - `gbuffer`: clears depth and draws albedo/metallic, normal/roughness and reversed-Z depth, or
+//! - `gbuffer`: clears depth and draws albedo/metallic, normal/roughness (and, where bound,
+//!   emissive/occlusion) and reversed-Z depth, or
 //!   depth alone when no color target is bound (the MSAA Z-prepass of the compressed G-buffer);
 //! - `gbuffer_append`: the same on top of what an earlier pass drew (two-phase culling's late draw);
 //! - `gbuffer_equal`: the MSAA Z-prepass baseline: depth EQUAL against a finished depth buffer,
@@ -14,8 +15,9 @@
 //! MSAA rate.
 
 use super::slots::{
-    clear_colors_setting, draw_list_slots, ms, redraw_list_slots, slot, GBUFFER_ALBEDO_FORMAT, GBUFFER_NORMAL_FORMATS,
-    NORMAL_SLOT_DOC, VISIBILITY_FORMATS,
+    clear_colors_setting, draw_list_slots, ms, redraw_list_slots, slot, EMISSIVE_OCCLUSION_SLOT_DOC,
+    GBUFFER_ALBEDO_FORMAT, GBUFFER_EMISSIVE_OCCLUSION_FORMAT, GBUFFER_NORMAL_FORMATS, NORMAL_SLOT_DOC,
+    VISIBILITY_FORMATS,
 };
 use crate::gpu::barrier::layout_for_format;
 use crate::gpu::cmd_set_full_viewport;
@@ -174,6 +176,7 @@ pub fn geometry_pipeline(
                 StencilRule::Off
             },
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            blend: false,
         },
     )?)
 }
@@ -238,6 +241,9 @@ pub fn record_geometry(
     }
 }
 
+/// The G-buffer's color targets in attachment order (`gbuffer.frag`'s outputs).
+const GBUFFER_COLOR_SLOTS: [&str; 3] = ["albedo", "normal", "emissive_occlusion"];
+
 /// How a geometry pass treats what is already in its targets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GeometryMode {
@@ -273,13 +279,15 @@ impl GbufferPass {
         let invalid = |m: String| crate::Error::Invalid(format!("pass '{}': {m}", pass.name));
         let depth = bound_image(plan, pass, "depth").ok_or_else(|| invalid("no depth image bound".into()))?;
         let colors: Vec<vk::Format> =
-            ["albedo", "normal"].iter().filter_map(|s| bound_image(plan, pass, s).map(|(f, _)| f)).collect();
+            GBUFFER_COLOR_SLOTS.iter().filter_map(|s| bound_image(plan, pass, s).map(|(f, _)| f)).collect();
         let ids = bound_image(plan, pass, "ids");
-        if colors.len() == 1 || (ids.is_some() && !colors.is_empty()) {
+        let surface = ["albedo", "normal"].iter().filter(|s| bound_image(plan, pass, s).is_some()).count();
+        if surface == 1 || (ids.is_some() && !colors.is_empty()) || (surface == 0 && !colors.is_empty()) {
             return Err(invalid(
-                "bind both albedo and normal, or ids alone (a visibility buffer), or none (a depth-only pass)".into(),
+                "bind both albedo and normal (and emissive_occlusion if wanted), or ids alone (a visibility buffer), or none (a depth-only pass)".into(),
             ));
         }
+        let emissive_occlusion = bound_image(plan, pass, "emissive_occlusion").is_some();
         if mode == GeometryMode::Equal && !crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL)
         {
             return Err(invalid(format!(
@@ -290,10 +298,19 @@ impl GbufferPass {
         let normal = bound_image(plan, pass, "normal").map(|(f, _)| f);
         let packed_ids = ids.is_some_and(|(format, _)| format == crate::passes::slots::VISIBILITY_PACKED);
         let (fragment, colors) = match ids {
-            Some((format, _)) => (Some(("gbuffer/visibility.frag", visibility_defines(Some(format)))), vec![format]),
-            None if colors.is_empty() => (Some(("gbuffer/depth_alpha.frag", &[][..])), colors),
-            None => (Some(("gbuffer/gbuffer.frag", normal_defines(normal))), colors),
+            Some((format, _)) => {
+                (Some(("gbuffer/visibility.frag", visibility_defines(Some(format)).to_vec())), vec![format])
+            }
+            None if colors.is_empty() => (Some(("gbuffer/depth_alpha.frag", Vec::new())), colors),
+            None => {
+                let mut defines = normal_defines(normal).to_vec();
+                if emissive_occlusion {
+                    defines.push(("EMISSIVE_OCCLUSION", "1"));
+                }
+                (Some(("gbuffer/gbuffer.frag", defines)), colors)
+            }
         };
+        let fragment = fragment.as_ref().map(|(path, defines)| (*path, defines.as_slice()));
         let pipeline =
             geometry_pipeline(ctx, shaders, &pass.name, fragment, &colors, depth, mode == GeometryMode::Equal)?;
         Ok(Self {
@@ -318,8 +335,9 @@ impl PassNode for GbufferPass {
         };
         let depth_load =
             if self.mode == GeometryMode::Clear { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD };
-        let colors: Vec<vk::RenderingAttachmentInfo> = ["albedo", "normal", "ids"]
+        let colors: Vec<vk::RenderingAttachmentInfo> = GBUFFER_COLOR_SLOTS
             .iter()
+            .chain(&["ids"])
             .filter_map(|s| slots.image(s))
             .map(|image| {
                 vk::RenderingAttachmentInfo::default()
@@ -369,6 +387,7 @@ impl PassKind for GbufferKind {
                 writes: vec![
                     ms(slot("albedo", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
                     ms(slot("normal", Usage::ColorAttachment, false, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
+                    ms(slot("emissive_occlusion", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_EMISSIVE_OCCLUSION_FORMAT), EMISSIVE_OCCLUSION_SLOT_DOC)),
                     ms(slot("ids", Usage::ColorAttachment, false, FormatRule::OneOf(VISIBILITY_FORMATS), "visibility buffer: instance id and triangle id, packed in R32_UINT or as R32G32_UINT (instead of albedo and normal)")),
                     ms(slot("depth", Usage::DepthAttachment, true, FormatRule::Depth, "reversed-Z depth (cleared to 0, stencil to 0)")),
                 ],
@@ -382,6 +401,7 @@ impl PassKind for GbufferKind {
                 writes: vec![
                     ms(slot("albedo", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
                     ms(slot("normal", Usage::ColorAttachmentLoad, false, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
+                    ms(slot("emissive_occlusion", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_EMISSIVE_OCCLUSION_FORMAT), EMISSIVE_OCCLUSION_SLOT_DOC)),
                     ms(slot("ids", Usage::ColorAttachmentLoad, false, FormatRule::OneOf(VISIBILITY_FORMATS), "visibility buffer: instance id and triangle id (packed R32_UINT or R32G32_UINT)")),
                     ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "reversed-Z depth")),
                 ],
@@ -395,6 +415,7 @@ impl PassKind for GbufferKind {
                 writes: vec![
                     ms(slot("albedo", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a")),
                     ms(slot("normal", Usage::ColorAttachment, true, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
+                    ms(slot("emissive_occlusion", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_EMISSIVE_OCCLUSION_FORMAT), EMISSIVE_OCCLUSION_SLOT_DOC)),
                     ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished depth, with stencil (its stencil is written)")),
                 ],
                 settings: vec![clear_colors_setting()],

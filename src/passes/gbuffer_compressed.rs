@@ -1,6 +1,6 @@
 //! The compressed G-buffer geometry pass (thesis `000` §4.3, paper `002`): the culled lists are
 //! drawn again over the finished MSAA depth with depth EQUAL, a stencil bit per sample and
-//! post-depth coverage, and each fragment writes one 14-byte block: the pixel's head when it
+//! post-depth coverage, and each fragment writes one 16-byte block: the pixel's head when it
 //! owns sample 0, otherwise a pool block pushed on the pixel's list.
 //!
 //! With a depth format without stencil and a `sample_claim` buffer ([`SampleOwner::Claim`])
@@ -12,10 +12,10 @@
 //!
 //! The `gbuffer` buffer holds a 16-byte header (pool blocks asked for, fragments and samples
 //! dropped because the pool was full) and `width * height` head blocks; the `gbuffer_pool`
-//! buffer holds the pool. Both store 28-byte pairs of blocks
+//! buffer holds the pool. Both store 32-byte pairs of blocks
 //! (`shaders/gbuffer/compressed_gbuffer.glsl`). Two buffers keep each binding within
 //! `maxStorageBufferRange` at 3840x2160 on devices that address 128 MiB per binding (lavapipe):
-//! the heads take 116 MB there, heads and pool together 174 MB. The pool's size sets its blocks;
+//! the heads take 133 MB there (within 128 MiB), heads and pool together 199 MB. The pool's size sets its blocks;
 //! links have 26 bits, so at most 2^26 - 1 pool blocks are used whatever the size.
 
 use super::gbuffer::{bound_image, geometry_pipeline, record_geometry, DrawSource};
@@ -34,7 +34,7 @@ use ash::vk;
 /// Bytes of the header before the blocks.
 pub const HEADER_BYTES: u64 = 16;
 /// Bytes of one pair of blocks.
-pub const PAIR_BYTES: u64 = 28;
+pub const PAIR_BYTES: u64 = 32;
 /// Pool blocks one link can address (a 26-bit index; 0 is the null link).
 pub const MAX_POOL_BLOCKS: u64 = (1 << 26) - 1;
 
@@ -54,7 +54,7 @@ pub fn check_heads(bytes: u64, pixels: u64) -> Result<(), String> {
     if bytes < need {
         return Err(format!(
             "the gbuffer buffer holds {bytes} bytes; the header and {pixels} head blocks take {need} (size: 16 + \
-             ceil_div(width * height, 2) * 28)"
+             ceil_div(width * height, 2) * 32)"
         ));
     }
     Ok(())
@@ -358,7 +358,7 @@ impl PassKind for GbufferCompressedKind {
     fn info(&self) -> PassKindInfo {
         PassKindInfo {
             name: "gbuffer_compressed",
-            doc: "the compressed G-buffer geometry pass: redraws the lists with depth EQUAL, stencil first-fragment-wins (or, without stencil, atomic sample claims) and post-depth coverage, writing one 14-byte block per pixel plus pooled blocks for the other distinct surfaces of edge pixels, in per-pixel linked lists",
+            doc: "the compressed G-buffer geometry pass: redraws the lists with depth EQUAL, stencil first-fragment-wins (or, without stencil, atomic sample claims) and post-depth coverage, writing one 16-byte block per pixel plus pooled blocks for the other distinct surfaces of edge pixels, in per-pixel linked lists",
             reads: {
                 let mut reads = redraw_list_slots();
                 reads.push(slot("aa_mask", Usage::Sampled(Stages::Fragment), false, FormatRule::Exact(AA_MASK_FORMAT), "selective AA: only pixels whose mask is not 0 keep more than one block (an aa_edges pass makes it)"));
@@ -366,8 +366,8 @@ impl PassKind for GbufferCompressedKind {
             },
             writes: vec![
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished MSAA depth: with stencil (its stencil is written), or without stencil and a sample_claim buffer")),
-                slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header and a head block per pixel (size: 16 + ceil_div(width * height, 2) * 28)"),
-                slot("gbuffer_pool", Usage::StorageBufferWrite(Stages::Fragment), true, FormatRule::Any, "the pool of blocks for the other surfaces of edge pixels, 14 bytes a block (size: ceil_div(blocks, 2) * 28; at most 2^26 - 1 blocks are used)"),
+                slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header and a head block per pixel (size: 16 + ceil_div(width * height, 2) * 32)"),
+                slot("gbuffer_pool", Usage::StorageBufferWrite(Stages::Fragment), true, FormatRule::Any, "the pool of blocks for the other surfaces of edge pixels, 16 bytes a block (size: ceil_div(blocks, 2) * 32; at most 2^26 - 1 blocks are used)"),
                 slot("sample_claim", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "with a depth format without stencil: the samples already claimed, one byte per pixel (size: ceil_div(width * height, 4) * 4; at most 8 samples)"),
             ],
             settings: vec![
@@ -465,9 +465,9 @@ mod tests {
 
     #[test]
     fn pool_sizes_respect_the_26_bit_index() {
-        assert_eq!(heads_bytes(3), 16 + 2 * 28);
+        assert_eq!(heads_bytes(3), 16 + 2 * 32);
         assert!(check_heads(heads_bytes(101), 101).is_ok());
-        assert!(check_heads(heads_bytes(101) - 1, 101).unwrap_err().contains("take 1444"));
+        assert!(check_heads(heads_bytes(101) - 1, 101).unwrap_err().contains("take 1648"));
         assert_eq!(pool_blocks(pool_bytes(50)), 50);
         assert_eq!(pool_blocks(pool_bytes(51)), 52); // the odd pair's spare block
         assert_eq!(pool_blocks(27), 0);

@@ -1,8 +1,10 @@
-//! Deferred lighting in compute: sun, point lights and sky ambient over the G-buffer, tone
-//! mapped and written sRGB-encoded into an RGBA8 storage image.
+//! Deferred lighting in compute: sun, point lights, sky ambient (scaled by ambient occlusion)
+//! and emission over the G-buffer, tone mapped and written sRGB-encoded into an RGBA8 storage
+//! image.
 
 use super::slots::{
-    lighting_settings, ms, slot, GBUFFER_ALBEDO_FORMAT, GBUFFER_NORMAL_FORMATS, LIT_OUTPUT_FORMAT, NORMAL_SLOT_DOC,
+    lighting_settings, ms, slot, EMISSIVE_OCCLUSION_SLOT_DOC, GBUFFER_ALBEDO_FORMAT, GBUFFER_EMISSIVE_OCCLUSION_FORMAT,
+    GBUFFER_NORMAL_FORMATS, LIT_OUTPUT_FORMAT, NORMAL_SLOT_DOC,
 };
 use crate::gpu::{Bind, Buffer, GpuContext, Image, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
@@ -20,6 +22,8 @@ pub struct LightingInputs<'a> {
     pub albedo: &'a Image,
     /// Normal/roughness, in `SHADER_READ_ONLY_OPTIMAL`.
     pub normal: &'a Image,
+    /// Emissive/occlusion, in `SHADER_READ_ONLY_OPTIMAL`, if the pass was created with it.
+    pub emissive_occlusion: Option<&'a Image>,
     /// Frame constants.
     pub frame: &'a Buffer,
     /// Point lights.
@@ -65,17 +69,21 @@ pub struct LightingPass {
 
 impl LightingPass {
     /// Compiles the shader for G-buffer images of `samples` samples whose normal image has
-    /// `normal_format` (one of [`crate::passes::slots::GBUFFER_NORMAL_FORMATS`])
-    /// and creates the pipeline.
+    /// `normal_format` (one of [`crate::passes::slots::GBUFFER_NORMAL_FORMATS`]), with an
+    /// emissive/occlusion image or without, and creates the pipeline.
     pub fn new(
         ctx: &GpuContext,
         shaders: &ShaderCompiler,
         samples: vk::SampleCountFlags,
         normal_format: vk::Format,
+        emissive_occlusion: bool,
     ) -> crate::Result<Self> {
         let samples = samples.as_raw().max(1).to_string();
         let mut defines = vec![("SAMPLES", samples.as_str())];
         defines.extend_from_slice(normal_defines(Some(normal_format)));
+        if emissive_occlusion {
+            defines.push(("EMISSIVE_OCCLUSION", "1"));
+        }
         let spirv = shaders.compile("lighting/lighting.comp", &defines)?;
         let settings = LightingSettings { exposure: 0.8, debug_view: 0, light_tiles: 1 };
         Ok(Self {
@@ -94,14 +102,18 @@ impl LightingPass {
     ) -> crate::Result<Self> {
         let samples = bound_image(plan, pass, "depth").map_or(vk::SampleCountFlags::TYPE_1, |(_, s)| s);
         let normal = bound_image(plan, pass, "normal").map_or(crate::passes::slots::GBUFFER_NORMAL_PACKED, |(f, _)| f);
-        Ok(Self { settings: LightingSettings::from_plan(pass)?, ..Self::new(ctx, shaders, samples, normal)? })
+        let emissive_occlusion = bound_image(plan, pass, "emissive_occlusion").is_some();
+        Ok(Self {
+            settings: LightingSettings::from_plan(pass)?,
+            ..Self::new(ctx, shaders, samples, normal, emissive_occlusion)?
+        })
     }
 
     /// Records one dispatch over the output.
     pub fn record(&self, cmd: vk::CommandBuffer, io: &LightingInputs<'_>, settings: &LightingSettings) {
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let s = self.sampler.handle();
-        let binds = [
+        let mut binds = vec![
             Bind::Sampled(0, io.depth.sampled_view(), s, read),
             Bind::Sampled(1, io.albedo.sampled_view(), s, read),
             Bind::Sampled(2, io.normal.sampled_view(), s, read),
@@ -109,6 +121,9 @@ impl LightingPass {
             Bind::Buffer(4, io.lights.handle()),
             Bind::StorageImage(5, io.output.view()),
         ];
+        if let Some(image) = io.emissive_occlusion {
+            binds.push(Bind::Sampled(6, image.sampled_view(), s, read));
+        }
         self.pipeline.dispatch_over(cmd, &binds, bytemuck::bytes_of(settings), io.output.extent());
     }
 }
@@ -121,6 +136,7 @@ impl PassNode for LightingPass {
             depth: slots.required_image("depth")?,
             albedo: slots.required_image("albedo")?,
             normal: slots.required_image("normal")?,
+            emissive_occlusion: slots.image("emissive_occlusion"),
             frame: inputs.constants(),
             lights: inputs.lights(),
             output: slots.required_image("output")?,
@@ -159,6 +175,13 @@ impl PassKind for LightingKind {
                     true,
                     FormatRule::OneOf(GBUFFER_NORMAL_FORMATS),
                     NORMAL_SLOT_DOC,
+                )),
+                ms(slot(
+                    "emissive_occlusion",
+                    Usage::Sampled(Stages::Compute),
+                    false,
+                    FormatRule::Exact(GBUFFER_EMISSIVE_OCCLUSION_FORMAT),
+                    EMISSIVE_OCCLUSION_SLOT_DOC,
                 )),
             ],
             writes: vec![slot(

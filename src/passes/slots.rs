@@ -13,6 +13,12 @@ pub const GBUFFER_NORMAL_PACKED: vk::Format = vk::Format::R32_UINT;
 /// The G-buffer normal/roughness formats the geometry and lighting passes accept: the packed
 /// word, or normal xyz + roughness as four halves (the thesis's per-sample MSAA baseline layout).
 pub const GBUFFER_NORMAL_FORMATS: &[vk::Format] = &[GBUFFER_NORMAL_PACKED, vk::Format::R16G16B16A16_SFLOAT];
+/// The G-buffer's emissive/occlusion format: emissive rgb (sRGB-encoded by the format), ambient
+/// occlusion a (`shaders/common/emissive_occlusion.glsl`).
+pub const GBUFFER_EMISSIVE_OCCLUSION_FORMAT: vk::Format = vk::Format::R8G8B8A8_SRGB;
+/// What the G-buffer's `emissive_occlusion` slots hold.
+pub(crate) const EMISSIVE_OCCLUSION_SLOT_DOC: &str =
+    "emissive rgb and ambient occlusion a (optional: without it, surfaces emit nothing and are not occluded)";
 /// What the G-buffer's `normal` slots hold, in either format.
 pub(crate) const NORMAL_SLOT_DOC: &str = "normal and roughness (packed R32_UINT, or R16G16B16A16_SFLOAT)";
 /// The visibility buffer's packed format: instance id and triangle id in one 32-bit word, the

@@ -61,6 +61,11 @@ impl<'a> SlotBindings<'a> {
         self.image(slot).ok_or_else(|| missing(self.pass, slot))
     }
 
+    /// The buffer bound to a required slot (validation guarantees it is there).
+    pub fn required_buffer(&self, slot: &str) -> crate::Result<&'a Buffer> {
+        self.buffer(slot).ok_or_else(|| missing(self.pass, slot))
+    }
+
     /// Every binding of the pass.
     pub fn all(&self) -> &'a [Binding] {
         &self.pass.bindings
