@@ -7,7 +7,10 @@
 //! the same path, so both give the same image.
 //!
 //! Mips are box-filtered on the CPU at upload, in linear light for textures that some material
-//! uses as colour (base colour, emissive: sRGB) and in stored values otherwise.
+//! uses as colour (base colour, emissive: sRGB) and in stored values otherwise. The alpha of a
+//! masked material's base colour is then scaled per mip so that the share of texels that pass
+//! its cutoff stays that of mip 0 (Castaño's coverage-preserving mips): box filtering alone
+//! thins foliage and fences until they vanish in the distance.
 
 use crate::gpu::texture_array::TextureArray;
 use crate::gpu::{Bind, GpuContext, Sampler, UploadBatch};
@@ -54,6 +57,7 @@ impl GpuTextures {
     /// Resamples, mips and queues the upload of every texture of `scene`.
     pub fn upload(ctx: &GpuContext, scene: &Scene, batch: &mut UploadBatch) -> crate::Result<Self> {
         let srgb = srgb_uses(scene);
+        let cutoffs = mask_cutoffs(scene);
         let mut members: Vec<Vec<usize>> = vec![Vec::new(); TEXTURE_CLASSES];
         let mut placement = Vec::with_capacity(scene.textures.len());
         for (i, t) in scene.textures.iter().enumerate() {
@@ -70,8 +74,10 @@ impl GpuTextures {
                 continue;
             }
             let side = class_side(class);
-            let layers: Vec<Vec<u8>> =
-                ids.iter().map(|&i| mip_chain(&resample(&scene.textures[i], side), side, srgb[i])).collect();
+            let layers: Vec<Vec<u8>> = ids
+                .iter()
+                .map(|&i| mip_chain(&resample(&scene.textures[i], side), side, srgb[i], cutoffs[i]))
+                .collect();
             let array = TextureArray::new(ctx, &format!("textures {side}x{side}"), side, ids.len() as u32)?;
             queue(ctx, batch, &array, &layers)?;
             arrays.push(array);
@@ -142,6 +148,48 @@ fn srgb_uses(scene: &Scene) -> Vec<bool> {
     srgb
 }
 
+/// Per scene texture, the alpha cutoff of the first masked material that takes it as base
+/// colour (`None`: no masked material does).
+fn mask_cutoffs(scene: &Scene) -> Vec<Option<f32>> {
+    let mut cutoffs = vec![None; scene.textures.len()];
+    for m in &scene.materials {
+        let crate::scene::AlphaMode::Mask { cutoff } = m.alpha_mode else { continue };
+        if let Some(c) = m.texture(TextureSlot::BaseColor).and_then(|t| cutoffs.get_mut(t.texture as usize)) {
+            c.get_or_insert(cutoff);
+        }
+    }
+    cutoffs
+}
+
+/// The share of `rgba`'s texels whose alpha, scaled by `scale`, reaches `cutoff`.
+fn coverage(rgba: &[u8], cutoff: f32, scale: f32) -> f32 {
+    let texels = rgba.len() / 4;
+    let kept = rgba.chunks_exact(4).filter(|t| t[3] as f32 / 255.0 * scale >= cutoff).count();
+    kept as f32 / texels.max(1) as f32
+}
+
+/// Scales the alpha of `rgba` so that its coverage at `cutoff` is as near `target` as a
+/// bisection of the scale finds.
+fn preserve_coverage(rgba: &mut [u8], cutoff: f32, target: f32) {
+    let (mut low, mut high) = (0.0f32, 4.0f32);
+    for _ in 0..16 {
+        let mid = (low + high) / 2.0;
+        if coverage(rgba, cutoff, mid) < target {
+            low = mid;
+        } else {
+            high = mid;
+        }
+    }
+    let scale = if (coverage(rgba, cutoff, low) - target).abs() < (coverage(rgba, cutoff, high) - target).abs() {
+        low
+    } else {
+        high
+    };
+    for t in rgba.chunks_exact_mut(4) {
+        t[3] = (t[3] as f32 * scale).round().clamp(0.0, 255.0) as u8;
+    }
+}
+
 /// `texture` as `side` x `side` RGBA8 texels.
 fn resample(texture: &Texture, side: u32) -> std::borrow::Cow<'_, [u8]> {
     if texture.width == side && texture.height == side {
@@ -170,8 +218,10 @@ fn linear_to_srgb(c: f32) -> u8 {
 }
 
 /// Mip 0 (`side` x `side`) followed by every smaller mip down to 1x1, each the 2x2 box average
-/// of the one above (colour channels in linear light where `srgb`; alpha always linear).
-fn mip_chain(level0: &[u8], side: u32, srgb: bool) -> Vec<u8> {
+/// of the one above (colour channels in linear light where `srgb`; alpha always linear), with
+/// the alpha of each mip scaled to keep mip 0's coverage at `mask_cutoff` where it is given.
+fn mip_chain(level0: &[u8], side: u32, srgb: bool, mask_cutoff: Option<f32>) -> Vec<u8> {
+    let target = mask_cutoff.map(|c| (c, coverage(level0, c, 1.0)));
     let mut out = level0.to_vec();
     let mut prev = level0.to_vec();
     let mut size = side;
@@ -190,6 +240,9 @@ fn mip_chain(level0: &[u8], side: u32, srgb: bool) -> Vec<u8> {
                     };
                 }
             }
+        }
+        if let Some((cutoff, target)) = target {
+            preserve_coverage(&mut next, cutoff, target);
         }
         out.extend_from_slice(&next);
         prev = next;
@@ -245,9 +298,42 @@ mod tests {
     fn mips_average_in_linear_light_for_colour() {
         // Black and white texels average to mid-grey light: 188 in sRGB, 128 stored linearly.
         let level0 = [0, 0, 0, 255, 255, 255, 255, 255, 0, 0, 0, 255, 255, 255, 255, 255];
-        let srgb = mip_chain(&level0, 2, true);
+        let srgb = mip_chain(&level0, 2, true, None);
         assert_eq!(srgb.len(), 20);
         assert_eq!(&srgb[16..], &[188, 188, 188, 255]);
-        assert_eq!(&mip_chain(&level0, 2, false)[16..], &[128, 128, 128, 255]);
+        assert_eq!(&mip_chain(&level0, 2, false, None)[16..], &[128, 128, 128, 255]);
+    }
+
+    #[test]
+    fn masked_mips_keep_the_share_of_texels_that_pass_the_cutoff() {
+        // Scattered opaque texels, a fifth of them, like leaves against gaps.
+        let side = 64u32;
+        let level0: Vec<u8> = (0..side * side)
+            .flat_map(|i| {
+                let hash = i.wrapping_mul(2_654_435_761) >> 16;
+                if hash % 5 == 0 {
+                    [255, 255, 255, 255]
+                } else {
+                    [255, 255, 255, 0]
+                }
+            })
+            .collect();
+        let mip = |chain: &[u8], level: u32| {
+            let start: usize = (0..level).map(|l| ((side >> l) * (side >> l) * 4) as usize).sum();
+            let len = ((side >> level) * (side >> level) * 4) as usize;
+            chain[start..start + len].to_vec()
+        };
+        let target = coverage(&level0, 0.5, 1.0);
+        let plain = mip_chain(&level0, side, true, None);
+        let kept = mip_chain(&level0, side, true, Some(0.5));
+        // Box filtering averages towards a fifth of opaque: by mip 3 almost nothing passes.
+        assert!(coverage(&mip(&plain, 3), 0.5, 1.0) < target / 4.0);
+        for level in 1..=3 {
+            let c = coverage(&mip(&kept, level), 0.5, 1.0);
+            assert!((c - target).abs() < 0.05, "mip {level}: {c} against {target}");
+        }
+        // Colour is untouched.
+        let colour = |m: Vec<u8>| m.chunks_exact(4).map(|t| [t[0], t[1], t[2]]).collect::<Vec<_>>();
+        assert_eq!(colour(mip(&kept, 2)), colour(mip(&plain, 2)));
     }
 }
