@@ -32,12 +32,13 @@ float material_alpha(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy) {
 // into a share of the samples (alpha-to-coverage), rotated by the pixel's position so that
 // layers of foliage do not all keep the same samples. The choice depends only on the fragment,
 // so every pass that draws the geometry (depth, G-buffer, ids, the visibility oracle) keeps the
-// same samples. With one sample it is the alpha test. Call it where every invocation of the
-// quad runs (it takes a screen derivative).
+// same samples. With one sample, or with ALPHA_TEST_ONLY (the bench's `--alpha-test`, which
+// measures what alpha-to-coverage costs), it is the alpha test. Call it where every invocation
+// of the quad runs (it takes a screen derivative).
 uint material_coverage(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy) {
     if (m.alpha_mode != ALPHA_MASK) return 0xFFFFFFFFu;
     float a = material_alpha(m, uv, dx, dy);
-#if MSAA_SAMPLES > 1
+#if MSAA_SAMPLES > 1 && !defined(ALPHA_TEST_ONLY)
     float width = max(fwidth(a), 1.0 / 256.0);
     float share = clamp((a - m.alpha_cutoff) / width + 0.5, 0.0, 1.0);
     uint n = uint(share * float(MSAA_SAMPLES) + 0.5);

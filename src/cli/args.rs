@@ -180,6 +180,11 @@ pub struct BenchArgs {
     /// image error).
     #[arg(long, default_value_t = 4, value_name = "N")]
     pub reference: u32,
+    /// Masked materials keep all or none of a pixel's samples (a plain alpha test) instead of
+    /// a share by alpha-to-coverage, in every pass and the oracle: to measure what
+    /// alpha-to-coverage costs and gains.
+    #[arg(long)]
+    pub alpha_test: bool,
     /// Folder for bench.json, bench.md and the plots (culling.svg, msaa.svg).
     #[arg(long, default_value = "out/bench")]
     pub out: PathBuf,

@@ -39,7 +39,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         validation: ContextOptions::default().validation,
         app_name: "cullgraph bench".into(),
     })?;
-    let shaders = ShaderCompiler::new(ShaderRoot::from_env())?;
+    let mut shaders = ShaderCompiler::new(ShaderRoot::from_env())?;
+    if args.alpha_test {
+        shaders = shaders.with_global_defines(&[("ALPHA_TEST_ONLY", "1")]);
+    }
     let io = |path: &std::path::Path, source| Error::Io { path: path.display().to_string(), source };
     std::fs::create_dir_all(&args.out).map_err(|e| io(&args.out, e))?;
     let write = |name: &str, text: &str| {

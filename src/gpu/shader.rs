@@ -120,13 +120,28 @@ pub struct ShaderCompiler {
     root: ShaderRoot,
     cache: Mutex<HashMap<(String, Vec<Define>), Spirv>>,
     read_log: ReadLog,
+    global_defines: Vec<Define>,
 }
 
 impl ShaderCompiler {
     /// A compiler reading sources from `root`.
     pub fn new(root: ShaderRoot) -> Result<Self, ShaderError> {
         let compiler = shaderc::Compiler::new().map_err(|e| ShaderError::Internal(e.to_string()))?;
-        Ok(Self { compiler, root, cache: Mutex::new(HashMap::new()), read_log: ReadLog::default() })
+        Ok(Self {
+            compiler,
+            root,
+            cache: Mutex::new(HashMap::new()),
+            read_log: ReadLog::default(),
+            global_defines: Vec::new(),
+        })
+    }
+
+    /// Adds `defines` to every shader this compiler compiles from now on (for variants measured
+    /// against each other, such as `ALPHA_TEST_ONLY`; see `shaders/common/material_surface.glsl`).
+    pub fn with_global_defines(mut self, defines: &[(&str, &str)]) -> Self {
+        self.global_defines.extend(defines.iter().map(|(k, v)| (k.to_string(), v.to_string())));
+        self.clear_cache();
+        self
     }
 
     /// Every file on disk the compiles so far read: user shaders given by path, the library's
@@ -169,6 +184,7 @@ impl ShaderCompiler {
     /// to `name`'s directory first (on disk when `name` is a real path), then against the library.
     pub fn compile_source(&self, name: &str, source: &str, defines: &[(&str, &str)]) -> Result<Spirv, ShaderError> {
         let mut defs: Vec<Define> = defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+        defs.extend(self.global_defines.iter().cloned());
         defs.sort();
         let key = (format!("{name}\0{source}"), defs);
         if let Some(hit) = self.cache.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
