@@ -127,7 +127,11 @@ fn graph_check_plan_and_dot() {
             rest.split(' ').next()
         })
         .collect();
-    assert_eq!(passes, ["draw_early", "hiz", "cull_late", "draw_late", "lighting"], "{stdout}");
+    assert_eq!(
+        passes,
+        ["draw_early", "hiz", "cull_late", "draw_late", "lighting", "transparent_sort", "transparent"],
+        "{stdout}"
+    );
     // A buffer too small for this scene is refused at its binding.
     let small = tmp.path().join("small.ron");
     std::fs::write(&small, std::fs::read_to_string(&two_phase).unwrap().replace("\"instances * 4\"", "64")).unwrap();

@@ -44,7 +44,7 @@ const COLOR_OUT: Access = Access {
 fn default_graph_compiles_to_the_fixed_frame() {
     let g = default_graph();
     let c = compile(&g);
-    assert_eq!(order(&c), ["gbuffer", "lighting"]);
+    assert_eq!(order(&c), ["gbuffer", "lighting", "transparent_sort", "transparent"]);
     assert!(c.pruned.is_empty());
     let lighting = &c.passes[1];
     assert_eq!(lighting.settings.get("exposure"), Some(&SettingValue::Float(0.8)));
@@ -57,7 +57,11 @@ fn default_graph_compiles_to_the_fixed_frame() {
         graph::plan::ResolvedKind::Image { format, extent, usage, .. } => {
             assert_eq!(*format, vk::Format::R8G8B8A8_UNORM);
             assert_eq!((extent.width, extent.height), (1280, 720));
-            assert_eq!(*usage, vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC);
+            // Lit in compute, blended over by the transparent pass, copied out.
+            assert_eq!(
+                *usage,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC
+            );
         }
         other => panic!("color is {other:?}"),
     }
@@ -77,12 +81,12 @@ fn default_graph_compiles_to_the_fixed_frame() {
 fn shipped_graphs_load_and_compile() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     for (file, passes) in [
-        ("graph/default.ron", 5),
-        ("graph/no_cull.ron", 2),
-        ("graph/frustum.ron", 3),
-        ("graph/two_phase.ron", 5),
-        ("graph/one_phase.ron", 4),
-        ("graph/occluder_prepass.ron", 6),
+        ("graph/default.ron", 7),
+        ("graph/no_cull.ron", 4),
+        ("graph/frustum.ron", 5),
+        ("graph/two_phase.ron", 7),
+        ("graph/one_phase.ron", 6),
+        ("graph/occluder_prepass.ron", 8),
         ("graph/examples/tint.ron", 3),
         ("graph/examples/history.ron", 3),
         ("graph/examples/host_target.ron", 2),
@@ -134,17 +138,22 @@ fn default_graph_barrier_plan_is_exactly_this() {
         vec![
             b("albedo", None, COLOR_OUT, true),
             b("normal", None, COLOR_OUT, true),
+            b("emissive_occlusion", None, COLOR_OUT, true),
             b("depth", None, depth_write, true)
         ]
     );
     // lighting: the G-buffer becomes readable in compute (read after write, layout change);
-    // the output is first used here.
+    // the output is first used here. The depth is read again by the transparent pass's fragment
+    // shader, so its one barrier covers both readers.
+    let sampled_by_both =
+        Access { stage: vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COMPUTE_SHADER, ..sampled };
     assert_eq!(
         c.passes[1].barriers,
         vec![
-            b("depth", Some(depth_write), sampled, false),
+            b("depth", Some(depth_write), sampled_by_both, false),
             b("albedo", Some(COLOR_OUT), sampled, false),
             b("normal", Some(COLOR_OUT), sampled, false),
+            b("emissive_occlusion", Some(COLOR_OUT), sampled, false),
             b("color", None, storage_write, true),
         ]
     );

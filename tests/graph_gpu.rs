@@ -106,7 +106,7 @@ fn a_broken_reload_keeps_the_last_good_graph_running() {
     let mut broken = GraphSpec::default_graph();
     broken.text = broken
         .text
-        .replace("\"normal\": \"normal\", \"depth\": \"depth\"}", "\"normal\": \"normal\", \"depth\": \"dept\"}");
+        .replace("\"emissive_occlusion\", \"depth\": \"depth\"}", "\"emissive_occlusion\", \"depth\": \"dept\"}");
     let err = renderer.reload_graph(&shaders, &broken).unwrap_err().to_string();
     assert!(err.starts_with("graph/default.ron:") && err.contains("'dept'"), "{err}");
     let still = renderer.render_to_image(&boxes_camera()).unwrap().1;
@@ -144,11 +144,11 @@ fn buffers_too_small_for_their_slots_are_refused_at_the_binding_when_the_graph_i
 
     // A count buffer that holds one count, where the cull pass writes one per face-cull region.
     let mut old = GraphSpec::builtin("two_phase").unwrap();
-    old.text = old.text.replace("\"late_count\": Buffer(size: 12)", "\"late_count\": Buffer(size: 4)");
+    old.text = old.text.replace("\"late_count\": Buffer(size: 16)", "\"late_count\": Buffer(size: 4)");
     let err = refused(&old);
     assert!(
         err.contains(&format!("two_phase.ron:{}", binding_pos(&old.text, "late_count", 1)))
-            && err.contains("pass 'cull_late' writes \"draw_count\": 'late_count' holds 4 bytes; the slot takes 12"),
+            && err.contains("pass 'cull_late' writes \"draw_count\": 'late_count' holds 4 bytes; the slot takes 16"),
         "{err}"
     );
     // The draw that reads it is refused at its own binding too.

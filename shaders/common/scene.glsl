@@ -38,6 +38,8 @@ struct MaterialTexture {
 #define ALPHA_OPAQUE 0u
 #define ALPHA_MASK 1u
 #define ALPHA_BLEND 2u
+// GpuMaterial flags (src/passes/shared/gpu_types.rs).
+#define MATERIAL_DOUBLE_SIDED 1u
 
 // Texture slots, in the order of GpuMaterial::textures (src/scene/texture.rs TextureSlot).
 #define TEX_BASE_COLOR 0
@@ -56,7 +58,7 @@ struct GpuMaterial {
     vec3 emissive;
     float normal_scale;
     float occlusion_strength;
-    float pad0;
+    uint flags;           // MATERIAL_* bits
     float pad1;
     float pad2;
     MaterialTexture textures[5];

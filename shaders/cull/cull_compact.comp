@@ -157,17 +157,24 @@ uint take_group_count(uint at) {
 // What one draw list's commands add up to.
 struct ListTotals {
     uint placed;         // instances
-    uvec3 written;       // commands, per face-cull region
+    uvec4 written;       // commands, per face-cull region
     uint64_t triangles;  // this invocation's share
 };
 
 // The face-cull region of group `g`.
-uint region_of(uint g) { return g >= pc.region_first[2] ? 2u : (g >= pc.region_first[1] ? 1u : 0u); }
+uint region_of(uint g) {
+    uint r = 0u;
+    for (uint i = 1u; i < FACE_CULL_REGIONS; ++i) r += g >= pc.region_first[i] ? 1u : 0u;
+    return r;
+}
 
-// One command in region `r`, as a scan term: three 10-bit counters in one word (a chunk of
-// THREADS groups writes at most 256 commands per region).
-uint region_term(uint r) { return 1u << (10u * r); }
-uvec3 region_counts(uint packed) { return uvec3(packed & 0x3FFu, (packed >> 10u) & 0x3FFu, packed >> 20u); }
+// Groups per chunk of the command scan: one fewer than the threads, so that a chunk writes at
+// most 255 commands per region and each region's count fits a byte of the packed scan term.
+#define CHUNK_GROUPS (THREADS - 1u)
+
+// One command in region `r`, as a scan term: four 8-bit counters in one word.
+uint region_term(uint r) { return 1u << (8u * r); }
+uvec4 region_counts(uint packed) { return (uvec4(packed) >> uvec4(0u, 8u, 16u, 24u)) & 0xFFu; }
 
 // Where the next command of region `r` goes, given the commands before it in this chunk.
 uint command_index(ListTotals t, uint r, uint packed_before) {
@@ -191,13 +198,13 @@ DrawCommand group_command(DrawGroup group, uint count, uint first_instance, inou
 // count back to zero. Called in uniform control flow.
 void write_group_commands(out ListTotals drawn, out ListTotals listed) {
     uint lane = gl_LocalInvocationIndex;
-    drawn = ListTotals(0u, uvec3(0u), 0ul);
-    listed = ListTotals(0u, uvec3(0u), 0ul);
-    for (uint chunk = 0u; chunk < pc.group_count; chunk += THREADS) {
+    drawn = ListTotals(0u, uvec4(0u), 0ul);
+    listed = ListTotals(0u, uvec4(0u), 0ul);
+    for (uint chunk = 0u; chunk < pc.group_count; chunk += CHUNK_GROUPS) {
         uint g = chunk + lane;
         uint count = 0u, visible = 0u;
         DrawGroup group;
-        if (g < pc.group_count) {
+        if (lane < CHUNK_GROUPS && g < pc.group_count) {
             count = take_group_count(g);
 #ifdef VISIBLE_OUT
             visible = take_group_count(pc.group_count + g);
@@ -253,7 +260,7 @@ CullStats stats_record(uint tested, uint frustum, uint occlusion, uint drawn, ui
     return s;
 }
 
-uint commands_of(ListTotals t) { return t.written.x + t.written.y + t.written.z; }
+uint commands_of(ListTotals t) { return t.written.x + t.written.y + t.written.z + t.written.w; }
 
 void write_commands() {
     uint lane = gl_LocalInvocationIndex;

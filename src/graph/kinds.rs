@@ -69,12 +69,16 @@ pub enum MinBytes {
     PerMesh(u64),
     /// A bit per instance, in 32-bit words (`ceil(instances / 32) * 4`).
     InstanceBits,
+    /// This many bytes per transparent instance (`max(1, blended) * n`).
+    PerBlended(u64),
 }
 
 impl MinBytes {
-    /// The bytes it asks for with `instances` instances and `meshes` draw groups.
-    pub fn bytes(self, instances: u64, meshes: u64) -> u64 {
+    /// The bytes it asks for with `instances` instances (`blended` of them transparent) and
+    /// `meshes` draw groups.
+    pub fn bytes(self, instances: u64, meshes: u64, blended: u64) -> u64 {
         match self {
+            MinBytes::PerBlended(n) => blended.max(1) * n,
             MinBytes::Any => 0,
             MinBytes::Fixed(n) | MinBytes::Exact(n) => n,
             MinBytes::PerInstance(n) => instances * n,
@@ -92,6 +96,7 @@ impl MinBytes {
             MinBytes::PerInstance(n) => format!("instances * {n}"),
             MinBytes::PerMesh(n) => format!("meshes * {n}"),
             MinBytes::InstanceBits => "ceil_div(instances, 32) * 4".into(),
+            MinBytes::PerBlended(n) => format!("max(1, blended) * {n}"),
         }
     }
 }

@@ -12,7 +12,10 @@
 //! edge functions that round to zero), so a ray through a shared edge never slips between two
 //! triangles. Triangles of zero area and non-finite ones are skipped (the rasterizer draws
 //! nothing for them), and so are the faces the rasterizer culls: back faces of one-sided
-//! materials, with the winding flipped for mirrored instances ([`FaceCull`]). Limits of
+//! materials, with the winding flipped for mirrored instances ([`FaceCull`]). Transparent
+//! (alphaMode BLEND) triangles are skipped too: they occlude nothing, and this oracle reports
+//! only opaque surfaces (the GPU id oracle, `oracle::visibility`, reports transparent
+//! instances seen in front of them). Limits of
 //! "exact": a sample within the rasterizer's sub-pixel snapping distance of an edge may resolve
 //! differently, and exact depth ties between instances go to whichever the traversal meets
 //! first, where the rasterizer would follow draw order.
@@ -181,6 +184,8 @@ impl RaycastOracle {
             FaceCull::Back => toward >= 0.0,
             FaceCull::Front => toward <= 0.0,
             FaceCull::None => false,
+            // Transparent surfaces hide nothing; the rays pass through them.
+            FaceCull::Blended => true,
         }
     }
 

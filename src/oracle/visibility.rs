@@ -2,6 +2,10 @@
 //! at every sample, with the same vertex transform (`invariant gl_Position`) as the G-buffer
 //! pass. The instances whose id survives at some sample are the visible set; culling must draw
 //! all of them (no false negatives), and what it draws beyond them are false positives.
+//!
+//! Transparent (alphaMode BLEND) instances hide nothing: they are drawn after the opaque ones,
+//! through the `transparent` pass's own fragment shader with its depth test against the opaque
+//! depth, and marked seen wherever a fragment passes.
 
 use crate::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
 use crate::gpu::cmd_set_full_viewport;
@@ -9,6 +13,8 @@ use crate::gpu::{
     Access, Bind, Buffer, BufferDesc, GpuContext, GraphicsDesc, Image, ImageDesc, MemoryLocation, Pipeline, Sampler,
     ShaderCompiler,
 };
+use crate::passes::shared::face_cull::FaceCull;
+use crate::passes::shared::gpu_types::DrawIndexedIndirect;
 use crate::passes::shared::scene_buffers::GpuScene;
 use ash::vk;
 use std::collections::BTreeSet;
@@ -31,6 +37,7 @@ pub struct VisibleIds {
 /// Renders instance ids without culling.
 pub struct VisibilityOracle {
     draw: Pipeline,
+    transparent: Pipeline,
     readback: Pipeline,
     sampler: Sampler,
     ids: Image,
@@ -71,6 +78,28 @@ impl VisibilityOracle {
                 blend: false,
             },
         )?;
+        let sample_count = samples.as_raw().max(1).to_string();
+        let transparent = Pipeline::graphics(
+            ctx,
+            "visibility oracle, transparent",
+            &GraphicsDesc {
+                vertex: &shaders.compile("gbuffer/gbuffer.vert", &[])?,
+                fragment: Some(&shaders.compile(
+                    "transparent/transparent.frag",
+                    &[("SAMPLES", &sample_count), ("VISIBILITY_ORACLE", "1")],
+                )?),
+                vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
+                vertex_attributes: &crate::passes::gbuffer::VERTEX_ATTRIBUTES,
+                color_formats: &[],
+                depth_format: vk::Format::UNDEFINED,
+                depth_compare: vk::CompareOp::ALWAYS,
+                depth_write: false,
+                samples: vk::SampleCountFlags::TYPE_1,
+                stencil: Default::default(),
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                blend: false,
+            },
+        )?;
         let defines: &[(&str, &str)] =
             if samples == vk::SampleCountFlags::TYPE_1 { &[] } else { &[("MULTISAMPLED", "1")] };
         let readback =
@@ -83,7 +112,11 @@ impl VisibilityOracle {
             vk::Format::R32_UINT,
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
         )?;
-        let depth = image("visibility depth", vk::Format::D32_SFLOAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?;
+        let depth = image(
+            "visibility depth",
+            vk::Format::D32_SFLOAT,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+        )?;
         let count = width as u64 * height as u64 * samples.as_raw() as u64;
         let out = Buffer::new(
             ctx,
@@ -94,7 +127,78 @@ impl VisibilityOracle {
                 location: MemoryLocation::GpuToCpu,
             },
         )?;
-        Ok(Self { draw, readback, sampler: Sampler::nearest_clamp(ctx)?, ids, depth, out, extent, samples })
+        Ok(Self {
+            draw,
+            transparent,
+            readback,
+            sampler: Sampler::nearest_clamp(ctx)?,
+            ids,
+            depth,
+            out,
+            extent,
+            samples,
+        })
+    }
+
+    /// Records the transparent region of the unculled list against the opaque depth just
+    /// drawn, marking in `seen` each instance with a fragment in front of it.
+    fn mark_transparent(
+        &self,
+        ctx: &GpuContext,
+        cmd: vk::CommandBuffer,
+        scene: &GpuScene,
+        constants: &Buffer,
+        seen: &Buffer,
+        area: vk::Rect2D,
+    ) {
+        let device = ctx.device();
+        let fragment_read = Access { stage: vk::PipelineStageFlags2::FRAGMENT_SHADER, ..Access::GRAPHICS_READ };
+        let fragment_write = Access {
+            stage: vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            access: vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            layout: vk::ImageLayout::UNDEFINED,
+        };
+        // SAFETY: cmd recording; the buffer is not in use.
+        unsafe { device.cmd_fill_buffer(cmd, seen.handle(), 0, vk::WHOLE_SIZE, 0) };
+        cmd_barriers(
+            device,
+            cmd,
+            &[memory_barrier(Access::TRANSFER_WRITE, fragment_write)],
+            &[image_barrier(&self.depth, Access::DEPTH_ATTACHMENT, fragment_read)],
+        );
+        let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let mut binds = vec![
+            Bind::Buffer(0, scene.instances.handle()),
+            Bind::Buffer(1, scene.draw_instance_ids.handle()),
+            Bind::Buffer(2, constants.handle()),
+            Bind::Buffer(3, scene.materials.handle()),
+            Bind::Sampled(5, self.depth.sampled_view(), self.sampler.handle(), read),
+            Bind::Buffer(6, seen.handle()),
+        ];
+        binds.extend_from_slice(scene.textures.bindings());
+        let blended = FaceCull::Blended as usize;
+        let stride = std::mem::size_of::<DrawIndexedIndirect>() as u32;
+        // SAFETY: cmd recording; every handle outlives the submission.
+        unsafe {
+            device.cmd_begin_rendering(cmd, &vk::RenderingInfo::default().render_area(area).layer_count(1));
+            cmd_set_full_viewport(device, cmd, self.extent);
+            self.transparent.bind(cmd);
+            self.transparent.push_bindings(cmd, &binds);
+            device.cmd_set_cull_mode(cmd, vk::CullModeFlags::NONE);
+            device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
+            device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
+            device.cmd_draw_indexed_indirect_count(
+                cmd,
+                scene.draw_commands.handle(),
+                scene.regions.first[blended] as u64 * stride as u64,
+                scene.draw_count.handle(),
+                blended as u64 * 4,
+                scene.regions.len[blended],
+                stride,
+            );
+            device.cmd_end_rendering(cmd);
+        }
+        cmd_barriers(device, cmd, &[memory_barrier(fragment_write, Access::HOST_READ)], &[]);
     }
 
     /// Draws every instance of `scene` as `constants` (a [`crate::passes::shared::gpu_types::FrameConstants`]
@@ -102,6 +206,18 @@ impl VisibilityOracle {
     pub fn render(&self, ctx: &GpuContext, scene: &GpuScene, constants: &Buffer) -> crate::Result<VisibleIds> {
         let device = ctx.device();
         let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: self.extent };
+        let blended = FaceCull::Blended as usize;
+        let transparent_groups = scene.regions.len[blended];
+        // One word per instance: 1 where a transparent fragment passed the depth test.
+        let seen = Buffer::new(
+            ctx,
+            &BufferDesc {
+                name: "visibility oracle, transparent seen",
+                size: (scene.instance_count.max(1) as u64) * 4,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuToCpu,
+            },
+        )?;
         ctx.submit_and_wait(|cmd| {
             let to_draw = [
                 image_barrier(&self.ids, Access::NONE, Access::COLOR_ATTACHMENT),
@@ -146,6 +262,9 @@ impl VisibilityOracle {
                 scene.regions.record(device, cmd, &scene.draw_commands, &scene.draw_count);
                 device.cmd_end_rendering(cmd);
             }
+            if transparent_groups > 0 {
+                self.mark_transparent(ctx, cmd, scene, constants, &seen, area);
+            }
             let sampled = Access { access: vk::AccessFlags2::SHADER_SAMPLED_READ, ..Access::COMPUTE_READ };
             cmd_barriers(device, cmd, &[], &[image_barrier(&self.ids, Access::COLOR_ATTACHMENT, sampled)]);
             let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
@@ -157,7 +276,11 @@ impl VisibilityOracle {
             crate::gpu::GpuResult::Ok(())
         })?;
         let ids: Vec<u32> = bytemuck::cast_slice(self.out.read_bytes()?).to_vec();
-        let visible = ids.iter().filter(|&&id| id != 0).map(|&id| id - 1).collect();
+        let mut visible: BTreeSet<u32> = ids.iter().filter(|&&id| id != 0).map(|&id| id - 1).collect();
+        if transparent_groups > 0 {
+            let seen: &[u32] = bytemuck::cast_slice(seen.read_bytes()?);
+            visible.extend((0..seen.len() as u32).filter(|&i| seen[i as usize] != 0));
+        }
         Ok(VisibleIds {
             width: self.extent.width,
             height: self.extent.height,

@@ -248,8 +248,9 @@ fn blocks_of(slots: u32) -> u32 {
     slots.div_ceil(CULL_BLOCK).max(1)
 }
 
-/// Why a draw count takes 12 bytes (graphs written before face culling declared 4).
-const COUNT_RULE: &str = "one count per face cull: back, front, none; graphs before face culling declared 4";
+/// Why a draw count takes 16 bytes (graphs written before face culling declared 4).
+const COUNT_RULE: &str =
+    "one count per region: back, front, none and transparent; graphs before transparency declared 12, before face culling 4";
 
 /// Blocks per superblock (`CULL_SUPERBLOCK` in `cull_common.glsl`).
 pub const CULL_SUPERBLOCK: u32 = 64;
@@ -368,8 +369,8 @@ impl PassNode for InstanceCullPass {
                     Bind::Buffer(3, stats.handle()),
                 ],
             );
-            let [_, first1, first2] = scene.regions.first;
-            init.push_constants(cmd, &[groups, 0, first1, first2]);
+            let [first0, first1, first2, first3] = scene.regions.first;
+            init.push_constants(cmd, &[groups, first0, first1, first2, first3]);
             // SAFETY: cmd recording with the pipeline bound.
             unsafe { device.cmd_dispatch(cmd, groups.div_ceil(256).max(1), 1, 1) };
             step_barrier(ctx, cmd);
@@ -419,8 +420,8 @@ impl PassNode for InstanceCullPass {
             ];
             compact_binds.extend(optional.iter().filter_map(|(b, buf)| buf.map(|buf| Bind::Buffer(*b, buf.handle()))));
             compact.push_bindings(cmd, &compact_binds);
-            compact
-                .push_constants(cmd, &[slots, groups, superblocks, 0, scene.regions.first[1], scene.regions.first[2]]);
+            let [first0, first1, first2, first3] = scene.regions.first;
+            compact.push_constants(cmd, &[slots, groups, superblocks, first0, first1, first2, first3]);
             // Workgroup 0 writes the commands, workgroup 1 + b places block b.
             // SAFETY: as above.
             unsafe { device.cmd_dispatch(cmd, blocks + 1, 1, 1) };
@@ -443,12 +444,12 @@ impl PassKind for InstanceCullKind {
             ],
             writes: vec![
                 sized(slot("draw_commands", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "one command per draw group (size: meshes * 20)"), COMMANDS_BYTES),
-                sized(slot("draw_count", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "number of commands of each face-cull region (12 bytes)"), COUNT_BYTES),
+                sized(slot("draw_count", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "number of commands of each face-cull region (16 bytes)"), COUNT_BYTES),
                 sized(slot("draw_instance_ids", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "survivors, one slice per draw group (size: instances * 4)"), IDS_BYTES),
                 sized(slot("visibility", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits (late phase)"), MinBytes::InstanceBits),
                 sized(slot("visible_ids", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group: the next frame's early draw list, which that frame draws as it is with no cull pass (size: instances * 4, history; the draw binds `.prev`)"), IDS_BYTES),
                 sized(slot("list_commands", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: the commands of that list (size: meshes * 20, history)"), COMMANDS_BYTES),
-                sized(slot("list_count", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: their number per face-cull region (size: 12, history)"), COUNT_BYTES),
+                sized(slot("list_count", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: their number per face-cull region (size: 16, history)"), COUNT_BYTES),
                 sized(slot("list_stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: that list's counters, reported as the next frame's early draw (size: 64, history)"), COUNTERS_BYTES),
                 sized(slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "counters of this pass (size: 64)"), COUNTERS_BYTES),
             ],

@@ -15,6 +15,8 @@ pub(crate) mod lighting_visibility;
 pub mod overlay;
 pub mod shared;
 pub(crate) mod slots;
+pub(crate) mod transparent;
+pub(crate) mod transparent_sort;
 pub(crate) mod visibility_ids;
 
 use crate::graph::KindRegistry;
@@ -42,5 +44,7 @@ pub fn register_builtin_kinds(kinds: &mut KindRegistry) -> crate::Result<()> {
     kinds.register(instance_cull::InstanceCullKind)?;
     kinds.register(overlay::OverlayKind)?;
     kinds.register(compute::ComputeKind)?;
+    kinds.register(transparent_sort::TransparentSortKind)?;
+    kinds.register(transparent::TransparentKind)?;
     Ok(())
 }

@@ -275,7 +275,16 @@ impl Renderer {
     /// on), from the draw lists captured through [`GraphRuntime::set_capture`].
     pub fn drawn(&self) -> Result<Option<Vec<DrawnInstances>>> {
         let Some(captured) = self.runtime.captured()? else { return Ok(None) };
-        Ok(Some(captured.into_iter().map(|(_, lists)| drawn_instances(&self.inputs.scene, lists)).collect()))
+        let plan = self.runtime.plan();
+        Ok(Some(
+            captured
+                .into_iter()
+                .map(|(pass, lists)| {
+                    let sorted = plan.passes.get(pass).is_some_and(|p| p.kind == crate::passes::transparent::KIND);
+                    drawn_instances(&self.inputs.scene, lists, sorted)
+                })
+                .collect(),
+        ))
     }
 
     /// The scene as the GPU holds it (buffers of instances, cull bounds, draw lists), for an
@@ -564,8 +573,9 @@ pub enum DrawnInstances {
 }
 
 /// The instances a draw pass's captured list (commands, counts, ids) drew; `None`: the pass
-/// binds no list and draws the scene's unculled one.
-fn drawn_instances(scene: &GpuScene, lists: Option<Vec<Vec<u8>>>) -> DrawnInstances {
+/// binds no list and draws the scene's unculled one. A geometry pass draws its list's opaque
+/// regions; the `transparent` pass (`sorted`) draws the first `count` commands of its list.
+fn drawn_instances(scene: &GpuScene, lists: Option<Vec<Vec<u8>>>, sorted: bool) -> DrawnInstances {
     let Some([commands, counts, ids]) = lists.and_then(|l| <[Vec<u8>; 3]>::try_from(l).ok()) else {
         return DrawnInstances::All;
     };
@@ -574,7 +584,12 @@ fn drawn_instances(scene: &GpuScene, lists: Option<Vec<Vec<u8>>>) -> DrawnInstan
     let counts: Vec<u32> = whole(&counts);
     let ids: Vec<u32> = whole(&ids);
     let mut out = Vec::new();
-    for c in scene.regions.drawn(&commands, &counts) {
+    let drawn: Box<dyn Iterator<Item = &DrawIndexedIndirect>> = if sorted {
+        Box::new(commands.iter().take(counts.first().copied().unwrap_or(0) as usize))
+    } else {
+        Box::new(scene.regions.drawn(&commands, &counts))
+    };
+    for c in drawn {
         let start = c.first_instance as usize;
         let end = (start + c.instance_count as usize).min(ids.len());
         out.extend_from_slice(&ids[start.min(end)..end]);

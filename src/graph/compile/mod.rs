@@ -34,6 +34,9 @@ pub struct FrameInputs {
     /// Meshes (`meshes`): the draw groups a draw list may hold (cullgraph's renderer counts a
     /// mesh once more per further face cull its instances need).
     pub meshes: u64,
+    /// Transparent (alphaMode BLEND) instances (`blended`): the ones drawn sorted after the
+    /// lighting.
+    pub blended: u64,
     /// Point lights (`lights`).
     pub lights: u64,
     /// Materials (`materials`).
@@ -81,7 +84,7 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
     // What the kept passes need of their resources. (Sizes that failed to resolve stand in as
     // 4 bytes: no size errors on top of those.)
     if errors.list.is_empty() {
-        let errs = super::validate::slot_size_errors(graph, &pruning.keep, &resolved, frame.instances, frame.meshes);
+        let errs = super::validate::slot_size_errors(graph, &pruning.keep, &resolved, frame);
         for (pos, message) in errs {
             sink.at(pos, message);
         }

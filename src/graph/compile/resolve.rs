@@ -103,6 +103,7 @@ pub fn variables(params: &[Param], frame: &FrameInputs) -> BTreeMap<String, Num>
     vars.insert("height".into(), Num::Int(frame.height as i64));
     vars.insert("instances".into(), q(frame.instances));
     vars.insert("meshes".into(), q(frame.meshes));
+    vars.insert("blended".into(), q(frame.blended));
     vars.insert("lights".into(), q(frame.lights));
     vars.insert("materials".into(), q(frame.materials));
     vars.insert("triangles".into(), q(frame.triangles));

@@ -107,30 +107,39 @@ fn format_errors(graph: &ValidatedGraph) -> Vec<(Pos, String)> {
     out
 }
 
-/// Attachments (and the multisampled inputs of a built-in pass, whose shader is compiled for one
-/// sample count) of one pass with different sample counts, and multisampled images in slots
-/// that take single-sampled ones.
+/// Attachments of one pass with different sample counts, multisampled inputs of a built-in
+/// pass (whose shader is compiled for one sample count) with different sample counts, and
+/// multisampled images in slots that take single-sampled ones. A pass may read multisampled
+/// inputs while drawing single-sampled attachments (a resolve, or a forward pass that tests
+/// against a multisampled depth in its shader).
 pub(crate) fn sample_errors(graph: &ValidatedGraph, samples: &[u32]) -> Vec<(Pos, String)> {
     let mut out = Vec::new();
     for pass in &graph.passes {
-        let mut first: Option<(&str, u32)> = None;
+        // The first attachment, and the first multisampled input.
+        let mut firsts: [Option<(&str, u32)>; 2] = [None, None];
         for b in &pass.bindings {
             let res = &graph.resources[b.resource];
             if !res.is_image() {
                 continue;
             }
             let n = samples.get(b.resource).copied().unwrap_or(1);
-            let same_samples =
-                b.usage.is_attachment() || (b.multisample_ok && pass.kind != crate::graph::kinds::COMPUTE_KIND);
-            if same_samples {
-                match first {
-                    None => first = Some((&res.name, n)),
+            let group = if b.usage.is_attachment() {
+                Some(0)
+            } else if b.multisample_ok && pass.kind != crate::graph::kinds::COMPUTE_KIND {
+                Some(1)
+            } else {
+                None
+            };
+            if let Some(group) = group {
+                let first = &mut firsts[group];
+                match *first {
+                    None => *first = Some((&res.name, n)),
                     Some((name, m)) if m != n => {
                         out.push((
                             b.pos,
                             format!(
                                 "pass '{}' mixes sample counts: '{name}' has {m}, '{}' has {n} \
-                                 (all its attachments and multisampled inputs need the same)",
+                                 (its attachments need one sample count, and so do its multisampled inputs)",
                                 pass.name, res.name
                             ),
                         ));

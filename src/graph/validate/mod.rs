@@ -30,7 +30,8 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 /// Names every expression may use besides params: the output size and scene quantities.
-pub const FRAME_VARIABLES: [&str; 7] = ["width", "height", "instances", "meshes", "lights", "materials", "triangles"];
+pub const FRAME_VARIABLES: [&str; 8] =
+    ["width", "height", "instances", "meshes", "blended", "lights", "materials", "triangles"];
 
 /// A `--param name=value` override.
 pub type ParamOverride = (String, String);

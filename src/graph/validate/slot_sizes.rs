@@ -5,6 +5,7 @@
 //! checks itself ([`crate::graph::PassKind::check_sizes`]).
 
 use super::super::compile::resolve::Resolved;
+use super::super::compile::FrameInputs;
 use super::super::error::Pos;
 use super::super::kinds::MinBytes;
 use super::super::validated::{PassBinding, ValidatedGraph};
@@ -15,19 +16,23 @@ pub(crate) fn slot_size_errors(
     graph: &ValidatedGraph,
     keep: &[bool],
     resolved: &[Resolved],
-    instances: u64,
-    meshes: u64,
+    frame: &FrameInputs,
 ) -> Vec<(Pos, String)> {
+    let (instances, meshes, blended) = (frame.instances, frame.meshes, frame.blended);
     let mut out = Vec::new();
     for (_, pass) in graph.passes.iter().enumerate().filter(|(p, _)| keep.get(*p).copied().unwrap_or(true)) {
         let Some(kind) = graph.kinds.info(&pass.kind) else { continue };
         for binding in &pass.bindings {
             let Some(Resolved::Buffer(bytes)) = resolved.get(binding.resource) else { continue };
             let min = kind.slot(&binding.slot).map_or(MinBytes::Any, |s| s.min_bytes);
-            let need = min.bytes(instances, meshes);
+            let need = min.bytes(instances, meshes, blended);
             if *bytes < need || (matches!(min, MinBytes::Exact(_)) && *bytes != need) {
                 let resource = &graph.resources[binding.resource].name;
-                let scene = format!(" for this scene ({instances} instances, {meshes} meshes)");
+                let scene = if matches!(min, MinBytes::PerBlended(_)) {
+                    format!(" for this scene ({blended} transparent instances)")
+                } else {
+                    format!(" for this scene ({instances} instances, {meshes} meshes)")
+                };
                 let message = too_small(&pass.name, binding, resource, *bytes, min, need, &scene);
                 out.push((binding.pos, message));
             }

@@ -1,4 +1,4 @@
-//! Back-face culling for indirect draws.
+//! Back-face culling for indirect draws, and the region of transparent instances.
 //!
 //! glTF culls the back faces of one-sided materials, and a mirroring transform (negative
 //! determinant) flips which winding is the front. The rasterizer's cull mode is fixed for one
@@ -7,6 +7,11 @@
 //! the same place in every list (the region's first group), each compacted from its start with
 //! its own count; a draw pass issues one indirect draw per non-empty region, with the cull mode
 //! set as dynamic state.
+//!
+//! Transparent (alphaMode BLEND) instances form a fourth region, [`FaceCull::Blended`], last in
+//! every list: culled like the others, but skipped by the geometry passes (they must not write
+//! depth nor occlude) and drawn sorted by the `transparent` pass, which culls their back faces
+//! in its shader.
 
 use crate::gpu::Buffer;
 use crate::passes::shared::gpu_types::DrawIndexedIndirect;
@@ -23,22 +28,29 @@ pub enum FaceCull {
     Front = 1,
     /// Double-sided material: nothing is dropped.
     None = 2,
+    /// Transparent material (alphaMode BLEND): not drawn by the geometry passes.
+    Blended = 3,
 }
 
 /// Number of face-cull regions in a command list.
-pub const FACE_CULL_REGIONS: usize = 3;
+pub const FACE_CULL_REGIONS: usize = 4;
 
 /// Bytes of a draw count buffer: one `u32` per region, in [`FaceCull`] order.
 pub const DRAW_COUNT_BYTES: u64 = 4 * FACE_CULL_REGIONS as u64;
 
 impl FaceCull {
     /// The regions in command-list order.
-    pub const ALL: [FaceCull; FACE_CULL_REGIONS] = [FaceCull::Back, FaceCull::Front, FaceCull::None];
+    pub const ALL: [FaceCull; FACE_CULL_REGIONS] = [FaceCull::Back, FaceCull::Front, FaceCull::None, FaceCull::Blended];
 
-    /// The face cull of `instance` (an unknown material counts as one-sided).
+    /// The regions the geometry passes draw: every one but [`FaceCull::Blended`].
+    pub const OPAQUE: [FaceCull; 3] = [FaceCull::Back, FaceCull::Front, FaceCull::None];
+
+    /// The face cull of `instance` (an unknown material counts as opaque and one-sided).
     pub fn of(scene: &Scene, instance: &Instance) -> Self {
-        let double_sided = scene.materials.get(instance.material as usize).is_some_and(|m| m.double_sided);
-        if double_sided {
+        let material = scene.materials.get(instance.material as usize);
+        if material.is_some_and(|m| m.alpha_mode == crate::scene::AlphaMode::Blend) {
+            FaceCull::Blended
+        } else if material.is_some_and(|m| m.double_sided) {
             FaceCull::None
         } else if instance.transform.linear.determinant() < 0.0 {
             // The same sign test as `instance_is_mirrored` in `shaders/common/scene.glsl`.
@@ -53,7 +65,7 @@ impl FaceCull {
         match self {
             FaceCull::Back => vk::CullModeFlags::BACK,
             FaceCull::Front => vk::CullModeFlags::FRONT,
-            FaceCull::None => vk::CullModeFlags::NONE,
+            FaceCull::None | FaceCull::Blended => vk::CullModeFlags::NONE,
         }
     }
 }
@@ -72,6 +84,11 @@ pub fn command_capacity(scene: &Scene) -> usize {
     used.iter().map(|u| u.iter().filter(|&&b| b).count().max(1)).sum()
 }
 
+/// The graphs' `blended` variable: the instances of `scene` that are transparent.
+pub fn blended_instances(scene: &Scene) -> usize {
+    scene.instances.iter().filter(|i| FaceCull::of(scene, i) == FaceCull::Blended).count()
+}
+
 /// Where each face cull's commands live in a command list, in groups (= commands).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct DrawRegions {
@@ -84,7 +101,11 @@ pub struct DrawRegions {
 impl DrawRegions {
     /// Regions of `len[r]` groups each, one after the other.
     pub fn from_lengths(len: [u32; FACE_CULL_REGIONS]) -> Self {
-        Self { first: [0, len[0], len[0] + len[1]], len }
+        let mut first = [0; FACE_CULL_REGIONS];
+        for r in 1..FACE_CULL_REGIONS {
+            first[r] = first[r - 1] + len[r - 1];
+        }
+        Self { first, len }
     }
 
     /// Groups over all regions.
@@ -92,28 +113,31 @@ impl DrawRegions {
         self.len.iter().sum()
     }
 
-    /// The commands a list drew, given its commands and its per-region counts (host copies).
+    /// The commands a geometry pass drew from a list, given its commands and its per-region
+    /// counts (host copies): those of the opaque regions ([`DrawRegions::record`]).
     pub fn drawn<'a>(
         &self,
         commands: &'a [DrawIndexedIndirect],
         counts: &'a [u32],
     ) -> impl Iterator<Item = &'a DrawIndexedIndirect> + 'a {
         let regions = *self;
-        (0..FACE_CULL_REGIONS).flat_map(move |r| {
+        FaceCull::OPAQUE.into_iter().map(|f| f as usize).flat_map(move |r| {
             let first = (regions.first[r] as usize).min(commands.len());
             let count = counts.get(r).copied().unwrap_or(0).min(regions.len[r]) as usize;
             commands[first..(first + count).min(commands.len())].iter()
         })
     }
 
-    /// Records one `vkCmdDrawIndexedIndirectCount` per non-empty region of `commands` (counts
-    /// in `count`, one `u32` per region: [`DRAW_COUNT_BYTES`], which callers check), each with
-    /// its region's cull mode. The pipeline bound must have the cull mode as dynamic state; a
-    /// commands buffer shorter than the regions clamps them.
+    /// Records one `vkCmdDrawIndexedIndirectCount` per non-empty opaque region of `commands`
+    /// (counts in `count`, one `u32` per region: [`DRAW_COUNT_BYTES`], which callers check),
+    /// each with its region's cull mode; the transparent region is left to the `transparent`
+    /// pass. The pipeline bound must have the cull mode as dynamic state; a commands buffer
+    /// shorter than the regions clamps them.
     pub fn record(&self, device: &ash::Device, cmd: vk::CommandBuffer, commands: &Buffer, count: &Buffer) {
         let stride = std::mem::size_of::<DrawIndexedIndirect>() as u32;
         let capacity = (commands.size() / stride as u64).min(u32::MAX as u64) as u32;
-        for (r, face_cull) in FaceCull::ALL.iter().enumerate() {
+        for face_cull in FaceCull::OPAQUE {
+            let r = face_cull as usize;
             let max = self.len[r].min(capacity.saturating_sub(self.first[r]));
             // Never reads a count past the buffer (callers refuse short ones with a message).
             if max == 0 || count.size() < (r as u64 + 1) * 4 {
@@ -147,13 +171,17 @@ mod tests {
 
     #[test]
     fn drawn_takes_each_region_up_to_its_count() {
-        let regions = DrawRegions::from_lengths([3, 1, 2]);
-        assert_eq!(regions.first, [0, 3, 4]);
+        let regions = DrawRegions::from_lengths([3, 1, 2, 0]);
+        assert_eq!(regions.first, [0, 3, 4, 6]);
         let commands: Vec<_> = (0..6).map(cmd).collect();
         let firsts = |counts: &[u32]| regions.drawn(&commands, counts).map(|c| c.first_instance).collect::<Vec<_>>();
         assert_eq!(firsts(&[2, 0, 1]), [0, 1, 4]);
         // A count past its region is clamped to it, and a missing count is zero.
         assert_eq!(firsts(&[9, 1]), [0, 1, 2, 3]);
+        // The transparent region is not the geometry passes'.
+        let regions = DrawRegions::from_lengths([1, 1, 1, 3]);
+        let opaque: Vec<u32> = regions.drawn(&commands, &[1, 1, 1, 3]).map(|c| c.first_instance).collect();
+        assert_eq!(opaque, [0, 1, 2]);
     }
 
     #[test]
@@ -193,7 +221,7 @@ mod tests {
             draws.commands.iter().map(|c| (c.first_instance, c.instance_count)).collect::<Vec<_>>(),
             [(0, 2), (2, 1), (3, 1), (4, 1)]
         );
-        assert_eq!(draws.regions, DrawRegions::from_lengths([2, 1, 1]));
+        assert_eq!(draws.regions, DrawRegions::from_lengths([2, 1, 1, 0]));
         // a twice, b twice, c (unused) once.
         assert_eq!(command_capacity(&scene), 5);
     }

@@ -107,6 +107,8 @@ pub const ALPHA_OPAQUE: u32 = 0;
 pub const ALPHA_MASK: u32 = 1;
 /// See [`ALPHA_OPAQUE`].
 pub const ALPHA_BLEND: u32 = 2;
+/// [`GpuMaterial::flags`]: back faces are drawn (and lit with the flipped normal).
+pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
 
 /// A material as the shaders read it (304 bytes; `GpuMaterial` in `shaders/common/scene.glsl`).
 #[repr(C)]
@@ -130,8 +132,10 @@ pub struct GpuMaterial {
     pub normal_scale: f32,
     /// How much the occlusion texture darkens.
     pub occlusion_strength: f32,
+    /// `MATERIAL_*` bits.
+    pub flags: u32,
     /// Padding.
-    pub pad: [f32; 3],
+    pub pad: [f32; 2],
     /// Per [`crate::scene::TextureSlot`], in its order.
     pub textures: [GpuMaterialTexture; 5],
 }
@@ -170,7 +174,8 @@ impl GpuMaterial {
             emissive: m.emissive.to_array(),
             normal_scale: m.normal_scale,
             occlusion_strength: m.occlusion_strength.clamp(0.0, 1.0),
-            pad: [0.0; 3],
+            flags: if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 },
+            pad: [0.0; 2],
             textures,
         }
     }

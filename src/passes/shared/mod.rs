@@ -121,6 +121,7 @@ pub fn frame_inputs(scene: &Scene, width: u32, height: u32) -> FrameInputs {
         height,
         instances: scene.instances.len() as u64,
         meshes: face_cull::command_capacity(scene) as u64,
+        blended: face_cull::blended_instances(scene) as u64,
         lights: scene.lights.len() as u64,
         materials: scene.materials.len() as u64,
         triangles: scene.instanced_triangles(),

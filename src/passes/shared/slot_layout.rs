@@ -91,6 +91,11 @@ pub struct SlotLayout {
 }
 
 impl SlotLayout {
+    /// Slots of the transparent region's groups ([`FaceCull::Blended`]), used or not.
+    pub fn blended_slots(&self) -> u32 {
+        self.groups.iter().filter(|g| g.key.0 == FaceCull::Blended as usize).map(|g| g.capacity).sum()
+    }
+
     /// Lays out the instances of `scene` for which `live` holds: each group's slots in spatial
     /// order, with room to spare, and each face-cull region's groups followed by its reserve.
     pub fn new(scene: &Scene, live: impl Fn(u32) -> bool) -> Self {

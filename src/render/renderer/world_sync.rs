@@ -306,6 +306,7 @@ fn frame_inputs(scene: &Scene, layout: &SlotLayout, settings: &RenderSettings) -
         height: settings.height,
         instances: with_room(layout.slots() as u64),
         meshes: with_room(layout.groups.len() as u64),
+        blended: with_room(layout.blended_slots() as u64),
         lights: scene.lights.len() as u64,
         materials: scene.materials.len() as u64,
         triangles: drawn_triangles(scene),
@@ -543,6 +544,7 @@ impl Renderer {
         let needed = frame_inputs(&scene, &layout, &self.settings);
         let outgrown = layout.slots() as u64 > mirror.compiled.instances
             || layout.groups.len() as u64 > mirror.compiled.meshes
+            || layout.blended_slots() as u64 > mirror.compiled.blended
             || needed.materials != mirror.compiled.materials
             || needed.lights > mirror.light_capacity as u64;
         let mut uploads = UploadBatch::default();
