@@ -60,7 +60,9 @@ fn default_graph_compiles_to_the_fixed_frame() {
             // Lit in compute, blended over by the transparent pass, copied out.
             assert_eq!(
                 *usage,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC
+                vk::ImageUsageFlags::STORAGE
+                    | vk::ImageUsageFlags::COLOR_ATTACHMENT
+                    | vk::ImageUsageFlags::TRANSFER_SRC
             );
         }
         other => panic!("color is {other:?}"),

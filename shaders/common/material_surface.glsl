@@ -68,9 +68,15 @@ MaterialSurface material_surface(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy, vec3 
     vec4 mr = sample_material(m.textures[TEX_METALLIC_ROUGHNESS], false, uv, dx, dy);
     s.roughness = clamp(m.roughness * mr.g, 0.0, 1.0);
     s.metallic = clamp(m.metallic * mr.b, 0.0, 1.0);
+#ifdef NO_EMISSION_OCCLUSION
+    // For scenes where no material has them (GpuScene::emission_or_occlusion).
+    s.occlusion = 1.0;
+    s.emissive = vec3(0.0);
+#else
     float ao = sample_material(m.textures[TEX_OCCLUSION], false, uv, dx, dy).r;
     s.occlusion = clamp(1.0 + m.occlusion_strength * (ao - 1.0), 0.0, 1.0);
     s.emissive = m.emissive * sample_material(m.textures[TEX_EMISSIVE], true, uv, dx, dy).rgb;
+#endif
     s.normal = geometric;
     if (m.textures[TEX_NORMAL].placement != NO_TEXTURE) {
         vec3 t = tangent.xyz - geometric * dot(geometric, tangent.xyz);

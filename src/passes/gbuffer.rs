@@ -260,6 +260,10 @@ pub struct GbufferPass {
     /// The pass's name in the graph, for messages.
     name: String,
     pipeline: Pipeline,
+    /// With an `emissive_occlusion` target bound: the pipeline that writes it, used while the
+    /// scene has emission or occlusion (`pipeline` then leaves the target out: a third color
+    /// export costs a fifth of the frame on GPUs that export pixels slowly, for nothing).
+    extras_pipeline: Option<Pipeline>,
     mode: GeometryMode,
     /// The `clear_colors` setting (`gbuffer_append` has none: it loads what is there).
     clear_colors: bool,
@@ -297,25 +301,35 @@ impl GbufferPass {
         }
         let normal = bound_image(plan, pass, "normal").map(|(f, _)| f);
         let packed_ids = ids.is_some_and(|(format, _)| format == crate::passes::slots::VISIBILITY_PACKED);
-        let (fragment, colors) = match ids {
+        let equal = mode == GeometryMode::Equal;
+        let surface_colors: Vec<vk::Format> =
+            ["albedo", "normal"].iter().filter_map(|s| bound_image(plan, pass, s).map(|(f, _)| f)).collect();
+        let pipeline = match ids {
             Some((format, _)) => {
-                (Some(("gbuffer/visibility.frag", visibility_defines(Some(format)).to_vec())), vec![format])
+                let fragment = ("gbuffer/visibility.frag", visibility_defines(Some(format)));
+                geometry_pipeline(ctx, shaders, &pass.name, Some(fragment), &[format], depth, equal)?
             }
-            None if colors.is_empty() => (Some(("gbuffer/depth_alpha.frag", Vec::new())), colors),
+            None if colors.is_empty() => {
+                let fragment = ("gbuffer/depth_alpha.frag", &[][..]);
+                geometry_pipeline(ctx, shaders, &pass.name, Some(fragment), &[], depth, equal)?
+            }
             None => {
-                let mut defines = normal_defines(normal).to_vec();
-                if emissive_occlusion {
-                    defines.push(("EMISSIVE_OCCLUSION", "1"));
-                }
-                (Some(("gbuffer/gbuffer.frag", defines)), colors)
+                let fragment = ("gbuffer/gbuffer.frag", normal_defines(normal));
+                geometry_pipeline(ctx, shaders, &pass.name, Some(fragment), &surface_colors, depth, equal)?
             }
         };
-        let fragment = fragment.as_ref().map(|(path, defines)| (*path, defines.as_slice()));
-        let pipeline =
-            geometry_pipeline(ctx, shaders, &pass.name, fragment, &colors, depth, mode == GeometryMode::Equal)?;
+        let extras_pipeline = if emissive_occlusion {
+            let mut defines = normal_defines(normal).to_vec();
+            defines.push(("EMISSIVE_OCCLUSION", "1"));
+            let fragment = ("gbuffer/gbuffer.frag", defines.as_slice());
+            Some(geometry_pipeline(ctx, shaders, &pass.name, Some(fragment), &colors, depth, equal)?)
+        } else {
+            None
+        };
         Ok(Self {
             name: pass.name.clone(),
             pipeline,
+            extras_pipeline,
             mode,
             // gbuffer_append loads its targets and declares no clear_colors.
             clear_colors: mode != GeometryMode::Append && pass.bool_setting("clear_colors")?,
@@ -335,9 +349,16 @@ impl PassNode for GbufferPass {
         };
         let depth_load =
             if self.mode == GeometryMode::Clear { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD };
+        let inputs = SceneInputs::of(rec)?;
+        let scene = &inputs.scene;
+        let (pipeline, extras) = match &self.extras_pipeline {
+            Some(p) if scene.emission_or_occlusion => (p, true),
+            _ => (&self.pipeline, false),
+        };
         let colors: Vec<vk::RenderingAttachmentInfo> = GBUFFER_COLOR_SLOTS
             .iter()
             .chain(&["ids"])
+            .filter(|&&s| extras || s != "emissive_occlusion")
             .filter_map(|s| slots.image(s))
             .map(|image| {
                 vk::RenderingAttachmentInfo::default()
@@ -348,8 +369,6 @@ impl PassNode for GbufferPass {
                     .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
             })
             .collect();
-        let inputs = SceneInputs::of(rec)?;
-        let scene = &inputs.scene;
         let triangle_bits = if self.packed_ids { Some(packed_id_bits(&self.name, scene)?.to_ne_bytes()) } else { None };
         let push: &[u8] = triangle_bits.as_ref().map_or(&[], |b| b.as_slice());
         let lists = match self.mode {
@@ -359,7 +378,7 @@ impl PassNode for GbufferPass {
         record_geometry(
             rec.ctx,
             rec.cmd,
-            &self.pipeline,
+            pipeline,
             scene,
             &lists,
             inputs.constants(),

@@ -219,7 +219,11 @@ fn claims_in_draw_order(ctx: &GpuContext, pass: &PlannedPass) -> Result<bool, St
 
 /// The `gbuffer_compressed` pass.
 pub struct GbufferCompressedPass {
+    /// The geometry pass, for scenes with emission or occlusion.
     draw: Pipeline,
+    /// The same without them (occlusion 1, no emission): the texture reads and the emissive
+    /// encoding cost the pass time on every fragment, for nothing where no material has them.
+    draw_plain: Pipeline,
     clear: Pipeline,
     /// Samples are claimed in `sample_claim` (no stencil).
     claim: bool,
@@ -260,6 +264,9 @@ impl GbufferCompressedPass {
         }
         let fragment = Some(("gbuffer/gbuffer_compressed.frag", defines.as_slice()));
         let draw = geometry_pipeline(ctx, shaders, &pass.name, fragment, &[], depth, true)?;
+        defines.push(("NO_EMISSION_OCCLUSION", "1"));
+        let fragment = Some(("gbuffer/gbuffer_compressed.frag", defines.as_slice()));
+        let draw_plain = geometry_pipeline(ctx, shaders, &pass.name, fragment, &[], depth, true)?;
         let clear = Pipeline::compute(
             ctx,
             &format!("{} clear", pass.name),
@@ -267,6 +274,7 @@ impl GbufferCompressedPass {
         )?;
         Ok(Self {
             draw,
+            draw_plain,
             clear,
             claim: owner == SampleOwner::Claim,
             aa: SelectiveAa::from_plan(pass)?,
@@ -337,7 +345,7 @@ impl PassNode for GbufferCompressedPass {
         record_geometry(
             rec.ctx,
             rec.cmd,
-            &self.draw,
+            if scene.emission_or_occlusion { &self.draw } else { &self.draw_plain },
             scene,
             &lists,
             inputs.constants(),

@@ -22,7 +22,8 @@ pub struct LightingInputs<'a> {
     pub albedo: &'a Image,
     /// Normal/roughness, in `SHADER_READ_ONLY_OPTIMAL`.
     pub normal: &'a Image,
-    /// Emissive/occlusion, in `SHADER_READ_ONLY_OPTIMAL`, if the pass was created with it.
+    /// Emissive/occlusion, in `SHADER_READ_ONLY_OPTIMAL`, when the pass was created with it and
+    /// the geometry passes wrote it (the scene has emission or occlusion).
     pub emissive_occlusion: Option<&'a Image>,
     /// Frame constants.
     pub frame: &'a Buffer,
@@ -63,6 +64,9 @@ impl LightingSettings {
 /// The lighting pass.
 pub struct LightingPass {
     pipeline: Pipeline,
+    /// With an `emissive_occlusion` image bound: the pipeline that reads it, used while the
+    /// scene has emission or occlusion (the geometry passes write it only then).
+    extras_pipeline: Option<Pipeline>,
     sampler: Sampler,
     settings: LightingSettings,
 }
@@ -81,16 +85,15 @@ impl LightingPass {
         let samples = samples.as_raw().max(1).to_string();
         let mut defines = vec![("SAMPLES", samples.as_str())];
         defines.extend_from_slice(normal_defines(Some(normal_format)));
-        if emissive_occlusion {
+        let pipeline = Pipeline::compute(ctx, "lighting", &shaders.compile("lighting/lighting.comp", &defines)?)?;
+        let extras_pipeline = if emissive_occlusion {
             defines.push(("EMISSIVE_OCCLUSION", "1"));
-        }
-        let spirv = shaders.compile("lighting/lighting.comp", &defines)?;
+            Some(Pipeline::compute(ctx, "lighting", &shaders.compile("lighting/lighting.comp", &defines)?)?)
+        } else {
+            None
+        };
         let settings = LightingSettings { exposure: 0.8, debug_view: 0, light_tiles: 1 };
-        Ok(Self {
-            pipeline: Pipeline::compute(ctx, "lighting", &spirv)?,
-            sampler: Sampler::nearest_clamp(ctx)?,
-            settings,
-        })
+        Ok(Self { pipeline, extras_pipeline, sampler: Sampler::nearest_clamp(ctx)?, settings })
     }
 
     /// The pass configured by a graph node's settings, for the sample count of its bound depth.
@@ -121,10 +124,14 @@ impl LightingPass {
             Bind::Buffer(4, io.lights.handle()),
             Bind::StorageImage(5, io.output.view()),
         ];
-        if let Some(image) = io.emissive_occlusion {
-            binds.push(Bind::Sampled(6, image.sampled_view(), s, read));
-        }
-        self.pipeline.dispatch_over(cmd, &binds, bytemuck::bytes_of(settings), io.output.extent());
+        let pipeline = match (io.emissive_occlusion, &self.extras_pipeline) {
+            (Some(image), Some(extras)) => {
+                binds.push(Bind::Sampled(6, image.sampled_view(), s, read));
+                extras
+            }
+            _ => &self.pipeline,
+        };
+        pipeline.dispatch_over(cmd, &binds, bytemuck::bytes_of(settings), io.output.extent());
     }
 }
 
@@ -136,7 +143,7 @@ impl PassNode for LightingPass {
             depth: slots.required_image("depth")?,
             albedo: slots.required_image("albedo")?,
             normal: slots.required_image("normal")?,
-            emissive_occlusion: slots.image("emissive_occlusion"),
+            emissive_occlusion: slots.image("emissive_occlusion").filter(|_| inputs.scene.emission_or_occlusion),
             frame: inputs.constants(),
             lights: inputs.lights(),
             output: slots.required_image("output")?,

@@ -126,6 +126,13 @@ impl Default for Material {
 }
 
 impl Material {
+    /// Whether the material emits light or darkens its ambient light: it has an emissive colour,
+    /// or an occlusion texture with a strength above 0.
+    pub fn has_emission_or_occlusion(&self) -> bool {
+        self.emissive.max_element() > 0.0
+            || (self.texture(TextureSlot::Occlusion).is_some() && self.occlusion_strength > 0.0)
+    }
+
     /// The texture of `slot`, if any.
     pub fn texture(&self, slot: TextureSlot) -> Option<&TextureRef> {
         self.textures[slot as usize].as_ref()

@@ -48,6 +48,9 @@ pub struct GpuScene {
     pub triangles: u64,
     /// Triangles of the largest mesh (how many bits a triangle id needs).
     pub max_mesh_triangles: u32,
+    /// Whether some material emits light or has an occlusion texture: without, the G-buffer
+    /// passes leave their `emissive_occlusion` target unwritten and the lighting does not read it.
+    pub emission_or_occlusion: bool,
 }
 
 /// The unculled draw list: instances grouped by face cull, then by mesh, preserving instance
@@ -229,6 +232,7 @@ impl GpuScene {
             instance_count: scene.instances.len() as u32,
             triangles: drawn_triangles(scene),
             max_mesh_triangles: scene.meshes.iter().map(|m| m.index_count / 3).max().unwrap_or(0),
+            emission_or_occlusion: scene.materials.iter().any(|m| m.has_emission_or_occlusion()),
         })
     }
 }
