@@ -628,3 +628,30 @@ fn every_method_shades_occlusion_and_emissive_textures() {
     }
     gpu.assert_clean();
 }
+
+/// More bad texture input: an image file that does not exist and an image in a format the
+/// importer does not decode become the placeholder with a note naming the image and the
+/// material, and the scene still loads; a texture index past the file's textures is an error
+/// naming the material, never a panic.
+#[test]
+fn missing_and_unsupported_images_and_bad_texture_indices_are_reported() {
+    use cullgraph::scene::gltf_import::load_with_report;
+    use cullgraph::scene::source::LoadOptions;
+    let mut json = textured_gltf();
+    json["images"] = serde_json::json!([
+        {"uri": "no_such_file.png", "name": "missing"},
+        {"uri": data_uri("image/webp", b"RIFF....WEBPVP8 "), "mimeType": "image/webp", "name": "webp"}
+    ]);
+    let (_dir, path) = gltf_file(&json);
+    let (scene, report) = load_with_report(&path, &LoadOptions::default()).unwrap();
+    let notes = report.notes.join("\n");
+    assert!(notes.contains("image 0 'missing'") && notes.contains("placeholder"), "{notes}");
+    assert!(notes.contains("image 1 'webp'") && notes.contains("placeholder"), "{notes}");
+    assert!(scene.textures.iter().all(|t| t.name.contains("placeholder")));
+    assert_eq!(scene.instances.len(), 2, "the rest of the scene loads (two primitives)");
+
+    json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["index"] = serde_json::json!(7);
+    let (_dir, path) = gltf_file(&json);
+    let error = load_with_report(&path, &LoadOptions::default()).err().expect("refused").to_string();
+    assert!(error.contains("scene.gltf") && error.contains("7"), "{error}");
+}
