@@ -655,3 +655,42 @@ fn missing_and_unsupported_images_and_bad_texture_indices_are_reported() {
     let error = load_with_report(&path, &LoadOptions::default()).err().expect("refused").to_string();
     assert!(error.contains("scene.gltf") && error.contains("7"), "{error}");
 }
+
+/// A double-sided quad seen from behind is lit with its normal flipped: under a sun from the
+/// camera's side its back face is as bright as the front face of the same quad turned towards the
+/// camera, in every method (unflipped, it would get the sky's light alone).
+#[test]
+fn double_sided_back_faces_are_lit_with_the_flipped_normal() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut scene = lit_scene();
+    let paper = scene.add_material(Material {
+        name: "paper".into(),
+        albedo: Vec3::splat(0.7),
+        roughness: 1.0,
+        double_sided: true,
+        ..Default::default()
+    });
+    let mesh = scene.add_mesh("quad", &quad(), "quad").unwrap();
+    // Left: facing the camera. Right: turned half a turn about y, its back towards the camera.
+    let turned = Mat3::from_rotation_y(std::f32::consts::PI);
+    scene.instances.push(Instance { transform: at(DVec3::new(-0.6, 0.0, 0.0), 1.0), mesh, material: paper, flags: 0 });
+    scene.instances.push(Instance {
+        transform: Transform { linear: turned, translation: DVec3::new(0.6, 0.0, 0.0) },
+        mesh,
+        material: paper,
+        flags: 0,
+    });
+    let (cx, cy) = (SIZE.0 / 2, SIZE.1 / 2);
+    for graph in ["default", "msaa_compressed", "visibility_buffer"] {
+        let spec = GraphSpec::builtin(graph).unwrap();
+        let mut r =
+            Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+        let image = r.render_to_image(&camera()).unwrap().1;
+        let (front, back) = (pixel(&image, cx - 25, cy), pixel(&image, cx + 25, cy));
+        assert!(front[0] > 100, "{graph}: the front face is lit: {front:?}");
+        let off = (0..3).map(|c| front[c].abs_diff(back[c])).max().unwrap();
+        assert!(off <= 2, "{graph}: back face {back:?} against front face {front:?}");
+    }
+    gpu.assert_clean();
+}
