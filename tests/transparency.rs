@@ -6,9 +6,9 @@ mod common;
 use common::GpuTest;
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
-use cullgraph::scene::{AlphaMode, Camera, Instance, Material, MeshData, Scene, Transform};
+use cullgraph::scene::{AlphaMode, Instance, Material, Scene, Transform};
 use cullgraph::stats::FrameStats;
-use glam::{DVec3, Mat3, Vec2, Vec3};
+use glam::{DVec3, Mat3, Vec3};
 
 const SIZE: (u32, u32) = (96, 72);
 
@@ -27,30 +27,6 @@ const METHODS: [&str; 11] = [
     "visibility_buffer",
 ];
 
-/// A unit quad in the xy plane facing +z.
-fn quad() -> MeshData {
-    MeshData {
-        positions: vec![
-            Vec3::new(-0.5, -0.5, 0.0),
-            Vec3::new(0.5, -0.5, 0.0),
-            Vec3::new(0.5, 0.5, 0.0),
-            Vec3::new(-0.5, 0.5, 0.0),
-        ],
-        normals: vec![Vec3::Z; 4],
-        uvs: vec![Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)],
-        indices: vec![0, 1, 2, 0, 2, 3],
-        tangents: Vec::new(),
-    }
-}
-
-fn camera() -> Camera {
-    Camera { eye: DVec3::new(0.0, 0.0, 3.0), target: DVec3::ZERO, ..Default::default() }
-}
-
-fn at(translation: DVec3, scale: f64) -> Transform {
-    Transform { linear: Mat3::from_diagonal(Vec3::splat(scale as f32)), translation }
-}
-
 fn glass(name: &str, albedo: Vec3, alpha: f32) -> Material {
     Material { name: name.into(), albedo, alpha, alpha_mode: AlphaMode::Blend, ..Default::default() }
 }
@@ -62,31 +38,20 @@ fn render(gpu: &GpuTest, scene: &Scene, graph: &str) -> (FrameStats, RgbaImage) 
     let spec = GraphSpec::builtin(graph).unwrap();
     let mut r = Renderer::with_graph(gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
     r.enable_verification(&shaders).unwrap();
-    r.render_to_image(&camera()).unwrap();
-    r.render_to_image(&camera()).unwrap()
-}
-
-fn pixel(image: &RgbaImage, x: u32, y: u32) -> [u8; 3] {
-    let p = image.get_pixel(x, y).0;
-    [p[0], p[1], p[2]]
-}
-
-fn lit_scene() -> Scene {
-    let mut scene = Scene { name: "transparency".into(), ..Default::default() };
-    scene.sun.direction = Vec3::new(0.0, 0.0, -1.0);
-    scene
+    r.render_to_image(&common::camera_on_z()).unwrap();
+    r.render_to_image(&common::camera_on_z()).unwrap()
 }
 
 /// A red box behind a half-transparent blue pane that covers the left half of the view.
 fn pane_over_box() -> Scene {
-    let mut scene = lit_scene();
+    let mut scene = common::sunlit_scene("transparency");
     let red =
         scene.add_material(Material { name: "red".into(), albedo: Vec3::new(0.9, 0.05, 0.05), ..Default::default() });
     let blue = scene.add_material(glass("blue glass", Vec3::new(0.05, 0.05, 0.9), 0.5));
     let cube = scene.add_mesh("cube", &common::cube_mesh(), "cube").unwrap();
-    let pane = scene.add_mesh("quad", &quad(), "quad").unwrap();
+    let pane = scene.add_mesh("quad", &common::quad_mesh(), "quad").unwrap();
     scene.instances.push(Instance {
-        transform: at(DVec3::new(0.0, 0.0, -1.0), 2.5),
+        transform: common::scaled_at(DVec3::new(0.0, 0.0, -1.0), 2.5),
         mesh: cube,
         material: red,
         flags: 0,
@@ -112,7 +77,7 @@ fn a_transparent_pane_blends_over_the_box_behind_it_in_every_method() {
     let scene = pane_over_box();
     let (_, unculled) = render(&gpu, &scene, "no_cull");
     let (cx, cy) = (SIZE.0 / 2, SIZE.1 / 2);
-    let (through, beside) = (pixel(&unculled, cx - 8, cy), pixel(&unculled, cx + 8, cy));
+    let (through, beside) = (common::rgb(&unculled, cx - 8, cy), common::rgb(&unculled, cx + 8, cy));
     assert!(beside[0] > beside[2] + 100, "plain red beside the pane: {beside:?}");
     assert!(
         through[2] > beside[2] + 60 && through[0] > 60,
@@ -123,7 +88,7 @@ fn a_transparent_pane_blends_over_the_box_behind_it_in_every_method() {
         let verify = stats.verify.expect("verified");
         assert_eq!(verify.false_negatives, 0, "{graph}: missed {:?}", verify.missed);
         assert_eq!(verify.visible, 2, "{graph}: the box and the pane are both seen");
-        let (t, b) = (pixel(&image, cx - 8, cy), pixel(&image, cx + 8, cy));
+        let (t, b) = (common::rgb(&image, cx - 8, cy), common::rgb(&image, cx + 8, cy));
         for (got, want, what) in [(t, through, "through the pane"), (b, beside, "beside it")] {
             let off = (0..3).map(|c| got[c].abs_diff(want[c])).max().unwrap();
             assert!(off <= 4, "{graph}: {what} {got:?}, unculled {want:?}");
@@ -142,14 +107,14 @@ fn a_transparent_pane_blends_over_the_box_behind_it_in_every_method() {
 fn transparent_panes_are_sorted_back_to_front() {
     let gpu = GpuTest::new();
     let pane_scene = |red_z: f64, green_z: f64| {
-        let mut scene = lit_scene();
+        let mut scene = common::sunlit_scene("transparency");
         let red = scene.add_material(glass("red glass", Vec3::new(0.9, 0.02, 0.02), 0.7));
         let green = scene.add_material(glass("green glass", Vec3::new(0.02, 0.9, 0.02), 0.7));
-        let pane = scene.add_mesh("quad", &quad(), "quad").unwrap();
+        let pane = scene.add_mesh("quad", &common::quad_mesh(), "quad").unwrap();
         // The red pane first in the scene, whatever its depth.
         for (material, z) in [(red, red_z), (green, green_z)] {
             scene.instances.push(Instance {
-                transform: at(DVec3::new(0.0, 0.0, z), 1.5),
+                transform: common::scaled_at(DVec3::new(0.0, 0.0, z), 1.5),
                 mesh: pane,
                 material,
                 flags: 0,
@@ -160,10 +125,10 @@ fn transparent_panes_are_sorted_back_to_front() {
     let (cx, cy) = (SIZE.0 / 2, SIZE.1 / 2);
     for graph in ["default", "msaa_compressed"] {
         let (_, red_front) = render(&gpu, &pane_scene(0.5, -0.5), graph);
-        let p = pixel(&red_front, cx, cy);
+        let p = common::rgb(&red_front, cx, cy);
         assert!(p[0] > p[1] + 40, "{graph}: red in front dominates: {p:?}");
         let (_, green_front) = render(&gpu, &pane_scene(-0.5, 0.5), graph);
-        let p = pixel(&green_front, cx, cy);
+        let p = common::rgb(&green_front, cx, cy);
         assert!(p[1] > p[0] + 40, "{graph}: green in front dominates: {p:?}");
     }
     gpu.assert_clean();
@@ -181,13 +146,13 @@ fn transparent_instances_are_occlusion_culled_but_never_occlude() {
     // A wall in the middle, in front of the box and partly of the pane, hiding a second, small
     // blue pane behind it.
     scene.instances.push(Instance {
-        transform: at(DVec3::new(0.0, 0.0, 1.5), 1.0),
+        transform: common::scaled_at(DVec3::new(0.0, 0.0, 1.5), 1.0),
         mesh: pane,
         material: grey,
         flags: 0,
     });
     scene.instances.push(Instance {
-        transform: at(DVec3::new(0.0, 0.0, 0.0), 0.2),
+        transform: common::scaled_at(DVec3::new(0.0, 0.0, 0.0), 0.2),
         mesh: pane,
         material: blue,
         flags: 0,

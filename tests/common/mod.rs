@@ -56,6 +56,48 @@ impl Drop for GpuTest {
     }
 }
 
+/// A unit quad in the xy plane facing +z, u along +x and v down (glTF's image orientation).
+pub fn quad_mesh() -> cullgraph::scene::MeshData {
+    use glam::{Vec2, Vec3};
+    cullgraph::scene::MeshData {
+        positions: vec![
+            Vec3::new(-0.5, -0.5, 0.0),
+            Vec3::new(0.5, -0.5, 0.0),
+            Vec3::new(0.5, 0.5, 0.0),
+            Vec3::new(-0.5, 0.5, 0.0),
+        ],
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        tangents: Vec::new(),
+    }
+}
+
+/// A camera on the +z axis, 3 units out, looking at the origin (where the quad tests put their
+/// quads).
+pub fn camera_on_z() -> cullgraph::scene::Camera {
+    cullgraph::scene::Camera { eye: glam::DVec3::new(0.0, 0.0, 3.0), target: glam::DVec3::ZERO, ..Default::default() }
+}
+
+/// A uniform scale by `scale`, then a move to `translation`.
+pub fn scaled_at(translation: glam::DVec3, scale: f64) -> cullgraph::scene::Transform {
+    cullgraph::scene::Transform { linear: glam::Mat3::from_diagonal(glam::Vec3::splat(scale as f32)), translation }
+}
+
+/// An empty scene lit by white sunlight from the camera's side of [`camera_on_z`], so that
+/// surfaces facing the camera keep their hue.
+pub fn sunlit_scene(name: &str) -> cullgraph::scene::Scene {
+    let mut scene = cullgraph::scene::Scene { name: name.into(), ..Default::default() };
+    scene.sun.direction = glam::Vec3::new(0.0, 0.0, -1.0);
+    scene
+}
+
+/// The rgb of pixel (`x`, `y`).
+pub fn rgb(image: &cullgraph::render::output::RgbaImage, x: u32, y: u32) -> [u8; 3] {
+    let p = image.get_pixel(x, y).0;
+    [p[0], p[1], p[2]]
+}
+
 /// A unit cube (-0.5..0.5) with per-face normals.
 pub fn cube_mesh() -> cullgraph::scene::MeshData {
     use glam::Vec3;
