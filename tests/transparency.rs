@@ -164,3 +164,54 @@ fn transparent_instances_are_occlusion_culled_but_never_occlude() {
     assert_eq!(verify.false_positives, 0, "the hidden pane is culled, not drawn");
     gpu.assert_clean();
 }
+
+/// A live world turns the pane over the box transparent at run time (a material registered
+/// then given to the instance): the next frame blends it with the box behind, culling still
+/// exact. A new emissive material given to it next makes it glow.
+#[test]
+fn a_live_world_makes_an_instance_transparent_and_emissive() {
+    use cullgraph::scene::world::World;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut scene = pane_over_box();
+    let opaque_blue =
+        scene.add_material(Material { name: "blue".into(), albedo: Vec3::new(0.05, 0.05, 0.9), ..Default::default() });
+    scene.instances[1].material = opaque_blue;
+    let (mut world, handles) = World::new(scene).unwrap();
+    let spec = GraphSpec::builtin("default").unwrap();
+    let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    r.enable_verification(&shaders).unwrap();
+    let (cx, cy) = (SIZE.0 / 2, SIZE.1 / 2);
+    let frame = |r: &mut Renderer| {
+        r.render_to_image(&common::camera_on_z()).unwrap();
+        let (stats, image) = r.render_to_image(&common::camera_on_z()).unwrap();
+        let verify = stats.verify.expect("verified");
+        assert_eq!(verify.false_negatives, 0, "missed {:?}", verify.missed);
+        (verify.visible, common::rgb(&image, cx - 8, cy))
+    };
+    // The pane covers the left half of the view; the box shows on the right whatever the pane is.
+    let (visible, opaque) = frame(&mut r);
+    assert_eq!(visible, 2);
+    assert!(opaque[2] > opaque[0] + 100, "blue pane: {opaque:?}");
+
+    let glass = world.add_material(glass("blue glass", Vec3::new(0.05, 0.05, 0.9), 0.5)).unwrap();
+    world.set_materials(&[(handles[1], glass)]).unwrap();
+    r.sync(&shaders, &world).unwrap();
+    let (visible, through) = frame(&mut r);
+    assert_eq!(visible, 2);
+    assert!(through[0] > opaque[0] + 40, "red comes through: {through:?} (opaque {opaque:?})");
+
+    let lamp = Material {
+        name: "lamp".into(),
+        albedo: Vec3::splat(0.1),
+        emissive: Vec3::new(1.0, 1.0, 0.0),
+        ..Default::default()
+    };
+    let lamp = world.add_material(lamp).unwrap();
+    world.set_materials(&[(handles[1], lamp)]).unwrap();
+    r.sync(&shaders, &world).unwrap();
+    let (visible, glow) = frame(&mut r);
+    assert_eq!(visible, 2);
+    assert!(glow[0] > 200 && glow[1] > 200 && glow[2] < 120, "the lamp glows yellow: {glow:?}");
+    gpu.assert_clean();
+}
