@@ -541,6 +541,36 @@ fn the_box_textured_conformance_model_shows_its_texture() {
     gpu.assert_clean();
 }
 
+/// The glTF sample `ClearCoatTest` (assimp-testmodels; `KHR_materials_clearcoat` is ignored with
+/// a note): its labels are black cards whose text is an emissive texture, and its partial
+/// coating is a transparent (`BLEND`) material. The labels' text glows (bright pixels the
+/// same scene without emission lacks), and every instance, the transparent one included, is
+/// drawn with 0 false negatives.
+#[test]
+fn the_clear_coat_conformance_model_shows_emissive_labels_and_its_blended_coating() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let path = std::path::Path::new("/usr/share/assimp/models/glTF2/ClearCoat-glTF/ClearCoatTest.gltf");
+    let scene = cullgraph::scene::gltf_import::load(path, &Default::default()).unwrap();
+    assert!(scene.materials.iter().any(|m| m.alpha_mode == AlphaMode::Blend), "the partial coating blends");
+    let camera = Camera { eye: DVec3::new(0.0, 0.0, 12.0), target: DVec3::ZERO, ..Default::default() };
+    let spec = GraphSpec::builtin("default").unwrap();
+    let bright = |scene: Scene| {
+        let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(320, 240), &spec).unwrap();
+        r.enable_verification(&shaders).unwrap();
+        r.render_to_image(&camera).unwrap();
+        let (stats, image) = r.render_to_image(&camera).unwrap();
+        let verify = stats.verify.expect("verified");
+        assert_eq!(verify.false_negatives, 0, "missed {:?}", verify.missed);
+        image.pixels().filter(|p| p.0[..3].iter().all(|&c| c > 200)).count()
+    };
+    let mut dark = scene.clone();
+    dark.materials.iter_mut().for_each(|m| m.emissive = Vec3::ZERO);
+    let (glowing, unlit) = (bright(scene), bright(dark));
+    assert!(glowing > unlit + 200, "{glowing} bright pixels with emission, {unlit} without");
+    gpu.assert_clean();
+}
+
 /// Every lighting method uses the occlusion and emissive textures. Under sky light alone (no
 /// sun), a quad whose occlusion texture is 0 on its left half and 1 on its right is black on the
 /// left and lit on the right; a quad whose emissive texture is red on its left half and black on
