@@ -718,3 +718,38 @@ fn double_sided_back_faces_are_lit_with_the_flipped_normal() {
     }
     gpu.assert_clean();
 }
+
+/// A live world without masked materials draws with pipelines that have no alpha test; when it
+/// registers a masked material and gives it to the fence, the next frame takes the alpha-tested
+/// ones: the box shows through the gaps, with 0 false negatives.
+#[test]
+fn a_world_that_gains_a_masked_material_cuts_its_holes_at_the_next_frame() {
+    use cullgraph::scene::world::World;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut scene = fence_and_box(32, true, 1.0);
+    let fence = scene.instances[0].material as usize;
+    let masked = scene.materials[fence].clone();
+    scene.materials[fence].alpha_mode = AlphaMode::Opaque;
+    let (mut world, handles) = World::new(scene).unwrap();
+    let spec = GraphSpec::builtin("two_phase").unwrap();
+    let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    r.enable_verification(&shaders).unwrap();
+    let reds = |r: &mut Renderer| {
+        r.render_to_image(&common::camera_on_z()).unwrap();
+        let (stats, image) = r.render_to_image(&common::camera_on_z()).unwrap();
+        let verify = stats.verify.expect("verified");
+        assert_eq!(verify.false_negatives, 0, "missed {:?}", verify.missed);
+        let cy = SIZE.1 / 2;
+        (SIZE.0 / 2 - 12..SIZE.0 / 2 + 12)
+            .map(|x| common::rgb(&image, x, cy))
+            .filter(|p| p[0] as u32 > 2 * p[1] as u32 && p[0] > 40)
+            .count()
+    };
+    assert_eq!(reds(&mut r), 0, "the opaque fence hides the box");
+    let masked = world.add_material(masked).unwrap();
+    world.set_materials(&[(handles[0], masked)]).unwrap();
+    r.sync(&shaders, &world).unwrap();
+    assert!(reds(&mut r) >= 6, "the box shows through the gaps");
+    gpu.assert_clean();
+}

@@ -36,6 +36,9 @@ float material_alpha(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy) {
 // measures what alpha-to-coverage costs), it is the alpha test. Call it where every invocation
 // of the quad runs (it takes a screen derivative).
 uint material_coverage(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy) {
+#ifdef NO_ALPHA_MASK
+    return 0xFFFFFFFFu;
+#endif
     if (m.alpha_mode != ALPHA_MASK) return 0xFFFFFFFFu;
     float a = material_alpha(m, uv, dx, dy);
 #if MSAA_SAMPLES > 1 && !defined(ALPHA_TEST_ONLY)
@@ -52,10 +55,15 @@ uint material_coverage(GpuMaterial m, vec2 uv, vec2 dx, vec2 dy) {
 }
 
 // Applies `material_coverage`: discards a fragment that keeps no sample, and limits the others
-// to the samples they keep.
+// to the samples they keep. With NO_ALPHA_MASK (a scene without masked materials) it does
+// nothing, so the shader has no `discard` and the depth test runs before it.
+#ifdef NO_ALPHA_MASK
+#define APPLY_MATERIAL_COVERAGE(coverage)
+#else
 #define APPLY_MATERIAL_COVERAGE(coverage) \
     if ((coverage) == 0u) discard; \
     if (MSAA_SAMPLES > 1) gl_SampleMask[0] = int(coverage)
+#endif
 
 // The surface of `m` at `uv`. `geometric` is the interpolated normal already turned to the
 // side the eye sees, `tangent` the interpolated tangent (w: bitangent sign), `front` whether

@@ -51,6 +51,9 @@ pub struct GpuScene {
     /// Whether some material emits light or has an occlusion texture: without, the G-buffer
     /// passes leave their `emissive_occlusion` target unwritten and the lighting does not read it.
     pub emission_or_occlusion: bool,
+    /// Whether some material is alpha-masked: without, the geometry passes take pipelines
+    /// without the alpha test, whose depth test runs before shading.
+    pub alpha_masks: bool,
 }
 
 /// The unculled draw list: instances grouped by face cull, then by mesh, preserving instance
@@ -233,6 +236,7 @@ impl GpuScene {
             triangles: drawn_triangles(scene),
             max_mesh_triangles: scene.meshes.iter().map(|m| m.index_count / 3).max().unwrap_or(0),
             emission_or_occlusion: scene.materials.iter().any(|m| m.has_emission_or_occlusion()),
+            alpha_masks: scene.materials.iter().any(|m| matches!(m.alpha_mode, crate::scene::AlphaMode::Mask { .. })),
         })
     }
 }
