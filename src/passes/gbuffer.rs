@@ -26,6 +26,8 @@ use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind};
 use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Usage};
 use crate::passes::shared::face_cull::DRAW_COUNT_BYTES;
+use crate::gpu::Spirv;
+use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use crate::passes::shared::scene_buffers::GpuScene;
 use crate::passes::shared::SceneInputs;
 use ash::vk;
@@ -133,52 +135,68 @@ pub const VERTEX_ATTRIBUTES: [(u32, vk::Format, u32); 4] = [
     (3, vk::Format::R16G16B16A16_SNORM, 24),
 ];
 
-/// Creates a graphics pipeline over `gbuffer.vert` (whose invariant position every geometry
-/// pass shares, so depth EQUAL against another pass's depth holds exactly). `equal`: depth
-/// EQUAL without writes and, where the format has stencil, stencil first-fragment-wins.
-pub fn geometry_pipeline(
-    ctx: &GpuContext,
-    shaders: &ShaderCompiler,
-    name: &str,
-    fragment: Option<(&str, &[(&str, &str)])>,
-    color_formats: &[vk::Format],
+/// A geometry pipeline's compiled shaders and fixed state: `gbuffer.vert` (whose invariant
+/// position every geometry pass shares, so depth EQUAL against another pass's depth holds
+/// exactly) and a fragment shader, its color formats and depth. `equal`: depth EQUAL without
+/// writes and, where the format has stencil, stencil first-fragment-wins.
+pub struct GeometryShaders {
+    vertex: Spirv,
+    fragment: Option<Spirv>,
+    color_formats: Vec<vk::Format>,
     depth: (vk::Format, vk::SampleCountFlags),
     equal: bool,
-) -> crate::Result<Pipeline> {
-    let vertex = shaders.compile("gbuffer/gbuffer.vert", &[])?;
-    // Masked materials keep a share of the samples (shaders/common/material_surface.glsl).
-    let samples = depth.1.as_raw().max(1).to_string();
-    let fragment = fragment
-        .map(|(path, defines)| {
-            let mut all = defines.to_vec();
-            all.push(("MSAA_SAMPLES", samples.as_str()));
-            shaders.compile(path, &all)
-        })
-        .transpose()?;
-    Ok(Pipeline::graphics(
-        ctx,
-        name,
-        &GraphicsDesc {
-            vertex: &vertex,
-            fragment: fragment.as_ref(),
-            vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-            vertex_attributes: &VERTEX_ATTRIBUTES,
-            color_formats,
-            depth_format: depth.0,
-            depth_compare: if equal { vk::CompareOp::EQUAL } else { vk::CompareOp::GREATER },
-            depth_write: !equal,
-            samples: depth.1,
-            // EQUAL redraws without stencil decide each sample otherwise (gbuffer_compressed's
-            // sample_claim); the passes refuse that combination where they have no other way.
-            stencil: if equal && crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL) {
-                StencilRule::FirstFragmentWins
-            } else {
-                StencilRule::Off
+}
+
+impl GeometryShaders {
+    /// Compiles the shaders (the fragment shader `fragment` with its defines, if any).
+    pub fn compile(
+        shaders: &ShaderCompiler,
+        fragment: Option<(&str, &[(&str, &str)])>,
+        color_formats: &[vk::Format],
+        depth: (vk::Format, vk::SampleCountFlags),
+        equal: bool,
+    ) -> crate::Result<Self> {
+        let vertex = shaders.compile("gbuffer/gbuffer.vert", &[])?;
+        // Masked materials keep a share of the samples (shaders/common/material_surface.glsl).
+        let samples = depth.1.as_raw().max(1).to_string();
+        let fragment = fragment
+            .map(|(path, defines)| {
+                let mut all = defines.to_vec();
+                all.push(("MSAA_SAMPLES", samples.as_str()));
+                shaders.compile(path, &all)
+            })
+            .transpose()?;
+        Ok(Self { vertex, fragment, color_formats: color_formats.to_vec(), depth, equal })
+    }
+
+    /// Creates the pipeline.
+    pub fn create(&self, ctx: &GpuContext, name: &str) -> crate::Result<Pipeline> {
+        let (depth, equal) = (self.depth, self.equal);
+        Ok(Pipeline::graphics(
+            ctx,
+            name,
+            &GraphicsDesc {
+                vertex: &self.vertex,
+                fragment: self.fragment.as_ref(),
+                vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
+                vertex_attributes: &VERTEX_ATTRIBUTES,
+                color_formats: &self.color_formats,
+                depth_format: depth.0,
+                depth_compare: if equal { vk::CompareOp::EQUAL } else { vk::CompareOp::GREATER },
+                depth_write: !equal,
+                samples: depth.1,
+                // EQUAL redraws without stencil decide each sample otherwise (gbuffer_compressed's
+                // sample_claim); the passes refuse that combination where they have no other way.
+                stencil: if equal && crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL) {
+                    StencilRule::FirstFragmentWins
+                } else {
+                    StencilRule::Off
+                },
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                blend: false,
             },
-            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-            blend: false,
-        },
-    )?)
+        )?)
+    }
 }
 
 /// Records `lists` with `pipeline` inside dynamic rendering over `colors` and `depth`.
@@ -265,15 +283,16 @@ pub enum GeometryMode {
 /// `emissive_occlusion` target is left out: a third color export costs a fifth of the frame on
 /// GPUs that export pixels slowly, for nothing.
 struct GeometryPipelines {
-    /// `[extras][masked]`; the `extras` row only where the target is bound.
-    variants: [[Option<Pipeline>; 2]; 2],
+    /// `[extras][masked]`, created when first picked; the `extras` row only where the target
+    /// is bound.
+    variants: [[Option<LazyPipeline>; 2]; 2],
 }
 
 impl GeometryPipelines {
     /// The pipeline for a scene with (or without) emission or occlusion and masked materials.
-    fn pick(&self, extras: bool, masked: bool) -> &Pipeline {
-        let row = if extras && self.variants[1][0].is_some() { 1 } else { 0 };
-        self.variants[row][masked as usize].as_ref().expect("every variant of a row is created")
+    fn pick(&mut self, ctx: &GpuContext, extras: bool, masked: bool) -> crate::Result<&Pipeline> {
+        let row = if self.writes_extras(extras) { 1 } else { 0 };
+        self.variants[row][masked as usize].as_mut().expect("every variant of a row is made").get(ctx)
     }
 
     /// Whether the pass draws the emissive/occlusion target for such a scene.
@@ -297,7 +316,6 @@ pub struct GbufferPass {
 impl GbufferPass {
     /// The pass for `pass`, with formats and samples from the images bound to it in `plan`.
     pub fn for_plan(
-        ctx: &GpuContext,
         shaders: &ShaderCompiler,
         pass: &PlannedPass,
         plan: &CompiledGraph,
@@ -327,7 +345,7 @@ impl GbufferPass {
         let equal = mode == GeometryMode::Equal;
         let surface_colors: Vec<vk::Format> =
             ["albedo", "normal"].iter().filter_map(|s| bound_image(plan, pass, s).map(|(f, _)| f)).collect();
-        let make = |extras: bool, masked: bool| -> crate::Result<Pipeline> {
+        let make = |extras: bool, masked: bool| -> crate::Result<LazyPipeline> {
             let no_masks: &[(&str, &str)] = if masked { &[] } else { &[("NO_ALPHA_MASK", "1")] };
             let (path, mut defines, formats): (&str, Vec<(&str, &str)>, &[vk::Format]) = match ids {
                 Some((format, _)) => ("gbuffer/visibility.frag", visibility_defines(Some(format)).to_vec(), &[]),
@@ -343,9 +361,10 @@ impl GbufferPass {
                 defines.push(("EMISSIVE_OCCLUSION", "1"));
             }
             defines.extend_from_slice(no_masks);
-            geometry_pipeline(ctx, shaders, &pass.name, Some((path, defines.as_slice())), formats, depth, equal)
+            let compiled = GeometryShaders::compile(shaders, Some((path, defines.as_slice())), formats, depth, equal)?;
+            Ok(LazyPipeline::geometry(&pass.name, compiled))
         };
-        let row = |extras: bool| -> crate::Result<[Option<Pipeline>; 2]> {
+        let row = |extras: bool| -> crate::Result<[Option<LazyPipeline>; 2]> {
             Ok([Some(make(extras, false)?), Some(make(extras, true)?)])
         };
         let pipelines =
@@ -374,8 +393,8 @@ impl PassNode for GbufferPass {
             if self.mode == GeometryMode::Clear { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD };
         let inputs = SceneInputs::of(rec)?;
         let scene = &inputs.scene;
-        let pipeline = self.pipelines.pick(scene.emission_or_occlusion, scene.alpha_masks);
         let extras = self.pipelines.writes_extras(scene.emission_or_occlusion);
+        let pipeline = self.pipelines.pick(rec.ctx, scene.emission_or_occlusion, scene.alpha_masks)?;
         let colors: Vec<vk::RenderingAttachmentInfo> = GBUFFER_COLOR_SLOTS
             .iter()
             .chain(&["ids"])
@@ -465,6 +484,6 @@ impl PassKind for GbufferKind {
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
-        Ok(Box::new(GbufferPass::for_plan(s.ctx, s.shaders, s.pass, s.plan, self.0)?))
+        Ok(Box::new(GbufferPass::for_plan(s.shaders, s.pass, s.plan, self.0)?))
     }
 }

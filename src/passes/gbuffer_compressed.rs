@@ -18,7 +18,8 @@
 //! the heads take 133 MB there (within 128 MiB), heads and pool together 199 MB. The pool's size sets its blocks;
 //! links have 26 bits, so at most 2^26 - 1 pool blocks are used whatever the size.
 
-use super::gbuffer::{bound_image, geometry_pipeline, record_geometry, DrawSource};
+use super::gbuffer::{bound_image, record_geometry, DrawSource, GeometryShaders};
+use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use super::slots::{ms, redraw_list_slots, slot, AA_MASK_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, GpuContext, Pipeline, ShaderCompiler};
@@ -219,11 +220,11 @@ fn claims_in_draw_order(ctx: &GpuContext, pass: &PlannedPass) -> Result<bool, St
 
 /// The `gbuffer_compressed` pass.
 pub struct GbufferCompressedPass {
-    /// The geometry pass, for scenes with emission or occlusion.
-    draw: Pipeline,
+    /// The geometry pass, for scenes with emission or occlusion (created when first used).
+    draw: LazyPipeline,
     /// The same without them (occlusion 1, no emission): the texture reads and the emissive
     /// encoding cost the pass time on every fragment, for nothing where no material has them.
-    draw_plain: Pipeline,
+    draw_plain: LazyPipeline,
     clear: Pipeline,
     /// Samples are claimed in `sample_claim` (no stencil).
     claim: bool,
@@ -263,10 +264,11 @@ impl GbufferCompressedPass {
             defines.push(("AA_MASK", "1"));
         }
         let fragment = Some(("gbuffer/gbuffer_compressed.frag", defines.as_slice()));
-        let draw = geometry_pipeline(ctx, shaders, &pass.name, fragment, &[], depth, true)?;
+        let draw = LazyPipeline::geometry(&pass.name, GeometryShaders::compile(shaders, fragment, &[], depth, true)?);
         defines.push(("NO_EMISSION_OCCLUSION", "1"));
         let fragment = Some(("gbuffer/gbuffer_compressed.frag", defines.as_slice()));
-        let draw_plain = geometry_pipeline(ctx, shaders, &pass.name, fragment, &[], depth, true)?;
+        let draw_plain =
+            LazyPipeline::geometry(&pass.name, GeometryShaders::compile(shaders, fragment, &[], depth, true)?);
         let clear = Pipeline::compute(
             ctx,
             &format!("{} clear", pass.name),
@@ -342,10 +344,11 @@ impl PassNode for GbufferCompressedPass {
                 vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             ));
         }
+        let draw = if scene.emission_or_occlusion { &mut self.draw } else { &mut self.draw_plain };
         record_geometry(
             rec.ctx,
             rec.cmd,
-            if scene.emission_or_occlusion { &self.draw } else { &self.draw_plain },
+            draw.get(rec.ctx)?,
             scene,
             &lists,
             inputs.constants(),

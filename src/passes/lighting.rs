@@ -11,6 +11,7 @@ use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Stages, Usage};
 use crate::passes::gbuffer::{bound_image, normal_defines};
+use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 
@@ -65,8 +66,9 @@ impl LightingSettings {
 pub struct LightingPass {
     pipeline: Pipeline,
     /// With an `emissive_occlusion` image bound: the pipeline that reads it, used while the
-    /// scene has emission or occlusion (the geometry passes write it only then).
-    extras_pipeline: Option<Pipeline>,
+    /// scene has emission or occlusion (the geometry passes write it only then), created when
+    /// first used.
+    extras_pipeline: Option<LazyPipeline>,
     sampler: Sampler,
     settings: LightingSettings,
 }
@@ -88,7 +90,7 @@ impl LightingPass {
         let pipeline = Pipeline::compute(ctx, "lighting", &shaders.compile("lighting/lighting.comp", &defines)?)?;
         let extras_pipeline = if emissive_occlusion {
             defines.push(("EMISSIVE_OCCLUSION", "1"));
-            Some(Pipeline::compute(ctx, "lighting", &shaders.compile("lighting/lighting.comp", &defines)?)?)
+            Some(LazyPipeline::compute("lighting", shaders.compile("lighting/lighting.comp", &defines)?))
         } else {
             None
         };
@@ -113,7 +115,13 @@ impl LightingPass {
     }
 
     /// Records one dispatch over the output.
-    pub fn record(&self, cmd: vk::CommandBuffer, io: &LightingInputs<'_>, settings: &LightingSettings) {
+    pub fn record(
+        &mut self,
+        ctx: &GpuContext,
+        cmd: vk::CommandBuffer,
+        io: &LightingInputs<'_>,
+        settings: &LightingSettings,
+    ) -> crate::Result<()> {
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let s = self.sampler.handle();
         let mut binds = vec![
@@ -124,14 +132,15 @@ impl LightingPass {
             Bind::Buffer(4, io.lights.handle()),
             Bind::StorageImage(5, io.output.view()),
         ];
-        let pipeline = match (io.emissive_occlusion, &self.extras_pipeline) {
+        let pipeline = match (io.emissive_occlusion, &mut self.extras_pipeline) {
             (Some(image), Some(extras)) => {
                 binds.push(Bind::Sampled(6, image.sampled_view(), s, read));
-                extras
+                extras.get(ctx)?
             }
             _ => &self.pipeline,
         };
         pipeline.dispatch_over(cmd, &binds, bytemuck::bytes_of(settings), io.output.extent());
+        Ok(())
     }
 }
 
@@ -148,8 +157,8 @@ impl PassNode for LightingPass {
             lights: inputs.lights(),
             output: slots.required_image("output")?,
         };
-        LightingPass::record(self, rec.cmd, &io, &self.settings);
-        Ok(())
+        let settings = self.settings;
+        LightingPass::record(self, rec.ctx, rec.cmd, &io, &settings)
     }
 }
 

@@ -9,6 +9,7 @@
 pub mod cull_data;
 pub mod face_cull;
 pub mod gpu_types;
+pub mod lazy_pipeline;
 pub mod scene_buffers;
 pub mod slot_layout;
 pub mod textures;
