@@ -21,12 +21,12 @@ use super::slots::{
 };
 use crate::gpu::barrier::layout_for_format;
 use crate::gpu::cmd_set_full_viewport;
+use crate::gpu::Spirv;
 use crate::gpu::{Bind, Buffer, GpuContext, GraphicsDesc, Image, Pipeline, ShaderCompiler, StencilRule};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind};
 use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Usage};
 use crate::passes::shared::face_cull::DRAW_COUNT_BYTES;
-use crate::gpu::Spirv;
 use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use crate::passes::shared::scene_buffers::GpuScene;
 use crate::passes::shared::SceneInputs;

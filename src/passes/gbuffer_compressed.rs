@@ -19,7 +19,6 @@
 //! links have 26 bits, so at most 2^26 - 1 pool blocks are used whatever the size.
 
 use super::gbuffer::{bound_image, record_geometry, DrawSource, GeometryShaders};
-use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use super::slots::{ms, redraw_list_slots, slot, AA_MASK_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, GpuContext, Pipeline, ShaderCompiler};
@@ -29,6 +28,7 @@ use crate::graph::{
     FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, ResourceDesc, SettingDecl, SettingDefault,
     Stages, Usage,
 };
+use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 
