@@ -16,6 +16,7 @@ use crate::gpu::{
 use crate::passes::shared::face_cull::FaceCull;
 use crate::passes::shared::gpu_types::DrawIndexedIndirect;
 use crate::passes::shared::scene_buffers::GpuScene;
+use crate::passes::transparent::{record_transparent, transparent_pipeline, TransparentDraws, TransparentShading};
 use ash::vk;
 use std::collections::BTreeSet;
 
@@ -78,27 +79,12 @@ impl VisibilityOracle {
                 blend: false,
             },
         )?;
-        let sample_count = samples.as_raw().max(1).to_string();
-        let transparent = Pipeline::graphics(
+        let transparent = transparent_pipeline(
             ctx,
+            shaders,
             "visibility oracle, transparent",
-            &GraphicsDesc {
-                vertex: &shaders.compile("gbuffer/gbuffer.vert", &[])?,
-                fragment: Some(&shaders.compile(
-                    "transparent/transparent.frag",
-                    &[("SAMPLES", &sample_count), ("VISIBILITY_ORACLE", "1")],
-                )?),
-                vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-                vertex_attributes: &crate::passes::gbuffer::VERTEX_ATTRIBUTES,
-                color_formats: &[],
-                depth_format: vk::Format::UNDEFINED,
-                depth_compare: vk::CompareOp::ALWAYS,
-                depth_write: false,
-                samples: vk::SampleCountFlags::TYPE_1,
-                stencil: Default::default(),
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                blend: false,
-            },
+            samples.as_raw(),
+            TransparentShading::MarkSeen,
         )?;
         let defines: &[(&str, &str)] =
             if samples == vk::SampleCountFlags::TYPE_1 { &[] } else { &[("MULTISAMPLED", "1")] };
@@ -177,27 +163,14 @@ impl VisibilityOracle {
         ];
         binds.extend_from_slice(scene.textures.bindings());
         let blended = FaceCull::Blended as usize;
-        let stride = std::mem::size_of::<DrawIndexedIndirect>() as u32;
-        // SAFETY: cmd recording; every handle outlives the submission.
-        unsafe {
-            device.cmd_begin_rendering(cmd, &vk::RenderingInfo::default().render_area(area).layer_count(1));
-            cmd_set_full_viewport(device, cmd, self.extent);
-            self.transparent.bind(cmd);
-            self.transparent.push_bindings(cmd, &binds);
-            device.cmd_set_cull_mode(cmd, vk::CullModeFlags::NONE);
-            device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
-            device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
-            device.cmd_draw_indexed_indirect_count(
-                cmd,
-                scene.draw_commands.handle(),
-                scene.regions.first[blended] as u64 * stride as u64,
-                scene.draw_count.handle(),
-                blended as u64 * 4,
-                scene.regions.len[blended],
-                stride,
-            );
-            device.cmd_end_rendering(cmd);
-        }
+        let draws = TransparentDraws {
+            commands: &scene.draw_commands,
+            offset: scene.regions.first[blended] as u64 * std::mem::size_of::<DrawIndexedIndirect>() as u64,
+            count: &scene.draw_count,
+            count_offset: blended as u64 * 4,
+            max: scene.regions.len[blended],
+        };
+        record_transparent(ctx, cmd, &self.transparent, scene, &[], area.extent, &binds, &[], &draws);
         cmd_barriers(device, cmd, &[memory_barrier(fragment_write, Access::HOST_READ)], &[]);
     }
 

@@ -10,7 +10,9 @@
 
 use super::gbuffer::{bound_samples, DrawSource, VERTEX_ATTRIBUTES};
 use super::slots::{draw_list_slots, ms, slot, LIT_OUTPUT_FORMAT};
-use crate::gpu::{cmd_set_full_viewport, Bind, GraphicsDesc, Pipeline, Sampler, StencilRule};
+use crate::gpu::{
+    cmd_set_full_viewport, Bind, Buffer, GpuContext, GraphicsDesc, Pipeline, Sampler, ShaderCompiler, StencilRule,
+};
 use crate::graph::executor::PassContext;
 use crate::graph::{
     FormatRule, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, SlotDecl, Stages,
@@ -19,11 +21,113 @@ use crate::graph::{
 use crate::passes::gbuffer::LIST_SLOTS;
 use crate::passes::shared::face_cull::FaceCull;
 use crate::passes::shared::gpu_types::DrawIndexedIndirect;
+use crate::passes::shared::scene_buffers::GpuScene;
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 
 /// The kind's name.
 pub const KIND: &str = "transparent";
+
+/// What `transparent.frag` is built for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum TransparentShading {
+    /// Shade and blend over one color attachment (the pass).
+    Blend,
+    /// Mark each instance with a fragment in front of the opaque depth, and draw nothing
+    /// (`VISIBILITY_ORACLE`: the visibility oracle, so that it sees exactly what the pass draws).
+    MarkSeen,
+}
+
+/// The pipeline of `transparent.frag` over `gbuffer.vert` for an opaque depth of `samples`
+/// samples: no depth attachment (the shader tests depth), the cull mode set per draw.
+pub(crate) fn transparent_pipeline(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    name: &str,
+    samples: u32,
+    shading: TransparentShading,
+) -> crate::Result<Pipeline> {
+    let samples = samples.max(1).to_string();
+    let mut defines = vec![("SAMPLES", samples.as_str())];
+    if shading == TransparentShading::MarkSeen {
+        defines.push(("VISIBILITY_ORACLE", "1"));
+    }
+    let vertex = shaders.compile("gbuffer/gbuffer.vert", &[])?;
+    let fragment = shaders.compile("transparent/transparent.frag", &defines)?;
+    let blend = shading == TransparentShading::Blend;
+    Ok(Pipeline::graphics(
+        ctx,
+        name,
+        &GraphicsDesc {
+            vertex: &vertex,
+            fragment: Some(&fragment),
+            vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
+            vertex_attributes: &VERTEX_ATTRIBUTES,
+            color_formats: if blend { &[LIT_OUTPUT_FORMAT] } else { &[] },
+            depth_format: vk::Format::UNDEFINED,
+            depth_compare: vk::CompareOp::ALWAYS,
+            depth_write: false,
+            samples: vk::SampleCountFlags::TYPE_1,
+            stencil: StencilRule::Off,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            blend,
+        },
+    )?)
+}
+
+/// Where a draw of transparent instances takes its commands: `max` commands from `offset` bytes
+/// into `commands`, counted by the word at `count_offset` of `count`.
+pub(crate) struct TransparentDraws<'a> {
+    pub commands: &'a Buffer,
+    pub offset: u64,
+    pub count: &'a Buffer,
+    pub count_offset: u64,
+    pub max: u32,
+}
+
+/// Records `draws` with `pipeline` (from [`transparent_pipeline`]) in a rendering scope over
+/// `colors` covering `extent`: bindings `binds` and push constants `push`, every face drawn
+/// (the shader drops one-sided materials' back faces).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn record_transparent(
+    ctx: &GpuContext,
+    cmd: vk::CommandBuffer,
+    pipeline: &Pipeline,
+    scene: &GpuScene,
+    colors: &[vk::RenderingAttachmentInfo<'_>],
+    extent: vk::Extent2D,
+    binds: &[Bind],
+    push: &[u8],
+    draws: &TransparentDraws<'_>,
+) {
+    let device = ctx.device();
+    let rendering = vk::RenderingInfo::default()
+        .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
+        .layer_count(1)
+        .color_attachments(colors);
+    let stride = std::mem::size_of::<DrawIndexedIndirect>() as u32;
+    // SAFETY: cmd is recording; every handle outlives the command buffer's execution.
+    unsafe {
+        device.cmd_begin_rendering(cmd, &rendering);
+        cmd_set_full_viewport(device, cmd, extent);
+        pipeline.bind(cmd);
+        pipeline.push_constant_bytes(cmd, push);
+        pipeline.push_bindings(cmd, binds);
+        device.cmd_set_cull_mode(cmd, vk::CullModeFlags::NONE);
+        device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
+        device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
+        device.cmd_draw_indexed_indirect_count(
+            cmd,
+            draws.commands.handle(),
+            draws.offset,
+            draws.count.handle(),
+            draws.count_offset,
+            draws.max,
+            stride,
+        );
+        device.cmd_end_rendering(cmd);
+    }
+}
 
 /// The `transparent` pass.
 pub struct TransparentPass {
@@ -48,16 +152,11 @@ impl PassNode for TransparentPass {
         };
         let depth = slots.required_image("depth")?;
         let output = slots.required_image("output")?;
-        let extent = output.extent();
         let color = [vk::RenderingAttachmentInfo::default()
             .image_view(output.view())
             .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::LOAD)
             .store_op(vk::AttachmentStoreOp::STORE)];
-        let rendering = vk::RenderingInfo::default()
-            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
-            .layer_count(1)
-            .color_attachments(&color);
         let mut binds = vec![
             Bind::Buffer(0, scene.instances.handle()),
             Bind::Buffer(1, list.instance_ids.handle()),
@@ -67,31 +166,11 @@ impl PassNode for TransparentPass {
             Bind::Sampled(5, depth.sampled_view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
         ];
         binds.extend_from_slice(scene.textures.bindings());
-        let stride = std::mem::size_of::<DrawIndexedIndirect>() as u32;
-        let max_draws = (list.commands.size() / stride as u64).min(list.instance_ids.size() / 4).min(u32::MAX as u64);
-        let device = rec.ctx.device();
-        // SAFETY: cmd is recording; every handle outlives the command buffer's execution.
-        unsafe {
-            device.cmd_begin_rendering(rec.cmd, &rendering);
-            cmd_set_full_viewport(device, rec.cmd, extent);
-            self.pipeline.bind(rec.cmd);
-            self.pipeline.push_constant_bytes(rec.cmd, bytemuck::bytes_of(&self.exposure));
-            self.pipeline.push_bindings(rec.cmd, &binds);
-            // Back faces of one-sided materials are dropped in the shader.
-            device.cmd_set_cull_mode(rec.cmd, vk::CullModeFlags::NONE);
-            device.cmd_bind_vertex_buffers(rec.cmd, 0, &[scene.vertices.handle()], &[0]);
-            device.cmd_bind_index_buffer(rec.cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
-            device.cmd_draw_indexed_indirect_count(
-                rec.cmd,
-                list.commands.handle(),
-                0,
-                list.count.handle(),
-                0,
-                max_draws as u32,
-                stride,
-            );
-            device.cmd_end_rendering(rec.cmd);
-        }
+        let stride = std::mem::size_of::<DrawIndexedIndirect>() as u64;
+        let max = (list.commands.size() / stride).min(list.instance_ids.size() / 4).min(u32::MAX as u64) as u32;
+        let draws = TransparentDraws { commands: list.commands, offset: 0, count: list.count, count_offset: 0, max };
+        let push = bytemuck::bytes_of(&self.exposure);
+        record_transparent(rec.ctx, rec.cmd, &self.pipeline, scene, &color, output.extent(), &binds, push, &draws);
         Ok(())
     }
 }
@@ -140,27 +219,8 @@ impl PassKind for TransparentKind {
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
-        let samples = bound_samples(s.plan, s.pass, "depth").to_string();
-        let vertex = s.shaders.compile("gbuffer/gbuffer.vert", &[])?;
-        let fragment = s.shaders.compile("transparent/transparent.frag", &[("SAMPLES", &samples)])?;
-        let pipeline = Pipeline::graphics(
-            s.ctx,
-            &s.pass.name,
-            &GraphicsDesc {
-                vertex: &vertex,
-                fragment: Some(&fragment),
-                vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-                vertex_attributes: &VERTEX_ATTRIBUTES,
-                color_formats: &[LIT_OUTPUT_FORMAT],
-                depth_format: vk::Format::UNDEFINED,
-                depth_compare: vk::CompareOp::ALWAYS,
-                depth_write: false,
-                samples: vk::SampleCountFlags::TYPE_1,
-                stencil: StencilRule::Off,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                blend: true,
-            },
-        )?;
+        let samples = bound_samples(s.plan, s.pass, "depth");
+        let pipeline = transparent_pipeline(s.ctx, s.shaders, &s.pass.name, samples, TransparentShading::Blend)?;
         Ok(Box::new(TransparentPass {
             pipeline,
             sampler: Sampler::nearest_clamp(s.ctx)?,
