@@ -12,13 +12,22 @@
 use ash::vk;
 use cullgraph::gpu::{cmd_set_full_viewport, Bind, GpuContext, GraphicsDesc, Pipeline, ShaderCompiler, StencilRule};
 use cullgraph::graph::{
-    FormatRule, MinBytes, NodeSetup, PassContext, PassKind, PassKindInfo, PassNode, ResolvedKind, SettingDecl,
-    SettingDefault, SlotDecl, Stages, Usage,
+    FormatRule, NodeSetup, PassContext, PassKind, PassKindInfo, PassNode, ResolvedKind, SettingDecl, SlotDecl, Stages,
+    Usage,
 };
 use cullgraph::passes::shared::SceneInputs;
 
-/// The `show` setting's words, the default first.
-const SHOW: &[&str] = &["all", "visible", "culled"];
+cullgraph::choice! {
+    /// Which boxes the pass draws (setting `show`); the first is the default.
+    enum Show {
+        /// Every instance's.
+        All = "all",
+        /// The ones the late cull found visible.
+        Visible = "visible",
+        /// The ones it culled.
+        Culled = "culled",
+    }
+}
 
 /// The `instance_bounds` pass kind.
 pub struct InstanceBoundsKind;
@@ -28,29 +37,16 @@ impl PassKind for InstanceBoundsKind {
         PassKindInfo {
             name: "instance_bounds",
             doc: "draws every instance's world-space box as lines over an image: green where this frame's visibility bits say visible, red where culled",
-            reads: vec![SlotDecl {
-                name: "visibility",
-                usage: Usage::StorageBufferRead(Stages::Vertex),
-                required: false,
-                format: FormatRule::Any,
-                multisample_ok: false,
-                doc: "this frame's visibility bits (a late instance_cull pass's `visibility`); unbound: every box white",
-                min_bytes: MinBytes::InstanceBits,
-            }],
-            writes: vec![SlotDecl {
-                name: "target",
-                usage: Usage::ColorAttachmentLoad,
-                required: true,
-                format: FormatRule::Color,
-                multisample_ok: false,
-                doc: "the image drawn on, its contents kept",
-                min_bytes: MinBytes::Any,
-            }],
-            settings: vec![SettingDecl {
-                name: "show",
-                default: SettingDefault::Choice(SHOW),
-                range: None, doc: "which boxes: all, the visible ones or the culled ones",
-            }],
+            reads: vec![SlotDecl::new(
+                "visibility",
+                Usage::StorageBufferRead(Stages::Vertex),
+                "this frame's visibility bits (a late instance_cull pass's `visibility`); unbound: every box white",
+            )
+            .at_least("ceil_div(instances, 32) * 4")],
+            writes: vec![SlotDecl::new("target", Usage::ColorAttachmentLoad, "the image drawn on, its contents kept")
+                .required()
+                .format(FormatRule::Color)],
+            settings: vec![SettingDecl::choice::<Show>("show", "which boxes: all, the visible ones or the culled ones")],
             slots_from_shader: false,
         }
     }
@@ -99,8 +95,8 @@ impl InstanceBoundsPass {
                 blend: false,
             },
         )?;
-        let show = pass.choice_setting("show")?;
-        let show = SHOW.iter().position(|w| *w == show).unwrap_or(0) as u32;
+        // The variants' order is the shader's.
+        let show = pass.choice::<Show>("show")? as u32;
         Ok(Self { pipeline, visibility, show })
     }
 }

@@ -15,7 +15,7 @@ pub use crate::gpu::{
     OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS,
 };
 pub use crate::graph::{
-    FormatRule, Imports, KindCheck, KindRegistry, MinBytes, NodeSetup, PassContext, PassKind, PassKindInfo, PassNode,
+    FormatRule, Imports, KindCheck, KindRegistry, NodeSetup, PassContext, PassKind, PassKindInfo, PassNode,
     ResolvedKind, SettingDecl, SettingDefault, SlotDecl, Stages, Usage, FRAMES_IN_FLIGHT,
 };
 pub use crate::passes::builtin_kinds;

@@ -134,7 +134,9 @@ fn graph_check_plan_and_dot() {
     );
     // A buffer too small for this scene is refused at its binding.
     let small = tmp.path().join("small.ron");
-    std::fs::write(&small, std::fs::read_to_string(&two_phase).unwrap().replace("\"instances * 4\"", "64")).unwrap();
+    let text = std::fs::read_to_string(&two_phase).unwrap();
+    let declared = text.replacen("resources: {", "resources: {\n        \"late_ids\": Buffer(size: 64),", 1);
+    std::fs::write(&small, declared).unwrap();
     let (code, _, err) = run(&["graph", "plan", small.to_str().unwrap(), "--instances", "1000"]);
     assert_eq!(code, 1);
     assert!(err.contains("small.ron:") && err.contains("the slot takes instances * 4 = 4000 bytes"), "{err}");

@@ -257,7 +257,7 @@ impl Drop for Watching {
 fn watch_reloads_on_change_and_keeps_the_last_good_graph_on_error() {
     let tmp = tempfile::tempdir().unwrap();
     let graph = tmp.path().join("g.ron");
-    let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/graph/default.ron")).unwrap();
+    let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/graph/two_phase.ron")).unwrap();
     std::fs::write(&graph, &good).unwrap();
     let png = tmp.path().join("w.png");
     let mut watch = Watching::start(&graph, &png);
@@ -280,7 +280,7 @@ fn watch_reloads_on_change_and_keeps_the_last_good_graph_on_error() {
         "{:?}",
         watch.seen
     );
-    assert!(watch.wait_for("rendered 'default'"), "the last good graph renders again: {:?}", watch.seen);
+    assert!(watch.wait_for("rendered 'two_phase'"), "the last good graph renders again: {:?}", watch.seen);
     drop(watch);
     assert!(png.exists());
 }

@@ -7,6 +7,7 @@ mod common;
 
 use common::GpuTest;
 use cullgraph::cull::math::{aabb_in_frustum, CullView};
+use cullgraph::passes::instance_cull::CullPassStats;
 use cullgraph::passes::shared::cull_data::{CullData, CULL_HUGE};
 use cullgraph::passes::shared::scene_buffers::DrawList;
 use cullgraph::render::DrawnInstances;
@@ -112,7 +113,7 @@ fn frustum_lists_equal_the_cpu_reference_exactly() {
             };
             assert_eq!(stats.draws, groups_with_survivors, "camera {i}: one command per non-empty group");
             // Every slot is tested and counted once.
-            let pass = &stats.culling[0];
+            let pass = &CullPassStats::of(&stats)[0];
             assert_eq!(pass.tested, instances as u32, "camera {i}: tested ({stats:?})");
             assert_eq!(pass.frustum_culled, (instances - want.len()) as u32, "camera {i}: frustum-culled");
         }
@@ -166,7 +167,7 @@ fn early_phase_from_last_frames_list_matches_the_tested_early_phase() {
             assert_eq!(early.len(), la[0].len(), "{source}, frame {frame}: an instance twice in the early list");
             assert!(la[1].iter().all(|id| !early.contains(id)), "{source}, frame {frame}: drawn early and late");
             // The early list's counters (written by last frame's late phase) are what was drawn.
-            let early_stats = &a.culling[0];
+            let early_stats = &CullPassStats::of(&a)[0];
             let early_triangles: u64 = la[0].iter().map(|&id| triangles_of(&scene, id)).sum();
             assert_eq!(
                 (early_stats.pass.as_str(), early_stats.tested, early_stats.drawn as usize, early_stats.triangles),

@@ -9,6 +9,7 @@ mod common;
 use common::{cube_mesh, GpuTest};
 use cullgraph::gpu::ShaderCompiler;
 use cullgraph::oracle::raycast::{RaycastOracle, SamplePattern};
+use cullgraph::passes::instance_cull::CullPassStats;
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::DrawnInstances;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
@@ -273,23 +274,15 @@ fn one_phase_counts_exactly_the_instances_it_pops_in_late() {
 /// (formats, samples, the passes after culling) is the graph's own. The library has no switch
 /// for this: `--no-cull` selects `graph/no_cull.ron` instead, which has no MSAA.
 fn without_culling(spec: &GraphSpec) -> GraphSpec {
-    let edits = [
-        (
-            r#"reads: {"visibility_prev": "visibility.prev", "hiz": "hiz"},"#,
-            r#"reads: {"visibility_prev": "visibility.prev"},"#,
-        ),
-        (
-            r#"settings: {"phase": "late", "bound": "bound", "hiz_test": "hiz_test"},"#,
-            r#"settings: {"phase": "late", "frustum": false},"#,
-        ),
-    ];
-    let mut out = spec.clone();
-    for (from, to) in edits {
-        assert_eq!(out.text.matches(from).count(), 1, "{}: `{from}`", spec.file);
-        out.text = out.text.replace(from, to);
-    }
-    out.file = format!("{} (culling off)", spec.file);
-    out
+    let name = std::path::Path::new(&spec.file).file_stem().unwrap().to_str().unwrap();
+    let text = format!(
+        r#"Graph(
+    name: "{name} (culling off)",
+    extends: "{name}",
+    edits: [Set(pass: "cull_late", unbind: ["hiz"], settings: {{"frustum": false}})],
+)"#
+    );
+    GraphSpec { text, file: format!("{} (culling off)", spec.file), ..spec.clone() }
 }
 
 #[test]
@@ -546,7 +539,7 @@ fn the_occluder_prepass_chooses_cheap_meshes_where_the_scene_flags_none() {
     let graphs = [graph("occluder_prepass", &[]), graph("occluder_prepass", &[("occluder_triangles", "0")])];
     let shot = Shot { scene: &scene, camera: &camera, size: (64, 40), frames: 3, path: CameraPath::Orbit };
     let (_, stats) = check_graphs(&gpu, &gpu.shaders(), shot, &graph("no_cull", &[]), &graphs);
-    let occluders = |s: &FrameStats| s.culling.iter().find(|p| p.pass == "cull_occluders").unwrap().drawn;
+    let occluders = |s: &FrameStats| CullPassStats::of(s).iter().find(|p| p.pass == "cull_occluders").unwrap().drawn;
     for (cheap, flagged_only) in stats[0].iter().zip(&stats[1]) {
         assert!(occluders(cheap) > 0 && cheap.occlusion_culled > 300, "cheap meshes: {cheap:?}");
         assert!(occluders(flagged_only) == 0 && flagged_only.occlusion_culled == 0, "flagged only: {flagged_only:?}");

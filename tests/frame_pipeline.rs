@@ -5,14 +5,17 @@
 mod common;
 
 use common::{city_view, GpuTest};
+use cullgraph::passes::instance_cull::CullPassStats;
 use cullgraph::render::{FramePipeline, GraphSpec, RenderSettings, Renderer, FRAMES_IN_FLIGHT};
 use cullgraph::scene::CameraPath;
 use cullgraph::stats::FrameStats;
 
 /// What must not depend on how the frames were submitted.
 fn counters(s: &FrameStats) -> impl PartialEq + std::fmt::Debug {
-    let passes: Vec<_> =
-        s.culling.iter().map(|p| (p.pass.clone(), p.tested, p.frustum_culled, p.occlusion_culled, p.drawn)).collect();
+    let passes: Vec<_> = CullPassStats::of(s)
+        .iter()
+        .map(|p| (p.pass.clone(), p.tested, p.frustum_culled, p.occlusion_culled, p.drawn))
+        .collect();
     (s.frame, s.instances, s.frustum_culled, s.occlusion_culled, s.drawn, s.draws, s.triangles, passes)
 }
 

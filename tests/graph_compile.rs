@@ -429,7 +429,7 @@ fn values_out_of_range_for_a_frame_are_errors_with_positions() {
          test.ron:5:52: width of image 'big' is 25600 (must be 1 to 16384)"
     );
     let mut frame = FrameInputs::new(640, 480);
-    frame.lights = 10;
+    frame.quantities.set("lights", 10);
     let c = graph::compile(&g, &frame).expect("fits");
     assert!(matches!(c.resources[0].kind, graph::plan::ResolvedKind::Buffer { size: 192, .. }));
 }
@@ -499,7 +499,7 @@ fn compiles_a_200_pass_graph() {
     let g = load_test(&text);
     let loaded = start.elapsed();
     let mut frame = FrameInputs::new(1920, 1080);
-    frame.instances = 100_000;
+    frame.quantities.set("instances", 100_000);
     let start = std::time::Instant::now();
     let runs = 10;
     let mut c = None;

@@ -103,12 +103,12 @@ fn a_broken_reload_keeps_the_last_good_graph_running() {
     let mut renderer = Renderer::new(&gpu, &shaders, boxes_scene(), RenderSettings::new(48, 32)).unwrap();
     let before = renderer.render_to_image(&boxes_camera()).unwrap().1;
 
-    let mut broken = GraphSpec::default_graph();
+    let mut broken = GraphSpec::builtin("two_phase").unwrap();
     broken.text = broken
         .text
         .replace("\"emissive_occlusion\", \"depth\": \"depth\"}", "\"emissive_occlusion\", \"depth\": \"dept\"}");
     let err = renderer.reload_graph(&shaders, &broken).unwrap_err().to_string();
-    assert!(err.starts_with("graph/default.ron:") && err.contains("'dept'"), "{err}");
+    assert!(err.starts_with("graph/two_phase.ron:") && err.contains("'dept'"), "{err}");
     let still = renderer.render_to_image(&boxes_camera()).unwrap().1;
     assert!(before.as_raw() == still.as_raw(), "the old graph must keep rendering the same frame");
 
@@ -142,9 +142,14 @@ fn buffers_too_small_for_their_slots_are_refused_at_the_binding_when_the_graph_i
         format!("{line}:{col}")
     };
 
+    // The two-phase graph with one more resource declared (the kinds create the rest).
+    let declaring = |declaration: &str| {
+        let mut spec = GraphSpec::builtin("two_phase").unwrap();
+        spec.text = spec.text.replacen("resources: {", &format!("resources: {{\n        {declaration},"), 1);
+        spec
+    };
     // A count buffer that holds one count, where the cull pass writes one per face-cull region.
-    let mut old = GraphSpec::builtin("two_phase").unwrap();
-    old.text = old.text.replace("\"late_count\": Buffer(size: 16)", "\"late_count\": Buffer(size: 4)");
+    let old = declaring("\"late_count\": Buffer(size: 4)");
     let err = refused(&old);
     assert!(
         err.contains(&format!("two_phase.ron:{}", binding_pos(&old.text, "late_count", 1)))
@@ -156,24 +161,18 @@ fn buffers_too_small_for_their_slots_are_refused_at_the_binding_when_the_graph_i
 
     // Sizes that depend on the scene: an id per instance.
     let instances = scene.instances.len();
-    let mut small = GraphSpec::builtin("two_phase").unwrap();
-    small.text = small.text.replace("\"late_ids\": Buffer(size: \"instances * 4\")", "\"late_ids\": Buffer(size: 8)");
-    assert_ne!(small.text, GraphSpec::builtin("two_phase").unwrap().text, "the edit applied");
+    let small = declaring("\"late_ids\": Buffer(size: 8)");
     let err = refused(&small);
     assert!(
         err.contains(&format!(
-            "'late_ids' holds 8 bytes; the slot takes instances * 4 = {} bytes for this scene ({instances} instances",
+            "'late_ids' holds 8 bytes; the slot takes instances * 4 = {} bytes for this scene (instances = {instances})",
             instances * 4
         )),
         "{err}"
     );
 
     // A pyramid at the depth's own size (as if it stored level 0 too, which the pass does not).
-    let mut full = GraphSpec::builtin("two_phase").unwrap();
-    full.text = full.text.replace(
-        "size: Fixed(\"max(1, width / 2)\", \"max(1, height / 2)\"), mips: All",
-        "size: Fixed(\"width\", \"height\"), mips: All",
-    );
+    let full = declaring("\"hiz\": Image(format: R32_SFLOAT, size: Fixed(\"width\", \"height\"), mips: All)");
     let err = refused(&full);
     assert!(
         err.contains(&format!("two_phase.ron:{}", binding_pos(&full.text, "hiz", 3)))

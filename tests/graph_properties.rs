@@ -403,7 +403,7 @@ proptest! {
             eprintln!("case: {} passes, {} resources", g.passes.len(), g.resources.len());
         }
         let mut frame = FrameInputs::new(640, 360);
-        frame.instances = 1000;
+        frame.quantities.set("instances", 1000);
         // Random sizes may give one pass attachments of different sizes, which compiling
         // refuses (no device renders that); anything else must compile.
         let c = match graph::compile(&g, &frame) {

@@ -521,6 +521,7 @@ fn hiz_build_in_a_graph_reduces_the_gbuffer_depth() {
             dir: None,
             overrides: vec![("method".into(), method.into())],
             kinds: cullgraph::passes::builtin_kinds(),
+            settings: Vec::new(),
         };
         let mut renderer =
             Renderer::with_graph(gpu, &tools.shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();

@@ -8,6 +8,7 @@ mod common;
 
 use common::{boxes_camera, boxes_scene, GpuTest};
 use cullgraph::oracle::image_error::mean_flip;
+use cullgraph::passes::lighting_compressed::GbufferPassStats;
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
@@ -27,66 +28,41 @@ enum Owner {
 
 const OWNERS: [Owner; 2] = [Owner::Stencil, Owner::Claim];
 
-/// A graph written like `graph/msaa_compressed.ron` with the given owner: for `Claim`, a
-/// D32_SFLOAT depth and a `sample_claim` buffer written by the compressed pass and read by the
-/// passes after it (the check graph's check then runs its claim variant).
-fn with_owner(text: &str, owner: Owner) -> String {
-    if owner == Owner::Stencil {
-        return text.to_string();
-    }
-    let claim = r#""sample_claim": Buffer(size: "ceil_div(width * height, 4) * 4"),"#;
-    let reads = r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool"},"#;
-    let check = r#"shader: "compressed_check.comp","#;
-    // The check graph's check pass also reads the oracle's ids.
-    let check_reads =
-        r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "ids": "ids"},"#;
-    // (from, to, the times `from` may occur)
-    let edits = [
-        (r#""depth": Image(format: D32_SFLOAT_S8_UINT,"#, r#""depth": Image(format: D32_SFLOAT,"#.to_string(), 1..=1),
-        (r#""gbuffer": Buffer(size:"#, format!("{claim}\n        \"gbuffer\": Buffer(size:"), 1..=1),
-        (
-            r#"writes: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool"}"#,
-            r#"writes: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "sample_claim": "sample_claim"}"#.to_string(),
-            1..=1,
-        ),
-        (
-            reads,
-            r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "sample_claim": "sample_claim"},"#.to_string(),
-            1..=usize::MAX,
-        ),
-        (
-            check_reads,
-            r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "ids": "ids", "sample_claim": "sample_claim"},"#
-                .to_string(),
-            0..=1,
-        ),
-    ];
-    // Only claims have an order to choose; the check graph sets no selective-AA params.
-    let params = r#""aa_object_flags": false,"#;
-    let settings = r#""aa_object_flags": "aa_object_flags","#;
-    let order_edits = [
-        (params, format!("{params}\n        \"claim_order\": \"auto\","), 0..=1),
-        (settings, format!("{settings}\n                \"claim_order\": \"claim_order\","), 0..=1),
-    ];
-    let mut text = text.to_string();
-    for (from, to, times) in edits.into_iter().chain(order_edits) {
-        let count = text.matches(from).count();
-        assert!(times.contains(&count), "the graph has `{from}` {count} times");
-        text = text.replace(from, &to);
-    }
-    text.replace(check, r#"shader: "compressed_check_claim.comp","#)
-}
+/// The edits that make a graph written like `graph/msaa_compressed.ron` decide samples by
+/// claims, as `graph/msaa_compressed_claim.ron` makes that one: a D32_SFLOAT depth, and a
+/// `sample_claim` buffer the compressed pass creates and the lighting reads.
+const CLAIM_EDITS: &str = r#"
+    params: {"claim_order": "auto"},
+    resources: {"depth": Image(format: D32_SFLOAT, samples: "msaa")},
+    edits: [
+        Set(pass: "gbuffer", writes: {"sample_claim": "sample_claim"}, settings: {"claim_order": "claim_order"}),
+        Set(pass: "lighting", reads: {"sample_claim": "sample_claim"}),"#;
 
-/// `spec(file, params)` with `owner` (the check graph's claim variant keeps its folder, where
-/// its shader is).
+/// The check graph `file` (in the repository) with `owner` deciding the samples: for `Claim`,
+/// a graph that extends it with the claim edits and the check pass's claim variant.
 fn owner_spec(file: &str, owner: Owner, params: &[(&str, &str)]) -> GraphSpec {
-    let mut spec = spec(file, params);
-    spec.text = with_owner(&spec.text, owner);
-    spec
-}
-
-fn read_repo_file(path: &str) -> String {
-    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(path)).unwrap()
+    let spec = spec(file, params);
+    if owner == Owner::Stencil {
+        return spec;
+    }
+    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+    let text = format!(
+        r#"Graph(
+    name: "claims",
+    extends: "{}",{CLAIM_EDITS}
+        Replace(pass: "check", with: Pass(
+            name: "check",
+            kind: "compute",
+            shader: "compressed_check_claim.comp",
+            reads: {{"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "ids": "ids", "sample_claim": "sample_claim"}},
+            writes: {{"check": "check"}},
+            dispatch: PerPixel("check"),
+        )),
+    ],
+)"#,
+        base.display()
+    );
+    GraphSpec { text, file: "claims.ron".into(), ..spec }
 }
 
 fn spec(file: &str, params: &[(&str, &str)]) -> GraphSpec {
@@ -191,7 +167,7 @@ fn compressed_lists_cover_each_sample_once_with_intersections_duplicates_and_bac
         let partly_covered = pixels.iter().filter(|p| p[2] > 0 && p[2] < 4).count();
         assert!(edge_pixels > 50, "{what}: edge pixels keep extra blocks ({edge_pixels})");
         assert!(background > 0 && partly_covered > 20, "{what}: the view has background and silhouettes");
-        let g = &stats.last().unwrap().gbuffer[0];
+        let g = &GbufferPassStats::of(stats.last().unwrap())[0];
         assert_eq!(g.overflow_fragments, 0, "{what}: unbounded pool overflowed: {g:?}");
         let listed: usize = pixels.iter().map(|p| p[1] as usize).sum();
         assert_eq!(g.pool_used as usize, listed, "{what}: every pool block is on exactly one list");
@@ -212,7 +188,7 @@ fn a_full_pool_degrades_gracefully_and_counts_what_it_dropped() {
         // triangles have no block of their own).
         assert!(pixels.iter().all(|p| p[0] & !(16 | 128) == 0), "{owner:?}: overflow corrupted a list");
         assert!(pixels.iter().any(|p| p[0] & 128 != 0), "{owner:?}: the oracle sees the dropped blocks");
-        let g = &stats.last().unwrap().gbuffer[0];
+        let g = &GbufferPassStats::of(stats.last().unwrap())[0];
         assert_eq!(g.pool_used, g.pool_blocks, "{owner:?}: the pool fills up: {g:?}");
         assert!(g.overflow_fragments > 0 && g.overflow_samples >= g.overflow_fragments, "{owner:?}: {g:?}");
     }
@@ -427,41 +403,53 @@ fn headless_pixel_scene() -> (Scene, Camera) {
 #[test]
 fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
     let gpu = GpuTest::new();
-    let outputs = r#"    outputs: ["color"],"#;
-    let extra_passes = r#"        Pass(
+    // Both lightings read the claims when there are claims.
+    let graph_text = |owner: Owner| {
+        let (base, claims) = match owner {
+            Owner::Stencil => ("msaa_compressed", ""),
+            Owner::Claim => {
+                ("msaa_compressed_claim", r#"Set(pass: "lighting_reversed", reads: {"sample_claim": "sample_claim"}),"#)
+            }
+        };
+        format!(
+            r#"Graph(
+    name: "reversed",
+    extends: "{base}",
+    resources: {{
+        "color_reversed": Image(format: R8G8B8A8_UNORM),
+        "marks": Image(format: R8G8B8A8_UNORM),
+        "difference": Image(format: R8G8B8A8_UNORM),
+    }},
+    passes: [
+        Pass(
             name: "reverse_lists",
             kind: "compute",
             shader: "reverse_lists.comp",
-            reads: {"depth": "depth"},
-            writes: {"gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "marks": "marks"},
+            reads: {{"depth": "depth"}},
+            writes: {{"gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "marks": "marks"}},
             dispatch: PerPixel("depth"),
         ),
         Pass(
             name: "lighting_reversed",
             kind: "lighting_compressed",
-            reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool"},
-            writes: {"output": "color_reversed"},
-            settings: {"exposure": "exposure", "light_tiles": "light_tiles", "shared_blocks": "shared_blocks"},
+            reads: {{"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool"}},
+            writes: {{"output": "color_reversed"}},
+            settings: {{"exposure": "exposure", "light_tiles": "light_tiles", "shared_blocks": "shared_blocks"}},
         ),
         Pass(
             name: "difference",
             kind: "compute",
             shader: "image_difference.comp",
-            reads: {"first": "color", "second": "color_reversed", "marks": "marks"},
-            writes: {"difference": "difference"},
+            reads: {{"first": "color", "second": "color_reversed", "marks": "marks"}},
+            writes: {{"difference": "difference"}},
             dispatch: PerPixel("difference"),
         ),
     ],
-    outputs: ["difference", "color"],"#;
-    let images = r#"        "color": Image(format: R8G8B8A8_UNORM),"#;
-    let more_images = r#"
-        "color_reversed": Image(format: R8G8B8A8_UNORM),
-        "marks": Image(format: R8G8B8A8_UNORM),
-        "difference": Image(format: R8G8B8A8_UNORM),"#;
-    let shipped = read_repo_file("graph/msaa_compressed.ron");
-    assert_eq!((shipped.matches(outputs).count(), shipped.matches(images).count()), (1, 1));
-    let text =
-        shipped.replace(&format!("    ],\n{outputs}"), extra_passes).replace(images, &format!("{images}{more_images}"));
+    edits: [{claims}],
+    outputs: ["difference", "color"],
+)"#
+        )
+    };
     // (scene and camera, size, pool, AA cap by object flags, what, least reversed lists, least
     // headless pixels with dropped samples)
     let cases = [
@@ -477,9 +465,9 @@ fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
         // The test graphs' folder has the extra shaders; both lightings read the claims.
         let params = [("pool_fraction", *pool), ("aa_object_flags", *cap)];
         let mut graph = spec("tests/graphs/gpu/compressed_check.ron", &params);
-        graph.text = with_owner(&text, owner);
+        graph.text = graph_text(owner);
         let (difference, stats) = render(&gpu, scene, camera, *size, &graph, 2);
-        let g = &stats.last().unwrap().gbuffer[0];
+        let g = &GbufferPassStats::of(stats.last().unwrap())[0];
         let flags = |bit: u8| difference.pixels().filter(|p| p.0[3] & bit != 0).count();
         assert!(flags(1) >= *reversed, "{what}: reversed lists of two or more blocks: {}", flags(1));
         assert!(flags(2) >= *headless, "{what}: headless pixels with dropped samples: {}", flags(2));
@@ -521,7 +509,7 @@ fn shared_block_shading_matches_the_per_pixel_loop() {
             &spec("builtin:msaa_compressed", &[("shared_blocks", capacity), ("shared_min_blocks", "0")]),
             1,
         );
-        let g = stats.last().unwrap().gbuffer[0].clone();
+        let g = GbufferPassStats::of(stats.last().unwrap())[0].clone();
         (image, g.pool_used, g.surfaces_per_pixel)
     };
     let (loop_image, loop_used, loop_histogram) = run("0");
@@ -543,25 +531,20 @@ fn shared_block_shading_matches_the_per_pixel_loop() {
 #[test]
 fn claimed_samples_give_the_image_of_scanning_every_depth_sample() {
     let gpu = GpuTest::new();
-    let source =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("graph/msaa_compressed_claim.ron")).unwrap();
-    let with_claims = r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool", "sample_claim": "sample_claim"},"#;
-    assert_eq!(source.matches(with_claims).count(), 1, "the lighting pass reads sample_claim");
-    let scanning = Path::new(env!("CARGO_TARGET_TMPDIR")).join("msaa_compressed_claim_scanning.ron");
-    std::fs::write(
-        &scanning,
-        source.replace(
-            with_claims,
-            r#"reads: {"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool"},"#,
-        ),
-    )
-    .unwrap();
+    // The claim graph with a lighting that reads every depth sample instead of the claims.
+    let scanning = GraphSpec {
+        text: r#"Graph(name: "scanning", extends: "msaa_compressed_claim", edits: [Set(pass: "lighting", unbind: ["sample_claim"])])"#
+            .into(),
+        file: "scanning.ron".into(),
+        ..GraphSpec::builtin("msaa_compressed_claim").unwrap()
+    };
     let cases = [(city(1500).0, city(1500).1, "city"), (intersecting_scene(), boxes_camera(), "cubes")];
     for (scene, camera, what) in &cases {
         let claimed = render(&gpu, scene, camera, (96, 64), &spec("builtin:msaa_compressed_claim", &[]), 1);
-        let scanned = render(&gpu, scene, camera, (96, 64), &spec(scanning.to_str().unwrap(), &[]), 1);
+        let scanned = render(&gpu, scene, camera, (96, 64), &scanning, 1);
         assert_eq!(mean_and_max_difference(&claimed.0, &scanned.0), (0.0, 0), "{what}");
-        let (a, b) = (&claimed.1.last().unwrap().gbuffer[0], &scanned.1.last().unwrap().gbuffer[0]);
+        let (a, b) =
+            (&GbufferPassStats::of(claimed.1.last().unwrap())[0], &GbufferPassStats::of(scanned.1.last().unwrap())[0]);
         assert!(a.pool_used > 0 && a.overflow_samples == 0, "{what}: {a:?}");
         assert_eq!(a.surfaces_per_pixel, b.surfaces_per_pixel, "{what}");
     }
@@ -582,7 +565,7 @@ fn selective_aa_keeps_one_block_where_it_is_capped() {
         // case) and the claims are the covered samples.
         // (16 and 128: the capped fragments keep no block, on purpose.)
         assert!(pixels.iter().all(|p| p[0] & !(16 | 128) == 0), "{params:?}: broken lists or claims");
-        (stats.last().unwrap().gbuffer[0].pool_used, pixels)
+        (GbufferPassStats::of(stats.last().unwrap())[0].pool_used, pixels)
     };
     let (all, _) = blocks(&[]);
     let (ellipse, pixels) = blocks(&[("aa_region", "ellipse"), ("aa_region_size", "0.5")]);
@@ -603,7 +586,7 @@ fn selective_aa_keeps_one_block_where_it_is_capped() {
     // stays close to full MSAA (what it drops are surfaces of nearly equal depth).
     let render_edges = |graph: &str| {
         let (image, stats) = render(&gpu, &scene, &camera, (96, 64), &spec(graph, &[("pool_fraction", "3")]), 1);
-        (image, stats.last().unwrap().gbuffer[0].pool_used)
+        (image, GbufferPassStats::of(stats.last().unwrap())[0].pool_used)
     };
     let (full_image, full_blocks) = render_edges("builtin:msaa_compressed");
     let (edge_image, edge_blocks) = render_edges("builtin:msaa_compressed_edges");
@@ -649,16 +632,34 @@ fn compressed_gbuffer_takes_less_memory_than_the_per_sample_gbuffer() {
 }
 
 /// `graph/msaa_compressed_claim.ron` is `msaa_compressed.ron` with the owner changed and
-/// nothing else (comments and layout aside): the two stay comparable.
+/// nothing else: composed, the two have the same passes in the same order, and differ only in
+/// the depth's format and the claims the compressed pass writes and the lighting reads.
 #[test]
 fn the_claim_graph_is_the_stencil_graph_with_claims() {
-    let read = |f: &str| std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(f)).unwrap();
-    let tokens = |text: &str| -> String {
-        text.lines().map(|l| l.split("//").next().unwrap_or("")).flat_map(str::split_whitespace).collect()
+    let env = cullgraph::graph::NoDevice::new(cullgraph::gpu::ShaderRoot::Embedded).unwrap();
+    let kinds = cullgraph::passes::builtin_kinds();
+    let load = |name: &str| {
+        let g = kinds.graph(name).unwrap();
+        cullgraph::graph::load_in(g.text, g.file, None, &[], &env, &kinds).unwrap()
     };
-    let derived = with_owner(&read("graph/msaa_compressed.ron"), Owner::Claim)
-        .replace(r#"name: "msaa_compressed","#, r#"name: "msaa_compressed_claim","#);
-    assert_eq!(tokens(&derived), tokens(&read("graph/msaa_compressed_claim.ron")));
+    let (stencil, claims) = (load("msaa_compressed"), load("msaa_compressed_claim"));
+    let outline = |g: &cullgraph::graph::ValidatedGraph| -> Vec<(String, String, Vec<String>)> {
+        g.passes
+            .iter()
+            .map(|p| {
+                let slots = p.bindings.iter().map(|b| b.slot.clone()).filter(|s| s != "sample_claim").collect();
+                (p.name.clone(), p.kind.clone(), slots)
+            })
+            .collect()
+    };
+    assert_eq!(outline(&stencil), outline(&claims));
+    let claimed: Vec<&str> = claims
+        .passes
+        .iter()
+        .filter(|p| p.bindings.iter().any(|b| b.slot == "sample_claim"))
+        .map(|p| p.name.as_str())
+        .collect();
+    assert_eq!(claimed, ["gbuffer", "lighting"]);
 }
 
 /// The packed normal word (octahedral 12 + 12 bits, roughness 8 bits; the built-in graphs'
@@ -732,7 +733,7 @@ fn flagged_instances_keep_one_block_with_object_flags_on() {
                 pixels.iter().all(|p| p[0] & !(16 | 128) == 0),
                 "{owner:?}, {object_flags}: broken lists or claims"
             );
-            let g = &stats.last().unwrap().gbuffer[0];
+            let g = &GbufferPassStats::of(stats.last().unwrap())[0];
             assert_eq!(g.overflow_fragments, 0, "{owner:?}: {g:?}");
             assert_eq!(g.pool_used as usize, pixels.iter().map(|p| p[1] as usize).sum::<usize>());
             (g.pool_used, pixels)
@@ -813,7 +814,7 @@ fn the_samples_debug_view_colours_pixels_by_their_surfaces() {
     println!("pixels with 1, 2, ... surfaces: {counts:?}");
     assert!(counts[1] > 100 && counts[2] > 5, "edge pixels with two and three surfaces in view: {counts:?}");
     assert_ne!(heat(1), heat(2));
-    assert_eq!(stats.last().unwrap().gbuffer[0].surfaces_per_pixel, counts);
+    assert_eq!(GbufferPassStats::of(stats.last().unwrap())[0].surfaces_per_pixel, counts);
 }
 
 /// The visibility buffer's ids packed in one word (the shipped graph) and as two words give the
@@ -917,7 +918,7 @@ fn the_shipped_compressed_graphs_render_at_4k() {
         ("builtin:msaa_compressed_edges", &[][..]),
     ] {
         let (image, stats) = render(&gpu, &scene, &camera, size, &spec(graph, params), 1);
-        let g = &stats[0].gbuffer[0];
+        let g = &GbufferPassStats::of(&stats[0])[0];
         assert_eq!(g.pool_blocks, pixels / 2, "{graph}: the pool of pool_fraction 0.5");
         assert!(g.pool_used > 10_000, "{graph}: edge pixels keep blocks ({g:?})");
         assert_eq!(g.overflow_fragments, 0, "{graph}: {g:?}");
@@ -933,10 +934,20 @@ fn the_shipped_compressed_graphs_render_at_4k() {
 #[test]
 fn a_buffer_beyond_the_devices_binding_range_is_refused_at_its_declaration() {
     let gpu = GpuTest::new();
-    let mut spec = spec("builtin:msaa_compressed", &[]);
-    let heads = r#""gbuffer": Buffer(size: "16 + ceil_div(width * height, 2) * 32")"#;
-    let line = spec.text.lines().position(|l| l.contains(heads)).expect("the shipped heads buffer") + 1;
-    spec.text = spec.text.replace(heads, r#""gbuffer": Buffer(size: "16 + ceil_div(width * height * 3 / 2, 2) * 32")"#);
+    // The shipped graph with its heads buffer declared half as large again.
+    let spec = GraphSpec {
+        text: r#"Graph(
+    name: "large_heads",
+    extends: "msaa_compressed",
+    resources: {
+        "gbuffer": Buffer(size: "16 + ceil_div(width * height * 3 / 2, 2) * 32"),
+    },
+)"#
+        .into(),
+        file: "large_heads.ron".into(),
+        ..spec("builtin:msaa_compressed", &[])
+    };
+    let line = 5;
     let limit = gpu.caps().limits.max_storage_buffer_range;
     if limit as u64 >= 199_065_616 {
         return; // a device that binds it all (NVIDIA: 4 GiB) has nothing to refuse

@@ -7,6 +7,8 @@ mod common;
 
 use common::{city_view, cube_mesh, GpuTest};
 use cullgraph::graph::plan::ResolvedKind;
+use cullgraph::passes::instance_cull::CullPassStats;
+use cullgraph::passes::lighting_compressed::GbufferPassStats;
 use cullgraph::passes::overlay::{glyph, glyph_origin, panel_rect, BAR_CHARS, LABEL_COLOR, MAX_COLS, NUMBER_COLOR};
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
@@ -89,7 +91,7 @@ fn stats_panel_shows_this_frames_counters_and_touches_nothing_else() {
     let (stats, image, renderer) = render(&gpu, &scene, &camera, size, &overlay_graph(&[]), 3);
     // The overlay changes nothing the frame computes.
     let counters =
-        |s: &FrameStats| (s.frustum_culled, s.occlusion_culled, s.drawn, s.draws, s.triangles, s.culling.clone());
+        |s: &FrameStats| (s.frustum_culled, s.occlusion_culled, s.drawn, s.draws, s.triangles, CullPassStats::of(s));
     assert_eq!(counters(&stats), counters(&lit_stats));
     assert!(stats.occlusion_culled > 0 && stats.frustum_culled > 0, "{stats:?}");
     // graph/overlay.ron is graph/default.ron plus the overlay pass: the other passes are the same.
@@ -111,8 +113,9 @@ fn stats_panel_shows_this_frames_counters_and_touches_nothing_else() {
     assert_eq!(passes(&renderer), passes(&lit_renderer), "graph/overlay.ron no longer matches graph/default.ron");
 
     // What the panel must say, from the CPU's readback of the same frame's counters.
-    let [early, late] = &stats.culling[..] else { panic!("two cull passes expected: {stats:?}") };
-    let widest = stats.culling.iter().max_by_key(|p| p.tested).unwrap();
+    let passes = CullPassStats::of(&stats);
+    let [early, late] = &passes[..] else { panic!("two cull passes expected: {stats:?}") };
+    let widest = passes.iter().max_by_key(|p| p.tested).unwrap();
     let mut expected = vec![
         format!("instances {}  tested {}", stats.instances, widest.tested),
         format!("frustum culled {}", stats.frustum_culled),
@@ -309,7 +312,7 @@ fn the_compressed_gbuffers_counters_on_the_panel_are_this_frames() {
     for pool_fraction in ["0.5", "0.004"] {
         let spec = example.clone().with_overrides([("pool_fraction".to_string(), pool_fraction.to_string())]);
         let (stats, image, _) = render(&gpu, &scene, &camera, size, &spec, 2);
-        let g = &stats.gbuffer[0];
+        let g = &GbufferPassStats::of(&stats)[0];
         let edges: u32 = g.surfaces_per_pixel[1..].iter().sum();
         let lines = read_panel(&image, 8, 1);
         let row = |prefix: &str| lines.iter().find(|l| l.starts_with(prefix)).cloned().unwrap_or_default();

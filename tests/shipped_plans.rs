@@ -11,7 +11,7 @@ use cullgraph::graph::plan::{PlannedBarrier, ResolvedKind, Version};
 use cullgraph::graph::{self, CompiledGraph, NoDevice};
 use cullgraph::passes::builtin_kinds;
 use cullgraph::passes::shared::frame_inputs;
-use cullgraph::render::graph_spec::BUILTIN_GRAPHS;
+use cullgraph::passes::SHIPPED_GRAPHS;
 use cullgraph::scene::procedural;
 use cullgraph::scene::source::LoadOptions;
 use std::collections::BTreeMap;
@@ -138,12 +138,10 @@ fn shipped_plans() -> Vec<(String, CompiledGraph)> {
     let env = NoDevice::new(ShaderRoot::Embedded).expect("shaderc");
     let options = LoadOptions { instances: Some(1000), ..Default::default() };
     let scene = procedural::generate("builtin:city", &options).unwrap();
-    let inputs = frame_inputs(&scene, 320, 240);
+    let inputs = frame_inputs(&builtin_kinds(), &scene, 320, 240).unwrap();
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut sources: Vec<(String, String, String)> = BUILTIN_GRAPHS
-        .iter()
-        .map(|(name, text)| (name.to_string(), text.to_string(), format!("graph/{name}.ron")))
-        .collect();
+    let mut sources: Vec<(String, String, String)> =
+        SHIPPED_GRAPHS.iter().map(|g| (g.name.to_string(), g.text.to_string(), g.file.to_string())).collect();
     for name in EXAMPLES {
         let file = format!("graph/examples/{name}.ron");
         sources.push((format!("examples-{name}"), std::fs::read_to_string(root.join(&file)).unwrap(), file));

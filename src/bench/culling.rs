@@ -4,6 +4,7 @@
 use super::peer::{copy_gbps, gbps, naive_frustum_ms};
 use super::{median, median_per_pass};
 use crate::gpu::{GpuContext, ShaderCompiler};
+use crate::passes::instance_cull::CullPassStats;
 use crate::render::{GraphSpec, RenderSettings, Renderer};
 use crate::scene::source::LoadOptions;
 use crate::scene::SceneSource;
@@ -197,10 +198,10 @@ pub fn run(
                 .into_iter()
                 .map(|(pass, ms)| {
                     let writes_list = |p: &crate::graph::plan::PlannedPass| {
-                        p.bindings.iter().any(|b| b.slot == crate::graph::executor::LIST_STATS_SLOT)
+                        p.bindings.iter().any(|b| b.slot == crate::passes::instance_cull::LIST_STATS_SLOT)
                     };
                     let bytes = cull_pass(&pass)
-                        .zip(last.culling.iter().find(|c| c.pass == pass))
+                        .zip(CullPassStats::of(&last).into_iter().find(|c| c.pass == pass))
                         .map(|(p, c)| {
                             cull_pass_bytes(n as u64, c.tested as u64, c.drawn as u64, groups, writes_list(p))
                         })

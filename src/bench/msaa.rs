@@ -9,6 +9,7 @@
 use super::{median, median_per_pass};
 use crate::gpu::{GpuContext, ShaderCompiler};
 use crate::oracle::image_error::image_error;
+use crate::passes::lighting_compressed::GbufferPassStats;
 use crate::render::output::RgbaImage;
 use crate::render::reference::{reference_render_size, render_reference};
 use crate::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
@@ -263,7 +264,7 @@ fn measure(
         lighting_ms: sum(&|p| p == "lighting"),
         passes,
         gbuffer_bytes,
-        pool: last.gbuffer.first().map(|g| PoolFigure {
+        pool: GbufferPassStats::of(&last).first().map(|g| PoolFigure {
             used: g.pool_used,
             blocks: g.pool_blocks,
             overflow_samples: g.overflow_samples,

@@ -90,7 +90,9 @@ fn check(args: &GraphCheckArgs) -> Result<(), Failure> {
     let compiled = match args.size {
         Some((width, height)) => {
             let scene = args.scene.load().map_err(|e| Failure::Other(e.to_string()))?;
-            graph::compile(&graph, &frame_inputs(&scene, width, height))?;
+            let inputs =
+                frame_inputs(&graph.kinds, &scene, width, height).map_err(|e| Failure::Other(e.to_string()))?;
+            graph::compile(&graph, &inputs)?;
             format!(", compiles at {width}x{height}")
         }
         None => String::new(),
@@ -110,7 +112,7 @@ fn compiled(file: &Path, params: &[(String, String)], frame: &GraphFrameArgs) ->
     let env = NoDevice::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
     let scene = frame.scene.load().map_err(|e| Failure::Other(e.to_string()))?;
     let (width, height) = frame.size;
-    let inputs = frame_inputs(&scene, width, height);
+    let inputs = frame_inputs(&graph.kinds, &scene, width, height).map_err(|e| Failure::Other(e.to_string()))?;
     let started = std::time::Instant::now();
     let plan = graph::compile(&graph, &inputs)?;
     let compile_time = started.elapsed();

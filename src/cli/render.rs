@@ -70,7 +70,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     renderer.set_step_timing(args.step_times);
     if args.pool_adapt {
-        renderer.enable_pool_adaptation();
+        renderer.enable_adaptation();
     }
 
     let bar = progress(Some(args.frames as u64), "rendering");
@@ -88,8 +88,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         if let Some(v) = frame_stats.verify.as_ref().filter(|v| v.false_negatives > 0) {
             eprintln!("frame {frame}: {} visible instance(s) culled, e.g. {:?}", v.false_negatives, v.missed);
         }
-        if let Some(fraction) = renderer.adapt_pool(&shaders, &frame_stats)? {
-            bar.println(format!("frame {frame}: compressed G-buffer pool re-planned at {fraction} blocks per pixel"));
+        for change in renderer.adapt(&shaders, &frame_stats)? {
+            let what = format!("{}.{} = {}", change.pass, change.setting, change.value);
+            bar.println(format!("frame {frame}: the graph re-planned with {what}"));
         }
         if let Some(v) = &frame_stats.verify {
             verified.add(v);
@@ -245,7 +246,7 @@ fn watch(
         Ok(())
     };
     render_once(renderer)?;
-    let mut files = FileWatch::new(watched_paths(args, shaders));
+    let mut files = FileWatch::new(watched_paths(args, renderer, shaders));
     println!("watching {} file(s); Ctrl-C stops", files.paths().count());
     while deadline.is_none_or(|d| Instant::now() < d) {
         std::thread::sleep(Duration::from_millis(200));
@@ -284,16 +285,19 @@ fn watch(
             }
         }
         // Headers a changed shader now includes.
-        files.watch_also(watched_paths(args, shaders));
+        files.watch_also(watched_paths(args, renderer, shaders));
     }
     Ok(())
 }
 
-/// The graph file and every file on disk its shaders were compiled from: user shaders, the
-/// headers they include, and the shader library when it comes from a directory. (Built-in
-/// graphs and embedded shaders cannot change while the program runs.)
-fn watched_paths(args: &RenderArgs, shaders: &ShaderCompiler) -> Vec<PathBuf> {
+/// The graph file, the files it extends, and every file on disk its shaders were compiled
+/// from: user shaders, the headers they include, and the shader library when it comes from a
+/// directory. (Built-in graphs and embedded shaders cannot change while the program runs.)
+fn watched_paths(args: &RenderArgs, renderer: &Renderer, shaders: &ShaderCompiler) -> Vec<PathBuf> {
     let mut paths: Vec<PathBuf> = args.graph.iter().filter(|g| !g.starts_with("builtin:")).map(PathBuf::from).collect();
+    let library = &renderer.plan().kinds;
+    let bases = renderer.plan().files.iter().skip(1).filter(|f| !library.graphs().any(|g| g.file == f.as_str()));
+    paths.extend(bases.map(PathBuf::from));
     paths.extend(shaders.files_read());
     paths
 }

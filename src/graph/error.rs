@@ -4,9 +4,12 @@
 
 use std::fmt;
 
-/// A place in a RON file: 1-based line and column (in characters).
+/// A place in a RON file: the file among those a graph was composed from (0: the one loaded),
+/// 1-based line and column (in characters).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Pos {
+    /// The file, an index into the graph's files.
+    pub file: u32,
     /// Line, from 1.
     pub line: u32,
     /// Column in characters, from 1.
@@ -14,12 +17,22 @@ pub struct Pos {
 }
 
 impl Pos {
-    /// Line 1, column 1 (the start of a file, or of the command line).
-    pub const START: Pos = Pos { line: 1, col: 1 };
+    /// Line 1, column 1 of the file loaded (or of the command line).
+    pub const START: Pos = Pos { file: 0, line: 1, col: 1 };
+
+    /// Line `line`, column `col` (each at least 1) of the file loaded.
+    pub fn at(line: usize, col: usize) -> Pos {
+        Pos { file: 0, line: line.clamp(1, u32::MAX as usize) as u32, col: col.clamp(1, u32::MAX as usize) as u32 }
+    }
+
+    /// The same line and column in file `file`.
+    pub fn in_file(self, file: usize) -> Pos {
+        Pos { file: file as u32, ..self }
+    }
 
     /// The position `n` characters to the right on the same line.
     pub fn right(self, n: usize) -> Pos {
-        Pos { line: self.line, col: self.col.saturating_add(n as u32) }
+        Pos { col: self.col.saturating_add(n as u32), ..self }
     }
 }
 
@@ -51,9 +64,9 @@ impl GraphError {
         Self { file: file.to_string(), line: pos.line, col: pos.col, message: message.into() }
     }
 
-    /// The position.
+    /// The line and column.
     pub fn pos(&self) -> Pos {
-        Pos { line: self.line, col: self.col }
+        Pos { file: 0, line: self.line, col: self.col }
     }
 }
 
@@ -114,21 +127,22 @@ impl From<GraphErrors> for crate::Error {
     }
 }
 
-/// Collects errors of one file.
+/// Collects errors of one graph, composed from `files`.
 #[derive(Debug)]
 pub(crate) struct Sink {
-    pub file: String,
+    pub files: Vec<String>,
     pub errors: Vec<GraphError>,
 }
 
 impl Sink {
-    pub fn new(file: &str) -> Self {
-        Self { file: file.to_string(), errors: Vec::new() }
+    pub fn new(files: &[String]) -> Self {
+        Self { files: files.to_vec(), errors: Vec::new() }
     }
 
     /// Records an error at `pos`.
     pub fn at(&mut self, pos: Pos, message: impl Into<String>) {
-        self.errors.push(GraphError::new(&self.file, pos, message));
+        let file = file_of(&self.files, pos);
+        self.errors.push(GraphError::new(file, pos, message));
     }
 
     /// Records an error that has no place in the file.
@@ -143,6 +157,11 @@ impl Sink {
             Err(GraphErrors::sorted(self.errors))
         }
     }
+}
+
+/// The name of the file of `pos` among `files`.
+pub(crate) fn file_of(files: &[String], pos: Pos) -> &str {
+    files.get(pos.file as usize).or(files.first()).map_or("", String::as_str)
 }
 
 /// Names from `candidates` close to `name` (edit distance at most a third of the longer name,

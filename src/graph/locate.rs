@@ -50,7 +50,7 @@ fn tokenize(text: &str) -> Vec<Token> {
     };
     while i < chars.len() {
         let c = chars[i];
-        let pos = Pos { line, col };
+        let pos = Pos { file: 0, line, col };
         let peek = |k: usize| chars.get(i + k).copied();
         if c.is_whitespace() {
             advance(&mut i, &mut line, &mut col, 1);

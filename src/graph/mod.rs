@@ -24,6 +24,7 @@
 //! (printable through `Display`, [`to_dot`]) -> [`GraphRuntime`], which records it.
 
 pub mod compile;
+pub mod compose;
 pub(crate) mod env;
 pub(crate) mod error;
 pub(crate) mod executor;
@@ -32,6 +33,7 @@ pub mod formats;
 pub(crate) mod kinds;
 pub(crate) mod locate;
 pub mod plan;
+pub mod quantity;
 pub(crate) mod report;
 pub(crate) mod schema;
 pub(crate) mod usage;
@@ -41,26 +43,29 @@ pub(crate) mod validated;
 pub use compile::device_limits::DeviceLimits;
 pub use compile::resolve::Resolved;
 pub use compile::{compile, FrameInputs};
+pub use compose::LibraryGraph;
 pub use env::{DeviceEnv, Environment, NoDevice};
 pub use error::{GraphError, GraphErrors, Pos, COMMAND_LINE};
-pub use executor::{Captured, LIST_COUNT_SLOT, LIST_STATS_SLOT, MAX_TIMED_STEPS};
+pub use executor::{Captured, MAX_TIMED_STEPS};
 pub use executor::{
-    FrameData, GraphRuntime, Import, Imports, PassContext, PassNode, ResourceBytes, SlotBindings, StepTimer,
-    FRAMES_IN_FLIGHT, STATS_BYTES, STATS_SLOT,
+    FrameData, GraphRuntime, Import, Imports, PassContext, PassCounters, PassNode, ResourceBytes, SlotBindings,
+    StepTimer, FRAMES_IN_FLIGHT,
 };
 pub use expr::{Expr, Num};
 pub use kinds::{
-    FormatRule, KindCheck, KindRegistry, MinBytes, NodeSetup, PassKind, PassKindInfo, RegisteredKind, SettingDecl,
-    SettingDefault, SlotDecl, COMPUTE_KIND,
+    Adaptation, Bytes, Choice, CounterEntry, Counters, Created, Creates, DrawCounts, Extent, FormatRule, KindCheck,
+    KindRegistry, MipChain, NodeSetup, PassKind, PassKindInfo, RegisteredKind, SettingDecl, SettingDefault,
+    SettingOverride, SlotDecl, Unbound, COMPUTE_KIND,
 };
 pub use plan::{
     Binding, CompiledGraph, PlannedBarrier, PlannedPass, PlannedResource, ResolvedKind, ResourceClass, ResourceId,
     SettingValue, Version,
 };
+pub use quantity::{Growth, Quantities, Quantity};
 pub use report::to_dot;
 pub use usage::{Stages, Usage};
-pub use validate::{load, load_file, load_in, parse_param_override, ParamOverride, FRAME_VARIABLES};
+pub use validate::{load, load_file, load_in, parse_param_override, ParamOverride};
 pub use validated::{
-    DispatchSpec, ImageSize, LocatedExpr, Mips, Param, ParamValue, Pass, PassBinding, PassSetting, Resource,
+    DispatchSpec, ImageSize, LocatedExpr, Mips, Owner, Param, ParamValue, Pass, PassBinding, PassSetting, Resource,
     ResourceDesc, SettingSource, ValidatedGraph,
 };

@@ -71,8 +71,11 @@ pub struct PlannedResource {
     /// First and last position (in execution order) of a pass that uses the current version;
     /// `None` when no kept pass uses it.
     pub lifetime: Option<(usize, usize)>,
-    /// Where it is declared in the graph file (errors of creating or importing it name it).
+    /// Where it is declared in the graph file (errors of creating or importing it name it); for
+    /// a resource a kind created, where the pass binds it or is named.
     pub pos: super::error::Pos,
+    /// The pass whose kind created it (`None`: declared in the graph).
+    pub owner: Option<String>,
 }
 
 /// A resource bound to a slot of a pass.
@@ -113,7 +116,7 @@ impl PlannedPass {
     }
 
     /// The real-valued setting `name` (a whole number counts).
-    pub fn float_setting(&self, name: &str) -> crate::Result<f64> {
+    pub fn real(&self, name: &str) -> crate::Result<f64> {
         match self.settings.get(name) {
             Some(SettingValue::Float(f)) => Ok(*f),
             Some(SettingValue::Int(i)) => Ok(*i as f64),
@@ -122,23 +125,28 @@ impl PlannedPass {
     }
 
     /// The whole-number setting `name`.
-    pub fn int_setting(&self, name: &str) -> crate::Result<i64> {
+    pub fn int(&self, name: &str) -> crate::Result<i64> {
         match self.settings.get(name) {
             Some(SettingValue::Int(i)) => Ok(*i),
             _ => Err(self.undeclared(name, "whole-number")),
         }
     }
 
-    /// The word chosen for setting `name`.
-    pub fn choice_setting(&self, name: &str) -> crate::Result<&str> {
+    /// The choice setting `name`, as the enum its kind declared it with
+    /// ([`crate::graph::SettingDecl::choice`]).
+    pub fn choice<C: crate::graph::Choice>(&self, name: &str) -> crate::Result<C> {
         match self.settings.get(name) {
-            Some(SettingValue::Choice(c)) => Ok(c),
+            Some(SettingValue::Choice(word)) => C::WORDS
+                .iter()
+                .position(|w| w == word)
+                .and_then(C::from_index)
+                .ok_or_else(|| self.undeclared(name, &format!("choice of {}", C::WORDS.join(", ")))),
             _ => Err(self.undeclared(name, "choice")),
         }
     }
 
     /// The boolean setting `name`.
-    pub fn bool_setting(&self, name: &str) -> crate::Result<bool> {
+    pub fn flag(&self, name: &str) -> crate::Result<bool> {
         match self.settings.get(name) {
             Some(SettingValue::Bool(b)) => Ok(*b),
             _ => Err(self.undeclared(name, "boolean")),
@@ -180,6 +188,8 @@ pub struct PlannedPass {
     pub dispatch: Option<[u32; 3]>,
     /// Barriers before the pass.
     pub barriers: Vec<PlannedBarrier>,
+    /// Where the pass is declared (in whichever file of a composed graph).
+    pub pos: super::error::Pos,
 }
 
 /// A pass the compiler removed, with the reason.
@@ -225,6 +235,8 @@ pub struct CompiledGraph {
     pub name: String,
     /// The file it was loaded from, as given to the loader.
     pub file: String,
+    /// Every file it was composed from, in [`super::error::Pos::file`] order.
+    pub files: Vec<String>,
     /// Passes in execution order.
     pub passes: Vec<PlannedPass>,
     /// Removed passes.
@@ -246,7 +258,7 @@ impl CompiledGraph {
     /// is done with it after compiling (creating its memory, importing it).
     pub fn declaration(&self, id: ResourceId) -> String {
         let r = &self.resources[id];
-        format!("{}:{}: resource '{}'", self.file, r.pos, r.name)
+        format!("{}:{}: resource '{}'", super::error::file_of(&self.files, r.pos), r.pos, r.name)
     }
 
     /// `error` of resource `id`, prefixed with where it is declared.

@@ -100,9 +100,15 @@ impl fmt::Display for CompiledGraph {
             self.pruned.len(),
             self.resources.len()
         )?;
+        if self.files.len() > 1 {
+            writeln!(f, "composed from: {}", self.files.join(", "))?;
+        }
         writeln!(f, "passes in execution order:")?;
         for (i, p) in self.passes.iter().enumerate() {
             write!(f, "  {i}: {} ({})", p.name, p.kind)?;
+            if self.files.len() > 1 {
+                write!(f, " at {}:{}", super::error::file_of(&self.files, p.pos), p.pos)?;
+            }
             if !p.settings.is_empty() {
                 let s: Vec<String> = p.settings.iter().map(|(k, v)| format!("{k}={}", setting(v))).collect();
                 write!(f, " settings {}", s.join(", "))?;
@@ -137,6 +143,9 @@ impl fmt::Display for CompiledGraph {
             }
             if let Some(Some(p)) = self.memory.placements.get(i) {
                 write!(f, ", heap {} offset {}", p.heap, p.offset)?;
+            }
+            if let Some(owner) = &r.owner {
+                write!(f, ", created by pass '{owner}'")?;
             }
             writeln!(f)?;
         }

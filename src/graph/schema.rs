@@ -11,23 +11,81 @@ use serde::Deserialize;
 use std::fmt;
 use std::marker::PhantomData;
 
-/// A whole graph file: `Graph(name: .., params: {..}, resources: {..}, passes: [..], outputs: [..])`.
+/// A whole graph file: `Graph(name: .., extends: .., params: {..}, resources: {..}, passes: [..],
+/// edits: [..], outputs: [..])`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(rename = "Graph", deny_unknown_fields)]
 pub struct GraphFile {
     /// Graph name (for messages, labels and the plan).
     pub name: String,
-    /// Parameters with their defaults; `--param k=v` overrides them.
+    /// The graph this one builds on: a name of the registry's library or a `.ron` path relative
+    /// to this file.
+    #[serde(default)]
+    pub extends: Option<String>,
+    /// Parameters with their defaults; `--param k=v` overrides them. With `extends`: added, or
+    /// new defaults of the base's.
     #[serde(default)]
     pub params: Entries<Literal>,
-    /// Resources by name.
+    /// Resources by name. With `extends`: added, or replacing the base's of the same name.
     #[serde(default)]
     pub resources: Entries<ResourceDecl>,
-    /// Passes in declaration order.
+    /// Passes in declaration order. With `extends`: after the base's.
+    #[serde(default)]
     pub passes: Vec<PassDecl>,
+    /// Changes to the passes so far (the base's and the ones above), in order.
+    #[serde(default)]
+    pub edits: Vec<EditDecl>,
     /// Resources the frame produces for the host (required; the first is the image shown).
+    /// With `extends`: the base's unless given.
     #[serde(default)]
     pub outputs: Option<Vec<String>>,
+}
+
+/// A change to the passes of a graph, by pass name.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(rename = "Edit", deny_unknown_fields)]
+pub enum EditDecl {
+    /// Inserts passes before or after a pass (exactly one of `before` and `after`).
+    Insert {
+        /// The pass they go before.
+        #[serde(default)]
+        before: Option<String>,
+        /// The pass they go after.
+        #[serde(default)]
+        after: Option<String>,
+        /// The passes, in order.
+        passes: Vec<PassDecl>,
+    },
+    /// Replaces a pass (the new one may have another name and kind).
+    Replace {
+        /// The pass replaced.
+        pass: String,
+        /// What replaces it.
+        with: PassDecl,
+    },
+    /// Removes a pass.
+    Remove {
+        /// The pass removed.
+        pass: String,
+    },
+    /// Changes bindings and settings of a pass: entries given replace the pass's of the same
+    /// slot or setting, or are added; `unbind` removes bindings.
+    Set {
+        /// The pass changed.
+        pass: String,
+        /// Read bindings to add or replace.
+        #[serde(default)]
+        reads: Entries<String>,
+        /// Write bindings to add or replace.
+        #[serde(default)]
+        writes: Entries<String>,
+        /// Settings to add or replace.
+        #[serde(default)]
+        settings: Entries<Literal>,
+        /// Slots whose bindings are removed (before the others are added).
+        #[serde(default)]
+        unbind: Vec<String>,
+    },
 }
 
 /// The entries of a RON map in file order, duplicates kept (ron itself keeps only the last).

@@ -124,6 +124,14 @@ pub enum ImageSize {
     Scaled(LocatedExpr),
     /// Width and height.
     Fixed(LocatedExpr, LocatedExpr),
+    /// The size of another resource's first mip, divided and rounded down, at least 1 (a
+    /// resource a kind creates relative to one bound to another of its slots).
+    Like {
+        /// The resource whose size it follows.
+        resource: ResourceId,
+        /// Divides each dimension.
+        divisor: u32,
+    },
 }
 
 /// Mip levels of an image.
@@ -172,12 +180,34 @@ pub struct Resource {
     pub history: bool,
     /// Provided by the host every frame.
     pub imported: bool,
+    /// The pass whose kind created it for one of its slots (`None`: declared in the file).
+    pub owner: Option<Owner>,
+}
+
+/// The pass whose kind created a resource, and for which slot.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Owner {
+    /// The pass's index in [`ValidatedGraph::passes`].
+    pub pass: usize,
+    /// The pass's name.
+    pub pass_name: String,
+    /// The slot.
+    pub slot: String,
 }
 
 impl Resource {
     /// Whether it is an image.
     pub fn is_image(&self) -> bool {
         matches!(self.desc, ResourceDesc::Image { .. })
+    }
+
+    /// How messages name it: `'name'`, and for a resource a kind created, which pass and slot
+    /// it is for.
+    pub fn describe(&self) -> String {
+        match &self.owner {
+            None => format!("'{}'", self.name),
+            Some(o) => format!("'{}' (created by pass '{}' for its slot \"{}\")", self.name, o.pass_name, o.slot),
+        }
     }
 }
 
@@ -267,6 +297,8 @@ pub struct ValidatedGraph {
     pub name: String,
     /// The file name given to the loader (used in messages).
     pub file: String,
+    /// Every file it was composed from, in [`Pos::file`] order (the first is `file`).
+    pub files: Vec<String>,
     /// Params in file order.
     pub params: Vec<Param>,
     /// Resources in file order.

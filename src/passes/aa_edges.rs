@@ -10,7 +10,7 @@ use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::graph::{
-    FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, Stages, Usage,
+    Creates, Extent, FormatRule, MipChain, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, Stages, Usage,
 };
 use ash::vk;
 
@@ -31,7 +31,7 @@ impl AaEdgesPass {
     ) -> crate::Result<Self> {
         let samples = bound_samples(plan, pass, "depth").to_string();
         let spirv = shaders.compile("aa/aa_edges.comp", &[("SAMPLES", &samples)])?;
-        let threshold = pass.float_setting("threshold")? as f32;
+        let threshold = pass.real("threshold")? as f32;
         Ok(Self {
             pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
             sampler: Sampler::nearest_clamp(ctx)?,
@@ -61,8 +61,8 @@ impl PassKind for AaEdgesKind {
             name: "aa_edges",
             doc: "selective AA by depth-edge detection: marks the pixels whose depth samples mix background and surface or differ by more than a relative threshold",
             reads: vec![ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the finished MSAA depth"))],
-            writes: vec![slot("mask", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(AA_MASK_FORMAT), "1 on depth edges, 0 elsewhere")],
-            settings: vec![SettingDecl { name: "threshold", default: SettingDefault::Float(0.01), range: None, doc: "relative view-depth difference between a pixel's samples that makes it an edge" }],
+            writes: vec![slot("mask", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(AA_MASK_FORMAT), "1 on depth edges, 0 elsewhere (created at the depth's size when the graph declares none)").creates(Creates::image(AA_MASK_FORMAT, Extent::Of { slot: "depth", divisor: 1 }, MipChain::One))],
+            settings: vec![SettingDecl::real("threshold", 0.01, (0.0, 1.0e6), "relative view-depth difference between a pixel's samples that makes it an edge")],
             slots_from_shader: false,
         }
     }

@@ -7,14 +7,27 @@ use crate::graph::executor::PassContext;
 use crate::graph::plan::PlannedPass;
 use ash::vk;
 
-/// FXAA's search schedules (`FXAA_QUALITY__PRESET`), the `preset` words; the first
-/// is the default (39, "extreme quality": twelve taps per direction, the first five one pixel
-/// apart).
-pub const PRESETS: &[&str] = &["39", "29", "23", "15", "12", "10"];
+crate::choice! {
+    /// FXAA 3.11's search schedules (`FXAA_QUALITY__PRESET`, setting `preset`); the first is the
+    /// default (39, "extreme quality": twelve taps per direction, the first five one pixel
+    /// apart).
+    pub enum Preset {
+        /// 39: extreme quality.
+        Extreme = "39",
+        /// 29.
+        High = "29",
+        /// 23.
+        Medium = "23",
+        /// 15.
+        Low = "15",
+        /// 12: FXAA's default.
+        Default = "12",
+        /// 10: the fastest.
+        Fastest = "10",
+    }
+}
 use super::slots::{slot, LIT_OUTPUT_FORMAT};
-use crate::graph::{
-    FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, Stages, Usage,
-};
+use crate::graph::{Choice, FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, Stages, Usage};
 
 /// Push constants of `fxaa.comp`: FXAA's three tunables.
 #[repr(C)]
@@ -32,9 +45,9 @@ impl FxaaSettings {
     /// From the pass's graph settings (`subpix`, `edge_threshold`, `edge_threshold_min`).
     pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
         Ok(Self {
-            subpix: pass.float_setting("subpix")? as f32,
-            edge_threshold: pass.float_setting("edge_threshold")? as f32,
-            edge_threshold_min: pass.float_setting("edge_threshold_min")? as f32,
+            subpix: pass.real("subpix")? as f32,
+            edge_threshold: pass.real("edge_threshold")? as f32,
+            edge_threshold_min: pass.real("edge_threshold_min")? as f32,
         })
     }
 }
@@ -49,8 +62,8 @@ pub struct FxaaPass {
 impl FxaaPass {
     /// Compiles the shader for the pass's `preset` and creates a bilinear clamp-to-edge sampler.
     pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler, pass: &PlannedPass) -> crate::Result<Self> {
-        // Validation keeps the word to one of PRESETS, each a define fxaa.comp knows.
-        let preset = pass.choice_setting("preset")?;
+        // Each preset's word is a define fxaa.comp knows.
+        let preset = pass.choice::<Preset>("preset")?.word();
         let spirv = shaders.compile("fxaa/fxaa.comp", &[("PRESET", preset)])?;
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::LINEAR)
@@ -91,10 +104,10 @@ impl PassKind for FxaaKind {
             reads: vec![slot("input", Usage::Sampled(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "the lit image (sRGB-encoded), sampled bilinearly")],
             writes: vec![slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "the anti-aliased image (same size as the input)")],
             settings: vec![
-                SettingDecl { name: "preset", default: SettingDefault::Choice(PRESETS), range: None, doc: "FXAA_QUALITY__PRESET: the edge search schedule (39: extreme quality, 12: FXAA's default)" },
-                SettingDecl { name: "subpix", default: SettingDefault::Float(0.75), range: None, doc: "amount of subpixel aliasing removal (0: off, 1: softest)" },
-                SettingDecl { name: "edge_threshold", default: SettingDefault::Float(0.166), range: None, doc: "minimum local contrast, relative to the local maximum luma, to process a pixel" },
-                SettingDecl { name: "edge_threshold_min", default: SettingDefault::Float(0.0833), range: None, doc: "minimum absolute local contrast (skips dark areas)" },
+                SettingDecl::choice::<Preset>("preset", "FXAA_QUALITY__PRESET: the edge search schedule (39: extreme quality, 12: FXAA's default)"),
+                SettingDecl::real("subpix", 0.75, (0.0, 1.0), "amount of subpixel aliasing removal (0: off, 1: softest)"),
+                SettingDecl::real("edge_threshold", 0.166, (0.0, 1.0e6), "minimum local contrast, relative to the local maximum luma, to process a pixel"),
+                SettingDecl::real("edge_threshold_min", 0.0833, (0.0, 1.0e6), "minimum absolute local contrast (skips dark areas)"),
             ],
             slots_from_shader: false,
         }

@@ -374,7 +374,7 @@ impl GbufferPass {
             pipelines,
             mode,
             // gbuffer_append loads its targets and declares no clear_colors.
-            clear_colors: mode != GeometryMode::Append && pass.bool_setting("clear_colors")?,
+            clear_colors: mode != GeometryMode::Append && pass.flag("clear_colors")?,
             packed_ids,
         })
     }

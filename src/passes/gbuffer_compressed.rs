@@ -25,9 +25,10 @@ use crate::gpu::{Access, Bind, GpuContext, Pipeline, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::graph::{
-    FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, ResourceDesc, SettingDecl, SettingDefault,
-    Stages, Usage,
+    Choice, Creates, FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, ResourceDesc,
+    SettingDecl, SettingDefault, Stages, Usage,
 };
+use crate::passes::lighting_compressed::pool::POOL_SETTING;
 use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use crate::passes::shared::SceneInputs;
 use ash::vk;
@@ -180,17 +181,36 @@ pub struct SelectiveAa {
 impl SelectiveAa {
     /// From a pass's settings.
     pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
-        let region = match pass.choice_setting("aa_region")? {
-            "ellipse" => 1,
-            "rectangle" => 2,
-            _ => 0,
-        };
         Ok(Self {
-            region,
-            region_size: pass.float_setting("aa_region_size")? as f32,
-            max_distance: pass.float_setting("aa_max_depth_distance")? as f32,
-            object_flags: pass.bool_setting("aa_object_flags")?,
+            region: pass.choice::<AaRegion>("aa_region")? as u32,
+            region_size: pass.real("aa_region_size")? as f32,
+            max_distance: pass.real("aa_max_depth_distance")? as f32,
+            object_flags: pass.flag("aa_object_flags")?,
         })
+    }
+}
+
+crate::choice! {
+    /// Where pixels may keep more than one block (setting `aa_region`).
+    pub enum AaRegion {
+        /// Everywhere.
+        All = "all",
+        /// Inside a centered ellipse.
+        Ellipse = "ellipse",
+        /// Inside a centered rectangle.
+        Rectangle = "rectangle",
+    }
+}
+
+crate::choice! {
+    /// Who wins an exactly coplanar tie of sample claims (setting `claim_order`).
+    pub enum ClaimOrder {
+        /// Draw order where the device has the interlock, else arrival.
+        Auto = "auto",
+        /// The first fragment in draw order (an ordered sample interlock).
+        Draw = "draw",
+        /// The first to claim.
+        Arrival = "arrival",
     }
 }
 
@@ -198,14 +218,14 @@ impl SelectiveAa {
 /// needs the device's ordered sample interlock, `auto` uses it where there is one.
 fn claims_in_draw_order(ctx: &GpuContext, pass: &PlannedPass) -> Result<bool, String> {
     let interlock = ctx.caps().sample_interlock;
-    match pass.choice_setting("claim_order").map_err(|e| e.to_string())? {
-        "arrival" => return Ok(false),
-        "auto" => {
+    match pass.choice::<ClaimOrder>("claim_order").map_err(|e| e.to_string())? {
+        ClaimOrder::Arrival => return Ok(false),
+        ClaimOrder::Auto => {
             let order = if interlock { "draw" } else { "arrival (no ordered sample interlock)" };
             tracing::info!("pass '{}': claim_order auto: {order} on {}", pass.name, ctx.caps().name);
             return Ok(interlock);
         }
-        _ => {}
+        ClaimOrder::Draw => {}
     }
     if !interlock {
         return Err(format!(
@@ -362,13 +382,23 @@ impl PassNode for GbufferCompressedPass {
     }
 }
 
+/// The kind's name in RON.
+pub const KIND: &str = "gbuffer_compressed";
+
+/// The header and a head block per pixel, two 16-byte blocks per 32-byte pair.
+const HEADS_BYTES: &str = "16 + ceil_div(width * height, 2) * 32";
+/// `pool_fraction` blocks per pixel, two 16-byte blocks per 32-byte pair.
+const POOL_BYTES: &str = "ceil_div(ceil(width * height * pool_fraction), 2) * 32";
+/// A byte of claimed samples per pixel, in whole words.
+const CLAIM_BYTES: &str = "ceil_div(width * height, 4) * 4";
+
 /// The `gbuffer_compressed` pass kind.
 pub struct GbufferCompressedKind;
 
 impl PassKind for GbufferCompressedKind {
     fn info(&self) -> PassKindInfo {
         PassKindInfo {
-            name: "gbuffer_compressed",
+            name: KIND,
             doc: "the compressed G-buffer geometry pass: redraws the lists with depth EQUAL, stencil first-fragment-wins (or, without stencil, atomic sample claims) and post-depth coverage, writing one 16-byte block per pixel plus pooled blocks for the other distinct surfaces of edge pixels, in per-pixel linked lists",
             reads: {
                 let mut reads = redraw_list_slots();
@@ -377,16 +407,17 @@ impl PassKind for GbufferCompressedKind {
             },
             writes: vec![
                 ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished MSAA depth: with stencil (its stencil is written), or without stencil and a sample_claim buffer")),
-                slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header and a head block per pixel (size: 16 + ceil_div(width * height, 2) * 32)"),
-                slot("gbuffer_pool", Usage::StorageBufferWrite(Stages::Fragment), true, FormatRule::Any, "the pool of blocks for the other surfaces of edge pixels, 16 bytes a block (size: ceil_div(blocks, 2) * 32; at most 2^26 - 1 blocks are used)"),
-                slot("sample_claim", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "with a depth format without stencil: the samples already claimed, one byte per pixel (size: ceil_div(width * height, 4) * 4; at most 8 samples)"),
+                slot("gbuffer", Usage::StorageBufferWrite(Stages::ComputeFragment), true, FormatRule::Any, "header and a head block per pixel").at_least(HEADS_BYTES).creates(Creates::buffer()),
+                slot("gbuffer_pool", Usage::StorageBufferWrite(Stages::Fragment), true, FormatRule::Any, "the pool of blocks for the other surfaces of edge pixels, 16 bytes a block, `pool_fraction` blocks per pixel (at most 2^26 - 1 blocks are used)").creates(Creates::buffer_of(POOL_BYTES)),
+                slot("sample_claim", Usage::StorageBufferWrite(Stages::ComputeFragment), false, FormatRule::Any, "with a depth format without stencil: the samples already claimed, one byte per pixel (at most 8 samples)").at_least(CLAIM_BYTES).creates(Creates::buffer()),
             ],
             settings: vec![
-                SettingDecl { name: "aa_region", default: SettingDefault::Choice(&["all", "ellipse", "rectangle"]), range: None, doc: "selective AA: only pixels inside this screen region (centered, aa_region_size of the screen) keep more than one block" },
-                SettingDecl { name: "aa_region_size", default: SettingDefault::Float(0.6), range: None, doc: "size of the AA region as a fraction of the screen's width and height" },
-                SettingDecl { name: "aa_max_depth_distance", default: SettingDefault::Float(0.0), range: None, doc: "selective AA: pixels farther than this distance keep one block (0: no limit)" },
-                SettingDecl { name: "aa_object_flags", default: SettingDefault::Bool(false), range: None, doc: "selective AA: instances flagged no-AA keep one block" },
-                SettingDecl { name: "claim_order", default: SettingDefault::Choice(&["auto", "draw", "arrival"]), range: None, doc: "with sample_claim: who wins an exactly coplanar tie. draw: the first fragment in draw order, as the stencil decides, through an ordered sample interlock (needs VK_EXT_fragment_shader_interlock); arrival: the first to claim, which may change from run to run and so flicker; auto: draw where the device has the interlock, else arrival. Refused on a pass whose depth has stencil (the stencil decides, in draw order)" },
+                SettingDecl::choice::<AaRegion>("aa_region", "selective AA: only pixels inside this screen region (centered, aa_region_size of the screen) keep more than one block"),
+                SettingDecl::real("aa_region_size", 0.6, (0.0, 1.0e6), "size of the AA region as a fraction of the screen's width and height"),
+                SettingDecl::real("aa_max_depth_distance", 0.0, (0.0, f64::MAX), "selective AA: pixels farther than this distance keep one block (0: no limit)"),
+                SettingDecl::flag("aa_object_flags", false, "selective AA: instances flagged no-AA keep one block"),
+                SettingDecl::real(POOL_SETTING, 0.5, (0.0, 7.0), "pool blocks per pixel of the pool the pass creates (beyond it, edge samples fall to the head; 7 holds every sample of 8x but the head's); a kind's adaptation may change it from the lighting's counters"),
+                SettingDecl { name: "claim_order", default: SettingDefault::Choice(<ClaimOrder as Choice>::WORDS), range: None, doc: "with sample_claim: who wins an exactly coplanar tie. draw: the first fragment in draw order, as the stencil decides, through an ordered sample interlock (needs VK_EXT_fragment_shader_interlock); arrival: the first to claim, which may change from run to run and so flicker; auto: draw where the device has the interlock, else arrival. Refused on a pass whose depth has stencil (the stencil decides, in draw order)" },
             ],
             slots_from_shader: false,
         }
@@ -396,7 +427,7 @@ impl PassKind for GbufferCompressedKind {
         sample_owner_error(check).into_iter().collect()
     }
 
-    fn check_sizes(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+    fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
         size_errors(check)
     }
 

@@ -77,8 +77,8 @@ pub const TILE_LEVEL: u32 = 6;
 use super::slots::slot;
 pub use crate::cull::hiz::FIRST_STORED_LEVEL;
 use crate::graph::{
-    FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, SettingDecl, SettingDefault, SlotDecl,
-    Stages, Usage,
+    Creates, Extent, FormatRule, KindCheck, MipChain, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, SettingDecl,
+    SlotDecl, Stages, Usage,
 };
 
 /// Size of the pyramid (its mip 0, chain level 1) for a depth of size `depth`: `max(1, w >> 1)` ×
@@ -93,25 +93,15 @@ pub fn pyramid_mip_count(depth: vk::Extent2D) -> u32 {
     crate::cull::hiz::stored_mip_count(glam::UVec2::new(depth.width, depth.height))
 }
 
-/// How the pyramid is built.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+crate::choice! {
+/// How the pyramid is built (setting `method`).
 pub enum HizMethod {
     /// One dispatch for the whole pyramid (64×64-pixel tiles; the last one to finish writes the
     /// levels above the tiles, merged by all of them).
-    #[default]
-    Single,
+    Single = "single",
     /// One dispatch per level with barriers between (baseline).
-    PerMip,
+    PerMip = "per_mip",
 }
-
-impl HizMethod {
-    /// From a graph node's `method` setting (`"single"` or `"per_mip"`).
-    pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
-        match pass.choice_setting("method")? {
-            "per_mip" => Ok(Self::PerMip),
-            _ => Ok(Self::Single),
-        }
-    }
 }
 
 /// Push constants of `hiz_build_single.comp`.
@@ -190,7 +180,7 @@ fn above_entries(max_dim: u32) -> u64 {
 impl HizBuildPass {
     /// The pass of a graph node (setting `method`).
     pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler, pass: &PlannedPass) -> crate::Result<Self> {
-        Self::with_method(ctx, shaders, &pass.name, HizMethod::from_plan(pass)?)
+        Self::with_method(ctx, shaders, &pass.name, pass.choice("method")?)
     }
 
     /// A pass named `name` (debug names) building the pyramid with `method`.
@@ -410,17 +400,16 @@ impl PassKind for HizBuildKind {
             name: "hiz_build",
             doc: "builds the reversed-Z Hi-Z pyramid (minimum = farthest depth per footprint, conservative for every size) from (MSAA) depth",
             reads: vec![SlotDecl { multisample_ok: true, ..slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "depth, reduced across samples first") }],
-            writes: vec![slot("hiz", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(HIZ_FORMAT), "the pyramid from chain level 1: mip 0 at half the depth's size (max(1, width / 2) x max(1, height / 2)), at most the levels down to 1x1, every mip written")],
-            settings: vec![SettingDecl {
-                name: "method",
-                default: SettingDefault::Choice(&["single", "per_mip"]),
-                range: None, doc: "one dispatch for the whole pyramid, or one dispatch per mip (baseline)",
-            }],
+            writes: vec![slot("hiz", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(HIZ_FORMAT), "the pyramid from chain level 1: mip 0 at half the depth's size (max(1, width / 2) x max(1, height / 2)), at most the levels down to 1x1, every mip written; created when the graph declares none").creates(Creates::image(HIZ_FORMAT, Extent::Of { slot: "depth", divisor: 2 }, MipChain::All))],
+            settings: vec![SettingDecl::choice::<HizMethod>(
+                "method",
+                "one dispatch for the whole pyramid, or one dispatch per mip (baseline)",
+            )],
             slots_from_shader: false,
         }
     }
 
-    fn check_sizes(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+    fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
         pyramid_error(check).into_iter().collect()
     }
 

@@ -3,8 +3,8 @@
 //! image.
 
 use super::slots::{
-    lighting_settings, ms, slot, EMISSIVE_OCCLUSION_SLOT_DOC, GBUFFER_ALBEDO_FORMAT, GBUFFER_EMISSIVE_OCCLUSION_FORMAT,
-    GBUFFER_NORMAL_FORMATS, LIT_OUTPUT_FORMAT, NORMAL_SLOT_DOC,
+    lighting_settings, ms, slot, DebugView, EMISSIVE_OCCLUSION_SLOT_DOC, GBUFFER_ALBEDO_FORMAT,
+    GBUFFER_EMISSIVE_OCCLUSION_FORMAT, GBUFFER_NORMAL_FORMATS, LIT_OUTPUT_FORMAT, NORMAL_SLOT_DOC,
 };
 use crate::gpu::{Bind, Buffer, GpuContext, Image, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
@@ -49,15 +49,10 @@ pub struct LightingSettings {
 impl LightingSettings {
     /// From the pass's graph settings (`exposure`, `debug_view`).
     pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
-        let exposure = pass.float_setting("exposure")? as f32;
-        let debug_view = match pass.choice_setting("debug_view")? {
-            "normals" => 1,
-            "albedo" => 2,
-            "depth" => 3,
-            "samples" => 4,
-            _ => 0,
-        };
-        let light_tiles = pass.bool_setting("light_tiles")?;
+        let exposure = pass.real("exposure")? as f32;
+        // The variants' order is `DEBUG_VIEW_*`'s.
+        let debug_view = pass.choice::<DebugView>("debug_view")? as u32;
+        let light_tiles = pass.flag("light_tiles")?;
         Ok(Self { exposure, debug_view, light_tiles: light_tiles as u32 })
     }
 }

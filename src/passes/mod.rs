@@ -8,19 +8,67 @@ pub(crate) mod fxaa;
 pub(crate) mod gbuffer;
 pub(crate) mod gbuffer_compressed;
 pub mod hiz_build;
-pub(crate) mod instance_cull;
+pub mod instance_cull;
 pub(crate) mod lighting;
-pub(crate) mod lighting_compressed;
+pub mod lighting_compressed;
 pub(crate) mod lighting_visibility;
 pub mod overlay;
 pub mod shared;
 pub(crate) mod slots;
 pub(crate) mod transparent;
-pub(crate) mod transparent_sort;
+pub mod transparent_sort;
 pub(crate) mod visibility_ids;
 
-use crate::graph::KindRegistry;
+use crate::graph::{KindRegistry, LibraryGraph};
 use gbuffer::GeometryMode;
+
+/// The graphs shipped in `graph/`, made of the built-in kinds and embedded at build time, so
+/// that a binary carried elsewhere has them: graphs extend them by name (`extends:
+/// "two_phase"`), and the command line runs them as `builtin:NAME`.
+pub const SHIPPED_GRAPHS: &[LibraryGraph] = &[
+    LibraryGraph { name: "default", file: "graph/default.ron", text: include_str!("../../graph/default.ron") },
+    LibraryGraph { name: "no_cull", file: "graph/no_cull.ron", text: include_str!("../../graph/no_cull.ron") },
+    LibraryGraph { name: "frustum", file: "graph/frustum.ron", text: include_str!("../../graph/frustum.ron") },
+    LibraryGraph { name: "two_phase", file: "graph/two_phase.ron", text: include_str!("../../graph/two_phase.ron") },
+    LibraryGraph { name: "one_phase", file: "graph/one_phase.ron", text: include_str!("../../graph/one_phase.ron") },
+    LibraryGraph {
+        name: "occluder_prepass",
+        file: "graph/occluder_prepass.ron",
+        text: include_str!("../../graph/occluder_prepass.ron"),
+    },
+    LibraryGraph { name: "overlay", file: "graph/overlay.ron", text: include_str!("../../graph/overlay.ron") },
+    LibraryGraph {
+        name: "msaa_compressed",
+        file: "graph/msaa_compressed.ron",
+        text: include_str!("../../graph/msaa_compressed.ron"),
+    },
+    LibraryGraph {
+        name: "msaa_compressed_edges",
+        file: "graph/msaa_compressed_edges.ron",
+        text: include_str!("../../graph/msaa_compressed_edges.ron"),
+    },
+    LibraryGraph {
+        name: "msaa_compressed_claim",
+        file: "graph/msaa_compressed_claim.ron",
+        text: include_str!("../../graph/msaa_compressed_claim.ron"),
+    },
+    LibraryGraph {
+        name: "msaa_per_sample",
+        file: "graph/msaa_per_sample.ron",
+        text: include_str!("../../graph/msaa_per_sample.ron"),
+    },
+    LibraryGraph {
+        name: "msaa_zprepass",
+        file: "graph/msaa_zprepass.ron",
+        text: include_str!("../../graph/msaa_zprepass.ron"),
+    },
+    LibraryGraph {
+        name: "visibility_buffer",
+        file: "graph/visibility_buffer.ron",
+        text: include_str!("../../graph/visibility_buffer.ron"),
+    },
+    LibraryGraph { name: "fxaa", file: "graph/fxaa.ron", text: include_str!("../../graph/fxaa.ron") },
+];
 
 /// A registry holding every built-in pass kind; register an engine's own kinds on top of it.
 pub fn builtin_kinds() -> KindRegistry {
@@ -29,8 +77,15 @@ pub fn builtin_kinds() -> KindRegistry {
     kinds
 }
 
-/// Registers every built-in pass kind in `kinds` (an error if one of their names is taken).
+/// Registers every built-in pass kind in `kinds`, and the scene quantities their sizes use
+/// (an error if one of their names is taken).
 pub fn register_builtin_kinds(kinds: &mut KindRegistry) -> crate::Result<()> {
+    for quantity in shared::scene_quantities() {
+        kinds.register_quantity(quantity)?;
+    }
+    for graph in SHIPPED_GRAPHS {
+        kinds.register_graph(*graph)?;
+    }
     kinds.register(gbuffer::GbufferKind(GeometryMode::Clear))?;
     kinds.register(gbuffer::GbufferKind(GeometryMode::Equal))?;
     kinds.register(gbuffer_compressed::GbufferCompressedKind)?;

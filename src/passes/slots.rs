@@ -1,7 +1,7 @@
 //! Slot and setting declarations that several built-in pass kinds share: the G-buffer's formats,
 //! draw lists, counters and the lighting settings.
 
-use crate::graph::{FormatRule, MinBytes, SettingDecl, SettingDefault, SlotDecl, Stages, Usage};
+use crate::graph::{FormatRule, SettingDecl, SlotDecl, Stages, Usage};
 use ash::vk;
 
 /// The G-buffer geometry pass's albedo/metallic format.
@@ -41,36 +41,43 @@ pub(crate) const fn slot(
     format: FormatRule,
     doc: &'static str,
 ) -> SlotDecl {
-    SlotDecl { name, usage, required, format, multisample_ok: false, doc, min_bytes: MinBytes::Any }
+    let s = SlotDecl::new(name, usage, doc).format(format);
+    if required {
+        s.required()
+    } else {
+        s
+    }
 }
 
-/// `s`, taking buffers of at least `min` bytes.
-pub(crate) const fn sized(s: SlotDecl, min: MinBytes) -> SlotDecl {
-    SlotDecl { min_bytes: min, ..s }
-}
-
-/// A draw command per draw group (`VkDrawIndexedIndirectCommand`).
-pub(crate) const COMMANDS_BYTES: MinBytes =
-    MinBytes::PerMesh(std::mem::size_of::<crate::passes::shared::gpu_types::DrawIndexedIndirect>() as u64);
-/// A draw count per face-cull region: back, front, none (graphs before face culling declared 4).
-pub(crate) const COUNT_BYTES: MinBytes = MinBytes::Fixed(crate::passes::shared::face_cull::DRAW_COUNT_BYTES);
+/// A draw command per draw group (`VkDrawIndexedIndirectCommand`, 20 bytes).
+pub(crate) const COMMANDS_BYTES: &str = "meshes * 20";
+/// A draw count per face-cull region: back, front, none and transparent.
+pub(crate) const COUNT_BYTES: &str = "16";
 /// An instance id per instance.
-pub(crate) const IDS_BYTES: MinBytes = MinBytes::PerInstance(4);
-/// A cull pass's counters (`CullCounters`), and the compressed G-buffer's: a fixed record the
-/// host reads whole.
-pub(crate) const COUNTERS_BYTES: MinBytes = MinBytes::Exact(crate::graph::STATS_BYTES as u64);
+pub(crate) const IDS_BYTES: &str = "instances * 4";
+/// A bit per instance, in 32-bit words.
+pub(crate) const INSTANCE_BITS: &str = "ceil_div(instances, 32) * 4";
+/// A pass's counters (a cull pass's, the compressed G-buffer's): a fixed record the host reads
+/// whole.
+pub(crate) const COUNTERS_BYTES: &str = "64";
+
+const _: () = {
+    assert!(std::mem::size_of::<crate::passes::shared::gpu_types::DrawIndexedIndirect>() == 20);
+    assert!(crate::passes::shared::face_cull::DRAW_COUNT_BYTES == 16);
+};
 
 pub(crate) const fn ms(s: SlotDecl) -> SlotDecl {
-    SlotDecl { multisample_ok: true, ..s }
+    s.multisample()
 }
 
 /// The three slots of one draw list: `names` and `docs` for its commands, count and instance
 /// ids (`required`: the graph must bind them).
 pub(crate) fn list_slots(names: [&'static str; 3], docs: [&'static str; 3], required: bool) -> [SlotDecl; 3] {
     [
-        sized(slot(names[0], Usage::Indirect, required, FormatRule::Any, docs[0]), COMMANDS_BYTES),
-        sized(slot(names[1], Usage::Indirect, required, FormatRule::Any, docs[1]), COUNT_BYTES),
-        sized(slot(names[2], Usage::StorageBufferRead(Stages::Vertex), required, FormatRule::Any, docs[2]), IDS_BYTES),
+        slot(names[0], Usage::Indirect, required, FormatRule::Any, docs[0]).at_least(COMMANDS_BYTES),
+        slot(names[1], Usage::Indirect, required, FormatRule::Any, docs[1]).at_least(COUNT_BYTES),
+        slot(names[2], Usage::StorageBufferRead(Stages::Vertex), required, FormatRule::Any, docs[2])
+            .at_least(IDS_BYTES),
     ]
 }
 
@@ -98,31 +105,39 @@ pub(crate) fn redraw_list_slots() -> Vec<SlotDecl> {
 
 pub(crate) fn lighting_settings() -> Vec<SettingDecl> {
     vec![
-        SettingDecl {
-            name: "exposure",
-            default: SettingDefault::Float(0.8),
-            range: Some((0.0, 1.0e6)),
-            doc: "scale applied before tone mapping",
-        },
-        SettingDecl {
-            name: "debug_view",
-            default: SettingDefault::Choice(&["none", "normals", "albedo", "depth", "samples"]),
-            range: None,
-            doc: "show a G-buffer channel instead of the lit image (samples: distinct surfaces per pixel as a heatmap)",
-        },
-        SettingDecl {
-            name: "light_tiles",
-            default: SettingDefault::Bool(true),
-            range: None,
-            doc: "cull point lights per 16x16 tile (false: every light for every pixel, the thesis's loop)",
-        },
+        SettingDecl::real("exposure", 0.8, (0.0, 1.0e6), "scale applied before tone mapping"),
+        SettingDecl::choice::<DebugView>(
+            "debug_view",
+            "show a G-buffer channel instead of the lit image (samples: distinct surfaces per pixel as a heatmap)",
+        ),
+        SettingDecl::flag(
+            "light_tiles",
+            true,
+            "cull point lights per 16x16 tile (false: every light for every pixel, the thesis's loop)",
+        ),
     ]
 }
 
-pub(crate) fn clear_colors_setting() -> SettingDecl {
-    SettingDecl {
-        name: "clear_colors",
-        default: SettingDefault::Bool(false),
-        range: None, doc: "clear the color targets first; off, texels no fragment wrote keep whatever they held (every built-in reader masks them by depth = 0), which saves a full-screen write",
+crate::choice! {
+    /// What the lighting passes show (setting `debug_view`).
+    pub enum DebugView {
+        /// The lit image.
+        None = "none",
+        /// Normals.
+        Normals = "normals",
+        /// Albedo.
+        Albedo = "albedo",
+        /// Depth.
+        Depth = "depth",
+        /// Distinct surfaces per pixel, as a heatmap.
+        Samples = "samples",
     }
+}
+
+pub(crate) fn clear_colors_setting() -> SettingDecl {
+    SettingDecl::flag(
+        "clear_colors",
+        false,
+        "clear the color targets first; off, texels no fragment wrote keep whatever they held (every built-in reader masks them by depth = 0), which saves a full-screen write",
+    )
 }

@@ -15,14 +15,14 @@ use crate::gpu::{
 };
 use crate::graph::executor::PassContext;
 use crate::graph::{
-    FormatRule, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, SlotDecl, Stages,
-    Usage,
+    FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Quantity, SettingDecl, SlotDecl, Stages, Usage,
 };
 use crate::passes::gbuffer::LIST_SLOTS;
 use crate::passes::shared::face_cull::FaceCull;
 use crate::passes::shared::gpu_types::DrawIndexedIndirect;
 use crate::passes::shared::scene_buffers::GpuScene;
 use crate::passes::shared::SceneInputs;
+use crate::passes::transparent_sort::{BLENDED, SORTED_COMMANDS_BYTES, SORTED_IDS_BYTES};
 use ash::vk;
 
 /// The kind's name.
@@ -182,12 +182,11 @@ impl PassKind for TransparentKind {
     fn info(&self) -> PassKindInfo {
         let mut list = draw_list_slots(true);
         // One command per instance, counted by one word (transparent_sort's output).
-        list[0].min_bytes = MinBytes::PerBlended(std::mem::size_of::<DrawIndexedIndirect>() as u64);
+        list[0] = list[0].at_least(SORTED_COMMANDS_BYTES);
         list[0].doc = "one VkDrawIndexedIndirectCommand per transparent instance, in drawing order";
-        list[1].min_bytes = MinBytes::Fixed(4);
+        list[1] = list[1].at_least("4");
         list[1].doc = "their number";
-        list[2].min_bytes = MinBytes::PerBlended(4);
-        list[2].usage = Usage::StorageBufferRead(Stages::Vertex);
+        list[2] = list[2].at_least(SORTED_IDS_BYTES);
         let depth: SlotDecl = ms(slot(
             "depth",
             Usage::Sampled(Stages::Fragment),
@@ -208,14 +207,18 @@ impl PassKind for TransparentKind {
                 FormatRule::Exact(LIT_OUTPUT_FORMAT),
                 "the lit image, blended over",
             )],
-            settings: vec![SettingDecl {
-                name: "exposure",
-                default: SettingDefault::Float(0.8),
-                range: Some((0.0, 1.0e6)),
-                doc: "scale applied before tone mapping (the lighting pass's)",
-            }],
+            settings: vec![SettingDecl::real(
+                "exposure",
+                0.8,
+                (0.0, 1.0e6),
+                "scale applied before tone mapping (the lighting pass's)",
+            )],
             slots_from_shader: false,
         }
+    }
+
+    fn quantities(&self) -> Vec<Quantity> {
+        vec![BLENDED]
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
@@ -224,7 +227,7 @@ impl PassKind for TransparentKind {
         Ok(Box::new(TransparentPass {
             pipeline,
             sampler: Sampler::nearest_clamp(s.ctx)?,
-            exposure: s.pass.float_setting("exposure")? as f32,
+            exposure: s.pass.real("exposure")? as f32,
         }))
     }
 }

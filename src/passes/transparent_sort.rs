@@ -11,13 +11,16 @@
 //! (`shaders/transparent_sort/transparent_sort.comp`). Sorting per instance, as Bevy and
 //! Granite do, leaves the triangles of one instance in mesh order.
 
-use super::slots::{list_slots, sized, slot};
+use super::slots::{list_slots, slot};
 use crate::gpu::{Bind, Buffer, Pipeline};
 use crate::graph::executor::PassContext;
-use crate::graph::{FormatRule, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, SlotDecl, Stages, Usage};
+use crate::graph::{
+    Creates, FormatRule, Growth, NodeSetup, PassKind, PassKindInfo, PassNode, Quantity, SlotDecl, Stages, Usage,
+};
 use crate::passes::gbuffer::{DrawSource, LIST_SLOTS};
 use crate::passes::shared::face_cull::FaceCull;
 use crate::passes::shared::gpu_types::DrawIndexedIndirect;
+use crate::passes::shared::SceneCounts;
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 
@@ -30,6 +33,33 @@ const COMMAND_BYTES: u64 = std::mem::size_of::<DrawIndexedIndirect>() as u64;
 /// Scratch bytes per transparent instance: a sort key (8 bytes) in a power of two of at most
 /// twice the instances, and the instance's entry (8 bytes).
 pub const SCRATCH_BYTES_PER_INSTANCE: u64 = 24;
+
+/// The kind's name in RON.
+pub const KIND: &str = "transparent_sort";
+
+/// One sorted command per transparent instance (it may be 0, so at least one).
+pub(crate) const SORTED_COMMANDS_BYTES: &str = "max(1, blended) * 20";
+/// One instance id per transparent instance.
+pub(crate) const SORTED_IDS_BYTES: &str = "max(1, blended) * 4";
+
+const _: () = assert!(COMMAND_BYTES == 20 && SCRATCH_BYTES_PER_INSTANCE == 24);
+
+/// The quantity `blended`: the transparent (alphaMode BLEND) instances, the ones sorted and
+/// drawn after the lighting; for a world, the slots of its transparent draw groups.
+pub const BLENDED: Quantity = Quantity {
+    name: "blended",
+    doc:
+        "transparent (alphaMode BLEND) instances, drawn sorted after the lighting (may be 0: sizes use max(1, blended))",
+    count: |s| {
+        let c = SceneCounts::downcast(s)?;
+        Some(
+            c.layout.map_or(crate::passes::shared::face_cull::blended_instances(c.scene) as u64, |l| {
+                l.blended_slots() as u64
+            }),
+        )
+    },
+    growth: Growth::Grows,
+};
 
 /// Push constants of `transparent_sort.comp`.
 #[repr(C)]
@@ -130,22 +160,28 @@ impl PassKind for TransparentSortKind {
             false,
         )
         .map(read);
-        let write = |name, min, doc| {
-            sized(slot(name, Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, doc), min)
+        let write = |name, bytes, doc| {
+            slot(name, Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, doc)
+                .at_least(bytes)
+                .creates(Creates::buffer())
         };
         PassKindInfo {
-            name: "transparent_sort",
+            name: KIND,
             doc: "the transparent (alphaMode BLEND) instances a culled list kept, sorted back to front, as one draw command each",
             reads: source.into_iter().chain(second).collect(),
             writes: vec![
-                write("draw_commands", MinBytes::PerBlended(COMMAND_BYTES), "one VkDrawIndexedIndirectCommand per transparent instance, farthest first"),
-                write("draw_count", MinBytes::Fixed(4), "their number"),
-                write("draw_instance_ids", MinBytes::PerBlended(4), "their instance ids"),
-                write("scratch", MinBytes::PerBlended(SCRATCH_BYTES_PER_INSTANCE), "the sort's keys and entries"),
+                write("draw_commands", SORTED_COMMANDS_BYTES, "one VkDrawIndexedIndirectCommand per transparent instance, farthest first").required(),
+                write("draw_count", "4", "their number").required(),
+                write("draw_instance_ids", SORTED_IDS_BYTES, "their instance ids").required(),
+                write("scratch", "max(1, blended) * 24", "the sort's keys and entries (created when unbound)").creates(Creates::buffer().always()),
             ],
             settings: vec![],
             slots_from_shader: false,
         }
+    }
+
+    fn quantities(&self) -> Vec<Quantity> {
+        vec![BLENDED]
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

@@ -3,33 +3,11 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::{GpuContext, ShaderCompiler};
-use crate::graph::{compile, load_in, CompiledGraph, DeviceEnv, KindRegistry};
+use crate::graph::{compile, load_in, CompiledGraph, DeviceEnv, KindRegistry, SettingOverride};
 use crate::passes::builtin_kinds;
 use crate::passes::shared::frame_inputs;
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
-
-/// The default graph shipped with the crate (`graph/default.ron`), embedded at build time.
-pub const DEFAULT_GRAPH: &str = include_str!("../../graph/default.ron");
-
-/// The graphs shipped in `graph/`, embedded so that a binary carried elsewhere has them:
-/// `builtin:NAME` on the command line.
-pub const BUILTIN_GRAPHS: &[(&str, &str)] = &[
-    ("default", DEFAULT_GRAPH),
-    ("no_cull", include_str!("../../graph/no_cull.ron")),
-    ("frustum", include_str!("../../graph/frustum.ron")),
-    ("two_phase", include_str!("../../graph/two_phase.ron")),
-    ("one_phase", include_str!("../../graph/one_phase.ron")),
-    ("occluder_prepass", include_str!("../../graph/occluder_prepass.ron")),
-    ("overlay", include_str!("../../graph/overlay.ron")),
-    ("msaa_compressed", include_str!("../../graph/msaa_compressed.ron")),
-    ("msaa_compressed_edges", include_str!("../../graph/msaa_compressed_edges.ron")),
-    ("msaa_compressed_claim", include_str!("../../graph/msaa_compressed_claim.ron")),
-    ("msaa_per_sample", include_str!("../../graph/msaa_per_sample.ron")),
-    ("msaa_zprepass", include_str!("../../graph/msaa_zprepass.ron")),
-    ("visibility_buffer", include_str!("../../graph/visibility_buffer.ron")),
-    ("fxaa", include_str!("../../graph/fxaa.ron")),
-];
 
 /// A render graph to load.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -44,32 +22,35 @@ pub struct GraphSpec {
     pub overrides: Vec<(String, String)>,
     /// The pass kinds its passes may use (the built-in ones unless an engine registered more).
     pub kinds: KindRegistry,
+    /// Settings of passes to change when compiling (after the params): what a kind's
+    /// adaptation asked for ([`crate::graph::Adaptation`]).
+    pub settings: Vec<SettingOverride>,
 }
 
 impl GraphSpec {
     /// The embedded default graph.
     pub fn default_graph() -> Self {
-        Self {
-            text: DEFAULT_GRAPH.into(),
-            file: "graph/default.ron".into(),
-            dir: None,
-            overrides: Vec::new(),
-            kinds: builtin_kinds(),
-        }
+        Self::builtin("default").expect("the built-in kinds' library holds the default graph")
     }
 
     /// A graph shipped in `graph/` by name (`default`, `no_cull`, `frustum`, ...).
     pub fn builtin(name: &str) -> Result<Self> {
-        let (_, text) = BUILTIN_GRAPHS.iter().find(|(n, _)| *n == name).ok_or_else(|| {
-            let names: Vec<&str> = BUILTIN_GRAPHS.iter().map(|(n, _)| *n).collect();
+        Self::from_library(builtin_kinds(), name)
+    }
+
+    /// The graph called `name` of `kinds`' library, loaded with `kinds`.
+    pub fn from_library(kinds: KindRegistry, name: &str) -> Result<Self> {
+        let graph = *kinds.graph(name).ok_or_else(|| {
+            let names: Vec<&str> = kinds.graphs().map(|g| g.name).collect();
             Error::Invalid(format!("unknown built-in graph '{name}' (built-in graphs: {})", names.join(", ")))
         })?;
         Ok(Self {
-            text: text.to_string(),
-            file: format!("graph/{name}.ron"),
+            text: graph.text.to_string(),
+            file: graph.file.to_string(),
             dir: None,
             overrides: Vec::new(),
-            kinds: builtin_kinds(),
+            kinds,
+            settings: Vec::new(),
         })
     }
 
@@ -91,12 +72,19 @@ impl GraphSpec {
             dir: path.parent().map(Path::to_path_buf),
             overrides: Vec::new(),
             kinds: builtin_kinds(),
+            settings: Vec::new(),
         })
     }
 
     /// The same graph with `overrides` added (later ones win).
     pub fn with_overrides(mut self, overrides: impl IntoIterator<Item = (String, String)>) -> Self {
         self.overrides.extend(overrides);
+        self
+    }
+
+    /// The same graph with `settings` changed (later ones win).
+    pub fn with_settings(mut self, settings: impl IntoIterator<Item = SettingOverride>) -> Self {
+        self.settings.extend(settings);
         self
     }
 
@@ -118,7 +106,7 @@ impl GraphSpec {
         width: u32,
         height: u32,
     ) -> Result<CompiledGraph> {
-        self.compile_for(ctx, shaders, &frame_inputs(scene, width, height))
+        self.compile_for(ctx, shaders, &frame_inputs(&self.kinds, scene, width, height)?)
     }
 
     /// Loads, validates (against `ctx`'s device) and compiles the graph for `inputs`.
@@ -130,6 +118,8 @@ impl GraphSpec {
     ) -> Result<CompiledGraph> {
         let env = DeviceEnv::new(ctx, shaders);
         let graph = load_in(&self.text, &self.file, self.dir.as_deref(), &self.overrides, &env, &self.kinds)?;
-        Ok(compile(&graph, inputs)?)
+        let mut inputs = inputs.clone();
+        inputs.settings.extend(self.settings.iter().cloned());
+        Ok(compile(&graph, &inputs)?)
     }
 }

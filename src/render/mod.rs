@@ -5,7 +5,6 @@ pub mod frame_pipeline;
 pub mod graph_spec;
 #[cfg(feature = "images")]
 pub mod output;
-pub mod pool_adapt;
 #[cfg(feature = "verify")]
 pub mod reference;
 pub mod renderer;

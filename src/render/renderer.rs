@@ -7,7 +7,6 @@
 use super::graph_spec::GraphSpec;
 #[cfg(feature = "images")]
 use super::output::{rgba_from_bytes, RgbaImage};
-use super::pool_adapt::PoolAdapter;
 use crate::error::{Error, Result};
 use crate::gpu::transfer::record_image_to_buffer;
 use crate::gpu::{
@@ -20,9 +19,9 @@ use crate::passes::overlay::GpuPassTimes;
 use crate::passes::shared::gpu_types::{DrawIndexedIndirect, FrameConstants, GpuPointLight};
 use crate::passes::shared::{GpuScene, SceneInputs};
 use crate::scene::{Camera, Scene};
+use crate::stats::FrameStats;
 #[cfg(feature = "verify")]
 use crate::stats::VerifyStats;
-use crate::stats::{CullCounters, CullPassStats, FrameStats, GbufferCounters, GbufferPassStats};
 use ash::vk;
 #[cfg(feature = "verify")]
 use std::collections::BTreeSet;
@@ -80,8 +79,8 @@ pub struct Renderer {
     exactly_visible: BTreeSet<u32>,
     /// The graph being run, for re-planning it with another pool size.
     spec: GraphSpec,
-    /// Sizes the compressed G-buffer's pool, when enabled.
-    pool: Option<PoolAdapter>,
+    /// The kinds' adaptation policies, per pass name, when enabled.
+    adaptations: Option<Vec<(String, Box<dyn crate::graph::Adaptation>)>>,
     /// The spec the last reload replaced (for [`Renderer::revert_reload`]).
     replaced_spec: Option<GraphSpec>,
     /// The world this renderer mirrors, when made from one ([`Renderer::from_world`]).
@@ -141,7 +140,7 @@ impl Renderer {
             #[cfg(feature = "verify")]
             exactly_visible: BTreeSet::new(),
             spec: spec.clone(),
-            pool: None,
+            adaptations: None,
             replaced_spec: None,
             world: None,
             retired_inputs: Vec::new(),
@@ -199,23 +198,45 @@ impl Renderer {
         }
     }
 
-    /// Lets the compressed G-buffer's pool follow what frames ask for (see
-    /// [`crate::render::pool_adapt`]), starting from the pool the graph's `pool_fraction`
-    /// parameter gives it. Call [`Renderer::adapt_pool`] after each frame.
-    pub fn enable_pool_adaptation(&mut self) {
-        self.pool = Some(PoolAdapter::new());
+    /// Lets the passes' kinds change the graph's settings from what the frames' counters say
+    /// (for example the compressed G-buffer's pool, which grows when it overflows and shrinks
+    /// when it stays mostly empty; [`crate::graph::Adaptation`]). Call [`Renderer::adapt`]
+    /// with each completed frame.
+    pub fn enable_adaptation(&mut self) {
+        self.adaptations = Some(Vec::new());
     }
 
-    /// Feeds a completed frame's counters to the pool adapter; when the pool should change,
-    /// re-plans the graph with the new `pool_fraction` (frames in flight finish on the old one)
-    /// and returns it.
-    pub fn adapt_pool(&mut self, shaders: &ShaderCompiler, stats: &FrameStats) -> Result<Option<f64>> {
-        let pixels = self.settings.width as u64 * self.settings.height as u64;
-        let (Some(pool), Some(g)) = (self.pool.as_mut(), stats.gbuffer.first()) else { return Ok(None) };
-        let Some(fraction) = pool.observe(g, pixels) else { return Ok(None) };
-        let spec = self.spec.clone().with_overrides([("pool_fraction".to_string(), format!("{fraction}"))]);
-        self.reload_graph(shaders, &spec)?;
-        Ok(Some(fraction))
+    /// Feeds a completed frame's counters to the kinds' adaptations; when they ask for new
+    /// settings, compiles the graph again with them (frames in flight finish on the old one)
+    /// and returns what changed.
+    pub fn adapt(
+        &mut self,
+        shaders: &ShaderCompiler,
+        stats: &FrameStats,
+    ) -> Result<Vec<crate::graph::SettingOverride>> {
+        let plan = self.runtime.plan();
+        let Some(adaptations) = self.adaptations.as_mut() else { return Ok(Vec::new()) };
+        let mut changes = Vec::new();
+        for (name, entry) in &stats.counters {
+            // A frame of a replaced plan names its passes as this one does.
+            let Some(now) = plan.passes.iter().position(|p| p.name == *name) else { continue };
+            let at = match adaptations.iter().position(|(n, _)| n == name) {
+                Some(at) => at,
+                None => match plan.kinds.get(&plan.passes[now].kind).and_then(|k| k.kind.adaptation()) {
+                    Some(a) => {
+                        adaptations.push((name.clone(), a));
+                        adaptations.len() - 1
+                    }
+                    None => continue,
+                },
+            };
+            changes.extend(adaptations[at].1.observe(entry, plan, now));
+        }
+        if !changes.is_empty() {
+            let spec = self.spec.clone().with_settings(changes.clone());
+            self.reload_graph(shaders, &spec)?;
+        }
+        Ok(changes)
     }
 
     /// Starts or stops timing the steps of multi-dispatch passes separately: each frame's
@@ -480,20 +501,10 @@ impl Renderer {
     pub fn completed_stats(&self, frame: u64) -> Result<FrameStats> {
         let timings = self.completed_timings(frame)?;
         let total = timings.iter().find(|t| t.name == "frame").map_or(0.0, |t| t.ms);
-        let counters = match self.runtime_of(frame) {
-            Some((runtime, index)) => runtime.pass_counters(index)?,
+        let entries = match self.runtime_of(frame) {
+            Some((runtime, index)) => runtime.counter_entries(index)?,
             None => Vec::new(),
         };
-        let culling: Vec<CullPassStats> = counters
-            .iter()
-            .filter(|(_, kind, _)| kind == "instance_cull")
-            .map(|(name, _, bytes)| CullPassStats::new(name, bytemuck::from_bytes::<CullCounters>(bytes)))
-            .collect();
-        let gbuffer: Vec<GbufferPassStats> = counters
-            .iter()
-            .filter(|(_, kind, _)| kind == "lighting_compressed")
-            .map(|(name, _, bytes)| GbufferPassStats::new(name, bytemuck::from_bytes::<GbufferCounters>(bytes)))
-            .collect();
         // A world renderer's empty slots are no instances.
         let instances = self.world.as_ref().map_or(self.inputs.scene.instance_count, |w| w.instances());
         let mut stats = FrameStats {
@@ -506,12 +517,7 @@ impl Renderer {
             gpu_total_ms: total,
             ..Default::default()
         };
-        if !culling.is_empty() {
-            (stats.frustum_culled, stats.occlusion_culled, stats.drawn, stats.draws, stats.triangles) =
-                crate::stats::cull::totals(&culling);
-        }
-        stats.culling = culling;
-        stats.gbuffer = gbuffer;
+        stats.add_counters(entries);
         stats.update = match &self.world {
             Some(world) => world.update_of(frame)?,
             None => None,

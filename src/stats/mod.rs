@@ -1,13 +1,12 @@
-//! Statistics as plain data: per-frame counts and GPU timings, exported as JSON.
-
-pub mod cull;
-pub mod gbuffer;
+//! Statistics as plain data: per-frame counts and GPU timings, exported as JSON. What a pass
+//! reports of its own work, its kind decodes ([`crate::graph::PassKind::decode_counters`]) into
+//! an entry of a group of [`FrameStats::passes`].
 
 use crate::gpu::PassTiming;
-pub use cull::{CullCounters, CullPassStats};
-pub use gbuffer::{GbufferCounters, GbufferPassStats};
-
+use crate::graph::{CounterEntry, DrawCounts};
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 pub use crate::graph::ResourceBytes;
 
@@ -28,11 +27,15 @@ pub struct FrameStats {
     pub draws: u32,
     /// Triangles submitted.
     pub triangles: u64,
-    /// Per cull pass (empty without culling).
-    pub culling: Vec<CullPassStats>,
-    /// Per compressed G-buffer (empty without one).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub gbuffer: Vec<GbufferPassStats>,
+    /// What the passes reported of their work, by group (`culling`: each cull pass's counts;
+    /// `gbuffer`: each compressed G-buffer's pool), in pass order: each entry as its kind
+    /// decoded it, naming its pass.
+    #[serde(flatten)]
+    pub passes: BTreeMap<String, Vec<serde_json::Value>>,
+    /// The same entries as their kinds decoded them, with the name of the pass that wrote each
+    /// (what a kind's adaptation reads; not exported).
+    #[serde(skip)]
+    pub counters: Vec<(String, CounterEntry)>,
     /// Exact-visibility check of this frame (with `--verify`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub verify: Option<VerifyStats>,
@@ -46,6 +49,33 @@ pub struct FrameStats {
     /// syncs before the frame).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub update: Option<UpdateStats>,
+}
+
+impl FrameStats {
+    /// The entries of `group` read as `T` (the type the kind that reports them gives), in pass
+    /// order; entries that are not a `T` are left out.
+    pub fn entries<T: DeserializeOwned>(&self, group: &str) -> Vec<T> {
+        self.passes.get(group).into_iter().flatten().filter_map(|v| serde_json::from_value(v.clone()).ok()).collect()
+    }
+
+    /// Adds the passes' entries, and makes the frame's totals from the draw lists among them
+    /// (the drawn figures of every list add up, since each draws a different set; the culled ones
+    /// come from the pass that tested the most instances). Without any, the totals stay as set.
+    pub fn add_counters(&mut self, entries: impl IntoIterator<Item = (String, CounterEntry)>) {
+        let mut draws: Vec<DrawCounts> = Vec::new();
+        for (pass, entry) in entries {
+            draws.extend(entry.draws);
+            self.passes.entry(entry.group.to_string()).or_default().push(entry.value.clone());
+            self.counters.push((pass, entry));
+        }
+        if let Some(widest) = draws.iter().max_by_key(|d| d.tested) {
+            self.frustum_culled = widest.frustum_culled;
+            self.occlusion_culled = widest.occlusion_culled;
+            self.drawn = draws.iter().map(|d| d.drawn).sum();
+            self.draws = draws.iter().map(|d| d.draws).sum();
+            self.triangles = draws.iter().map(|d| d.triangles).sum();
+        }
+    }
 }
 
 /// What applying a world's changes cost ([`crate::render::Renderer::sync`]).

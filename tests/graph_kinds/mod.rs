@@ -3,20 +3,10 @@
 
 #![allow(dead_code)]
 
-use cullgraph::graph::{
-    FormatRule, KindRegistry, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, SlotDecl, Stages, Usage,
-};
+use cullgraph::graph::{KindRegistry, NodeSetup, PassKind, PassKindInfo, PassNode, SlotDecl, Stages, Usage};
 
 const fn slot(name: &'static str, usage: Usage) -> SlotDecl {
-    SlotDecl {
-        name,
-        usage,
-        required: false,
-        format: FormatRule::Any,
-        multisample_ok: false,
-        doc: "test slot",
-        min_bytes: MinBytes::Any,
-    }
+    SlotDecl::new(name, usage, "test slot")
 }
 
 /// Image read slots of kind `img`.
@@ -67,6 +57,11 @@ impl PassKind for Declared {
 /// Kind `img` (image slots), `buf` (buffer slots) and `mix` (both, with prefixed names).
 pub fn test_kinds() -> KindRegistry {
     let mut kinds = KindRegistry::new();
+    // The scene's quantities, as cullgraph's own kinds register them.
+    let quantities = cullgraph::passes::shared::scene_quantities();
+    for quantity in quantities.into_iter().chain([cullgraph::passes::transparent_sort::BLENDED]) {
+        kinds.register_quantity(quantity).expect("distinct quantities");
+    }
     for info in test_kind_infos() {
         kinds.register(Declared(info)).expect("distinct test kinds");
     }

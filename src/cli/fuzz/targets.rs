@@ -110,10 +110,14 @@ impl Bench {
             Ok(g) => g,
             Err(errors) => return graph_errors_class(&errors),
         };
-        let mut big = FrameInputs::new(3840, 2160);
-        big.instances = 1_000_000;
-        big.meshes = 64;
-        for frame in [frame_inputs(&self.city, 64, 48), big.clone()] {
+        let kinds = builtin_kinds();
+        let big = FrameInputs::new(3840, 2160);
+        let big = FrameInputs { quantities: big.quantities.with("instances", 1_000_000).with("meshes", 64), ..big };
+        let small = match frame_inputs(&kinds, &self.city, 64, 48) {
+            Ok(f) => f,
+            Err(e) => return runtime_class(&e),
+        };
+        for frame in [small, big] {
             if let Err(errors) = graph::compile(&loaded, &frame) {
                 return graph_errors_class(&errors);
             }
@@ -123,7 +127,8 @@ impl Bench {
             file: "fuzz.ron".into(),
             dir: dir.map(Path::to_path_buf),
             overrides: Vec::new(),
-            kinds: builtin_kinds(),
+            kinds,
+            settings: Vec::new(),
         };
         self.render(self.city.clone(), &spec)
     }
@@ -200,7 +205,7 @@ fn scene_error_class(e: &SceneError) -> (Class, String) {
 /// repository's test graphs, when run from its root). Each with the folder its shaders are in.
 pub fn graph_seeds(extra: &[PathBuf]) -> Vec<(String, Option<PathBuf>)> {
     let mut seeds: Vec<(String, Option<PathBuf>)> =
-        cullgraph::render::graph_spec::BUILTIN_GRAPHS.iter().map(|(_, text)| (text.to_string(), None)).collect();
+        cullgraph::passes::SHIPPED_GRAPHS.iter().map(|g| (g.text.to_string(), None)).collect();
     for dir in extra {
         let Ok(entries) = std::fs::read_dir(dir) else { continue };
         let mut files: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();

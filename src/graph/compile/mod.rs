@@ -14,7 +14,9 @@ pub mod resolve;
 
 use super::error::{GraphErrors, Sink};
 use super::kinds::KindCheck;
+use super::kinds::SettingOverride;
 use super::plan::{Binding, CompiledGraph, MemoryPlan, PlannedPass, PlannedResource, ResolvedKind, ResourceClass};
+use super::quantity::Quantities;
 use super::validate::{apply_overrides, ParamOverride};
 use super::validated::{ParamValue, ValidatedGraph};
 use ash::vk;
@@ -29,22 +31,15 @@ pub struct FrameInputs {
     pub width: u32,
     /// Output height in pixels (`height`).
     pub height: u32,
-    /// Instances in the scene (`instances`).
-    pub instances: u64,
-    /// Meshes (`meshes`): the draw groups a draw list may hold (cullgraph's renderer counts a
-    /// mesh once more per further face cull its instances need).
-    pub meshes: u64,
-    /// Transparent (alphaMode BLEND) instances (`blended`): the ones drawn sorted after the
-    /// lighting.
-    pub blended: u64,
-    /// Point lights (`lights`).
-    pub lights: u64,
-    /// Materials (`materials`).
-    pub materials: u64,
-    /// Triangles over all instances (`triangles`).
-    pub triangles: u64,
+    /// The scene's quantities by name (`instances`, `meshes`, ...), as the host counted them
+    /// ([`crate::graph::KindRegistry::count`]). One the graph uses but the host did not give
+    /// counts as 0.
+    pub quantities: Quantities,
     /// `name=value` param overrides (applied after the load-time ones).
     pub params: Vec<ParamOverride>,
+    /// Settings of passes to change (after the params), as a kind's adaptation asks
+    /// ([`crate::graph::Adaptation`]).
+    pub settings: Vec<SettingOverride>,
 }
 
 impl FrameInputs {
@@ -52,23 +47,43 @@ impl FrameInputs {
     pub fn new(width: u32, height: u32) -> Self {
         Self { width, height, ..Default::default() }
     }
+
+    /// The output size with `quantities`.
+    pub fn with_quantities(width: u32, height: u32, quantities: Quantities) -> Self {
+        Self { width, height, quantities, ..Default::default() }
+    }
+
+    /// The value of quantity `name` (0 when the host gave none).
+    pub fn quantity(&self, name: &str) -> u64 {
+        self.quantities.get(name).unwrap_or(0)
+    }
 }
 
 /// Compiles `graph` for one frame configuration. Errors (values out of range for this frame,
 /// bad overrides) carry file positions like load errors.
 pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGraph, GraphErrors> {
     profiling::scope!("cullgraph::compile_graph", graph.name.as_str());
-    let mut sink = Sink::new(&graph.file);
+    let mut sink = Sink::new(&graph.files);
     let max = resolve::MAX_IMAGE_DIMENSION;
     if frame.width == 0 || frame.height == 0 || frame.width > max || frame.height > max {
         sink.command_line(format!("output size {}x{} must be 1 to {max} in each dimension", frame.width, frame.height));
     }
     let mut params = graph.params.clone();
     apply_overrides(&mut params, &frame.params, &mut sink);
-    let vars = resolve::variables(&params, frame);
-    let mut errors = resolve::Errors { file: &graph.file, list: Vec::new() };
-    let resolved: Vec<Resolved> =
-        graph.resources.iter().map(|r| resolve::resource(&r.name, &r.desc, &vars, frame, &mut errors)).collect();
+    let quantities: Vec<&str> = graph.kinds.quantities().map(|q| q.name).collect();
+    let frame_vars = resolve::frame_variables(frame, &quantities);
+    let vars = resolve::variables(&params, frame, &quantities);
+    let mut errors = resolve::Errors { files: &graph.files, list: Vec::new() };
+    let param_values: HashMap<&str, &ParamValue> = params.iter().map(|p| (p.name.as_str(), &p.value)).collect();
+    // Settings first: what a kind creates may be sized by its pass's settings.
+    let mut settings: Vec<_> = (0..graph.passes.len())
+        .map(|p| {
+            let declared = graph.kind(p).map(|k| k.settings.as_slice()).unwrap_or(&[]);
+            resolve::settings(&graph.passes[p], declared, &param_values, &vars, &mut errors)
+        })
+        .collect();
+    resolve::setting_overrides(graph, &frame.settings, &mut settings, &mut sink);
+    let resolved = resolve::resources(graph, &vars, &frame_vars, &settings, frame, &mut errors);
     let samples: Vec<u32> = resolved
         .iter()
         .map(|r| match r {
@@ -81,20 +96,48 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
     }
 
     let pruning = prune::prune(graph);
+    let names: Vec<String> = graph.resources.iter().map(|r| r.name.clone()).collect();
+    // Every kept pass as planned, its barriers still to come.
+    let mut planned: Vec<Option<PlannedPass>> = (0..graph.passes.len())
+        .map(|p| {
+            let pass = &graph.passes[p];
+            pruning.keep[p].then(|| PlannedPass {
+                name: pass.name.clone(),
+                kind: pass.kind.clone(),
+                bindings: pass
+                    .bindings
+                    .iter()
+                    .map(|b| Binding { slot: b.slot.clone(), resource: b.resource, version: b.version, usage: b.usage })
+                    .collect(),
+                settings: settings[p].clone(),
+                shader: pass.shader.clone(),
+                dispatch: resolve::dispatch(pass, &resolved, &names, &vars, &mut errors),
+                barriers: Vec::new(),
+                pos: pass.pos,
+            })
+        })
+        .collect();
     // What the kept passes need of their resources. (Sizes that failed to resolve stand in as
     // 4 bytes: no size errors on top of those.)
     if errors.list.is_empty() {
-        let errs = super::validate::slot_size_errors(graph, &pruning.keep, &resolved, frame);
+        let errs = super::validate::slot_size_errors(graph, &pruning.keep, &resolved, &frame_vars, &settings);
         for (pos, message) in errs {
             sink.at(pos, message);
         }
         for (pos, message) in device_limits::limit_errors(graph, &pruning.keep, &resolved) {
             sink.at(pos, message);
         }
-        for (pass, _) in graph.passes.iter().zip(&pruning.keep).filter(|(_, keep)| **keep) {
-            let Some(kind) = graph.kinds.get(&pass.kind) else { continue };
-            let check = KindCheck { graph, pass, samples: &samples, resolved: &resolved };
-            for (pos, message) in kind.kind.check_sizes(&check) {
+        for (pass, plan) in graph.passes.iter().zip(&planned) {
+            let (Some(kind), Some(plan)) = (graph.kinds.get(&pass.kind), plan) else { continue };
+            let check = KindCheck {
+                graph,
+                pass,
+                samples: &samples,
+                resolved: &resolved,
+                planned: Some(plan),
+                limits: graph.limits.as_ref(),
+            };
+            for (pos, message) in kind.kind.check_compiled(&check) {
                 sink.at(pos, message);
             }
         }
@@ -108,27 +151,13 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
     };
     let lifetimes = lifetimes::lifetimes(graph, &order);
 
-    let param_values: HashMap<&str, &ParamValue> = params.iter().map(|p| (p.name.as_str(), &p.value)).collect();
-    let names: Vec<String> = graph.resources.iter().map(|r| r.name.clone()).collect();
     let is_image: Vec<bool> = resolved.iter().map(|r| matches!(r, Resolved::Image { .. })).collect();
     let barriers = barriers::plan_barriers(graph, &order, &is_image);
     let mut passes = Vec::with_capacity(order.len());
     for (pos, &p) in order.iter().enumerate() {
-        let pass = &graph.passes[p];
-        let declared = graph.kind(p).map(|k| k.settings.as_slice()).unwrap_or(&[]);
-        passes.push(PlannedPass {
-            name: pass.name.clone(),
-            kind: pass.kind.clone(),
-            bindings: pass
-                .bindings
-                .iter()
-                .map(|b| Binding { slot: b.slot.clone(), resource: b.resource, version: b.version, usage: b.usage })
-                .collect(),
-            settings: resolve::settings(pass, declared, &param_values, &vars, &mut errors),
-            shader: pass.shader.clone(),
-            dispatch: resolve::dispatch(pass, &resolved, &names, &vars, &mut errors),
-            barriers: barriers[pos].clone(),
-        });
+        let Some(mut pass) = planned[p].take() else { continue };
+        pass.barriers = barriers[pos].clone();
+        passes.push(pass);
     }
 
     let mut resources = Vec::with_capacity(graph.resources.len());
@@ -159,7 +188,15 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
                 ResolvedKind::Buffer { size, usage }
             }
         };
-        resources.push(PlannedResource { name: res.name.clone(), kind, class, lifetime: lifetimes[r], pos: res.pos });
+        let owner = res.owner.as_ref().map(|o| o.pass_name.clone());
+        resources.push(PlannedResource {
+            name: res.name.clone(),
+            kind,
+            class,
+            lifetime: lifetimes[r],
+            pos: res.pos,
+            owner,
+        });
     }
 
     let items: Vec<Option<memory::MemoryItem>> = resources
@@ -187,6 +224,7 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
     sink.into_result(CompiledGraph {
         name: graph.name.clone(),
         file: graph.file.clone(),
+        files: graph.files.clone(),
         passes,
         pruned: pruning.pruned,
         resources,

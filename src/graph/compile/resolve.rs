@@ -7,10 +7,11 @@
 use super::FrameInputs;
 use crate::graph::error::Pos;
 use crate::graph::expr::Num;
-use crate::graph::kinds::SettingDefault;
+use crate::graph::kinds::{SettingDefault, SettingOverride};
 use crate::graph::plan::SettingValue;
+use crate::graph::validate::kind_variables;
 use crate::graph::validated::{
-    DispatchSpec, ImageSize, LocatedExpr, Mips, Param, ParamValue, Pass, ResourceDesc, SettingSource,
+    DispatchSpec, ImageSize, LocatedExpr, Mips, Param, ParamValue, Pass, ResourceDesc, SettingSource, ValidatedGraph,
 };
 use ash::vk;
 use std::collections::{BTreeMap, HashMap};
@@ -94,19 +95,24 @@ pub fn sample_flags(count: u32) -> vk::SampleCountFlags {
     vk::SampleCountFlags::from_raw(count.max(1))
 }
 
-/// Variables of expressions for one frame: numeric params and the frame quantities.
-pub fn variables(params: &[Param], frame: &FrameInputs) -> BTreeMap<String, Num> {
+/// Variables of expressions for one frame: numeric params, the output size and the registered
+/// `quantities` (0 where the host gave no value).
+pub fn variables(params: &[Param], frame: &FrameInputs, quantities: &[&str]) -> BTreeMap<String, Num> {
     let mut vars: BTreeMap<String, Num> =
         params.iter().filter_map(|p| Some((p.name.clone(), p.value.as_num()?))).collect();
+    vars.extend(frame_variables(frame, quantities));
+    vars
+}
+
+/// The output size and the registered `quantities` of one frame, as variables.
+pub fn frame_variables(frame: &FrameInputs, quantities: &[&str]) -> BTreeMap<String, Num> {
     let q = |v: u64| Num::Int(v.min(i64::MAX as u64) as i64);
+    let mut vars = BTreeMap::new();
     vars.insert("width".into(), Num::Int(frame.width as i64));
     vars.insert("height".into(), Num::Int(frame.height as i64));
-    vars.insert("instances".into(), q(frame.instances));
-    vars.insert("meshes".into(), q(frame.meshes));
-    vars.insert("blended".into(), q(frame.blended));
-    vars.insert("lights".into(), q(frame.lights));
-    vars.insert("materials".into(), q(frame.materials));
-    vars.insert("triangles".into(), q(frame.triangles));
+    for name in quantities {
+        vars.insert(name.to_string(), q(frame.quantity(name)));
+    }
     vars
 }
 
@@ -130,15 +136,16 @@ pub enum Resolved {
 
 /// Collects errors while resolving.
 pub struct Errors<'a> {
-    /// File name for messages.
-    pub file: &'a str,
+    /// The graph's files, for messages.
+    pub files: &'a [String],
     /// Found so far.
     pub list: Vec<crate::graph::error::GraphError>,
 }
 
 impl Errors<'_> {
     fn push(&mut self, pos: Pos, message: String) {
-        self.list.push(crate::graph::error::GraphError::new(self.file, pos, message));
+        let file = crate::graph::error::file_of(self.files, pos);
+        self.list.push(crate::graph::error::GraphError::new(file, pos, message));
     }
 
     /// Evaluates `e` and checks it with `check`; errors are recorded with `what` in front.
@@ -165,38 +172,99 @@ impl Errors<'_> {
     }
 }
 
-/// Resolves one resource description.
-pub fn resource(
+/// Resolves every resource of `graph`: declared ones with `vars` (params, output size and
+/// quantities), ones a kind created with `frame_vars` (output size and quantities) and their
+/// pass's `settings`, and images sized like another resource after that one.
+pub fn resources(
+    graph: &ValidatedGraph,
+    vars: &BTreeMap<String, Num>,
+    frame_vars: &BTreeMap<String, Num>,
+    settings: &[BTreeMap<String, SettingValue>],
+    frame: &FrameInputs,
+    errors: &mut Errors<'_>,
+) -> Vec<Resolved> {
+    let mut resolved: Vec<Option<Resolved>> = vec![None; graph.resources.len()];
+    // Each round resolves what depends on nothing unresolved; a resource sized like itself
+    // through others is never resolved, and is reported.
+    loop {
+        let mut progress = false;
+        for (r, res) in graph.resources.iter().enumerate() {
+            if resolved[r].is_some() {
+                continue;
+            }
+            if let ResourceDesc::Image { size: ImageSize::Like { resource, .. }, .. } = res.desc {
+                if resolved.get(resource).is_none_or(Option::is_none) {
+                    continue;
+                }
+            }
+            let owner_vars;
+            let vars = match &res.owner {
+                Some(owner) => {
+                    owner_vars = kind_variables(frame_vars, &settings[owner.pass]);
+                    &owner_vars
+                }
+                None => vars,
+            };
+            resolved[r] = Some(resource(&res.describe(), &res.desc, vars, frame, &resolved, errors));
+            progress = true;
+        }
+        if !progress {
+            break;
+        }
+    }
+    resolved
+        .into_iter()
+        .enumerate()
+        .map(|(r, res)| {
+            res.unwrap_or_else(|| {
+                let res = &graph.resources[r];
+                errors.push(res.pos, format!("the size of {} depends on itself", res.describe()));
+                Resolved::Buffer(MIN_BUFFER_BYTES)
+            })
+        })
+        .collect()
+}
+
+/// Resolves one resource description (`name` as messages say it); `resolved` holds the
+/// resources resolved so far.
+fn resource(
     name: &str,
     desc: &ResourceDesc,
     vars: &BTreeMap<String, Num>,
     frame: &FrameInputs,
+    resolved: &[Option<Resolved>],
     errors: &mut Errors<'_>,
 ) -> Resolved {
     match desc {
         ResourceDesc::Buffer { size } => {
-            Resolved::Buffer(errors.value(size, vars, &format!("size of buffer '{name}'"), buffer_bytes).unwrap_or(4))
+            Resolved::Buffer(errors.value(size, vars, &format!("size of buffer {name}"), buffer_bytes).unwrap_or(4))
         }
         ResourceDesc::Image { format, size, mips, samples, .. } => {
             let (w, h) = match size {
+                ImageSize::Like { resource, divisor } => match resolved.get(*resource) {
+                    Some(Some(Resolved::Image { extent, .. })) => {
+                        ((extent.width / divisor).max(1), (extent.height / divisor).max(1))
+                    }
+                    _ => (1, 1),
+                },
                 ImageSize::Output => (frame.width.max(1), frame.height.max(1)),
                 ImageSize::Scaled(f) => {
-                    let f = errors.value(f, vars, &format!("scale of image '{name}'"), scale).unwrap_or(1.0);
+                    let f = errors.value(f, vars, &format!("scale of image {name}"), scale).unwrap_or(1.0);
                     let dim = |v: u32| ((v as f64 * f).ceil() as u64).clamp(1, MAX_IMAGE_DIMENSION as u64) as u32;
                     (dim(frame.width), dim(frame.height))
                 }
                 ImageSize::Fixed(w, h) => (
-                    errors.value(w, vars, &format!("width of image '{name}'"), image_dimension).unwrap_or(1),
-                    errors.value(h, vars, &format!("height of image '{name}'"), image_dimension).unwrap_or(1),
+                    errors.value(w, vars, &format!("width of image {name}"), image_dimension).unwrap_or(1),
+                    errors.value(h, vars, &format!("height of image {name}"), image_dimension).unwrap_or(1),
                 ),
             };
             let mips = match mips {
                 Mips::All => full_mip_chain(w, h),
                 Mips::Count(e) => {
-                    errors.value(e, vars, &format!("mips of image '{name}'"), |n| mip_count(n, w, h)).unwrap_or(1)
+                    errors.value(e, vars, &format!("mips of image {name}"), |n| mip_count(n, w, h)).unwrap_or(1)
                 }
             };
-            let samples = errors.value(samples, vars, &format!("samples of image '{name}'"), sample_count).unwrap_or(1);
+            let samples = errors.value(samples, vars, &format!("samples of image {name}"), sample_count).unwrap_or(1);
             Resolved::Image { format: *format, extent: vk::Extent2D { width: w, height: h }, mips, samples }
         }
     }
@@ -254,6 +322,44 @@ pub fn settings(
         }
     }
     out
+}
+
+/// Applies `overrides` to the resolved `settings` of the passes they name. An unknown pass or
+/// setting, or a value that is not of the setting's type or outside its range, is an error of
+/// the command line (the overrides come from the host, not the file).
+pub(crate) fn setting_overrides(
+    graph: &ValidatedGraph,
+    overrides: &[SettingOverride],
+    settings: &mut [BTreeMap<String, SettingValue>],
+    sink: &mut crate::graph::error::Sink,
+) {
+    for o in overrides {
+        let what = format!("setting {}.{}={}", o.pass, o.setting, o.value);
+        let Some(p) = graph.pass_index(&o.pass) else {
+            sink.command_line(format!("{what}: no pass '{}'", o.pass));
+            continue;
+        };
+        let Some(decl) = graph.kind(p).and_then(|k| k.settings.iter().find(|s| s.name == o.setting)) else {
+            sink.command_line(format!("{what}: pass '{}' has no setting '{}'", o.pass, o.setting));
+            continue;
+        };
+        let text = o.value.trim();
+        let value = match &decl.default {
+            SettingDefault::Bool(_) => text.parse().ok().map(SettingValue::Bool),
+            SettingDefault::Int(_) => text.parse().ok().map(SettingValue::Int),
+            SettingDefault::Float(_) => text.parse::<f64>().ok().filter(|f| f.is_finite()).map(SettingValue::Float),
+            SettingDefault::Choice(words) => words.contains(&text).then(|| SettingValue::Choice(text.to_string())),
+        };
+        match value {
+            None => sink.command_line(format!("{what}: not a value of the setting's type")),
+            Some(v) => match decl.range_error(&v) {
+                Some(why) => sink.command_line(format!("{what}: {why}")),
+                None => {
+                    settings[p].insert(o.setting.clone(), v);
+                }
+            },
+        }
+    }
 }
 
 /// Workgroup counts of a compute pass.

@@ -24,58 +24,81 @@ pub struct ResourceBytes {
 
 use crate::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
 use crate::gpu::{Access, Buffer, BufferDesc, GpuContext, GpuTimer, Image, MemoryLocation, PassTiming, ShaderCompiler};
-use crate::graph::kinds::NodeSetup;
+use crate::graph::kinds::{CounterEntry, Counters, NodeSetup};
 use crate::graph::plan::{CompiledGraph, MemoryPlan, ResourceClass, ResourceId, Version};
 use ash::vk;
 use std::cell::RefCell;
 use std::path::Path;
 use tracker::Tracker;
 
-/// Slot name through which a pass exposes its counters (copied to the host every frame).
-pub const STATS_SLOT: &str = "stats";
-/// Bytes of counters a pass writes to its `stats` slot.
-pub const STATS_BYTES: usize = 64;
-/// Slot through which a late cull phase writes the counters of the next frame's early draw
-/// list; the frame that draws the list reports them (the `.prev` copy).
-pub const LIST_STATS_SLOT: &str = "list_stats";
-/// Slot through which that phase writes the list's draw count (its drawer binds the `.prev`).
-pub const LIST_COUNT_SLOT: &str = "list_count";
-
 /// Counters copied to the host every frame: whose they are and where they come from.
-struct StatsSource {
+struct CounterSource {
     /// The pass whose binding is copied (after it has run).
     pass: usize,
     /// That binding, with the version whose contents are this frame's figures.
     binding: crate::graph::plan::Binding,
     /// The name reported with them.
     label: String,
+    /// Where they go in the readback buffer, and how many bytes.
+    offset: u64,
+    bytes: u64,
 }
 
-/// The counters a frame reports, in pass order: each `stats` binding, and for a late cull phase
-/// that writes the next frame's early draw list, that list as this frame drew it (last frame's
-/// `list_stats`), reported under the name of the pass that draws it and placed at that pass.
-fn stats_sources(plan: &CompiledGraph) -> Vec<StatsSource> {
-    let mut sources: Vec<(usize, StatsSource)> = Vec::new();
+/// The counters a frame reports, in pass order: each slot a kind declares as counters
+/// ([`crate::graph::Counters`]). A list a pass writes for the next frame is reported as that
+/// frame drew it (the `.prev` copy), under the name of the pass that draws it and placed at that
+/// pass.
+fn counter_sources(plan: &CompiledGraph) -> Vec<CounterSource> {
+    let mut sources: Vec<(usize, CounterSource)> = Vec::new();
     for (index, pass) in plan.passes.iter().enumerate() {
-        if let Some(b) = pass.bindings.iter().find(|b| b.slot == STATS_SLOT) {
-            sources.push((index, StatsSource { pass: index, binding: b.clone(), label: pass.name.clone() }));
+        let Some(kind) = plan.kinds.info(&pass.kind) else { continue };
+        for b in &pass.bindings {
+            let Some(counters) = kind.slot(&b.slot).and_then(|s| s.counters) else { continue };
+            let bytes = match plan.resources[b.resource].kind {
+                crate::graph::plan::ResolvedKind::Buffer { size, .. } => size,
+                _ => continue,
+            };
+            let (at, binding, label) = match counters {
+                Counters::ThisFrame => (index, b.clone(), pass.name.clone()),
+                Counters::NextFramesList { count_slot } => {
+                    let count = pass.bindings.iter().find(|c| c.slot == count_slot);
+                    let drawer = plan.passes.iter().position(|p| {
+                        p.bindings
+                            .iter()
+                            .any(|d| Some(d.resource) == count.map(|c| c.resource) && d.version == Version::Previous)
+                    });
+                    let label = drawer
+                        .map_or_else(|| format!("{} (last frame's list)", pass.name), |d| plan.passes[d].name.clone());
+                    let binding = crate::graph::plan::Binding { version: Version::Previous, ..b.clone() };
+                    (drawer.unwrap_or(index), binding, label)
+                }
+            };
+            sources.push((at, CounterSource { pass: index, binding, label, offset: 0, bytes }));
         }
-        let Some(list) = pass.bindings.iter().find(|b| b.slot == LIST_STATS_SLOT) else { continue };
-        let count = pass.bindings.iter().find(|b| b.slot == LIST_COUNT_SLOT);
-        let drawer = plan.passes.iter().position(|p| {
-            p.bindings.iter().any(|d| {
-                d.slot == "draw_count"
-                    && Some(d.resource) == count.map(|c| c.resource)
-                    && d.version == Version::Previous
-            })
-        });
-        let label =
-            drawer.map_or_else(|| format!("{} (last frame's list)", pass.name), |d| plan.passes[d].name.clone());
-        let binding = crate::graph::plan::Binding { version: Version::Previous, ..list.clone() };
-        sources.push((drawer.unwrap_or(index), StatsSource { pass: index, binding, label }));
     }
     sources.sort_by_key(|(at, _)| *at);
-    sources.into_iter().map(|(_, s)| s).collect()
+    let mut offset = 0;
+    sources
+        .into_iter()
+        .map(|(_, mut s)| {
+            s.offset = offset;
+            offset += s.bytes.next_multiple_of(16);
+            s
+        })
+        .collect()
+}
+
+/// The counters one pass wrote in a frame, as read back.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PassCounters {
+    /// The name they are reported under (the pass, or the pass that drew a list).
+    pub label: String,
+    /// The kind of the pass that wrote them.
+    pub kind: String,
+    /// The slot they were bound to.
+    pub slot: String,
+    /// Their bytes.
+    pub bytes: Vec<u8>,
 }
 
 /// Copies the buffer bound by `binding` in `frame` (at most `max_bytes` of it) into the host
@@ -123,10 +146,10 @@ pub struct GraphRuntime {
     timers: Vec<RefCell<GpuTimer>>,
     /// Whether passes time their steps separately.
     step_timing: bool,
-    /// Passes with a bound `stats` slot, and per frame in flight a host buffer their counters
-    /// are copied into (read a few frames later, never waited on).
-    stats_sources: Vec<StatsSource>,
-    stats_ring: Vec<Buffer>,
+    /// Bindings of counters slots, and per frame in flight a host buffer they are copied into
+    /// (read a few frames later, never waited on).
+    counter_sources: Vec<CounterSource>,
+    counter_ring: Vec<Buffer>,
     /// Host copies of named slots, when a checking tool asked for them.
     capture: Option<capture::SlotCapture>,
     /// The wrappers of host resources used by earlier frames, with the frame: kept until that
@@ -165,14 +188,15 @@ impl GraphRuntime {
         let timers = (0..FRAMES_IN_FLIGHT)
             .map(|_| GpuTimer::new(ctx, scopes).map(RefCell::new))
             .collect::<Result<Vec<_>, _>>()?;
-        let stats_sources = stats_sources(&plan);
-        let stats_ring = (0..FRAMES_IN_FLIGHT)
+        let counter_sources = counter_sources(&plan);
+        let ring_bytes = counter_sources.last().map_or(16, |s| s.offset + s.bytes.next_multiple_of(16));
+        let counter_ring = (0..FRAMES_IN_FLIGHT)
             .map(|i| {
                 Buffer::new(
                     ctx,
                     &BufferDesc {
                         name: &format!("pass counters readback {i}"),
-                        size: (stats_sources.len().max(1) * STATS_BYTES) as u64,
+                        size: ring_bytes,
                         usage: vk::BufferUsageFlags::TRANSFER_DST,
                         location: MemoryLocation::GpuToCpu,
                     },
@@ -187,8 +211,8 @@ impl GraphRuntime {
             resources,
             timers,
             step_timing: false,
-            stats_sources,
-            stats_ring,
+            counter_sources,
+            counter_ring,
             capture: None,
             retired_imports: Vec::new(),
             frame: 0,
@@ -315,15 +339,13 @@ impl GraphRuntime {
                     cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
                 }
             }
-            let ring = &self.stats_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize];
-            for (k, source) in self.stats_sources.iter().enumerate().filter(|(_, s)| s.pass == index) {
-                let offset = (k * STATS_BYTES) as u64;
-                // Exactly one record: each source has its own STATS_BYTES of the ring.
-                let (binding, record) = (&source.binding, STATS_BYTES as u64);
+            let ring = &self.counter_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+            for source in self.counter_sources.iter().filter(|s| s.pass == index) {
+                let (binding, offset, record) = (&source.binding, source.offset, source.bytes);
                 copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, ring, offset, record);
             }
         }
-        if !self.stats_sources.is_empty() {
+        if !self.counter_sources.is_empty() {
             cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
         }
         timer.borrow_mut().end(cmd);
@@ -490,23 +512,42 @@ impl GraphRuntime {
         self.capture.as_ref().map(|c| c.read()).transpose()
     }
 
-    /// The counters each pass with a `stats` slot wrote in `frame`, once the frame has completed
-    /// (empty if its readback slot was reused since): (pass name, pass kind, the 64 bytes it wrote).
-    /// An early draw list written by last frame's late cull phase comes under the name of the
-    /// pass that drew it, with the cull pass's kind.
-    pub fn pass_counters(&self, frame: u64) -> crate::Result<Vec<(String, String, [u8; STATS_BYTES])>> {
+    /// The counters every counters slot held in `frame`, once the frame has completed (empty if
+    /// its readback slot was reused since), in pass order. A list written by last frame's pass
+    /// for this frame comes under the name of the pass that drew it, with the writer's kind.
+    pub fn pass_counters(&self, frame: u64) -> crate::Result<Vec<PassCounters>> {
         if frame >= self.frame || self.frame - frame > FRAMES_IN_FLIGHT as u64 {
             return Ok(Vec::new());
         }
-        let bytes = self.stats_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize].read_bytes()?;
+        let bytes = self.counter_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize].read_bytes()?;
         Ok(self
-            .stats_sources
+            .counter_sources
             .iter()
-            .enumerate()
-            .map(|(k, source)| {
-                let mut out = [0u8; STATS_BYTES];
-                out.copy_from_slice(&bytes[k * STATS_BYTES..(k + 1) * STATS_BYTES]);
-                (source.label.clone(), self.plan.passes[source.pass].kind.clone(), out)
+            .map(|source| {
+                let (start, end) = (source.offset as usize, (source.offset + source.bytes) as usize);
+                PassCounters {
+                    label: source.label.clone(),
+                    kind: self.plan.passes[source.pass].kind.clone(),
+                    slot: source.binding.slot.clone(),
+                    bytes: bytes.get(start..end).unwrap_or_default().to_vec(),
+                }
+            })
+            .collect())
+    }
+
+    /// What the kinds make of the counters of `frame` ([`Self::pass_counters`],
+    /// [`crate::graph::PassKind::decode_counters`]), once it has completed, with the name of
+    /// the pass that wrote each.
+    pub fn counter_entries(&self, frame: u64) -> crate::Result<Vec<(String, CounterEntry)>> {
+        let counters = self.pass_counters(frame)?;
+        Ok(self
+            .counter_sources
+            .iter()
+            .zip(counters)
+            .filter_map(|(source, c)| {
+                let kind = self.plan.kinds.get(&c.kind)?;
+                let writer = self.plan.passes[source.pass].name.clone();
+                Some((writer, kind.kind.decode_counters(&c.label, &c.slot, &c.bytes)?))
             })
             .collect())
     }

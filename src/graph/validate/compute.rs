@@ -83,7 +83,7 @@ impl Validator<'_> {
             return;
         };
         let shader_pos = self.pos(&[path[0], path[1], Seg::Field("shader")]);
-        let local = self.dir.as_ref().map(|d| d.join(shader)).filter(|p| p.is_file());
+        let local = self.src.dir_of(&[path[0], path[1]]).map(|d| d.join(shader)).filter(|p| p.is_file());
         let resolved = local.unwrap_or_else(|| std::path::PathBuf::from(shader));
         pass.shader = Some(resolved.clone());
         let interface = match self.env.shader_interface(&resolved) {

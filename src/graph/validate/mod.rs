@@ -10,6 +10,7 @@
 //! usage and sample count, sample counts within a pass).
 
 mod compute;
+mod created;
 mod dataflow;
 mod images;
 mod passes;
@@ -17,21 +18,18 @@ mod resources;
 mod slot_sizes;
 
 pub(crate) use images::sample_errors;
-pub(crate) use slot_sizes::slot_size_errors;
+pub(crate) use slot_sizes::{kind_variables, slot_size_errors};
 
+use super::compose::{Composer, Sources};
 use super::env::Environment;
 use super::error::{list, GraphError, GraphErrors, Pos, Sink};
 use super::expr::{Expr, Num};
 use super::kinds::{KindCheck, KindRegistry};
-use super::locate::{Locator, Seg};
+use super::locate::Seg;
 use super::schema::{self, Literal, NumLit};
 use super::validated::{LocatedExpr, Param, ParamValue, ValidatedGraph};
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
-
-/// Names every expression may use besides params: the output size and scene quantities.
-pub const FRAME_VARIABLES: [&str; 8] =
-    ["width", "height", "instances", "meshes", "blended", "lights", "materials", "triangles"];
 
 /// A `--param name=value` override.
 pub type ParamOverride = (String, String);
@@ -84,30 +82,23 @@ pub fn load_in(
     env: &dyn Environment,
     kinds: &KindRegistry,
 ) -> Result<ValidatedGraph, GraphErrors> {
-    let parsed = match schema::parse(text) {
-        Ok(g) => g,
-        Err(e) => {
-            let pos = Pos { line: e.span.start.line.max(1) as u32, col: e.span.start.col.max(1) as u32 };
-            return Err(GraphErrors(vec![GraphError::new(file, pos, e.code.to_string())]));
-        }
-    };
-    let mut v = Validator {
-        loc: Locator::new(text),
-        sink: Sink::new(file),
-        env,
-        kinds,
-        dir: dir.map(Path::to_path_buf),
-        uncertain_writes: HashSet::new(),
-    };
+    let (parsed, src, edit_errors) = Composer::new(kinds).compose(text, file, dir)?;
+    let files = src.names();
+    let mut sink = Sink::new(&files);
+    sink.errors.extend(edit_errors);
+    let mut v =
+        Validator { sink, src, env, kinds, uncertain_writes: HashSet::new(), frame_variables: kinds.variables() };
     let params = v.params(&parsed.params, overrides);
     let scope = Scope::new(&params);
-    let (resources, samples) = v.resources(&parsed, &scope);
-    let mut passes = v.passes(&parsed, &resources, &scope);
+    let (mut resources, mut samples) = v.resources(&parsed, &scope);
+    let implicit = v.created_resources(&parsed, &mut resources, &mut samples);
+    let mut passes = v.passes(&parsed, &resources, &implicit, &scope);
     compute::settle_write_usages(&mut passes, &resources);
     let outputs = v.outputs(&parsed, &resources);
     let graph = ValidatedGraph {
         name: parsed.name.clone(),
         file: file.to_string(),
+        files,
         params,
         resources,
         passes,
@@ -119,7 +110,14 @@ pub fn load_in(
     images::check(&mut v, &graph, &samples);
     for pass in &graph.passes {
         let Some(kind) = kinds.get(&pass.kind) else { continue };
-        let check = KindCheck { graph: &graph, pass, samples: &samples, resolved: &[] };
+        let check = KindCheck {
+            graph: &graph,
+            pass,
+            samples: &samples,
+            resolved: &[],
+            planned: None,
+            limits: graph.limits.as_ref(),
+        };
         for (pos, message) in kind.kind.validate(&check) {
             v.err(pos, message);
         }
@@ -161,19 +159,22 @@ impl<'p> Scope<'p> {
 }
 
 pub(crate) struct Validator<'a> {
-    pub loc: Locator,
+    /// The files of the graph and where each part of it was written.
+    pub src: Sources,
     pub sink: Sink,
     pub env: &'a dyn Environment,
     pub kinds: &'a KindRegistry,
-    pub dir: Option<PathBuf>,
     /// Resources written by passes whose bindings could not all be resolved: "nothing writes
     /// it" errors would only cascade.
     pub uncertain_writes: HashSet<usize>,
+    /// Names every expression may use besides params: the output size and the quantities of
+    /// the registry.
+    pub frame_variables: Vec<&'static str>,
 }
 
 impl Validator<'_> {
     pub fn pos(&self, path: &[Seg<'_>]) -> Pos {
-        self.loc.pos(path)
+        self.src.pos(path)
     }
 
     pub fn err(&mut self, pos: Pos, message: impl Into<String>) {
@@ -197,11 +198,9 @@ impl Validator<'_> {
                         "param name '{name}' is not an identifier (letters, digits and '_', not starting with a digit)"
                     ),
                 );
-            } else if FRAME_VARIABLES.contains(&name.as_str()) {
-                self.err(
-                    pos,
-                    format!("param name '{name}' is reserved (frame variables: {})", FRAME_VARIABLES.join(", ")),
-                );
+            } else if self.frame_variables.contains(&name.as_str()) {
+                let reserved = self.frame_variables.join(", ");
+                self.err(pos, format!("param name '{name}' is reserved (frame variables: {reserved})"));
             }
             let value = match lit {
                 Literal::Bool(b) => ParamValue::Bool(*b),
@@ -235,25 +234,25 @@ impl Validator<'_> {
             NumLit::Int(i) => Some(LocatedExpr::constant(Num::Int(*i), pos)),
             NumLit::Float(f) => Some(LocatedExpr::constant(Num::Float(*f), pos)),
             NumLit::Expr(text) => {
-                let plain = self.loc.pos_in_string(path, 0) != pos;
+                let plain = self.src.pos_in_string(path, 0) != pos;
                 let located = |expr: Expr| LocatedExpr { expr, pos, plain };
                 let expr = match Expr::parse(text) {
                     Ok(e) => e,
                     Err(e) => {
-                        self.err(self.loc.pos_in_string(path, e.offset), format!("{what}: {}", e.message));
+                        self.err(self.src.pos_in_string(path, e.offset), format!("{what}: {}", e.message));
                         return None;
                     }
                 };
                 let mut ok = true;
                 for (name, offset) in expr.variables() {
-                    let at = self.loc.pos_in_string(path, offset);
+                    let at = self.src.pos_in_string(path, offset);
                     let message = match scope.param(name) {
                         Some(p) if p.value.as_num().is_none() => {
                             format!("{what}: param '{name}' is a {}, not a number", p.value.type_name())
                         }
                         Some(_) => continue,
-                        None if vars == Vars::Frame && FRAME_VARIABLES.contains(&name) => continue,
-                        None if vars == Vars::ParamsOnly && FRAME_VARIABLES.contains(&name) => {
+                        None if vars == Vars::Frame && self.frame_variables.contains(&name) => continue,
+                        None if vars == Vars::ParamsOnly && self.frame_variables.contains(&name) => {
                             format!(
                                 "{what}: only params can be used here, not '{name}' (params: {})",
                                 params_list(scope)
@@ -264,7 +263,7 @@ impl Validator<'_> {
                         }
                         None => {
                             let all: Vec<&str> =
-                                FRAME_VARIABLES.iter().copied().chain(scope.numeric_params()).collect();
+                                self.frame_variables.iter().copied().chain(scope.numeric_params()).collect();
                             format!("{what}: unknown variable '{name}' (variables: {})", all.join(", "))
                         }
                     };

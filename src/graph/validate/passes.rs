@@ -1,10 +1,12 @@
 //! Pass declarations: names, kinds, slots and the resources bound to them, settings, and the
 //! shader/dispatch fields that only compute passes take.
 
+use super::created::ImplicitBinding;
 use super::slot_sizes::too_small;
 use super::{literal_text, resource_list, Scope, Validator, Vars};
 use crate::graph::error::{close_names, list};
-use crate::graph::kinds::{MinBytes, PassKindInfo, SettingDefault, COMPUTE_KIND};
+use crate::graph::expr::Expr;
+use crate::graph::kinds::{Bytes, PassKindInfo, SettingDefault, COMPUTE_KIND};
 use crate::graph::locate::Seg;
 use crate::graph::plan::{SettingValue, Version};
 use crate::graph::schema::{GraphFile, Literal, PassDecl};
@@ -43,7 +45,13 @@ impl Validator<'_> {
         }
     }
 
-    pub(super) fn passes(&mut self, file: &GraphFile, resources: &[Resource], scope: &Scope<'_>) -> Vec<Pass> {
+    pub(super) fn passes(
+        &mut self,
+        file: &GraphFile,
+        resources: &[Resource],
+        implicit: &[Vec<ImplicitBinding>],
+        scope: &Scope<'_>,
+    ) -> Vec<Pass> {
         let names: HashMap<String, usize> = resources.iter().enumerate().map(|(i, r)| (r.name.clone(), i)).collect();
         let mut out: Vec<Pass> = Vec::new();
         for (i, decl) in file.passes.iter().enumerate() {
@@ -89,6 +97,19 @@ impl Validator<'_> {
                 } else {
                     self.fixed_pass_fields(i, decl, kind);
                     self.kind_bindings(i, decl, kind, &mut pass, &entries, resources);
+                    for b in implicit.get(i).into_iter().flatten() {
+                        let Some(slot) = kind.slot(b.slot) else { continue };
+                        pass.bindings.push(PassBinding {
+                            slot: slot.name.to_string(),
+                            written_slot: slot.name.to_string(),
+                            resource: b.resource,
+                            version: Version::Current,
+                            usage: slot.usage,
+                            multisample_ok: slot.multisample_ok,
+                            in_writes: true,
+                            pos: name_pos,
+                        });
+                    }
                 }
                 pass.settings = self.settings(i, decl, kind, scope);
             }
@@ -258,15 +279,15 @@ impl Validator<'_> {
                 in_writes: e.in_writes,
                 pos: val_pos,
             };
-            // A fixed minimum against a constant size needs no scene: say it now, not at compile.
-            if let (MinBytes::Fixed(need) | MinBytes::Exact(need), ResourceDesc::Buffer { size }) =
-                (slot.min_bytes, &res.desc)
-            {
-                let exact = matches!(slot.min_bytes, MinBytes::Exact(_));
+            // A constant requirement against a constant size needs no scene: say it now, not at
+            // compile.
+            let need = slot.bytes.expr().and_then(|e| Expr::parse(e).ok()).and_then(|e| e.eval(&BTreeMap::new()).ok());
+            if let (Some(need), ResourceDesc::Buffer { size }) = (need.and_then(|n| n.as_whole()), &res.desc) {
+                let exact = matches!(slot.bytes, Bytes::Exactly(_));
                 let bytes = size.expr.eval(&BTreeMap::new()).ok().map(|n| n.as_f64());
                 let wrong = |b: f64| b >= 0.0 && (b < need as f64 || (exact && b != need as f64));
                 if let Some(bytes) = bytes.filter(|b| wrong(*b)) {
-                    let message = too_small(&decl.name, &binding, &res.name, bytes as u64, slot.min_bytes, need, "");
+                    let message = too_small(&decl.name, &binding, &res.name, bytes as u64, slot.bytes, need as u64, "");
                     self.err(val_pos, message);
                 }
             }

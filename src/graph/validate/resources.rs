@@ -47,7 +47,7 @@ impl Validator<'_> {
                 }
                 (None, _) => continue,
             };
-            out.push(Resource { name: name.clone(), pos, desc, history, imported });
+            out.push(Resource { name: name.clone(), pos, desc, history, imported, owner: None });
             samples_out.push(samples);
         }
         (out, samples_out)
@@ -123,7 +123,7 @@ impl Validator<'_> {
         let mips = match mips {
             None => Mips::Count(one(self.pos(base))),
             Some(MipsDecl::Named) => {
-                let written = self.loc.ident(&mips_path).unwrap_or("").to_string();
+                let written = self.src.ident(&mips_path).unwrap_or("").to_string();
                 if written != "All" {
                     self.err(
                         self.pos(&mips_path),

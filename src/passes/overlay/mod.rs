@@ -36,14 +36,12 @@ pub use panel::{
 };
 pub use times::{GpuPassTimes, MAX_TIMED, PASS_TIMES_BYTES};
 
-use super::slots::{sized, slot, COUNTERS_BYTES, HIZ_FORMAT, LIT_OUTPUT_FORMAT};
+use super::slots::{slot, COUNTERS_BYTES, HIZ_FORMAT, INSTANCE_BITS, LIT_OUTPUT_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
-use crate::graph::{
-    FormatRule, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, SettingDefault, Stages, Usage,
-};
+use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, Stages, Usage};
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 use panel::*;
@@ -55,15 +53,16 @@ pub const STATS_SLOTS: [&str; MAX_STATS] = ["stats0", "stats1", "stats2", "stats
 /// The slot of a compressed G-buffer's counters (a `lighting_compressed` pass's `stats`).
 pub const GBUFFER_STATS_SLOT: &str = "gbuffer_stats";
 
-/// What the overlay shows (setting `view`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum OverlayView {
-    /// The panel only.
-    Stats,
-    /// A Hi-Z level in grey over the whole image, and the panel.
-    Hiz,
-    /// Occlusion-culled instances tinted red, and the panel.
-    Culled,
+crate::choice! {
+    /// What the overlay shows (setting `view`).
+    pub enum OverlayView {
+        /// The panel only.
+        Stats = "stats",
+        /// A Hi-Z level in grey over the whole image, and the panel.
+        Hiz = "hiz",
+        /// Occlusion-culled instances tinted red, and the panel.
+        Culled = "culled",
+    }
 }
 
 /// The pass's settings, from the graph.
@@ -83,13 +82,9 @@ impl OverlaySettings {
     /// Reads a planned pass's settings (validation filled every default).
     pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
         // The declared ranges keep these within a u32.
-        let int = |k: &str| pass.int_setting(k).map(|i| i.clamp(0, u32::MAX as i64) as u32);
-        let view = match pass.choice_setting("view")? {
-            "hiz" => OverlayView::Hiz,
-            "culled" => OverlayView::Culled,
-            _ => OverlayView::Stats,
-        };
-        Ok(Self { view, hiz_level: int("hiz_level")?, scale: int("scale")?, timings: pass.bool_setting("timings")? })
+        let int = |k: &str| pass.int(k).map(|i| i.clamp(0, u32::MAX as i64) as u32);
+        let view = pass.choice("view")?;
+        Ok(Self { view, hiz_level: int("hiz_level")?, scale: int("scale")?, timings: pass.flag("timings")? })
     }
 
     /// The text scale for an image `height` pixels high.
@@ -402,13 +397,13 @@ impl PassKind for OverlayKind {
             name: "overlay",
             doc: "draws this frame's culling counters (formatted on the GPU), with `gbuffer_stats` the compressed G-buffer's, per-pass GPU milliseconds and optional debug views (a Hi-Z mip, occlusion-culled instances) over the lit image",
             reads: vec![
-                sized(slot("stats0", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a cull pass (its `stats` buffer, 64 bytes)"), COUNTERS_BYTES),
-                sized(slot("stats1", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a second cull pass"), COUNTERS_BYTES),
-                sized(slot("stats2", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a third cull pass"), COUNTERS_BYTES),
-                sized(slot("stats3", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a fourth cull pass"), COUNTERS_BYTES),
+                slot("stats0", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a cull pass (its `stats` buffer, 64 bytes)").exactly(COUNTERS_BYTES),
+                slot("stats1", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a second cull pass").exactly(COUNTERS_BYTES),
+                slot("stats2", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a third cull pass").exactly(COUNTERS_BYTES),
+                slot("stats3", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "counters of a fourth cull pass").exactly(COUNTERS_BYTES),
                 slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid (view \"hiz\")"),
-                sized(slot("visibility", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits from the late cull pass (view \"culled\")"), MinBytes::InstanceBits),
-                sized(slot("gbuffer_stats", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "a compressed G-buffer's counters (a lighting_compressed pass's `stats`): pool blocks in use, overflowed samples, pixels with several surfaces"), COUNTERS_BYTES),
+                slot("visibility", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits from the late cull pass (view \"culled\")").at_least(INSTANCE_BITS),
+                slot("gbuffer_stats", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "a compressed G-buffer's counters (a lighting_compressed pass's `stats`): pool blocks in use, overflowed samples, pixels with several surfaces").exactly(COUNTERS_BYTES),
             ],
             writes: vec![slot(
                 "output",
@@ -418,14 +413,10 @@ impl PassKind for OverlayKind {
                 "the lit image, drawn on in place",
             )],
             settings: vec![
-                SettingDecl {
-                    name: "view",
-                    default: SettingDefault::Choice(&["stats", "hiz", "culled"]),
-                    range: None, doc: "the counter panel only; plus a Hi-Z mip in grey over the whole image; plus occlusion-culled instances tinted red",
-                },
-                SettingDecl { name: "hiz_level", default: SettingDefault::Int(0), range: Some((0.0, 15.0)), doc: "mip of the Hi-Z pyramid shown by view \"hiz\" (clamped to the last)" },
-                SettingDecl { name: "scale", default: SettingDefault::Int(0), range: Some((0.0, 64.0)), doc: "text size in pixels per font pixel (0: max(1, height / 720))" },
-                SettingDecl { name: "timings", default: SettingDefault::Bool(true), range: None, doc: "show GPU milliseconds per pass (of the newest completed frame)" },
+                SettingDecl::choice::<OverlayView>("view", "the counter panel only; plus a Hi-Z mip in grey over the whole image; plus occlusion-culled instances tinted red"),
+                SettingDecl::int("hiz_level", 0, (0, 15), "mip of the Hi-Z pyramid shown by view \"hiz\" (clamped to the last)"),
+                SettingDecl::int("scale", 0, (0, 64), "text size in pixels per font pixel (0: max(1, height / 720))"),
+                SettingDecl::flag("timings", true, "show GPU milliseconds per pass (of the newest completed frame)"),
             ],
             slots_from_shader: false,
         }
@@ -451,6 +442,7 @@ mod tests {
             class: ResourceClass::Transient,
             lifetime: None,
             pos: Default::default(),
+            owner: None,
         };
         let bind =
             |slot: &str, resource, usage| Binding { slot: slot.into(), resource, version: Version::Current, usage };
@@ -462,6 +454,7 @@ mod tests {
             shader: None,
             dispatch: None,
             barriers: vec![],
+            pos: Default::default(),
         };
         let read = Usage::StorageBufferRead(Stages::Compute);
         let overlay = PlannedPass {
@@ -472,10 +465,12 @@ mod tests {
             shader: None,
             dispatch: None,
             barriers: vec![],
+            pos: Default::default(),
         };
         CompiledGraph {
             name: "test".into(),
             file: "test.ron".into(),
+            files: vec!["test.ron".into()],
             passes: vec![cull("cull_a", phases[0], 0), cull("cull_b", phases[1], 1), overlay],
             pruned: vec![],
             resources: vec![resource("a"), resource("b")],

@@ -5,8 +5,8 @@
 
 use super::times::MAX_TIMED;
 use super::{OverlaySettings, OverlayView, GBUFFER_STATS_SLOT, STATS_SLOTS};
-use crate::graph::executor::LIST_STATS_SLOT;
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind, SettingValue, Version};
+use crate::passes::instance_cull::LIST_STATS_SLOT;
 
 /// Most rows of the panel.
 pub const MAX_ROWS: usize = 48;

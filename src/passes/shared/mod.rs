@@ -15,7 +15,7 @@ pub mod slot_layout;
 pub mod textures;
 
 use crate::gpu::{Buffer, BufferDesc, GpuContext, MemoryLocation};
-use crate::graph::{FrameInputs, PassContext, FRAMES_IN_FLIGHT};
+use crate::graph::{FrameInputs, Growth, KindRegistry, PassContext, Quantity, FRAMES_IN_FLIGHT};
 use crate::passes::overlay::{GpuPassTimes, PASS_TIMES_BYTES};
 use crate::scene::Scene;
 use ash::vk;
@@ -113,19 +113,92 @@ impl SceneInputs {
     }
 }
 
-/// What a graph is compiled for with `scene` at `width` x `height`: the output size and the
-/// scene's quantities. Meshes count once more per further face cull their instances need, so
-/// that they bound the draw groups ([`face_cull::command_capacity`]).
-pub fn frame_inputs(scene: &Scene, width: u32, height: u32) -> FrameInputs {
-    FrameInputs {
-        width,
-        height,
-        instances: scene.instances.len() as u64,
-        meshes: face_cull::command_capacity(scene) as u64,
-        blended: face_cull::blended_instances(scene) as u64,
-        lights: scene.lights.len() as u64,
-        materials: scene.materials.len() as u64,
-        triangles: scene.instanced_triangles(),
-        params: Vec::new(),
+/// A changing world's scene as cullgraph's renderer lays it out in slots: the scene in slot
+/// order (empty slots included) with its layout, whose slots and draw groups include the room
+/// the renderer keeps to grow.
+pub struct LaidOutScene {
+    /// The scene in slot order.
+    pub scene: Scene,
+    /// Its slot layout.
+    pub layout: slot_layout::SlotLayout,
+}
+
+/// What cullgraph's renderer counts the graphs' quantities in: a [`Scene`] rendered as it is,
+/// or a [`LaidOutScene`]. Quantities registered beside the built-in kinds read the host's
+/// description through this.
+pub struct SceneCounts<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The slot layout, for a world.
+    pub layout: Option<&'a slot_layout::SlotLayout>,
+}
+
+impl<'a> SceneCounts<'a> {
+    /// The host's description (`&Scene` or `&LaidOutScene`), or `None` for another type.
+    pub fn downcast(scene: &'a dyn std::any::Any) -> Option<SceneCounts<'a>> {
+        if let Some(scene) = scene.downcast_ref::<Scene>() {
+            return Some(SceneCounts { scene, layout: None });
+        }
+        let laid = scene.downcast_ref::<LaidOutScene>()?;
+        Some(SceneCounts { scene: &laid.scene, layout: Some(&laid.layout) })
     }
+}
+
+/// A quantity counted in [`SceneCounts`].
+const fn scene_quantity(
+    name: &'static str,
+    doc: &'static str,
+    count: fn(&dyn std::any::Any) -> Option<u64>,
+    growth: Growth,
+) -> Quantity {
+    Quantity { name, doc, count, growth }
+}
+
+/// The quantities of every scene, which the built-in kinds' sizes use: `instances`, `meshes`
+/// (draw groups), `lights`, `materials` and `triangles`.
+pub fn scene_quantities() -> [Quantity; 5] {
+    [
+        scene_quantity(
+            "instances",
+            "instances of the scene (a world's slots)",
+            |s| {
+                let c = SceneCounts::downcast(s)?;
+                Some(c.layout.map_or(c.scene.instances.len() as u64, |l| l.slots() as u64))
+            },
+            Growth::Grows,
+        ),
+        scene_quantity(
+            "meshes",
+            "draw groups a draw list may hold: each mesh once, and once more for each further face cull its instances need (one-sided, mirrored, double-sided, transparent)",
+            |s| {
+                let c = SceneCounts::downcast(s)?;
+                Some(c.layout.map_or(face_cull::command_capacity(c.scene) as u64, |l| l.groups.len() as u64))
+            },
+            Growth::Grows,
+        ),
+        scene_quantity(
+            "lights",
+            "point lights",
+            |s| Some(SceneCounts::downcast(s)?.scene.lights.len() as u64),
+            Growth::Grows,
+        ),
+        scene_quantity(
+            "materials",
+            "materials",
+            |s| Some(SceneCounts::downcast(s)?.scene.materials.len() as u64),
+            Growth::Exact,
+        ),
+        scene_quantity(
+            "triangles",
+            "triangles over all instances",
+            |s| Some(scene_buffers::drawn_triangles(SceneCounts::downcast(s)?.scene)),
+            Growth::Grows,
+        ),
+    ]
+}
+
+/// What a graph loaded with `kinds` is compiled for with `scene` at `width` x `height`: the
+/// output size and the scene's quantities ([`SceneCounts`]).
+pub fn frame_inputs(kinds: &KindRegistry, scene: &Scene, width: u32, height: u32) -> crate::Result<FrameInputs> {
+    Ok(FrameInputs::with_quantities(width, height, kinds.count(scene)?))
 }

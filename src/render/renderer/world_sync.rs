@@ -28,11 +28,10 @@ use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{
     Access, Bind, Buffer, BufferDesc, GpuContext, GpuTimer, MemoryLocation, Pipeline, ShaderCompiler, UploadBatch,
 };
-use crate::graph::{FrameInputs, FRAMES_IN_FLIGHT};
+use crate::graph::{FrameInputs, Growth, KindRegistry, Quantities, FRAMES_IN_FLIGHT};
 use crate::passes::shared::gpu_types::GpuInstance;
-use crate::passes::shared::scene_buffers::drawn_triangles;
 use crate::passes::shared::slot_layout::{group_key, SlotLayout};
-use crate::passes::shared::{GpuScene, SceneInputs};
+use crate::passes::shared::{GpuScene, LaidOutScene, SceneInputs};
 use crate::render::{GraphSpec, RenderSettings};
 use crate::scene::world::{Change, InstanceHandle, World};
 use crate::scene::Scene;
@@ -299,19 +298,32 @@ fn lay_out(world: &World) -> (SlotLayout, Scene) {
     (layout, scene)
 }
 
-/// What a graph for `scene` laid out as `layout` is compiled for, with room to grow.
-fn frame_inputs(scene: &Scene, layout: &SlotLayout, settings: &RenderSettings) -> FrameInputs {
-    FrameInputs {
-        width: settings.width,
-        height: settings.height,
-        instances: with_room(layout.slots() as u64),
-        meshes: with_room(layout.groups.len() as u64),
-        blended: with_room(layout.blended_slots() as u64),
-        lights: scene.lights.len() as u64,
-        materials: scene.materials.len() as u64,
-        triangles: drawn_triangles(scene),
-        params: Vec::new(),
-    }
+/// The quantities of `scene` laid out as `layout`, as the graph's kinds count them.
+fn quantities(kinds: &KindRegistry, scene: Scene, layout: SlotLayout) -> Result<(Quantities, Scene, SlotLayout)> {
+    let laid = LaidOutScene { scene, layout };
+    let counted = kinds.count(&laid)?;
+    Ok((counted, laid.scene, laid.layout))
+}
+
+/// What a graph is compiled for with `counted` quantities: room to grow in those that grow.
+fn with_room_to_grow(kinds: &KindRegistry, counted: &Quantities, settings: &RenderSettings) -> FrameInputs {
+    let quantities = counted
+        .iter()
+        .map(|(name, n)| {
+            let grows = kinds.quantity(name).is_some_and(|q| q.growth == Growth::Grows);
+            (name.to_string(), if grows { with_room(n) } else { n })
+        })
+        .collect();
+    FrameInputs::with_quantities(settings.width, settings.height, quantities)
+}
+
+/// Whether a graph compiled for `compiled` no longer holds what `counted` counts: a quantity
+/// that grows beyond its room, or another that changed.
+fn outgrows(kinds: &KindRegistry, counted: &Quantities, compiled: &FrameInputs) -> bool {
+    counted.iter().any(|(name, n)| match kinds.quantity(name).map(|q| q.growth) {
+        Some(Growth::Grows) => n > compiled.quantity(name),
+        _ => n != compiled.quantity(name),
+    })
 }
 
 impl Renderer {
@@ -330,7 +342,8 @@ impl Renderer {
             return Err(Error::Invalid("the world has no instances".into()));
         }
         let (layout, scene) = lay_out(world);
-        let compiled = frame_inputs(&scene, &layout, &settings);
+        let (counted, scene, layout) = quantities(&spec.kinds, scene, layout)?;
+        let compiled = with_room_to_grow(&spec.kinds, &counted, &settings);
         let runtime = build_runtime_for(ctx, shaders, &compiled, spec)?;
         let mut uploads = UploadBatch::default();
         let gpu_scene = GpuScene::upload_with(ctx, &scene, layout.draw_list(&scene), &mut uploads)?;
@@ -541,12 +554,10 @@ impl Renderer {
         };
         let mut scene = layout.slot_scene(world.scene());
         scene.lights = live_lights(world);
-        let needed = frame_inputs(&scene, &layout, &self.settings);
-        let outgrown = layout.slots() as u64 > mirror.compiled.instances
-            || layout.groups.len() as u64 > mirror.compiled.meshes
-            || layout.blended_slots() as u64 > mirror.compiled.blended
-            || needed.materials != mirror.compiled.materials
-            || needed.lights > mirror.light_capacity as u64;
+        let kinds = &self.spec.kinds;
+        let (counted, scene, layout) = quantities(kinds, scene, layout)?;
+        let outgrown = outgrows(kinds, &counted, &mirror.compiled) || scene.lights.len() > mirror.light_capacity;
+        let needed = with_room_to_grow(kinds, &counted, &self.settings);
         let mut uploads = UploadBatch::default();
         // Textures are the slowest part of an upload (resampling and mips on the CPU): they are
         // made again only when the world registered one, or when their upload has not been

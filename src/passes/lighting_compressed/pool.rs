@@ -1,10 +1,12 @@
 //! Sizing the compressed G-buffer's pool from its counters, read back a few frames late: grow
 //! at once when fragments were dropped (to what they asked for, plus a margin), shrink only
 //! after the pool has stayed mostly empty for a while, so that the size does not oscillate.
-//! A new size is a new value of the graph's `pool_fraction` parameter (pool blocks per pixel);
-//! the renderer re-plans the graph with it.
+//! A new size is a new value of the `pool_fraction` setting (pool blocks per pixel) of the
+//! `gbuffer_compressed` pass that writes the pool the lighting read; the host compiles the graph
+//! again with it ([`crate::graph::Adaptation`]).
 
-use crate::stats::GbufferPassStats;
+use super::GbufferPassStats;
+use crate::graph::{Adaptation, CompiledGraph, CounterEntry, SettingOverride, Version};
 
 /// Frames the pool must stay under a quarter full before it shrinks.
 pub const SHRINK_AFTER_FRAMES: u32 = 30;
@@ -66,6 +68,31 @@ impl PoolAdapter {
         None
     }
 }
+
+/// The pool policy of one `lighting_compressed` pass.
+#[derive(Default)]
+pub struct PoolAdaptation(PoolAdapter);
+
+impl Adaptation for PoolAdaptation {
+    fn observe(&mut self, counters: &CounterEntry, plan: &CompiledGraph, pass: usize) -> Vec<SettingOverride> {
+        let Ok(stats) = serde_json::from_value::<GbufferPassStats>(counters.value.clone()) else { return Vec::new() };
+        // The pass that writes the pool this one reads, and so sizes it.
+        let pool = plan.passes.get(pass).and_then(|p| p.bindings.iter().find(|b| b.slot == "gbuffer_pool"));
+        let writer = pool.and_then(|pool| {
+            plan.passes.iter().find(|p| {
+                p.settings.contains_key(POOL_SETTING)
+                    && p.bindings.iter().any(|b| b.resource == pool.resource && b.version == Version::Current)
+            })
+        });
+        let (Some(writer), Some(fraction)) = (writer, self.0.observe(&stats, stats.pixels())) else {
+            return Vec::new();
+        };
+        vec![SettingOverride { pass: writer.name.clone(), setting: POOL_SETTING.into(), value: format!("{fraction}") }]
+    }
+}
+
+/// The setting of `gbuffer_compressed` that sizes its pool.
+pub const POOL_SETTING: &str = "pool_fraction";
 
 #[cfg(test)]
 mod tests {

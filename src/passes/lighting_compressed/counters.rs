@@ -1,8 +1,14 @@
 //! Counters of the compressed G-buffer (`Stats` in `shaders/lighting/lighting_compressed.comp`):
-//! how full the pool was, what overflowed, and how many distinct surfaces the pixels hold.
+//! how full the pool was, what overflowed, and how many distinct surfaces the pixels hold; the
+//! entry of the frame's stats the kind makes of them (group [`GROUP`] of [`FrameStats`]).
 
+use crate::graph::CounterEntry;
+use crate::stats::FrameStats;
 use bytemuck::{Pod, Zeroable};
 use serde::{Deserialize, Serialize};
+
+/// The group of the frame's stats (and key of its JSON) that compressed G-buffers report in.
+pub const GROUP: &str = "gbuffer";
 
 /// The counters as the GPU writes them (64 bytes).
 #[repr(C)]
@@ -67,6 +73,25 @@ impl GbufferPassStats {
             overflow_samples: c.overflow_samples,
             surfaces_per_pixel: c.surfaces_per_pixel(),
         }
+    }
+}
+
+impl GbufferPassStats {
+    /// The compressed G-buffers' figures of `frame`, in pass order.
+    pub fn of(frame: &FrameStats) -> Vec<GbufferPassStats> {
+        frame.entries(GROUP)
+    }
+
+    /// Pixels of the image (every pixel has at least one surface).
+    pub fn pixels(&self) -> u64 {
+        self.surfaces_per_pixel.iter().map(|&n| n as u64).sum()
+    }
+
+    /// The entry of the frame's stats for `counters` of pass `pass`.
+    pub(crate) fn entry(pass: &str, counters: &[u8]) -> Option<CounterEntry> {
+        let c: GbufferCounters = bytemuck::try_pod_read_unaligned(counters).ok()?;
+        let value = serde_json::to_value(GbufferPassStats::new(pass, &c)).ok()?;
+        Some(CounterEntry { group: GROUP, value, draws: None })
     }
 }
 

@@ -1,8 +1,14 @@
 //! Counters the instance-cull passes write on the GPU (`CullStats` in
-//! `shaders/cull/cull_common.glsl`), and how a frame's figures are made from them.
+//! `shaders/cull/cull_common.glsl`), and the entry of the frame's stats the kind makes of them
+//! (group [`GROUP`] of [`FrameStats`]).
 
+use crate::graph::{CounterEntry, DrawCounts};
+use crate::stats::FrameStats;
 use bytemuck::{Pod, Zeroable};
 use serde::{Deserialize, Serialize};
+
+/// The group of the frame's stats (and key of its JSON) that cull passes report in.
+pub const GROUP: &str = "culling";
 
 /// One cull pass's counters as the GPU writes them (64 bytes).
 #[repr(C)]
@@ -69,15 +75,25 @@ impl CullPassStats {
     }
 }
 
-/// A frame's totals over its cull passes: drawn, draws and triangles add up over the passes
-/// (each draws a different set); the culled counts come from the pass that evaluated the most
-/// instances (the late or single pass tests everything).
-pub fn totals(passes: &[CullPassStats]) -> (u32, u32, u32, u32, u64) {
-    let widest = passes.iter().max_by_key(|p| p.tested);
-    let frustum = widest.map_or(0, |p| p.frustum_culled);
-    let occlusion = widest.map_or(0, |p| p.occlusion_culled);
-    let drawn = passes.iter().map(|p| p.drawn).sum();
-    let draws = passes.iter().map(|p| p.draws).sum();
-    let triangles = passes.iter().map(|p| p.triangles).sum();
-    (frustum, occlusion, drawn, draws, triangles)
+impl CullPassStats {
+    /// The cull passes' figures of `frame`, in pass order.
+    pub fn of(frame: &FrameStats) -> Vec<CullPassStats> {
+        frame.entries(GROUP)
+    }
+
+    /// The entry of the frame's stats for `counters` of pass `pass` (`None` if they are not a
+    /// whole record).
+    pub(crate) fn entry(pass: &str, counters: &[u8]) -> Option<CounterEntry> {
+        let c: CullCounters = bytemuck::try_pod_read_unaligned(counters).ok()?;
+        let stats = CullPassStats::new(pass, &c);
+        let draws = DrawCounts {
+            tested: stats.tested,
+            frustum_culled: stats.frustum_culled,
+            occlusion_culled: stats.occlusion_culled,
+            drawn: stats.drawn,
+            draws: stats.draws,
+            triangles: stats.triangles,
+        };
+        Some(CounterEntry { group: GROUP, value: serde_json::to_value(stats).ok()?, draws: Some(draws) })
+    }
 }

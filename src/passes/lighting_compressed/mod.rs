@@ -1,19 +1,27 @@
 //! Lighting over the compressed G-buffer in compute (`lighting_compressed`): each block of a
 //! pixel's list is shaded once with the tile's lights and weighted by the samples it covers.
-//! With a `stats` slot it also reports the pool's counters and how many distinct surfaces the
-//! pixels hold (`GbufferCounters` in [`crate::stats::gbuffer`]).
+//! It also reports the pool's counters and how many distinct surfaces the pixels hold
+//! ([`counters`]), from which the kind's policy sizes the pool ([`pool`]).
+
+pub mod counters;
+pub mod pool;
 
 use super::gbuffer::bound_samples;
 use super::gbuffer_compressed::BoundGbuffer;
 use super::lighting::LightingSettings;
-use super::slots::{lighting_settings, ms, sized, slot, COUNTERS_BYTES, LIT_OUTPUT_FORMAT};
+use super::slots::{lighting_settings, ms, slot, COUNTERS_BYTES, LIT_OUTPUT_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::graph::{
-    FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, SettingDecl, SettingDefault, Stages, Usage,
+    Adaptation, CounterEntry, Counters, Creates, FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode,
+    Pos, SettingDecl, Stages, Usage,
 };
+pub use counters::{GbufferCounters, GbufferPassStats};
+
+/// The kind's name in RON.
+pub const KIND: &str = "lighting_compressed";
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 
@@ -46,7 +54,7 @@ pub struct LightingCompressedPass {
 
 /// Setting `name` of `pass`, a block count (its declared range keeps it within a u32).
 fn block_count_setting(pass: &PlannedPass, name: &str) -> crate::Result<u32> {
-    Ok(pass.int_setting(name)?.clamp(0, u32::MAX as i64) as u32)
+    Ok(pass.int(name)?.clamp(0, u32::MAX as i64) as u32)
 }
 
 impl LightingCompressedPass {
@@ -147,7 +155,7 @@ pub struct LightingCompressedKind;
 impl PassKind for LightingCompressedKind {
     fn info(&self) -> PassKindInfo {
         PassKindInfo {
-            name: "lighting_compressed",
+            name: KIND,
             doc: "lights the compressed G-buffer in compute: every block shaded once with tile-culled point lights, tone-mapped, weighted by the samples it covers, averaged",
             reads: vec![
                 ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the MSAA depth (positions are rebuilt from each block's sample)")),
@@ -157,31 +165,31 @@ impl PassKind for LightingCompressedKind {
             ],
             writes: vec![
                 slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image"),
-                sized(slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "pool counters and a blocks-per-pixel histogram (size: 64)"), COUNTERS_BYTES),
+                slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "pool counters and a blocks-per-pixel histogram (created when unbound; read as `pass.stats`)").exactly(COUNTERS_BYTES).creates(Creates::buffer().always()).counters(Counters::ThisFrame),
             ],
             settings: {
                 let mut settings = lighting_settings();
-                settings.push(SettingDecl {
-                    name: "shared_blocks",
-                    default: SettingDefault::Int(DEFAULT_SHARED_BLOCKS as i64),
-                    range: Some((0.0, MAX_SHARED_BLOCKS as f64)), doc: "pool blocks a 16x16 tile gathers and shades with all its invocations per round, in up to four rounds (0..=1024; 0: each pixel loops over its own list, the thesis's resolve)",
-                });
-                settings.push(SettingDecl {
-                    name: "shared_min_blocks",
-                    default: SettingDefault::Int(DEFAULT_SHARED_MIN_BLOCKS as i64),
-                    range: Some((0.0, u32::MAX as f64)), doc: "a tile with at most this many pool blocks leaves them to their pixels' own loops (0: every tile shares its blocks, the fastest on the H100)",
-                });
+                settings.push(SettingDecl::int("shared_blocks", DEFAULT_SHARED_BLOCKS as i64, (0, MAX_SHARED_BLOCKS as i64), "pool blocks a 16x16 tile gathers and shades with all its invocations per round, in up to four rounds (0..=1024; 0: each pixel loops over its own list, the thesis's resolve)"));
+                settings.push(SettingDecl::int("shared_min_blocks", DEFAULT_SHARED_MIN_BLOCKS as i64, (0, u32::MAX as i64), "a tile with at most this many pool blocks leaves them to their pixels' own loops (0: every tile shares its blocks, the fastest on the H100)"));
                 settings
             },
             slots_from_shader: false,
         }
     }
 
-    fn check_sizes(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+    fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
         super::gbuffer_compressed::size_errors(check)
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
         Ok(Box::new(LightingCompressedPass::new(s.ctx, s.shaders, s.pass, s.plan)?))
+    }
+
+    fn decode_counters(&self, pass: &str, _slot: &str, bytes: &[u8]) -> Option<CounterEntry> {
+        GbufferPassStats::entry(pass, bytes)
+    }
+
+    fn adaptation(&self) -> Option<Box<dyn Adaptation>> {
+        Some(Box::new(pool::PoolAdaptation::default()))
     }
 }

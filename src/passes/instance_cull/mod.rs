@@ -29,37 +29,114 @@
 //! `cull_init.comp` then the test step appending with atomics; its order within a group varies
 //! from run to run.
 
-use super::slots::{sized, slot, COMMANDS_BYTES, COUNTERS_BYTES, COUNT_BYTES, HIZ_FORMAT, IDS_BYTES};
+pub mod counters;
+
+use super::slots::{slot, COMMANDS_BYTES, COUNTERS_BYTES, COUNT_BYTES, HIZ_FORMAT, IDS_BYTES, INSTANCE_BITS};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
-use crate::graph::executor::{PassContext, LIST_COUNT_SLOT, LIST_STATS_SLOT};
+use crate::graph::executor::PassContext;
 use crate::graph::plan::PlannedPass;
 use crate::graph::{
-    FormatRule, KindCheck, MinBytes, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, SettingDecl, SettingDefault,
-    Stages, Usage,
+    Choice, CounterEntry, Counters, Creates, FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos,
+    SettingDecl, Stages, Usage,
 };
-use crate::passes::shared::face_cull::DRAW_COUNT_BYTES;
 use crate::passes::shared::SceneInputs;
 use ash::vk;
+pub use counters::{CullCounters, CullPassStats};
+
+/// The kind's name in RON.
+pub const KIND: &str = "instance_cull";
+
+/// The slot of the counters of the list the late phase writes for the next frame.
+pub const LIST_STATS_SLOT: &str = "list_stats";
 
 /// Slots per block of the prefix sum (`CULL_BLOCK` in `cull_common.glsl`).
 pub const CULL_BLOCK: u32 = 256;
 
+crate::choice! {
+    /// Which instances a cull pass draws (setting `phase`).
+    pub enum Phase {
+        /// Every survivor.
+        All = "all",
+        /// Last frame's visible ones.
+        Early = "early",
+        /// The newly visible ones (and this frame's visibility).
+        Late = "late",
+        /// The chosen occluders.
+        Occluders = "occluders",
+        /// All but the occluders.
+        Rest = "rest",
+    }
+}
+
+crate::choice! {
+    /// The world bound a cull pass tests (setting `bound`).
+    pub enum Bound {
+        /// The axis-aligned box.
+        Box = "box",
+        /// The sphere.
+        Sphere = "sphere",
+    }
+}
+
+crate::choice! {
+    /// The occlusion footprint (setting `hiz_test`).
+    pub enum HizTest {
+        /// At most 2x2 texels.
+        Coarse = "coarse",
+        /// Up to 3x3 texels one level finer (culls more).
+        Finer = "finer",
+    }
+}
+
+crate::choice! {
+    /// The camera the occlusion test projects with (setting `hiz_view`).
+    pub enum HizView {
+        /// This frame's.
+        Current = "current",
+        /// Last frame's (a test against last frame's pyramid).
+        Previous = "previous",
+    }
+}
+
+crate::choice! {
+    /// How survivors are compacted (setting `compaction`).
+    pub enum Compaction {
+        /// A prefix sum in slot order (the unculled draw order).
+        Ordered = "ordered",
+        /// The thesis's atomic append (order varies; measured only).
+        Atomic = "atomic",
+    }
+}
+
+impl Phase {
+    /// The shader's define for this phase.
+    fn define(self) -> &'static str {
+        match self {
+            Phase::All => "PHASE_ALL",
+            Phase::Early => "PHASE_EARLY",
+            Phase::Late => "PHASE_LATE",
+            Phase::Occluders => "PHASE_OCCLUDERS",
+            Phase::Rest => "PHASE_REST",
+        }
+    }
+}
+
 /// The pass's settings, from the graph.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CullSettings {
-    /// `all`, `early`, `late`, `occluders` or `rest`.
-    pub phase: String,
+    /// Which instances it draws.
+    pub phase: Phase,
     /// Test the frustum.
     pub frustum: bool,
-    /// Test boxes (true) or spheres.
-    pub boxes: bool,
-    /// The finer Hi-Z footprint.
-    pub finer: bool,
-    /// Project with last frame's camera.
-    pub previous_view: bool,
-    /// Atomic append instead of ordered compaction.
-    pub atomic: bool,
+    /// The bound tested.
+    pub bound: Bound,
+    /// The occlusion footprint.
+    pub hiz_test: HizTest,
+    /// The camera of the occlusion test.
+    pub hiz_view: HizView,
+    /// The compaction.
+    pub compaction: Compaction,
     /// Occluder choice: farthest distance.
     pub occluder_distance: f32,
     /// Occluder choice: smallest projected radius over the view height.
@@ -72,15 +149,29 @@ impl CullSettings {
     /// Reads the planned pass's settings (validation filled every default).
     pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
         Ok(Self {
-            phase: pass.choice_setting("phase")?.to_string(),
-            frustum: pass.bool_setting("frustum")?,
-            boxes: pass.choice_setting("bound")? == "box",
-            finer: pass.choice_setting("hiz_test")? == "finer",
-            previous_view: pass.choice_setting("hiz_view")? == "previous",
-            atomic: pass.choice_setting("compaction")? == "atomic",
-            occluder_distance: pass.float_setting("occluder_distance")? as f32,
-            occluder_size: pass.float_setting("occluder_size")? as f32,
-            occluder_triangles: pass.float_setting("occluder_triangles")?.clamp(0.0, u32::MAX as f64) as u32,
+            phase: pass.choice("phase")?,
+            frustum: pass.flag("frustum")?,
+            bound: pass.choice("bound")?,
+            hiz_test: pass.choice("hiz_test")?,
+            hiz_view: pass.choice("hiz_view")?,
+            compaction: pass.choice("compaction")?,
+            occluder_distance: pass.real("occluder_distance")? as f32,
+            occluder_size: pass.real("occluder_size")? as f32,
+            // The declared range keeps it within a u32.
+            occluder_triangles: pass.int("occluder_triangles")?.clamp(0, u32::MAX as i64) as u32,
+        })
+    }
+
+    /// Why these settings cannot write the next frame's early draw list, if they cannot: only
+    /// the late phase with ordered compaction writes it.
+    pub fn list_error(&self) -> Option<String> {
+        (self.phase != Phase::Late || self.compaction == Compaction::Atomic).then(|| {
+            format!(
+                "the next frame's early draw list (`visible_ids`, `list_commands`, `list_count`) is written by the \
+                 late phase with ordered compaction; this pass is phase \"{}\" with {} compaction",
+                self.phase.word(),
+                self.compaction.word()
+            )
         })
     }
 }
@@ -96,16 +187,12 @@ struct Scratch {
     draw_bits: Buffer,
     /// Survivors of each draw group, then visible slots of each (zero between runs).
     group_counts: Buffer,
-    /// Where the counters go when the graph binds no `stats` buffer.
-    own_stats: Buffer,
     /// Whether the scan buffer still needs its first clear.
     fresh: bool,
 }
 
 /// The instance-cull pass.
 pub struct InstanceCullPass {
-    /// The pass's name in the graph, for messages.
-    name: String,
     settings: CullSettings,
     test: Pipeline,
     compact: Option<Pipeline>,
@@ -135,23 +222,21 @@ impl InstanceCullPass {
             return Err(invalid(&message));
         }
         let visible_out = bound("visible_ids");
-        // What the bindings cannot say (a setting may come from a parameter): checked here.
-        if visible_out && (settings.phase != "late" || settings.atomic) {
-            return Err(invalid(
-                "the next frame's early draw list (`visible_ids`, `list_*`) is written by the late phase, with ordered compaction",
-            ));
+        // Checked when the graph is compiled too (a setting may come from a parameter).
+        if let Some(message) = settings.list_error().filter(|_| visible_out) {
+            return Err(invalid(&message));
         }
-        let phase = format!("PHASE_{}", settings.phase.to_uppercase());
-        let mut defines: Vec<(&str, &str)> = vec![(phase.as_str(), "1")];
+        let atomic = settings.compaction == Compaction::Atomic;
+        let mut defines: Vec<(&str, &str)> = vec![(settings.phase.define(), "1")];
         let flags = [
             (!settings.frustum, "NO_FRUSTUM"),
-            (!settings.boxes, "BOUND_SPHERE"),
-            (settings.finer, "HIZ_FINER"),
-            (settings.previous_view, "HIZ_PREV_VIEW"),
+            (settings.bound == Bound::Sphere, "BOUND_SPHERE"),
+            (settings.hiz_test == HizTest::Finer, "HIZ_FINER"),
+            (settings.hiz_view == HizView::Previous, "HIZ_PREV_VIEW"),
             (bound("hiz"), "HAS_HIZ"),
             (bound("visibility_prev"), "HAS_VIS_PREV"),
             (bound("visibility"), "WRITE_VIS"),
-            (settings.atomic, "ATOMIC_APPEND"),
+            (atomic, "ATOMIC_APPEND"),
             (visible_out, "VISIBLE_OUT"),
         ];
         defines.extend(flags.iter().filter(|(on, _)| *on).map(|(_, name)| (*name, "1")));
@@ -160,21 +245,13 @@ impl InstanceCullPass {
         let compute = |step: &str, file: &str, defines: &[(&str, &str)]| -> crate::Result<Pipeline> {
             Ok(Pipeline::compute(ctx, &name(step), &shaders.compile(file, defines)?)?)
         };
-        let (compact, init) = if settings.atomic {
+        let (compact, init) = if atomic {
             (None, Some(compute("init", "cull/cull_init.comp", &[])?))
         } else {
             let defines: &[(&str, &str)] = if visible_out { &[("VISIBLE_OUT", "1")] } else { &[] };
             (Some(compute("compact", "cull/cull_compact.comp", defines)?), None)
         };
-        Ok(Self {
-            name: pass.name.clone(),
-            settings,
-            test,
-            compact,
-            init,
-            sampler: Sampler::nearest_clamp(ctx)?,
-            scratch: None,
-        })
+        Ok(Self { settings, test, compact, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
     }
 
     /// Scratch buffers for `slots` instances and `groups` draw groups (created on first use).
@@ -202,7 +279,6 @@ impl InstanceCullPass {
                 )?,
                 draw_bits: storage("cull draw bits", blocks * (CULL_BLOCK as u64 / 32) * 4)?,
                 group_counts: storage("cull group counts", 2 * groups.max(1) as u64 * 4)?,
-                own_stats: storage("cull stats (unbound)", 64)?,
                 fresh: true,
             });
         }
@@ -210,8 +286,9 @@ impl InstanceCullPass {
     }
 }
 
-/// The late phase's bindings for the next frame's early draw list, written together.
-pub const LIST_SLOTS: [&str; 4] = ["visible_ids", "list_commands", LIST_COUNT_SLOT, LIST_STATS_SLOT];
+/// The late phase's bindings for the next frame's early draw list, written together (with its
+/// counters, `list_stats`, which the kind creates with them).
+pub const LIST_SLOTS: [&str; 3] = ["visible_ids", "list_commands", "list_count"];
 
 /// What is wrong with an instance_cull pass's draw-list bindings, if anything: the slot to point
 /// at (empty: the pass itself) and the message. Graph loading reports it at that binding; the
@@ -248,10 +325,6 @@ fn blocks_of(slots: u32) -> u32 {
     slots.div_ceil(CULL_BLOCK).max(1)
 }
 
-/// Why a draw count takes 16 bytes (graphs written before face culling declared 4).
-const COUNT_RULE: &str =
-    "one count per region: back, front, none and transparent; graphs before transparency declared 12, before face culling 4";
-
 /// Blocks per superblock (`CULL_SUPERBLOCK` in `cull_common.glsl`).
 pub const CULL_SUPERBLOCK: u32 = 64;
 
@@ -272,32 +345,9 @@ impl PassNode for InstanceCullPass {
                 crate::passes::shared::cull_data::MAX_CULL_SLOTS
             )));
         }
-        let need = |slot: &str| {
-            rec.slots
-                .buffer(slot)
-                .ok_or_else(|| crate::Error::Invalid(format!("instance_cull: nothing bound to '{slot}'")))
-        };
+        let need = |slot: &str| rec.slots.required_buffer(slot);
         let (commands, draw_count) = (need("draw_commands")?, need("draw_count")?);
-        let draw_ids = need("draw_instance_ids")?;
-        let (ids_bytes, commands_bytes) = (slots as u64 * 4, groups as u64 * 20);
-        let sizes = [
-            ("draw_commands", Some(commands), commands_bytes, "meshes * 20"),
-            ("draw_instance_ids", Some(draw_ids), ids_bytes, "instances * 4"),
-            ("visible_ids", rec.slots.buffer("visible_ids"), ids_bytes, "instances * 4"),
-            ("list_commands", rec.slots.buffer("list_commands"), commands_bytes, "meshes * 20"),
-            ("draw_count", Some(draw_count), DRAW_COUNT_BYTES, COUNT_RULE),
-            ("list_count", rec.slots.buffer("list_count"), DRAW_COUNT_BYTES, COUNT_RULE),
-            ("list_stats", rec.slots.buffer("list_stats"), 64, "64"),
-        ];
-        for (slot, buffer, need, rule) in sizes {
-            if let Some(buffer) = buffer.filter(|b| b.size() < need) {
-                return Err(crate::Error::Invalid(format!(
-                    "pass '{}' (instance_cull): {slot} needs {need} bytes ({rule}); got {}",
-                    self.name,
-                    buffer.size()
-                )));
-            }
-        }
+        let (draw_ids, stats) = (need("draw_instance_ids")?, need("stats")?);
         self.ensure_scratch(ctx, slots, groups)?;
         let device = ctx.device();
         let scratch = self.scratch.as_mut().expect("ensured above");
@@ -315,7 +365,6 @@ impl PassNode for InstanceCullPass {
         // Last frame's run of this pass used the same scratch.
         step_barrier(ctx, cmd);
         let scratch = self.scratch.as_ref().expect("ensured above");
-        let stats = rec.slots.buffer("stats").unwrap_or(&scratch.own_stats);
         let blocks = blocks_of(slots);
         let superblocks = blocks.div_ceil(CULL_SUPERBLOCK);
 
@@ -435,34 +484,36 @@ pub struct InstanceCullKind;
 
 impl PassKind for InstanceCullKind {
     fn info(&self) -> PassKindInfo {
+        let write = |name, doc| slot(name, Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, doc);
+        let list = Creates::buffer().history();
         PassKindInfo {
-            name: "instance_cull",
+            name: KIND,
             doc: "tests every instance's world bound (frustum, optionally Hi-Z occlusion) and compacts the survivors per draw group in slot order (the unculled draw order) into draw commands for vkCmdDrawIndexedIndirectCount",
             reads: vec![
-                sized(slot("visibility_prev", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "last frame's visibility bits (early and late phases)"), MinBytes::InstanceBits),
+                slot("visibility_prev", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "last frame's visibility bits (early and late phases)").at_least(INSTANCE_BITS),
                 slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid to test against (none: frustum only)"),
             ],
             writes: vec![
-                sized(slot("draw_commands", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "one command per draw group (size: meshes * 20)"), COMMANDS_BYTES),
-                sized(slot("draw_count", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "number of commands of each face-cull region (16 bytes)"), COUNT_BYTES),
-                sized(slot("draw_instance_ids", Usage::StorageBufferWrite(Stages::Compute), true, FormatRule::Any, "survivors, one slice per draw group (size: instances * 4)"), IDS_BYTES),
-                sized(slot("visibility", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "this frame's visibility bits (late phase)"), MinBytes::InstanceBits),
-                sized(slot("visible_ids", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group: the next frame's early draw list, which that frame draws as it is with no cull pass (size: instances * 4, history; the draw binds `.prev`)"), IDS_BYTES),
-                sized(slot("list_commands", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: the commands of that list (size: meshes * 20, history)"), COMMANDS_BYTES),
-                sized(slot("list_count", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: their number per face-cull region (size: 16, history)"), COUNT_BYTES),
-                sized(slot("list_stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "late phase, with `visible_ids`: that list's counters, reported as the next frame's early draw (size: 64, history)"), COUNTERS_BYTES),
-                sized(slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "counters of this pass (size: 64)"), COUNTERS_BYTES),
+                write("draw_commands", "one command per draw group").required().at_least(COMMANDS_BYTES).creates(Creates::buffer()),
+                write("draw_count", "number of commands of each face-cull region: back, front, none and transparent").required().at_least(COUNT_BYTES).creates(Creates::buffer()),
+                write("draw_instance_ids", "survivors, one slice per draw group").required().at_least(IDS_BYTES).creates(Creates::buffer()),
+                write("visibility", "this frame's visibility bits (late phase; history: the next frame reads `.prev`)").at_least(INSTANCE_BITS).creates(list),
+                write("visible_ids", "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group: the next frame's early draw list, which that frame draws as it is with no cull pass (history; the draw binds `.prev`)").at_least(IDS_BYTES).creates(list),
+                write("list_commands", "late phase, with `visible_ids`: the commands of that list (history)").at_least(COMMANDS_BYTES).creates(list),
+                write("list_count", "late phase, with `visible_ids`: their number per face-cull region (history)").at_least(COUNT_BYTES).creates(list),
+                write("list_stats", "late phase, with `visible_ids`: that list's counters, reported as the next frame's early draw (created with `visible_ids`)").exactly(COUNTERS_BYTES).creates(list.with("visible_ids")).counters(Counters::NextFramesList { count_slot: "list_count" }),
+                write("stats", "counters of this pass (created when unbound; read as `pass.stats`)").exactly(COUNTERS_BYTES).creates(Creates::buffer().always()).counters(Counters::ThisFrame),
             ],
             settings: vec![
-                SettingDecl { name: "phase", default: SettingDefault::Choice(&["all", "early", "late", "occluders", "rest"]), range: None, doc: "which instances the pass draws: all survivors; last frame's visible ones (early); newly visible ones (late); chosen occluders; all but the occluders" },
-                SettingDecl { name: "frustum", default: SettingDefault::Bool(true), range: None, doc: "test against the view frustum (false: keep everything, the no-cull baseline)" },
-                SettingDecl { name: "bound", default: SettingDefault::Choice(&["box", "sphere"]), range: None, doc: "world bound tested: axis-aligned box or sphere" },
-                SettingDecl { name: "hiz_test", default: SettingDefault::Choice(&["coarse", "finer"]), range: None, doc: "occlusion footprint: at most 2x2 texels, or up to 3x3 one level finer (culls more)" },
-                SettingDecl { name: "hiz_view", default: SettingDefault::Choice(&["current", "previous"]), range: None, doc: "project with this frame's camera, or last frame's (a test against last frame's pyramid)" },
-                SettingDecl { name: "compaction", default: SettingDefault::Choice(&["ordered", "atomic"]), range: None, doc: "prefix-sum compaction in slot order (the unculled draw order), or the thesis's atomic append (order varies, measured only)" },
-                SettingDecl { name: "occluder_distance", default: SettingDefault::Float(200.0), range: None, doc: "occluders phase: farthest distance of an occluder's bound" },
-                SettingDecl { name: "occluder_size", default: SettingDefault::Float(0.02), range: None, doc: "occluders phase: smallest projected radius, as a fraction of the view height" },
-                SettingDecl { name: "occluder_triangles", default: SettingDefault::Int(1024), range: Some((0.0, u32::MAX as f64)), doc: "occluders phase: instances of meshes with at most this many triangles are candidates too, besides those flagged as occluders (0: flagged ones only)" },
+                SettingDecl::choice::<Phase>("phase", "which instances the pass draws: all survivors; last frame's visible ones (early); newly visible ones (late); chosen occluders; all but the occluders"),
+                SettingDecl::flag("frustum", true, "test against the view frustum (false: keep everything, the no-cull baseline)"),
+                SettingDecl::choice::<Bound>("bound", "world bound tested: axis-aligned box or sphere"),
+                SettingDecl::choice::<HizTest>("hiz_test", "occlusion footprint: at most 2x2 texels, or up to 3x3 one level finer (culls more)"),
+                SettingDecl::choice::<HizView>("hiz_view", "project with this frame's camera, or last frame's (a test against last frame's pyramid)"),
+                SettingDecl::choice::<Compaction>("compaction", "prefix-sum compaction in slot order (the unculled draw order), or the thesis's atomic append (order varies, measured only)"),
+                SettingDecl::real("occluder_distance", 200.0, (0.0, f64::MAX), "occluders phase: farthest distance of an occluder's bound"),
+                SettingDecl::real("occluder_size", 0.02, (0.0, f64::MAX), "occluders phase: smallest projected radius, as a fraction of the view height"),
+                SettingDecl::int("occluder_triangles", 1024, (0, u32::MAX as i64), "occluders phase: instances of meshes with at most this many triangles are candidates too, besides those flagged as occluders (0: flagged ones only)"),
             ],
             slots_from_shader: false,
         }
@@ -476,10 +527,24 @@ impl PassKind for InstanceCullKind {
             return Vec::new();
         };
         let pos = check.binding(slot).map_or(pass.pos, |b| b.pos);
-        vec![(pos, format!("pass '{}' (instance_cull): {message}", pass.name))]
+        vec![(pos, format!("pass '{}' ({KIND}): {message}", pass.name))]
+    }
+
+    fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        let (Some(planned), Some(visible)) = (check.planned, check.binding("visible_ids")) else { return Vec::new() };
+        match CullSettings::from_plan(planned) {
+            Ok(settings) => settings.list_error().map(|m| (visible.pos, format!("pass '{}': {m}", planned.name))),
+            Err(e) => Some((check.pass.pos, e.to_string())),
+        }
+        .into_iter()
+        .collect()
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
         Ok(Box::new(InstanceCullPass::new(s.ctx, s.shaders, s.pass)?))
+    }
+
+    fn decode_counters(&self, pass: &str, _slot: &str, bytes: &[u8]) -> Option<CounterEntry> {
+        CullPassStats::entry(pass, bytes)
     }
 }
