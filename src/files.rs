@@ -12,19 +12,70 @@ pub const SHADER_LIMIT: u64 = 4 << 20;
 /// Most bytes of a glTF or GLB scene file (its JSON and, for GLB, its binary chunk).
 pub const SCENE_LIMIT: u64 = 2 << 30;
 
-/// The bytes of the regular file at `path`, at most `limit` of them. `what` names the kind of
-/// file in the message of a refusal ("graph file", "shader", ...).
-pub fn read_limited(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>, String> {
-    // The metadata first: opening a FIFO would block until a writer comes.
+/// Most bytes of all the buffers of one glTF scene together, wherever they are (GLB chunk,
+/// `data:` URIs, files beside it): what the scene file itself may hold, so that a buffer in a
+/// file of its own costs no more than one embedded in the scene.
+pub const BUFFERS_LIMIT: u64 = SCENE_LIMIT;
+
+/// The metadata of `path` if it is a regular file whose size says what reading it gives.
+/// Refused: directories, FIFOs (opening one would block until a writer comes), devices, and on
+/// Linux the files the kernel generates as they are read (`/proc`, `/sys`, ...), which report
+/// a size of 0 or 4096 whatever they hold (`/proc/self/pagemap` reads on for terabytes).
+fn regular_file(path: &Path, what: &str) -> Result<std::fs::Metadata, String> {
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read the {what}: {e}"))?;
     if !meta.is_file() {
         return Err(format!("the {what} is not a regular file (a device, FIFO or directory)"));
     }
+    if let Some(fs) = kernel_filesystem(path) {
+        return Err(format!("the {what} is not a regular file (a file the kernel generates, on {fs})"));
+    }
+    Ok(meta)
+}
+
+/// The name of the kernel's pseudo filesystem that `path` lies on, if it does.
+#[cfg(target_os = "linux")]
+fn kernel_filesystem(path: &Path) -> Option<&'static str> {
+    // Magic numbers of statfs(2)'s f_type.
+    const PSEUDO: [(u64, &str); 11] = [
+        (0x9fa0, "proc"),
+        (0x6265_6572, "sysfs"),
+        (0x6462_6720, "debugfs"),
+        (0x7472_6163, "tracefs"),
+        (0x7363_6673, "securityfs"),
+        (0x0027_e0eb, "cgroup"),
+        (0x6367_7270, "cgroup2"),
+        (0x6265_6570, "configfs"),
+        (0xde5e_81e4, "efivarfs"),
+        (0xcafe_4a11, "bpf"),
+        (0x6165_676c, "pstore"),
+    ];
+    // f_type is a signed or unsigned word depending on the platform; the magic fits 32 bits.
+    #[allow(clippy::unnecessary_cast)]
+    let magic = rustix::fs::statfs(path).ok()?.f_type as u64 & 0xffff_ffff;
+    PSEUDO.iter().find(|(m, _)| *m == magic).map(|(_, name)| *name)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn kernel_filesystem(_path: &Path) -> Option<&'static str> {
+    None
+}
+
+/// An empty vector with room for `bytes` bytes, or the error that names the file.
+fn buffer_for(bytes: u64, what: &str) -> Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    out.try_reserve_exact(bytes as usize).map_err(|_| format!("cannot allocate {bytes} bytes to read the {what}"))?;
+    Ok(out)
+}
+
+/// The bytes of the regular file at `path`, at most `limit` of them. `what` names the kind of
+/// file in the message of a refusal ("graph file", "shader", ...).
+pub fn read_limited(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>, String> {
+    let meta = regular_file(path, what)?;
     if meta.len() > limit {
         return Err(format!("the {what} is {} bytes; a {what} may have at most {limit}", meta.len()));
     }
     let file = std::fs::File::open(path).map_err(|e| format!("cannot read the {what}: {e}"))?;
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    let mut bytes = buffer_for(meta.len(), what)?;
     // A file that grows while it is read still stops at the limit.
     file.take(limit + 1).read_to_end(&mut bytes).map_err(|e| format!("cannot read the {what}: {e}"))?;
     if bytes.len() as u64 > limit {
@@ -39,15 +90,14 @@ pub fn read_limited_text(path: &Path, limit: u64, what: &str) -> Result<String, 
 }
 
 /// The first `length` bytes of the regular file at `path` (a glTF buffer read up to its
-/// `byteLength`): fewer when the file is shorter, never more.
+/// `byteLength`, which the caller has capped): fewer when the file is shorter, never more, and
+/// never more than the file's size said when it was opened.
 pub fn read_prefix(path: &Path, length: u64, what: &str) -> Result<Vec<u8>, String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read the {what}: {e}"))?;
-    if !meta.is_file() {
-        return Err(format!("the {what} is not a regular file (a device, FIFO or directory)"));
-    }
+    let meta = regular_file(path, what)?;
     let file = std::fs::File::open(path).map_err(|e| format!("cannot read the {what}: {e}"))?;
-    let mut bytes = Vec::with_capacity(meta.len().min(length) as usize);
-    file.take(length).read_to_end(&mut bytes).map_err(|e| format!("cannot read the {what}: {e}"))?;
+    let wanted = meta.len().min(length);
+    let mut bytes = buffer_for(wanted, what)?;
+    file.take(wanted).read_to_end(&mut bytes).map_err(|e| format!("cannot read the {what}: {e}"))?;
     Ok(bytes)
 }
 
@@ -70,6 +120,34 @@ mod tests {
         assert_eq!(read_prefix(&big, 10, "buffer").unwrap().len(), 10);
         let err = read_limited(&dir.path().join("missing"), 10, "shader").unwrap_err();
         assert!(err.contains("cannot read the shader"), "{err}");
+        let err = read_prefix(dir.path(), 16, "buffer file").unwrap_err();
+        assert!(err.contains("not a regular file"), "{err}");
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn files_the_kernel_generates_are_refused() {
+        for path in ["/proc/self/pagemap", "/proc/self/status", "/sys/kernel/mm/transparent_hugepage/enabled"] {
+            if !Path::new(path).exists() {
+                continue;
+            }
+            let err = read_prefix(Path::new(path), 1 << 20, "buffer file").unwrap_err();
+            assert!(err.contains("not a regular file") && err.contains("kernel generates"), "{path}: {err}");
+            let err = read_limited(Path::new(path), SCENE_LIMIT, "scene file").unwrap_err();
+            assert!(err.contains("not a regular file"), "{path}: {err}");
+        }
+    }
+
+    #[test]
+    fn a_prefix_is_no_longer_than_the_file_says_it_is() {
+        let dir = tempfile::tempdir().unwrap();
+        let sparse = dir.path().join("sparse.bin");
+        let file = std::fs::File::create(&sparse).unwrap();
+        // 100 GiB of holes: only what is asked for is read, and allocated.
+        file.set_len(100 << 30).unwrap();
+        assert_eq!(read_prefix(&sparse, 64, "buffer file").unwrap(), vec![0u8; 64]);
+        let err = read_limited(&sparse, SCENE_LIMIT, "scene file").unwrap_err();
+        assert!(err.contains("107374182400 bytes") && err.contains("at most 2147483648"), "{err}");
     }
 
     #[test]

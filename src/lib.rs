@@ -80,10 +80,17 @@ mod readme_limits {
             crate::graph::expr::MAX_NESTING,
             crate::graph::expr::MAX_TOKENS
         );
+        let buffers = format!("a scene's buffers {} GiB together", files::BUFFERS_LIMIT >> 30);
         let world = format!("up to 2^{} (about", crate::scene::MAX_COORDINATE.log2());
         let max = crate::graph::compile::resolve::MAX_IMAGE_DIMENSION;
         let size = format!("up to {max}x{max}");
-        for stated in [files, expressions, world, size] {
+        use crate::scene::validate::{MAX_INDICES, MAX_INSTANCES, MAX_TEXTURES, MAX_VERTICES};
+        let scene = format!(
+            "A scene holds at most {MAX_INSTANCES} instances, {MAX_VERTICES} vertices, {MAX_INDICES} indices and \
+             {MAX_TEXTURES} textures"
+        );
+        let image_side = format!("at most {} texels a side", crate::scene::gltf_import::MAX_IMAGE_SIDE);
+        for stated in [files, buffers, expressions, world, size, scene, image_side] {
             assert!(readme.contains(&stated), "the README does not say \"{stated}\"");
         }
     }

@@ -753,3 +753,43 @@ fn a_world_that_gains_a_masked_material_cuts_its_holes_at_the_next_frame() {
     assert!(reds(&mut r) >= 6, "the box shows through the gaps");
     gpu.assert_clean();
 }
+
+/// One texture more than a size class's array can hold (the device's `maxImageArrayLayers`,
+/// 2048 on lavapipe, of distinct 16x16 textures): the scene loads; the class keeps all but its
+/// last layer for the first textures, in scene order, and the two that do not fit show the
+/// magenta and black placeholder there, named by `placeholder_textures`.
+#[test]
+fn textures_beyond_a_full_size_class_show_the_placeholder() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let layers = gpu.caps().limits.max_image_array_layers as usize;
+    assert!(layers <= 4096, "a device with {layers} layers an array would make this test slow");
+    let mut scene = common::sunlit_scene("textures");
+    for i in 0..=layers {
+        // Distinct greens, and red first.
+        let texel = if i == 0 { [230, 10, 10, 255] } else { [10, 100 + (i % 150) as u8, (i / 150) as u8, 255] };
+        let rgba = texel.repeat(16 * 16);
+        scene.textures.push(Arc::new(Texture { name: format!("t{i}"), width: 16, height: 16, rgba }));
+    }
+    let mesh = scene.add_mesh("quad", &common::quad_mesh(), "quad").unwrap();
+    let sampler = Sampler { nearest_mag: true, nearest_min: true, ..Default::default() };
+    for (texture, x) in [(0u32, -0.6), (layers as u32, 0.6)] {
+        let mut material = Material { name: format!("t{texture}"), albedo: Vec3::ONE, ..Default::default() };
+        material.textures[0] = Some(TextureRef { sampler, ..TextureRef::new(texture) });
+        let m = scene.add_material(material);
+        let transform = common::scaled_at(DVec3::new(x, 0.0, 0.0), 1.0);
+        scene.instances.push(Instance { transform, mesh, material: m, flags: 0 });
+    }
+    let (w, h) = (64, 48);
+    let spec = GraphSpec::builtin("default").unwrap();
+    let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(w, h), &spec).unwrap();
+    assert_eq!(r.gpu_scene().textures.placeholder_textures(), [layers as u32 - 1, layers as u32]);
+    let image = r.render_to_image(&common::camera_on_z()).unwrap().1;
+    let (left, right) = (w / 2 - 12, w / 2 + 12);
+    assert_eq!(dominant(common::rgb(&image, left, h / 2)), 0, "red: {:?}", common::rgb(&image, left, h / 2));
+    // The checker's texels are magenta or black: no green anywhere on the right quad.
+    let texels: Vec<[u8; 3]> = (h / 2 - 6..h / 2 + 6).map(|y| common::rgb(&image, right, y)).collect();
+    assert!(texels.iter().all(|p| p[1] < 40), "{texels:?}");
+    assert!(texels.iter().any(|p| p[0] > 100 && p[2] > 100), "no magenta: {texels:?}");
+    gpu.assert_clean();
+}

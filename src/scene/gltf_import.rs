@@ -17,12 +17,14 @@ mod images;
 mod materials;
 mod nodes;
 mod primitive;
+mod totals;
 
 use super::camera::{Camera, Projection};
 use super::error::SceneError;
 use super::source::LoadOptions;
 use super::{procedural, Instance, Material, Scene, Transform};
 use glam::Vec3;
+use std::collections::HashMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
@@ -105,22 +107,26 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
     let gltf = buffers::parse(&bytes, &mut report.notes).map_err(import_err)?;
     drop(bytes);
     let document = gltf.document;
-    let base = path.parent().unwrap_or_else(|| Path::new("."));
-    let buffers = buffers::load_buffers(&document, base, gltf.blob).map_err(import_err)?;
     note_ignored_features(&document, &mut report.notes);
 
+    // The hierarchy and the totals come from the document alone: a scene past a limit is
+    // refused before its buffers are read or anything is allocated for it.
+    let roots = nodes::roots(&document, &mut report.notes);
+    let placed = nodes::walk(&document, roots, &short, &mut report.notes)?;
+    let totals = totals::count(&document, &placed, &short)?;
     let mut scene = Scene { name: short.clone(), ..Default::default() };
+    reserve(&mut scene, &totals).map_err(import_err)?;
+
+    let base = path.parent().unwrap_or_else(|| Path::new("."));
+    let buffers = buffers::load_buffers(&document, base, gltf.blob).map_err(import_err)?;
     let textures = images::load(&document, base, &buffers, &mut report.notes);
     let placeholder: Vec<bool> = textures.iter().map(|(_, p)| *p).collect();
     scene.textures = textures.into_iter().map(|(t, _)| t).collect();
     for material in materials::convert(&document, &placeholder, &mut report.notes) {
         scene.add_material(material);
     }
-    let mut default_material = None;
 
-    let roots = nodes::roots(&document, &mut report.notes);
-    let placed = nodes::walk(&document, roots, &short, &mut report.notes)?;
-
+    let mut meshes = MeshImport { buffers: &buffers, file: &short, shared: HashMap::new(), default_material: None };
     // Per glTF mesh: the (cullgraph mesh, material) of each drawable primitive, once imported.
     let mut imported: Vec<Option<Vec<DrawnPrimitive>>> = vec![None; document.meshes().len()];
     let mut skinned = 0usize;
@@ -128,11 +134,18 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
         let Some(mesh) = p.node.mesh() else { continue };
         skinned += usize::from(p.node.skin().is_some());
         if imported[mesh.index()].is_none() {
-            let prims = import_mesh(&mesh, &short, &buffers, &mut scene, &mut default_material, &mut report)?;
+            let prims = meshes.import(&mesh, &mut scene, &mut report)?;
             imported[mesh.index()] = Some(prims);
         }
-        for &(mesh, material) in imported[mesh.index()].iter().flatten().flatten() {
-            scene.instances.push(Instance { transform: p.world, mesh, material, flags: p.flags });
+        let what = format!("its {}", mesh_label(&mesh));
+        for &(mesh_id, material) in imported[mesh.index()].iter().flatten().flatten() {
+            // A node whose geometry reaches past the coordinate range is the user's to hear of
+            // (lights placed above it would be refused otherwise, blaming the importer's light).
+            let bounds = &scene.meshes[mesh_id as usize].bounds;
+            if let Some(e) = crate::scene::validate::bounds_error(&what, bounds, &p.world) {
+                return Err(SceneError::invalid(format!("{short}: {}", nodes::node_label(&p.node)), e));
+            }
+            scene.instances.push(Instance { transform: p.world, mesh: mesh_id, material, flags: p.flags });
         }
     }
     if skinned > 0 {
@@ -150,7 +163,7 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
         return Err(import_err(format!("nothing to draw: {why}")));
     }
 
-    scene.camera = placed.iter().find_map(|p| camera_of(p, &mut report.notes));
+    scene.camera = placed.iter().find_map(|p| camera_of(&document, p, &mut report.notes));
     if let Some(bounds) = scene.world_bounds() {
         let n = light_count;
         scene.lights = procedural::lights::scatter(&bounds, n, options.seed);
@@ -161,50 +174,112 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
     Ok((scene, report))
 }
 
-/// Adds the drawable primitives of `mesh` to the scene's pools (one cullgraph mesh each) and
-/// returns their (mesh, material) pairs; primitives that cannot be drawn go to the report.
-fn import_mesh(
-    mesh: &gltf::Mesh<'_>,
-    short: &str,
-    buffers: &[Vec<u8>],
-    scene: &mut Scene,
-    default_material: &mut Option<u32>,
-    report: &mut ImportReport,
-) -> Result<Vec<DrawnPrimitive>, SceneError> {
-    let label = match mesh.name() {
+/// Reserves the scene's pools and instance list for `totals`, fallibly: memory the host cannot
+/// give is an error naming what it was for, not an aborted process.
+fn reserve(scene: &mut Scene, totals: &totals::Totals) -> Result<(), String> {
+    let fail = |n: usize, what: &str| format!("cannot allocate memory for the scene's {n} {what}");
+    scene.instances.try_reserve_exact(totals.instances).map_err(|_| fail(totals.instances, "instances"))?;
+    scene.vertices.try_reserve_exact(totals.vertices).map_err(|_| fail(totals.vertices, "vertices"))?;
+    scene.indices.try_reserve_exact(totals.indices).map_err(|_| fail(totals.indices, "indices"))?;
+    Ok(())
+}
+
+/// `mesh 'name' (#i)`, or `mesh #i` for an unnamed mesh.
+fn mesh_label(mesh: &gltf::Mesh<'_>) -> String {
+    match mesh.name() {
         Some(name) => format!("mesh '{name}' (#{})", mesh.index()),
         None => format!("mesh #{}", mesh.index()),
-    };
-    let base_name = mesh.name().map(str::to_string).unwrap_or_else(|| format!("mesh#{}", mesh.index()));
-    let mut prims = Vec::new();
-    for prim in mesh.primitives() {
-        let place = format!("{short}: {label} primitive {}", prim.index());
-        match primitive::convert(&prim, buffers, &place)? {
-            primitive::Converted::Skipped(why) => {
-                report.skipped_primitives.push(format!("{place}: {why}"));
-                prims.push(None);
-            }
-            primitive::Converted::Mesh(data, mesh_place, notes) => {
-                report.notes.extend(notes);
-                let id = scene.add_mesh(&format!("{base_name}/{}", prim.index()), &data, &mesh_place)?;
-                // glTF materials were added first, in file order, so their indices carry over.
-                let material = match prim.material().index() {
-                    Some(i) => i as u32,
-                    None => *default_material.get_or_insert_with(|| scene.add_material(Material::default())),
-                };
-                if prim.morph_targets().len() > 0 {
-                    report.notes.push(format!("{place}: morph targets are ignored (base shape drawn)"));
-                }
-                prims.push(Some((id, material)));
-            }
-        }
     }
-    Ok(prims)
+}
+
+/// The import of meshes into one scene's pools.
+struct MeshImport<'a> {
+    buffers: &'a [Vec<u8>],
+    /// The file name, first in every place.
+    file: &'a str,
+    /// The cullgraph mesh of each distinct primitive geometry already imported (or why it is
+    /// skipped): primitives that share their accessors share their mesh, whatever glTF mesh
+    /// they belong to.
+    shared: HashMap<totals::PrimitiveKey, Result<u32, String>>,
+    /// The material given to primitives without one, once a primitive needs it.
+    default_material: Option<u32>,
+}
+
+impl MeshImport<'_> {
+    /// Adds the drawable primitives of `mesh` to the scene's pools (one cullgraph mesh per
+    /// distinct geometry) and returns their (mesh, material) pairs; primitives that cannot be
+    /// drawn go to the report.
+    fn import(
+        &mut self,
+        mesh: &gltf::Mesh<'_>,
+        scene: &mut Scene,
+        report: &mut ImportReport,
+    ) -> Result<Vec<DrawnPrimitive>, SceneError> {
+        let label = mesh_label(mesh);
+        let base_name = mesh.name().map(str::to_string).unwrap_or_else(|| format!("mesh#{}", mesh.index()));
+        let mut prims = Vec::new();
+        for prim in mesh.primitives() {
+            let place = format!("{}: {label} primitive {}", self.file, prim.index());
+            let key = totals::PrimitiveKey::of(&prim);
+            let converted = match self.shared.get(&key) {
+                Some(converted) => converted.clone(),
+                None => {
+                    let converted = match primitive::convert(&prim, self.buffers, &place)? {
+                        primitive::Converted::Skipped(why) => Err(why),
+                        primitive::Converted::Mesh(data, mesh_place, notes) => {
+                            report.notes.extend(notes);
+                            Ok(scene.add_mesh(&format!("{base_name}/{}", prim.index()), &data, &mesh_place)?)
+                        }
+                    };
+                    self.shared.insert(key, converted.clone());
+                    converted
+                }
+            };
+            let id = match converted {
+                Ok(id) => id,
+                Err(why) => {
+                    report.skipped_primitives.push(format!("{place}: {why}"));
+                    prims.push(None);
+                    continue;
+                }
+            };
+            // glTF materials were added first, in file order, so their indices carry over.
+            let material = match prim.material().index() {
+                Some(i) => i as u32,
+                None => *self.default_material.get_or_insert_with(|| scene.add_material(Material::default())),
+            };
+            if prim.morph_targets().len() > 0 {
+                report.notes.push(format!("{place}: morph targets are ignored (base shape drawn)"));
+            }
+            prims.push(Some((id, material)));
+        }
+        Ok(prims)
+    }
 }
 
 /// The camera of a node that has one, if it is usable.
-fn camera_of(placed: &nodes::Placed<'_>, notes: &mut Vec<String>) -> Option<Camera> {
+fn camera_of(document: &gltf::Document, placed: &nodes::Placed<'_>, notes: &mut Vec<String>) -> Option<Camera> {
     let camera = placed.node.camera()?;
+    // The gltf crate unwraps the projection its `type` names, which its validation does not
+    // require to be there.
+    let json = document.as_json().cameras.get(camera.index())?;
+    let (kind, present) = match json.type_ {
+        gltf::json::validation::Checked::Valid(gltf::json::camera::Type::Perspective) => {
+            ("perspective", json.perspective.is_some())
+        }
+        gltf::json::validation::Checked::Valid(gltf::json::camera::Type::Orthographic) => {
+            ("orthographic", json.orthographic.is_some())
+        }
+        gltf::json::validation::Checked::Invalid => ("invalid", false),
+    };
+    if !present {
+        notes.push(format!(
+            "{}: camera {} ignored: its type is {kind} but it has no {kind} properties",
+            nodes::node_label(&placed.node),
+            camera.index()
+        ));
+        return None;
+    }
     let w: &Transform = &placed.world;
     let forward = w.linear.mul_vec3(Vec3::NEG_Z).try_normalize()?;
     let up = w.linear.mul_vec3(Vec3::Y).try_normalize().unwrap_or(Vec3::Y);

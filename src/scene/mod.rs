@@ -172,6 +172,15 @@ impl Transform {
     pub fn is_finite(&self) -> bool {
         self.linear.is_finite() && self.translation.is_finite()
     }
+
+    /// World-space AABB (min, max) of the local box `bounds` under this transform.
+    pub fn bounds_of(&self, bounds: &Aabb) -> (DVec3, DVec3) {
+        let center = self.apply(bounds.center());
+        // |M| * half-extent bounds the transformed box exactly for an affine map.
+        let abs = Mat3::from_cols(self.linear.x_axis.abs(), self.linear.y_axis.abs(), self.linear.z_axis.abs());
+        let half = abs.mul_vec3(bounds.half_extent()).as_dvec3();
+        (center - half, center + half)
+    }
 }
 
 /// One placed copy of a mesh.
@@ -256,6 +265,11 @@ impl Scene {
             bounds,
             sphere,
         };
+        // Pools of millions of entries: a failed allocation is this mesh's error, not an abort.
+        let no_memory =
+            |what: &str, n: usize| SceneError::invalid(place, format!("cannot allocate memory for {n} more {what}"));
+        self.vertices.try_reserve(vertices.len()).map_err(|_| no_memory("vertices", vertices.len()))?;
+        self.indices.try_reserve(data.indices.len()).map_err(|_| no_memory("indices", data.indices.len()))?;
         self.vertices.extend_from_slice(&vertices);
         self.indices.extend_from_slice(&data.indices);
         self.meshes.push(mesh);
@@ -270,16 +284,7 @@ impl Scene {
 
     /// World-space AABB of one instance (the transformed corners of its mesh's local AABB).
     pub fn instance_bounds(&self, instance: &Instance) -> (DVec3, DVec3) {
-        let b = &self.meshes[instance.mesh as usize].bounds;
-        let center = instance.transform.apply(b.center());
-        // |M| * half-extent bounds the transformed box exactly for an affine map.
-        let abs = Mat3::from_cols(
-            instance.transform.linear.x_axis.abs(),
-            instance.transform.linear.y_axis.abs(),
-            instance.transform.linear.z_axis.abs(),
-        );
-        let half = abs.mul_vec3(b.half_extent()).as_dvec3();
-        (center - half, center + half)
+        instance.transform.bounds_of(&self.meshes[instance.mesh as usize].bounds)
     }
 
     /// World-space bounds of all instances (`None` for an empty scene).

@@ -7,6 +7,16 @@ use super::{Instance, Scene};
 
 /// Material indices the GPU instance record can hold (24 bits).
 pub const MAX_MATERIALS: usize = 1 << 24;
+/// The most instances a scene may hold: what the cull pass's prefix sums count (24 bits).
+pub const MAX_INSTANCES: usize = (1 << 24) - 1;
+/// The most vertices of a scene's vertex pool: 2 GiB of 32-byte vertices, so that the pool
+/// stays one storage buffer within every target device's `maxStorageBufferRange`.
+pub const MAX_VERTICES: usize = 1 << 26;
+/// The most indices of a scene's index pool: 2 GiB of `u32`s, for the same reason.
+pub const MAX_INDICES: usize = 1 << 29;
+/// The most textures a scene may hold: a material names a texture's layer in 16 bits (and the
+/// GPU shows at most its size classes' array layers of them, `passes::shared::textures`).
+pub const MAX_TEXTURES: usize = 1 << 16;
 /// Flag bits a scene's instances may use: the cull records keep 7 bits, and the last of them is
 /// [`super::FLAG_EMPTY_SLOT`], which only the renderer sets.
 pub const MAX_FLAG_BITS: u32 = 6;
@@ -24,6 +34,7 @@ pub fn validate_scene(scene: &Scene) -> Result<(), SceneError> {
             format!("{} materials exceed the {MAX_MATERIALS} an instance can address", scene.materials.len()),
         ));
     }
+    check_totals(scene)?;
     validate_meshes(scene)?;
     for (i, t) in scene.textures.iter().enumerate() {
         if let Some(e) = texture_problem(t) {
@@ -98,10 +109,51 @@ fn check_instance(scene: &Scene, instance: &Instance) -> Result<(), String> {
     if let Some(e) = super::position_error("translation", instance.transform.translation) {
         return Err(e);
     }
+    if let Some(mesh) = scene.meshes.get(instance.mesh as usize).filter(|m| m.bounds.min.cmple(m.bounds.max).all()) {
+        if let Some(e) = bounds_error(&format!("mesh '{}'", mesh.name), &mesh.bounds, &instance.transform) {
+            return Err(e);
+        }
+    }
     if instance.flags >> MAX_FLAG_BITS != 0 {
         return Err(format!("flags {:#x} use bits above the {MAX_FLAG_BITS} that instances may use", instance.flags));
     }
     Ok(())
+}
+
+/// The scene's instances, vertices, indices and textures against the scene limits.
+fn check_totals(scene: &Scene) -> Result<(), SceneError> {
+    let totals = [
+        (scene.instances.len(), MAX_INSTANCES, "instances"),
+        (scene.vertices.len(), MAX_VERTICES, "vertices"),
+        (scene.indices.len(), MAX_INDICES, "indices"),
+        (scene.textures.len(), MAX_TEXTURES, "textures"),
+    ];
+    for (count, max, what) in totals {
+        if count > max {
+            return Err(SceneError::invalid(
+                scene_place(scene),
+                format!("{count} {what} exceed the {max} a scene may hold"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Why a mesh with the local `bounds` placed by `transform` is refused, if it is: its world
+/// bounds are not finite (a huge scale), or reach beyond [`super::MAX_COORDINATE`], where
+/// positions lose their precision on the GPU. `what` names the mesh in the message.
+pub(crate) fn bounds_error(what: &str, bounds: &super::Aabb, transform: &super::Transform) -> Option<String> {
+    let (min, max) = transform.bounds_of(bounds);
+    let max_coordinate = super::MAX_COORDINATE;
+    if !(min.is_finite() && max.is_finite()) {
+        Some(format!("{what} is placed with world bounds {min}..{max}, which are not finite"))
+    } else if min.abs().max_element().max(max.abs().max_element()) > max_coordinate {
+        Some(format!(
+            "{what} reaches {min}..{max}, beyond ±{max_coordinate:.0} (2^40) units, where positions stop keeping 1/256 unit of precision on the GPU"
+        ))
+    } else {
+        None
+    }
 }
 
 fn validate_meshes(scene: &Scene) -> Result<(), SceneError> {
@@ -264,6 +316,15 @@ mod tests {
         }
         s.instances[1].transform.translation.x = 1e12;
         assert!(validate_scene(&s).is_ok());
+        // Within range itself, but its mesh reaches past it (or to infinity).
+        s.instances[1].transform.translation.x = crate::scene::MAX_COORDINATE;
+        let e = validate_scene(&s).unwrap_err().to_string();
+        assert!(e.starts_with("instance #1: mesh 'tri' reaches") && e.contains("beyond ±1099511627776"), "{e}");
+        s.instances[1].transform.translation.x = 0.0;
+        s.instances[1].transform.linear = glam::Mat3::from_diagonal(Vec3::splat(3e38));
+        let e = validate_scene(&s).unwrap_err().to_string();
+        assert!(e.starts_with("instance #1: mesh 'tri' reaches [0, 0, 0]..[3000"), "{e}");
+        s.instances[1].transform.linear = glam::Mat3::IDENTITY;
         assert!(s.validate_instance(7).is_err());
     }
 

@@ -6,6 +6,13 @@
 //! the array coordinate. Lavapipe (no dynamic indexing of sampled-image arrays) and NVIDIA take
 //! the same path, so both give the same image.
 //!
+//! A class holds at most the device's `maxImageArrayLayers` layers (2048 on lavapipe and
+//! NVIDIA). A scene with more textures of one class keeps one layer fewer of them, in scene
+//! order, and shows the placeholder checker in the last layer for the rest, with a warning
+//! naming each of them ([`GpuTextures::placeholder_textures`]). A second array per class is no
+//! way out: the arrays take 16 of the 32 push descriptors lavapipe allows a pass already, and
+//! 16 more would not fit beside a textured pass's own bindings.
+//!
 //! Mips are box-filtered on the CPU at upload, in linear light for textures that some material
 //! uses as colour (base colour, emissive: sRGB) and in stored values otherwise. The alpha of a
 //! masked material's base colour is then scaled per mip so that the share of texels that pass
@@ -51,6 +58,49 @@ pub struct GpuTextures {
     bindings: Vec<Bind>,
     /// Per scene texture: `class << 16 | layer`.
     placement: Vec<u32>,
+    /// Scene textures that did not fit their class's array and show the placeholder.
+    placeholder_textures: Vec<u32>,
+}
+
+/// Which layer of which class every texture gets, when a class holds at most `capacity` layers.
+#[derive(Debug, PartialEq)]
+struct Layout {
+    /// Per class, the scene textures that get a layer, in layer order.
+    members: Vec<Vec<usize>>,
+    /// Per class, whether its last layer is the placeholder of the textures that did not fit.
+    placeholder: Vec<bool>,
+    /// Per scene texture: `class << 16 | layer`.
+    placement: Vec<u32>,
+    /// Scene textures that did not fit and show their class's placeholder layer.
+    overflow: Vec<usize>,
+}
+
+impl Layout {
+    /// Textures of the given sizes, in scene order; `capacity` is at least 1.
+    fn new(sizes: impl Iterator<Item = (u32, u32)>, capacity: usize) -> Self {
+        let classes: Vec<usize> = sizes.map(|(w, h)| class_of(w, h)).collect();
+        let mut wanted = [0usize; TEXTURE_CLASSES];
+        for &c in &classes {
+            wanted[c] += 1;
+        }
+        // A full class keeps capacity - 1 textures and the placeholder.
+        let placeholder: Vec<bool> = wanted.iter().map(|&n| n > capacity).collect();
+        let mut members: Vec<Vec<usize>> = vec![Vec::new(); TEXTURE_CLASSES];
+        let mut placement = Vec::with_capacity(classes.len());
+        let mut overflow = Vec::new();
+        for (i, &c) in classes.iter().enumerate() {
+            let room = if placeholder[c] { capacity - 1 } else { capacity };
+            let layer = if members[c].len() < room {
+                members[c].push(i);
+                members[c].len() - 1
+            } else {
+                overflow.push(i);
+                room
+            };
+            placement.push(((c as u32) << 16) | layer as u32);
+        }
+        Self { members, placeholder, placement, overflow }
+    }
 }
 
 impl GpuTextures {
@@ -58,15 +108,21 @@ impl GpuTextures {
     pub fn upload(ctx: &GpuContext, scene: &Scene, batch: &mut UploadBatch) -> crate::Result<Self> {
         let srgb = srgb_uses(scene);
         let cutoffs = mask_cutoffs(scene);
-        let mut members: Vec<Vec<usize>> = vec![Vec::new(); TEXTURE_CLASSES];
-        let mut placement = Vec::with_capacity(scene.textures.len());
-        for (i, t) in scene.textures.iter().enumerate() {
-            let class = class_of(t.width, t.height);
-            placement.push(((class as u32) << 16) | members[class].len() as u32);
-            members[class].push(i);
+        // The layer is 16 bits of a placement.
+        let capacity = (ctx.caps().limits.max_image_array_layers as usize).clamp(1, 1 << 16);
+        let placed = Layout::new(scene.textures.iter().map(|t| (t.width, t.height)), capacity);
+        if !placed.overflow.is_empty() {
+            let names: Vec<String> =
+                placed.overflow.iter().map(|&i| format!("texture #{i} '{}'", scene.textures[i].name)).collect();
+            tracing::warn!(
+                "{} textures did not fit the texture arrays (at most {capacity} layers a size class on this device) and show the placeholder: {}",
+                names.len(),
+                names.join(", ")
+            );
         }
+        let placeholder = Texture::placeholder("textures beyond a full size class");
         let mut arrays = Vec::with_capacity(TEXTURE_CLASSES);
-        for (class, ids) in members.iter().enumerate() {
+        for (class, ids) in placed.members.iter().enumerate() {
             if ids.is_empty() {
                 let array = TextureArray::new(ctx, &format!("textures {class} (unused)"), 1, 1)?;
                 queue(ctx, batch, &array, &[vec![255u8; 4]])?;
@@ -74,11 +130,14 @@ impl GpuTextures {
                 continue;
             }
             let side = class_side(class);
-            let layers: Vec<Vec<u8>> = ids
+            let mut layers: Vec<Vec<u8>> = ids
                 .iter()
                 .map(|&i| mip_chain(&resample(&scene.textures[i], side), side, srgb[i], cutoffs[i]))
                 .collect();
-            let array = TextureArray::new(ctx, &format!("textures {side}x{side}"), side, ids.len() as u32)?;
+            if placed.placeholder[class] {
+                layers.push(mip_chain(&resample(&placeholder, side), side, false, None));
+            }
+            let array = TextureArray::new(ctx, &format!("textures {side}x{side}"), side, layers.len() as u32)?;
             queue(ctx, batch, &array, &layers)?;
             arrays.push(array);
         }
@@ -111,7 +170,14 @@ impl GpuTextures {
                 ]
             })
             .collect();
-        Ok(Self { arrays, _sampler: sampler, bindings, placement })
+        let placeholder_textures = placed.overflow.iter().map(|&i| i as u32).collect();
+        Ok(Self { arrays, _sampler: sampler, bindings, placement: placed.placement, placeholder_textures })
+    }
+
+    /// Scene textures that did not fit their size class's array (more than the device's
+    /// `maxImageArrayLayers` textures of that class) and show the placeholder checker instead.
+    pub fn placeholder_textures(&self) -> &[u32] {
+        &self.placeholder_textures
     }
 
     /// Where scene texture `texture` lives: `class << 16 | layer`.
@@ -292,6 +358,22 @@ mod tests {
         assert_eq!(class_of(256, 128), 4);
         assert_eq!(class_of(100_000, 2), TEXTURE_CLASSES - 1);
         assert_eq!(class_side(class_of(512, 512)), 512);
+    }
+
+    #[test]
+    fn a_full_class_keeps_one_layer_for_the_placeholder_of_the_rest() {
+        // Three layers a class: five 16x16 textures and one 32x32 among them.
+        let sizes = [(16, 16), (8, 8), (32, 32), (16, 16), (1, 1), (16, 4)];
+        let layout = Layout::new(sizes.into_iter(), 3);
+        assert_eq!(layout.members[0], vec![0, 1]);
+        assert_eq!(layout.members[1], vec![2]);
+        assert_eq!(layout.placeholder[..2], [true, false]);
+        assert_eq!(layout.overflow, vec![3, 4, 5]);
+        assert_eq!(layout.placement, vec![0, 1, 1 << 16, 2, 2, 2]);
+        // Exactly full: no placeholder.
+        let layout = Layout::new([(16, 16); 3].into_iter(), 3);
+        assert_eq!((layout.placeholder[0], layout.overflow.len()), (false, 0));
+        assert_eq!(layout.placement, vec![0, 1, 2]);
     }
 
     #[test]

@@ -54,6 +54,22 @@ pub(super) fn read_indices(accessor: &Accessor<'_>, buffers: &[Vec<u8>]) -> Resu
     }
 }
 
+/// The element count of `accessor` as its document declares it, when its elements fit in its
+/// buffer view and the view in its buffer's declared `byteLength` (or, without a view, within
+/// [`MAX_VIEWLESS_ELEMENTS`]); `None` otherwise, for the read to report. Reads nothing, so the
+/// scene's totals are known before any buffer is loaded.
+pub(super) fn declared_count(accessor: &Accessor<'_>) -> Option<usize> {
+    let count = accessor.count();
+    let Some(view) = accessor.view() else {
+        return (count <= MAX_VIEWLESS_ELEMENTS).then_some(count);
+    };
+    let size = accessor.size();
+    let stride = view.stride().unwrap_or(size).max(size);
+    let view_end = view.offset().checked_add(view.length())?;
+    let elements_end = count.checked_sub(1)?.checked_mul(stride)?.checked_add(size)?.checked_add(accessor.offset())?;
+    (view_end <= view.buffer().length() && elements_end <= view.length()).then_some(count)
+}
+
 fn f32_at(b: &[u8], at: usize) -> f32 {
     f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
 }
@@ -85,17 +101,28 @@ fn read<T: Copy + Default>(
     if count == 0 {
         return Err("has count 0".into());
     }
+    let allocate = || {
+        let mut out = Vec::new();
+        out.try_reserve_exact(count).map_err(|_| format!("cannot allocate memory for its {count} elements"))?;
+        Ok::<Vec<T>, String>(out)
+    };
     let mut out = match accessor.view() {
         Some(view) => {
             let bytes = strided(&view, accessor.offset(), count, size, buffers)?;
             let stride = view.stride().unwrap_or(size);
-            (0..count).map(|i| decode(&bytes[i * stride..i * stride + size])).collect::<Vec<T>>()
+            let mut out = allocate()?;
+            out.extend((0..count).map(|i| decode(&bytes[i * stride..i * stride + size])));
+            out
         }
         None if accessor.sparse().is_none() => return Err("has neither a buffer view nor sparse data".into()),
         None if count > MAX_VIEWLESS_ELEMENTS => {
             return Err(format!("has no buffer view and a count of {count} (at most {MAX_VIEWLESS_ELEMENTS})"))
         }
-        None => vec![T::default(); count],
+        None => {
+            let mut out = allocate()?;
+            out.resize(count, T::default());
+            out
+        }
     };
     if let Some(sparse) = accessor.sparse() {
         let n = sparse.count();

@@ -83,6 +83,20 @@ pub(super) fn load_buffers(
     base: &Path,
     mut blob: Option<Vec<u8>>,
 ) -> Result<Vec<Vec<u8>>, String> {
+    // The declared lengths first: a buffer in a file of its own (or endless, or sparse and
+    // huge) is capped like one embedded in the scene file, before anything is read.
+    let mut declared = 0u64;
+    for buffer in document.buffers() {
+        declared = declared.saturating_add(buffer.length() as u64);
+        if declared > crate::files::BUFFERS_LIMIT {
+            return Err(format!(
+                "buffer {}: its byteLength {} takes the scene's buffers to {declared} bytes; a scene's buffers may hold at most {} together",
+                buffer.index(),
+                buffer.length(),
+                crate::files::BUFFERS_LIMIT
+            ));
+        }
+    }
     let mut out = Vec::with_capacity(document.buffers().len());
     for buffer in document.buffers() {
         let i = buffer.index();
@@ -122,8 +136,9 @@ pub(super) fn load_buffers(
     Ok(out)
 }
 
-/// The bytes of a buffer's file, up to the `byteLength` the document declares: a file that is
-/// larger (or endless, like `/dev/zero`) never costs more memory than the buffer.
+/// The bytes of a buffer's file, up to the `byteLength` the document declares (capped by
+/// [`crate::files::BUFFERS_LIMIT`] already): a file that is larger (or sparse, or endless)
+/// never costs more memory than the buffer; a special file is refused.
 fn read_buffer_file(path: &Path, length: usize) -> Result<Vec<u8>, String> {
     crate::files::read_prefix(path, length as u64, "buffer file")
 }
@@ -225,9 +240,15 @@ mod uri_tests {
         // A buffer is read up to its byteLength, and a special file not at all.
         std::fs::write(dir.path().join("long.bin"), [1u8; 64]).unwrap();
         assert_eq!(load_buffers(&document("long.bin", 4), dir.path(), None).unwrap(), vec![vec![1u8; 4]]);
-        for uri in ["file:///dev/zero", "/dev/zero"] {
+        for uri in ["file:///dev/zero", "/dev/zero", "/proc/self/pagemap", "."] {
             let err = load_buffers(&document(uri, 4), dir.path(), None).unwrap_err();
-            assert!(err.contains("not a regular file") && err.contains("buffer 0"), "{err}");
+            assert!(err.contains("not a regular file") && err.contains("buffer 0"), "{uri}: {err}");
         }
+        // A declared length past the limit is refused before anything is read.
+        let err = load_buffers(&document("/proc/self/pagemap", 100 << 30), dir.path(), None).unwrap_err();
+        assert!(
+            err.starts_with("buffer 0: its byteLength 107374182400") && err.contains("at most 2147483648"),
+            "{err}"
+        );
     }
 }

@@ -37,8 +37,10 @@ pub(super) fn load(
     document
         .images()
         .map(|image| {
-            let name = label(&image);
-            let decoded = if kept >= SCENE_TEXEL_BYTES {
+            let name = label(document, &image);
+            let decoded = if let Some(why) = source_problem(document, &image) {
+                Err(why.to_string())
+            } else if kept >= SCENE_TEXEL_BYTES {
                 Err(format!("the scene's images already take {} MiB decoded, the most kept", SCENE_TEXEL_BYTES >> 20))
             } else {
                 bytes(&image, base, buffers).and_then(|bytes| decode(&bytes, image.source()))
@@ -58,14 +60,25 @@ pub(super) fn load(
 }
 
 /// `image 3 'bark.png'` (its name, else its URI, else nothing).
-pub(super) fn label(image: &gltf::Image<'_>) -> String {
-    let named = image.name().map(str::to_string).or_else(|| match image.source() {
-        Source::Uri { uri, .. } if !uri.starts_with("data:") => Some(uri.to_string()),
-        _ => None,
-    });
+pub(super) fn label(document: &Document, image: &gltf::Image<'_>) -> String {
+    // From the JSON: `image.source()` panics on the images `source_problem` finds.
+    let uri = document.as_json().images.get(image.index()).and_then(|json| json.uri.as_deref());
+    let named = image.name().or(uri.filter(|uri| !uri.starts_with("data:")));
     match named {
         Some(name) => format!("image {} '{name}'", image.index()),
         None => format!("image {}", image.index()),
+    }
+}
+
+/// Why `image` has no source the `gltf` crate can give, if it has none: `Image::source`
+/// unwraps a `uri` where there is no `bufferView`, and a `mimeType` where there is one, and
+/// the crate's validation requires neither (gltf 1.4.1, `image.rs`).
+fn source_problem(document: &Document, image: &gltf::Image<'_>) -> Option<&'static str> {
+    let json = document.as_json().images.get(image.index())?;
+    match (&json.buffer_view, &json.uri, &json.mime_type) {
+        (None, None, _) => Some("it has neither a bufferView nor a uri"),
+        (Some(_), _, None) => Some("it has a bufferView but no mimeType (glTF requires one with a bufferView)"),
+        _ => None,
     }
 }
 

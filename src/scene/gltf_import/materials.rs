@@ -35,7 +35,7 @@ pub(super) fn convert(document: &Document, placeholder: &[bool], notes: &mut Vec
                 notes.push(format!(
                     "material '{name}': its {} ({}) shows the placeholder",
                     slot.name(),
-                    super::images::label(&texture.source())
+                    super::images::label(document, &texture.source())
                 ));
             }
             textures[slot as usize] = Some(TextureRef {

@@ -22,7 +22,7 @@ pub(super) enum Converted {
 /// primitive 0`) and is extended with the accessor in every error.
 pub(super) fn convert(primitive: &Primitive<'_>, buffers: &[Vec<u8>], place: &str) -> Result<Converted, SceneError> {
     let mode = primitive.mode();
-    if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+    if !super::totals::drawable(mode) {
         return Ok(Converted::Skipped(format!("mode {} cannot be drawn as triangles", mode_name(mode))));
     }
     let positions_accessor = primitive

@@ -3,7 +3,7 @@
 //! Lights use the shaders' falloff `color * window(d / range) / (d² + 1)`, so a light that should
 //! give a radiance near 1 at distance `d` needs a color of about `d² + 1`.
 
-use crate::scene::PointLight;
+use crate::scene::{PointLight, MAX_COORDINATE};
 use glam::{DVec3, Vec3};
 use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
@@ -41,6 +41,9 @@ pub fn scatter(bounds: &(DVec3, DVec3), n: usize, seed: u64) -> Vec<PointLight> 
             let jx = rng.random_range(0.25..0.75);
             let jz = rng.random_range(0.25..0.75);
             let position = DVec3::new(min.x + (cx + jx) * cell.x, max.y + above, min.z + (cz + jz) * cell.z);
+            // A scene that reaches the top of the coordinate range gets its lights at its top,
+            // not above the range: an added light must not make a valid scene invalid.
+            let position = position.clamp(DVec3::splat(-MAX_COORDINATE), DVec3::splat(MAX_COORDINATE));
             let tint = Vec3::new(1.0, rng.random_range(0.82..0.95), rng.random_range(0.68..0.85));
             // Fill lights: the sun stays the main light, these add local variation.
             light(position, tint, 0.5, drop as f32, range)
@@ -66,6 +69,9 @@ mod tests {
             assert!((l.position.y - b.0.y) < l.range as f64);
         }
         assert!(scatter(&b, 0, 1).is_empty());
+        // At the top of the coordinate range the lights stay inside it.
+        let top = (DVec3::new(0.0, MAX_COORDINATE - 1.0, 0.0), DVec3::new(10.0, MAX_COORDINATE, 10.0));
+        assert!(scatter(&top, 4, 1).iter().all(|l| l.position.y == MAX_COORDINATE));
         assert!(scatter(&(DVec3::NAN, DVec3::ONE), 3, 1).is_empty());
     }
 }

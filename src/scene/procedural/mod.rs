@@ -23,8 +23,8 @@ use glam::Vec3;
 
 /// Names of the built-in scenes.
 pub const AVAILABLE: &[&str] = &["builtin:city", "builtin:field"];
-/// Largest accepted `instances` option.
-pub const MAX_INSTANCES: usize = 50_000_000;
+/// Largest accepted `instances` option: the most a scene may hold.
+pub const MAX_INSTANCES: usize = super::validate::MAX_INSTANCES;
 /// Largest accepted `kinds` option.
 pub const MAX_KINDS: usize = 100_000;
 /// Largest accepted `lights` option.
