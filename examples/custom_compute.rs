@@ -4,9 +4,8 @@
 //! `cargo run --release --example custom_compute`
 
 use ash::vk;
-use cullgraph::gpu::{
-    transfer, Bind, ContextOptions, GpuContext, GpuResult, Pipeline, ShaderCompiler, ShaderRoot, UploadBatch,
-};
+use cullgraph::gpu::{transfer, GpuResult, UploadBatch};
+use cullgraph::prelude::*;
 
 const SHADER: &str = r#"#version 460
 #include "common/octahedral.glsl"

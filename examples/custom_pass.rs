@@ -10,12 +10,7 @@
 //! `cargo run --release --example custom_pass -- [builtin:city|PATH.glb] [out.png]`
 
 use ash::vk;
-use cullgraph::gpu::{cmd_set_full_viewport, Bind, GpuContext, GraphicsDesc, Pipeline, ShaderCompiler, StencilRule};
-use cullgraph::graph::{
-    FormatRule, NodeSetup, PassContext, PassKind, PassKindInfo, PassNode, ResolvedKind, SettingDecl, SlotDecl, Stages,
-    Usage,
-};
-use cullgraph::passes::shared::SceneInputs;
+use cullgraph::prelude::*;
 
 cullgraph::choice! {
     /// Which boxes the pass draws (setting `show`); the first is the default.
@@ -101,12 +96,7 @@ impl InstanceBoundsPass {
     }
 }
 
-fn compile(
-    shaders: &ShaderCompiler,
-    name: &str,
-    source: &str,
-    defines: &[(&str, &str)],
-) -> cullgraph::Result<cullgraph::gpu::Spirv> {
+fn compile(shaders: &ShaderCompiler, name: &str, source: &str, defines: &[(&str, &str)]) -> cullgraph::Result<Spirv> {
     shaders.compile_source(name, source, defines).map_err(|e| cullgraph::Error::Invalid(e.to_string()))
 }
 
@@ -149,11 +139,7 @@ impl PassNode for InstanceBoundsPass {
 
 #[allow(dead_code)] // tests/custom_pass.rs includes this file for the kind alone.
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    use cullgraph::gpu::{ContextOptions, ShaderRoot};
     use cullgraph::render::output::save_png;
-    use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
-    use cullgraph::scene::source::LoadOptions;
-    use cullgraph::scene::SceneSource;
 
     let mut args = std::env::args().skip(1);
     let source: SceneSource = args.next().unwrap_or_else(|| "builtin:city".into()).parse()?;
@@ -163,7 +149,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let camera = scene.default_camera(settings.width as f32 / settings.height as f32);
 
     // The built-in kinds plus ours; graphs loaded with this registry may use `instance_bounds`.
-    let mut kinds = cullgraph::passes::builtin_kinds();
+    let mut kinds = builtin_kinds();
     kinds.register(InstanceBoundsKind)?;
     let graph = concat!(env!("CARGO_MANIFEST_DIR"), "/graph/examples/instance_bounds.ron");
     let spec = GraphSpec::from_file(graph.as_ref())?.with_kinds(kinds);

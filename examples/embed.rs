@@ -12,14 +12,7 @@
 //! `cargo run --release --example embed`
 
 use ash::vk;
-use cullgraph::gpu::{
-    GpuContext, HostHandles, RequiredFeatures, ShaderCompiler, ShaderRoot, OPTIONAL_DEVICE_EXTENSIONS,
-    REQUIRED_DEVICE_EXTENSIONS,
-};
-use cullgraph::render::{RenderSettings, Renderer};
-use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::world::World;
-use cullgraph::scene::{Instance, SceneSource};
+use cullgraph::prelude::*;
 use std::ffi::CStr;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

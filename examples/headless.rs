@@ -2,11 +2,8 @@
 //!
 //! `cargo run --release --example headless -- [builtin:city|PATH.glb] [out.png]`
 
-use cullgraph::gpu::{ContextOptions, GpuContext, ShaderCompiler, ShaderRoot};
+use cullgraph::prelude::*;
 use cullgraph::render::output::save_png;
-use cullgraph::render::{RenderSettings, Renderer};
-use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::SceneSource;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);

@@ -44,7 +44,10 @@
 //! links none of the command line's crates.
 #![warn(missing_docs)]
 
+/// The command line's benchmarks: public only so that the `cullgraph` binary reaches them; not
+/// part of the library's API.
 #[cfg(feature = "cli")]
+#[doc(hidden)]
 pub mod bench;
 pub mod cull;
 pub mod error;

@@ -6,21 +6,26 @@
 //! - rendering: [`Renderer`] with a [`GraphSpec`], [`Imports`] of the engine's own images and
 //!   buffers, [`FrameStats`] and [`PassTiming`] as plain data;
 //! - an engine's own pass kinds: [`PassKind`] registered in a [`KindRegistry`] (on top of
-//!   [`builtin_kinds`]), with the pieces a kind declares and records with.
+//!   [`builtin_kinds`]), with the pieces a kind declares ([`SlotDecl`], [`SettingDecl`] and
+//!   [`crate::choice!`], [`Creates`], [`Counters`], [`Quantity`]) and records with
+//!   ([`PassContext`], [`SceneInputs`]);
+//! - observers of frames ([`FrameObserver`]).
 
 pub use crate::error::{Error, Result};
 pub use crate::gpu::{
     cmd_set_full_viewport, Access, Bind, Buffer, BufferDesc, ContextOptions, GpuContext, GraphicsDesc, HostHandles,
-    HostImage, Image, MemoryLocation, PassTiming, Pipeline, RequiredFeatures, ShaderCompiler, ShaderRoot, StencilRule,
-    OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS,
+    HostImage, Image, MemoryLocation, PassTiming, Pipeline, RequiredFeatures, ShaderCompiler, ShaderRoot, Spirv,
+    StencilRule, OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS,
 };
 pub use crate::graph::{
-    FormatRule, Imports, KindCheck, KindRegistry, NodeSetup, PassContext, PassKind, PassKindInfo, PassNode,
-    ResolvedKind, SettingDecl, SettingDefault, SlotDecl, Stages, Usage, FRAMES_IN_FLIGHT,
+    Bytes, Choice, Counters, Creates, Extent, FormatRule, Growth, Imports, KindCheck, KindRegistry, MipChain,
+    NodeSetup, PassContext, PassKind, PassKindInfo, PassNode, Quantity, ResolvedKind, SettingDecl, SlotDecl, Stages,
+    Usage, FRAMES_IN_FLIGHT,
 };
 pub use crate::passes::builtin_kinds;
-pub use crate::passes::shared::SceneInputs;
-pub use crate::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
+pub use crate::passes::shared::{SceneCounts, SceneInputs};
+pub use crate::render::{FrameObserver, FramePipeline, GraphSpec, RenderSettings, Renderer};
+pub use crate::scene::source::LoadOptions;
 pub use crate::scene::world::{InstanceHandle, LightHandle, World, WorldError};
 pub use crate::scene::{Camera, Instance, Material, MeshData, PointLight, Projection, Scene, SceneSource, Transform};
 pub use crate::stats::{FrameStats, UpdateStats};

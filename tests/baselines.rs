@@ -34,8 +34,9 @@
 mod common;
 
 use common::{boxes_camera, boxes_scene, GpuTest};
+use cullgraph::oracle::reference_error;
 use cullgraph::oracle::ImageError;
-use cullgraph::render::{reference_error, GraphSpec, RenderSettings, Renderer};
+use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::procedural;
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{Camera, Scene};

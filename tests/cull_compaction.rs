@@ -7,6 +7,7 @@ mod common;
 
 use common::GpuTest;
 use cullgraph::cull::math::{aabb_in_frustum, CullView};
+use cullgraph::oracle::Verify;
 use cullgraph::passes::instance_cull::CullPassStats;
 use cullgraph::passes::shared::cull_data::{CullData, CULL_HUGE};
 use cullgraph::passes::shared::scene_buffers::DrawList;

@@ -9,6 +9,7 @@ mod common;
 use common::{cube_mesh, GpuTest};
 use cullgraph::gpu::ShaderCompiler;
 use cullgraph::oracle::raycast::{RaycastOracle, SamplePattern};
+use cullgraph::oracle::Verify;
 use cullgraph::passes::instance_cull::CullPassStats;
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::DrawnInstances;

@@ -46,13 +46,17 @@ fn a_graph_extends_a_shipped_one_and_edits_its_passes() {
         ["draw_early", "first_hiz", "hiz", "cull_late", "draw_late", "lighting", "after_lighting", "sort", "last"]
     );
     let param = |name: &str| g.params.iter().find(|p| p.name == name).map(|p| p.value.clone());
-    assert_eq!(param("exposure"), Some(graph::ParamValue::Float(1.5)), "the base's param takes the new default");
-    assert_eq!(param("tint"), Some(graph::ParamValue::Float(0.25)), "a new param is added");
+    assert_eq!(
+        param("exposure"),
+        Some(graph::validated::ParamValue::Float(1.5)),
+        "the base's param takes the new default"
+    );
+    assert_eq!(param("tint"), Some(graph::validated::ParamValue::Float(0.25)), "a new param is added");
     assert_eq!(g.params.iter().filter(|p| p.name == "exposure").count(), 1);
     let cull = &g.passes[g.pass_index("cull_late").unwrap()];
     assert!(cull.bindings.iter().all(|b| b.slot != "hiz"), "unbound");
     let bound = cull.settings.iter().find(|s| s.name == "bound").unwrap();
-    assert_eq!(bound.source, graph::SettingSource::Value(SettingValue::Choice("sphere".into())));
+    assert_eq!(bound.source, graph::validated::SettingSource::Value(SettingValue::Choice("sphere".into())));
     assert_eq!(g.files, ["edited.ron", "graph/two_phase.ron"]);
 }
 

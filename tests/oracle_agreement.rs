@@ -6,6 +6,7 @@ mod common;
 
 use common::GpuTest;
 use cullgraph::oracle::raycast::{RaycastOracle, SamplePattern};
+use cullgraph::oracle::Verify;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{CameraPath, SceneSource};

@@ -4,6 +4,7 @@
 mod common;
 
 use common::GpuTest;
+use cullgraph::oracle::Verify;
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::texture::{Sampler, Wrap};

@@ -6,6 +6,7 @@
 mod common;
 
 use common::{boxes_camera, boxes_scene, cube_mesh, GpuTest};
+use cullgraph::oracle::Verify;
 use cullgraph::passes::instance_cull::CullPassStats;
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};

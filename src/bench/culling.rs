@@ -4,6 +4,7 @@
 use super::peer::{copy_gbps, gbps, naive_frustum_ms};
 use super::{median, median_per_pass};
 use crate::gpu::{GpuContext, ShaderCompiler};
+use crate::oracle::Verify;
 use crate::passes::instance_cull::CullPassStats;
 use crate::render::{GraphSpec, RenderSettings, Renderer};
 use crate::scene::source::LoadOptions;

@@ -9,9 +9,9 @@
 use super::{median, median_per_pass};
 use crate::gpu::{GpuContext, ShaderCompiler};
 use crate::oracle::image_error::image_error;
+use crate::oracle::reference::{reference_render_size, render_reference};
 use crate::passes::lighting_compressed::GbufferPassStats;
 use crate::render::output::RgbaImage;
-use crate::render::reference::{reference_render_size, render_reference};
 use crate::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
 use crate::scene::source::LoadOptions;
 use crate::scene::{Camera, Scene, SceneSource};

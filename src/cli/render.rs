@@ -4,8 +4,9 @@
 use super::args::RenderArgs;
 use super::watch::FileWatch;
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
+use cullgraph::oracle::reference::{image_reference_error, reference_render_size};
+use cullgraph::oracle::Verify;
 use cullgraph::render::output::save_png;
-use cullgraph::render::reference::{image_reference_error, reference_render_size};
 use cullgraph::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::{Camera, Projection};
 use cullgraph::stats::{FrameStats, RunStats};

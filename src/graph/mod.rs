@@ -23,8 +23,8 @@
 //! [`ValidatedGraph`] -> [`compile()`] for one output size and scene -> [`CompiledGraph`]
 //! (printable through `Display`, [`to_dot`]) -> [`GraphRuntime`], which records it.
 
-pub mod compile;
-pub mod compose;
+pub(crate) mod compile;
+pub(crate) mod compose;
 pub(crate) mod env;
 pub(crate) mod error;
 pub(crate) mod executor;
@@ -33,12 +33,12 @@ pub mod formats;
 pub(crate) mod kinds;
 pub(crate) mod locate;
 pub mod plan;
-pub mod quantity;
+pub(crate) mod quantity;
 pub(crate) mod report;
 pub(crate) mod schema;
 pub(crate) mod usage;
 pub(crate) mod validate;
-pub(crate) mod validated;
+pub mod validated;
 
 pub use compile::device_limits::DeviceLimits;
 pub use compile::resolve::Resolved;
@@ -46,16 +46,15 @@ pub use compile::{compile, FrameInputs};
 pub use compose::LibraryGraph;
 pub use env::{DeviceEnv, Environment, NoDevice};
 pub use error::{GraphError, GraphErrors, Pos, COMMAND_LINE};
-pub use executor::{Captured, MAX_TIMED_STEPS};
+pub(crate) use executor::Captured;
 pub use executor::{
-    FrameData, GraphRuntime, Import, Imports, PassContext, PassCounters, PassNode, ResourceBytes, SlotBindings,
+    CompletedTimings, FrameData, GraphRuntime, Import, Imports, PassContext, PassNode, ResourceBytes, SlotBindings,
     StepTimer, FRAMES_IN_FLIGHT,
 };
-pub use expr::{Expr, Num};
 pub use kinds::{
-    Adaptation, Bytes, Choice, CounterEntry, Counters, Created, Creates, DrawCounts, Extent, FormatRule, KindCheck,
-    KindRegistry, MipChain, NodeSetup, PassKind, PassKindInfo, RegisteredKind, SettingDecl, SettingDefault,
-    SettingOverride, SlotDecl, Unbound, COMPUTE_KIND,
+    Adaptation, Bytes, Choice, CounterEntry, Counters, Created, Creates, DrawCounts, DrawList, DrawOrder, Extent,
+    FormatRule, KindCheck, KindRegistry, MipChain, NodeSetup, PassKind, PassKindInfo, RegisteredKind, SettingDecl,
+    SettingDefault, SettingOverride, SlotDecl, Unbound, COMPUTE_KIND,
 };
 pub use plan::{
     Binding, CompiledGraph, PlannedBarrier, PlannedPass, PlannedResource, ResolvedKind, ResourceClass, ResourceId,
@@ -65,7 +64,4 @@ pub use quantity::{Growth, Quantities, Quantity};
 pub use report::to_dot;
 pub use usage::{Stages, Usage};
 pub use validate::{load, load_file, load_in, parse_param_override, ParamOverride};
-pub use validated::{
-    DispatchSpec, ImageSize, LocatedExpr, Mips, Owner, Param, ParamValue, Pass, PassBinding, PassSetting, Resource,
-    ResourceDesc, SettingSource, ValidatedGraph,
-};
+pub use validated::{Pass, PassBinding, ValidatedGraph};

@@ -16,7 +16,9 @@ use crate::gpu::{
 use crate::passes::shared::face_cull::FaceCull;
 use crate::passes::shared::gpu_types::DrawIndexedIndirect;
 use crate::passes::shared::scene_buffers::GpuScene;
-use crate::passes::transparent::{record_transparent, transparent_pipeline, TransparentDraws, TransparentShading};
+use crate::passes::shared::transparent_draw::{
+    record_transparent, transparent_pipeline, TransparentDraws, TransparentShading,
+};
 use ash::vk;
 use std::collections::BTreeSet;
 
@@ -68,7 +70,7 @@ impl VisibilityOracle {
                 vertex: &vertex,
                 fragment: Some(&fragment),
                 vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-                vertex_attributes: &crate::passes::gbuffer::VERTEX_ATTRIBUTES,
+                vertex_attributes: &crate::passes::shared::VERTEX_ATTRIBUTES,
                 color_formats: &[vk::Format::R32_UINT],
                 depth_format: vk::Format::D32_SFLOAT,
                 depth_compare: vk::CompareOp::GREATER,

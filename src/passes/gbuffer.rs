@@ -25,7 +25,7 @@ use crate::gpu::Spirv;
 use crate::gpu::{Bind, Buffer, GpuContext, GraphicsDesc, Image, Pipeline, ShaderCompiler, StencilRule};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind};
-use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Usage};
+use crate::graph::{DrawList, DrawOrder, FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Usage};
 use crate::passes::shared::face_cull::DRAW_COUNT_BYTES;
 use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use crate::passes::shared::scene_buffers::GpuScene;
@@ -126,14 +126,7 @@ pub fn bound_samples(plan: &CompiledGraph, pass: &PlannedPass, slot: &str) -> u3
     bound_image(plan, pass, slot).map_or(1, |(_, s)| s.as_raw().max(1))
 }
 
-/// The pool's vertex layout ([`crate::scene::Vertex`]) as `gbuffer.vert` reads it: position,
-/// octahedral normal, texture coordinates, tangent.
-pub const VERTEX_ATTRIBUTES: [(u32, vk::Format, u32); 4] = [
-    (0, vk::Format::R32G32B32_SFLOAT, 0),
-    (1, vk::Format::R16G16_SNORM, 12),
-    (2, vk::Format::R32G32_SFLOAT, 16),
-    (3, vk::Format::R16G16B16A16_SNORM, 24),
-];
+pub use super::shared::VERTEX_ATTRIBUTES;
 
 /// A geometry pipeline's compiled shaders and fixed state: `gbuffer.vert` (whose invariant
 /// position every geometry pass shares, so depth EQUAL against another pass's depth holds
@@ -481,6 +474,10 @@ impl PassKind for GbufferKind {
                 slots_from_shader: false,
             },
         }
+    }
+
+    fn draw_list(&self) -> Option<DrawList> {
+        Some(DrawList { slots: LIST_SLOTS, order: DrawOrder::Regions })
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

@@ -24,8 +24,9 @@ use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, GpuContext, Pipeline, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
+use crate::graph::validated::ResourceDesc;
 use crate::graph::{
-    Choice, Creates, FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, ResourceDesc,
+    Choice, Creates, DrawList, DrawOrder, FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos,
     SettingDecl, SettingDefault, Stages, Usage,
 };
 use crate::passes::lighting_compressed::pool::POOL_SETTING;
@@ -429,6 +430,10 @@ impl PassKind for GbufferCompressedKind {
 
     fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
         size_errors(check)
+    }
+
+    fn draw_list(&self) -> Option<DrawList> {
+        Some(DrawList { slots: super::gbuffer::LIST_SLOTS, order: DrawOrder::Regions })
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

@@ -8,126 +8,26 @@
 //! surface is resolved as the lighting resolved the opaque image. Transparent surfaces write no
 //! depth, so they hide nothing, from each other or from the culling.
 
-use super::gbuffer::{bound_samples, DrawSource, VERTEX_ATTRIBUTES};
+use super::gbuffer::{bound_samples, DrawSource};
 use super::slots::{draw_list_slots, ms, slot, LIT_OUTPUT_FORMAT};
-use crate::gpu::{
-    cmd_set_full_viewport, Bind, Buffer, GpuContext, GraphicsDesc, Pipeline, Sampler, ShaderCompiler, StencilRule,
-};
+use crate::gpu::{Bind, Pipeline, Sampler};
 use crate::graph::executor::PassContext;
 use crate::graph::{
-    FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Quantity, SettingDecl, SlotDecl, Stages, Usage,
+    DrawList, DrawOrder, FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Quantity, SettingDecl, SlotDecl,
+    Stages, Usage,
 };
 use crate::passes::gbuffer::LIST_SLOTS;
 use crate::passes::shared::face_cull::FaceCull;
 use crate::passes::shared::gpu_types::DrawIndexedIndirect;
-use crate::passes::shared::scene_buffers::GpuScene;
+use crate::passes::shared::transparent_draw::{
+    record_transparent, transparent_pipeline, TransparentDraws, TransparentShading,
+};
 use crate::passes::shared::SceneInputs;
 use crate::passes::transparent_sort::{BLENDED, SORTED_COMMANDS_BYTES, SORTED_IDS_BYTES};
 use ash::vk;
 
 /// The kind's name.
 pub const KIND: &str = "transparent";
-
-/// What `transparent.frag` is built for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum TransparentShading {
-    /// Shade and blend over one color attachment (the pass).
-    Blend,
-    /// Mark each instance with a fragment in front of the opaque depth, and draw nothing
-    /// (`VISIBILITY_ORACLE`: the visibility oracle, so that it sees exactly what the pass draws).
-    MarkSeen,
-}
-
-/// The pipeline of `transparent.frag` over `gbuffer.vert` for an opaque depth of `samples`
-/// samples: no depth attachment (the shader tests depth), the cull mode set per draw.
-pub(crate) fn transparent_pipeline(
-    ctx: &GpuContext,
-    shaders: &ShaderCompiler,
-    name: &str,
-    samples: u32,
-    shading: TransparentShading,
-) -> crate::Result<Pipeline> {
-    let samples = samples.max(1).to_string();
-    let mut defines = vec![("SAMPLES", samples.as_str())];
-    if shading == TransparentShading::MarkSeen {
-        defines.push(("VISIBILITY_ORACLE", "1"));
-    }
-    let vertex = shaders.compile("gbuffer/gbuffer.vert", &[])?;
-    let fragment = shaders.compile("transparent/transparent.frag", &defines)?;
-    let blend = shading == TransparentShading::Blend;
-    Ok(Pipeline::graphics(
-        ctx,
-        name,
-        &GraphicsDesc {
-            vertex: &vertex,
-            fragment: Some(&fragment),
-            vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-            vertex_attributes: &VERTEX_ATTRIBUTES,
-            color_formats: if blend { &[LIT_OUTPUT_FORMAT] } else { &[] },
-            depth_format: vk::Format::UNDEFINED,
-            depth_compare: vk::CompareOp::ALWAYS,
-            depth_write: false,
-            samples: vk::SampleCountFlags::TYPE_1,
-            stencil: StencilRule::Off,
-            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-            blend,
-        },
-    )?)
-}
-
-/// Where a draw of transparent instances takes its commands: `max` commands from `offset` bytes
-/// into `commands`, counted by the word at `count_offset` of `count`.
-pub(crate) struct TransparentDraws<'a> {
-    pub commands: &'a Buffer,
-    pub offset: u64,
-    pub count: &'a Buffer,
-    pub count_offset: u64,
-    pub max: u32,
-}
-
-/// Records `draws` with `pipeline` (from [`transparent_pipeline`]) in a rendering scope over
-/// `colors` covering `extent`: bindings `binds` and push constants `push`, every face drawn
-/// (the shader drops one-sided materials' back faces).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn record_transparent(
-    ctx: &GpuContext,
-    cmd: vk::CommandBuffer,
-    pipeline: &Pipeline,
-    scene: &GpuScene,
-    colors: &[vk::RenderingAttachmentInfo<'_>],
-    extent: vk::Extent2D,
-    binds: &[Bind],
-    push: &[u8],
-    draws: &TransparentDraws<'_>,
-) {
-    let device = ctx.device();
-    let rendering = vk::RenderingInfo::default()
-        .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
-        .layer_count(1)
-        .color_attachments(colors);
-    let stride = std::mem::size_of::<DrawIndexedIndirect>() as u32;
-    // SAFETY: cmd is recording; every handle outlives the command buffer's execution.
-    unsafe {
-        device.cmd_begin_rendering(cmd, &rendering);
-        cmd_set_full_viewport(device, cmd, extent);
-        pipeline.bind(cmd);
-        pipeline.push_constant_bytes(cmd, push);
-        pipeline.push_bindings(cmd, binds);
-        device.cmd_set_cull_mode(cmd, vk::CullModeFlags::NONE);
-        device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
-        device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
-        device.cmd_draw_indexed_indirect_count(
-            cmd,
-            draws.commands.handle(),
-            draws.offset,
-            draws.count.handle(),
-            draws.count_offset,
-            draws.max,
-            stride,
-        );
-        device.cmd_end_rendering(cmd);
-    }
-}
 
 /// The `transparent` pass.
 pub struct TransparentPass {
@@ -219,6 +119,10 @@ impl PassKind for TransparentKind {
 
     fn quantities(&self) -> Vec<Quantity> {
         vec![BLENDED]
+    }
+
+    fn draw_list(&self) -> Option<DrawList> {
+        Some(DrawList { slots: LIST_SLOTS, order: DrawOrder::Sorted })
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

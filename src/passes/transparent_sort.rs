@@ -32,10 +32,10 @@ const SECOND_SLOTS: [&str; 3] = ["second_list_commands", "second_list_count", "s
 const COMMAND_BYTES: u64 = std::mem::size_of::<DrawIndexedIndirect>() as u64;
 /// Scratch bytes per transparent instance: a sort key (8 bytes) in a power of two of at most
 /// twice the instances, and the instance's entry (8 bytes).
-pub const SCRATCH_BYTES_PER_INSTANCE: u64 = 24;
+pub(crate) const SCRATCH_BYTES_PER_INSTANCE: u64 = 24;
 
 /// The kind's name in RON.
-pub const KIND: &str = "transparent_sort";
+pub(crate) const KIND: &str = "transparent_sort";
 
 /// One sorted command per transparent instance (it may be 0, so at least one).
 pub(crate) const SORTED_COMMANDS_BYTES: &str = "max(1, blended) * 20";
@@ -87,7 +87,7 @@ fn capacity(commands: u64, ids: u64, scratch: u64) -> (u32, u32) {
 }
 
 /// The `transparent_sort` pass.
-pub struct TransparentSortPass {
+pub(crate) struct TransparentSortPass {
     pipeline: Pipeline,
 }
 

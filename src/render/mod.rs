@@ -1,17 +1,16 @@
 //! The renderer: owns a scene on the GPU and a render graph's runtime, and records a frame
 //! headlessly or into a host engine's command buffer.
 
+mod drawn;
 pub mod frame_pipeline;
 pub mod graph_spec;
+pub mod observer;
 #[cfg(feature = "images")]
 pub mod output;
-#[cfg(feature = "verify")]
-pub mod reference;
 pub mod renderer;
 
 pub use crate::graph::FRAMES_IN_FLIGHT;
 pub use frame_pipeline::FramePipeline;
 pub use graph_spec::GraphSpec;
-#[cfg(feature = "verify")]
-pub use reference::{reference_error, render_reference, DEFAULT_REFERENCE_SCALE};
+pub use observer::FrameObserver;
 pub use renderer::{DrawnInstances, RenderSettings, Renderer};

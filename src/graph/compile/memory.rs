@@ -137,3 +137,60 @@ mod tests {
         assert_eq!(heaps, vec![5120], "5096 rounded up to whole 256-byte units");
     }
 }
+
+#[cfg(test)]
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+    #[test]
+    fn memory_placement_never_overlaps_live_items(
+        items in prop::collection::vec(
+            prop::option::weighted(0.9, (1u64..5000, prop::sample::select(vec![1u64, 4, 256, 4096]), 0usize..8, 0usize..4, 0u32..2)),
+            0..24,
+        )
+    ) {
+        let items: Vec<Option<MemoryItem>> = items
+            .into_iter()
+            .map(|i| i.map(|(size, alignment, start, len, heap_class)| MemoryItem {
+                size,
+                alignment,
+                lifetime: (start, start + len),
+                heap_class,
+            }))
+            .collect();
+        let (placements, heaps) = plan_memory(&items);
+        prop_assert_eq!(placements.len(), items.len());
+        for (i, (item, p)) in items.iter().zip(&placements).enumerate() {
+            let (Some(item), Some(p)) = (item, p) else {
+                prop_assert!(item.is_none() && p.is_none());
+                continue;
+            };
+            prop_assert_eq!(p.offset % item.alignment, 0);
+            prop_assert!(p.offset + item.size <= heaps[p.heap]);
+            for (j, (other, q)) in items.iter().zip(&placements).enumerate() {
+                let (Some(other), Some(q)) = (other, q) else { continue };
+                if i == j {
+                    continue;
+                }
+                if other.heap_class == item.heap_class {
+                    prop_assert_eq!(p.heap, q.heap);
+                } else {
+                    prop_assert!(p.heap != q.heap);
+                }
+                let live = item.lifetime.0 <= other.lifetime.1 && other.lifetime.0 <= item.lifetime.1;
+                if p.heap == q.heap && live {
+                    prop_assert!(p.offset + item.size <= q.offset || q.offset + other.size <= p.offset);
+                }
+            }
+        }
+        // Each placement adds at most its size plus alignment padding to the heaps, and each
+        // heap is rounded up to whole units of its largest alignment.
+        let max_align = items.iter().flatten().map(|i| i.alignment.max(1)).max().unwrap_or(1);
+        let bound: u64 = items.iter().flatten().map(|i| i.size + i.alignment - 1).sum::<u64>()
+            + heaps.len() as u64 * max_align;
+        prop_assert!(heaps.iter().sum::<u64>() <= bound);
+    }
+    }
+}

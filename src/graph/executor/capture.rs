@@ -1,6 +1,8 @@
-//! Host copies of the buffers some passes read through named slots (for checking tools such as
-//! `--verify`, which reads the draw lists a frame consumed). The copies are read after the frame
-//! completed, before the next frame is recorded.
+//! Host copies of the draw lists the passes drew (for checking tools such as `--verify`, which
+//! compares what a frame drew with what it should have): each pass whose kind declares a draw
+//! list ([`crate::graph::PassKind::draw_list`]) has the buffers bound to that list's slots
+//! copied right after it runs. The copies are read after the frame completed, before the next
+//! frame is recorded.
 
 use super::resources::{Physical, RuntimeResources};
 use crate::gpu::{Buffer, BufferDesc, GpuContext, MemoryLocation};
@@ -11,30 +13,25 @@ use ash::vk;
 /// bytes (`None`: the pass leaves one of the slots unbound).
 pub type Captured = (usize, Option<Vec<Vec<u8>>>);
 
-/// Host buffers for the captured slots of each capturing pass, refreshed every recorded frame.
+/// One drawing pass's captured list: its index, its list's slots and a host copy per slot
+/// (`None`: it leaves a slot unbound).
+type PassCopies = (usize, [&'static str; 3], Option<Vec<Buffer>>);
+
+/// Host buffers for the draw list of each drawing pass, refreshed every recorded frame.
 pub struct SlotCapture {
-    slots: Vec<&'static str>,
-    /// Per capturing pass: its index and a host copy per slot (None: it leaves a slot unbound).
-    copies: Vec<(usize, Option<Vec<Buffer>>)>,
+    copies: Vec<PassCopies>,
 }
 
 impl SlotCapture {
-    /// Host buffers for `slots` of every pass whose kind reads all of them.
-    pub fn new(
-        ctx: &GpuContext,
-        plan: &CompiledGraph,
-        resources: &RuntimeResources,
-        slots: &[&'static str],
-    ) -> crate::Result<Self> {
+    /// Host buffers for the draw list of every pass whose kind declares one.
+    pub fn new(ctx: &GpuContext, plan: &CompiledGraph, resources: &RuntimeResources) -> crate::Result<Self> {
         let mut copies = Vec::new();
         for (i, pass) in plan.passes.iter().enumerate() {
-            let Some(kind) = plan.kinds.info(&pass.kind) else { continue };
-            if !slots.iter().all(|s| kind.reads.iter().any(|r| r.name == *s)) {
-                continue;
-            }
+            let Some(list) = plan.kinds.get(&pass.kind).and_then(|k| k.kind.draw_list()) else { continue };
+            let slots = list.slots;
             let bound: Vec<_> = slots.iter().filter_map(|s| pass.bindings.iter().find(|b| b.slot == *s)).collect();
             if bound.len() < slots.len() {
-                copies.push((i, None));
+                copies.push((i, slots, None));
                 continue;
             }
             let host = |k: usize| -> crate::Result<Buffer> {
@@ -52,9 +49,9 @@ impl SlotCapture {
                     },
                 )?)
             };
-            copies.push((i, Some((0..slots.len()).map(host).collect::<crate::Result<Vec<_>>>()?)));
+            copies.push((i, slots, Some((0..slots.len()).map(host).collect::<crate::Result<Vec<_>>>()?)));
         }
-        Ok(Self { slots: slots.to_vec(), copies })
+        Ok(Self { copies })
     }
 
     /// The bindings of pass `index`'s captured slots with the host buffers to copy them into
@@ -64,8 +61,10 @@ impl SlotCapture {
         index: usize,
         bindings: &'a [Binding],
     ) -> impl Iterator<Item = (&'a Binding, &'a Buffer)> + 'a {
-        let hosts = self.copies.iter().find(|(i, _)| *i == index).and_then(|(_, h)| h.as_ref());
-        self.slots
+        let pass = self.copies.iter().find(|(i, _, _)| *i == index);
+        let slots = pass.map(|(_, s, _)| s.as_slice()).unwrap_or(&[]);
+        let hosts = pass.and_then(|(_, _, h)| h.as_ref());
+        slots
             .iter()
             .zip(hosts.into_iter().flatten())
             .filter_map(move |(slot, host)| bindings.iter().find(|b| b.slot == *slot).map(|b| (b, host)))
@@ -76,7 +75,7 @@ impl SlotCapture {
     pub fn read(&self) -> crate::Result<Vec<Captured>> {
         self.copies
             .iter()
-            .map(|(i, hosts)| {
+            .map(|(i, _, hosts)| {
                 let bytes = match hosts {
                     Some(h) => Some(h.iter().map(|b| b.read_bytes().map(|s| s.to_vec())).collect::<Result<_, _>>()?),
                     None => None,

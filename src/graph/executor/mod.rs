@@ -10,7 +10,7 @@ mod tracker;
 
 pub use capture::Captured;
 pub use imports::{Import, Imports};
-pub use node::{FrameData, PassContext, PassNode, SlotBindings, StepTimer};
+pub use node::{CompletedTimings, FrameData, PassContext, PassNode, SlotBindings, StepTimer};
 pub use resources::{Physical, RuntimeResources};
 
 /// Device bytes of one resource of a graph (both copies of a history resource).
@@ -90,7 +90,7 @@ fn counter_sources(plan: &CompiledGraph) -> Vec<CounterSource> {
 
 /// The counters one pass wrote in a frame, as read back.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct PassCounters {
+pub(crate) struct PassCounters {
     /// The name they are reported under (the pass, or the pass that drew a list).
     pub label: String,
     /// The kind of the pass that wrote them.
@@ -146,6 +146,8 @@ pub struct GraphRuntime {
     timers: Vec<RefCell<GpuTimer>>,
     /// Whether passes time their steps separately.
     step_timing: bool,
+    /// Whether a pass reads the newest completed frame's times.
+    reads_timings: bool,
     /// Bindings of counters slots, and per frame in flight a host buffer they are copied into
     /// (read a few frames later, never waited on).
     counter_sources: Vec<CounterSource>,
@@ -189,6 +191,7 @@ impl GraphRuntime {
             .map(|_| GpuTimer::new(ctx, scopes).map(RefCell::new))
             .collect::<Result<Vec<_>, _>>()?;
         let counter_sources = counter_sources(&plan);
+        let reads_timings = plan.passes.iter().any(|p| plan.kinds.get(&p.kind).is_some_and(|k| k.kind.reads_timings()));
         let ring_bytes = counter_sources.last().map_or(16, |s| s.offset + s.bytes.next_multiple_of(16));
         let counter_ring = (0..FRAMES_IN_FLIGHT)
             .map(|i| {
@@ -211,6 +214,7 @@ impl GraphRuntime {
             resources,
             timers,
             step_timing: false,
+            reads_timings,
             counter_sources,
             counter_ring,
             capture: None,
@@ -277,6 +281,7 @@ impl GraphRuntime {
         if frame == 0 {
             self.copy_inherited(cmd, frame);
         }
+        let completed = if self.reads_timings { self.newest_timings(frame) } else { None };
         let timer = &self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
         timer.borrow_mut().reset(cmd);
         timer.borrow_mut().begin(cmd, "frame");
@@ -320,6 +325,7 @@ impl GraphRuntime {
                 frame: inputs,
                 slots: SlotBindings { pass, resources: &self.resources, frame },
                 steps: StepTimer::new(self.step_timing.then_some(timer), &pass.name),
+                timings: completed.as_ref(),
             };
             node.record(&rec)?;
             rec.steps.finish(cmd);
@@ -492,16 +498,17 @@ impl GraphRuntime {
         self.step_timing
     }
 
-    /// Starts copying, after every pass whose kind reads all of `slots`, the buffers bound
-    /// there to the host (a checking tool: `--verify` reads the draw lists this way); an empty
-    /// list stops it. See [`GraphRuntime::captured`].
-    pub fn set_capture(&mut self, slots: &[&'static str]) -> crate::Result<()> {
-        self.capture = if slots.is_empty() {
-            None
-        } else {
-            Some(capture::SlotCapture::new(&self.ctx, &self.plan, &self.resources, slots)?)
-        };
+    /// Starts (or stops) copying the draw list of every pass whose kind declares one to the
+    /// host, after the pass (a checking tool: `--verify` reads what each pass drew this way).
+    /// See [`GraphRuntime::captured`].
+    pub fn capture_draw_lists(&mut self, on: bool) -> crate::Result<()> {
+        self.capture = if on { Some(capture::SlotCapture::new(&self.ctx, &self.plan, &self.resources)?) } else { None };
         Ok(())
+    }
+
+    /// Whether draw lists are captured.
+    pub fn captures_draw_lists(&self) -> bool {
+        self.capture.is_some()
     }
 
     /// What the capturing passes bound to the captured slots in the last recorded frame, once
@@ -515,7 +522,7 @@ impl GraphRuntime {
     /// The counters every counters slot held in `frame`, once the frame has completed (empty if
     /// its readback slot was reused since), in pass order. A list written by last frame's pass
     /// for this frame comes under the name of the pass that drew it, with the writer's kind.
-    pub fn pass_counters(&self, frame: u64) -> crate::Result<Vec<PassCounters>> {
+    pub(crate) fn pass_counters(&self, frame: u64) -> crate::Result<Vec<PassCounters>> {
         if frame >= self.frame || self.frame - frame > FRAMES_IN_FLIGHT as u64 {
             return Ok(Vec::new());
         }
@@ -550,6 +557,15 @@ impl GraphRuntime {
                 Some((writer, kind.kind.decode_counters(&c.label, &c.slot, &c.bytes)?))
             })
             .collect())
+    }
+
+    /// The times of the newest frame before `frame` that has completed, without waiting (a
+    /// frame still executing has no results yet and is skipped).
+    fn newest_timings(&self, frame: u64) -> Option<CompletedTimings> {
+        (1..=FRAMES_IN_FLIGHT as u64).filter_map(|back| frame.checked_sub(back)).find_map(|f| match self.timings(f) {
+            Ok(passes) if !passes.is_empty() => Some(CompletedTimings { frame: f, passes }),
+            _ => None,
+        })
     }
 
     /// GPU time per pass of `frame`, once it has completed (empty if its timestamps were reused).

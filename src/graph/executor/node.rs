@@ -93,6 +93,18 @@ pub struct PassContext<'a> {
     pub slots: SlotBindings<'a>,
     /// Timestamps between the pass's steps, when the runtime was asked for them.
     pub steps: StepTimer<'a>,
+    /// The GPU times of the newest frame that has completed, for kinds that read them
+    /// ([`crate::graph::PassKind::reads_timings`]); `None` until one has.
+    pub timings: Option<&'a CompletedTimings>,
+}
+
+/// The GPU times of a completed frame of the runtime.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompletedTimings {
+    /// The runtime's number of that frame.
+    pub frame: u64,
+    /// Each pass's scope and the whole frame's (`frame`).
+    pub passes: Vec<crate::gpu::PassTiming>,
 }
 
 impl PassContext<'_> {

@@ -36,6 +36,25 @@ pub struct DrawCounts {
     pub triangles: u64,
 }
 
+/// The slots of the draw list a pass draws, and how to read it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DrawList {
+    /// The slots of its indirect commands, its draw count and its instance ids.
+    pub slots: [&'static str; 3],
+    /// Which of its commands the pass draws.
+    pub order: DrawOrder,
+}
+
+/// Which commands of a draw list a pass draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DrawOrder {
+    /// A culled list of the scene's draw groups, laid out in regions, each with its own count
+    /// (the opaque regions are drawn; how the host's scene lays them out says which).
+    Regions,
+    /// The first `count` commands, in order (a sorted list).
+    Sorted,
+}
+
 /// A setting of a pass to change: the pass, the setting and its new value as RON would write it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SettingOverride {

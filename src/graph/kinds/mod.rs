@@ -12,7 +12,7 @@ mod counters;
 mod setting;
 mod slot;
 
-pub use counters::{Adaptation, CounterEntry, DrawCounts, SettingOverride};
+pub use counters::{Adaptation, CounterEntry, DrawCounts, DrawList, DrawOrder, SettingOverride};
 pub use setting::{Choice, SettingDecl, SettingDefault};
 pub use slot::{Bytes, Counters, Created, Creates, Extent, FormatRule, MipChain, SlotDecl, Unbound};
 
@@ -107,6 +107,19 @@ pub trait PassKind: Send + Sync {
     fn decode_counters(&self, pass: &str, slot: &str, bytes: &[u8]) -> Option<CounterEntry> {
         let _ = (pass, slot, bytes);
         None
+    }
+
+    /// The draw list a pass of this kind draws, when it draws one (what a checking tool reads
+    /// to know what each pass drew, [`crate::graph::GraphRuntime::capture_draw_lists`]);
+    /// `None` (the default): it draws none.
+    fn draw_list(&self) -> Option<DrawList> {
+        None
+    }
+
+    /// Whether a pass of this kind reads the GPU times of the newest completed frame
+    /// ([`crate::graph::PassContext::timings`]); the executor reads them back only then.
+    fn reads_timings(&self) -> bool {
+        false
     }
 
     /// The kind's policy for changing settings of the graph from what a pass's counters say

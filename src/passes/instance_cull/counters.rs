@@ -8,7 +8,7 @@ use bytemuck::{Pod, Zeroable};
 use serde::{Deserialize, Serialize};
 
 /// The group of the frame's stats (and key of its JSON) that cull passes report in.
-pub const GROUP: &str = "culling";
+pub(crate) const GROUP: &str = "culling";
 
 /// One cull pass's counters as the GPU writes them (64 bytes).
 #[repr(C)]

@@ -45,13 +45,13 @@ use ash::vk;
 pub use counters::{CullCounters, CullPassStats};
 
 /// The kind's name in RON.
-pub const KIND: &str = "instance_cull";
+pub(crate) const KIND: &str = "instance_cull";
 
 /// The slot of the counters of the list the late phase writes for the next frame.
-pub const LIST_STATS_SLOT: &str = "list_stats";
+pub(crate) const LIST_STATS_SLOT: &str = "list_stats";
 
 /// Slots per block of the prefix sum (`CULL_BLOCK` in `cull_common.glsl`).
-pub const CULL_BLOCK: u32 = 256;
+pub(crate) const CULL_BLOCK: u32 = 256;
 
 crate::choice! {
     /// Which instances a cull pass draws (setting `phase`).
@@ -124,7 +124,7 @@ impl Phase {
 
 /// The pass's settings, from the graph.
 #[derive(Clone, Debug, PartialEq)]
-pub struct CullSettings {
+pub(crate) struct CullSettings {
     /// Which instances it draws.
     pub phase: Phase,
     /// Test the frustum.
@@ -192,7 +192,7 @@ struct Scratch {
 }
 
 /// The instance-cull pass.
-pub struct InstanceCullPass {
+pub(crate) struct InstanceCullPass {
     settings: CullSettings,
     test: Pipeline,
     compact: Option<Pipeline>,
@@ -288,12 +288,12 @@ impl InstanceCullPass {
 
 /// The late phase's bindings for the next frame's early draw list, written together (with its
 /// counters, `list_stats`, which the kind creates with them).
-pub const LIST_SLOTS: [&str; 3] = ["visible_ids", "list_commands", "list_count"];
+pub(crate) const LIST_SLOTS: [&str; 3] = ["visible_ids", "list_commands", "list_count"];
 
 /// What is wrong with an instance_cull pass's draw-list bindings, if anything: the slot to point
 /// at (empty: the pass itself) and the message. Graph loading reports it at that binding; the
 /// pass checks it again when it is built.
-pub fn list_binding_error(bound: impl Fn(&str) -> bool) -> Option<(&'static str, String)> {
+pub(crate) fn list_binding_error(bound: impl Fn(&str) -> bool) -> Option<(&'static str, String)> {
     let first_bound = LIST_SLOTS.iter().copied().find(|s| bound(s))?;
     if let Some(missing) = LIST_SLOTS.iter().find(|s| !bound(s)) {
         return Some((
@@ -326,7 +326,7 @@ fn blocks_of(slots: u32) -> u32 {
 }
 
 /// Blocks per superblock (`CULL_SUPERBLOCK` in `cull_common.glsl`).
-pub const CULL_SUPERBLOCK: u32 = 64;
+pub(crate) const CULL_SUPERBLOCK: u32 = 64;
 
 /// Compute writes before compute reads and writes of the next step.
 fn step_barrier(ctx: &GpuContext, cmd: vk::CommandBuffer) {

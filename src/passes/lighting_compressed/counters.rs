@@ -8,7 +8,7 @@ use bytemuck::{Pod, Zeroable};
 use serde::{Deserialize, Serialize};
 
 /// The group of the frame's stats (and key of its JSON) that compressed G-buffers report in.
-pub const GROUP: &str = "gbuffer";
+pub(crate) const GROUP: &str = "gbuffer";
 
 /// The counters as the GPU writes them (64 bytes).
 #[repr(C)]

@@ -4,7 +4,7 @@
 //! ([`counters`]), from which the kind's policy sizes the pool ([`pool`]).
 
 pub mod counters;
-pub mod pool;
+pub(crate) mod pool;
 
 use super::gbuffer::bound_samples;
 use super::gbuffer_compressed::BoundGbuffer;
@@ -21,7 +21,7 @@ use crate::graph::{
 pub use counters::{GbufferCounters, GbufferPassStats};
 
 /// The kind's name in RON.
-pub const KIND: &str = "lighting_compressed";
+pub(crate) const KIND: &str = "lighting_compressed";
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 
@@ -45,7 +45,7 @@ struct Push {
 }
 
 /// The `lighting_compressed` pass.
-pub struct LightingCompressedPass {
+pub(crate) struct LightingCompressedPass {
     pipeline: Pipeline,
     stats_clear: Option<Pipeline>,
     sampler: Sampler,

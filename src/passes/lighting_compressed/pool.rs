@@ -25,17 +25,6 @@ pub struct PoolAdapter {
 }
 
 impl PoolAdapter {
-    /// Starting from the pool the first observed frame reports (whatever the graph's
-    /// `pool_fraction` gave it).
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    /// Pool blocks per pixel now (`None` before the first frame).
-    pub fn fraction(&self) -> Option<f64> {
-        self.fraction
-    }
-
     /// Looks at one completed frame's counters for an image of `pixels`; returns the new pool
     /// fraction when the pool should change.
     pub fn observe(&mut self, g: &GbufferPassStats, pixels: u64) -> Option<f64> {
@@ -110,7 +99,7 @@ mod tests {
 
     #[test]
     fn grows_at_once_and_shrinks_slowly() {
-        let mut a = PoolAdapter::new();
+        let mut a = PoolAdapter::default();
         // 1000 pixels, a pool of 100 blocks asked for 300: grow to 300 * 1.25.
         assert_eq!(a.observe(&stats(300, 100), 1000), Some(0.375));
         assert_eq!(a.observe(&stats(300, 375), 1000), None);
@@ -121,11 +110,11 @@ mod tests {
         assert_eq!(a.observe(&stats(20, 375), 1000), Some(0.04));
         // Never beyond 7 blocks per pixel, never below the floor.
         assert_eq!(a.observe(&stats(100_000, 40), 1000), Some(MAX_FRACTION));
-        let mut b = PoolAdapter::new();
-        assert_eq!(b.fraction(), None);
+        let mut b = PoolAdapter::default();
+        assert_eq!(b.fraction, None);
         for _ in 0..SHRINK_AFTER_FRAMES {
             b.observe(&stats(0, 500), 1000);
         }
-        assert_eq!(b.fraction(), Some(MIN_FRACTION));
+        assert_eq!(b.fraction, Some(MIN_FRACTION));
     }
 }

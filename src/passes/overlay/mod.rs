@@ -11,12 +11,14 @@
 //! workgroup, a thread per row) formats the fields from the counters the cull passes wrote to
 //! their `stats` buffers earlier in the same frame, so the figures are this frame's, on the
 //! GPU, with no readback; then `overlay_draw.comp` draws the character grid with font8x8 glyphs
-//! (uploaded once). The totals are made as [`crate::stats::cull::totals`] makes the CPU's.
+//! (uploaded once). The totals are made as [`crate::stats::FrameStats::add_counters`] makes the
+//! CPU's.
 //!
-//! **Timings.** GPU times are known only once a frame has completed. The renderer writes the
-//! newest completed frame's times, in plan order, into a small host-visible buffer per frame in
-//! flight ([`GpuPassTimes`], [`crate::passes::shared::SceneInputs::pass_times`]); the panel says
-//! which frame they are from and draws a bar per pass proportional to its time.
+//! **Timings.** GPU times are known only once a frame has completed. The kind asks the executor
+//! for the newest completed frame's ([`crate::graph::PassKind::reads_timings`]) and the pass
+//! writes them, in plan order, into a small host-visible buffer of its own per frame in flight
+//! ([`GpuPassTimes`]); the panel says which frame they are from and draws a bar per pass
+//! proportional to its time.
 //!
 //! **Cost.** View `stats` dispatches over the panel's largest possible extent only (and leaves
 //! every pixel outside this frame's panel untouched). The debug views are full screen: `hiz`
@@ -30,28 +32,27 @@
 mod panel;
 mod times;
 
-pub use panel::{
-    glyph, glyph_origin, panel_rect, BAR_CHARS, GLYPH, LABEL_COLOR, LINE, MARGIN, MAX_COLS, MAX_LABEL, MAX_NAME,
-    MAX_ROWS, NUMBER_COLOR, PADDING,
-};
-pub use times::{GpuPassTimes, MAX_TIMED, PASS_TIMES_BYTES};
+pub use panel::{glyph, glyph_origin, panel_rect, BAR_CHARS, LABEL_COLOR, MAX_COLS, NUMBER_COLOR};
+pub(crate) use times::{GpuPassTimes, PASS_TIMES_BYTES};
 
 use super::slots::{slot, COUNTERS_BYTES, HIZ_FORMAT, INSTANCE_BITS, LIT_OUTPUT_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
-use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, Stages, Usage};
+use crate::graph::{
+    FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, Stages, Usage, FRAMES_IN_FLIGHT,
+};
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 use panel::*;
 
 /// Cull passes whose counters the panel can show (slots `stats0`..`stats3`).
-pub const MAX_STATS: usize = 4;
+pub(crate) const MAX_STATS: usize = 4;
 /// The stats slots, in the order the panel lists them.
-pub const STATS_SLOTS: [&str; MAX_STATS] = ["stats0", "stats1", "stats2", "stats3"];
+pub(crate) const STATS_SLOTS: [&str; MAX_STATS] = ["stats0", "stats1", "stats2", "stats3"];
 /// The slot of a compressed G-buffer's counters (a `lighting_compressed` pass's `stats`).
-pub const GBUFFER_STATS_SLOT: &str = "gbuffer_stats";
+pub(crate) const GBUFFER_STATS_SLOT: &str = "gbuffer_stats";
 
 crate::choice! {
     /// What the overlay shows (setting `view`).
@@ -67,7 +68,7 @@ crate::choice! {
 
 /// The pass's settings, from the graph.
 #[derive(Clone, Debug, PartialEq)]
-pub struct OverlaySettings {
+pub(crate) struct OverlaySettings {
     /// What to show.
     pub view: OverlayView,
     /// Mip of the Hi-Z pyramid view `hiz` shows (clamped to the last).
@@ -128,7 +129,7 @@ struct DrawPush {
 const TEXT_BYTES: u64 = (16 + MAX_ROWS * 4 + MAX_ROWS * MAX_COLS * 4) as u64;
 
 /// The overlay pass.
-pub struct OverlayPass {
+pub(crate) struct OverlayPass {
     name: String,
     settings: OverlaySettings,
     /// Widest possible panel, in characters, and its rows.
@@ -147,6 +148,10 @@ pub struct OverlayPass {
     no_stats: Buffer,
     /// View `culled`: header + per-row coverage counts, for the size it was made for.
     coverage: Option<(vk::Extent2D, Buffer)>,
+    /// The newest completed frame's GPU times ([`GpuPassTimes`]), one host-visible buffer per
+    /// frame in flight, and the plan's pass names they are listed by.
+    times: Vec<Buffer>,
+    pass_names: Vec<String>,
 }
 
 impl OverlayPass {
@@ -221,12 +226,19 @@ impl OverlayPass {
             text,
             no_stats: Buffer::with_data(ctx, &name("no stats"), storage, &[0u8; 64])?,
             coverage: None,
+            times: (0..FRAMES_IN_FLIGHT)
+                .map(|i| {
+                    let desc = BufferDesc {
+                        name: &name(&format!("times {i}")),
+                        size: PASS_TIMES_BYTES,
+                        usage: storage,
+                        location: MemoryLocation::CpuToGpu,
+                    };
+                    Buffer::new(ctx, &desc)
+                })
+                .collect::<Result<_, _>>()?,
+            pass_names: plan.passes.iter().map(|p| p.name.clone()).collect(),
         })
-    }
-
-    /// The settings in use.
-    pub fn settings(&self) -> &OverlaySettings {
-        &self.settings
     }
 
     /// The coverage buffer for an image of `extent` (made on first use and when the size changes).
@@ -325,7 +337,13 @@ impl PassNode for OverlayPass {
             cmd_barriers(&device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::COMPUTE_WRITE)], &[]);
         }
 
-        let times = frame.pass_times();
+        let times = &mut self.times[(rec.frame.frame % FRAMES_IN_FLIGHT as u64) as usize];
+        let newest = match rec.timings {
+            Some(t) => GpuPassTimes::from_timings(&self.pass_names, t.frame, &t.passes),
+            None => GpuPassTimes::none(),
+        };
+        times.write_bytes(0, bytemuck::bytes_of(&newest))?;
+        let times = &self.times[(rec.frame.frame % FRAMES_IN_FLIGHT as u64) as usize];
         let mut binds: Vec<Bind> = (0..MAX_STATS)
             .map(|k| Bind::Buffer(k as u32, stats.get(k).copied().unwrap_or(&self.no_stats).handle()))
             .collect();
@@ -425,6 +443,10 @@ impl PassKind for OverlayKind {
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
         Ok(Box::new(OverlayPass::new(s.ctx, s.shaders, s.pass, s.plan)?))
     }
+
+    fn reads_timings(&self) -> bool {
+        true
+    }
 }
 
 #[cfg(test)]
@@ -511,13 +533,13 @@ mod tests {
 
     #[test]
     fn times_follow_the_plan_order_and_unknown_ones_are_negative() {
-        let p = plan(["early", "late"]);
+        let p: Vec<String> = plan(["early", "late"]).passes.iter().map(|p| p.name.clone()).collect();
         let timing = |name: &str, ms| PassTiming { name: name.into(), start_ms: 0.0, ms };
         let t =
             GpuPassTimes::from_timings(&p, 7, &[timing("frame", 3.0), timing("cull_b", 2.0), timing("overlay", 0.5)]);
         assert_eq!((t.count, t.frame, t.total_ms), (3, 7, 3.0));
         assert_eq!(t.ms[..4], [-1.0, 2.0, 0.5, -1.0]);
-        assert_eq!(PASS_TIMES_BYTES, 16 + 4 * MAX_TIMED as u64);
+        assert_eq!(PASS_TIMES_BYTES, 16 + 4 * times::MAX_TIMED as u64);
         assert_eq!(GpuPassTimes::none().frame, u32::MAX);
     }
 

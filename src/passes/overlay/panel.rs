@@ -9,17 +9,17 @@ use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind, SettingValue,
 use crate::passes::instance_cull::LIST_STATS_SLOT;
 
 /// Most rows of the panel.
-pub const MAX_ROWS: usize = 48;
+pub(crate) const MAX_ROWS: usize = 48;
 /// Most characters per row.
 pub const MAX_COLS: usize = 96;
 /// Font pixels per glyph side.
-pub const GLYPH: u32 = 8;
+pub(crate) const GLYPH: u32 = 8;
 /// Font pixels per text line.
-pub const LINE: u32 = 10;
+pub(crate) const LINE: u32 = 10;
 /// Font pixels between the panel's edge and its text.
-pub const PADDING: u32 = 4;
+pub(crate) const PADDING: u32 = 4;
 /// Screen pixels between the image's top-left corner and the panel.
-pub const MARGIN: u32 = 8;
+pub(crate) const MARGIN: u32 = 8;
 /// Length of the longest time bar, in characters.
 pub const BAR_CHARS: u32 = 12;
 /// Color of label glyphs (sRGB-encoded RGB).
@@ -27,9 +27,9 @@ pub const LABEL_COLOR: [u8; 3] = [215, 215, 215];
 /// Color of number glyphs (sRGB-encoded RGB).
 pub const NUMBER_COLOR: [u8; 3] = [255, 224, 112];
 /// Longest pass name shown in the timings (longer ones are cut).
-pub const MAX_NAME: usize = 20;
+pub(crate) const MAX_NAME: usize = 20;
 /// Longest cull-pass label in the drawn line.
-pub const MAX_LABEL: usize = 12;
+pub(crate) const MAX_LABEL: usize = 12;
 
 pub(super) const TOKEN_END: u32 = 0xFFFF_FFFF;
 pub(super) const TOKEN_FIELD: u32 = 0x1000_0000;

@@ -1,5 +1,5 @@
 //! What the built-in passes share besides their slots: the scene on the GPU, its GPU layouts,
-//! and this frame's constants, lights and GPU times ([`SceneInputs`]).
+//! and this frame's constants and lights ([`SceneInputs`]).
 //!
 //! The graph knows none of it: the renderer hands a [`SceneInputs`] to every frame as the graph's
 //! opaque shared data ([`crate::graph::FrameData::shared`]), and a pass reads it through
@@ -9,27 +9,34 @@
 pub mod cull_data;
 pub mod face_cull;
 pub mod gpu_types;
-pub mod lazy_pipeline;
+pub(crate) mod lazy_pipeline;
 pub mod scene_buffers;
 pub mod slot_layout;
 pub mod textures;
+pub(crate) mod transparent_draw;
 
 use crate::gpu::{Buffer, BufferDesc, GpuContext, MemoryLocation};
 use crate::graph::{FrameInputs, Growth, KindRegistry, PassContext, Quantity, FRAMES_IN_FLIGHT};
-use crate::passes::overlay::{GpuPassTimes, PASS_TIMES_BYTES};
 use crate::scene::Scene;
 use ash::vk;
 use gpu_types::{FrameConstants, GpuPointLight};
 pub use scene_buffers::GpuScene;
 
+/// The pool's vertex layout ([`crate::scene::Vertex`]) as `gbuffer.vert` reads it: position,
+/// octahedral normal, texture coordinates, tangent.
+pub const VERTEX_ATTRIBUTES: [(u32, vk::Format, u32); 4] = [
+    (0, vk::Format::R32G32B32_SFLOAT, 0),
+    (1, vk::Format::R16G16_SNORM, 12),
+    (2, vk::Format::R32G32_SFLOAT, 16),
+    (3, vk::Format::R16G16B16A16_SNORM, 24),
+];
+
 /// Host-visible data of one frame in flight.
-pub struct FrameSlot {
+pub(crate) struct FrameSlot {
     /// This frame's [`FrameConstants`].
     pub constants: Buffer,
     /// This frame's point lights ([`GpuPointLight`] each).
     pub lights: Buffer,
-    /// The newest completed frame's GPU times ([`GpuPassTimes`]), for an overlay pass.
-    pub pass_times: Buffer,
 }
 
 /// The scene on the GPU and the per-frame buffers of each frame in flight; the renderer picks
@@ -58,12 +65,9 @@ impl SceneInputs {
                         },
                     )
                 };
-                let mut pass_times = host(&format!("pass times {i}"), PASS_TIMES_BYTES)?;
-                pass_times.write_bytes(0, bytemuck::bytes_of(&GpuPassTimes::none()))?;
                 Ok(FrameSlot {
                     constants: host(&format!("frame constants {i}"), std::mem::size_of::<FrameConstants>() as u64)?,
                     lights: host(&format!("lights {i}"), light_bytes)?,
-                    pass_times,
                 })
             })
             .collect::<crate::Result<Vec<_>>>()?;
@@ -93,7 +97,7 @@ impl SceneInputs {
     }
 
     /// The slot of frame `frame` (what it held once that frame has completed).
-    pub fn slot(&self, frame: u64) -> &FrameSlot {
+    pub(crate) fn slot(&self, frame: u64) -> &FrameSlot {
         &self.frames[(frame % FRAMES_IN_FLIGHT as u64) as usize]
     }
 
@@ -105,11 +109,6 @@ impl SceneInputs {
     /// This frame's point lights.
     pub fn lights(&self) -> &Buffer {
         &self.frames[self.current].lights
-    }
-
-    /// The newest completed frame's GPU times ([`GpuPassTimes`]).
-    pub fn pass_times(&self) -> &Buffer {
-        &self.frames[self.current].pass_times
     }
 }
 

@@ -22,7 +22,8 @@
 //! groups, or a journal that no longer reaches back to the last sync, lays the world out anew
 //! in spatial order, with the history cleared.
 
-use super::{build_runtime_for, Renderer};
+use super::graphs::build_runtime;
+use super::Renderer;
 use crate::error::{Error, Result};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{
@@ -344,7 +345,7 @@ impl Renderer {
         let (layout, scene) = lay_out(world);
         let (counted, scene, layout) = quantities(&spec.kinds, scene, layout)?;
         let compiled = with_room_to_grow(&spec.kinds, &counted, &settings);
-        let runtime = build_runtime_for(ctx, shaders, &compiled, spec)?;
+        let runtime = build_runtime(ctx, shaders, &compiled, spec)?;
         let mut uploads = UploadBatch::default();
         let gpu_scene = GpuScene::upload_with(ctx, &scene, layout.draw_list(&scene), &mut uploads)?;
         let light_capacity = with_room(scene.lights.len() as u64) as usize;
@@ -554,7 +555,7 @@ impl Renderer {
         };
         let mut scene = layout.slot_scene(world.scene());
         scene.lights = live_lights(world);
-        let kinds = &self.spec.kinds;
+        let kinds = &self.graphs.spec.kinds;
         let (counted, scene, layout) = quantities(kinds, scene, layout)?;
         let outgrown = outgrows(kinds, &counted, &mirror.compiled) || scene.lights.len() > mirror.light_capacity;
         let needed = with_room_to_grow(kinds, &counted, &self.settings);
@@ -562,28 +563,28 @@ impl Renderer {
         // Textures are the slowest part of an upload (resampling and mips on the CPU): they are
         // made again only when the world registered one, or when their upload has not been
         // recorded yet (the batch that holds it is replaced below).
-        let reuse = !textures_changed && self.pending_uploads.is_none();
+        let reuse = !textures_changed && self.uploads.pending.is_none();
         let textures = reuse.then(|| self.inputs.scene.textures.clone());
         let gpu_scene = GpuScene::upload_reusing(&self.ctx, &scene, layout.draw_list(&scene), &mut uploads, textures)?;
         let light_capacity = with_room(scene.lights.len() as u64).max(mirror.light_capacity as u64) as usize;
         let inputs = SceneInputs::new(&self.ctx, gpu_scene, light_capacity)?;
         if outgrown {
-            let mut runtime = build_runtime_for(&self.ctx, shaders, &needed, &self.spec)?;
+            let mut runtime = build_runtime(&self.ctx, shaders, &needed, &self.graphs.spec)?;
             if how == Layout::Kept {
                 // Slots and groups kept their indices: last frame's visibility still holds.
-                runtime.inherit_history(&self.runtime);
+                runtime.inherit_history(&self.graphs.runtime);
             }
             self.install_runtime(runtime)?;
         } else if how == Layout::Fresh {
             // Slots were given out anew: last frame's visibility and draw lists name other
             // instances now.
-            self.runtime.reset_history();
+            self.graphs.runtime.reset_history();
         }
         let bytes = uploads.bytes();
         let old = std::mem::replace(&mut self.inputs, inputs);
         self.retired_inputs.push((self.frame_index.saturating_sub(1), old));
         // A batch not recorded yet would fill the buffers being replaced: it goes unrecorded.
-        self.pending_uploads = Some(uploads);
+        self.uploads.pending = Some(uploads);
         let mirror = self.world.as_mut().expect("a world renderer");
         if outgrown {
             mirror.compiled = needed;

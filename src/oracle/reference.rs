@@ -6,12 +6,11 @@
 //! Only the camera makes one frame differ from another in these graphs (no time input), so a
 //! fresh renderer's first frame is the same frame.
 
-use super::graph_spec::GraphSpec;
-use super::output::{rgba_from_bytes, RgbaImage};
-use super::renderer::{RenderSettings, Renderer};
+use super::image_error::{downsample_box_srgb, image_error, ImageError};
 use crate::error::{Error, Result};
 use crate::gpu::{GpuContext, ShaderCompiler};
-use crate::oracle::image_error::{downsample_box_srgb, image_error, ImageError};
+use crate::render::output::{rgba_from_bytes, RgbaImage};
+use crate::render::{GraphSpec, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 
 /// Default supersampling factor per axis (`--reference` without a value): 4 x 4 = 16 samples.

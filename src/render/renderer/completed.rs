@@ -1,0 +1,47 @@
+//! The figures of a frame once it has completed: its GPU timings and the counters each pass's
+//! kind decoded, read back through per-frame host buffers a few frames late, never waited on.
+
+use super::Renderer;
+use crate::error::Result;
+use crate::gpu::PassTiming;
+use crate::stats::FrameStats;
+
+impl Renderer {
+    /// GPU timings of a recorded frame if it has completed and its timestamps were not reused.
+    pub fn completed_timings(&self, frame: u64) -> Result<Vec<PassTiming>> {
+        match self.graphs.runtime_of(frame) {
+            Some((runtime, index)) => runtime.timings(index),
+            None => Ok(Vec::new()),
+        }
+    }
+
+    /// The figures of a recorded frame once it has completed on the GPU (counters and
+    /// timestamps come back through per-frame host buffers, a few frames late, never waited
+    /// on). Without culling passes everything is drawn.
+    pub fn completed_stats(&self, frame: u64) -> Result<FrameStats> {
+        let timings = self.completed_timings(frame)?;
+        let total = timings.iter().find(|t| t.name == "frame").map_or(0.0, |t| t.ms);
+        let entries = match self.graphs.runtime_of(frame) {
+            Some((runtime, index)) => runtime.counter_entries(index)?,
+            None => Vec::new(),
+        };
+        // A world renderer's empty slots are no instances.
+        let instances = self.world.as_ref().map_or(self.inputs.scene.instance_count, |w| w.instances());
+        let mut stats = FrameStats {
+            frame,
+            instances,
+            drawn: instances,
+            draws: self.inputs.scene.regions.groups(),
+            triangles: self.inputs.scene.triangles,
+            gpu_ms: timings.into_iter().filter(|t| t.name != "frame").collect(),
+            gpu_total_ms: total,
+            ..Default::default()
+        };
+        stats.add_counters(entries);
+        stats.update = match &self.world {
+            Some(world) => world.update_of(frame)?,
+            None => None,
+        };
+        Ok(stats)
+    }
+}
