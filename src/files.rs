@@ -15,6 +15,22 @@ pub const SCENE_LIMIT: u64 = 2 << 30;
 /// The bytes of the regular file at `path`, at most `limit` of them. `what` names the kind of
 /// file in the message of a refusal ("graph file", "shader", ...).
 pub fn read_limited(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>, String> {
+    let len = check_regular(path, limit, what)?;
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read the {what}: {e}"))?;
+    let mut bytes = Vec::new();
+    bytes.try_reserve_exact(len as usize).map_err(|_| format!("no memory to read the {what} ({len} bytes)"))?;
+    // A file that grows while it is read still stops at the limit.
+    file.take(limit + 1).read_to_end(&mut bytes).map_err(|e| format!("cannot read the {what}: {e}"))?;
+    if bytes.len() as u64 > limit {
+        return Err(format!("the {what} grew past {limit} bytes while it was read"));
+    }
+    Ok(bytes)
+}
+
+/// The size of the regular file at `path`, refused (without opening it) when it is something
+/// else or larger than `limit`: [`read_limited`]'s checks, for a caller that reads the file
+/// itself.
+pub fn check_regular(path: &Path, limit: u64, what: &str) -> Result<u64, String> {
     // The metadata first: opening a FIFO would block until a writer comes.
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read the {what}: {e}"))?;
     if !meta.is_file() {
@@ -23,14 +39,7 @@ pub fn read_limited(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>, Stri
     if meta.len() > limit {
         return Err(format!("the {what} is {} bytes; a {what} may have at most {limit}", meta.len()));
     }
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot read the {what}: {e}"))?;
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    // A file that grows while it is read still stops at the limit.
-    file.take(limit + 1).read_to_end(&mut bytes).map_err(|e| format!("cannot read the {what}: {e}"))?;
-    if bytes.len() as u64 > limit {
-        return Err(format!("the {what} grew past {limit} bytes while it was read"));
-    }
-    Ok(bytes)
+    Ok(meta.len())
 }
 
 /// Like [`read_limited`], as UTF-8 text.

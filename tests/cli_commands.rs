@@ -218,7 +218,7 @@ fn world_offsets_beyond_the_precise_range_are_refused() {
 
 /// A path flag that names something unusable is refused before any work, naming the flag: an
 /// output that is a directory or a FIFO (whose opening would block until a reader comes), a
-/// shader folder that is not one.
+/// shader folder that is not one, a replayed fuzz input that is a FIFO or a device.
 #[test]
 fn unusable_paths_are_refused_before_any_work_naming_the_flag() {
     let tmp = tempfile::tempdir().unwrap();
@@ -227,6 +227,9 @@ fn unusable_paths_are_refused_before_any_work_naming_the_flag() {
     let (fifo, dir) = (fifo.to_str().unwrap(), tmp.path().to_str().unwrap());
     let png = tmp.path().join("f.png");
     let png = png.to_str().unwrap();
+    let file = tmp.path().join("file");
+    std::fs::write(&file, b"x").unwrap();
+    let file = file.to_str().unwrap();
     let default = format!("{ROOT}/graph/default.ron");
     let render = ["render", "--instances", "100", "--size", "16x16"];
     #[rustfmt::skip]
@@ -238,6 +241,11 @@ fn unusable_paths_are_refused_before_any_work_naming_the_flag() {
         ([&render[..], &["--out", png, "--shader-dir", "/dev/zero"]].concat(), "--shader-dir /dev/zero: is not a directory".into()),
         ([&render[..], &["--out", png, "--shader-dir", "/no/such/dir"]].concat(), "--shader-dir /no/such/dir: No such file".into()),
         (vec!["graph", "dot", &default, "-o", fifo], format!("-o {fifo}: is not a regular file")),
+        (vec!["fuzz", "graph", "--replay", fifo], format!("--replay {fifo}: the graph file is not a regular file")),
+        (vec!["fuzz", "graph", "--replay", "/dev/zero"], "--replay /dev/zero: the graph file is not a regular file".into()),
+        (vec!["fuzz", "gltf", "--replay", fifo], format!("--replay {fifo}: the scene file is not a regular file")),
+        (vec!["fuzz", "graph", "--seconds", "1", "--seeds", "/no/such/dir", "--out", dir], "--seeds /no/such/dir: No such file".into()),
+        (vec!["fuzz", "graph", "--seconds", "1", "--out", file], format!("--out {file}: is not a directory")),
         (vec!["bench", "--suites", "hiz", "--out", "/dev/null"], "--out /dev/null: is not a directory".into()),
     ];
     for (args, message) in cases {
