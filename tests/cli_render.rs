@@ -48,8 +48,8 @@ fn scene_sizes_beyond_memory_are_refused_with_the_memory_they_need() {
         let args = ["render", "--instances", n, "--size", "16x16", "--out", out.to_str().unwrap()];
         let (code, _, err) = run_with_memory_limit(&args, 8_000_000);
         assert_eq!(code, 1, "{err}");
-        assert!(err.contains(&format!("error: --instances {n}: the scene needs about ")), "{err}");
-        assert!(err.contains(" GiB of ") && err.contains("ask for fewer"), "{err}");
+        assert!(err.contains(&format!("error: --instances {n} needs about ")), "{err}");
+        assert!(err.contains(" GiB of ") && err.contains("ask for less"), "{err}");
         for flags in [&["graph", "plan", "graph/default.ron"][..], &["bench", "--suites", "culling", "--out"]] {
             let out_dir = tmp.path().join("bench");
             let mut args: Vec<&str> = flags.to_vec();
@@ -59,9 +59,15 @@ fn scene_sizes_beyond_memory_are_refused_with_the_memory_they_need() {
             args.extend(["--instances", n, "--size", "16x16"]);
             let (code, _, err) = run_with_memory_limit(&args, 2_000_000);
             assert_eq!(code, 1, "{args:?}: {err}");
-            assert!(err.contains(&format!("--instances {n}: the scene needs about ")), "{args:?}: {err}");
+            assert!(err.contains(&format!("--instances {n} needs about ")), "{args:?}: {err}");
         }
     }
+    // An image (and its supersampled reference) too large for the memory names its flags.
+    let args =
+        ["render", "--instances", "1000", "--size", "1024x1024", "--reference", "16", "--out", out.to_str().unwrap()];
+    let (code, _, err) = run_with_memory_limit(&args, 2_000_000);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("error: --size 1024x1024 with --reference 16 needs about "), "{err}");
     assert!(!out.exists());
     // Beyond the documented maximum, the flag's parser refuses at once.
     let (code, _, err) = run(&["render", "--instances", "50000001", "--out", out.to_str().unwrap()]);

@@ -237,21 +237,22 @@ impl SceneArgs {
         Ok(source.load(&options)?)
     }
 
-    /// Refuses a built-in scene whose memory `room` does not hold (used as `usage`, rendered at
-    /// `pixels` output pixels), naming the flags that size it; a scene file is not checked (its
-    /// size is bounded by the file's).
+    /// Refuses a built-in scene whose memory `room` does not hold (used as `usage`), naming the
+    /// flags that size it; a scene file is not checked (its size is bounded by the file's).
+    /// Returns what the scene needs.
     pub fn check_memory(
         &self,
         room: &super::memory::Room,
         usage: super::memory::Use,
-        pixels: u64,
-    ) -> cullgraph::Result<()> {
+    ) -> cullgraph::Result<super::memory::Need> {
         use cullgraph::scene::procedural::{city, field};
-        let Ok(cullgraph::scene::SceneSource::Builtin(name)) = self.scene.parse() else { return Ok(()) };
+        let Ok(cullgraph::scene::SceneSource::Builtin(name)) = self.scene.parse() else {
+            return Ok(Default::default());
+        };
         let (instances, kinds, lights) = match name.as_str() {
             "city" => (city::DEFAULT_INSTANCES, 0, city::DEFAULT_LIGHTS),
             "field" => (field::DEFAULT_INSTANCES, self.kinds.unwrap_or(field::DEFAULT_KINDS), field::DEFAULT_LIGHTS),
-            _ => return Ok(()), // the generator names the scenes it has
+            _ => return Ok(Default::default()), // the generator names the scenes it has
         };
         let instances = self.instances.unwrap_or(instances);
         let size = super::memory::SceneSize {
@@ -266,7 +267,9 @@ impl SceneArgs {
         if let Some(k) = self.kinds.filter(|_| name == "field") {
             value.push_str(&format!(" with --kinds {k}"));
         }
-        room.check("--instances", &value, super::memory::Need::of(size, usage, pixels))
+        let need = super::memory::Need::of(size, usage);
+        room.check("--instances", &value, need)?;
+        Ok(need)
     }
 }
 

@@ -60,7 +60,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let pixels = args.size.0 as u64 * args.size.1 as u64;
     for (on, usage) in [(suite("culling"), Use::Render), (suite("dynamic"), Use::Animate)] {
         if on {
-            room.check("--instances", &largest.to_string(), Need::of(city(largest), usage, pixels))?;
+            room.check("--instances", &largest.to_string(), Need::of(city(largest), usage) + Need::image(pixels))?;
         }
     }
     let mut shaders = ShaderCompiler::new(ShaderRoot::from_env())?;

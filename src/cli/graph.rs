@@ -70,7 +70,7 @@ fn dot_output(path: Option<&Path>) -> Result<(), Failure> {
 /// The scene that sizes a graph, generated when the machine holds it.
 fn scene(args: &super::args::SceneArgs) -> Result<cullgraph::scene::Scene, Failure> {
     let room = super::memory::Room::host();
-    args.check_memory(&room, super::memory::Use::Generate, 0).map_err(|e| Failure::Other(e.to_string()))?;
+    args.check_memory(&room, super::memory::Use::Generate).map_err(|e| Failure::Other(e.to_string()))?;
     args.load().map_err(|e| Failure::Other(e.to_string()))
 }
 

@@ -68,8 +68,8 @@ pub struct SceneSize {
 }
 
 impl Need {
-    /// What a scene of `size` needs when used as `usage`, rendered at `pixels` output pixels.
-    pub fn of(size: SceneSize, usage: Use, pixels: u64) -> Need {
+    /// What a scene of `size` needs when used as `usage`.
+    pub fn of(size: SceneSize, usage: Use) -> Need {
         let (host, device) = match usage {
             Use::Generate => (HOST_PER_GENERATED_INSTANCE, 0),
             Use::Render => (HOST_PER_INSTANCE, DEVICE_PER_INSTANCE),
@@ -79,19 +79,26 @@ impl Need {
         let sum =
             |terms: &[(u64, u64)]| terms.iter().fold(0u64, |acc, &(n, b)| acc.saturating_add(n.saturating_mul(b)));
         Need {
-            host: sum(&[
-                (size.instances, host),
-                (size.kinds, HOST_PER_KIND),
-                (size.lights, HOST_PER_LIGHT),
-                (pixels * rendered, HOST_PER_PIXEL),
-                (1, BASE),
-            ]),
+            host: sum(&[(size.instances, host), (size.kinds, HOST_PER_KIND), (size.lights, HOST_PER_LIGHT), (1, BASE)]),
             device: sum(&[
                 (size.instances, device),
                 (size.kinds * rendered, DEVICE_PER_KIND),
                 (size.lights * rendered, DEVICE_PER_LIGHT),
             ]),
         }
+    }
+
+    /// What images of `pixels` pixels in all need on the host, read back and written.
+    pub fn image(pixels: u64) -> Need {
+        Need { host: pixels.saturating_mul(HOST_PER_PIXEL), device: 0 }
+    }
+}
+
+impl std::ops::Add for Need {
+    type Output = Need;
+
+    fn add(self, other: Need) -> Need {
+        Need { host: self.host.saturating_add(other.host), device: self.device.saturating_add(other.device) }
     }
 }
 
@@ -141,13 +148,13 @@ impl Room {
         };
         if let Some(host) = self.host.filter(|&h| host_need > h) {
             return Err(Error::Invalid(format!(
-                "{flag} {value}: the scene needs {what}, and this process can take {} more; ask for fewer",
+                "{flag} {value} needs {what}, and this process can take {} more; ask for less",
                 gb(host)
             )));
         }
         if let Some((name, heap)) = self.device.as_ref().filter(|(_, heap)| need.device > *heap) {
             return Err(Error::Invalid(format!(
-                "{flag} {value}: the scene needs about {} of device memory, and {name} has {}; ask for fewer",
+                "{flag} {value} needs about {} of device memory, and {name} has {}; ask for less",
                 gb(need.device),
                 gb(*heap)
             )));
@@ -202,11 +209,11 @@ mod tests {
     #[test]
     fn a_scene_beyond_the_room_is_refused_naming_the_flag_and_the_memory() {
         let size = SceneSize { instances: 50_000_000, kinds: 0, lights: 32 };
-        let need = Need::of(size, Use::Render, 1280 * 720);
+        let need = Need::of(size, Use::Render) + Need::image(1280 * 720);
         assert_eq!(need.device, 50_000_000 * DEVICE_PER_INSTANCE + 32 * DEVICE_PER_LIGHT);
         let small = Room { host: Some(8 << 30), device: Some(("gpu".into(), 80 << 30)), device_on_host: false };
         let e = small.check("--instances", "50000000", need).unwrap_err().to_string();
-        assert!(e.starts_with("--instances 50000000: the scene needs about 10.7 GiB of host memory"), "{e}");
+        assert!(e.starts_with("--instances 50000000 needs about 10.7 GiB of host memory"), "{e}");
         assert!(e.contains("can take 8.0 GiB more"), "{e}");
         let small_device = Room { host: Some(64 << 30), device: Some(("gpu".into(), 4 << 30)), device_on_host: false };
         let e = small_device.check("--instances", "50000000", need).unwrap_err().to_string();

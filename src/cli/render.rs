@@ -2,7 +2,7 @@
 //! image and stats; with `--watch`, keep rendering and hot-reload the graph and its shaders.
 
 use super::args::RenderArgs;
-use super::memory::{Room, Use};
+use super::memory::{Need, Room, Use};
 use super::paths;
 use super::watch::FileWatch;
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
@@ -35,8 +35,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         app_name: "cullgraph".into(),
     })?;
     let usage = if args.animate { Use::Animate } else { Use::Render };
+    let room = Room::with_device(&ctx);
+    let scene_need = args.scene.check_memory(&room, usage)?;
+    // The image, and the reference's at N x N times its pixels.
     let pixels = width as u64 * height as u64 * (1 + args.reference.map_or(0, |n| n as u64 * n as u64));
-    args.scene.check_memory(&Room::with_device(&ctx), usage, pixels)?;
+    let size = match args.reference {
+        Some(n) => format!("{width}x{height} with --reference {n}"),
+        None => format!("{width}x{height}"),
+    };
+    room.check("--size", &size, scene_need + Need::image(pixels))?;
     let spinner = progress(None, "loading scene");
     let mut scene = args.scene.load()?;
     spinner.finish_and_clear();
