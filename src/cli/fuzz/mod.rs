@@ -1,5 +1,6 @@
-//! `cullgraph fuzz graph|gltf`: mutation fuzzing of the RON graph loader and compiler and of
-//! the glTF importer, on stable Rust, for a given time.
+//! `cullgraph fuzz graph|gltf`: mutation fuzzing of the RON graph loader, compiler and passes
+//! and of the glTF importer, on stable Rust, for a given time. Most inputs are edits of a seed's
+//! parsed structure, the rest edits of its bytes ([`corpus`]).
 //!
 //! A supervisor runs the inputs in a worker process (this same binary, `--worker`), so that a
 //! crash (stack overflow, abort) or a hang is caught and classified like a panic: the worker
