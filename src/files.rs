@@ -84,6 +84,17 @@ pub fn read_limited(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>, Stri
     Ok(bytes)
 }
 
+/// The size of the regular file at `path`, refused (without opening it) when it is something
+/// else or larger than `limit`: [`read_limited`]'s checks, for a caller that reads the file
+/// itself.
+pub fn check_regular(path: &Path, limit: u64, what: &str) -> Result<u64, String> {
+    let meta = regular_file(path, what)?;
+    if meta.len() > limit {
+        return Err(format!("the {what} is {} bytes; a {what} may have at most {limit}", meta.len()));
+    }
+    Ok(meta.len())
+}
+
 /// Like [`read_limited`], as UTF-8 text.
 pub fn read_limited_text(path: &Path, limit: u64, what: &str) -> Result<String, String> {
     String::from_utf8(read_limited(path, limit, what)?).map_err(|e| format!("the {what} is not UTF-8 text: {e}"))

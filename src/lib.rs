@@ -51,7 +51,7 @@
 pub mod bench;
 pub mod cull;
 pub mod error;
-pub(crate) mod files;
+pub mod files;
 pub mod gpu;
 pub mod graph;
 #[cfg(feature = "verify")]

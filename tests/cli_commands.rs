@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::cli::run;
+use common::cli::{run, run_within};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
@@ -216,4 +216,67 @@ fn world_offsets_beyond_the_precise_range_are_refused() {
         assert_eq!(code, 1, "{offset}: {err}");
         assert!(err.contains("is beyond ±1099511627776 (2^40) units"), "{offset}: {err}");
     }
+}
+
+/// A path flag that names something unusable is refused before any work, naming the flag: an
+/// output that is a directory or a FIFO (whose opening would block until a reader comes), a
+/// shader folder that is not one, a replayed fuzz input that is a FIFO or a device.
+#[test]
+fn unusable_paths_are_refused_before_any_work_naming_the_flag() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fifo = tmp.path().join("pipe");
+    assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let (fifo, dir) = (fifo.to_str().unwrap(), tmp.path().to_str().unwrap());
+    let png = tmp.path().join("f.png");
+    let png = png.to_str().unwrap();
+    let file = tmp.path().join("file");
+    std::fs::write(&file, b"x").unwrap();
+    let file = file.to_str().unwrap();
+    let default = format!("{ROOT}/graph/default.ron");
+    let render = ["render", "--instances", "100", "--size", "16x16"];
+    #[rustfmt::skip]
+    let cases: Vec<(Vec<&str>, String)> = vec![
+        ([&render[..], &["--out", fifo]].concat(), format!("--out {fifo}: is not a regular file")),
+        ([&render[..], &["--out", dir]].concat(), format!("--out {dir}: is a directory")),
+        ([&render[..], &["--out", png, "--stats", fifo]].concat(), format!("--stats {fifo}: is not a regular file")),
+        ([&render[..], &["--out", png, "--stats", dir]].concat(), format!("--stats {dir}: is a directory")),
+        ([&render[..], &["--out", png, "--shader-dir", "/dev/zero"]].concat(), "--shader-dir /dev/zero: is not a directory".into()),
+        ([&render[..], &["--out", png, "--shader-dir", "/no/such/dir"]].concat(), "--shader-dir /no/such/dir: No such file".into()),
+        (vec!["graph", "dot", &default, "-o", fifo], format!("-o {fifo}: is not a regular file")),
+        (vec!["fuzz", "graph", "--replay", fifo], format!("--replay {fifo}: the graph file is not a regular file")),
+        (vec!["fuzz", "graph", "--replay", "/dev/zero"], "--replay /dev/zero: the graph file is not a regular file".into()),
+        (vec!["fuzz", "gltf", "--replay", fifo], format!("--replay {fifo}: the scene file is not a regular file")),
+        (vec!["fuzz", "graph", "--seconds", "1", "--seeds", "/no/such/dir", "--out", dir], "--seeds /no/such/dir: No such file".into()),
+        (vec!["fuzz", "graph", "--seconds", "1", "--out", file], format!("--out {file}: is not a directory")),
+        (vec!["bench", "--suites", "hiz", "--out", "/dev/null"], "--out /dev/null: is not a directory".into()),
+    ];
+    for (args, message) in cases {
+        let (code, _, err) = run_within(&args, 60);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert!(err.contains(&message), "{args:?}: {err}");
+    }
+    assert!(!std::path::Path::new(png).exists(), "nothing was rendered");
+}
+
+/// Numbers that would run a bench without end or measure nothing are refused, naming the flag;
+/// so are moved counts the city cannot give.
+#[test]
+fn bench_counts_are_bounded() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().to_str().unwrap();
+    for (flag, value, range) in [
+        ("--frames", "0", "1..=100000"),
+        ("--frames", "4294967295", "1..=100000"),
+        ("--warmup", "100001", "0..=100000"),
+    ] {
+        let (code, _, err) = run(&["bench", "--suites", "hiz", flag, value, "--out", out]);
+        assert_eq!(code, 2, "{flag} {value}: {err}");
+        assert!(err.contains(&format!("'{flag} <{}>'", flag[2..].to_uppercase())) && err.contains(range), "{err}");
+    }
+    let (code, _, err) = run(&["bench", "--suites", "msaa", "--msaa-samples", "3", "--out", out]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--msaa-samples") && err.contains("2, 4 or 8"), "{err}");
+    let (code, _, err) = run(&["bench", "--suites", "dynamic", "--instances", "1000", "--moved", "5000", "--out", out]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--moved 5000: more than the largest city's 1000 instances"), "{err}");
 }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::cli::{cullgraph, run};
+use common::cli::{cullgraph, run, run_with_memory_limit, run_within};
 use std::io::{BufRead, BufReader};
 use std::process::Stdio;
 use std::sync::mpsc;
@@ -34,6 +34,62 @@ fn bad_flags_and_files_are_reported_clearly() {
     assert_eq!(code, 1);
     assert!(err.contains("bad.ron:1:"), "{err}");
     assert!(!std::path::Path::new(out).exists(), "nothing is written when the frame cannot be made");
+}
+
+/// A scene larger than the machine or the device holds is refused before it is generated, with
+/// the memory it needs and the flag that asked for it: here under an 8 GB address-space limit,
+/// like a smaller machine (lavapipe also offers only a 2 GiB heap, which 16777217 instances
+/// exceed anywhere).
+#[test]
+fn scene_sizes_beyond_memory_are_refused_with_the_memory_they_need() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("x.png");
+    for n in ["16777217", "50000000"] {
+        let args = ["render", "--instances", n, "--size", "16x16", "--out", out.to_str().unwrap()];
+        let (code, _, err) = run_with_memory_limit(&args, 8_000_000);
+        assert_eq!(code, 1, "{err}");
+        assert!(err.contains(&format!("error: --instances {n} needs about ")), "{err}");
+        assert!(err.contains(" GiB of ") && err.contains("ask for less"), "{err}");
+        for flags in [&["graph", "plan", "graph/default.ron"][..], &["bench", "--suites", "culling", "--out"]] {
+            let out_dir = tmp.path().join("bench");
+            let mut args: Vec<&str> = flags.to_vec();
+            if flags[0] == "bench" {
+                args.push(out_dir.to_str().unwrap());
+            }
+            args.extend(["--instances", n, "--size", "16x16"]);
+            let (code, _, err) = run_with_memory_limit(&args, 2_000_000);
+            assert_eq!(code, 1, "{args:?}: {err}");
+            assert!(err.contains(&format!("--instances {n} needs about ")), "{args:?}: {err}");
+        }
+    }
+    // An image (and its supersampled reference) too large for the memory names its flags.
+    let args =
+        ["render", "--instances", "1000", "--size", "1024x1024", "--reference", "16", "--out", out.to_str().unwrap()];
+    let (code, _, err) = run_with_memory_limit(&args, 2_000_000);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("error: --size 1024x1024 with --reference 16 needs about "), "{err}");
+    assert!(!out.exists());
+    // Beyond the documented maximum, the flag's parser refuses at once.
+    let (code, _, err) = run(&["render", "--instances", "50000001", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("'--instances <N>'") && err.contains("1..=50000000"), "{err}");
+}
+
+/// Durations are finite and at most a day: anything else is refused naming the flag, instead of
+/// watching (or fuzzing) forever or panicking on a duration the clock cannot hold.
+#[test]
+fn durations_must_be_finite_and_at_most_a_day() {
+    for value in ["inf", "NaN", "-1", "86401", "1e300"] {
+        for args in [
+            vec!["render", "--size", "16x16", "--watch", "--watch-for", value, "--out", "/dev/null"],
+            vec!["fuzz", "graph", "--seconds", value, "--out", "/dev/null"],
+        ] {
+            let (code, _, err) = run_within(&args, 60);
+            assert_eq!(code, 2, "{args:?}: {err}");
+            let flag = if args[0] == "render" { "'--watch-for <SECONDS>'" } else { "'--seconds <SECONDS>'" };
+            assert!(err.contains(flag) && err.contains("between 0 and 86400 (a day)"), "{args:?}: {err}");
+        }
+    }
 }
 
 /// Memory the device cannot give is reported at the declaration of the resource that asked for

@@ -1,8 +1,15 @@
 //! Argument definitions (clap derive) and value parsers.
 
+use clap::builder::TypedValueParser;
 use clap::{Args, Parser, Subcommand};
+use cullgraph::scene::procedural::{MAX_INSTANCES, MAX_KINDS, MAX_LIGHTS};
 use glam::DVec3;
 use std::path::PathBuf;
+
+/// Most frames a bench measures, or warms up with, per configuration.
+const MAX_BENCH_FRAMES: i64 = 100_000;
+/// Longest duration a flag takes, in seconds: a day.
+pub const MAX_SECONDS: f64 = 86_400.0;
 
 /// GPU-driven culling and deferred rendering of huge scenes, through Vulkan.
 #[derive(Parser, Debug)]
@@ -54,8 +61,8 @@ pub struct FuzzArgs {
     /// What to fuzz.
     #[arg(value_enum)]
     pub target: FuzzTarget,
-    /// How long, in seconds.
-    #[arg(long, default_value_t = 60.0)]
+    /// How long, in seconds (at most a day).
+    #[arg(long, default_value_t = 60.0, value_parser = parse_seconds, allow_hyphen_values = true)]
     pub seconds: f64,
     /// Seed of the mutations (a run is reproducible from it).
     #[arg(long, default_value_t = 1)]
@@ -129,11 +136,12 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', default_values_t = ["culling".to_string(), "hiz".into()])]
     pub suites: Vec<String>,
     /// Instances moved per frame in the `dynamic` suite (on the largest `--instances` city),
-    /// comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = [1_000usize, 10_000, 100_000, 1_000_000])]
+    /// comma-separated, at most that city's instances [default: 1000,10000,100000,1000000, those
+    /// the city has].
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u64).range(1..=MAX_INSTANCES as u64).map(|n| n as usize))]
     pub moved: Vec<usize>,
     /// City sizes to measure (instances), comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = [10_000usize, 100_000, 1_000_000])]
+    #[arg(long, value_delimiter = ',', default_values_t = [10_000usize, 100_000, 1_000_000], value_parser = clap::value_parser!(u64).range(1..=MAX_INSTANCES as u64).map(|n| n as usize))]
     pub instances: Vec<usize>,
     /// Built-in graphs to compare, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = ["no_cull".to_string(), "frustum".into(), "two_phase".into(), "occluder_prepass".into(), "one_phase".into()])]
@@ -145,10 +153,10 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', value_parser = parse_size, default_values = ["1920x1080", "3840x2160"])]
     pub hiz_sizes: Vec<(u32, u32)>,
     /// Frames before measuring.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(0..=MAX_BENCH_FRAMES))]
     pub warmup: u32,
     /// Frames measured (medians are reported).
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=MAX_BENCH_FRAMES))]
     pub frames: u32,
     /// Also check one frame per graph against exact visibility.
     #[arg(long)]
@@ -171,14 +179,14 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', default_values_t = cullgraph::bench::msaa::ONE_SAMPLE_METHODS.iter().chain(cullgraph::bench::msaa::MSAA_METHODS).map(|m| m.to_string()))]
     pub msaa_methods: Vec<String>,
     /// MSAA suite: sample counts, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = [2u32, 4, 8])]
+    #[arg(long, value_delimiter = ',', default_values_t = [2u32, 4, 8], value_parser = parse_msaa_samples)]
     pub msaa_samples: Vec<u32>,
     /// MSAA suite: point-light counts, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = [5usize, 50, 500])]
+    #[arg(long, value_delimiter = ',', default_values_t = [5usize, 50, 500], value_parser = clap::value_parser!(u64).range(0..=MAX_LIGHTS as u64).map(|n| n as usize))]
     pub msaa_lights: Vec<usize>,
     /// MSAA suite: the reference's supersampling per axis (4: 16 samples per pixel; 0: no
     /// image error).
-    #[arg(long, default_value_t = 4, value_name = "N")]
+    #[arg(long, default_value_t = 4, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=64))]
     pub reference: u32,
     /// Masked materials keep all or none of a pixel's samples (a plain alpha test) instead of
     /// a share by alpha-to-coverage, in every pass and the oracle: to measure what
@@ -199,14 +207,17 @@ pub struct SceneArgs {
     /// Scene: `builtin:city`, `builtin:field`, or a glTF 2.0 file (.gltf/.glb).
     #[arg(long, default_value = "builtin:city")]
     pub scene: String,
-    /// Number of instances of a built-in scene (city: 1,000 to 1,000,000; default 10,000).
-    #[arg(long, value_name = "N")]
+    /// Number of instances of a built-in scene (default 10,000; at most 50,000,000, and what
+    /// the machine's and the device's memory hold: a larger scene is refused with the memory it
+    /// needs).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_INSTANCES as u64).map(|n| n as usize))]
     pub instances: Option<usize>,
-    /// Number of distinct mesh kinds of `builtin:field` (default 64).
-    #[arg(long, value_name = "N")]
+    /// Number of distinct mesh kinds of `builtin:field` (default 64, at most 100,000).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_KINDS as u64).map(|n| n as usize))]
     pub kinds: Option<usize>,
-    /// Number of point lights (built-in scenes; files get them only when they have none).
-    #[arg(long, value_name = "N")]
+    /// Number of point lights (built-in scenes; files get them only when they have none; at
+    /// most 1,000,000).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(0..=MAX_LIGHTS as u64).map(|n| n as usize))]
     pub lights: Option<usize>,
     /// Seed of the built-in generators.
     #[arg(long, default_value_t = 1)]
@@ -224,6 +235,41 @@ impl SceneArgs {
             seed: self.seed,
         };
         Ok(source.load(&options)?)
+    }
+
+    /// Refuses a built-in scene whose memory `room` does not hold (used as `usage`), naming the
+    /// flags that size it; a scene file is not checked (its size is bounded by the file's).
+    /// Returns what the scene needs.
+    pub fn check_memory(
+        &self,
+        room: &super::memory::Room,
+        usage: super::memory::Use,
+    ) -> cullgraph::Result<super::memory::Need> {
+        use cullgraph::scene::procedural::{city, field};
+        let Ok(cullgraph::scene::SceneSource::Builtin(name)) = self.scene.parse() else {
+            return Ok(Default::default());
+        };
+        let (instances, kinds, lights) = match name.as_str() {
+            "city" => (city::DEFAULT_INSTANCES, 0, city::DEFAULT_LIGHTS),
+            "field" => (field::DEFAULT_INSTANCES, self.kinds.unwrap_or(field::DEFAULT_KINDS), field::DEFAULT_LIGHTS),
+            _ => return Ok(Default::default()), // the generator names the scenes it has
+        };
+        let instances = self.instances.unwrap_or(instances);
+        let size = super::memory::SceneSize {
+            instances: instances as u64,
+            kinds: kinds as u64,
+            lights: self.lights.unwrap_or(lights) as u64,
+        };
+        let mut value = instances.to_string();
+        if self.instances.is_none() {
+            value.push_str(" (the default)");
+        }
+        if let Some(k) = self.kinds.filter(|_| name == "field") {
+            value.push_str(&format!(" with --kinds {k}"));
+        }
+        let need = super::memory::Need::of(size, usage);
+        room.check("--instances", &value, need)?;
+        Ok(need)
     }
 }
 
@@ -367,8 +413,8 @@ pub struct RenderArgs {
     /// good graph keeps running and the error is printed). Stop with Ctrl-C.
     #[arg(long)]
     pub watch: bool,
-    /// With --watch: stop after this many seconds.
-    #[arg(long, value_name = "SECONDS", requires = "watch")]
+    /// With --watch: stop after this many seconds (at most a day).
+    #[arg(long, value_name = "SECONDS", requires = "watch", value_parser = parse_seconds, allow_hyphen_values = true)]
     pub watch_for: Option<f64>,
     /// Enable the Khronos validation layer with synchronization validation.
     #[arg(long)]
@@ -390,6 +436,23 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
         Ok(n)
     };
     Ok((parse(w, "width")?, parse(h, "height")?))
+}
+
+/// Parses a duration in seconds: a finite number from 0 to [`MAX_SECONDS`].
+pub fn parse_seconds(s: &str) -> Result<f64, String> {
+    let seconds: f64 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
+    if !(0.0..=MAX_SECONDS).contains(&seconds) {
+        return Err(format!("{s} seconds is not between 0 and {MAX_SECONDS} (a day)"));
+    }
+    Ok(seconds)
+}
+
+/// Parses an MSAA sample count the bench measures: 2, 4 or 8.
+fn parse_msaa_samples(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(n @ (2 | 4 | 8)) => Ok(n),
+        _ => Err(format!("'{s}' is not a sample count the MSAA methods take: 2, 4 or 8")),
+    }
 }
 
 /// Parses a camera path name.
@@ -427,5 +490,12 @@ mod tests {
         assert_eq!(parse_vec3("1,-2.5,3e7"), Ok(DVec3::new(1.0, -2.5, 3e7)));
         assert!(parse_vec3("1,2").is_err());
         assert!(parse_vec3("1,nan,2").unwrap_err().contains("not finite"));
+        assert_eq!(parse_seconds("1.5"), Ok(1.5));
+        assert_eq!(parse_seconds("86400"), Ok(86_400.0));
+        for bad in ["inf", "NaN", "-1", "86401", "1e300", "x"] {
+            assert!(parse_seconds(bad).is_err(), "{bad}");
+        }
+        assert_eq!(parse_msaa_samples("8"), Ok(8));
+        assert!(parse_msaa_samples("3").unwrap_err().contains("2, 4 or 8"));
     }
 }

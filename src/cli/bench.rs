@@ -1,10 +1,15 @@
 //! `cullgraph bench`: runs the benchmarks and writes JSON, Markdown and SVG plots next to each other.
 
 use super::args::BenchArgs;
+use super::memory::{Need, Room, SceneSize, Use};
 use cullgraph::bench::{culling, dynamic, hiz, msaa, plot};
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::scene::SceneSource;
 use cullgraph::{Error, Result};
+
+/// Instances moved per frame in the `dynamic` suite when `--moved` is not given (those up to the
+/// city's size).
+const DEFAULT_MOVED: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
 
 /// The suites `--suites` takes.
 const SUITES: &[&str] = &["culling", "hiz", "msaa", "dynamic"];
@@ -15,6 +20,17 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         return Err(Error::Invalid(format!("--suites: unknown suite '{unknown}' (known: {})", SUITES.join(", "))));
     }
     let suite = |name: &str| args.suites.iter().any(|s| s == name);
+    super::paths::output_dir("--out", &args.out)?;
+    let largest = args.instances.iter().copied().max().unwrap_or(1_000_000);
+    if let Some(moved) = args.moved.iter().find(|&&m| m > largest).filter(|_| suite("dynamic")) {
+        return Err(Error::Invalid(format!(
+            "--moved {moved}: more than the largest city's {largest} instances (--instances)"
+        )));
+    }
+    let moved = match args.moved.is_empty() {
+        true => DEFAULT_MOVED.iter().copied().filter(|&m| m <= largest).collect(),
+        false => args.moved.clone(),
+    };
     let msaa_scenes = args
         .msaa_scenes
         .iter()
@@ -39,6 +55,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         validation: ContextOptions::default().validation,
         app_name: "cullgraph bench".into(),
     })?;
+    let room = Room::with_device(&ctx);
+    let city = |instances: usize| SceneSize { instances: instances as u64, kinds: 0, lights: 32 };
+    let pixels = args.size.0 as u64 * args.size.1 as u64;
+    for (on, usage) in [(suite("culling"), Use::Render), (suite("dynamic"), Use::Animate)] {
+        if on {
+            room.check("--instances", &largest.to_string(), Need::of(city(largest), usage) + Need::image(pixels))?;
+        }
+    }
     let mut shaders = ShaderCompiler::new(ShaderRoot::from_env())?;
     if args.alpha_test {
         shaders = shaders.with_global_defines(&[("ALPHA_TEST_ONLY", "1")]);
@@ -126,7 +150,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if suite("dynamic") {
         let bench = dynamic::DynamicBench {
             instances: args.instances.iter().copied().max().unwrap_or(1_000_000),
-            moved: args.moved.clone(),
+            moved,
             width,
             height,
             warmup: args.warmup,

@@ -17,18 +17,22 @@ pub fn run(args: &GraphArgs) -> ExitCode {
         GraphCommand::Plan(a) => compiled(&a.file, &a.params, &a.frame).map(|plan| {
             println!("{plan}");
         }),
-        GraphCommand::Dot(a) => compiled(&a.file, &a.params, &a.frame).and_then(|plan| {
-            let dot = graph::to_dot(&plan);
-            match &a.out {
-                None => {
-                    print!("{dot}");
-                    Ok(())
+        GraphCommand::Dot(a) => {
+            dot_output(a.out.as_deref()).and_then(|_| compiled(&a.file, &a.params, &a.frame)).and_then(|plan| {
+                let dot = graph::to_dot(&plan);
+                match &a.out {
+                    None => {
+                        print!("{dot}");
+                        Ok(())
+                    }
+                    Some(path) => dot_output(Some(path))
+                        .and_then(|_| {
+                            std::fs::write(path, dot).map_err(|e| Failure::Other(format!("{}: {e}", path.display())))
+                        })
+                        .map(|_| eprintln!("wrote {}", path.display())),
                 }
-                Some(path) => std::fs::write(path, dot)
-                    .map(|_| eprintln!("wrote {}", path.display()))
-                    .map_err(|e| Failure::Other(format!("{}: {e}", path.display()))),
-            }
-        }),
+            })
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -56,6 +60,18 @@ impl From<GraphErrors> for Failure {
     fn from(e: GraphErrors) -> Self {
         Failure::Graph(e)
     }
+}
+
+/// Refuses a `graph dot -o` target that cannot be written as a file.
+fn dot_output(path: Option<&Path>) -> Result<(), Failure> {
+    path.map_or(Ok(()), |p| super::paths::output_file("-o", p).map_err(|e| Failure::Other(e.to_string())))
+}
+
+/// The scene that sizes a graph, generated when the machine holds it.
+fn scene(args: &super::args::SceneArgs) -> Result<cullgraph::scene::Scene, Failure> {
+    let room = super::memory::Room::host();
+    args.check_memory(&room, super::memory::Use::Generate).map_err(|e| Failure::Other(e.to_string()))?;
+    args.load().map_err(|e| Failure::Other(e.to_string()))
 }
 
 fn shader_root() -> ShaderRoot {
@@ -89,7 +105,7 @@ fn check(args: &GraphCheckArgs) -> Result<(), Failure> {
     let graph = load(&args.file, &args.params, args.device.as_deref())?;
     let compiled = match args.size {
         Some((width, height)) => {
-            let scene = args.scene.load().map_err(|e| Failure::Other(e.to_string()))?;
+            let scene = scene(&args.scene)?;
             let inputs =
                 frame_inputs(&graph.kinds, &scene, width, height).map_err(|e| Failure::Other(e.to_string()))?;
             graph::compile(&graph, &inputs)?;
@@ -110,7 +126,7 @@ fn check(args: &GraphCheckArgs) -> Result<(), Failure> {
 fn compiled(file: &Path, params: &[(String, String)], frame: &GraphFrameArgs) -> Result<CompiledGraph, Failure> {
     let graph = load(file, params, frame.device.as_deref())?;
     let env = NoDevice::new(shader_root()).map_err(|e| Failure::Other(e.to_string()))?;
-    let scene = frame.scene.load().map_err(|e| Failure::Other(e.to_string()))?;
+    let scene = scene(&frame.scene)?;
     let (width, height) = frame.size;
     let inputs = frame_inputs(&graph.kinds, &scene, width, height).map_err(|e| Failure::Other(e.to_string()))?;
     let started = std::time::Instant::now();

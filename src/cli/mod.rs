@@ -4,6 +4,8 @@ mod args;
 mod bench;
 mod fuzz;
 mod graph;
+mod memory;
+mod paths;
 mod render;
 mod watch;
 

@@ -2,6 +2,8 @@
 //! image and stats; with `--watch`, keep rendering and hot-reload the graph and its shaders.
 
 use super::args::RenderArgs;
+use super::memory::{Need, Room, Use};
+use super::paths;
 use super::watch::FileWatch;
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::oracle::reference::{image_reference_error, reference_render_size};
@@ -19,7 +21,30 @@ use std::time::{Duration, Instant};
 /// Runs the command.
 pub fn run(args: &RenderArgs) -> Result<()> {
     let (width, height) = args.size;
+    // What cannot work is refused before the scene is generated and the frames rendered.
+    paths::output_file("--out", &args.out)?;
+    if let Some(stats) = &args.stats {
+        paths::output_file("--stats", stats)?;
+    }
+    if let Some(dir) = &args.shader_dir {
+        paths::input_dir("--shader-dir", dir)?;
+    }
     let spec = graph_spec(args)?;
+    let ctx = GpuContext::new(&ContextOptions {
+        device: DeviceSelector::or_from_env(args.device.as_deref().map(|d| d.parse().unwrap_or_default())),
+        validation: args.validation || ContextOptions::default().validation,
+        app_name: "cullgraph".into(),
+    })?;
+    let usage = if args.animate { Use::Animate } else { Use::Render };
+    let room = Room::with_device(&ctx);
+    let scene_need = args.scene.check_memory(&room, usage)?;
+    // The image, and the reference's at N x N times its pixels.
+    let pixels = width as u64 * height as u64 * (1 + args.reference.map_or(0, |n| n as u64 * n as u64));
+    let size = match args.reference {
+        Some(n) => format!("{width}x{height} with --reference {n}"),
+        None => format!("{width}x{height}"),
+    };
+    room.check("--size", &size, scene_need + Need::image(pixels))?;
     let spinner = progress(None, "loading scene");
     let mut scene = args.scene.load()?;
     spinner.finish_and_clear();
@@ -30,11 +55,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         camera.eye += offset;
         camera.target += offset;
     }
-    let ctx = GpuContext::new(&ContextOptions {
-        device: DeviceSelector::or_from_env(args.device.as_deref().map(|d| d.parse().unwrap_or_default())),
-        validation: args.validation || ContextOptions::default().validation,
-        app_name: "cullgraph".into(),
-    })?;
     let root = match &args.shader_dir {
         Some(dir) => ShaderRoot::Directory(dir.clone()),
         None => ShaderRoot::from_env(),
@@ -112,6 +132,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 take(earlier, &mut renderer)?;
             }
             let (frame_stats, image) = renderer.render_to_image(&camera)?;
+            paths::output_file("--out", &args.out)?;
             save_png(&image, &args.out)?;
             last_frame = Some((camera, image));
             take(frame_stats, &mut renderer)?;
@@ -146,6 +167,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         stats.reference = Some(error);
     }
     if let Some(path) = &args.stats {
+        paths::output_file("--stats", path)?;
         write_file(path, stats.to_json().as_bytes())?;
     }
     let last = last_stats;
@@ -242,6 +264,7 @@ fn watch(
     let deadline = watch_deadline(args.watch_for);
     let render_once = |renderer: &mut Renderer| -> Result<()> {
         let (stats, image) = renderer.render_to_image(camera)?;
+        paths::output_file("--out", &args.out)?;
         save_png(&image, &args.out)?;
         println!("rendered '{}' in {:.3} GPU ms -> {}", renderer.plan().name, stats.gpu_total_ms, args.out.display());
         Ok(())
@@ -343,12 +366,11 @@ fn progress(len: Option<u64>, message: &'static str) -> ProgressBar {
     bar.with_message(message)
 }
 
-/// When `--watch-for SECONDS` ends, from now. A duration too long for the clock (`1e300`)
-/// watches until stopped, as with no limit; a negative or NaN one ends at once.
+/// When `--watch-for SECONDS` ends, from now (the flag's parser keeps it finite, from 0 to a
+/// day); without it, never.
 fn watch_deadline(seconds: Option<f64>) -> Option<Instant> {
-    let seconds = seconds?;
-    let duration = Duration::try_from_secs_f64(if seconds > 0.0 { seconds } else { 0.0 }).ok()?;
-    Instant::now().checked_add(duration)
+    let duration = Duration::try_from_secs_f64(seconds?.clamp(0.0, super::args::MAX_SECONDS)).unwrap_or_default();
+    Some(Instant::now() + duration)
 }
 
 /// `--animate`: the city's world and its traffic, stepped once a frame.
@@ -396,10 +418,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn any_watch_duration_gives_a_deadline_or_none_without_panicking() {
+    fn any_watch_duration_gives_a_deadline_within_a_day() {
         assert!(watch_deadline(None).is_none());
+        let day = Instant::now() + Duration::from_secs(86_401);
         for huge in [1e300, f64::INFINITY, f64::MAX] {
-            assert!(watch_deadline(Some(huge)).is_none(), "{huge}");
+            assert!(watch_deadline(Some(huge)).is_some_and(|d| d < day), "{huge}");
         }
         for now in [0.0, -5.0, f64::NAN, f64::NEG_INFINITY] {
             assert!(watch_deadline(Some(now)).is_some_and(|d| d <= Instant::now()), "{now}");

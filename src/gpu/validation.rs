@@ -66,6 +66,24 @@ pub(crate) fn messenger_info(log: &ValidationLog) -> vk::DebugUtilsMessengerCrea
         .user_data(log as *const ValidationLog as *mut c_void)
 }
 
+/// Whether a message fails a validated run: every warning or error of the validation layer,
+/// its performance warnings included (`UNASSIGNED-CoreValidation-Shader-OutputNotConsumed`
+/// says a pipeline fetches or passes data no stage reads), every synchronization hazard, and
+/// errors from anywhere. Drivers' own GENERAL warnings (e.g. Mesa 22.3's SPIR-V front end
+/// warning about a valid `invariant gl_Position`) are logged, not counted: they are not about
+/// the application's use of Vulkan.
+fn is_counted(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    kind: vk::DebugUtilsMessageTypeFlagsEXT,
+    id: &str,
+) -> bool {
+    let from_layer =
+        kind.intersects(vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE);
+    (from_layer && severity.intersects(COUNTED_SEVERITIES))
+        || severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+        || id.starts_with("SYNC-HAZARD")
+}
+
 unsafe extern "system" fn debug_callback(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
     kind: vk::DebugUtilsMessageTypeFlagsEXT,
@@ -88,13 +106,7 @@ unsafe extern "system" fn debug_callback(
     };
     let id = text(data.p_message_id_name);
     let message = text(data.p_message);
-    // What counts: every validation-layer warning or error, every synchronization hazard, and
-    // errors from anywhere. Drivers' own GENERAL warnings (e.g. Mesa 22.3's SPIR-V front end
-    // warning about a valid `invariant gl_Position`) are logged, not counted.
-    let validation = kind.contains(vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION);
-    let counted = (validation && severity.intersects(COUNTED_SEVERITIES))
-        || severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
-        || id.starts_with("SYNC-HAZARD");
+    let counted = is_counted(severity, kind, &id);
     if counted {
         tracing::error!(target: "vulkan", ?kind, id = %id, "{message}");
         log.push(format!("[{id}] {message}"));
@@ -104,4 +116,24 @@ unsafe extern "system" fn debug_callback(
         tracing::trace!(target: "vulkan", ?kind, id = %id, "{message}");
     }
     vk::FALSE
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vk::DebugUtilsMessageSeverityFlagsEXT as Severity;
+    use vk::DebugUtilsMessageTypeFlagsEXT as Kind;
+
+    #[test]
+    fn warnings_and_errors_of_the_layer_count_and_driver_warnings_do_not() {
+        let id = "UNASSIGNED-CoreValidation-Shader-OutputNotConsumed";
+        assert!(is_counted(Severity::WARNING, Kind::PERFORMANCE, id));
+        assert!(is_counted(Severity::WARNING, Kind::VALIDATION, "VUID-x"));
+        assert!(is_counted(Severity::ERROR, Kind::VALIDATION, "VUID-x"));
+        assert!(is_counted(Severity::ERROR, Kind::GENERAL, "driver"));
+        assert!(is_counted(Severity::INFO, Kind::VALIDATION, "SYNC-HAZARD-WRITE-AFTER-READ"));
+        assert!(!is_counted(Severity::WARNING, Kind::GENERAL, "../src/vulkan/runtime/vk_nir.c:56"));
+        assert!(!is_counted(Severity::INFO, Kind::PERFORMANCE, id));
+        assert!(!is_counted(Severity::INFO, Kind::VALIDATION, "VUID-x"));
+    }
 }

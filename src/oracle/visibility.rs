@@ -22,6 +22,12 @@ use crate::passes::shared::transparent_draw::{
 use ash::vk;
 use std::collections::BTreeSet;
 
+/// The vertex attributes `oracle/id.vert` reads, at the geometry passes' locations and offsets:
+/// the position and the UV (for the alpha test). The normal and tangent are not fetched, which
+/// the validation layer would otherwise report as attributes no shader consumes.
+const ID_VERTEX_ATTRIBUTES: [(u32, vk::Format, u32); 2] =
+    [crate::passes::gbuffer::VERTEX_ATTRIBUTES[0], crate::passes::gbuffer::VERTEX_ATTRIBUTES[2]];
+
 /// Instance ids per sample of one frame, and the set of instances seen at some sample.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct VisibleIds {
@@ -70,7 +76,7 @@ impl VisibilityOracle {
                 vertex: &vertex,
                 fragment: Some(&fragment),
                 vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-                vertex_attributes: &crate::passes::shared::VERTEX_ATTRIBUTES,
+                vertex_attributes: &ID_VERTEX_ATTRIBUTES,
                 color_formats: &[vk::Format::R32_UINT],
                 depth_format: vk::Format::D32_SFLOAT,
                 depth_compare: vk::CompareOp::GREATER,

@@ -1,5 +1,6 @@
-//! `cullgraph fuzz graph|gltf`: mutation fuzzing of the RON graph loader and compiler and of
-//! the glTF importer, on stable Rust, for a given time.
+//! `cullgraph fuzz graph|gltf`: mutation fuzzing of the RON graph loader, compiler and passes
+//! and of the glTF importer, on stable Rust, for a given time. Most inputs are edits of a seed's
+//! parsed structure, the rest edits of its bytes ([`corpus`]).
 //!
 //! A supervisor runs the inputs in a worker process (this same binary, `--worker`), so that a
 //! crash (stack overflow, abort) or a hang is caught and classified like a panic: the worker
@@ -9,12 +10,18 @@
 //! reproducible. Every input that breaks a promise (see [`Class::is_failure`]) is saved under
 //! `OUT/` with its class in the name; `--replay FILE` runs one saved input again.
 
-mod mutate;
+mod corpus;
+mod mutate_bytes;
+mod mutate_gltf;
+mod mutate_graph;
+mod ron_tree;
 mod targets;
 
 use super::args::{FuzzArgs, FuzzTarget};
+use corpus::Mutator;
+use cullgraph::files;
 use rand::rngs::SmallRng;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
@@ -57,42 +64,66 @@ fn extension(target: FuzzTarget) -> &'static str {
 /// replay finds the shaders it names.
 const SEED_DIR_MARK: &str = "// fuzz seed dir: ";
 
+/// Runs one saved input again. It is read as the command reads its kind of input (a regular
+/// file, at most the size of a graph or a scene), so a FIFO or `/dev/zero` is refused, not
+/// waited on or read without end.
 fn replay(bench: &Bench, target: FuzzTarget, file: &Path) -> cullgraph::Result<(Class, String)> {
-    let bytes =
-        std::fs::read(file).map_err(|e| cullgraph::Error::Io { path: file.display().to_string(), source: e })?;
+    let refused = |e: String| cullgraph::Error::Invalid(format!("--replay {}: {e}", file.display()));
     Ok(match target {
         FuzzTarget::Graph => {
+            let bytes = files::read_limited(file, files::GRAPH_LIMIT, "graph file").map_err(refused)?;
             let text = String::from_utf8_lossy(&bytes).into_owned();
             let dir = text.lines().last().and_then(|l| l.strip_prefix(SEED_DIR_MARK)).map(PathBuf::from);
-            bench.graph(&text, dir.as_deref())
+            bench.graph(&text, dir.as_deref(), &mut || {})
         }
-        FuzzTarget::Gltf => bench.gltf(file),
+        FuzzTarget::Gltf => {
+            // The importer reads it with the same checks; refusing here keeps the answer an
+            // error of the flag rather than an outcome of the input.
+            files::check_regular(file, files::SCENE_LIMIT, "scene file").map_err(refused)?;
+            bench.gltf(file, &mut || {})
+        }
     })
 }
 
-/// The worker: runs inputs from `args.start` until the deadline, one line per input on stdout.
+/// The worker: runs inputs from `args.start` until the deadline, its lines on stdout:
+/// `start CASE MUTATOR WELL_FORMED` before an input, `checked CASE` once it has passed the
+/// check (graph) or imported (glTF), `done CASE CLASS<tab>DETAIL` after it.
 fn worker(args: &FuzzArgs) -> cullgraph::Result<()> {
     std::panic::set_hook(Box::new(|_| {}));
     let bench = Bench::new()?;
     let out = args.out.clone();
     let current = out.join(format!("current.{}", extension(args.target)));
-    let deadline = Instant::now() + Duration::from_secs_f64(args.seconds.max(0.0));
-    let graph_seeds = targets::graph_seeds(&args.seed_dirs);
-    let gltf_seeds = gltf_seeds(&args.seed_dirs);
+    let deadline = Instant::now() + Duration::from_secs_f64(args.seconds);
+    let (graphs, scenes) = match args.target {
+        FuzzTarget::Graph => {
+            let passes = |text: &str, dir: Option<&Path>| bench.check(text, dir).is_ok();
+            (Some(corpus::GraphCorpus::new(&args.seed_dirs, &passes)?), None)
+        }
+        FuzzTarget::Gltf => (None, Some(corpus::GltfCorpus::new(&args.seed_dirs)?)),
+    };
     let stdout = std::io::stdout();
+    let say = |line: String| {
+        let mut lock = stdout.lock();
+        writeln!(lock, "{line}").ok();
+        lock.flush().ok();
+    };
     let mut case = args.start;
     while Instant::now() < deadline {
         let mut rng = SmallRng::seed_from_u64(args.seed ^ case.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        let input = match args.target {
-            FuzzTarget::Graph => graph_input(&mut rng, &graph_seeds),
-            FuzzTarget::Gltf => gltf_input(&mut rng, &gltf_seeds),
+        let input = match (&graphs, &scenes) {
+            (Some(graphs), _) => graphs.input(&mut rng),
+            (_, Some(scenes)) => scenes.input(&mut rng),
+            _ => unreachable!("one corpus per target"),
         };
-        std::fs::write(&current, &input.0)
+        std::fs::write(&current, &input.bytes)
             .map_err(|e| cullgraph::Error::Io { path: current.display().to_string(), source: e })?;
-        writeln!(stdout.lock(), "start {case}").ok();
+        say(format!("start {case} {} {}", input.mutator.name(), u8::from(input.well_formed)));
+        let mut checked = || say(format!("checked {case}"));
         let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match args.target {
-            FuzzTarget::Graph => bench.graph(&String::from_utf8_lossy(&input.0), input.1.as_deref()),
-            FuzzTarget::Gltf => bench.gltf(&current),
+            FuzzTarget::Graph => {
+                bench.graph(&String::from_utf8_lossy(&input.bytes), input.dir.as_deref(), &mut checked)
+            }
+            FuzzTarget::Gltf => bench.gltf(&current, &mut checked),
         }));
         let (class, detail) = outcome.unwrap_or_else(|payload| {
             let message = payload
@@ -107,57 +138,10 @@ fn worker(args: &FuzzArgs) -> cullgraph::Result<()> {
         if class.is_failure() {
             keep(&current, class, case, extension(args.target), &out);
         }
-        writeln!(stdout.lock(), "done {case} {}\t{detail}", class.name()).ok();
-        stdout.lock().flush().ok();
+        say(format!("done {case} {}\t{detail}", class.name()));
         case += 1;
     }
     Ok(())
-}
-
-/// A mutated graph and the folder of its seed.
-fn graph_input(rng: &mut SmallRng, seeds: &[(String, Option<PathBuf>)]) -> (Vec<u8>, Option<PathBuf>) {
-    let (seed, dir) = &seeds[rng.random_range(0..seeds.len())];
-    let others: Vec<&str> = seeds.iter().map(|(t, _)| t.as_str()).collect();
-    let mut text = mutate::graph_text(rng, seed, &others);
-    if let Some(dir) = dir {
-        text.push_str(&format!("\n{SEED_DIR_MARK}{}", dir.display()));
-    }
-    (text.into_bytes(), dir.clone())
-}
-
-/// glTF documents to mutate: the built-in one and every `.glb` under the seed folders (their
-/// JSON and binary chunk).
-fn gltf_seeds(dirs: &[PathBuf]) -> Vec<(serde_json::Value, Vec<u8>)> {
-    let mut seeds = vec![targets::gltf_seed()];
-    for dir in dirs {
-        let Ok(entries) = std::fs::read_dir(dir) else { continue };
-        for path in entries.flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "glb")) {
-            let Ok(bytes) = std::fs::read(&path) else { continue };
-            let Ok(glb) = gltf::Glb::from_slice(&bytes) else { continue };
-            let Ok(doc) = serde_json::from_slice(&glb.json) else { continue };
-            seeds.push((doc, glb.bin.map(|b| b.into_owned()).unwrap_or_default()));
-        }
-    }
-    seeds
-}
-
-/// A mutated glTF: the document, the binary chunk, or both.
-fn gltf_input(rng: &mut SmallRng, seeds: &[(serde_json::Value, Vec<u8>)]) -> (Vec<u8>, Option<PathBuf>) {
-    let (doc, bin) = &seeds[rng.random_range(0..seeds.len())];
-    let (mut doc, mut bin) = (doc.clone(), bin.clone());
-    match rng.random_range(0..4) {
-        0 => mutate::binary(rng, &mut bin),
-        1 => {
-            mutate::gltf_document(rng, &mut doc);
-            mutate::binary(rng, &mut bin);
-        }
-        _ => mutate::gltf_document(rng, &mut doc),
-    }
-    let mut file = targets::glb(&doc, &bin);
-    if rng.random_range(0..8) == 0 {
-        mutate::binary(rng, &mut file); // the container itself
-    }
-    (file, None)
 }
 
 /// Copies `input` (input number `case` of class `class`) to `out` as `CLASS-CASE.EXT`, unless
@@ -172,24 +156,51 @@ fn keep(input: &Path, class: Class, case: u64, ext: &str, out: &Path) {
     }
 }
 
+/// The inputs of one mutator, by how far they got.
+#[derive(Default, Clone, Copy)]
+struct Reach {
+    inputs: u64,
+    well_formed: u64,
+    passed: u64,
+    ok: u64,
+    failures: u64,
+}
+
+/// The input a worker is running.
+#[derive(Clone, Copy)]
+struct Running {
+    case: u64,
+    since: Instant,
+    mutator: Mutator,
+    well_formed: bool,
+    passed: bool,
+}
+
 /// What the supervisor has seen.
 #[derive(Default)]
 struct Tally {
     counts: BTreeMap<Class, u64>,
     examples: BTreeMap<Class, Vec<String>>,
+    reach: BTreeMap<Mutator, Reach>,
 }
 
 impl Tally {
-    /// Counts one outcome; a crash or a hang (the worker is gone, `current` is its input) is
-    /// kept here, the others by the worker.
-    fn record(&mut self, class: Class, detail: &str, input: &Path, case: u64, ext: &str, out: &Path) {
+    /// Counts one outcome of the input `running`; a crash or a hang (the worker is gone,
+    /// `current` is its input) is kept here, the others by the worker.
+    fn record(&mut self, class: Class, detail: &str, running: &Running, current: &Path, ext: &str, out: &Path) {
         *self.counts.entry(class).or_default() += 1;
+        let reach = self.reach.entry(running.mutator).or_default();
+        reach.inputs += 1;
+        reach.well_formed += u64::from(running.well_formed);
+        reach.passed += u64::from(running.passed);
+        reach.ok += u64::from(class == Class::Ok);
+        reach.failures += u64::from(class.is_failure());
         let examples = self.examples.entry(class).or_default();
         if examples.len() < EXAMPLES_PER_CLASS && !detail.is_empty() {
             examples.push(detail.chars().take(300).collect());
         }
         if matches!(class, Class::Crash | Class::Hang) {
-            keep(input, class, case, ext, out);
+            keep(current, class, running.case, ext, out);
         }
     }
 
@@ -231,49 +242,64 @@ fn supervise(args: &FuzzArgs) -> cullgraph::Result<()> {
         let path = path.display().to_string();
         move |e| cullgraph::Error::Io { path: path.clone(), source: e }
     };
+    super::paths::output_dir("--out", &args.out)?;
+    for dir in &args.seed_dirs {
+        super::paths::input_dir("--seeds", dir)?;
+    }
     std::fs::create_dir_all(&args.out).map_err(io(&args.out))?;
     let ext = extension(args.target);
     let current = args.out.join(format!("current.{ext}"));
     let started = Instant::now();
-    let total = Duration::from_secs_f64(args.seconds.max(0.0));
+    let total = Duration::from_secs_f64(args.seconds);
     let mut tally = Tally::default();
     let mut next = 0u64;
     while started.elapsed() < total {
         let left = (total - started.elapsed()).as_secs_f64();
         let (mut child, lines) = spawn_worker(args, next, left)?;
-        let mut running: Option<(u64, Instant)> = None;
+        let mut running: Option<Running> = None;
         loop {
             match lines.recv_timeout(Duration::from_millis(500)) {
                 Ok(line) => {
-                    if let Some(case) = line.strip_prefix("start ").and_then(|c| c.parse().ok()) {
-                        running = Some((case, Instant::now()));
-                    } else if let Some(rest) = line.strip_prefix("done ") {
-                        let (head, detail) = rest.split_once('\t').unwrap_or((rest, ""));
-                        let (case, class) = head.split_once(' ').unwrap_or((head, ""));
-                        let case: u64 = case.parse().unwrap_or(next);
-                        let class = Class::from_name(class).unwrap_or(Class::Unpositioned);
-                        tally.record(class, detail, &current, case, ext, &args.out);
-                        running = None;
-                        next = case + 1;
+                    let mut words = line.split(' ');
+                    match (words.next(), words.next().and_then(|c| c.parse::<u64>().ok())) {
+                        (Some("start"), Some(case)) => {
+                            let mutator = words.next().and_then(Mutator::from_name).unwrap_or(Mutator::Bytes);
+                            let well_formed = words.next() == Some("1");
+                            running =
+                                Some(Running { case, since: Instant::now(), mutator, well_formed, passed: false });
+                        }
+                        (Some("checked"), Some(_)) => {
+                            if let Some(r) = running.as_mut() {
+                                r.passed = true;
+                            }
+                        }
+                        (Some("done"), Some(case)) => {
+                            let rest = line.splitn(3, ' ').nth(2).unwrap_or("");
+                            let (class, detail) = rest.split_once('\t').unwrap_or((rest, ""));
+                            let class = Class::from_name(class).unwrap_or(Class::Unpositioned);
+                            if let Some(r) = running.take() {
+                                tally.record(class, detail, &r, &current, ext, &args.out);
+                            }
+                            next = case + 1;
+                        }
+                        _ => {}
                     }
                 }
                 Err(mpsc::RecvTimeoutError::Timeout) => {
-                    if let Some((case, since)) = running {
-                        if since.elapsed() > HANG_LIMIT {
-                            let _ = child.kill();
-                            let _ = child.wait();
-                            tally.record(Class::Hang, "no answer in 30 s", &current, case, ext, &args.out);
-                            next = case + 1;
-                            break;
-                        }
+                    if let Some(r) = running.filter(|r| r.since.elapsed() > HANG_LIMIT) {
+                        let _ = child.kill();
+                        let _ = child.wait();
+                        tally.record(Class::Hang, "no answer in 30 s", &r, &current, ext, &args.out);
+                        next = r.case + 1;
+                        break;
                     }
                 }
                 Err(mpsc::RecvTimeoutError::Disconnected) => {
                     let status = child.wait().ok();
-                    if let Some((case, _)) = running {
+                    if let Some(r) = running {
                         let why = status.map(|s| s.to_string()).unwrap_or_default();
-                        tally.record(Class::Crash, &why, &current, case, ext, &args.out);
-                        next = case + 1;
+                        tally.record(Class::Crash, &why, &r, &current, ext, &args.out);
+                        next = r.case + 1;
                     } else if status.is_some_and(|s| !s.success()) && tally.total() == 0 {
                         return Err(cullgraph::Error::Invalid(
                             "the fuzz worker failed before its first input (no Vulkan device?)".into(),
@@ -316,8 +342,27 @@ fn report(args: &FuzzArgs, tally: &Tally, took: Duration) -> String {
         tally.total(),
         took.as_secs_f64()
     );
-    for class in Class::ALL {
+    for class in Class::ALL.into_iter().filter(|c| *c != Class::CheckLied || args.target == FuzzTarget::Graph) {
         out.push_str(&format!("| {} | {} |\n", class.name(), tally.counts.get(&class).copied().unwrap_or(0)));
+    }
+    let (form, passed) = match args.target {
+        FuzzTarget::Graph => ("well-formed RON", "passed check"),
+        FuzzTarget::Gltf => ("well-formed GLB and JSON", "imported"),
+    };
+    out.push_str(&format!(
+        "\n| mutations | inputs | {form} | {passed} | ok | broke a promise |\n|---|---:|---:|---:|---:|---:|\n"
+    ));
+    let share = |n: u64, of: u64| format!("{n} ({:.1} %)", 100.0 * n as f64 / of.max(1) as f64);
+    for (mutator, r) in &tally.reach {
+        out.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} |\n",
+            mutator.name(),
+            r.inputs,
+            share(r.well_formed, r.inputs),
+            share(r.passed, r.inputs),
+            share(r.ok, r.inputs),
+            r.failures
+        ));
     }
     for (class, examples) in tally.examples.iter().filter(|(_, e)| !e.is_empty()) {
         out.push_str(&format!("\n{}:\n", class.name()));

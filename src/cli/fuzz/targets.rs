@@ -1,7 +1,9 @@
 //! The two fuzz targets and how their outcomes are classified.
 //!
-//! - `graph`: a RON graph is loaded against the device, compiled at 64x48 and at 3840x2160 for a
-//!   small city, and, when it compiles, rendered for two frames with validation on.
+//! - `graph`: a RON graph is checked as `graph check --size` checks it (loaded against the
+//!   device, compiled at 64x48 for a small city and at 3840x2160 for 10^6 instances) and, when
+//!   the check passes, rendered for two frames with validation on: a graph that passes the check
+//!   must render (else the check lied).
 //! - `gltf`: a glTF file is imported, and, when it imports, rendered for two frames with
 //!   validation on.
 
@@ -13,7 +15,7 @@ use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{Scene, SceneError, SceneSource};
 use serde_json::{json, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// What one input did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -26,6 +28,8 @@ pub enum Class {
     Unpositioned,
     /// A validation-layer message while rendering something that was accepted.
     Validation,
+    /// A graph that passed the check (load and compile) and failed to render.
+    CheckLied,
     /// A panic (caught).
     Panic,
     /// The process died (stack overflow, abort, signal).
@@ -36,8 +40,16 @@ pub enum Class {
 
 impl Class {
     /// Every class, in report order.
-    pub const ALL: [Class; 7] =
-        [Class::Ok, Class::Positioned, Class::Unpositioned, Class::Validation, Class::Panic, Class::Crash, Class::Hang];
+    pub const ALL: [Class; 8] = [
+        Class::Ok,
+        Class::Positioned,
+        Class::Unpositioned,
+        Class::Validation,
+        Class::CheckLied,
+        Class::Panic,
+        Class::Crash,
+        Class::Hang,
+    ];
 
     /// The name used in reports and in the worker's lines.
     pub fn name(self) -> &'static str {
@@ -46,6 +58,7 @@ impl Class {
             Class::Positioned => "positioned error",
             Class::Unpositioned => "unpositioned error",
             Class::Validation => "validation message",
+            Class::CheckLied => "check lied",
             Class::Panic => "panic",
             Class::Crash => "crash",
             Class::Hang => "hang",
@@ -102,41 +115,57 @@ impl Bench {
         }
     }
 
-    /// Runs one graph (`text`, from a seed in `dir`).
-    pub fn graph(&self, text: &str, dir: Option<&Path>) -> (Class, String) {
+    /// Checks a graph as `graph check --size` does (loads it against the device, compiles it
+    /// at 64x48 for the small city and at 3840x2160 for 10^6 instances): whether it passes and
+    /// whether it imports host resources; else the class and message of its refusal.
+    pub fn check(&self, text: &str, dir: Option<&Path>) -> Result<bool, (Class, String)> {
         let env = DeviceEnv::new(&self.ctx, &self.shaders);
-        let loaded = graph::load_in(text, "fuzz.ron", dir, &[], &env, &builtin_kinds());
-        let loaded = match loaded {
-            Ok(g) => g,
-            Err(errors) => return graph_errors_class(&errors),
-        };
+        let loaded = graph::load_in(text, "fuzz.ron", dir, &[], &env, &builtin_kinds())
+            .map_err(|errors| graph_errors_class(&errors))?;
         let kinds = builtin_kinds();
         let big = FrameInputs::new(3840, 2160);
         let big = FrameInputs { quantities: big.quantities.with("instances", 1_000_000).with("meshes", 64), ..big };
-        let small = match frame_inputs(&kinds, &self.city, 64, 48) {
-            Ok(f) => f,
-            Err(e) => return runtime_class(&e),
-        };
+        let small = frame_inputs(&kinds, &self.city, 64, 48).map_err(|e| runtime_class(&e))?;
         for frame in [small, big] {
-            if let Err(errors) = graph::compile(&loaded, &frame) {
-                return graph_errors_class(&errors);
-            }
+            graph::compile(&loaded, &frame).map_err(|errors| graph_errors_class(&errors))?;
+        }
+        Ok(loaded.resources.iter().any(|r| r.imported))
+    }
+
+    /// Runs one graph (`text`, from a seed in `dir`): checks it and renders what passes;
+    /// `checked` is called when it has passed the check, before it is rendered. A graph that
+    /// imports host resources is checked only: rendering it needs a host to hand them over.
+    pub fn graph(&self, text: &str, dir: Option<&Path>, checked: &mut dyn FnMut()) -> (Class, String) {
+        let imports = match self.check(text, dir) {
+            Ok(imports) => imports,
+            Err(refused) => return refused,
+        };
+        checked();
+        if imports {
+            return (Class::Ok, String::new());
         }
         let spec = GraphSpec {
             text: text.to_string(),
             file: "fuzz.ron".into(),
             dir: dir.map(Path::to_path_buf),
             overrides: Vec::new(),
-            kinds,
+            kinds: builtin_kinds(),
             settings: Vec::new(),
         };
-        self.render(self.city.clone(), &spec)
+        match self.render(self.city.clone(), &spec) {
+            (Class::Positioned | Class::Unpositioned, error) => (Class::CheckLied, error),
+            outcome => outcome,
+        }
     }
 
-    /// Imports the glTF file at `path` and renders it.
-    pub fn gltf(&self, path: &Path) -> (Class, String) {
+    /// Imports the glTF file at `path` and renders it; `imported` is called when it has
+    /// imported, before it is rendered.
+    pub fn gltf(&self, path: &Path, imported: &mut dyn FnMut()) -> (Class, String) {
         match SceneSource::File(path.to_path_buf()).load(&LoadOptions::default()) {
-            Ok(scene) => self.render(scene, &GraphSpec::default_graph()),
+            Ok(scene) => {
+                imported();
+                self.render(scene, &GraphSpec::default_graph())
+            }
             Err(e) => scene_error_class(&e),
         }
     }
@@ -201,24 +230,6 @@ fn scene_error_class(e: &SceneError) -> (Class, String) {
     (if placed { Class::Positioned } else { Class::Unpositioned }, text)
 }
 
-/// The RON graphs the graph target mutates: the shipped ones, and those under `extra` (the
-/// repository's test graphs, when run from its root). Each with the folder its shaders are in.
-pub fn graph_seeds(extra: &[PathBuf]) -> Vec<(String, Option<PathBuf>)> {
-    let mut seeds: Vec<(String, Option<PathBuf>)> =
-        cullgraph::passes::SHIPPED_GRAPHS.iter().map(|g| (g.text.to_string(), None)).collect();
-    for dir in extra {
-        let Ok(entries) = std::fs::read_dir(dir) else { continue };
-        let mut files: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
-        files.sort();
-        for file in files.into_iter().filter(|p| p.extension().is_some_and(|e| e == "ron")) {
-            if let Ok(text) = std::fs::read_to_string(&file) {
-                seeds.push((text, Some(dir.clone())));
-            }
-        }
-    }
-    seeds
-}
-
 /// A small valid glTF document and its binary chunk: two meshes (a quad and a tetrahedron with
 /// normals), a node hierarchy with transforms, a material, a camera and a point light.
 pub fn gltf_seed() -> (Value, Vec<u8>) {
@@ -279,9 +290,9 @@ pub fn gltf_seed() -> (Value, Vec<u8>) {
     (doc, bin)
 }
 
-/// `doc` and `bin` as a binary glTF file.
-pub fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut json = serde_json::to_vec(doc).unwrap_or_default();
+/// A glTF document's JSON text and its binary chunk as a binary glTF file.
+pub fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let mut json = json.to_vec();
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }

@@ -78,7 +78,9 @@ pub fn generate(options: &LoadOptions) -> Result<Scene, SceneError> {
         0,
     );
 
+    // About one lamp per LAMP_EVERY props, and one more per block for the rounding.
     let mut lamps = Vec::new();
+    lamps.try_reserve_exact(n / LAMP_EVERY + blocks).map_err(|_| no_memory(n, "street lamps"))?;
     for b in 0..blocks {
         let quota = per_block + usize::from(b < extra);
         let corner = origin + DVec3::new((b % g) as f64 * PITCH, 0.0, (b / g) as f64 * PITCH);
@@ -86,7 +88,7 @@ pub fn generate(options: &LoadOptions) -> Result<Scene, SceneError> {
     }
     debug_assert_eq!(scene.instances.len(), n);
 
-    scene.lights = street_lights(&mut lamps, light_count, options.seed, &scene);
+    scene.lights = street_lights(&mut lamps, light_count, options.seed, &scene)?;
     scene.camera = Some(street_camera(origin, g));
     Ok(scene)
 }
@@ -214,8 +216,15 @@ fn push(out: &mut Vec<Instance>, kind: &Kind, rng: &mut SmallRng, pos: DVec3, ya
 
 /// Lights at the `count` street lamps nearest to the city center (where the suggested camera
 /// stands), topped up with lights scattered over the city when there are too few lamps.
-fn street_lights(lamps: &mut Vec<DVec3>, count: usize, seed: u64, scene: &Scene) -> Vec<PointLight> {
-    let mut chosen: Vec<(usize, DVec3)> = lamps.drain(..).enumerate().collect();
+fn street_lights(
+    lamps: &mut Vec<DVec3>,
+    count: usize,
+    seed: u64,
+    scene: &Scene,
+) -> Result<Vec<PointLight>, SceneError> {
+    let mut chosen: Vec<(usize, DVec3)> = Vec::new();
+    chosen.try_reserve_exact(lamps.len()).map_err(|_| no_memory(scene.instances.len(), "street lamps"))?;
+    chosen.extend(lamps.drain(..).enumerate());
     let key = |(i, p): &(usize, DVec3)| (p.x * p.x + p.z * p.z, *i);
     if chosen.len() > count {
         chosen.select_nth_unstable_by(count, |a, b| key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal));
@@ -231,7 +240,12 @@ fn street_lights(lamps: &mut Vec<DVec3>, count: usize, seed: u64, scene: &Scene)
             out.extend(lights::scatter(&bounds, count - out.len(), seed));
         }
     }
-    out
+    Ok(out)
+}
+
+/// The error of an allocation for `what` that failed for a city of `n` instances.
+fn no_memory(n: usize, what: &str) -> SceneError {
+    SceneError::Builtin(format!("builtin:city: cannot allocate memory for the {what} of {n} instances"))
 }
 
 /// A camera at eye height in the middle of the north-south street nearest the center, looking

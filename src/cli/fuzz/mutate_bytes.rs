@@ -1,11 +1,10 @@
-//! Mutations of the fuzzers' inputs: text edits for RON graphs (deletions, duplications,
-//! tokens that break or stretch the grammar, splices from other seeds) and structural edits of
-//! glTF documents (a field set to an edge value, removed or duplicated, the binary chunk
-//! corrupted or truncated).
+//! Byte-level mutations, the share of the fuzzers' inputs that tests the parsers themselves:
+//! text edits of RON graphs (deletions, duplications, tokens that break or stretch the grammar,
+//! splices from other seeds) and corrupted or truncated bytes (a GLB's JSON, binary chunk or
+//! container).
 
 use rand::rngs::SmallRng;
 use rand::Rng;
-use serde_json::{json, Value};
 
 /// Tokens that are likely to reach a new branch of the loader or the compiler when inserted
 /// anywhere in a graph.
@@ -153,89 +152,6 @@ fn replace_number(rng: &mut SmallRng, text: &mut Vec<char>, at: usize) {
     let end = (start..text.len()).find(|&i| !(text[i].is_ascii_digit() || text[i] == '.')).unwrap_or(text.len());
     let value = EDGE_NUMBERS[rng.random_range(0..EDGE_NUMBERS.len())];
     text.splice(start..end, value.chars());
-}
-
-/// Values a glTF field is set to.
-fn edge_value(rng: &mut SmallRng) -> Value {
-    match rng.random_range(0..16) {
-        0 => json!(0),
-        1 => json!(-1),
-        2 => json!(1),
-        3 => json!(2),
-        4 => json!(4_294_967_295u64),
-        5 => json!(65_536),
-        6 => json!(1e30),
-        7 => json!(-1e30),
-        8 => json!(0.5),
-        9 => Value::Null,
-        10 => json!([]),
-        11 => json!({}),
-        12 => json!("x"),
-        13 => json!([1e30, 1e30, 1e30]),
-        14 => json!([0.0, 0.0, 0.0, 0.0]),
-        _ => json!(5123),
-    }
-}
-
-/// Every JSON pointer of `value` (objects and arrays included).
-fn pointers(value: &Value, at: String, out: &mut Vec<String>) {
-    match value {
-        Value::Object(map) => {
-            for (k, v) in map {
-                let p = format!("{at}/{}", k.replace('~', "~0").replace('/', "~1"));
-                out.push(p.clone());
-                pointers(v, p, out);
-            }
-        }
-        Value::Array(items) => {
-            for (i, v) in items.iter().enumerate() {
-                let p = format!("{at}/{i}");
-                out.push(p.clone());
-                pointers(v, p, out);
-            }
-        }
-        _ => {}
-    }
-}
-
-/// One to four structural edits of a glTF document: a field set to an edge value, removed, or
-/// an array element duplicated.
-pub fn gltf_document(rng: &mut SmallRng, doc: &mut Value) {
-    for _ in 0..rng.random_range(1..=4) {
-        let mut all = Vec::new();
-        pointers(doc, String::new(), &mut all);
-        if all.is_empty() {
-            return;
-        }
-        let pointer = all[rng.random_range(0..all.len())].clone();
-        let (parent, key) = pointer.rsplit_once('/').unwrap_or(("", &pointer));
-        let action = rng.random_range(0..4);
-        let value = edge_value(rng);
-        match doc.pointer_mut(parent) {
-            Some(Value::Object(map)) => match action {
-                0 => {
-                    map.remove(key);
-                }
-                _ => {
-                    map.insert(key.to_string(), value);
-                }
-            },
-            Some(Value::Array(items)) => {
-                let Ok(i) = key.parse::<usize>() else { continue };
-                match action {
-                    0 if items.len() > 1 => {
-                        items.remove(i);
-                    }
-                    1 => {
-                        let copy = items[i].clone();
-                        items.push(copy);
-                    }
-                    _ => items[i] = value,
-                }
-            }
-            _ => {}
-        }
-    }
 }
 
 /// Corrupts `bin`: a few bytes set to random values, or the tail cut.
