@@ -280,3 +280,27 @@ fn bench_counts_are_bounded() {
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("--moved 5000: more than the largest city's 1000 instances"), "{err}");
 }
+
+/// What the renderer requires of a compiled graph, `graph check --size` requires too, at the
+/// text at fault: the first output is the image the host shows, an image of the output size.
+#[test]
+fn graph_check_applies_the_renderers_rules_on_the_shown_image() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cases = [
+        (r#"Graph(name: "a", extends: "frustum", outputs: ["cull.stats", "color"])"#, "1:48: the first output 'cull.stats' is a buffer"),
+        (
+            r#"Graph(name: "b", extends: "two_phase", resources: {"color": Image(format: R8G8B8A8_UNORM, size: Scaled(0.5))})"#,
+            "1:52: the first output 'color' is the image the host shows: it must be the output size, 64x48, with one sample a pixel; it is 32x24 with 1",
+        ),
+    ];
+    for (text, expected) in cases {
+        let file = tmp.path().join("g.ron");
+        std::fs::write(&file, text).unwrap();
+        let file = file.to_str().unwrap();
+        let (code, _, err) = run(&["graph", "check", file]);
+        assert_eq!(code, 0, "the graph alone is fine: {err}");
+        let (code, _, err) = run(&["graph", "check", file, "--size", "64x48"]);
+        assert_eq!(code, 1);
+        assert!(err.contains(&format!("{file}:{expected}")), "{err}");
+    }
+}

@@ -59,6 +59,8 @@ impl Environment for FakeDevice {
             max_uniform_buffer_range: 1 << 16,
             max_image_dimension_2d: 8192,
             max_framebuffer: vk::Extent2D { width: 8192, height: 8192 },
+            max_compute_shared_memory_size: 32768,
+            features: ["post_depth_coverage", "subgroup_compute"].map(String::from).to_vec(),
         })
     }
 }

@@ -206,3 +206,36 @@ fn a_reload_that_fails_at_its_first_frame_reverts_to_the_graph_it_replaced() {
     renderer.render(&boxes_camera()).unwrap();
     assert!(renderer.revert_reload().is_err(), "the new graph has recorded a frame");
 }
+
+/// A pass placed twice, the second copy after everything that reads what the first wrote
+/// (and after the executor copied its counters to the host), is ordered like any other
+/// write-after-read: no hazard for synchronization validation, as `graph check` promised.
+#[test]
+fn a_cull_pass_placed_twice_renders_without_a_hazard() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut spec = GraphSpec::builtin("two_phase").unwrap();
+    spec.text = r#"Graph(
+    name: "twice",
+    extends: "two_phase",
+    passes: [Pass(
+        name: "cull_again",
+        kind: "instance_cull",
+        reads: {"visibility_prev": "visibility.prev", "hiz": "hiz"},
+        writes: {
+            "draw_commands": "late_commands", "draw_count": "late_count", "draw_instance_ids": "late_ids",
+            "visibility": "visibility", "stats": "cull_late.stats",
+        },
+        settings: {"phase": "late"},
+    )],
+)"#
+    .into();
+    spec.file = "twice.ron".into();
+    let mut renderer = Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(48, 32), &spec).unwrap();
+    let names: Vec<&str> = renderer.plan().passes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names.last(), Some(&"cull_again"), "{names:?}");
+    for _ in 0..3 {
+        renderer.render(&boxes_camera()).unwrap();
+    }
+    gpu.assert_clean();
+}

@@ -853,9 +853,14 @@ fn packed_visibility_ids_shade_like_two_words_and_refuse_what_does_not_fit() {
     }
     let camera = Camera { eye: DVec3::new(0.0, 0.0, 0.0), target: DVec3::new(0.0, 0.0, -1.0), ..Default::default() };
     let settings = RenderSettings::new(8, 8);
-    let mut renderer = Renderer::with_graph(&gpu, &gpu.shaders(), big.clone(), settings.clone(), &packed).unwrap();
-    let refused = renderer.render(&camera).unwrap_err().to_string();
+    // Refused when the graph is compiled for the scene, at the passes that write the ids.
+    let refused = Renderer::with_graph(&gpu, &gpu.shaders(), big.clone(), settings.clone(), &packed)
+        .err()
+        .expect("packed ids refused")
+        .to_string();
+    assert!(refused.starts_with("graph/visibility_buffer.ron:18:"), "{refused}");
     assert!(refused.contains("pass 'draw_early'") && refused.contains("19 + 15"), "{refused}");
+    assert!(refused.contains("pass 'draw_late'"), "{refused}");
     let mut renderer = Renderer::with_graph(&gpu, &gpu.shaders(), big, settings, &two_words).unwrap();
     renderer.render(&camera).unwrap();
 }

@@ -7,6 +7,7 @@ use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler,
 use cullgraph::graph::{self, CompiledGraph, DeviceEnv, Environment, GraphErrors, NoDevice};
 use cullgraph::passes::builtin_kinds;
 use cullgraph::passes::shared::frame_inputs;
+use cullgraph::render::graph_spec::shown_image_error;
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -108,7 +109,9 @@ fn check(args: &GraphCheckArgs) -> Result<(), Failure> {
             let scene = scene(&args.scene)?;
             let inputs =
                 frame_inputs(&graph.kinds, &scene, width, height).map_err(|e| Failure::Other(e.to_string()))?;
-            graph::compile(&graph, &inputs)?;
+            let plan = graph::compile(&graph, &inputs)?;
+            // What the renderer requires of a compiled graph, checked as it would be.
+            shown_image_error(&plan, width, height)?;
             format!(", compiles at {width}x{height}")
         }
         None => String::new(),

@@ -207,7 +207,17 @@ impl<'a> DeviceEnv<'a> {
 impl Environment for DeviceEnv<'_> {
     fn limits(&self) -> Option<super::compile::device_limits::DeviceLimits> {
         let caps = self.ctx.caps();
-        Some(super::compile::device_limits::DeviceLimits::from_vulkan(&caps.name, &caps.limits))
+        let subgroup = vk::SubgroupFeatureFlags::BASIC
+            | vk::SubgroupFeatureFlags::VOTE
+            | vk::SubgroupFeatureFlags::ARITHMETIC
+            | vk::SubgroupFeatureFlags::BALLOT;
+        let features = [
+            (caps.post_depth_coverage, "post_depth_coverage"),
+            (caps.sample_interlock, "fragment_shader_sample_interlock"),
+            (caps.subgroup_compute_ops.contains(subgroup), "subgroup_compute"),
+        ];
+        let features = features.iter().filter(|(on, _)| *on).map(|(_, name)| name.to_string()).collect();
+        Some(super::compile::device_limits::DeviceLimits::from_vulkan(&caps.name, &caps.limits, features))
     }
 
     fn check_image_format(

@@ -82,6 +82,11 @@ pub fn is_depth(format: vk::Format) -> bool {
     info(format).is_some_and(|f| f.depth)
 }
 
+/// Whether `format` is a depth format with a stencil aspect.
+pub fn has_stencil(format: vk::Format) -> bool {
+    matches!(format, vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT | vk::Format::D16_UNORM_S8_UINT)
+}
+
 /// Up to `max` supported names closest to `name` (for "unknown format" errors).
 pub fn suggestions(name: &str, max: usize) -> Vec<&'static str> {
     let mut scored: Vec<(usize, &'static str)> = FORMATS

@@ -245,6 +245,8 @@ pub struct CompiledGraph {
     pub resources: Vec<PlannedResource>,
     /// Resources the frame produces for the host (the first is the image `cullgraph render` saves).
     pub outputs: Vec<ResourceId>,
+    /// Where each output is listed in the graph's files.
+    pub output_pos: Vec<super::error::Pos>,
     /// Transient memory, estimated from formats and sizes (the executor re-plans with the
     /// device's real memory requirements through the same algorithm).
     pub memory: MemoryPlan,
@@ -254,6 +256,11 @@ pub struct CompiledGraph {
 }
 
 impl CompiledGraph {
+    /// The name of the file of `pos`, among those the graph was composed from.
+    pub fn file_at(&self, pos: super::error::Pos) -> &str {
+        super::error::file_of(&self.files, pos)
+    }
+
     /// `file:line:col: resource 'name'`: where resource `id` is declared, for errors of what
     /// is done with it after compiling (creating its memory, importing it).
     pub fn declaration(&self, id: ResourceId) -> String {

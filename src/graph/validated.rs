@@ -307,6 +307,8 @@ pub struct ValidatedGraph {
     pub passes: Vec<Pass>,
     /// Output resources.
     pub outputs: Vec<ResourceId>,
+    /// Where each output is listed.
+    pub output_pos: Vec<Pos>,
     /// The pass kinds it was validated against.
     pub kinds: KindRegistry,
     /// The limits of the device it was validated for (none without a device): compiling checks

@@ -25,7 +25,11 @@ use crate::gpu::Spirv;
 use crate::gpu::{Bind, Buffer, GpuContext, GraphicsDesc, Image, Pipeline, ShaderCompiler, StencilRule};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass, ResolvedKind};
-use crate::graph::{DrawList, DrawOrder, FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Usage};
+use crate::graph::validated::ResourceDesc;
+use crate::graph::{
+    DrawList, DrawOrder, FormatRule, Growth, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, Quantity,
+    Usage,
+};
 use crate::passes::shared::face_cull::DRAW_COUNT_BYTES;
 use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use crate::passes::shared::scene_buffers::GpuScene;
@@ -468,7 +472,7 @@ impl PassKind for GbufferKind {
                     ms(slot("albedo", Usage::ColorAttachment, true, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a")),
                     ms(slot("normal", Usage::ColorAttachment, true, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
                     ms(slot("emissive_occlusion", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_EMISSIVE_OCCLUSION_FORMAT), EMISSIVE_OCCLUSION_SLOT_DOC)),
-                    ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "the finished depth, with stencil (its stencil is written)")),
+                    ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::DepthStencil, "the finished depth, with stencil (its stencil is written)")),
                 ],
                 settings: vec![clear_colors_setting()],
                 slots_from_shader: false,
@@ -480,7 +484,64 @@ impl PassKind for GbufferKind {
         Some(DrawList { slots: LIST_SLOTS, order: DrawOrder::Regions })
     }
 
+    fn validate(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        targets_error(check).into_iter().collect()
+    }
+
+    fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        packed_ids_error(check).into_iter().collect()
+    }
+
+    fn quantities(&self) -> Vec<Quantity> {
+        vec![MESH_TRIANGLES]
+    }
+
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
         Ok(Box::new(GbufferPass::for_plan(s.shaders, s.pass, s.plan, self.0)?))
     }
+}
+
+/// The quantity `mesh_triangles`: the triangles of the scene's largest mesh, which decide how
+/// many bits packed visibility ids give the triangle.
+pub const MESH_TRIANGLES: Quantity = Quantity {
+    name: "mesh_triangles",
+    doc: "triangles of the scene's largest mesh",
+    count: |s| {
+        let c = crate::passes::shared::SceneCounts::downcast(s)?;
+        Some(c.scene.meshes.iter().map(|m| m.index_count as u64 / 3).max().unwrap_or(0))
+    },
+    growth: Growth::Exact,
+};
+
+/// Which targets a geometry pass binds must make one of its three forms: albedo and normal
+/// (emissive_occlusion optional), ids alone (a visibility buffer), or none (depth only).
+fn targets_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
+    let bound = |slot: &str| check.binding(slot);
+    let surface = ["albedo", "normal"].iter().filter(|s| bound(s).is_some()).count();
+    let colors = GBUFFER_COLOR_SLOTS.iter().filter(|s| bound(s).is_some()).count();
+    let ids = bound("ids");
+    if surface == 1 || (ids.is_some() && colors > 0) || (surface == 0 && colors > 0) {
+        let at = GBUFFER_COLOR_SLOTS.iter().chain(&["ids"]).find_map(|s| bound(s)).map_or(check.pass.pos, |b| b.pos);
+        let message = format!(
+            "pass '{}': bind both albedo and normal (and emissive_occlusion if wanted), or ids alone (a \
+             visibility buffer), or none (a depth-only pass)",
+            check.pass.name
+        );
+        return Some((at, message));
+    }
+    None
+}
+
+/// Packed visibility ids (R32_UINT) must hold the scene's instance and triangle ids.
+fn packed_ids_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
+    let ids = check.binding("ids")?;
+    let ResourceDesc::Image { format, .. } = check.graph.resources[ids.resource].desc else { return None };
+    let quantities = check.quantities?;
+    if format != crate::passes::slots::VISIBILITY_PACKED {
+        return None;
+    }
+    let instances = quantities.get("instances")?.min(u32::MAX as u64) as u32;
+    let triangles = quantities.get(MESH_TRIANGLES.name)?.min(u32::MAX as u64) as u32;
+    let why = super::visibility_ids::triangle_bits(instances, triangles).err()?;
+    Some((ids.pos, format!("pass '{}': {why}", check.pass.name)))
 }

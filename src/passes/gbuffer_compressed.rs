@@ -215,6 +215,32 @@ crate::choice! {
     }
 }
 
+/// What the device lacks for the pass: post-depth coverage, and for claims in draw order the
+/// ordered sample interlock (no device: nothing to say yet).
+fn device_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
+    let (limits, planned) = (check.limits?, check.planned?);
+    let pass = check.pass;
+    if !limits.has("post_depth_coverage") {
+        let message = format!(
+            "pass '{}' (gbuffer_compressed) needs VK_EXT_post_depth_coverage, which is not enabled on {} (not \
+             supported, or not among a host's `enabled_device_extensions`)",
+            pass.name, limits.device
+        );
+        return Some((pass.pos, message));
+    }
+    let draw_order = planned.choice::<ClaimOrder>("claim_order").ok()? == ClaimOrder::Draw;
+    if draw_order && check.binding("sample_claim").is_some() && !limits.has("fragment_shader_sample_interlock") {
+        let at = pass.settings.iter().find(|s| s.name == "claim_order").map_or(pass.pos, |s| s.pos);
+        let message = format!(
+            "pass '{}': claim_order \"draw\" needs VK_EXT_fragment_shader_interlock with \
+             fragmentShaderSampleInterlock, which is not enabled on {}; \"arrival\" needs nothing",
+            pass.name, limits.device
+        );
+        return Some((at, message));
+    }
+    None
+}
+
 /// Whether the sample claims of `pass` run in draw order (its `claim_order` setting): `draw`
 /// needs the device's ordered sample interlock, `auto` uses it where there is one.
 fn claims_in_draw_order(ctx: &GpuContext, pass: &PlannedPass) -> Result<bool, String> {
@@ -429,7 +455,9 @@ impl PassKind for GbufferCompressedKind {
     }
 
     fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
-        size_errors(check)
+        let mut out = size_errors(check);
+        out.extend(device_error(check));
+        out
     }
 
     fn draw_list(&self) -> Option<DrawList> {

@@ -49,6 +49,14 @@ pub(crate) const fn slot(
     }
 }
 
+/// What a draw list's buffers hold ([`SlotDecl::content`]): only a kind that writes them so may
+/// feed a draw.
+pub(crate) const DRAW_COMMANDS: &str = "draw commands";
+/// A draw list's counts.
+pub(crate) const DRAW_COUNTS: &str = "draw counts";
+/// A draw list's instance ids.
+pub(crate) const INSTANCE_IDS: &str = "instance ids";
+
 /// A draw command per draw group (`VkDrawIndexedIndirectCommand`, 20 bytes).
 pub(crate) const COMMANDS_BYTES: &str = "meshes * 20";
 /// A draw count per face-cull region: back, front, none and transparent.
@@ -74,10 +82,13 @@ pub(crate) const fn ms(s: SlotDecl) -> SlotDecl {
 /// ids (`required`: the graph must bind them).
 pub(crate) fn list_slots(names: [&'static str; 3], docs: [&'static str; 3], required: bool) -> [SlotDecl; 3] {
     [
-        slot(names[0], Usage::Indirect, required, FormatRule::Any, docs[0]).at_least(COMMANDS_BYTES),
-        slot(names[1], Usage::Indirect, required, FormatRule::Any, docs[1]).at_least(COUNT_BYTES),
+        slot(names[0], Usage::Indirect, required, FormatRule::Any, docs[0])
+            .at_least(COMMANDS_BYTES)
+            .content(DRAW_COMMANDS),
+        slot(names[1], Usage::Indirect, required, FormatRule::Any, docs[1]).at_least(COUNT_BYTES).content(DRAW_COUNTS),
         slot(names[2], Usage::StorageBufferRead(Stages::Vertex), required, FormatRule::Any, docs[2])
-            .at_least(IDS_BYTES),
+            .at_least(IDS_BYTES)
+            .content(INSTANCE_IDS),
     ]
 }
 

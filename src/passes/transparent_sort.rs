@@ -11,7 +11,7 @@
 //! (`shaders/transparent_sort/transparent_sort.comp`). Sorting per instance, as Bevy and
 //! Granite do, leaves the triangles of one instance in mesh order.
 
-use super::slots::{list_slots, slot};
+use super::slots::{list_slots, slot, DRAW_COMMANDS, DRAW_COUNTS, INSTANCE_IDS};
 use crate::gpu::{Bind, Buffer, Pipeline};
 use crate::graph::executor::PassContext;
 use crate::graph::{
@@ -170,9 +170,9 @@ impl PassKind for TransparentSortKind {
             doc: "the transparent (alphaMode BLEND) instances a culled list kept, sorted back to front, as one draw command each",
             reads: source.into_iter().chain(second).collect(),
             writes: vec![
-                write("draw_commands", SORTED_COMMANDS_BYTES, "one VkDrawIndexedIndirectCommand per transparent instance, farthest first").required(),
-                write("draw_count", "4", "their number").required(),
-                write("draw_instance_ids", SORTED_IDS_BYTES, "their instance ids").required(),
+                write("draw_commands", SORTED_COMMANDS_BYTES, "one VkDrawIndexedIndirectCommand per transparent instance, farthest first").required().content(DRAW_COMMANDS),
+                write("draw_count", "4", "their number").required().content(DRAW_COUNTS),
+                write("draw_instance_ids", SORTED_IDS_BYTES, "their instance ids").required().content(INSTANCE_IDS),
                 write("scratch", "max(1, blended) * 24", "the sort's keys and entries (created when unbound)").creates(Creates::buffer().always()),
             ],
             settings: vec![],

@@ -3,10 +3,13 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::{GpuContext, ShaderCompiler};
-use crate::graph::{compile, load_in, CompiledGraph, DeviceEnv, KindRegistry, SettingOverride};
+use crate::graph::{
+    compile, load_in, CompiledGraph, DeviceEnv, GraphError, GraphErrors, KindRegistry, ResolvedKind, SettingOverride,
+};
 use crate::passes::builtin_kinds;
 use crate::passes::shared::frame_inputs;
 use crate::scene::Scene;
+use ash::vk;
 use std::path::{Path, PathBuf};
 
 /// A render graph to load.
@@ -95,6 +98,37 @@ impl GraphSpec {
     }
 }
 
+/// The rule for a graph whose first output is read back or shown: that output is an image of
+/// the output size (`width` x `height`) with one sample a pixel. An error at the output's
+/// declaration otherwise. [`Renderer::render_to_rgba8`](crate::render::Renderer::render_to_rgba8)
+/// applies it, and so does `graph check --size`, for the frame `cullgraph render` reads back.
+pub fn shown_image_error(plan: &CompiledGraph, width: u32, height: u32) -> std::result::Result<(), GraphErrors> {
+    let Some(&first) = plan.outputs.first() else { return Ok(()) };
+    let r = &plan.resources[first];
+    // At the resource's description when it has the wrong size, at the outputs otherwise.
+    let mut at = r.pos;
+    let message = match r.kind {
+        ResolvedKind::Image { extent, samples, .. }
+            if (extent.width, extent.height) == (width, height) && samples == vk::SampleCountFlags::TYPE_1 =>
+        {
+            return Ok(())
+        }
+        ResolvedKind::Image { extent, samples, .. } => format!(
+            "the first output '{}' is the image the host shows: it must be the output size, {width}x{height}, with \
+             one sample a pixel; it is {}x{} with {}",
+            r.name,
+            extent.width,
+            extent.height,
+            samples.as_raw()
+        ),
+        ResolvedKind::Buffer { .. } => {
+            at = plan.output_pos.first().copied().unwrap_or(r.pos);
+            format!("the first output '{}' is a buffer; it must be the image the host shows", r.name)
+        }
+    };
+    Err(GraphErrors(vec![GraphError::new(plan.file_at(at), at, message)]))
+}
+
 impl GraphSpec {
     /// Loads, validates (against `ctx`'s device) and compiles the graph for `scene` at
     /// `width` x `height`.
@@ -120,6 +154,7 @@ impl GraphSpec {
         let graph = load_in(&self.text, &self.file, self.dir.as_deref(), &self.overrides, &env, &self.kinds)?;
         let mut inputs = inputs.clone();
         inputs.settings.extend(self.settings.iter().cloned());
-        Ok(compile(&graph, &inputs)?)
+        let plan = compile(&graph, &inputs)?;
+        Ok(plan)
     }
 }

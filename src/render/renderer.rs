@@ -320,6 +320,9 @@ impl Renderer {
         let ctx = self.ctx.clone();
         let mut frame = 0;
         let mut record_ms = 0.0;
+        if readback.is_some() {
+            self.readback_error()?;
+        }
         ctx.submit_and_wait(|cmd| {
             let start = Instant::now();
             frame = self.record(cmd, camera)?;
@@ -327,15 +330,6 @@ impl Renderer {
             if let Some(dst) = readback {
                 let (image, state) =
                     self.output().ok_or_else(|| Error::Invalid("the graph's first output is not an image".into()))?;
-                let extent = image.extent();
-                if (extent.width, extent.height) != (self.settings.width, self.settings.height)
-                    || image.format() != vk::Format::R8G8B8A8_UNORM
-                {
-                    return Err(Error::Invalid(format!(
-                        "the graph's first output '{}' must be an R8G8B8A8_UNORM image of the output size to be saved",
-                        image.name()
-                    )));
-                }
                 record_image_to_buffer(&ctx, cmd, image, state, dst);
                 self.graphs.runtime.note_output_use(0, Access { layout: state.layout, ..Access::TRANSFER_READ });
             }
@@ -348,6 +342,23 @@ impl Renderer {
         self.observers = observers;
         looked?;
         Ok(stats)
+    }
+
+    /// Why the graph's first output cannot be read back as 8-bit RGBA of the output size, at
+    /// its declaration.
+    fn readback_error(&self) -> Result<()> {
+        let plan = self.plan();
+        super::graph_spec::shown_image_error(plan, self.settings.width, self.settings.height)?;
+        let Some(&first) = plan.outputs.first() else {
+            return Err(Error::Invalid("the graph has no output to read back".into()));
+        };
+        match plan.resources[first].kind {
+            crate::graph::ResolvedKind::Image { format: vk::Format::R8G8B8A8_UNORM, .. } => Ok(()),
+            _ => Err(plan.error_at(
+                first,
+                Error::Invalid("must be an R8G8B8A8_UNORM image to be read back as 8-bit RGBA".into()),
+            )),
+        }
     }
 
     /// This frame's constants: the camera, and last frame's for passes that test against last

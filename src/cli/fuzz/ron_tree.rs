@@ -469,6 +469,15 @@ Graph(name: "g \"x\"\n", /* nested /* comment */ */ resources: {"a": Image(forma
         }
     }
 
+    /// Printing moves the passes of the printed file itself, so its positions
+    /// are not part of the comparison; positions in the graphs it extends are.
+    fn without_positions_in_the_printed_file(plan: &str) -> String {
+        plan.split(' ')
+            .map(|word| if word.starts_with("g.ron:") { "g.ron" } else { word })
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+
     /// Every shipped graph, printed from its tree, compiles to the same plan.
     #[test]
     fn shipped_graphs_survive_the_round_trip() {
@@ -477,7 +486,8 @@ Graph(name: "g \"x\"\n", /* nested /* comment */ */ resources: {"a": Image(forma
         let kinds = cullgraph::passes::builtin_kinds();
         let plan = |text: &str| {
             let loaded = graph::load_in(text, "g.ron", None, &[], &env, &kinds).map_err(|e| e.to_string())?;
-            graph::compile(&loaded, &FrameInputs::new(64, 48)).map(|p| p.to_string()).map_err(|e| e.to_string())
+            let plan = graph::compile(&loaded, &FrameInputs::new(64, 48)).map_err(|e| e.to_string())?;
+            Ok::<_, String>(without_positions_in_the_printed_file(&plan.to_string()))
         };
         for (name, text) in cullgraph::passes::SHIPPED_GRAPHS.iter().map(|g| (g.name, g.text)) {
             let doc = parse(text).unwrap_or_else(|| panic!("{name} parses"));

@@ -11,6 +11,7 @@ use cullgraph::gpu::{GpuContext, ShaderCompiler};
 use cullgraph::graph::{self, DeviceEnv, FrameInputs};
 use cullgraph::passes::builtin_kinds;
 use cullgraph::passes::shared::frame_inputs;
+use cullgraph::render::graph_spec::shown_image_error;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{Scene, SceneError, SceneSource};
@@ -127,7 +128,8 @@ impl Bench {
         let big = FrameInputs { quantities: big.quantities.with("instances", 1_000_000).with("meshes", 64), ..big };
         let small = frame_inputs(&kinds, &self.city, 64, 48).map_err(|e| runtime_class(&e))?;
         for frame in [small, big] {
-            graph::compile(&loaded, &frame).map_err(|errors| graph_errors_class(&errors))?;
+            let plan = graph::compile(&loaded, &frame).map_err(|errors| graph_errors_class(&errors))?;
+            shown_image_error(&plan, frame.width, frame.height).map_err(|errors| graph_errors_class(&errors))?;
         }
         Ok(loaded.resources.iter().any(|r| r.imported))
     }

@@ -23,13 +23,27 @@ pub struct DeviceLimits {
     pub max_image_dimension_2d: u32,
     /// `maxFramebufferWidth` and `maxFramebufferHeight`: the largest render area.
     pub max_framebuffer: vk::Extent2D,
+    /// `maxComputeSharedMemorySize`: the most workgroup-shared bytes a compute shader declares.
+    pub max_compute_shared_memory_size: u32,
+    /// Optional features the device has enabled that kinds may need, by name (the host's
+    /// names: cullgraph's renderer says `post_depth_coverage`, `fragment_shader_sample_interlock`
+    /// and `subgroup_compute`, for basic, vote, arithmetic and ballot subgroup operations in
+    /// compute shaders).
+    pub features: Vec<String>,
 }
 
 impl DeviceLimits {
-    /// The limits of `limits`, a device called `device`.
-    pub fn from_vulkan(device: &str, limits: &vk::PhysicalDeviceLimits) -> Self {
+    /// Whether the device has the optional feature `name` enabled.
+    pub fn has(&self, name: &str) -> bool {
+        self.features.iter().any(|f| f == name)
+    }
+
+    /// The limits of `limits`, a device called `device` with the optional `features`.
+    pub fn from_vulkan(device: &str, limits: &vk::PhysicalDeviceLimits, features: Vec<String>) -> Self {
         Self {
             device: device.to_string(),
+            max_compute_shared_memory_size: limits.max_compute_shared_memory_size,
+            features,
             max_storage_buffer_range: limits.max_storage_buffer_range as u64,
             max_uniform_buffer_range: limits.max_uniform_buffer_range as u64,
             max_image_dimension_2d: limits.max_image_dimension2_d,

@@ -136,6 +136,7 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
                 resolved: &resolved,
                 planned: Some(plan),
                 limits: graph.limits.as_ref(),
+                quantities: Some(&frame.quantities),
             };
             for (pos, message) in kind.kind.check_compiled(&check) {
                 sink.at(pos, message);
@@ -229,6 +230,7 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
         pruned: pruning.pruned,
         resources,
         outputs: graph.outputs.clone(),
+        output_pos: graph.output_pos.clone(),
         memory,
         kinds: graph.kinds.clone(),
     })

@@ -291,7 +291,18 @@ impl GraphRuntime {
             let mut images = Vec::new();
             for b in &pass.barriers {
                 let Some(phys) = self.resources.index(b.resource, b.version, frame) else { continue };
-                let src = b.src.unwrap_or_else(|| self.tracker.pending(self.resources.alias_set(phys)));
+                // The plan knows the passes; what the executor itself did to the memory since
+                // (copying counters or captured lists to the host) only the tracker knows, so a
+                // planned source also waits for that.
+                let pending = self.tracker.pending(self.resources.alias_set(phys));
+                let src = match b.src {
+                    Some(planned) => Access {
+                        stage: planned.stage | pending.stage,
+                        access: planned.access | pending.access,
+                        ..planned
+                    },
+                    None => pending,
+                };
                 match self.resources.get(phys) {
                     Physical::Image(image) => {
                         let old = if b.discard { vk::ImageLayout::UNDEFINED } else { self.tracker.state(phys).layout };

@@ -145,6 +145,9 @@ pub struct KindCheck<'a> {
     pub planned: Option<&'a PlannedPass>,
     /// The device's limits and features, when there is a device.
     pub limits: Option<&'a DeviceLimits>,
+    /// The scene's quantities of the compilation ([`PassKind::check_compiled`]); `None` at load
+    /// time.
+    pub quantities: Option<&'a Quantities>,
 }
 
 impl<'a> KindCheck<'a> {

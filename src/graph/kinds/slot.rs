@@ -189,6 +189,11 @@ pub struct SlotDecl {
     /// The host reads the slot's buffer back after every frame, and the kind decodes it
     /// ([`crate::graph::PassKind::decode_counters`]); the slot's bytes must be `Exactly` a record.
     pub counters: Option<Counters>,
+    /// What the buffer holds, where the pass trusts it (`"draw commands"`: a draw reads its
+    /// indirect commands from it, and a buffer of anything else could make the device draw
+    /// without end). A read slot with a content takes only resources that the host imports or
+    /// that are written through slots of the same content.
+    pub content: Option<&'static str>,
 }
 
 impl SlotDecl {
@@ -204,6 +209,7 @@ impl SlotDecl {
             bytes: Bytes::Any,
             creates: None,
             counters: None,
+            content: None,
         }
     }
 
@@ -235,6 +241,11 @@ impl SlotDecl {
     /// The kind creates the resource when the graph declares none.
     pub const fn creates(self, creates: Creates) -> Self {
         Self { creates: Some(creates), ..self }
+    }
+
+    /// The buffer holds `content` (see [`SlotDecl::content`]).
+    pub const fn content(self, content: &'static str) -> Self {
+        Self { content: Some(content), ..self }
     }
 
     /// The slot holds counters that the host reads back every frame.

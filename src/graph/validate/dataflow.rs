@@ -4,6 +4,7 @@
 use super::{resource_list, Validator};
 use crate::graph::compile::flow::{self, DepKind};
 use crate::graph::compile::order;
+use crate::graph::error::Pos;
 use crate::graph::locate::Seg;
 use crate::graph::plan::{ResourceId, Version};
 use crate::graph::schema::GraphFile;
@@ -11,17 +12,18 @@ use crate::graph::validated::{Resource, ValidatedGraph};
 use std::collections::HashMap;
 
 impl Validator<'_> {
-    pub(super) fn outputs(&mut self, file: &GraphFile, resources: &[Resource]) -> Vec<ResourceId> {
+    pub(super) fn outputs(&mut self, file: &GraphFile, resources: &[Resource]) -> (Vec<ResourceId>, Vec<Pos>) {
         let names: HashMap<String, usize> = resources.iter().enumerate().map(|(i, r)| (r.name.clone(), i)).collect();
         let hint = "add outputs: [\"name\"] (the first is the image the host shows)";
         let Some(list) = &file.outputs else {
             self.err(self.pos(&[]), format!("graph '{}' has no outputs; {hint}", file.name));
-            return Vec::new();
+            return (Vec::new(), Vec::new());
         };
         if list.is_empty() {
             self.err(self.pos(&[Seg::Field("outputs")]), format!("graph '{}' has no outputs; {hint}", file.name));
         }
         let mut out: Vec<ResourceId> = Vec::new();
+        let mut at = Vec::new();
         for (k, name) in list.iter().enumerate() {
             let pos = self.pos(&[Seg::Field("outputs"), Seg::Index(k)]);
             if let Some(base) = name.strip_suffix(".prev") {
@@ -37,8 +39,9 @@ impl Validator<'_> {
                 continue;
             }
             out.push(r);
+            at.push(pos);
         }
-        out
+        (out, at)
     }
 }
 
@@ -87,6 +90,7 @@ pub(super) fn check(v: &mut Validator<'_>, graph: &ValidatedGraph, file: &GraphF
             }
         }
     }
+    content_errors(v, graph);
     if let Some(list) = &file.outputs {
         for (k, name) in list.iter().enumerate() {
             let Some(r) = graph.resource_id(name) else { continue };
@@ -114,5 +118,36 @@ pub(super) fn check(v: &mut Validator<'_>, graph: &ValidatedGraph, file: &GraphF
             .collect();
         let first = &graph.passes[cycle.passes[0]];
         v.err(first.pos, format!("cycle: {} ({})", names.join(" -> "), why.join("; ")));
+    }
+}
+
+/// Reads of a content a pass trusts ([`crate::graph::SlotDecl::content`], draw commands above
+/// all) from resources written as anything else: a draw that took its indirect commands from a
+/// buffer of visibility bits could run without end.
+fn content_errors(v: &mut Validator<'_>, graph: &ValidatedGraph) {
+    let slot_of = |pass: &crate::graph::validated::Pass, slot: &str| graph.kinds.info(&pass.kind)?.slot(slot).copied();
+    for pass in &graph.passes {
+        for b in pass.bindings.iter().filter(|b| !b.in_writes) {
+            let Some(content) = slot_of(pass, &b.slot).and_then(|s| s.content) else { continue };
+            if graph.resources[b.resource].imported {
+                continue;
+            }
+            let writers = graph.passes.iter().flat_map(|w| w.bindings.iter().map(move |wb| (w, wb)));
+            let wrong = writers
+                .filter(|(_, wb)| wb.in_writes && wb.resource == b.resource)
+                .find(|(w, wb)| slot_of(w, &wb.slot).and_then(|s| s.content) != Some(content));
+            if let Some((w, wb)) = wrong {
+                let name = &graph.resources[b.resource].name;
+                v.err(
+                    b.pos,
+                    format!(
+                        "pass '{}' reads {content} from '{name}' (slot \"{}\"), but pass '{}' writes '{name}' \
+                         through \"{}\", which does not write {content}: only a pass whose kind writes {content} \
+                         may feed this slot",
+                        pass.name, b.written_slot, w.name, wb.written_slot
+                    ),
+                );
+            }
+        }
     }
 }

@@ -79,6 +79,9 @@ fn format_errors(graph: &ValidatedGraph) -> Vec<(Pos, String)> {
                     Some(fs.iter().map(|&f| formats::name(f)).collect::<Vec<_>>().join(" or "))
                 }
                 FormatRule::Depth if !depth => Some("a depth format".to_string()),
+                FormatRule::DepthStencil if !formats::has_stencil(format) => {
+                    Some("a depth format with stencil (D24_UNORM_S8_UINT or D32_SFLOAT_S8_UINT)".to_string())
+                }
                 FormatRule::Color if depth => Some("a color format".to_string()),
                 _ if b.usage.needs_depth_format() && !depth => Some("a depth format".to_string()),
                 _ if (b.usage.is_attachment() || is_storage_image(b.usage))

@@ -94,7 +94,7 @@ pub fn load_in(
     let implicit = v.created_resources(&parsed, &mut resources, &mut samples);
     let mut passes = v.passes(&parsed, &resources, &implicit, &scope);
     compute::settle_write_usages(&mut passes, &resources);
-    let outputs = v.outputs(&parsed, &resources);
+    let (outputs, output_pos) = v.outputs(&parsed, &resources);
     let graph = ValidatedGraph {
         name: parsed.name.clone(),
         file: file.to_string(),
@@ -103,6 +103,7 @@ pub fn load_in(
         resources,
         passes,
         outputs,
+        output_pos,
         kinds: kinds.clone(),
         limits: env.limits(),
     };
@@ -117,6 +118,7 @@ pub fn load_in(
             resolved: &[],
             planned: None,
             limits: graph.limits.as_ref(),
+            quantities: None,
         };
         for (pos, message) in kind.kind.validate(&check) {
             v.err(pos, message);

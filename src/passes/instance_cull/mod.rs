@@ -31,7 +31,10 @@
 
 pub mod counters;
 
-use super::slots::{slot, COMMANDS_BYTES, COUNTERS_BYTES, COUNT_BYTES, HIZ_FORMAT, IDS_BYTES, INSTANCE_BITS};
+use super::slots::{
+    slot, COMMANDS_BYTES, COUNTERS_BYTES, COUNT_BYTES, DRAW_COMMANDS, DRAW_COUNTS, HIZ_FORMAT, IDS_BYTES,
+    INSTANCE_BITS, INSTANCE_IDS,
+};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
@@ -494,13 +497,13 @@ impl PassKind for InstanceCullKind {
                 slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid to test against (none: frustum only)"),
             ],
             writes: vec![
-                write("draw_commands", "one command per draw group").required().at_least(COMMANDS_BYTES).creates(Creates::buffer()),
-                write("draw_count", "number of commands of each face-cull region: back, front, none and transparent").required().at_least(COUNT_BYTES).creates(Creates::buffer()),
-                write("draw_instance_ids", "survivors, one slice per draw group").required().at_least(IDS_BYTES).creates(Creates::buffer()),
+                write("draw_commands", "one command per draw group").required().at_least(COMMANDS_BYTES).creates(Creates::buffer()).content(DRAW_COMMANDS),
+                write("draw_count", "number of commands of each face-cull region: back, front, none and transparent").required().at_least(COUNT_BYTES).creates(Creates::buffer()).content(DRAW_COUNTS),
+                write("draw_instance_ids", "survivors, one slice per draw group").required().at_least(IDS_BYTES).creates(Creates::buffer()).content(INSTANCE_IDS),
                 write("visibility", "this frame's visibility bits (late phase; history: the next frame reads `.prev`)").at_least(INSTANCE_BITS).creates(list),
-                write("visible_ids", "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group: the next frame's early draw list, which that frame draws as it is with no cull pass (history; the draw binds `.prev`)").at_least(IDS_BYTES).creates(list),
-                write("list_commands", "late phase, with `visible_ids`: the commands of that list (history)").at_least(COMMANDS_BYTES).creates(list),
-                write("list_count", "late phase, with `visible_ids`: their number per face-cull region (history)").at_least(COUNT_BYTES).creates(list),
+                write("visible_ids", "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group: the next frame's early draw list, which that frame draws as it is with no cull pass (history; the draw binds `.prev`)").at_least(IDS_BYTES).creates(list).content(INSTANCE_IDS),
+                write("list_commands", "late phase, with `visible_ids`: the commands of that list (history)").at_least(COMMANDS_BYTES).creates(list).content(DRAW_COMMANDS),
+                write("list_count", "late phase, with `visible_ids`: their number per face-cull region (history)").at_least(COUNT_BYTES).creates(list).content(DRAW_COUNTS),
                 write("list_stats", "late phase, with `visible_ids`: that list's counters, reported as the next frame's early draw (created with `visible_ids`)").exactly(COUNTERS_BYTES).creates(list.with("visible_ids")).counters(Counters::NextFramesList { count_slot: "list_count" }),
                 write("stats", "counters of this pass (created when unbound; read as `pass.stats`)").exactly(COUNTERS_BYTES).creates(Creates::buffer().always()).counters(Counters::ThisFrame),
             ],
@@ -531,13 +534,33 @@ impl PassKind for InstanceCullKind {
     }
 
     fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
-        let (Some(planned), Some(visible)) = (check.planned, check.binding("visible_ids")) else { return Vec::new() };
-        match CullSettings::from_plan(planned) {
-            Ok(settings) => settings.list_error().map(|m| (visible.pos, format!("pass '{}': {m}", planned.name))),
-            Err(e) => Some((check.pass.pos, e.to_string())),
+        let pass = check.pass;
+        let mut out = Vec::new();
+        if let (Some(planned), Some(visible)) = (check.planned, check.binding("visible_ids")) {
+            match CullSettings::from_plan(planned) {
+                Ok(settings) => {
+                    out.extend(settings.list_error().map(|m| (visible.pos, format!("pass '{}': {m}", pass.name))))
+                }
+                Err(e) => out.push((pass.pos, e.to_string())),
+            }
         }
-        .into_iter()
-        .collect()
+        let instances = check.quantities.and_then(|q| q.get("instances")).unwrap_or(0);
+        let most = crate::passes::shared::cull_data::MAX_CULL_SLOTS as u64;
+        if instances > most {
+            let message =
+                format!("pass '{}' ({KIND}) culls at most {most} instances; the scene has {instances}", pass.name);
+            out.push((pass.pos, message));
+        }
+        if check.limits.is_some_and(|l| !l.has("subgroup_compute")) {
+            let message = format!(
+                "pass '{}' ({KIND}) needs basic, vote, arithmetic and ballot subgroup operations in compute shaders, \
+                 which {} does not have",
+                pass.name,
+                check.limits.map_or("", |l| l.device.as_str())
+            );
+            out.push((pass.pos, message));
+        }
+        out
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

@@ -52,6 +52,27 @@ pub(crate) struct LightingCompressedPass {
     settings: LightingSettings,
 }
 
+/// Shared memory a tile takes to shade `shared_blocks` blocks together.
+fn shared_bytes(shared_blocks: u32) -> u32 {
+    shared_blocks * SHARED_BYTES_PER_BLOCK + SHARED_BYTES_OTHER
+}
+
+/// `shared_blocks` beyond the device's shared memory.
+fn shared_memory_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
+    let (limits, planned) = (check.limits?, check.planned?);
+    let blocks = block_count_setting(planned, "shared_blocks").ok()?;
+    let (bytes, limit) = (shared_bytes(blocks), limits.max_compute_shared_memory_size);
+    (bytes > limit).then(|| {
+        let at = check.pass.settings.iter().find(|s| s.name == "shared_blocks").map_or(check.pass.pos, |s| s.pos);
+        let message = format!(
+            "pass '{}': shared_blocks {blocks} needs about {bytes} bytes of shared memory; {} has {limit} \
+             (maxComputeSharedMemorySize)",
+            check.pass.name, limits.device
+        );
+        (at, message)
+    })
+}
+
 /// Setting `name` of `pass`, a block count (its declared range keeps it within a u32).
 fn block_count_setting(pass: &PlannedPass, name: &str) -> crate::Result<u32> {
     Ok(pass.int(name)?.clamp(0, u32::MAX as i64) as u32)
@@ -68,8 +89,9 @@ impl LightingCompressedPass {
         let samples = bound_samples(plan, pass, "depth").to_string();
         let with_stats = pass.bindings.iter().any(|b| b.slot == "stats");
         let shared_blocks = block_count_setting(pass, "shared_blocks")?;
-        let shared_bytes = shared_blocks * SHARED_BYTES_PER_BLOCK + SHARED_BYTES_OTHER;
+        let shared_bytes = shared_bytes(shared_blocks);
         let limit = ctx.caps().limits.max_compute_shared_memory_size;
+        // Checked when the graph is compiled (shared_memory_error); a host's own compile may not have.
         if shared_bytes > limit {
             return Err(crate::Error::Invalid(format!(
                 "pass '{}': shared_blocks {shared_blocks} needs about {shared_bytes} bytes of shared memory; this device has {limit}",
@@ -178,7 +200,9 @@ impl PassKind for LightingCompressedKind {
     }
 
     fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
-        super::gbuffer_compressed::size_errors(check)
+        let mut out = super::gbuffer_compressed::size_errors(check);
+        out.extend(shared_memory_error(check));
+        out
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

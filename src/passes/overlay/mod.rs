@@ -41,7 +41,8 @@ use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, P
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::graph::{
-    FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, SettingDecl, Stages, Usage, FRAMES_IN_FLIGHT,
+    FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, SettingDecl, Stages, Usage,
+    FRAMES_IN_FLIGHT,
 };
 use crate::passes::shared::SceneInputs;
 use ash::vk;
@@ -154,6 +155,17 @@ pub(crate) struct OverlayPass {
     pass_names: Vec<String>,
 }
 
+/// What `view` needs bound that `bound` says is not.
+fn view_error(view: OverlayView, bound: impl Fn(&str) -> bool) -> Option<&'static str> {
+    match view {
+        OverlayView::Hiz if !bound("hiz") => Some("view \"hiz\" needs a pyramid bound to slot 'hiz'"),
+        OverlayView::Culled if !bound("visibility") => {
+            Some("view \"culled\" needs the late cull pass's visibility bits bound to slot 'visibility'")
+        }
+        _ => None,
+    }
+}
+
 impl OverlayPass {
     /// The pass of a graph node: compiles the view's shaders and uploads the font and the panel's
     /// template (labels from `plan`).
@@ -165,17 +177,8 @@ impl OverlayPass {
     ) -> crate::Result<Self> {
         let settings = OverlaySettings::from_plan(pass)?;
         let bound = |slot: &str| pass.bindings.iter().any(|b| b.slot == slot);
-        let invalid = |m: &str| crate::Error::Invalid(format!("pass '{}': {m}", pass.name));
-        match settings.view {
-            OverlayView::Hiz if !bound("hiz") => {
-                return Err(invalid("view \"hiz\" needs a pyramid bound to slot 'hiz'"))
-            }
-            OverlayView::Culled if !bound("visibility") => {
-                return Err(invalid(
-                    "view \"culled\" needs the late cull pass's visibility bits bound to slot 'visibility'",
-                ))
-            }
-            _ => {}
+        if let Some(m) = view_error(settings.view, bound) {
+            return Err(crate::Error::Invalid(format!("pass '{}': {m}", pass.name)));
         }
         let labels = stats_labels(plan, pass);
         let panel = Panel::new(plan, pass, &settings, &labels);
@@ -447,6 +450,17 @@ impl PassKind for OverlayKind {
     fn reads_timings(&self) -> bool {
         true
     }
+
+    fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        let Some(settings) = check.planned.and_then(|p| OverlaySettings::from_plan(p).ok()) else { return Vec::new() };
+        view_error(settings.view, |slot| check.binding(slot).is_some())
+            .map(|m| {
+                let at = check.pass.settings.iter().find(|s| s.name == "view").map_or(check.pass.pos, |s| s.pos);
+                (at, format!("pass '{}': {m}", check.pass.name))
+            })
+            .into_iter()
+            .collect()
+    }
 }
 
 #[cfg(test)]
@@ -497,6 +511,7 @@ mod tests {
             pruned: vec![],
             resources: vec![resource("a"), resource("b")],
             outputs: vec![],
+            output_pos: vec![],
             memory: MemoryPlan::default(),
             kinds: Default::default(),
         }
