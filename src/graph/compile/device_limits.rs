@@ -23,6 +23,26 @@ pub struct DeviceLimits {
     pub max_image_dimension_2d: u32,
     /// `maxFramebufferWidth` and `maxFramebufferHeight`: the largest render area.
     pub max_framebuffer: vk::Extent2D,
+    /// What one workgroup of a compute shader may use.
+    pub compute: ComputeLimits,
+}
+
+/// The limits on one workgroup of a compute shader, which its pipeline must keep to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ComputeLimits {
+    /// `maxComputeSharedMemorySize`: bytes of `shared` memory.
+    pub max_shared_memory_bytes: u32,
+    /// `maxComputeWorkGroupSize`: `local_size_x/y/z`, each.
+    pub max_work_group_size: [u32; 3],
+    /// `maxComputeWorkGroupInvocations`: `local_size_x * local_size_y * local_size_z`.
+    pub max_work_group_invocations: u32,
+}
+
+impl ComputeLimits {
+    /// What every Vulkan device allows (the minimums the specification requires), for checks
+    /// made without a device.
+    pub const VULKAN_MINIMUM: Self =
+        Self { max_shared_memory_bytes: 16384, max_work_group_size: [128, 128, 64], max_work_group_invocations: 128 };
 }
 
 impl DeviceLimits {
@@ -36,6 +56,11 @@ impl DeviceLimits {
             max_framebuffer: vk::Extent2D {
                 width: limits.max_framebuffer_width,
                 height: limits.max_framebuffer_height,
+            },
+            compute: ComputeLimits {
+                max_shared_memory_bytes: limits.max_compute_shared_memory_size,
+                max_work_group_size: limits.max_compute_work_group_size,
+                max_work_group_invocations: limits.max_compute_work_group_invocations,
             },
         }
     }
