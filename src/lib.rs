@@ -93,7 +93,14 @@ mod readme_limits {
              {MAX_TEXTURES} textures"
         );
         let image_side = format!("at most {} texels a side", crate::scene::gltf_import::MAX_IMAGE_SIDE);
-        for stated in [files, buffers, expressions, world, size, scene, image_side] {
+        use crate::graph::compile::resolve::{MAX_DISPATCH_GROUPS, MAX_GROUPS};
+        let dispatch = format!("at most {MAX_GROUPS} workgroups per dimension and {MAX_DISPATCH_GROUPS} in all");
+        let includes = format!(
+            "`#include`s nest at most {} deep, bring in at most {} MiB together",
+            crate::gpu::shader::MAX_INCLUDE_DEPTH,
+            crate::gpu::shader::MAX_INCLUDED_BYTES >> 20
+        );
+        for stated in [files, buffers, expressions, world, size, scene, image_side, dispatch, includes] {
             assert!(readme.contains(&stated), "the README does not say \"{stated}\"");
         }
     }

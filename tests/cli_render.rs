@@ -99,8 +99,11 @@ fn durations_must_be_finite_and_at_most_a_day() {
 fn a_failed_allocation_names_the_resource_and_its_declaration() {
     let tmp = tempfile::tempdir().unwrap();
     let shader = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/graphs/shaders/rw_image.comp");
+    // The same shader for the float image: a storage image's format qualifier is its format.
+    let float_shader = tmp.path().join("rw_float_image.comp");
+    std::fs::write(&float_shader, std::fs::read_to_string(shader).unwrap().replace("rgba8", "rgba32f")).unwrap();
     let graph = tmp.path().join("huge.ron");
-    let pass = |name: &str, image: &str| {
+    let pass = |name: &str, image: &str, shader: &str| {
         format!(
             "Pass(name: \"{name}\", kind: \"compute\", shader: \"{shader}\", writes: {{\"img\": \"{image}\"}}, \
              dispatch: PerPixel(\"{image}\")),"
@@ -110,8 +113,8 @@ fn a_failed_allocation_names_the_resource_and_its_declaration() {
         "Graph(\n    name: \"huge\",\n    resources: {{\n        \"small\": Image(format: R8G8B8A8_UNORM),\n        \
          \"huge\": Image(format: R32G32B32A32_SFLOAT, size: Fixed(16384, 16384)),\n    }},\n    passes: [{} {}],\n    \
          outputs: [\"small\", \"huge\"],\n)\n",
-        pass("a", "small"),
-        pass("b", "huge")
+        pass("a", "small", shader),
+        pass("b", "huge", float_shader.to_str().unwrap())
     );
     std::fs::write(&graph, text).unwrap();
     let out = tmp.path().join("x.png");

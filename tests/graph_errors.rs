@@ -17,7 +17,8 @@ use std::path::{Path, PathBuf};
 
 /// A device that cannot use sRGB formats as storage images, has no 8x MSAA and no
 /// `D24_UNORM_S8_UINT`, like some real ones; it binds at most 128 MiB of storage buffer (as
-/// lavapipe) and 64 KiB of uniform buffer, and makes images and render areas of at most 8192.
+/// lavapipe) and 64 KiB of uniform buffer, makes images and render areas of at most 8192, and
+/// runs workgroups of at most 1024x512x64 and 1024 threads with 32 KiB of shared memory.
 struct FakeDevice {
     shaders: NoDevice,
 }
@@ -59,8 +60,12 @@ impl Environment for FakeDevice {
             max_uniform_buffer_range: 1 << 16,
             max_image_dimension_2d: 8192,
             max_framebuffer: vk::Extent2D { width: 8192, height: 8192 },
-            max_compute_shared_memory_size: 32768,
             features: ["post_depth_coverage", "subgroup_compute"].map(String::from).to_vec(),
+            compute: graph::ComputeLimits {
+                max_shared_memory_bytes: 32768,
+                max_work_group_size: [1024, 512, 64],
+                max_work_group_invocations: 1024,
+            },
         })
     }
 }

@@ -239,3 +239,55 @@ fn a_cull_pass_placed_twice_renders_without_a_hazard() {
     }
     gpu.assert_clean();
 }
+
+/// A compute shader's shared memory is counted from its SPIR-V: exactly the device's limit
+/// renders, four bytes more are refused when the graph is loaded, at the pass's shader.
+#[test]
+fn shared_memory_up_to_the_device_limit_runs_and_beyond_it_is_refused_at_the_shader() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let limit = gpu.caps().limits.max_compute_shared_memory_size;
+    let dir = tempfile::tempdir().unwrap();
+    // Every workgroup fills `words` (all of its shared memory at the limit), then each thread
+    // reads the word at the other end and writes it as red.
+    let write = |words: u32| {
+        let shader = format!(
+            "#version 460\n\
+             layout(local_size_x = 8, local_size_y = 8) in;\n\
+             layout(binding = 0, rgba8) uniform writeonly image2D dst;\n\
+             shared uint words[{words}];\n\
+             void main() {{\n\
+                 uint i = gl_LocalInvocationIndex;\n\
+                 for (uint k = i; k < {words}u; k += 64u) words[k] = k;\n\
+                 barrier();\n\
+                 imageStore(dst, ivec2(gl_GlobalInvocationID.xy), vec4(float(words[{words}u - 1u - i] % 256u) / 255.0, 0, 0, 1));\n\
+             }}\n"
+        );
+        std::fs::write(dir.path().join("shared.comp"), shader).unwrap();
+        let graph = "Graph(\n    name: \"shared\",\n    resources: {\"out\": Image(format: R8G8B8A8_UNORM)},\n    passes: [\n        \
+                     Pass(name: \"fill\", kind: \"compute\", shader: \"shared.comp\", writes: {\"dst\": \"out\"}, dispatch: PerPixel(\"out\")),\n    ],\n    outputs: [\"out\"],\n)\n";
+        let path = dir.path().join("shared.ron");
+        std::fs::write(&path, graph).unwrap();
+        GraphSpec::from_file(&path).unwrap()
+    };
+    let words = limit / 4;
+    let mut renderer =
+        Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(16, 8), &write(words)).unwrap();
+    let image = renderer.render_to_image(&boxes_camera()).unwrap().1;
+    for (x, y, pixel) in image.enumerate_pixels() {
+        let i = x % 8 + 8 * (y % 8);
+        assert_eq!(pixel[0] as u32, (words - 1 - i) % 256, "pixel {x},{y}");
+    }
+
+    let err = Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(16, 8), &write(words + 4))
+        .err()
+        .expect("refused when loaded")
+        .to_string();
+    let expected = format!(
+        "shared.ron:5:53: shader 'shared.comp' of pass 'fill' uses {} bytes of shared memory, more than {} allows \
+         (maxComputeSharedMemorySize {limit})",
+        limit + 16,
+        gpu.caps().name
+    );
+    assert!(err.contains(&expected), "{err}\nexpected: {expected}");
+}

@@ -17,6 +17,7 @@ pub mod texture_array;
 pub mod timestamps;
 pub mod transfer;
 pub mod validation;
+pub mod workgroup_memory;
 
 pub use barrier::Access;
 pub use buffer::{Buffer, BufferDesc};

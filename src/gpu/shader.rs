@@ -1,5 +1,6 @@
-//! Runtime GLSL compilation with shaderc: `#include` of the headers in `shaders/`, defines, a
-//! cache, and compile errors that name the file and line.
+//! Runtime GLSL compilation with shaderc: `#include` of the headers in `shaders/` (bounded in
+//! depth and total size, cycles refused), defines, a cache, and compile errors that name the
+//! file and line.
 //!
 //! Shaders come either from the sources embedded at build time (so a binary carried to another
 //! machine works on its own) or from a directory on disk (for editing and hot reload).
@@ -201,9 +202,21 @@ impl ShaderCompiler {
             options.add_macro_definition(k, Some(v));
         }
         let (root, read_log) = (self.root.clone(), self.read_log.clone());
-        options.set_include_callback(move |requested, kind, from, _depth| {
-            resolve_include(&root, &read_log, requested, kind, from)
+        let includes = std::cell::RefCell::new(IncludeChain::new(name));
+        options.set_include_callback(move |requested, kind, from, depth| {
+            includes.borrow_mut().include(requested, kind, from, depth, |requested, kind, from| {
+                resolve_include(&root, &read_log, requested, kind, from)
+            })
         });
+        if let Some(line) = source.lines().position(|l| l.contains('\0')) {
+            let diagnostic = Diagnostic {
+                file: name.into(),
+                line: line as u32 + 1,
+                severity: "error".into(),
+                message: "the source contains a NUL character".into(),
+            };
+            return Err(ShaderError::Compile { path: name.into(), diagnostics: vec![diagnostic] });
+        }
         let result = self.compiler.compile_into_spirv(source, kind, name, "main", Some(&options));
         let artifact = match result {
             Ok(a) => a,
@@ -216,6 +229,93 @@ impl ShaderCompiler {
         self.cache.lock().unwrap_or_else(|p| p.into_inner()).insert(key, spirv.clone());
         Ok(spirv)
     }
+}
+
+/// Most `#include`s nested in one another (the library's headers nest 4 deep).
+pub const MAX_INCLUDE_DEPTH: usize = 32;
+/// Most bytes that the `#include`s of one compile bring in together: without a bound, headers
+/// that each include the next twice double the text at every level.
+pub const MAX_INCLUDED_BYTES: u64 = 4 * crate::files::SHADER_LIMIT;
+
+/// The `#include`s of one compile, so that a file that includes itself (directly or through
+/// others), a chain nested too deeply or a total too large ends as an error at the `#include`
+/// instead of a preprocessor that never stops and grows without bound. An include cycle is an
+/// error even where include guards would end it.
+struct IncludeChain {
+    /// The files being included, the shader first: `stack[d]` includes `stack[d + 1]`; each as
+    /// its name in messages and as a key that is the same for every spelling of its path.
+    stack: Vec<(String, String)>,
+    /// Bytes brought in so far.
+    bytes: u64,
+    /// A refusal of a `#include "..."` that shaderc will ask again as `#include <...>`:
+    /// (requested, from, message). The retry gives the same answer.
+    refused: Option<(String, String, String)>,
+}
+
+impl IncludeChain {
+    fn new(shader: &str) -> Self {
+        Self { stack: vec![(shader.to_string(), include_key(shader))], bytes: 0, refused: None }
+    }
+
+    /// Answers shaderc's request for `requested`, included from `from` at nesting `depth` (1
+    /// for the shader's own includes), with `resolve` finding the file.
+    fn include(
+        &mut self,
+        requested: &str,
+        kind: shaderc::IncludeType,
+        from: &str,
+        depth: usize,
+        resolve: impl FnOnce(&str, shaderc::IncludeType, &str) -> shaderc::IncludeCallbackResult,
+    ) -> shaderc::IncludeCallbackResult {
+        if let Some((r, f, message)) = self.refused.take() {
+            if kind == shaderc::IncludeType::Standard && r == requested && f == from {
+                return Err(message);
+            }
+        }
+        let included = resolve(requested, kind, from)?;
+        let refusal = self.refusal(&included, depth);
+        if let Some(message) = refusal {
+            if kind == shaderc::IncludeType::Relative {
+                self.refused = Some((requested.to_string(), from.to_string(), message.clone()));
+            }
+            return Err(message);
+        }
+        self.stack.push((included.resolved_name.clone(), include_key(&included.resolved_name)));
+        Ok(included)
+    }
+
+    /// Why `included`, at nesting `depth`, is refused.
+    fn refusal(&mut self, included: &shaderc::ResolvedInclude, depth: usize) -> Option<String> {
+        if depth > MAX_INCLUDE_DEPTH {
+            return Some(format!("includes nest more than {MAX_INCLUDE_DEPTH} deep"));
+        }
+        // Includes are asked for depth first: the files open now are the first `depth`.
+        self.stack.truncate(depth.max(1));
+        let key = include_key(&included.resolved_name);
+        if let Some(at) = self.stack.iter().position(|(_, k)| *k == key) {
+            let mut cycle: Vec<&str> = self.stack[at..].iter().map(|(n, _)| n.as_str()).collect();
+            cycle.push(&included.resolved_name);
+            return Some(format!("include cycle: {}", cycle.join(" includes ")));
+        }
+        self.bytes = self.bytes.saturating_add(included.content.len() as u64);
+        if self.bytes > MAX_INCLUDED_BYTES {
+            return Some(format!(
+                "the includes of this shader bring in more than {} MiB together",
+                MAX_INCLUDED_BYTES >> 20
+            ));
+        }
+        if included.content.contains('\0') {
+            return Some(format!("'{}' contains a NUL character", included.resolved_name));
+        }
+        None
+    }
+}
+
+/// The same string for every spelling of one file's path (`a/./b.glsl`, `a/b.glsl`): its
+/// canonical path when it is a file on disk, otherwise the name itself (a library path, which
+/// is normalized already).
+fn include_key(name: &str) -> String {
+    std::fs::canonicalize(name).map_or_else(|_| name.to_string(), |p| p.display().to_string())
 }
 
 /// The shader stage from the file extension.
@@ -315,6 +415,92 @@ mod tests {
         assert_eq!((d[0].file.as_str(), d[0].line, d[0].severity.as_str()), ("cull/a.comp", 12, "error"));
         assert_eq!(d[0].message, "'x' : undeclared identifier");
         assert_eq!((d[1].file.as_str(), d[1].line), ("common/h.glsl", 3));
+    }
+
+    /// The error of compiling `main` in a folder holding `files` (name, text).
+    fn include_error(files: &[(String, String)], main: &str) -> String {
+        let dir = tempfile::tempdir().unwrap();
+        for (name, text) in files {
+            std::fs::write(dir.path().join(name), text).unwrap();
+        }
+        let compiler = ShaderCompiler::new(ShaderRoot::Embedded).unwrap();
+        match compiler.compile_path(&dir.path().join(main), &[]) {
+            Err(ShaderError::Compile { diagnostics, .. }) => {
+                let d = &diagnostics[0];
+                format!("{}:{}: {}", Path::new(&d.file).file_name().unwrap().to_string_lossy(), d.line, d.message)
+            }
+            other => panic!("expected a compile error, got {other:?}"),
+        }
+    }
+
+    fn file(name: &str, text: &str) -> (String, String) {
+        (name.to_string(), text.to_string())
+    }
+
+    const MAIN: &str = "layout(local_size_x = 1) in;\nvoid main() {}\n";
+
+    #[test]
+    fn include_cycles_are_errors_at_the_include() {
+        let own = include_error(&[file("a.comp", &format!("#version 460\n#include \"a.comp\"\n{MAIN}"))], "a.comp");
+        assert!(own.starts_with("a.comp:2: '#include' : include cycle: "), "{own}");
+        let pair = include_error(
+            &[
+                file("a.comp", &format!("#version 460\n#include \"b.glsl\"\n{MAIN}")),
+                file("b.glsl", "// guards would not help\n#include \"./a.comp\"\n"),
+            ],
+            "a.comp",
+        );
+        assert!(pair.starts_with("b.glsl:2: '#include' : include cycle: "), "{pair}");
+        assert!(pair.contains("a.comp includes ") && pair.contains("b.glsl includes "), "{pair}");
+    }
+
+    #[test]
+    fn includes_nest_at_most_max_include_depth_and_bring_in_a_bounded_total() {
+        let n = MAX_INCLUDE_DEPTH + 8;
+        let mut chain: Vec<(String, String)> =
+            (0..n).map(|i| file(&format!("h{i}.glsl"), &format!("#include \"h{}.glsl\"\n", i + 1))).collect();
+        chain.push(file(&format!("h{n}.glsl"), ""));
+        chain.push(file("main.comp", &format!("#version 460\n#include \"h0.glsl\"\n{MAIN}")));
+        let deep = include_error(&chain, "main.comp");
+        let last = MAX_INCLUDE_DEPTH - 1;
+        let expected = format!(
+            "h{last}.glsl:1: '#include' : includes nest more than {MAX_INCLUDE_DEPTH} deep for header name: h{}.glsl",
+            last + 1
+        );
+        assert_eq!(deep, expected);
+
+        // Each header includes the next twice: 2^24 copies of the last one, unless bounded.
+        let padding = "// ".to_string() + &"x".repeat(1000) + "\n";
+        let mut doubling: Vec<(String, String)> = (0..24)
+            .map(|i| {
+                file(
+                    &format!("d{i}.glsl"),
+                    &format!("{padding}#include \"d{j}.glsl\"\n#include \"d{j}.glsl\"\n", j = i + 1),
+                )
+            })
+            .collect();
+        doubling.push(file("d24.glsl", &padding));
+        doubling.push(file("main.comp", &format!("#version 460\n#include \"d0.glsl\"\n{MAIN}")));
+        let wide = include_error(&doubling, "main.comp");
+        assert!(wide.contains("the includes of this shader bring in more than 16 MiB together"), "{wide}");
+    }
+
+    #[test]
+    fn a_nul_character_is_an_error_not_a_panic() {
+        let compiler = ShaderCompiler::new(ShaderRoot::Embedded).unwrap();
+        let err = compiler.compile_source("t.comp", "#version 460\nvoid main() {}\0\n", &[]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "shader 't.comp' failed to compile:\nt.comp:2: error: the source contains a NUL character"
+        );
+        let header = include_error(
+            &[file("h.glsl", "int x;\0"), file("m.comp", &format!("#version 460\n#include \"h.glsl\"\n{MAIN}"))],
+            "m.comp",
+        );
+        assert!(
+            header.starts_with("m.comp:2: '#include' : ") && header.contains("contains a NUL character"),
+            "{header}"
+        );
     }
 
     #[test]

@@ -64,7 +64,7 @@ pub fn shader_interface_with(compiler: &crate::gpu::ShaderCompiler, path: &Path)
     let mut interface = crate::gpu::reflect::reflect(&spirv).map_err(|e| e.to_string())?;
     // The optimizer strips variable names from the SPIR-V; take them from the source, with the
     // headers it includes from beside it.
-    let source = if path.is_file() { source_with_local_includes(path, 0) } else { None };
+    let source = if path.is_file() { source_with_local_includes(path) } else { None };
     if let Some(source) = source {
         let names = binding_names(&source);
         for (binding, info) in interface.bindings.iter_mut() {
@@ -76,23 +76,38 @@ pub fn shader_interface_with(compiler: &crate::gpu::ShaderCompiler, path: &Path)
     Ok(interface)
 }
 
-/// Headers included more deeply than this are not searched for binding names (include cycles).
-const MAX_INCLUDE_DEPTH: u32 = 16;
-
 /// The text of the shader file `path` with every `#include "file"` that names a file beside it
 /// (relative to the including file) inlined, so that bindings declared in such headers have
-/// names; includes from the shader library stay as they are. `None` if `path` cannot be read.
-fn source_with_local_includes(path: &Path, depth: u32) -> Option<String> {
+/// names; includes from the shader library stay as they are. Each file is inlined once (a
+/// header included again, or including itself, keeps its `#include` line), no deeper than the
+/// compiler allows and no more text than it takes in, so that this ends fast and small on any
+/// files. `None` if `path` cannot be read.
+fn source_with_local_includes(path: &Path) -> Option<String> {
+    let mut inlined = std::collections::HashSet::new();
+    let mut budget = crate::gpu::shader::MAX_INCLUDED_BYTES;
+    inline_local_includes(path, 0, &mut inlined, &mut budget)
+}
+
+fn inline_local_includes(
+    path: &Path,
+    depth: usize,
+    inlined: &mut std::collections::HashSet<std::path::PathBuf>,
+    budget: &mut u64,
+) -> Option<String> {
+    if depth > crate::gpu::shader::MAX_INCLUDE_DEPTH
+        || !inlined.insert(std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()))
+    {
+        return None;
+    }
     let source = crate::files::read_limited_text(path, crate::files::SHADER_LIMIT, "shader").ok()?;
+    *budget = budget.checked_sub(source.len() as u64)?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let mut out = String::with_capacity(source.len());
     for line in source.lines() {
         let included = line.trim_start().strip_prefix("#include").map(str::trim).and_then(|rest| {
             let name = rest.strip_prefix('"')?.split('"').next()?;
             let file = dir.join(name);
-            (depth < MAX_INCLUDE_DEPTH && file.is_file())
-                .then(|| source_with_local_includes(&file, depth + 1))
-                .flatten()
+            file.is_file().then(|| inline_local_includes(&file, depth + 1, inlined, budget)).flatten()
         });
         out.push_str(included.as_deref().unwrap_or(line));
         out.push('\n');
@@ -297,7 +312,7 @@ layout(push_constant) uniform Push { uint n; } push;
     }
 
     #[test]
-    fn inlines_the_headers_beside_a_shader_but_not_library_ones_or_cycles() {
+    fn inlines_the_headers_beside_a_shader_once_but_not_library_ones() {
         let dir = std::env::temp_dir().join(format!("cullgraph-env-includes-{}", std::process::id()));
         std::fs::create_dir_all(dir.join("sub")).unwrap();
         std::fs::write(
@@ -310,10 +325,11 @@ layout(push_constant) uniform Push { uint n; } push;
             "layout(binding = 3) buffer B { uint w[]; } claims;\n#include \"body.glsl\"\n",
         )
         .unwrap();
-        let text = source_with_local_includes(&dir.join("main.comp"), 0).unwrap();
+        let text = source_with_local_includes(&dir.join("main.comp")).unwrap();
         assert!(text.contains("#include \"common/scene.glsl\""), "library includes stay: {text}");
         assert_eq!(binding_names(&text).get(&3).map(String::as_str), Some("claims"));
-        assert_eq!(text.matches("claims;").count() as u32, MAX_INCLUDE_DEPTH, "a cycle stops at the depth limit");
+        assert_eq!(text.matches("claims;").count(), 1, "a cycle is inlined once: {text}");
+        assert!(text.contains("#include \"body.glsl\""), "the include that closes the cycle stays: {text}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

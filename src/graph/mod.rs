@@ -40,7 +40,7 @@ pub(crate) mod usage;
 pub(crate) mod validate;
 pub mod validated;
 
-pub use compile::device_limits::DeviceLimits;
+pub use compile::device_limits::{ComputeLimits, DeviceLimits};
 pub use compile::resolve::Resolved;
 pub use compile::{compile, FrameInputs};
 pub use compose::LibraryGraph;

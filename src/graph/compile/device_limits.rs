@@ -23,13 +23,31 @@ pub struct DeviceLimits {
     pub max_image_dimension_2d: u32,
     /// `maxFramebufferWidth` and `maxFramebufferHeight`: the largest render area.
     pub max_framebuffer: vk::Extent2D,
-    /// `maxComputeSharedMemorySize`: the most workgroup-shared bytes a compute shader declares.
-    pub max_compute_shared_memory_size: u32,
     /// Optional features the device has enabled that kinds may need, by name (the host's
     /// names: cullgraph's renderer says `post_depth_coverage`, `fragment_shader_sample_interlock`
     /// and `subgroup_compute`, for basic, vote, arithmetic and ballot subgroup operations in
     /// compute shaders).
     pub features: Vec<String>,
+    /// What one workgroup of a compute shader may use.
+    pub compute: ComputeLimits,
+}
+
+/// The limits on one workgroup of a compute shader, which its pipeline must keep to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ComputeLimits {
+    /// `maxComputeSharedMemorySize`: bytes of `shared` memory.
+    pub max_shared_memory_bytes: u32,
+    /// `maxComputeWorkGroupSize`: `local_size_x/y/z`, each.
+    pub max_work_group_size: [u32; 3],
+    /// `maxComputeWorkGroupInvocations`: `local_size_x * local_size_y * local_size_z`.
+    pub max_work_group_invocations: u32,
+}
+
+impl ComputeLimits {
+    /// What every Vulkan device allows (the minimums the specification requires), for checks
+    /// made without a device.
+    pub const VULKAN_MINIMUM: Self =
+        Self { max_shared_memory_bytes: 16384, max_work_group_size: [128, 128, 64], max_work_group_invocations: 128 };
 }
 
 impl DeviceLimits {
@@ -42,7 +60,6 @@ impl DeviceLimits {
     pub fn from_vulkan(device: &str, limits: &vk::PhysicalDeviceLimits, features: Vec<String>) -> Self {
         Self {
             device: device.to_string(),
-            max_compute_shared_memory_size: limits.max_compute_shared_memory_size,
             features,
             max_storage_buffer_range: limits.max_storage_buffer_range as u64,
             max_uniform_buffer_range: limits.max_uniform_buffer_range as u64,
@@ -50,6 +67,11 @@ impl DeviceLimits {
             max_framebuffer: vk::Extent2D {
                 width: limits.max_framebuffer_width,
                 height: limits.max_framebuffer_height,
+            },
+            compute: ComputeLimits {
+                max_shared_memory_bytes: limits.max_compute_shared_memory_size,
+                max_work_group_size: limits.max_compute_work_group_size,
+                max_work_group_invocations: limits.max_compute_work_group_invocations,
             },
         }
     }

@@ -24,6 +24,13 @@ pub const MAX_IMAGE_DIMENSION: u32 = 16384;
 pub const MIN_BUFFER_BYTES: u64 = 4;
 /// Most workgroups per dimension of a dispatch (the Vulkan minimum of `maxComputeWorkGroupCount`).
 pub const MAX_GROUPS: u64 = 65535;
+/// Most workgroups of one dispatch in all. Vulkan bounds each dimension only, so 65535^3
+/// workgroups are a valid dispatch that keeps a device busy for hours (lavapipe never returns,
+/// a GPU is reset by its watchdog). 2^22 is one 8x8 workgroup per 8x8 tile of the largest image
+/// (16384x16384), and a trivial shader runs that many in about a second on lavapipe with two
+/// cores (8x8 threads a workgroup; 8 s at the most threads a workgroup that lavapipe allows,
+/// 32x32); more work belongs in more threads per workgroup or in several passes.
+pub const MAX_DISPATCH_GROUPS: u64 = 1 << 22;
 
 /// Evaluates `e`; an error carries its position.
 pub fn eval(e: &LocatedExpr, vars: &BTreeMap<String, Num>) -> Result<Num, (Pos, String)> {
@@ -410,6 +417,17 @@ pub fn dispatch(
             );
             return None;
         }
+    }
+    let total = groups[0] * groups[1] * groups[2];
+    if total > MAX_DISPATCH_GROUPS {
+        errors.push(
+            pass.dispatch_pos,
+            format!(
+                "dispatch of pass '{}' needs {}x{}x{} = {total} workgroups (at most {MAX_DISPATCH_GROUPS} in all)",
+                pass.name, groups[0], groups[1], groups[2]
+            ),
+        );
+        return None;
     }
     Some(groups.map(|g| g as u32))
 }

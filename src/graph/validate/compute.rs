@@ -9,12 +9,20 @@
 //! resource in the frame (nothing meaningful to keep, unless the host imported it), and to
 //! read-modify-write it otherwise.
 //!
+//! What would make a frame invalid is refused here rather than left to the device: image
+//! bindings that are not 2D with one layer (graph images and their views are), storage images
+//! without a format qualifier or with one that is not the bound image's format, and workgroups
+//! larger, or with more shared memory, than the device allows (the Vulkan minimums without a
+//! device).
+//!
 //! [`Environment`]: crate::graph::env::Environment
 
 use super::passes::Entry;
 use super::{resource_list, Scope, Validator, Vars};
-use crate::gpu::reflect::BindingInfo;
+use crate::gpu::reflect::{format_qualifier, BindingInfo, ImageDecl, ImageDim, ShaderInterface};
+use crate::graph::compile::device_limits::{ComputeLimits, DeviceLimits};
 use crate::graph::error::list;
+use crate::graph::formats;
 use crate::graph::locate::Seg;
 use crate::graph::plan::Version;
 use crate::graph::schema::{DispatchDecl, PassDecl};
@@ -44,6 +52,59 @@ fn binding_label(number: u32, info: &BindingInfo) -> String {
         Some(n) if !n.is_empty() => format!("{number} '{n}'"),
         _ => number.to_string(),
     }
+}
+
+/// Whether a graph pass can bind a descriptor of this type.
+fn bindable(kind: vk::DescriptorType) -> bool {
+    matches!(
+        kind,
+        vk::DescriptorType::COMBINED_IMAGE_SAMPLER
+            | vk::DescriptorType::SAMPLED_IMAGE
+            | vk::DescriptorType::STORAGE_IMAGE
+            | vk::DescriptorType::STORAGE_BUFFER
+            | vk::DescriptorType::UNIFORM_BUFFER
+    )
+}
+
+/// Why binding `number` of `shader` cannot be bound to any graph resource, whatever the pass
+/// binds there: a descriptor a graph cannot bind, an array, an image that is not 2D with one
+/// layer (graph images are, and their views), or a storage image without a format qualifier
+/// (writing one needs a format feature that devices lack for some formats, and reading one a
+/// device feature).
+fn binding_problem(number: u32, info: &BindingInfo, shader: &str) -> Option<String> {
+    let label = binding_label(number, info);
+    let storage = info.kind == vk::DescriptorType::STORAGE_IMAGE;
+    if !bindable(info.kind) {
+        return Some(format!(
+            "binding {label} of shader '{shader}' is a {}, which graph passes cannot bind \
+             (use sampled images, storage images, storage buffers or uniform buffers)",
+            descriptor_name(info.kind)
+        ));
+    }
+    if info.count != 1 {
+        return Some(format!(
+            "binding {label} of shader '{shader}' is an array of {}; graph passes bind single resources",
+            info.count
+        ));
+    }
+    let image = info.image?;
+    if image.dim != ImageDim::D2 || image.arrayed {
+        let flat = ImageDecl { dim: ImageDim::D2, arrayed: false, ..image };
+        let declared = image.glsl_type(storage);
+        let article = if declared.starts_with('i') { "an" } else { "a" };
+        return Some(format!(
+            "binding {label} of shader '{shader}' is {article} {declared}, but graph images are 2D with one layer: \
+             declare it {}",
+            flat.glsl_type(storage)
+        ));
+    }
+    if storage && image.format.is_none() {
+        return Some(format!(
+            "storage image binding {label} of shader '{shader}' has no format qualifier: declare the format of \
+             the image bound there, e.g. layout(binding = {number}, rgba8) for R8G8B8A8_UNORM"
+        ));
+    }
+    None
 }
 
 impl Validator<'_> {
@@ -96,37 +157,13 @@ impl Validator<'_> {
             }
         };
         pass.local_size = interface.local_size.unwrap_or([1, 1, 1]);
-        let bindable = |kind: vk::DescriptorType| {
-            matches!(
-                kind,
-                vk::DescriptorType::COMBINED_IMAGE_SAMPLER
-                    | vk::DescriptorType::SAMPLED_IMAGE
-                    | vk::DescriptorType::STORAGE_IMAGE
-                    | vk::DescriptorType::STORAGE_BUFFER
-                    | vk::DescriptorType::UNIFORM_BUFFER
-            )
-        };
+        for message in workgroup_errors(shader, &decl.name, &interface, self.env.limits().as_ref()) {
+            self.err(shader_pos, message);
+        }
         let mut shader_ok = true;
         for (&number, info) in &interface.bindings {
-            let label = binding_label(number, info);
-            if !bindable(info.kind) {
-                self.err(
-                    shader_pos,
-                    format!(
-                        "binding {label} of shader '{shader}' is a {}, which graph passes cannot bind \
-                         (use sampled images, storage images, storage buffers or uniform buffers)",
-                        descriptor_name(info.kind)
-                    ),
-                );
-                shader_ok = false;
-            } else if info.count != 1 {
-                self.err(
-                    shader_pos,
-                    format!(
-                        "binding {label} of shader '{shader}' is an array of {}; graph passes bind single resources",
-                        info.count
-                    ),
-                );
+            if let Some(message) = binding_problem(number, info, shader) {
+                self.err(shader_pos, message);
                 shader_ok = false;
             }
         }
@@ -178,7 +215,7 @@ impl Validator<'_> {
                 );
                 continue;
             }
-            if !bindable(info.kind) || info.count != 1 {
+            if binding_problem(number, info, shader).is_some() {
                 self.drop_binding(e.target);
                 continue;
             }
@@ -204,16 +241,35 @@ impl Validator<'_> {
             if let (Some(declared), ResourceDesc::Image { format, .. }) =
                 (info.image.and_then(|i| i.sampled), &res.desc)
             {
-                let gives = crate::graph::formats::sampled_scalar(*format);
+                let gives = formats::sampled_scalar(*format);
                 if *format != vk::Format::UNDEFINED && gives != declared {
                     let message = format!(
                         "{head} samples {declared:?} values but '{}' is {}, which gives {gives:?} values",
                         res.name,
-                        crate::graph::formats::name(*format)
+                        formats::name(*format)
                     );
                     self.err(val_pos, message);
                     self.drop_binding(e.target);
                     continue;
+                }
+            }
+            // A storage image view must have exactly the format its declaration names.
+            if let (Some(declared), ResourceDesc::Image { format, .. }) = (info.image.and_then(|i| i.format), &res.desc)
+            {
+                if *format != vk::Format::UNDEFINED && declared != *format {
+                    let fix = match format_qualifier(*format) {
+                        Some(q) => format!("declare it {q}"),
+                        None => "no format qualifier names that format, so it cannot be a storage image".into(),
+                    };
+                    let message = format!(
+                        "{head} is declared {} ({}) but '{}' is {}: {fix}",
+                        format_qualifier(declared).unwrap_or("?"),
+                        formats::name(declared),
+                        res.name,
+                        formats::name(*format)
+                    );
+                    // The usage stays: the device's support of the image as storage is checked too.
+                    self.err(val_pos, message);
                 }
             }
             let c = Stages::Compute;
@@ -260,7 +316,7 @@ impl Validator<'_> {
             });
         }
         for (&number, info) in &interface.bindings {
-            if !unresolved && !bound.contains_key(&number) && bindable(info.kind) && info.count == 1 {
+            if !unresolved && !bound.contains_key(&number) && binding_problem(number, info, shader).is_none() {
                 self.err(
                     shader_pos,
                     format!(
@@ -334,6 +390,47 @@ impl Validator<'_> {
             }
         };
     }
+}
+
+/// What a compute shader's workgroup takes beyond the device's `limits` (without a device, beyond
+/// the minimum every Vulkan device allows): its size in each dimension, its threads and its
+/// shared memory. A pipeline past them is invalid (the validation layer reports
+/// `VUID-RuntimeSpirv-Workgroup-06530` for shared memory).
+fn workgroup_errors(
+    shader: &str,
+    pass: &str,
+    interface: &ShaderInterface,
+    limits: Option<&DeviceLimits>,
+) -> Vec<String> {
+    let (c, who) = match limits {
+        Some(l) => (l.compute, l.device.as_str()),
+        None => (ComputeLimits::VULKAN_MINIMUM, "every Vulkan device (no device was asked)"),
+    };
+    let mut out = Vec::new();
+    let head = format!("shader '{shader}' of pass '{pass}'");
+    let [x, y, z] = interface.local_size.unwrap_or([1, 1, 1]);
+    let [mx, my, mz] = c.max_work_group_size;
+    if x > mx || y > my || z > mz {
+        out.push(format!(
+            "{head} has workgroups of {x}x{y}x{z} threads, more than {who} allows \
+             (maxComputeWorkGroupSize {mx}x{my}x{mz})"
+        ));
+    }
+    let threads = x as u64 * y as u64 * z as u64;
+    if threads > c.max_work_group_invocations as u64 {
+        out.push(format!(
+            "{head} has workgroups of {x}x{y}x{z} = {threads} threads, more than {who} allows \
+             (maxComputeWorkGroupInvocations {})",
+            c.max_work_group_invocations
+        ));
+    }
+    if interface.workgroup_memory_bytes > c.max_shared_memory_bytes as u64 {
+        out.push(format!(
+            "{head} uses {} bytes of shared memory, more than {who} allows (maxComputeSharedMemorySize {})",
+            interface.workgroup_memory_bytes, c.max_shared_memory_bytes
+        ));
+    }
+    out
 }
 
 /// Storage writes of compute passes: a plain write (previous contents discarded) for the first

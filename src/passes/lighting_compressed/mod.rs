@@ -61,7 +61,7 @@ fn shared_bytes(shared_blocks: u32) -> u32 {
 fn shared_memory_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
     let (limits, planned) = (check.limits?, check.planned?);
     let blocks = block_count_setting(planned, "shared_blocks").ok()?;
-    let (bytes, limit) = (shared_bytes(blocks), limits.max_compute_shared_memory_size);
+    let (bytes, limit) = (shared_bytes(blocks), limits.compute.max_shared_memory_bytes);
     (bytes > limit).then(|| {
         let at = check.pass.settings.iter().find(|s| s.name == "shared_blocks").map_or(check.pass.pos, |s| s.pos);
         let message = format!(
