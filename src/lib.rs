@@ -51,6 +51,10 @@
 pub mod bench;
 pub mod cull;
 pub mod error;
+/// Bounded reading of the files a user names: public only so that the `cullgraph` binary's
+/// fuzzer reads its inputs with the library's limits; not part of the library's API (the
+/// limits themselves are stated in the README).
+#[doc(hidden)]
 pub mod files;
 pub mod gpu;
 pub mod graph;

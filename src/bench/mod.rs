@@ -1,17 +1,17 @@
 //! `cullgraph bench`: speed measured with timestamp queries, in one run, so that every figure
 //! can be read as a ratio to the others on the same device (never asserted in tests).
 //!
-//! - [`culling`]: per-pass GPU time of each culling graph over city scenes of growing size,
+//! - [`culling`](crate::bench::culling): per-pass GPU time of each culling graph over city scenes of growing size,
 //!   frame time against no culling in an occluded street view, the share of invisible instances
 //!   each scheme culls (exact visibility as the oracle), and the bytes each pass moves against
 //!   the device's measured copy bandwidth and a naive atomic-append frustum peer.
-//! - [`dynamic`]: the living world's update path (instances moved, inserted and removed every
+//! - [`dynamic`](crate::bench::dynamic): the living world's update path (instances moved, inserted and removed every
 //!   frame) against standing still, rebuilding, and a plain host-to-device copy.
-//! - [`hiz`]: the Hi-Z pyramid, single dispatch against one dispatch per mip, at several sizes.
-//! - [`msaa`]: speed against error of every anti-aliasing method (GPU ms, G-buffer memory, mean
+//! - [`hiz`](crate::bench::hiz): the Hi-Z pyramid, single dispatch against one dispatch per mip, at several sizes.
+//! - [`msaa`](crate::bench::msaa): speed against error of every anti-aliasing method (GPU ms, G-buffer memory, mean
 //!   FLIP and PSNR against a supersampled reference), the compressed G-buffer against its
 //!   baselines.
-//! - [`plot`]: SVG plots of the culling and MSAA figures.
+//! - [`plot`](crate::bench::plot): SVG plots of the culling and MSAA figures.
 
 pub mod culling;
 pub mod dynamic;

@@ -6,7 +6,7 @@
 //!   `obvhs` BVH of the scene's world-space triangles.
 //! - [`metrics`]: PSNR and mean absolute error of two RGBA8 images.
 //! - [`image_error`]: the linear-light box downsample of a supersampled reference, and mean FLIP
-//!   and PSNR of an image against it; [`reference`] renders that reference.
+//!   and PSNR of an image against it; [`reference`](mod@reference) renders that reference.
 //! - [`visibility`]: the unculled instance-id render; [`verification`] attaches it to a renderer
 //!   as an observer of its frames, to count what culling got wrong.
 

@@ -523,7 +523,7 @@ impl GraphRuntime {
     }
 
     /// What the capturing passes bound to the captured slots in the last recorded frame, once
-    /// it has completed (`None` without [`GraphRuntime::set_capture`]): per pass, in pass order,
+    /// it has completed (`None` without [`GraphRuntime::capture_draw_lists`]): per pass, in pass order,
     /// its index and each slot's bytes (`None` where the pass leaves a slot unbound). Read
     /// before recording the next frame.
     pub fn captured(&self) -> crate::Result<Option<Vec<Captured>>> {
@@ -553,7 +553,7 @@ impl GraphRuntime {
             .collect())
     }
 
-    /// What the kinds make of the counters of `frame` ([`Self::pass_counters`],
+    /// What the kinds make of the counters of `frame` (the counters of its passes,
     /// [`crate::graph::PassKind::decode_counters`]), once it has completed, with the name of
     /// the pass that wrote each.
     pub fn counter_entries(&self, frame: u64) -> crate::Result<Vec<(String, CounterEntry)>> {

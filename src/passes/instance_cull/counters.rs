@@ -1,6 +1,6 @@
 //! Counters the instance-cull passes write on the GPU (`CullStats` in
 //! `shaders/cull/cull_common.glsl`), and the entry of the frame's stats the kind makes of them
-//! (group [`GROUP`] of [`FrameStats`]).
+//! (group `GROUP` of [`FrameStats`]).
 
 use crate::graph::{CounterEntry, DrawCounts};
 use crate::stats::FrameStats;

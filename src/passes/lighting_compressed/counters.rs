@@ -1,6 +1,6 @@
 //! Counters of the compressed G-buffer (`Stats` in `shaders/lighting/lighting_compressed.comp`):
 //! how full the pool was, what overflowed, and how many distinct surfaces the pixels hold; the
-//! entry of the frame's stats the kind makes of them (group [`GROUP`] of [`FrameStats`]).
+//! entry of the frame's stats the kind makes of them (group `GROUP` of [`FrameStats`]).
 
 use crate::graph::CounterEntry;
 use crate::stats::FrameStats;

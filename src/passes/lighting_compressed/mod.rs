@@ -1,7 +1,7 @@
 //! Lighting over the compressed G-buffer in compute (`lighting_compressed`): each block of a
 //! pixel's list is shaded once with the tile's lights and weighted by the samples it covers.
 //! It also reports the pool's counters and how many distinct surfaces the pixels hold
-//! ([`counters`]), from which the kind's policy sizes the pool ([`pool`]).
+//! ([`counters`]), from which the kind's policy sizes the pool (its `pool` module).
 
 pub mod counters;
 pub(crate) mod pool;

@@ -17,7 +17,7 @@
 //! **Timings.** GPU times are known only once a frame has completed. The kind asks the executor
 //! for the newest completed frame's ([`crate::graph::PassKind::reads_timings`]) and the pass
 //! writes them, in plan order, into a small host-visible buffer of its own per frame in flight
-//! ([`GpuPassTimes`]); the panel says which frame they are from and draws a bar per pass
+//! (`GpuPassTimes`); the panel says which frame they are from and draws a bar per pass
 //! proportional to its time.
 //!
 //! **Cost.** View `stats` dispatches over the panel's largest possible extent only (and leaves
@@ -149,7 +149,7 @@ pub(crate) struct OverlayPass {
     no_stats: Buffer,
     /// View `culled`: header + per-row coverage counts, for the size it was made for.
     coverage: Option<(vk::Extent2D, Buffer)>,
-    /// The newest completed frame's GPU times ([`GpuPassTimes`]), one host-visible buffer per
+    /// The newest completed frame's GPU times (`GpuPassTimes`), one host-visible buffer per
     /// frame in flight, and the plan's pass names they are listed by.
     times: Vec<Buffer>,
     pass_names: Vec<String>,
