@@ -80,6 +80,9 @@ struct FrameConstants {
     CullView prev_cull_view; // last frame's (tests against last frame's Hi-Z)
     vec4 prev_eye_hi;      // last frame's eye, xyz
     vec4 prev_eye_lo;
+    mat4 view_proj_unjittered;      // view_proj without the sub-pixel jitter (for motion vectors)
+    mat4 prev_view_proj_unjittered; // last frame's, relative to last frame's eye
+    vec4 jitter;                    // xy: this frame's jitter, zw: last frame's, in NDC units
 };
 
 // What the lighting pass shows (its `debug_view` setting).

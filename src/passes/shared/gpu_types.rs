@@ -261,6 +261,14 @@ pub struct FrameConstants {
     pub prev_eye_hi: [f32; 4],
     /// Last frame's eye, lo part.
     pub prev_eye_lo: [f32; 4],
+    /// This frame's eye-relative world to clip without the sub-pixel jitter (`view_proj` is
+    /// jittered): motion vectors compare unjittered positions, so that the jitter does not move
+    /// still pixels.
+    pub view_proj_unjittered: [[f32; 4]; 4],
+    /// Last frame's world relative to last frame's eye, to clip, without its jitter.
+    pub prev_view_proj_unjittered: [[f32; 4]; 4],
+    /// xy: this frame's jitter, zw: last frame's, in NDC units (2 / size per pixel).
+    pub jitter: [f32; 4],
 }
 
 impl FrameConstants {
@@ -271,6 +279,7 @@ impl FrameConstants {
         let vp: Mat4 = camera.view_projection_rel_eye(aspect);
         let (eye_hi, eye_lo) = split_hi_lo(camera.eye);
         let (prev_eye_hi, prev_eye_lo) = split_hi_lo(previous.eye);
+        let prev_vp: Mat4 = previous.view_projection_rel_eye(aspect);
         let sun = scene.sun;
         Self {
             view_proj: vp.to_cols_array_2d(),
@@ -285,6 +294,9 @@ impl FrameConstants {
             prev_cull_view: GpuCullView::new(previous, width, height),
             prev_eye_hi: prev_eye_hi.extend(0.0).to_array(),
             prev_eye_lo: prev_eye_lo.extend(0.0).to_array(),
+            view_proj_unjittered: vp.to_cols_array_2d(),
+            prev_view_proj_unjittered: prev_vp.to_cols_array_2d(),
+            jitter: [0.0; 4],
         }
     }
 }
@@ -351,7 +363,7 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuMaterial>(), 64 + 5 * 48);
         assert_eq!(std::mem::size_of::<GpuPointLight>(), 32);
         assert_eq!(std::mem::size_of::<GpuCullView>(), 64);
-        assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16 + 2 * 64 + 2 * 16);
+        assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16 + 2 * 64 + 2 * 16 + 2 * 64 + 16);
         assert_eq!(std::mem::size_of::<DrawIndexedIndirect>(), 20);
     }
 }
