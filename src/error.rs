@@ -37,6 +37,15 @@ pub enum Error {
         #[source]
         source: Box<Error>,
     },
+    /// A failure of one view of a renderer, naming the view.
+    #[error("view {view}: {source}")]
+    View {
+        /// The view's number ([`crate::render::ViewId::number`]).
+        view: u32,
+        /// What went wrong.
+        #[source]
+        source: Box<Error>,
+    },
 }
 
 impl From<crate::gpu::ShaderError> for Error {

@@ -337,6 +337,23 @@ pub struct RenderArgs {
     /// Near-plane distance.
     #[arg(long)]
     pub near: Option<f32>,
+    /// A view of the world, `eye=X,Y,Z;target=X,Y,Z;fov=DEG;size=WxH` (repeatable; every key
+    /// but eye and target optional, size defaults to `--size`): all views are rendered each
+    /// frame over one copy of the scene, each with its own culling history. `--out F.png`
+    /// then writes `F.view0.png`, `F.view1.png`, ..., and `--stats` each view's figures
+    /// under `views`.
+    #[arg(
+        long = "view",
+        value_name = "eye=X,Y,Z;target=X,Y,Z;fov=DEG;size=WxH",
+        value_parser = super::views::parse_view,
+        allow_hyphen_values = true,
+        conflicts_with_all = ["eye", "target", "watch", "reference"]
+    )]
+    pub views: Vec<super::views::ViewArg>,
+    /// From frame N on, the output (or every view) is WxH (repeatable), e.g. `--resize
+    /// 640x360@10`: the renderer keeps the scene and rebuilds only what depends on the size.
+    #[arg(long = "resize", value_name = "WxH@N", value_parser = super::views::parse_resize, conflicts_with = "watch")]
+    pub resizes: Vec<((u32, u32), u32)>,
     /// Number of frames to render (stats are recorded for each; the image is the last frame).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub frames: u32,

@@ -7,6 +7,7 @@ mod graph;
 mod memory;
 mod paths;
 mod render;
+mod views;
 mod watch;
 
 use clap::Parser;

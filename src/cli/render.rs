@@ -4,6 +4,7 @@
 use super::args::RenderArgs;
 use super::memory::{Need, Room, Use};
 use super::paths;
+use super::views;
 use super::watch::FileWatch;
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::oracle::reference::{image_reference_error, reference_render_size};
@@ -20,7 +21,8 @@ use std::time::{Duration, Instant};
 
 /// Runs the command.
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let (width, height) = args.size;
+    // With --view, the first view is the renderer's main view.
+    let (width, height) = args.views.first().map_or(args.size, |v| views::view_size(args, v));
     // What cannot work is refused before the scene is generated and the frames rendered.
     paths::output_file("--out", &args.out)?;
     if let Some(stats) = &args.stats {
@@ -38,8 +40,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let usage = if args.animate { Use::Animate } else { Use::Render };
     let room = Room::with_device(&ctx);
     let scene_need = args.scene.check_memory(&room, usage)?;
-    // The image, and the reference's at N x N times its pixels.
-    let pixels = width as u64 * height as u64 * (1 + args.reference.map_or(0, |n| n as u64 * n as u64));
+    // The image (every view's, at the largest size a resize asks for), and the reference's at
+    // N x N times its pixels.
+    let largest = args.resizes.iter().map(|((w, h), _)| *w as u64 * *h as u64).max().unwrap_or(0);
+    let view_pixels: u64 = match args.views.is_empty() {
+        true => (width as u64 * height as u64).max(largest),
+        false => args.views.iter().map(|v| view_pixels_of(args, v).max(largest)).sum(),
+    };
+    let pixels = view_pixels + width as u64 * height as u64 * args.reference.map_or(0, |n| n as u64 * n as u64);
     let size = match args.reference {
         Some(n) => format!("{width}x{height} with --reference {n}"),
         None => format!("{width}x{height}"),
@@ -55,6 +63,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         camera.eye += offset;
         camera.target += offset;
     }
+    let view_cameras =
+        args.views.iter().map(|v| views::view_camera(args, &scene, v)).collect::<Result<Vec<Camera>>>()?;
     let root = match &args.shader_dir {
         Some(dir) => ShaderRoot::Directory(dir.clone()),
         None => ShaderRoot::from_env(),
@@ -94,6 +104,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         renderer.enable_adaptation();
     }
 
+    if !args.views.is_empty() {
+        return run_views(args, renderer, &shaders, &spec, &view_cameras, stats, animation, &ctx);
+    }
+
     let bar = progress(Some(args.frames as u64), "rendering");
     let mut last_frame = None;
     // Every frame's figures are kept only for `--stats`, which writes them all; otherwise a long
@@ -123,6 +137,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         Ok(())
     };
     for frame in 0..args.frames {
+        if let Some((w, h)) = views::size_at(&args.resizes, frame) {
+            renderer.resize(&shaders, w, h)?;
+        }
         let camera = args.camera_path.camera_at(&camera, frame);
         if let Some(animation) = animation.as_mut() {
             animation.step(&mut renderer, &shaders)?;
@@ -203,6 +220,78 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
     }
     validation_verdict(&ctx)
+}
+
+/// The pixels of one `--view`.
+fn view_pixels_of(args: &RenderArgs, view: &views::ViewArg) -> u64 {
+    let (w, h) = views::view_size(args, view);
+    w as u64 * h as u64
+}
+
+/// The rest of [`run`] with several views: render them, write each view's image, print each
+/// view's figures and the stats.
+#[allow(clippy::too_many_arguments)]
+fn run_views(
+    args: &RenderArgs,
+    mut renderer: Renderer,
+    shaders: &ShaderCompiler,
+    spec: &GraphSpec,
+    cameras: &[Camera],
+    mut stats: RunStats,
+    mut animation: Option<Animation>,
+    ctx: &GpuContext,
+) -> Result<()> {
+    let bar = progress(None, "rendering views");
+    let mut verified = VerifyTotals::default();
+    let step = |r: &mut Renderer| match animation.as_mut() {
+        Some(animation) => animation.step(r, shaders),
+        None => Ok(()),
+    };
+    let seen = |s: &FrameStats| {
+        if let Some(v) = &s.verify {
+            verified.add(v);
+        }
+    };
+    views::render_views(args, &mut renderer, shaders, spec, cameras, &mut stats, step, seen)?;
+    bar.finish_and_clear();
+    let memory = renderer.runtime().memory();
+    stats.transient_bytes = memory.bytes_with_aliasing;
+    stats.transient_bytes_without_aliasing = memory.bytes_without_aliasing;
+    stats.resources = renderer.runtime().resource_bytes();
+    stats.texture_bytes = renderer.gpu_scene().textures.bytes();
+    drop(renderer);
+    if let Some(path) = &args.stats {
+        paths::output_file("--stats", path)?;
+        write_file(path, stats.to_json().as_bytes())?;
+    }
+    for view in &stats.views {
+        let Some(last) = view.frames.last() else { continue };
+        println!(
+            "view {} of {} through '{}': {}x{}, {} instances, {} drawn ({} frustum-culled, {} occlusion-culled), {} draws, GPU {:.3} ms -> {}",
+            view.view,
+            stats.scene,
+            stats.graph,
+            view.width,
+            view.height,
+            last.instances,
+            last.drawn,
+            last.frustum_culled,
+            last.occlusion_culled,
+            last.draws,
+            last.gpu_total_ms,
+            view.image
+        );
+    }
+    if args.verify {
+        let VerifyTotals { frames, visible, missed, extra } = verified;
+        println!(
+            "verify: {frames} view-frame(s), {visible} visible instance-frames, {missed} false negatives, {extra} false positives"
+        );
+        if missed > 0 {
+            return Err(Error::Invalid(format!("culling removed {missed} visible instance-frame(s)")));
+        }
+    }
+    validation_verdict(ctx)
 }
 
 /// An error when the validation layer reported anything during the run (with `--validation`).

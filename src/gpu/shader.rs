@@ -137,6 +137,14 @@ impl ShaderCompiler {
         })
     }
 
+    /// A compiler of its own over the same sources with the same global defines (its cache
+    /// starts empty), for something that compiles later on its own, such as an observer.
+    pub fn try_clone(&self) -> Result<Self, ShaderError> {
+        let mut twin = Self::new(self.root.clone())?;
+        twin.global_defines = self.global_defines.clone();
+        Ok(twin)
+    }
+
     /// Adds `defines` to every shader this compiler compiles from now on (for variants measured
     /// against each other, such as `ALPHA_TEST_ONLY`; see `shaders/common/material_surface.glsl`).
     pub fn with_global_defines(mut self, defines: &[(&str, &str)]) -> Self {

@@ -8,30 +8,65 @@ use super::visibility::VisibilityOracle;
 use crate::error::Result;
 use crate::gpu::ShaderCompiler;
 use crate::graph::CompiledGraph;
-use crate::render::{DrawnInstances, FrameObserver, Renderer};
+use crate::render::{DrawnInstances, FrameObserver, Renderer, ViewId};
 use crate::scene::FLAG_EMPTY_SLOT;
 use crate::stats::{FrameStats, VerifyStats};
 use ash::vk;
 use std::collections::BTreeSet;
 
-/// The observer: the oracle, and what it saw in the last frame.
-pub struct Verification {
+/// An oracle made for one view at one output size and depth sample count.
+struct ViewOracle {
+    view: ViewId,
+    made_for: (u32, u32, vk::SampleCountFlags),
     oracle: VisibilityOracle,
+}
+
+/// The observer: an oracle per view (made again when the view's size or sample count
+/// changes), and what it saw in the last frame checked.
+pub struct Verification {
+    shaders: ShaderCompiler,
+    oracles: Vec<ViewOracle>,
     exactly_visible: BTreeSet<u32>,
 }
 
 impl Verification {
-    /// An oracle for `renderer`'s output size and its graph's depth sample count.
+    /// Verification of every view of `renderer`.
     pub fn new(renderer: &Renderer, shaders: &ShaderCompiler) -> Result<Self> {
-        let settings = renderer.settings();
-        let samples = depth_samples(renderer.plan());
-        let oracle = VisibilityOracle::new(renderer.context(), shaders, settings.width, settings.height, samples)?;
-        Ok(Self { oracle, exactly_visible: BTreeSet::new() })
+        let mut verification =
+            Self { shaders: shaders.try_clone()?, oracles: Vec::new(), exactly_visible: BTreeSet::new() };
+        // The main view's oracle now, so that a device that cannot make one says so at once.
+        verification.oracle_of(renderer, ViewId::MAIN)?;
+        Ok(verification)
     }
 
     /// The instances seen by some sample of the last frame checked (empty before).
     pub fn exactly_visible(&self) -> &BTreeSet<u32> {
         &self.exactly_visible
+    }
+
+    /// The oracle of `view` at its current size and sample count.
+    fn oracle_of(&mut self, renderer: &Renderer, view: ViewId) -> Result<&mut VisibilityOracle> {
+        let settings = renderer.view_settings(view)?;
+        let made_for = (settings.width, settings.height, depth_samples(renderer.view_plan(view)?));
+        let at = match self.oracles.iter().position(|o| o.view == view) {
+            Some(at) if self.oracles[at].made_for == made_for => at,
+            found => {
+                let (w, h, samples) = made_for;
+                let oracle = VisibilityOracle::new(renderer.context(), &self.shaders, w, h, samples)?;
+                let made = ViewOracle { view, made_for, oracle };
+                match found {
+                    Some(at) => {
+                        self.oracles[at] = made;
+                        at
+                    }
+                    None => {
+                        self.oracles.push(made);
+                        self.oracles.len() - 1
+                    }
+                }
+            }
+        };
+        Ok(&mut self.oracles[at].oracle)
     }
 }
 
@@ -40,10 +75,11 @@ impl FrameObserver for Verification {
         true
     }
 
-    fn completed(&mut self, renderer: &Renderer, frame: u64, stats: &mut FrameStats) -> Result<()> {
-        let constants = renderer.frame_constants_of(frame);
-        let visible = self.oracle.render(renderer.context(), renderer.gpu_scene(), constants)?.visible;
-        let lists = renderer.drawn()?.unwrap_or_default();
+    fn completed(&mut self, renderer: &Renderer, view: ViewId, frame: u64, stats: &mut FrameStats) -> Result<()> {
+        let constants = renderer.view_frame_constants_of(view, frame)?;
+        let oracle = self.oracle_of(renderer, view)?;
+        let visible = oracle.render(renderer.context(), renderer.gpu_scene(), constants)?.visible;
+        let lists = renderer.drawn_in_view(view)?.unwrap_or_default();
         let drawn: BTreeSet<u32> = if lists.contains(&DrawnInstances::All) {
             (0..renderer.gpu_scene().instance_count).collect()
         } else {

@@ -9,21 +9,25 @@ use super::observer::FrameObserver;
 #[cfg(feature = "images")]
 use super::output::{rgba_from_bytes, RgbaImage};
 use crate::error::{Error, Result};
-use crate::gpu::transfer::record_image_to_buffer;
-use crate::gpu::{Access, Buffer, BufferDesc, GpuContext, Image, MemoryLocation, ShaderCompiler, UploadBatch};
-use crate::graph::{CompiledGraph, FrameData, GraphRuntime, Imports, FRAMES_IN_FLIGHT};
-use crate::passes::shared::gpu_types::{FrameConstants, GpuPointLight};
+use crate::gpu::{Access, Buffer, GpuContext, Image, ShaderCompiler, UploadBatch};
+use crate::graph::{CompiledGraph, FrameInputs, GraphRuntime, Imports, FRAMES_IN_FLIGHT};
 use crate::passes::shared::{frame_inputs, GpuScene, SceneInputs};
 use crate::scene::{Camera, Scene};
 use crate::stats::FrameStats;
 use ash::vk;
 use graphs::{build_runtime, Graphs};
-use std::time::Instant;
+use std::sync::Arc;
+use view::View;
 
 mod adapt;
 mod completed;
 mod graphs;
+mod view;
+mod views;
 mod world_sync;
+
+pub use view::{ViewFrame, ViewId};
+pub use views::MAX_VIEWS;
 
 pub use super::drawn::DrawnInstances;
 
@@ -58,24 +62,48 @@ struct Uploads {
     recorded: Vec<(u64, UploadBatch)>,
 }
 
-/// Renders a scene through a render graph.
+/// What recent frames may still be using after it was replaced or removed, with the last frame
+/// that could use it: kept until that frame has executed.
+#[derive(Default)]
+struct Retired {
+    inputs: Vec<(u64, SceneInputs)>,
+    views: Vec<(u64, View)>,
+}
+
+impl Retired {
+    /// Drops what only frames before `frame - FRAMES_IN_FLIGHT + 1` used (they have executed
+    /// once `frame` is recorded).
+    fn recorded(&mut self, frame: u64) {
+        let in_flight = FRAMES_IN_FLIGHT as u64;
+        self.inputs.retain(|(last, _)| frame < last + in_flight);
+        self.views.retain(|(last, _)| frame < last + in_flight);
+    }
+}
+
+/// Renders a world through one or more views.
+///
+/// The renderer holds the world's GPU state (scene, instances, meshes, materials, textures,
+/// lights), uploaded once, and any number of views over it ([`ViewId`]). Each view has its own
+/// camera, output size, graph and culling history; views can be added
+/// ([`Renderer::add_view`]), resized ([`Renderer::resize_view`]) and removed
+/// ([`Renderer::remove_view`]) between any two frames without disturbing the others. A renderer
+/// is made with one view, [`ViewId::MAIN`], which the single-camera methods
+/// ([`Renderer::record`], [`Renderer::render`], [`Renderer::plan`], ...) address.
 pub struct Renderer {
     ctx: GpuContext,
-    settings: RenderSettings,
     scene: Scene,
-    /// The scene on the GPU and the per-frame buffers every built-in pass reads.
-    inputs: SceneInputs,
-    /// Scene inputs a relayout replaced, with the frame they were last used by.
-    retired_inputs: Vec<(u64, SceneInputs)>,
+    /// The scene on the GPU, shared by every view.
+    gpu_scene: Arc<GpuScene>,
+    /// Point lights each view's per-frame light buffers hold.
+    light_capacity: usize,
     uploads: Uploads,
-    /// The graph being run and the ones reloads replaced.
-    graphs: Graphs,
+    retired: Retired,
+    /// The views, in the order they were added.
+    views: Vec<View>,
+    /// The number the next added view gets.
+    next_view: u32,
     frame_index: u64,
-    /// The camera of the last recorded frame.
-    previous_camera: Option<Camera>,
-    /// The kinds' adaptation policies, when enabled.
-    adaptations: Option<adapt::Adaptations>,
-    /// What looks at each headless frame once it has completed.
+    /// What looks at each headless frame of the main view once it has completed.
     observers: Vec<Box<dyn FrameObserver>>,
     /// The world this renderer mirrors, when made from one ([`Renderer::from_world`]).
     world: Option<world_sync::WorldMirror>,
@@ -98,54 +126,79 @@ impl Renderer {
         profiling::scope!("cullgraph::Renderer::with_graph");
         settings.validate()?;
         crate::scene::validate::validate_scene(&scene)?;
-        let inputs = frame_inputs(&spec.kinds, &scene, settings.width, settings.height)?;
-        let runtime = build_runtime(ctx, shaders, &inputs, spec)?;
+        let compiled = frame_inputs(&spec.kinds, &scene, settings.width, settings.height)?;
+        let runtime = build_runtime(ctx, shaders, &compiled, spec)?;
         let mut uploads = UploadBatch::default();
-        let gpu_scene = GpuScene::upload(ctx, &scene, &mut uploads)?;
-        let inputs = SceneInputs::new(ctx, gpu_scene, scene.lights.len())?;
-        Ok(Self::assemble(ctx, scene, inputs, uploads, runtime, settings, spec))
+        let gpu_scene = Arc::new(GpuScene::upload(ctx, &scene, &mut uploads)?);
+        let lights = scene.lights.len();
+        Self::assemble(ctx, scene, gpu_scene, lights, uploads, runtime, compiled, settings, spec)
     }
 
-    /// A renderer of `scene` (as the GPU holds it) with its inputs, first uploads and runtime.
+    /// A renderer of `scene` (as the GPU holds it) with its first uploads and its main view.
+    #[allow(clippy::too_many_arguments)]
     fn assemble(
         ctx: &GpuContext,
         scene: Scene,
-        inputs: SceneInputs,
+        gpu_scene: Arc<GpuScene>,
+        light_capacity: usize,
         uploads: UploadBatch,
         runtime: GraphRuntime,
+        compiled: FrameInputs,
         settings: RenderSettings,
         spec: &GraphSpec,
-    ) -> Self {
-        Self {
-            ctx: ctx.clone(),
+    ) -> Result<Self> {
+        let main = View {
+            id: ViewId::MAIN,
             settings,
-            scene,
-            inputs,
-            retired_inputs: Vec::new(),
-            uploads: Uploads { pending: Some(uploads), recorded: Vec::new() },
-            graphs: Graphs::new(spec, runtime),
-            frame_index: 0,
+            graphs: Graphs::new(spec, runtime, compiled),
+            inputs: SceneInputs::new(ctx, gpu_scene.clone(), light_capacity)?,
             previous_camera: None,
             adaptations: None,
+        };
+        Ok(Self {
+            ctx: ctx.clone(),
+            scene,
+            gpu_scene,
+            light_capacity,
+            uploads: Uploads { pending: Some(uploads), recorded: Vec::new() },
+            retired: Retired::default(),
+            views: vec![main],
+            next_view: 1,
+            frame_index: 0,
             observers: Vec::new(),
             world: None,
+        })
+    }
+
+    /// The main view: always the first ([`Renderer::remove_view`] refuses to remove it).
+    fn main_view(&self) -> &View {
+        &self.views[0]
+    }
+
+    fn main_view_mut(&mut self) -> &mut View {
+        &mut self.views[0]
+    }
+
+    /// What a graph of `spec` is compiled for on this renderer's scene at `settings`.
+    fn compiled_for(&mut self, spec: &GraphSpec, settings: &RenderSettings) -> Result<FrameInputs> {
+        match &mut self.world {
+            Some(world) => world.compiled_for(&spec.kinds, &mut self.scene, settings),
+            None => frame_inputs(&spec.kinds, &self.scene, settings.width, settings.height),
         }
     }
 
-    /// Replaces the graph. On error the current graph stays in place and keeps rendering.
+    /// Replaces the main view's graph. On error the current graph stays in place and keeps rendering.
     pub fn reload_graph(&mut self, shaders: &ShaderCompiler, spec: &GraphSpec) -> Result<()> {
-        let inputs = match &self.world {
-            // Compiled for the world's layout with its room to grow, as before.
-            Some(world) => world.compiled().clone(),
-            None => frame_inputs(&spec.kinds, &self.scene, self.settings.width, self.settings.height)?,
-        };
-        let runtime = build_runtime(&self.ctx, shaders, &inputs, spec)?;
-        self.graphs.reload(spec, runtime, self.frame_index)
+        self.reload_view_graph(shaders, ViewId::MAIN, spec).map_err(unwrap_main)
     }
 
-    /// Makes `runtime` the one that records from the next frame on (see [`Graphs::install`]).
-    fn install_runtime(&mut self, runtime: GraphRuntime) -> Result<()> {
-        self.graphs.install(runtime, self.frame_index)
+    /// Replaces `view`'s graph. On error the current graph stays in place and keeps rendering.
+    pub fn reload_view_graph(&mut self, shaders: &ShaderCompiler, view: ViewId, spec: &GraphSpec) -> Result<()> {
+        let settings = self.view_state(view)?.settings.clone();
+        let compiled = self.compiled_for(spec, &settings).map_err(|e| view.error(e))?;
+        let runtime = build_runtime(&self.ctx, shaders, &compiled, spec).map_err(|e| view.error(e))?;
+        let frame = self.frame_index;
+        self.view_state_mut(view)?.graphs.reload(spec, runtime, compiled, frame)
     }
 
     /// Puts back the graph that the last [`Renderer::reload_graph`] replaced, as it was, when
@@ -153,20 +206,25 @@ impl Renderer {
     /// its first frame (a pass refusing what is bound to it), and a hot reload then falls back to
     /// the last good graph without rebuilding it from files that may have changed meanwhile.
     pub fn revert_reload(&mut self) -> Result<()> {
-        self.graphs.revert(self.frame_index)
+        self.main_view_mut().graphs.revert()
     }
 
-    /// Starts or stops timing the steps of multi-dispatch passes separately: each frame's
-    /// [`FrameStats::gpu_ms`] then also holds `pass/step` entries (see
+    /// Starts or stops timing the steps of multi-dispatch passes separately, in every view:
+    /// each frame's [`FrameStats::gpu_ms`] then also holds `pass/step` entries (see
     /// [`GraphRuntime::set_step_timing`]).
     pub fn set_step_timing(&mut self, on: bool) {
-        self.graphs.runtime.set_step_timing(on);
+        for view in &mut self.views {
+            view.graphs.runtime.set_step_timing(on);
+        }
     }
 
-    /// Attaches `observer`: from now on it looks at every frame [`Renderer::render`] waits for.
+    /// Attaches `observer`: from now on it looks at every frame of every view that
+    /// [`Renderer::render`] and its variants wait for.
     pub fn attach(&mut self, observer: impl FrameObserver) -> Result<()> {
         if observer.needs_draw_lists() {
-            self.graphs.runtime.capture_draw_lists(true)?;
+            for view in &mut self.views {
+                view.graphs.runtime.capture_draw_lists(true)?;
+            }
         }
         self.observers.push(Box::new(observer));
         Ok(())
@@ -190,32 +248,32 @@ impl Renderer {
         &self.scene
     }
 
-    /// Output size.
+    /// The main view's output size.
     pub fn settings(&self) -> &RenderSettings {
-        &self.settings
+        &self.main_view().settings
     }
 
-    /// The compiled graph being executed.
+    /// The main view's compiled graph.
     pub fn plan(&self) -> &CompiledGraph {
-        self.graphs.runtime.plan()
+        self.main_view().plan()
     }
 
-    /// The graph's runtime (resources, memory, timings).
+    /// The main view's graph runtime (resources, memory, timings).
     pub fn runtime(&self) -> &GraphRuntime {
-        &self.graphs.runtime
+        self.main_view().runtime()
     }
 
-    /// What each drawing pass drew in the last completed frame, in pass order (`None` unless an
-    /// attached observer asked for the draw lists, [`FrameObserver::needs_draw_lists`]).
+    /// What each drawing pass of the main view drew in the last completed frame, in pass order
+    /// (`None` unless an attached observer asked for the draw lists,
+    /// [`FrameObserver::needs_draw_lists`]).
     pub fn drawn(&self) -> Result<Option<Vec<DrawnInstances>>> {
-        let Some(captured) = self.graphs.runtime.captured()? else { return Ok(None) };
-        Ok(Some(super::drawn::drawn(self.plan(), &self.inputs.scene, captured)))
+        self.drawn_in_view(ViewId::MAIN)
     }
 
-    /// This frame's constants as frame `frame` was given them ([`FrameConstants`]), once it
+    /// The main view's constants as frame `frame` was given them ([`FrameConstants`]), once it
     /// has completed (the buffer is reused `FRAMES_IN_FLIGHT` frames later).
     pub fn frame_constants_of(&self, frame: u64) -> &Buffer {
-        &self.inputs.slot(frame).constants
+        &self.main_view().inputs.slot(frame).constants
     }
 
     /// The GPU device.
@@ -223,19 +281,20 @@ impl Renderer {
         &self.ctx
     }
 
-    /// The scene as the GPU holds it (buffers of instances, cull bounds, draw lists), for an
-    /// engine's own passes and for checks.
+    /// The scene as the GPU holds it (buffers of instances, cull bounds, draw lists), shared by
+    /// every view, for an engine's own passes and for checks.
     pub fn gpu_scene(&self) -> &GpuScene {
-        &self.inputs.scene
+        &self.gpu_scene
     }
 
-    /// The graph's first output image as left by the last recorded frame, and the access it was
-    /// last used with. `None` before the first frame or when the first output is a buffer.
+    /// The main view's first output image as left by the last recorded frame, and the access it
+    /// was last used with. `None` before the first frame or when the first output is a buffer.
     pub fn output(&self) -> Option<(&Image, Access)> {
-        self.graphs.runtime.output_image(0)
+        self.main_view().output()
     }
 
-    /// Records one frame into `cmd` (which must be recording) for `camera`; returns its index.
+    /// Records one frame of the main view into `cmd` (which must be recording) for `camera`;
+    /// returns its index.
     ///
     /// This is the embedding entry point: nothing is submitted. At most [`FRAMES_IN_FLIGHT`]
     /// recorded frames may be executing at once.
@@ -246,13 +305,35 @@ impl Renderer {
     /// Like [`Renderer::record`], with the host resources the graph imports (e.g. the engine's
     /// back buffer as the lighting output).
     pub fn record_with_imports(&mut self, cmd: vk::CommandBuffer, camera: &Camera, imports: &Imports) -> Result<u64> {
+        self.record_views(cmd, &[ViewFrame { view: ViewId::MAIN, camera, imports }]).map_err(unwrap_main)
+    }
+
+    /// Records one frame of the world into `cmd` (which must be recording): the world's
+    /// uploads and updates once, then each listed view's graph with its camera, in the order
+    /// given. Views not listed keep their state and history for a later frame. Returns the
+    /// frame's index.
+    ///
+    /// Before anything is recorded every view and camera is checked: an unknown or removed
+    /// view, a view listed twice or an unusable camera is an error naming the view, and the
+    /// frame is not consumed.
+    pub fn record_views(&mut self, cmd: vk::CommandBuffer, views: &[ViewFrame<'_>]) -> Result<u64> {
         profiling::scope!("cullgraph::Renderer::record");
-        camera.validate().map_err(|e| Error::Invalid(format!("camera: {e}")))?;
+        if views.is_empty() {
+            return Err(Error::Invalid("a frame must render at least one view".into()));
+        }
+        let mut order = Vec::with_capacity(views.len());
+        for (i, frame_view) in views.iter().enumerate() {
+            let at = self.view_index(frame_view.view)?;
+            if views[..i].iter().any(|earlier| earlier.view == frame_view.view) {
+                return Err(frame_view.view.error(Error::Invalid("listed twice in one frame".into())));
+            }
+            frame_view.camera.validate().map_err(|e| frame_view.view.error(Error::Invalid(format!("camera: {e}"))))?;
+            order.push(at);
+        }
         let frame = self.frame_index;
-        // All or nothing: until the graph has recorded, nothing is consumed, so that a host may
-        // discard this command buffer after an error and record the frame again.
-        let constants = self.frame_constants(camera);
-        self.write_frame_data(frame, &constants, camera)?;
+        for (&at, frame_view) in order.iter().zip(views) {
+            self.views[at].write_frame_data(&self.scene, frame, frame_view.camera)?;
+        }
         if let Some(batch) = &self.uploads.pending {
             self.ctx.begin_label(cmd, "upload scene");
             batch.record(&self.ctx, cmd);
@@ -260,122 +341,55 @@ impl Renderer {
         }
         if let Some(world) = &mut self.world {
             self.ctx.begin_label(cmd, "update scene");
-            world.record_updates(&self.ctx, cmd, frame, &self.inputs.scene)?;
+            world.record_updates(&self.ctx, cmd, frame, &self.gpu_scene)?;
             self.ctx.end_label(cmd);
         }
-        self.inputs.select(frame);
-        let data = FrameData {
-            frame,
-            extent: vk::Extent2D { width: self.settings.width, height: self.settings.height },
-            shared: &self.inputs,
-        };
-        self.graphs.runtime.record(cmd, &data, imports)?;
+        for (&at, frame_view) in order.iter().zip(views) {
+            self.views[at].record(&self.ctx, cmd, frame, frame_view.camera, frame_view.imports)?;
+        }
 
-        // Uploads and replaced graphs recorded FRAMES_IN_FLIGHT frames ago have executed by now.
+        // Uploads and replaced state recorded FRAMES_IN_FLIGHT frames ago have executed by now.
         let in_flight = FRAMES_IN_FLIGHT as u64;
         self.uploads.recorded.retain(|(f, _)| frame < f + in_flight);
-        self.graphs.recorded(frame);
-        self.retired_inputs.retain(|(last, _)| frame < last + in_flight);
+        self.retired.recorded(frame);
         if let Some(world) = &mut self.world {
             world.recorded(frame);
         }
         if let Some(batch) = self.uploads.pending.take() {
             self.uploads.recorded.push((frame, batch));
         }
-        self.previous_camera = Some(camera.clone());
         self.frame_index += 1;
         Ok(frame)
     }
 
-    /// Renders one frame headlessly (own command buffer, submit, wait) and returns its stats.
+    /// Renders one frame of the main view headlessly (own command buffer, submit, wait) and
+    /// returns its stats.
     pub fn render(&mut self, camera: &Camera) -> Result<FrameStats> {
-        self.render_inner(camera, None)
+        let mut frames = self.render_views(&[(ViewId::MAIN, camera)]).map_err(unwrap_main)?;
+        Ok(frames.remove(0))
     }
 
-    /// Renders one frame headlessly and reads the graph's first output back as an image.
+    /// Renders one frame headlessly and reads the main view's first output back as an image.
     #[cfg(feature = "images")]
     pub fn render_to_image(&mut self, camera: &Camera) -> Result<(FrameStats, RgbaImage)> {
         let (stats, bytes) = self.render_to_rgba8(camera)?;
-        Ok((stats, rgba_from_bytes(self.settings.width, self.settings.height, bytes)?))
+        let settings = self.settings();
+        Ok((stats, rgba_from_bytes(settings.width, settings.height, bytes)?))
     }
 
-    /// Renders one frame headlessly and reads the graph's first output (an `R8G8B8A8_UNORM`
-    /// image of the output size) back: tightly packed rows, top to bottom.
+    /// Renders one frame headlessly and reads the main view's first output (an
+    /// `R8G8B8A8_UNORM` image of the output size) back: tightly packed rows, top to bottom.
     pub fn render_to_rgba8(&mut self, camera: &Camera) -> Result<(FrameStats, Vec<u8>)> {
-        let (w, h) = (self.settings.width, self.settings.height);
-        let readback = Buffer::new(
-            &self.ctx,
-            &BufferDesc {
-                name: "output readback",
-                size: w as u64 * h as u64 * 4,
-                usage: vk::BufferUsageFlags::TRANSFER_DST,
-                location: MemoryLocation::GpuToCpu,
-            },
-        )?;
-        let stats = self.render_inner(camera, Some(&readback))?;
-        Ok((stats, readback.read_bytes()?.to_vec()))
+        let mut frames = self.render_views_to_rgba8(&[(ViewId::MAIN, camera)]).map_err(unwrap_main)?;
+        Ok(frames.remove(0))
     }
+}
 
-    fn render_inner(&mut self, camera: &Camera, readback: Option<&Buffer>) -> Result<FrameStats> {
-        let ctx = self.ctx.clone();
-        let mut frame = 0;
-        let mut record_ms = 0.0;
-        if readback.is_some() {
-            self.readback_error()?;
-        }
-        ctx.submit_and_wait(|cmd| {
-            let start = Instant::now();
-            frame = self.record(cmd, camera)?;
-            record_ms = start.elapsed().as_secs_f64() * 1e3;
-            if let Some(dst) = readback {
-                let (image, state) =
-                    self.output().ok_or_else(|| Error::Invalid("the graph's first output is not an image".into()))?;
-                record_image_to_buffer(&ctx, cmd, image, state, dst);
-                self.graphs.runtime.note_output_use(0, Access { layout: state.layout, ..Access::TRANSFER_READ });
-            }
-            Ok::<(), Error>(())
-        })?;
-        let mut stats = self.completed_stats(frame)?;
-        stats.cpu_record_ms = record_ms;
-        let mut observers = std::mem::take(&mut self.observers);
-        let looked = observers.iter_mut().try_for_each(|o| o.completed(self, frame, &mut stats));
-        self.observers = observers;
-        looked?;
-        Ok(stats)
-    }
-
-    /// Why the graph's first output cannot be read back as 8-bit RGBA of the output size, at
-    /// its declaration.
-    fn readback_error(&self) -> Result<()> {
-        let plan = self.plan();
-        super::graph_spec::shown_image_error(plan, self.settings.width, self.settings.height)?;
-        let Some(&first) = plan.outputs.first() else {
-            return Err(Error::Invalid("the graph has no output to read back".into()));
-        };
-        match plan.resources[first].kind {
-            crate::graph::ResolvedKind::Image { format: vk::Format::R8G8B8A8_UNORM, .. } => Ok(()),
-            _ => Err(plan.error_at(
-                first,
-                Error::Invalid("must be an R8G8B8A8_UNORM image to be read back as 8-bit RGBA".into()),
-            )),
-        }
-    }
-
-    /// This frame's constants: the camera, and last frame's for passes that test against last
-    /// frame's pyramid.
-    fn frame_constants(&self, camera: &Camera) -> FrameConstants {
-        let previous = self.previous_camera.as_ref().unwrap_or(camera);
-        FrameConstants::new(&self.scene, camera, previous, self.settings.width, self.settings.height)
-    }
-
-    fn write_frame_data(&mut self, frame: u64, constants: &FrameConstants, camera: &Camera) -> Result<()> {
-        let lights: Vec<GpuPointLight> = self.scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();
-        let slot = self.inputs.slot_mut(frame);
-        slot.constants.write_bytes(0, bytemuck::bytes_of(constants))?;
-        if !lights.is_empty() {
-            slot.lights.write_bytes(0, bytemuck::cast_slice(&lights))?;
-        }
-        Ok(())
+/// An error of the main view as a single-view renderer reports it: without naming the view.
+fn unwrap_main(e: Error) -> Error {
+    match e {
+        Error::View { view: 0, source } => *source,
+        e => e,
     }
 }
 

@@ -154,6 +154,28 @@ pub struct RunStats {
     /// `--reference`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference: Option<ImageError>,
+    /// With several views (`--view`), each one's figures; `frames` then holds the first
+    /// view's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub views: Vec<ViewRunStats>,
+}
+
+/// One view of a run with several (`cullgraph render --view`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ViewRunStats {
+    /// The view's number (0 for the first).
+    pub view: u32,
+    /// Its output width in the last frame.
+    pub width: u32,
+    /// Its output height in the last frame.
+    pub height: u32,
+    /// Device bytes of its graph's resources (targets, pyramids, culling history) before
+    /// transients share memory: what the view costs beside the scene, which all views share.
+    pub view_bytes: u64,
+    /// Its image.
+    pub image: String,
+    /// Its per-frame figures.
+    pub frames: Vec<FrameStats>,
 }
 
 impl RunStats {

@@ -21,6 +21,7 @@ use crate::scene::Scene;
 use ash::vk;
 use gpu_types::{FrameConstants, GpuPointLight};
 pub use scene_buffers::GpuScene;
+use std::sync::Arc;
 
 /// The pool's vertex layout ([`crate::scene::Vertex`]) as `gbuffer.vert` reads it: position,
 /// octahedral normal, texture coordinates, tangent.
@@ -39,18 +40,20 @@ pub(crate) struct FrameSlot {
     pub lights: Buffer,
 }
 
-/// The scene on the GPU and the per-frame buffers of each frame in flight; the renderer picks
-/// the frame's slot before recording it.
+/// What one view's graph reads besides its slots: the world's scene on the GPU (shared by every
+/// view) and the view's own per-frame buffers of each frame in flight (its constants and its
+/// eye-relative lights); the renderer picks the frame's slot before recording it.
 pub struct SceneInputs {
-    /// The scene on the GPU (pools, instances, materials, the unculled draw list).
-    pub scene: GpuScene,
+    /// The scene on the GPU (pools, instances, materials, the unculled draw list), shared by
+    /// every view of the world.
+    pub scene: Arc<GpuScene>,
     frames: Vec<FrameSlot>,
     current: usize,
 }
 
 impl SceneInputs {
     /// Wraps `scene`, with per-frame buffers for up to `lights` point lights.
-    pub fn new(ctx: &GpuContext, scene: GpuScene, lights: usize) -> crate::Result<Self> {
+    pub fn new(ctx: &GpuContext, scene: Arc<GpuScene>, lights: usize) -> crate::Result<Self> {
         let light_bytes = (lights.max(1) * std::mem::size_of::<GpuPointLight>()) as u64;
         let frames = (0..FRAMES_IN_FLIGHT)
             .map(|i| -> crate::Result<FrameSlot> {

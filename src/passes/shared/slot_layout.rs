@@ -68,7 +68,7 @@ fn capacity_for(count: usize) -> u32 {
 }
 
 /// The slot layout of one renderer's copy of a world.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct SlotLayout {
     /// The groups in command-list order (each face-cull region's, then its reserve).
     pub groups: Vec<GroupRange>,

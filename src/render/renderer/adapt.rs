@@ -10,22 +10,23 @@ use crate::stats::FrameStats;
 
 /// Each adapting pass's policy, by pass name, made when its first counters arrive.
 #[derive(Default)]
-pub(super) struct Adaptations(Vec<(String, Box<dyn Adaptation>)>);
+pub(in crate::render) struct Adaptations(Vec<(String, Box<dyn Adaptation>)>);
 
 impl Renderer {
     /// Lets the passes' kinds change the graph's settings from what the frames' counters say
     /// (for example the compressed G-buffer's pool, which grows when it overflows and shrinks
     /// when it stays mostly empty). Call [`Renderer::adapt`] with each completed frame.
     pub fn enable_adaptation(&mut self) {
-        self.adaptations = Some(Adaptations::default());
+        self.main_view_mut().adaptations = Some(Adaptations::default());
     }
 
     /// Feeds a completed frame's counters to the kinds' adaptations; when they ask for new
     /// settings, compiles the graph again with them (frames in flight finish on the old one)
     /// and returns what changed.
     pub fn adapt(&mut self, shaders: &ShaderCompiler, stats: &FrameStats) -> Result<Vec<SettingOverride>> {
-        let plan = self.graphs.runtime.plan();
-        let Some(Adaptations(adaptations)) = self.adaptations.as_mut() else { return Ok(Vec::new()) };
+        let main = &mut self.views[0];
+        let plan = main.graphs.runtime.plan();
+        let Some(Adaptations(adaptations)) = main.adaptations.as_mut() else { return Ok(Vec::new()) };
         let mut changes = Vec::new();
         for (name, entry) in &stats.counters {
             // A frame of a replaced plan names its passes as this one does.
@@ -43,7 +44,7 @@ impl Renderer {
             changes.extend(adaptations[at].1.observe(entry, plan, now));
         }
         if !changes.is_empty() {
-            let spec = self.graphs.spec.clone().with_settings(changes.clone());
+            let spec = main.graphs.spec.clone().with_settings(changes.clone());
             self.reload_graph(shaders, &spec)?;
         }
         Ok(changes)

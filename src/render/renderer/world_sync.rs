@@ -37,6 +37,7 @@ use crate::render::{GraphSpec, RenderSettings};
 use crate::scene::world::{Change, InstanceHandle, World};
 use crate::scene::Scene;
 use crate::stats::UpdateStats;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A moved instance's new transform, as `shaders/world/scatter.comp` (`MOVES`) reads it: 64
@@ -68,10 +69,6 @@ pub(super) struct WorldMirror {
     /// The world version applied last.
     version: u64,
     layout: SlotLayout,
-    /// Point lights the per-frame light buffers hold.
-    light_capacity: usize,
-    /// What the graph was compiled for (slots and groups with room to grow).
-    compiled: FrameInputs,
     /// The handle each world instance index had when its slot was written: a new handle at an
     /// index (removed and inserted between two syncs) is a new instance and takes a new slot.
     handles: Vec<Option<InstanceHandle>>,
@@ -99,9 +96,19 @@ impl WorldMirror {
         self.layout.occupied()
     }
 
-    /// What the graph is compiled for.
-    pub(super) fn compiled(&self) -> &FrameInputs {
-        &self.compiled
+    /// What a graph loaded with `kinds` is compiled for on this world's `scene` (as the
+    /// renderer holds it, in slots) at `settings`: its quantities with room to grow.
+    pub(super) fn compiled_for(
+        &mut self,
+        kinds: &KindRegistry,
+        scene: &mut Scene,
+        settings: &RenderSettings,
+    ) -> Result<FrameInputs> {
+        let layout = std::mem::take(&mut self.layout);
+        let (counted, counted_scene, layout) = quantities(kinds, std::mem::take(scene), layout);
+        *scene = counted_scene;
+        self.layout = layout;
+        Ok(with_room_to_grow(kinds, &counted?, settings))
     }
 
     /// Where `slot`'s queued update is, growing the table to hold it.
@@ -299,11 +306,12 @@ fn lay_out(world: &World) -> (SlotLayout, Scene) {
     (layout, scene)
 }
 
-/// The quantities of `scene` laid out as `layout`, as the graph's kinds count them.
-fn quantities(kinds: &KindRegistry, scene: Scene, layout: SlotLayout) -> Result<(Quantities, Scene, SlotLayout)> {
+/// The quantities of `scene` laid out as `layout`, as the graph's kinds count them (the scene
+/// and layout handed back whatever the outcome).
+fn quantities(kinds: &KindRegistry, scene: Scene, layout: SlotLayout) -> (Result<Quantities>, Scene, SlotLayout) {
     let laid = LaidOutScene { scene, layout };
-    let counted = kinds.count(&laid)?;
-    Ok((counted, laid.scene, laid.layout))
+    let counted = kinds.count(&laid);
+    (counted, laid.scene, laid.layout)
 }
 
 /// What a graph is compiled for with `counted` quantities: room to grow in those that grow.
@@ -343,19 +351,17 @@ impl Renderer {
             return Err(Error::Invalid("the world has no instances".into()));
         }
         let (layout, scene) = lay_out(world);
-        let (counted, scene, layout) = quantities(&spec.kinds, scene, layout)?;
-        let compiled = with_room_to_grow(&spec.kinds, &counted, &settings);
+        let (counted, scene, layout) = quantities(&spec.kinds, scene, layout);
+        let compiled = with_room_to_grow(&spec.kinds, &counted?, &settings);
         let runtime = build_runtime(ctx, shaders, &compiled, spec)?;
         let mut uploads = UploadBatch::default();
-        let gpu_scene = GpuScene::upload_with(ctx, &scene, layout.draw_list(&scene), &mut uploads)?;
+        let gpu_scene = Arc::new(GpuScene::upload_with(ctx, &scene, layout.draw_list(&scene), &mut uploads)?);
         let light_capacity = with_room(scene.lights.len() as u64) as usize;
-        let inputs = SceneInputs::new(ctx, gpu_scene, light_capacity)?;
-        let mut renderer = Self::assemble(ctx, scene, inputs, uploads, runtime, settings, spec);
+        let mut renderer =
+            Self::assemble(ctx, scene, gpu_scene, light_capacity, uploads, runtime, compiled, settings, spec)?;
         renderer.world = Some(WorldMirror {
             version: world.version(),
             layout,
-            light_capacity,
-            compiled,
             handles: world_handles(world),
             moves: Vec::new(),
             whole: Vec::new(),
@@ -438,7 +444,7 @@ impl Renderer {
         }
         if lights {
             let live = live_lights(world);
-            reupload |= live.len() > mirror.light_capacity;
+            reupload |= live.len() > self.light_capacity;
             self.scene.lights = live;
         }
         instances.sort_unstable();
@@ -555,44 +561,62 @@ impl Renderer {
         };
         let mut scene = layout.slot_scene(world.scene());
         scene.lights = live_lights(world);
-        let kinds = &self.graphs.spec.kinds;
-        let (counted, scene, layout) = quantities(kinds, scene, layout)?;
-        let outgrown = outgrows(kinds, &counted, &mirror.compiled) || scene.lights.len() > mirror.light_capacity;
-        let needed = with_room_to_grow(kinds, &counted, &self.settings);
+        let lights_outgrown = scene.lights.len() > self.light_capacity;
+        // Every view's graph first, so that an error leaves all of them as they were.
+        let mut layout = layout;
+        let mut recompiled = Vec::new();
+        for view in &self.views {
+            let kinds = &view.graphs.spec.kinds;
+            let (counted, counted_scene, counted_layout) = quantities(kinds, scene, layout);
+            (scene, layout) = (counted_scene, counted_layout);
+            let counted = counted.map_err(|e| view.error(e))?;
+            if lights_outgrown || outgrows(kinds, &counted, &view.graphs.compiled) {
+                let needed = with_room_to_grow(kinds, &counted, &view.settings);
+                let mut runtime =
+                    build_runtime(&self.ctx, shaders, &needed, &view.graphs.spec).map_err(|e| view.error(e))?;
+                if how == Layout::Kept {
+                    // Slots and groups kept their indices: last frame's visibility still holds.
+                    runtime.inherit_history(&view.graphs.runtime);
+                }
+                recompiled.push(Some((runtime, needed)));
+            } else {
+                recompiled.push(None);
+            }
+        }
         let mut uploads = UploadBatch::default();
         // Textures are the slowest part of an upload (resampling and mips on the CPU): they are
         // made again only when the world registered one, or when their upload has not been
         // recorded yet (the batch that holds it is replaced below).
         let reuse = !textures_changed && self.uploads.pending.is_none();
-        let textures = reuse.then(|| self.inputs.scene.textures.clone());
+        let textures = reuse.then(|| self.gpu_scene.textures.clone());
         let gpu_scene = GpuScene::upload_reusing(&self.ctx, &scene, layout.draw_list(&scene), &mut uploads, textures)?;
-        let light_capacity = with_room(scene.lights.len() as u64).max(mirror.light_capacity as u64) as usize;
-        let inputs = SceneInputs::new(&self.ctx, gpu_scene, light_capacity)?;
-        if outgrown {
-            let mut runtime = build_runtime(&self.ctx, shaders, &needed, &self.graphs.spec)?;
-            if how == Layout::Kept {
-                // Slots and groups kept their indices: last frame's visibility still holds.
-                runtime.inherit_history(&self.graphs.runtime);
+        let gpu_scene = Arc::new(gpu_scene);
+        let light_capacity = with_room(scene.lights.len() as u64).max(self.light_capacity as u64) as usize;
+        let mut inputs = Vec::with_capacity(self.views.len());
+        for _ in &self.views {
+            inputs.push(SceneInputs::new(&self.ctx, gpu_scene.clone(), light_capacity)?);
+        }
+        let (frame, last_use) = (self.frame_index, self.frame_index.saturating_sub(1));
+        for ((view, runtime), inputs) in self.views.iter_mut().zip(recompiled).zip(inputs) {
+            match runtime {
+                Some((runtime, needed)) => view.graphs.install(runtime, needed, frame)?,
+                // Slots were given out anew: last frame's visibility and draw lists name other
+                // instances now.
+                None if how == Layout::Fresh => view.graphs.runtime.reset_history(),
+                None => {}
             }
-            self.install_runtime(runtime)?;
-        } else if how == Layout::Fresh {
-            // Slots were given out anew: last frame's visibility and draw lists name other
-            // instances now.
-            self.graphs.runtime.reset_history();
+            let old = std::mem::replace(&mut view.inputs, inputs);
+            self.retired.inputs.push((last_use, old));
         }
         let bytes = uploads.bytes();
-        let old = std::mem::replace(&mut self.inputs, inputs);
-        self.retired_inputs.push((self.frame_index.saturating_sub(1), old));
+        self.gpu_scene = gpu_scene;
+        self.light_capacity = light_capacity;
         // A batch not recorded yet would fill the buffers being replaced: it goes unrecorded.
         self.uploads.pending = Some(uploads);
         let mirror = self.world.as_mut().expect("a world renderer");
-        if outgrown {
-            mirror.compiled = needed;
-        }
         mirror.clear_updates();
         mirror.layout = layout;
         mirror.handles = world_handles(world);
-        mirror.light_capacity = light_capacity;
         mirror.version = world.version();
         self.scene = scene;
         let stats = UpdateStats {

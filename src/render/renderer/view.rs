@@ -1,0 +1,137 @@
+//! A view of the renderer's world: its own camera, output size, graph instance and culling
+//! history, over the scene buffers every view shares.
+
+use super::adapt::Adaptations;
+use super::graphs::Graphs;
+use crate::error::{Error, Result};
+use crate::gpu::{Access, GpuContext, Image};
+use crate::graph::{CompiledGraph, FrameData, GraphRuntime, Imports};
+use crate::passes::shared::gpu_types::{FrameConstants, GpuPointLight};
+use crate::passes::shared::SceneInputs;
+use crate::render::RenderSettings;
+use crate::scene::{Camera, Scene};
+use ash::vk;
+
+/// Names a view of a [`super::Renderer`]. Ids are never given out twice: a removed view's id
+/// stays refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ViewId(pub(super) u32);
+
+impl ViewId {
+    /// The view a renderer is made with.
+    pub const MAIN: ViewId = ViewId(0);
+
+    /// The number of the view: 0 for the first, counting every view ever added.
+    pub fn number(self) -> u32 {
+        self.0
+    }
+}
+
+impl ViewId {
+    /// `e`, naming this view.
+    pub(super) fn error(self, e: Error) -> Error {
+        match e {
+            Error::View { .. } => e,
+            e => Error::View { view: self.0, source: Box::new(e) },
+        }
+    }
+}
+
+impl std::fmt::Display for ViewId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "view {}", self.0)
+    }
+}
+
+/// One view's camera and host resources for a frame of [`super::Renderer::record_views`].
+#[derive(Clone, Copy)]
+pub struct ViewFrame<'a> {
+    /// The view.
+    pub view: ViewId,
+    /// Its camera this frame.
+    pub camera: &'a Camera,
+    /// The host resources its graph imports.
+    pub imports: &'a Imports,
+}
+
+impl<'a> ViewFrame<'a> {
+    /// `view` seen by `camera`, importing nothing.
+    pub fn new(view: ViewId, camera: &'a Camera) -> Self {
+        static NONE: std::sync::OnceLock<Imports> = std::sync::OnceLock::new();
+        Self { view, camera, imports: NONE.get_or_init(Imports::new) }
+    }
+}
+
+/// A view's state.
+pub(super) struct View {
+    pub id: ViewId,
+    /// Output size.
+    pub settings: RenderSettings,
+    /// The graph it runs, and the ones a reload or resize replaced.
+    pub graphs: Graphs,
+    /// The shared scene and this view's per-frame buffers.
+    pub inputs: SceneInputs,
+    /// The camera of the last frame it recorded.
+    pub previous_camera: Option<Camera>,
+    /// Its kinds' adaptation policies, when enabled.
+    pub adaptations: Option<Adaptations>,
+}
+
+impl View {
+    /// The compiled graph being executed.
+    pub fn plan(&self) -> &CompiledGraph {
+        self.graphs.runtime.plan()
+    }
+
+    /// The running graph's runtime.
+    pub fn runtime(&self) -> &GraphRuntime {
+        &self.graphs.runtime
+    }
+
+    /// The graph's first output image as the last recorded frame left it.
+    pub fn output(&self) -> Option<(&Image, Access)> {
+        self.graphs.runtime.output_image(0)
+    }
+
+    /// Writes frame `frame`'s constants and eye-relative lights for `camera`.
+    pub fn write_frame_data(&mut self, scene: &Scene, frame: u64, camera: &Camera) -> Result<()> {
+        let previous = self.previous_camera.as_ref().unwrap_or(camera);
+        let constants = FrameConstants::new(scene, camera, previous, self.settings.width, self.settings.height);
+        let lights: Vec<GpuPointLight> = scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();
+        let slot = self.inputs.slot_mut(frame);
+        slot.constants.write_bytes(0, bytemuck::bytes_of(&constants))?;
+        if !lights.is_empty() {
+            slot.lights.write_bytes(0, bytemuck::cast_slice(&lights))?;
+        }
+        Ok(())
+    }
+
+    /// Records this view's graph for renderer frame `frame` (its data written before).
+    pub fn record(
+        &mut self,
+        ctx: &GpuContext,
+        cmd: vk::CommandBuffer,
+        frame: u64,
+        camera: &Camera,
+        imports: &Imports,
+    ) -> Result<()> {
+        self.inputs.select(frame);
+        let data = FrameData {
+            frame,
+            extent: vk::Extent2D { width: self.settings.width, height: self.settings.height },
+            shared: &self.inputs,
+        };
+        ctx.begin_label(cmd, &self.id.to_string());
+        let recorded = self.graphs.runtime.record(cmd, &data, imports);
+        ctx.end_label(cmd);
+        let local = recorded.map_err(|e| self.error(e))?;
+        self.graphs.recorded(frame, local);
+        self.previous_camera = Some(camera.clone());
+        Ok(())
+    }
+
+    /// `e`, naming this view.
+    pub fn error(&self, e: Error) -> Error {
+        self.id.error(e)
+    }
+}

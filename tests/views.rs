@@ -1,0 +1,177 @@
+//! Many views over one world: each view renders exactly what a renderer of its camera alone
+//! renders (images and counts), views are added, resized and removed at any frame without
+//! disturbing the others, and bad view input is an error naming the view.
+
+mod common;
+
+use common::{city_view, GpuTest};
+use cullgraph::oracle::Verify;
+use cullgraph::render::{GraphSpec, RenderSettings, Renderer, ViewId, MAX_VIEWS};
+use cullgraph::scene::Camera;
+use cullgraph::stats::FrameStats;
+use glam::DVec3;
+
+/// A street-level camera looking along the city from one corner: mostly occluded.
+fn street_camera(scene: &cullgraph::scene::Scene) -> Camera {
+    let (min, max) = scene.world_bounds().expect("the city has instances");
+    Camera {
+        eye: DVec3::new(min.x + 2.0, 2.0, min.z + 2.0),
+        target: DVec3::new(max.x, 1.0, max.z),
+        ..Default::default()
+    }
+}
+
+/// What the counts of two renders of the same camera must share.
+fn counts(s: &FrameStats) -> (u32, u32, u32, u32) {
+    (s.drawn, s.frustum_culled, s.occlusion_culled, s.draws)
+}
+
+#[test]
+fn views_rendered_together_match_each_camera_rendered_alone() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, overview) = city_view(1500, (64, 48));
+    let street = street_camera(&scene);
+    let mut together = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
+    let second = together.add_view(&shaders, RenderSettings::new(40, 30), &GraphSpec::default_graph()).unwrap();
+    together.enable_verification(&shaders).unwrap();
+    let mut alone_main = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
+    let mut alone_second = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(40, 30)).unwrap();
+    // The cameras move a little each frame, so that each view's history matters.
+    let orbit = cullgraph::scene::CameraPath::Orbit;
+    for frame in 0..4 {
+        let (a, b) = (orbit.camera_at(&overview, frame), orbit.camera_at(&street, frame));
+        let both = together.render_views_to_rgba8(&[(ViewId::MAIN, &a), (second, &b)]).unwrap();
+        let (main_stats, main_image) = alone_main.render_to_rgba8(&a).unwrap();
+        let (second_stats, second_image) = alone_second.render_to_rgba8(&b).unwrap();
+        assert!(both[0].1 == main_image, "frame {frame}: the main view's image differs from its camera alone");
+        assert!(both[1].1 == second_image, "frame {frame}: the second view's image differs from its camera alone");
+        assert_eq!(counts(&both[0].0), counts(&main_stats), "frame {frame}, main view");
+        assert_eq!(counts(&both[1].0), counts(&second_stats), "frame {frame}, second view");
+        for (view, (stats, _)) in both.iter().enumerate() {
+            let verify = stats.verify.as_ref().expect("verification is on");
+            assert_eq!(verify.false_negatives, 0, "frame {frame}, view {view}: {:?}", verify.missed);
+        }
+    }
+    // Both cameras see different parts of the city: the views really are different.
+    let last = together.render_views(&[(ViewId::MAIN, &overview), (second, &street)]).unwrap();
+    assert_ne!(last[0].drawn, last[1].drawn);
+    gpu.assert_clean();
+}
+
+#[test]
+fn a_view_skipped_for_some_frames_keeps_its_history_and_the_others_are_untouched() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, overview) = city_view(1500, (64, 48));
+    let street = street_camera(&scene);
+    let mut r = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
+    let mut alone = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(64, 48)).unwrap();
+    let side = r.add_view(&shaders, RenderSettings::new(64, 48), &GraphSpec::default_graph()).unwrap();
+    for frame in 0..5 {
+        // The side view renders only every other frame; the main view every frame.
+        let frames: Vec<(ViewId, &Camera)> = if frame % 2 == 0 {
+            vec![(ViewId::MAIN, &overview), (side, &street)]
+        } else {
+            vec![(ViewId::MAIN, &overview)]
+        };
+        let stats = r.render_views(&frames).unwrap();
+        let expected = alone.render(&overview).unwrap();
+        assert_eq!(counts(&stats[0]), counts(&expected), "frame {frame}");
+    }
+    // Removing the side view leaves the main view's history as it was.
+    r.remove_view(side).unwrap();
+    let (stats, image) = r.render_to_rgba8(&overview).unwrap();
+    let (expected, expected_image) = alone.render_to_rgba8(&overview).unwrap();
+    assert_eq!(counts(&stats), counts(&expected));
+    assert!(image == expected_image);
+    gpu.assert_clean();
+}
+
+#[test]
+fn a_resized_view_renders_what_a_view_made_at_that_size_renders() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, camera) = city_view(800, (64, 48));
+    let mut r = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
+    r.enable_verification(&shaders).unwrap();
+    let other = r.add_view(&shaders, RenderSettings::new(32, 24), &GraphSpec::default_graph()).unwrap();
+    let mut other_alone = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(32, 24)).unwrap();
+    let street = street_camera(&scene);
+    // Up, down, odd, one pixel, and back: each right after the resize, then a frame later.
+    for (w, h) in [(64, 48), (96, 72), (33, 17), (1, 1), (7, 1), (64, 48)] {
+        r.resize(&shaders, w, h).unwrap();
+        let mut fresh = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(w, h)).unwrap();
+        for _ in 0..2 {
+            let frames = r.render_views_to_rgba8(&[(ViewId::MAIN, &camera), (other, &street)]).unwrap();
+            let (_, expected) = fresh.render_to_rgba8(&camera).unwrap();
+            assert_eq!(r.settings(), &RenderSettings::new(w, h));
+            assert!(frames[0].1 == expected, "{w}x{h}: the resized view's image differs from a view made at that size");
+            let verify = frames[0].0.verify.as_ref().expect("verification is on");
+            assert_eq!(verify.false_negatives, 0, "{w}x{h}: {:?}", verify.missed);
+            // The other view is not disturbed by the resizes.
+            let expected_other = other_alone.render(&street).unwrap();
+            assert_eq!(counts(&frames[1].0), counts(&expected_other), "{w}x{h}: the other view");
+        }
+    }
+    gpu.assert_clean();
+}
+
+#[test]
+fn bad_view_input_is_an_error_naming_the_view() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, camera) = city_view(200, (32, 24));
+    let mut r = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(32, 24)).unwrap();
+    let spec = GraphSpec::default_graph();
+    let err = r.add_view(&shaders, RenderSettings::new(0, 24), &spec).unwrap_err().to_string();
+    assert!(err.contains("view 1") && err.contains("0x24"), "{err}");
+    let view = r.add_view(&shaders, RenderSettings::new(16, 16), &spec).unwrap();
+    assert_eq!(view.to_string(), "view 1", "a refused view takes no id");
+    let err = r.resize_view(&shaders, view, 16, 0).unwrap_err().to_string();
+    assert!(err.contains("view 1") && err.contains("16x0"), "{err}");
+    let err = r.render_views(&[(view, &camera), (view, &camera)]).unwrap_err().to_string();
+    assert!(err.contains("view 1") && err.contains("twice"), "{err}");
+    let nan = Camera { eye: DVec3::NAN, ..camera.clone() };
+    let err = r.render_views(&[(ViewId::MAIN, &camera), (view, &nan)]).unwrap_err().to_string();
+    assert!(err.contains("view 1") && err.contains("not finite"), "{err}");
+    r.remove_view(view).unwrap();
+    let next = r.add_view(&shaders, RenderSettings::new(16, 16), &spec).unwrap();
+    assert_eq!(next.to_string(), "view 2", "ids are never given twice");
+    r.remove_view(next).unwrap();
+    for err in [
+        r.render_views(&[(view, &camera)]).unwrap_err().to_string(),
+        r.remove_view(view).unwrap_err().to_string(),
+        r.resize_view(&shaders, view, 8, 8).unwrap_err().to_string(),
+    ] {
+        assert!(err.contains("view 1") && err.contains("removed"), "{err}");
+    }
+    let err = r.remove_view(ViewId::MAIN).unwrap_err().to_string();
+    assert!(err.contains("view 0") && err.contains("main view"), "{err}");
+    // Up to the limit, then refused; the views that exist still render.
+    let mut views = Vec::new();
+    while r.views().count() < MAX_VIEWS {
+        views.push(r.add_view(&shaders, RenderSettings::new(2, 2), &spec).unwrap());
+    }
+    let err = r.add_view(&shaders, RenderSettings::new(2, 2), &spec).unwrap_err().to_string();
+    assert!(err.contains(&format!("at most {MAX_VIEWS} views")), "{err}");
+    let frames: Vec<(ViewId, &Camera)> = views.iter().map(|&v| (v, &camera)).collect();
+    assert_eq!(r.render_views(&frames).unwrap().len(), MAX_VIEWS - 1);
+    gpu.assert_clean();
+}
+
+#[test]
+fn a_second_view_shares_the_scene() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, camera) = city_view(400, (32, 24));
+    let mut r = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(32, 24)).unwrap();
+    r.render(&camera).unwrap();
+    let instances = r.gpu_scene().instances.handle();
+    let view = r.add_view(&shaders, RenderSettings::new(32, 24), &GraphSpec::default_graph()).unwrap();
+    // Same size and graph: the second view costs what the first costs besides the scene.
+    assert_eq!(r.view_runtime(view).unwrap().memory(), r.runtime().memory());
+    r.render_views(&[(ViewId::MAIN, &camera), (view, &camera)]).unwrap();
+    assert_eq!(r.gpu_scene().instances.handle(), instances, "the scene was not uploaded again");
+    gpu.assert_clean();
+}
