@@ -98,6 +98,8 @@ fn a_resized_view_renders_what_a_view_made_at_that_size_renders() {
     let other = r.add_view(&shaders, RenderSettings::new(32, 24), &GraphSpec::default_graph()).unwrap();
     let mut other_alone = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(32, 24)).unwrap();
     let street = street_camera(&scene);
+    r.render_views(&[(ViewId::MAIN, &camera), (other, &street)]).unwrap();
+    let pipelines = gpu.pipelines_made();
     // Up, down, odd, one pixel, and back: each right after the resize, then a frame later.
     for (w, h) in [(64, 48), (96, 72), (33, 17), (1, 1), (7, 1), (64, 48)] {
         r.resize(&shaders, w, h).unwrap();
@@ -114,6 +116,8 @@ fn a_resized_view_renders_what_a_view_made_at_that_size_renders() {
             assert_eq!(counts(&frames[1].0), counts(&expected_other), "{w}x{h}: the other view");
         }
     }
+    // The fresh renderers made none either: they share the pipelines that are alive.
+    assert_eq!(gpu.pipelines_made(), pipelines, "resizing made pipelines");
     gpu.assert_clean();
 }
 

@@ -12,6 +12,8 @@
 //!   FLIP and PSNR against a supersampled reference), the compressed G-buffer against its
 //!   baselines.
 //! - [`plot`](crate::bench::plot): SVG plots of the culling and MSAA figures.
+//! - [`views`](crate::bench::views): many views over one world in one frame, what each view
+//!   costs beside the shared scene, and resizing a view.
 
 pub mod culling;
 pub mod dynamic;
@@ -19,6 +21,7 @@ pub mod hiz;
 pub mod msaa;
 pub mod peer;
 pub mod plot;
+pub mod views;
 
 use crate::gpu::PassTiming;
 

@@ -2,7 +2,7 @@
 
 use super::args::BenchArgs;
 use super::memory::{Need, Room, SceneSize, Use};
-use cullgraph::bench::{culling, dynamic, hiz, msaa, plot};
+use cullgraph::bench::{culling, dynamic, hiz, msaa, plot, views};
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::scene::SceneSource;
 use cullgraph::{Error, Result};
@@ -12,7 +12,10 @@ use cullgraph::{Error, Result};
 const DEFAULT_MOVED: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
 
 /// The suites `--suites` takes.
-const SUITES: &[&str] = &["culling", "hiz", "msaa", "dynamic"];
+const SUITES: &[&str] = &["culling", "hiz", "msaa", "dynamic", "views"];
+
+/// View counts of the `views` suite.
+const VIEW_COUNTS: [usize; 5] = [1, 2, 4, 8, 16];
 
 /// Runs the command.
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -58,7 +61,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let room = Room::with_device(&ctx);
     let city = |instances: usize| SceneSize { instances: instances as u64, kinds: 0, lights: 32 };
     let pixels = args.size.0 as u64 * args.size.1 as u64;
-    for (on, usage) in [(suite("culling"), Use::Render), (suite("dynamic"), Use::Animate)] {
+    for (on, usage) in [(suite("culling") || suite("views"), Use::Render), (suite("dynamic"), Use::Animate)] {
         if on {
             room.check("--instances", &largest.to_string(), Need::of(city(largest), usage) + Need::image(pixels))?;
         }
@@ -120,6 +123,22 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         )?;
         finish_suite("culling", serde_json::to_value(&report).unwrap_or_default(), report.markdown())?;
         plot("culling.svg", plot::culling_svg(&report).map(Some))?;
+    }
+    if suite("views") {
+        let report = views::run(
+            &ctx,
+            &shaders,
+            &views::ViewsBench {
+                instances: largest,
+                width,
+                height,
+                views: VIEW_COUNTS.to_vec(),
+                warmup: args.warmup,
+                frames: args.frames,
+            },
+            &progress,
+        )?;
+        finish_suite("views", serde_json::to_value(&report).unwrap_or_default(), report.markdown())?;
     }
     if suite("hiz") {
         progress("hi-z pyramid");

@@ -115,6 +115,8 @@ pub(crate) struct DeviceShared {
     pub caps: DeviceCaps,
     validation: ValidationLog,
     owned: Option<OwnedParts>,
+    /// The pipelines alive on this device, by everything they were made from.
+    pub pipelines: super::pipeline::PipelineMemo,
 }
 
 /// What an owned context created and must destroy.
@@ -163,6 +165,12 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
+    /// Pipelines made on this device so far. Passes that ask for a pipeline that is alive
+    /// (the same shaders and state) share it, so rebuilding a graph for a new size makes none.
+    pub fn pipelines_made(&self) -> u64 {
+        self.shared.pipelines.made()
+    }
+
     /// Loads Vulkan, picks a device and creates everything cullgraph needs.
     pub fn new(options: &ContextOptions) -> GpuResult<Self> {
         // SAFETY: loading the system Vulkan loader.
@@ -280,6 +288,7 @@ impl GpuContext {
                 caps,
                 validation,
                 owned,
+                pipelines: Default::default(),
             }),
         })
     }

@@ -6,7 +6,8 @@ use super::error::{GpuError, GpuResult, VkResultExt};
 use super::reflect::{self, ShaderInterface};
 use super::shader::Spirv;
 use ash::vk;
-use std::sync::Arc;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, Weak};
 
 /// One resource bound to a binding of set 0 for the next dispatch or draw.
 #[derive(Clone, Copy, Debug)]
@@ -81,8 +82,52 @@ pub enum StencilRule {
     FirstFragmentWins,
 }
 
-/// A pipeline with its reflected layout.
-pub struct Pipeline {
+/// Everything a pipeline is made from: equal keys make the same pipeline.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum PipelineKey {
+    Compute { name: String, spirv: Spirv, constants: Vec<u32> },
+    Graphics { name: String, shaders: Vec<Spirv>, state: Vec<i64> },
+}
+
+/// The pipelines alive on a device: making one whose key is here hands out the same objects.
+/// A view's resize or a graph's reload builds its passes again, and their pipelines then cost
+/// nothing to make, while the runtime being replaced still holds them. Entries whose pipeline
+/// was dropped are swept as new ones arrive.
+#[derive(Default)]
+pub(crate) struct PipelineMemo {
+    alive: Mutex<HashMap<PipelineKey, Weak<PipelineObjects>>>,
+    /// Pipelines made on the device so far.
+    made: std::sync::atomic::AtomicU64,
+}
+
+impl PipelineMemo {
+    fn get(&self, key: &PipelineKey) -> Option<Pipeline> {
+        let memo = self.alive.lock().unwrap_or_else(|p| p.into_inner());
+        memo.get(key).and_then(Weak::upgrade).map(Pipeline)
+    }
+
+    fn insert(&self, key: PipelineKey, objects: PipelineObjects) -> Pipeline {
+        let objects = Arc::new(objects);
+        self.made.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let mut memo = self.alive.lock().unwrap_or_else(|p| p.into_inner());
+        memo.retain(|_, weak| weak.strong_count() > 0);
+        memo.insert(key, Arc::downgrade(&objects));
+        Pipeline(objects)
+    }
+
+    /// Pipelines made on the device so far (each shared one counted once).
+    pub fn made(&self) -> u64 {
+        self.made.load(std::sync::atomic::Ordering::Relaxed)
+    }
+}
+
+/// A pipeline with its reflected layout. Pipelines made from the same shaders and state share
+/// their Vulkan objects (see [`PipelineMemo`]).
+#[derive(Clone)]
+pub struct Pipeline(Arc<PipelineObjects>);
+
+/// A pipeline's Vulkan objects, destroyed with the last [`Pipeline`] that holds them.
+pub(crate) struct PipelineObjects {
     shared: Arc<DeviceShared>,
     name: String,
     pipeline: vk::Pipeline,
@@ -104,6 +149,10 @@ impl Pipeline {
     /// ids the shader does not declare are ignored. The driver compiles with the values known,
     /// so loops bounded by them can be unrolled.
     pub fn compute_specialized(ctx: &GpuContext, name: &str, spirv: &Spirv, constants: &[u32]) -> GpuResult<Self> {
+        let key = PipelineKey::Compute { name: name.into(), spirv: spirv.clone(), constants: constants.to_vec() };
+        if let Some(made) = ctx.shared.pipelines.get(&key) {
+            return Ok(made);
+        }
         let interface = reflect_or_err(name, &[spirv])?;
         let stages = vk::ShaderStageFlags::COMPUTE;
         let (set_layout, layout) = create_layout(ctx, &interface, stages)?;
@@ -126,11 +175,15 @@ impl Pipeline {
         let result = unsafe { ctx.device().create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
         module.destroy(ctx);
         p.pipeline = result.map_err(|(_, r)| r).vk("vkCreateComputePipelines")?[0];
-        Ok(p)
+        Ok(ctx.shared.pipelines.insert(key, p))
     }
 
     /// A graphics pipeline for dynamic rendering.
     pub fn graphics(ctx: &GpuContext, name: &str, desc: &GraphicsDesc<'_>) -> GpuResult<Self> {
+        let key = graphics_key(name, desc);
+        if let Some(made) = ctx.shared.pipelines.get(&key) {
+            return Ok(made);
+        }
         let mut sources = vec![desc.vertex];
         sources.extend(desc.fragment);
         let interface = reflect_or_err(name, &sources)?;
@@ -259,7 +312,7 @@ impl Pipeline {
             fs.destroy(ctx);
         }
         p.pipeline = result.map_err(|(_, r)| r).vk("vkCreateGraphicsPipelines")?[0];
-        Ok(p)
+        Ok(ctx.shared.pipelines.insert(key, p))
     }
 
     fn empty(
@@ -270,8 +323,8 @@ impl Pipeline {
         bind_point: vk::PipelineBindPoint,
         stages: vk::ShaderStageFlags,
         interface: ShaderInterface,
-    ) -> Self {
-        Self {
+    ) -> PipelineObjects {
+        PipelineObjects {
             shared: ctx.shared.clone(),
             name: name.into(),
             pipeline: vk::Pipeline::null(),
@@ -285,18 +338,18 @@ impl Pipeline {
 
     /// What the shaders declare (bindings, push constants, workgroup size).
     pub fn interface(&self) -> &ShaderInterface {
-        &self.interface
+        &self.0.interface
     }
 
     /// Debug name.
     pub fn name(&self) -> &str {
-        &self.name
+        &self.0.name
     }
 
     /// Binds the pipeline.
     pub fn bind(&self, cmd: vk::CommandBuffer) {
         // SAFETY: cmd recording (caller contract).
-        unsafe { self.shared.device.cmd_bind_pipeline(cmd, self.bind_point, self.pipeline) };
+        unsafe { self.0.shared.device.cmd_bind_pipeline(cmd, self.0.bind_point, self.0.pipeline) };
     }
 
     /// Pushes descriptors for set 0. Bindings the shader does not use (declared in a variant but
@@ -309,7 +362,7 @@ impl Pipeline {
                 let n = match *b {
                     Bind::Buffer(n, _) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) => n,
                 };
-                self.interface.bindings.contains_key(&n)
+                self.0.interface.bindings.contains_key(&n)
             })
             .collect();
         let binds = binds.as_slice();
@@ -336,7 +389,7 @@ impl Pipeline {
                 let binding = match *b {
                     Bind::Buffer(n, _) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) => n,
                 };
-                let kind = self.interface.bindings.get(&binding).map(|i| i.kind).unwrap_or(match b {
+                let kind = self.0.interface.bindings.get(&binding).map(|i| i.kind).unwrap_or(match b {
                     Bind::Buffer(..) => vk::DescriptorType::STORAGE_BUFFER,
                     Bind::StorageImage(..) => vk::DescriptorType::STORAGE_IMAGE,
                     Bind::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
@@ -355,7 +408,9 @@ impl Pipeline {
             })
             .collect();
         // SAFETY: infos live until the call returns; cmd recording with this pipeline's layout.
-        unsafe { self.shared.push_descriptor.cmd_push_descriptor_set(cmd, self.bind_point, self.layout, 0, &writes) };
+        unsafe {
+            self.0.shared.push_descriptor.cmd_push_descriptor_set(cmd, self.0.bind_point, self.0.layout, 0, &writes)
+        };
     }
 
     /// Records a compute pass of one invocation per texel of `extent`: binds the pipeline, pushes
@@ -365,10 +420,10 @@ impl Pipeline {
         self.bind(cmd);
         self.push_bindings(cmd, binds);
         self.push_constant_bytes(cmd, push);
-        let [x, y, _] = self.interface.local_size.unwrap_or([1, 1, 1]);
+        let [x, y, _] = self.0.interface.local_size.unwrap_or([1, 1, 1]);
         let groups = (extent.width.div_ceil(x.max(1)).max(1), extent.height.div_ceil(y.max(1)).max(1));
         // SAFETY: cmd recording (caller contract), with this pipeline and its bindings just set.
-        unsafe { self.shared.device.cmd_dispatch(cmd, groups.0, groups.1, 1) };
+        unsafe { self.0.shared.device.cmd_dispatch(cmd, groups.0, groups.1, 1) };
     }
 
     /// Sets push constants from a plain-old-data value.
@@ -378,16 +433,16 @@ impl Pipeline {
 
     /// Sets push constants from bytes (at most the shader's block size are used).
     pub fn push_constant_bytes(&self, cmd: vk::CommandBuffer, bytes: &[u8]) {
-        let len = bytes.len().min(self.interface.push_constant_bytes as usize);
+        let len = bytes.len().min(self.0.interface.push_constant_bytes as usize);
         if len == 0 {
             return;
         }
         // SAFETY: cmd recording; the range lies inside the layout's push-constant range.
-        unsafe { self.shared.device.cmd_push_constants(cmd, self.layout, self.stages, 0, &bytes[..len]) };
+        unsafe { self.0.shared.device.cmd_push_constants(cmd, self.0.layout, self.0.stages, 0, &bytes[..len]) };
     }
 }
 
-impl Drop for Pipeline {
+impl Drop for PipelineObjects {
     fn drop(&mut self) {
         // SAFETY: the caller guarantees no pending command buffer uses the pipeline.
         unsafe {
@@ -399,6 +454,29 @@ impl Drop for Pipeline {
             d.destroy_descriptor_set_layout(self.set_layout, None);
         }
     }
+}
+
+/// The key of a graphics pipeline: its shaders and every field of its state.
+fn graphics_key(name: &str, desc: &GraphicsDesc<'_>) -> PipelineKey {
+    let mut shaders = vec![desc.vertex.clone()];
+    shaders.extend(desc.fragment.cloned());
+    let mut state = vec![
+        desc.vertex_stride as i64,
+        desc.depth_format.as_raw() as i64,
+        desc.depth_compare.as_raw() as i64,
+        desc.depth_write as i64,
+        desc.samples.as_raw() as i64,
+        desc.stencil as i64,
+        desc.topology.as_raw() as i64,
+        desc.blend as i64,
+        desc.fragment.is_some() as i64,
+        desc.color_formats.len() as i64,
+    ];
+    state.extend(desc.color_formats.iter().map(|f| f.as_raw() as i64));
+    for &(location, format, offset) in desc.vertex_attributes {
+        state.extend([location as i64, format.as_raw() as i64, offset as i64]);
+    }
+    PipelineKey::Graphics { name: name.into(), shaders, state }
 }
 
 fn reflect_or_err(name: &str, sources: &[&Spirv]) -> GpuResult<ShaderInterface> {

@@ -146,6 +146,24 @@ pub(crate) fn spatial_keys(scene: &Scene) -> Vec<u64> {
 }
 
 impl GpuScene {
+    /// Device bytes of the scene's buffers and textures: what every view of a renderer shares.
+    pub fn bytes(&self) -> u64 {
+        let buffers = [
+            &self.vertices,
+            &self.indices,
+            &self.instances,
+            &self.materials,
+            &self.draw_instance_ids,
+            &self.draw_commands,
+            &self.draw_count,
+            &self.cull_records,
+            &self.draw_groups,
+            &self.group_bounds,
+            &self.instance_triangles,
+        ];
+        buffers.iter().map(|b| b.size()).sum::<u64>() + self.textures.bytes()
+    }
+
     /// Creates the device buffers and queues their contents on `batch`.
     pub fn upload(ctx: &GpuContext, scene: &Scene, batch: &mut UploadBatch) -> crate::Result<Self> {
         Self::upload_with(ctx, scene, DrawList::all_instances(scene), batch)

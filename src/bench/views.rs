@@ -1,0 +1,214 @@
+//! Many views over one world: a city rendered through 1, 2, 4, 8 and 16 views in one frame
+//! (four split-screen cameras at street level, then orthographic views from above, as shadow
+//! maps see the city), each view culled by its own graph; what each view costs beside the
+//! shared scene; and resizing a view (CPU time, its next frame, and that nothing is uploaded).
+
+use super::median;
+use crate::error::Result;
+use crate::gpu::{GpuContext, ShaderCompiler};
+use crate::render::{GraphSpec, RenderSettings, Renderer, ViewId};
+use crate::scene::source::LoadOptions;
+use crate::scene::{Camera, Projection, Scene, SceneSource};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct ViewsBench {
+    /// City size.
+    pub instances: usize,
+    /// Size of the first view and of the resize (the split-screen views are a quarter of it).
+    pub width: u32,
+    /// See `width`.
+    pub height: u32,
+    /// View counts, one row each.
+    pub views: Vec<usize>,
+    /// Frames before measuring.
+    pub warmup: u32,
+    /// Frames measured (medians are reported).
+    pub frames: u32,
+}
+
+/// One view count.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct ViewsRow {
+    /// Views rendered each frame.
+    pub views: usize,
+    /// Median GPU milliseconds of all views' instance-cull passes together.
+    pub cull_ms: f64,
+    /// Median GPU milliseconds of the whole frame (every view).
+    pub frame_ms: f64,
+    /// Instance-cull dispatch steps recorded per frame.
+    pub cull_passes: usize,
+    /// Device bytes of every view's graph resources together (the scene is shared).
+    pub view_bytes: u64,
+    /// Instances drawn per view in the last frame.
+    pub drawn: Vec<u32>,
+}
+
+/// The figures of one run.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct ViewsReport {
+    /// Device.
+    pub device: String,
+    /// City size.
+    pub instances: usize,
+    /// Device bytes of the scene all views share (geometry, instances, bounds, textures).
+    pub scene_bytes: u64,
+    /// One row per view count.
+    pub rows: Vec<ViewsRow>,
+    /// Median CPU milliseconds of resizing the main view between `width`x`height` and
+    /// three quarters of it.
+    pub resize_cpu_ms: f64,
+    /// Median GPU milliseconds of the frame right after a resize.
+    pub resized_frame_ms: f64,
+    /// Median GPU milliseconds of a frame without a resize.
+    pub steady_frame_ms: f64,
+    /// Pipelines made by the resizes (0: every pipeline was shared).
+    pub resize_pipelines: u64,
+    /// Whether the scene's buffers stayed the same through the resizes (nothing uploaded).
+    pub scene_kept: bool,
+}
+
+/// The `i`-th camera of a frame of many views: four split-screen street cameras looking inward
+/// from the city's corners, then orthographic views from above over a grid of tiles.
+fn camera(scene: &Scene, i: usize) -> Camera {
+    let (min, max) = scene.world_bounds().unwrap_or((DVec3::splat(-1.0), DVec3::splat(1.0)));
+    let center = (min + max) * 0.5;
+    if i < 4 {
+        let corner = DVec3::new(if i & 1 == 0 { min.x } else { max.x }, 2.0, if i & 2 == 0 { min.z } else { max.z });
+        return Camera {
+            eye: corner + (center - corner) * 0.05,
+            target: DVec3::new(center.x, 1.5, center.z),
+            ..Default::default()
+        };
+    }
+    let tile = i - 4;
+    let (tx, tz) = ((tile % 4) as f64, (tile / 4) as f64);
+    let size = (max - min) / 4.0;
+    let at = DVec3::new(min.x + (tx + 0.5) * size.x, center.y, min.z + (tz + 0.5) * size.z.max(1e-3));
+    let height = (max.y - min.y).max(1.0) + 10.0;
+    Camera {
+        eye: at + DVec3::new(0.0, height, 0.0),
+        target: at,
+        up: glam::Vec3::Z,
+        projection: Projection::Orthographic { height: size.x.max(size.z) as f32, far: (2.0 * height) as f32 },
+        near: 1.0,
+    }
+}
+
+/// Runs the suite.
+pub fn run(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    bench: &ViewsBench,
+    progress: &dyn Fn(&str),
+) -> Result<ViewsReport> {
+    progress(&format!("views: city of {} instances", bench.instances));
+    let scene = SceneSource::Builtin("city".into())
+        .load(&LoadOptions { instances: Some(bench.instances), ..Default::default() })?;
+    let (w, h) = (bench.width, bench.height);
+    let quarter = RenderSettings::new((w / 2).max(1), (h / 2).max(1));
+    let spec = GraphSpec::default_graph();
+    let mut report = ViewsReport { device: ctx.caps().name.clone(), instances: bench.instances, ..Default::default() };
+    for &n in &bench.views {
+        progress(&format!("views: {n} view(s)"));
+        let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), quarter.clone(), &spec)?;
+        renderer.set_step_timing(false);
+        let mut ids = vec![ViewId::MAIN];
+        for i in 1..n {
+            let settings = if i < 4 { quarter.clone() } else { RenderSettings::new(1024, 1024) };
+            ids.push(renderer.add_view(shaders, settings, &spec)?);
+        }
+        let cameras: Vec<Camera> = (0..n).map(|i| camera(&scene, i)).collect();
+        let frame: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&cameras).collect();
+        // Every view runs the same graph: its instance-cull passes by name.
+        let cull_names: Vec<String> =
+            renderer.plan().passes.iter().filter(|p| p.kind == "instance_cull").map(|p| p.name.clone()).collect();
+        let (mut cull, mut total) = (Vec::new(), Vec::new());
+        let mut drawn = Vec::new();
+        for f in 0..bench.warmup + bench.frames {
+            let stats = renderer.render_views(&frame)?;
+            if f < bench.warmup {
+                continue;
+            }
+            let timings = stats.iter().flat_map(|s| &s.gpu_ms);
+            cull.push(timings.filter(|t| cull_names.contains(&t.name)).map(|t| t.ms).sum::<f64>());
+            total.push(stats.iter().map(|s| s.gpu_total_ms).sum::<f64>());
+            drawn = stats.iter().map(|s| s.drawn).collect();
+        }
+        let cull_passes = cull_names.len() * n;
+        let view_bytes = ids
+            .iter()
+            .map(|&id| renderer.view_runtime(id).map(|r| r.resource_bytes().iter().map(|b| b.bytes).sum::<u64>()))
+            .sum::<Result<u64>>()?;
+        report.scene_bytes = renderer.gpu_scene().bytes();
+        report.rows.push(ViewsRow {
+            views: n,
+            cull_ms: median(&mut cull),
+            frame_ms: median(&mut total),
+            cull_passes,
+            view_bytes,
+            drawn,
+        });
+    }
+
+    progress(&format!("views: resizing {w}x{h}"));
+    let camera = scene.default_camera(w as f32 / h as f32);
+    let mut renderer = Renderer::with_graph(ctx, shaders, scene, RenderSettings::new(w, h), &spec)?;
+    for _ in 0..bench.warmup.max(1) {
+        renderer.render(&camera)?;
+    }
+    let instances = renderer.gpu_scene().instances.handle();
+    let pipelines = ctx.pipelines_made();
+    let (mut cpu, mut resized, mut steady) = (Vec::new(), Vec::new(), Vec::new());
+    for f in 0..bench.frames.max(2) {
+        let (rw, rh) = if f % 2 == 0 { ((w * 3 / 4).max(1), (h * 3 / 4).max(1)) } else { (w, h) };
+        let start = Instant::now();
+        renderer.resize(shaders, rw, rh)?;
+        cpu.push(start.elapsed().as_secs_f64() * 1e3);
+        resized.push(renderer.render(&camera)?.gpu_total_ms);
+        steady.push(renderer.render(&camera)?.gpu_total_ms);
+    }
+    report.resize_cpu_ms = median(&mut cpu);
+    report.resized_frame_ms = median(&mut resized);
+    report.steady_frame_ms = median(&mut steady);
+    report.resize_pipelines = ctx.pipelines_made() - pipelines;
+    report.scene_kept = renderer.gpu_scene().instances.handle() == instances;
+    Ok(report)
+}
+
+impl ViewsReport {
+    /// The report as Markdown.
+    pub fn markdown(&self) -> String {
+        let mut md = format!(
+            "## Views\n\nCity of {} instances on {}; the scene ({:.1} MB) is shared by every view.\n\n\
+             | views | cull passes | cull GPU ms | frame GPU ms | view resources MB | drawn per view |\n\
+             |---|---|---|---|---|---|\n",
+            self.instances,
+            self.device,
+            self.scene_bytes as f64 / 1e6
+        );
+        for r in &self.rows {
+            md += &format!(
+                "| {} | {} | {:.3} | {:.3} | {:.1} | {:?} |\n",
+                r.views,
+                r.cull_passes,
+                r.cull_ms,
+                r.frame_ms,
+                r.view_bytes as f64 / 1e6,
+                r.drawn
+            );
+        }
+        md += &format!(
+            "\nResize: {:.2} ms CPU, next frame {:.3} GPU ms (steady {:.3}), {} pipelines made, scene {}.\n",
+            self.resize_cpu_ms,
+            self.resized_frame_ms,
+            self.steady_frame_ms,
+            self.resize_pipelines,
+            if self.scene_kept { "kept" } else { "uploaded again" }
+        );
+        md
+    }
+}
