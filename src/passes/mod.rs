@@ -15,6 +15,7 @@ pub(crate) mod lighting_visibility;
 pub mod overlay;
 pub mod shared;
 pub(crate) mod slots;
+pub(crate) mod tonemap;
 pub(crate) mod transparent;
 pub mod transparent_sort;
 pub(crate) mod visibility_ids;
@@ -94,6 +95,7 @@ pub fn register_builtin_kinds(kinds: &mut KindRegistry) -> crate::Result<()> {
     kinds.register(lighting_compressed::LightingCompressedKind)?;
     kinds.register(lighting::LightingKind)?;
     kinds.register(fxaa::FxaaKind)?;
+    kinds.register(tonemap::TonemapKind)?;
     kinds.register(gbuffer::GbufferKind(GeometryMode::Append))?;
     kinds.register(hiz_build::HizBuildKind)?;
     kinds.register(instance_cull::InstanceCullKind)?;
