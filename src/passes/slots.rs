@@ -34,6 +34,8 @@ pub const HIZ_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 /// The lighting passes' output format: linear HDR colour, scene radiance before exposure and
 /// tone mapping (the `tonemap` pass maps it to [`LIT_OUTPUT_FORMAT`]).
 pub const HDR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// The `depth_resolve` pass's output format: one reversed-Z depth per pixel.
+pub const RESOLVED_DEPTH_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 /// The tone-mapped image's format (sRGB-encoded values in a UNORM image, so it can be storage):
 /// the `tonemap` pass's output, which the transparent, FXAA and overlay passes read or write.
 pub const LIT_OUTPUT_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
