@@ -23,9 +23,11 @@ use std::time::Instant;
 mod adapt;
 mod completed;
 mod graphs;
+mod readback;
 mod world_sync;
 
 pub use super::drawn::DrawnInstances;
+pub use readback::OutputF32;
 
 /// Output size.
 #[derive(Clone, Debug, PartialEq, Eq)]
