@@ -12,19 +12,24 @@ use std::path::{Path, PathBuf};
 struct Request {
     flag: &'static str,
     outputs: &'static [&'static str],
+    /// Where a graph with the output is found, for the error.
+    found_in: &'static str,
     path: PathBuf,
 }
 
-/// The shipped graph that has every post-processing output.
-const GRAPH_WITH_OUTPUTS: &str = "builtin:post";
-
 fn requests(args: &RenderArgs) -> Vec<Request> {
-    let flags: [(&'static str, &'static [&'static str], &Option<PathBuf>); 3] = [
-        ("--hdr-out", &["hdr"], &args.hdr_out),
-        ("--motion-out", &["motion"], &args.motion_out),
-        ("--depth-out", &["depth_resolved", "depth"], &args.depth_out),
+    const POST: &str = "--graph builtin:post has it";
+    // No shipped graph writes motion vectors yet: a graph of the host's own must.
+    const NONE: &str = "no shipped graph writes it yet";
+    let flags: [(&'static str, &'static [&'static str], &'static str, &Option<PathBuf>); 3] = [
+        ("--hdr-out", &["hdr"], POST, &args.hdr_out),
+        ("--motion-out", &["motion"], NONE, &args.motion_out),
+        ("--depth-out", &["depth_resolved", "depth"], POST, &args.depth_out),
     ];
-    flags.into_iter().filter_map(|(flag, outputs, path)| Some(Request { flag, outputs, path: path.clone()? })).collect()
+    flags
+        .into_iter()
+        .filter_map(|(flag, outputs, found_in, path)| Some(Request { flag, outputs, found_in, path: path.clone()? }))
+        .collect()
 }
 
 /// Refuses, before rendering, a file that cannot be written and an output the graph lacks.
@@ -35,13 +40,14 @@ pub fn check(args: &RenderArgs, renderer: &Renderer) -> Result<()> {
         if output_of(renderer, &request).is_none() {
             let names: Vec<&str> = plan.outputs.iter().map(|&id| plan.resources[id].name.as_str()).collect();
             return Err(Error::Invalid(format!(
-                "{} {}: graph '{}' ({}) has no output '{}' (its outputs: {}); --graph {GRAPH_WITH_OUTPUTS} has it",
+                "{} {}: graph '{}' ({}) has no output '{}' (its outputs: {}); {}",
                 request.flag,
                 request.path.display(),
                 plan.name,
                 plan.file,
                 request.outputs.join("' or '"),
                 names.join(", "),
+                request.found_in,
             )));
         }
     }
