@@ -129,7 +129,7 @@ fn graph_check_plan_and_dot() {
         .collect();
     assert_eq!(
         passes,
-        ["draw_early", "hiz", "cull_late", "draw_late", "lighting", "transparent_sort", "transparent"],
+        ["draw_early", "hiz", "cull_late", "draw_late", "lighting", "tonemap", "transparent_sort", "transparent"],
         "{stdout}"
     );
     // A buffer too small for this scene is refused at its binding.

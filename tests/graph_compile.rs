@@ -43,7 +43,7 @@ const COLOR_OUT: Access = Access {
 fn default_graph_compiles_to_the_fixed_frame() {
     let g = default_graph();
     let c = compile(&g);
-    assert_eq!(order(&c), ["gbuffer", "lighting", "transparent_sort", "transparent"]);
+    assert_eq!(order(&c), ["gbuffer", "lighting", "tonemap", "transparent_sort", "transparent"]);
     assert!(c.pruned.is_empty());
     let lighting = &c.passes[1];
     assert_eq!(lighting.settings.get("exposure"), Some(&SettingValue::Float(0.8)));
@@ -56,7 +56,7 @@ fn default_graph_compiles_to_the_fixed_frame() {
         graph::plan::ResolvedKind::Image { format, extent, usage, .. } => {
             assert_eq!(*format, vk::Format::R8G8B8A8_UNORM);
             assert_eq!((extent.width, extent.height), (1280, 720));
-            // Lit in compute, blended over by the transparent pass, copied out.
+            // Tone-mapped in compute, blended over by the transparent pass, copied out.
             assert_eq!(
                 *usage,
                 vk::ImageUsageFlags::STORAGE
@@ -82,12 +82,12 @@ fn default_graph_compiles_to_the_fixed_frame() {
 fn shipped_graphs_load_and_compile() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     for (file, passes) in [
-        ("graph/default.ron", 7),
-        ("graph/no_cull.ron", 4),
-        ("graph/frustum.ron", 5),
-        ("graph/two_phase.ron", 7),
-        ("graph/one_phase.ron", 6),
-        ("graph/occluder_prepass.ron", 8),
+        ("graph/default.ron", 8),
+        ("graph/no_cull.ron", 5),
+        ("graph/frustum.ron", 6),
+        ("graph/two_phase.ron", 8),
+        ("graph/one_phase.ron", 7),
+        ("graph/occluder_prepass.ron", 9),
         ("graph/examples/tint.ron", 3),
         ("graph/examples/history.ron", 3),
         ("graph/examples/host_target.ron", 2),
@@ -155,7 +155,7 @@ fn default_graph_barrier_plan_is_exactly_this() {
             b("albedo", Some(COLOR_OUT), sampled, false),
             b("normal", Some(COLOR_OUT), sampled, false),
             b("emissive_occlusion", Some(COLOR_OUT), sampled, false),
-            b("color", None, storage_write, true),
+            b("hdr", None, storage_write, true),
         ]
     );
 }

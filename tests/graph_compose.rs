@@ -43,7 +43,18 @@ fn a_graph_extends_a_shipped_one_and_edits_its_passes() {
     let g = load(text, "edited.ron", None).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         pass_names(&g),
-        ["draw_early", "first_hiz", "hiz", "cull_late", "draw_late", "lighting", "after_lighting", "sort", "last"]
+        [
+            "draw_early",
+            "first_hiz",
+            "hiz",
+            "cull_late",
+            "draw_late",
+            "lighting",
+            "after_lighting",
+            "tonemap",
+            "sort",
+            "last"
+        ]
     );
     let param = |name: &str| g.params.iter().find(|p| p.name == name).map(|p| p.value.clone());
     assert_eq!(

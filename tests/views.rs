@@ -99,6 +99,7 @@ fn a_resized_view_renders_what_a_view_made_at_that_size_renders() {
     let mut other_alone = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(32, 24)).unwrap();
     let street = street_camera(&scene);
     r.render_views(&[(ViewId::MAIN, &camera), (other, &street)]).unwrap();
+    other_alone.render(&street).unwrap();
     let pipelines = gpu.pipelines_made();
     // Up, down, odd, one pixel, and back: each right after the resize, then a frame later.
     for (w, h) in [(64, 48), (96, 72), (33, 17), (1, 1), (7, 1), (64, 48)] {

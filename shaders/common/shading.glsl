@@ -1,7 +1,10 @@
 // The shading model every lighting pass and baseline shares: Lambert diffuse plus GGX
-// specular (Smith height-correlated visibility, Schlick Fresnel), ACES-fitted tone map, sRGB.
+// specular (Smith height-correlated visibility, Schlick Fresnel), ACES-fitted tone map, sRGB
+// (tonemap.glsl).
 #ifndef CULLGRAPH_SHADING_GLSL
 #define CULLGRAPH_SHADING_GLSL
+
+#include "tonemap.glsl"
 
 const float PI = 3.14159265359;
 
@@ -60,17 +63,6 @@ vec3 ambient_light(Surface s, vec3 sky) {
 vec3 sky_color(vec3 dir) {
     float t = clamp(dir.y * 0.5 + 0.5, 0.0, 1.0);
     return mix(vec3(0.55, 0.6, 0.68), vec3(0.18, 0.32, 0.62), t);
-}
-
-// Narkowicz's ACES fit.
-vec3 tonemap_aces(vec3 x) {
-    return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
-}
-
-vec3 linear_to_srgb(vec3 c) {
-    vec3 lo = c * 12.92;
-    vec3 hi = 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055;
-    return mix(lo, hi, step(vec3(0.0031308), c));
 }
 
 #endif

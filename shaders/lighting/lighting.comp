@@ -1,10 +1,12 @@
 #version 460
 // Deferred lighting in compute over a G-buffer of images: sun, tile-culled point lights, a
 // sky ambient term scaled by the surface's occlusion and its emissive colour (with
-// EMISSIVE_OCCLUSION: an image holds them; without, none and 1), tone-mapped, written
-// sRGB-encoded. With multisampled images (the per-sample
-// MSAA baseline) a pixel whose samples all hold the same surface (material, normal and plane)
-// is shaded once; otherwise every sample is shaded and the tone-mapped results averaged.
+// EMISSIVE_OCCLUSION: an image holds them; without, none and 1), written as linear HDR colour
+// (scene radiance before exposure; the tonemap pass maps it). With multisampled images (the
+// per-sample MSAA baseline) a pixel whose samples all hold the same surface (material, normal
+// and plane) is shaded once; otherwise every sample is shaded, the tone-mapped results averaged
+// and the HDR colour that shows as that average stored (tonemap.glsl). Debug views are display
+// colours, stored the same way.
 #include "../common/scene.glsl"
 #include "../common/shading.glsl"
 #include "../common/gbuffer_normal.glsl"
@@ -33,7 +35,12 @@ layout(set = 0, binding = 6) uniform sampler2D emissive_occlusion_tex;
 #endif
 layout(set = 0, binding = 3, scalar) readonly buffer Frame { FrameConstants frame; };
 layout(set = 0, binding = 4, scalar) readonly buffer Lights { GpuPointLight lights[]; };
+// HDR_OUTPUT: linear HDR colour for a tonemap pass; without, the tone-mapped image itself.
+#ifdef HDR_OUTPUT
+layout(set = 0, binding = 5, rgba16f) uniform writeonly image2D out_color;
+#else
 layout(set = 0, binding = 5, rgba8) uniform writeonly image2D out_color;
+#endif
 
 #include "../lighting/light_tiles.glsl"
 
@@ -43,10 +50,31 @@ layout(push_constant) uniform Settings {
     uint light_tiles;
 } settings;
 
-// Tone-mapped color of sample `s` of `pixel`.
-vec3 shade_sample(ivec2 pixel, uint s, vec2 center) {
+// Writes a pixel's linear HDR colour, or without HDR_OUTPUT what the tonemap pass would make of it.
+void store_hdr(ivec2 pixel, vec3 hdr) {
+#ifdef HDR_OUTPUT
+    imageStore(out_color, pixel, vec4(hdr, 1.0));
+#else
+    imageStore(out_color, pixel, vec4(linear_to_srgb(tonemap_aces(hdr * settings.exposure)), 1.0));
+#endif
+}
+
+// Writes a pixel given as a tone-mapped (display) colour: with HDR_OUTPUT the HDR colour the
+// tonemap pass shows as it (tonemap.glsl).
+void store_display(ivec2 pixel, vec3 display) {
+#ifdef HDR_OUTPUT
+    imageStore(out_color, pixel, vec4(hdr_from_display(display, settings.exposure), 1.0));
+#else
+    imageStore(out_color, pixel, vec4(linear_to_srgb(display), 1.0));
+#endif
+}
+
+// Linear HDR color of sample `s` of `pixel`, or with a debug view its display color;
+// `display` says which.
+vec3 shade_sample(ivec2 pixel, uint s, vec2 center, out bool display) {
+    display = false;
     float depth = FETCH(depth_tex, pixel, s).r;
-    if (depth <= 0.0) return tonemap_aces(sky_color(view_direction(center)) * settings.exposure);
+    if (depth <= 0.0) return sky_color(view_direction(center));
     vec4 am = FETCH(albedo_metallic_tex, pixel, s);
     vec4 nr = decode_normal_roughness(FETCH(normal_roughness_tex, pixel, s));
     Surface surface;
@@ -64,10 +92,18 @@ vec3 shade_sample(ivec2 pixel, uint s, vec2 center) {
     surface.occlusion = 1.0;
 #endif
     uint debug_view = settings.debug_view;
+    display = debug_view != DEBUG_VIEW_NONE && debug_view != DEBUG_VIEW_SAMPLES;
     if (debug_view == DEBUG_VIEW_NORMALS) return pow(surface.normal * 0.5 + 0.5, vec3(2.2));
     if (debug_view == DEBUG_VIEW_ALBEDO) return pow(am.rgb, vec3(2.2));
     if (debug_view == DEBUG_VIEW_DEPTH) return pow(vec3(fract(log2(depth) * 0.25)), vec3(2.2));
-    return tonemap_aces(shade_tile_lights(surface) * settings.exposure);
+    return shade_tile_lights(surface);
+}
+
+// Tone-mapped color of sample `s` of `pixel` (what the display shows of it).
+vec3 shade_sample_display(ivec2 pixel, uint s, vec2 center) {
+    bool display;
+    vec3 c = shade_sample(pixel, s, center, display);
+    return display ? c : tonemap_aces(c * settings.exposure);
 }
 
 #if SAMPLES > 1
@@ -132,18 +168,19 @@ void main() {
     tile_add_depth_range(range);
     tile_cull_lights(settings.light_tiles != 0u);
     if (!inside) return;
-    vec3 color;
-    uint shaded = 1u;
-    if (single_surface(pixel)) {
-        color = shade_sample(pixel, 0u, center);
-    } else {
-        color = vec3(0.0);
-        for (uint s = 0u; s < SAMPLES; ++s) color += shade_sample(pixel, s, center);
-        color /= float(SAMPLES);
-        shaded = SAMPLES;
-    }
     if (settings.debug_view == DEBUG_VIEW_SAMPLES) {
-        color = shaded > 1u ? vec3(1.0, 0.0, 0.0) : vec3(0.003, 0.003, 0.05);
+        store_display(pixel, single_surface(pixel) ? vec3(0.003, 0.003, 0.05) : vec3(1.0, 0.0, 0.0));
+    } else if (single_surface(pixel)) {
+        bool display;
+        vec3 c = shade_sample(pixel, 0u, center, display);
+        if (display) {
+            store_display(pixel, c);
+        } else {
+            store_hdr(pixel, c);
+        }
+    } else {
+        vec3 color = vec3(0.0);
+        for (uint s = 0u; s < SAMPLES; ++s) color += shade_sample_display(pixel, s, center);
+        store_display(pixel, color / float(SAMPLES));
     }
-    imageStore(out_color, pixel, vec4(linear_to_srgb(color), 1.0));
 }

@@ -3,7 +3,8 @@
 // block of its list is shaded once with the tile's lights, tone-mapped, and weighted by the
 // samples it covers; the background samples (depth 0) are sky; the head takes the rest (its own
 // samples and any a full pool or an AA cap dropped; where the pixel has no head, the listed
-// block with the lowest sample does). The weighted mean is written sRGB-encoded.
+// block with the lowest sample does). The weighted mean of the tone-mapped colours is stored as
+// the linear HDR colour the tonemap pass shows as that mean (tonemap.glsl).
 //
 // A workgroup is a 16x16 tile. Its pixels' pool blocks are gathered into one shared list and
 // shaded by all 256 invocations together, so that an edge pixel's extra blocks do not make its
@@ -38,7 +39,12 @@ layout(set = 0, binding = 1, scalar) readonly buffer Gbuffer {
 layout(set = 0, binding = 7, scalar) readonly buffer GbufferPool { BlockPair pairs[]; } pool;
 layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
 layout(set = 0, binding = 3, scalar) readonly buffer Lights { GpuPointLight lights[]; };
+// HDR_OUTPUT: linear HDR colour for a tonemap pass; without, the tone-mapped image itself.
+#ifdef HDR_OUTPUT
+layout(set = 0, binding = 4, rgba16f) uniform writeonly image2D out_color;
+#else
 layout(set = 0, binding = 4, rgba8) uniform writeonly image2D out_color;
+#endif
 #ifdef WRITE_STATS
 // Pool counters and blocks per pixel (GbufferCounters in src/stats/gbuffer.rs).
 layout(set = 0, binding = 5) buffer Stats {
@@ -87,6 +93,25 @@ layout(push_constant) uniform Settings {
     uint light_tiles;
     uint pool_blocks;
 } settings;
+
+// Writes a pixel's linear HDR colour, or without HDR_OUTPUT what the tonemap pass would make of it.
+void store_hdr(ivec2 pixel, vec3 hdr) {
+#ifdef HDR_OUTPUT
+    imageStore(out_color, pixel, vec4(hdr, 1.0));
+#else
+    imageStore(out_color, pixel, vec4(linear_to_srgb(tonemap_aces(hdr * settings.exposure)), 1.0));
+#endif
+}
+
+// Writes a pixel given as a tone-mapped (display) colour: with HDR_OUTPUT the HDR colour the
+// tonemap pass shows as it (tonemap.glsl).
+void store_display(ivec2 pixel, vec3 display) {
+#ifdef HDR_OUTPUT
+    imageStore(out_color, pixel, vec4(hdr_from_display(display, settings.exposure), 1.0));
+#else
+    imageStore(out_color, pixel, vec4(linear_to_srgb(display), 1.0));
+#endif
+}
 
 // A block's words as loaded: albedo + metallic, normal, and its surface word.
 struct BlockWords {
@@ -375,7 +400,7 @@ void resolve_pixel(ivec2 pixel, vec2 center, PixelList list, uvec3 sum, uint lin
     if (sky_weight > 0u) add_weighted(sum, tonemap_aces(sky_color(view_direction(center)) * settings.exposure), sky_weight);
     vec3 color = vec3(sum) * (1.0 / (SUM_UNIT * float(SAMPLES)));
     if (settings.debug_view == DEBUG_VIEW_SAMPLES) color = heat(pixel_surfaces(list));
-    imageStore(out_color, pixel, vec4(linear_to_srgb(color), 1.0));
+    store_display(pixel, color);
 }
 
 void main() {

@@ -4,7 +4,8 @@
 // are each shaded once: the triangle is fetched from the shared pools, the camera ray through
 // the pixel center gives its barycentrics (the attributes a rasterizer interpolates at the pixel
 // center), and the tone-mapped result is weighted by the samples the id covers. The background
-// is sky. Texture coordinates and their screen derivatives come from the same ray casts through
+// is sky. The mean is stored as the linear HDR colour the tonemap pass shows as it
+// (tonemap.glsl). Texture coordinates and their screen derivatives come from the same ray casts through
 // the pixel center and its right and lower neighbours' (the rasterizer's own derivatives are
 // the differences between neighbouring pixels, so both methods pick the same mips).
 #include "../common/material_surface.glsl"
@@ -28,7 +29,12 @@ layout(set = 0, binding = 1) uniform usampler2D id_tex;
 #endif
 layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
 layout(set = 0, binding = 3, scalar) readonly buffer Lights { GpuPointLight lights[]; };
+// HDR_OUTPUT: linear HDR colour for a tonemap pass; without, the tone-mapped image itself.
+#ifdef HDR_OUTPUT
+layout(set = 0, binding = 4, rgba16f) uniform writeonly image2D out_color;
+#else
 layout(set = 0, binding = 4, rgba8) uniform writeonly image2D out_color;
+#endif
 layout(set = 0, binding = 5, scalar) readonly buffer Instances { GpuInstance instances[]; };
 layout(set = 0, binding = 6, scalar) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 7, scalar) readonly buffer Vertices { PoolVertex vertices[]; };
@@ -43,6 +49,25 @@ layout(push_constant) uniform Settings {
     uint light_tiles;
     uint triangle_bits;    // PACKED_IDS: low bits of an id word that hold the triangle
 } settings;
+
+// Writes a pixel's linear HDR colour, or without HDR_OUTPUT what the tonemap pass would make of it.
+void store_hdr(ivec2 pixel, vec3 hdr) {
+#ifdef HDR_OUTPUT
+    imageStore(out_color, pixel, vec4(hdr, 1.0));
+#else
+    imageStore(out_color, pixel, vec4(linear_to_srgb(tonemap_aces(hdr * settings.exposure)), 1.0));
+#endif
+}
+
+// Writes a pixel given as a tone-mapped (display) colour: with HDR_OUTPUT the HDR colour the
+// tonemap pass shows as it (tonemap.glsl).
+void store_display(ivec2 pixel, vec3 display) {
+#ifdef HDR_OUTPUT
+    imageStore(out_color, pixel, vec4(hdr_from_display(display, settings.exposure), 1.0));
+#else
+    imageStore(out_color, pixel, vec4(linear_to_srgb(display), 1.0));
+#endif
+}
 
 // Sample `s`'s (instance id, triangle id).
 uvec2 load_id(ivec2 pixel, uint s) {
@@ -175,5 +200,5 @@ void main() {
     if (settings.debug_view == DEBUG_VIEW_SAMPLES) {
         color = distinct + (background > 0u ? 1u : 0u) > 1u ? vec3(1.0, 0.0, 0.0) : vec3(0.003, 0.003, 0.05);
     }
-    imageStore(out_color, pixel, vec4(linear_to_srgb(color), 1.0));
+    store_display(pixel, color);
 }

@@ -364,6 +364,20 @@ pub struct RenderArgs {
     /// Write per-frame statistics as JSON to this file.
     #[arg(long, value_name = "PATH")]
     pub stats: Option<PathBuf>,
+    /// Write the last frame's linear HDR colour (the graph's output `hdr`, before tone mapping)
+    /// as a 32-bit float OpenEXR image (RGBA). `builtin:post` has it.
+    #[arg(long, value_name = "FILE.exr")]
+    pub hdr_out: Option<PathBuf>,
+    /// Write the last frame's motion vectors (the graph's output `motion`: pixels from this
+    /// frame's position to the last frame's, x right, y down) as a 32-bit float OpenEXR image
+    /// (R = x, G = y, B = 0). No shipped graph writes it yet.
+    #[arg(long, value_name = "FILE.exr")]
+    pub motion_out: Option<PathBuf>,
+    /// Write the last frame's depth (the graph's output `depth_resolved`, else `depth`:
+    /// reversed-Z, 1 at the near plane, 0 for the background) as a 32-bit float OpenEXR image
+    /// (R = G = B = depth). `builtin:post` has it.
+    #[arg(long, value_name = "FILE.exr")]
+    pub depth_out: Option<PathBuf>,
     /// Vulkan device by name substring or index (see `cullgraph devices`); env CULLGRAPH_DEVICE.
     #[arg(long, value_name = "NAME|INDEX")]
     pub device: Option<String>,

@@ -6,6 +6,7 @@ mod fuzz;
 mod graph;
 mod memory;
 mod paths;
+mod post_out;
 mod render;
 mod views;
 mod watch;

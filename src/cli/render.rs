@@ -95,6 +95,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         renderer.enable_verification(&shaders)?;
     }
     stats.graph = renderer.plan().name.clone();
+    super::post_out::check(args, &renderer)?;
     if args.watch {
         watch(args, &mut renderer, &shaders, spec, &camera)?;
         return validation_verdict(&ctx);
@@ -151,6 +152,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             let (frame_stats, image) = renderer.render_to_image(&camera)?;
             paths::output_file("--out", &args.out)?;
             save_png(&image, &args.out)?;
+            super::post_out::write(args, &mut renderer)?;
             last_frame = Some((camera, image));
             take(frame_stats, &mut renderer)?;
         } else if let Some(pipeline) = pipeline.as_mut() {

@@ -186,13 +186,19 @@ pub fn read_buffer(ctx: &GpuContext, buffer: &Buffer) -> GpuResult<Vec<u8>> {
     Ok(staging.read_bytes()?.to_vec())
 }
 
-/// Records a copy of mip 0 of a color image (in `state`, left in `state`) into `dst`, tightly packed.
+/// Records a copy of mip 0 of a color image, or of the depth aspect of a depth image (in `state`,
+/// left in `state`), into `dst`, tightly packed.
 pub fn record_image_to_buffer(ctx: &GpuContext, cmd: vk::CommandBuffer, image: &Image, state: Access, dst: &Buffer) {
     let device = ctx.device();
     cmd_barriers(device, cmd, &[], &[image_barrier(image, state, Access::TRANSFER_READ)]);
     let region = vk::BufferImageCopy::default()
         .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: image.aspect(),
+            // A copy takes one aspect: of a depth-stencil image, its depth.
+            aspect_mask: if image.aspect().contains(vk::ImageAspectFlags::DEPTH) {
+                vk::ImageAspectFlags::DEPTH
+            } else {
+                image.aspect()
+            },
             mip_level: 0,
             base_array_layer: 0,
             layer_count: 1,

@@ -1,10 +1,11 @@
 //! Deferred lighting in compute: sun, point lights, sky ambient (scaled by ambient occlusion)
-//! and emission over the G-buffer, tone mapped and written sRGB-encoded into an RGBA8 storage
-//! image.
+//! and emission over the G-buffer, written as linear HDR colour into an RGBA16F storage image
+//! that the `tonemap` pass maps to the display.
 
 use super::slots::{
-    lighting_settings, ms, slot, DebugView, EMISSIVE_OCCLUSION_SLOT_DOC, GBUFFER_ALBEDO_FORMAT,
-    GBUFFER_EMISSIVE_OCCLUSION_FORMAT, GBUFFER_NORMAL_FORMATS, LIT_OUTPUT_FORMAT, NORMAL_SLOT_DOC,
+    lighting_output_defines, lighting_settings, ms, slot, DebugView, EMISSIVE_OCCLUSION_SLOT_DOC,
+    GBUFFER_ALBEDO_FORMAT, GBUFFER_EMISSIVE_OCCLUSION_FORMAT, GBUFFER_NORMAL_FORMATS, LIGHTING_OUTPUT_DOC,
+    LIGHTING_OUTPUT_FORMATS, NORMAL_SLOT_DOC,
 };
 use crate::gpu::{Bind, Buffer, GpuContext, Image, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
@@ -38,7 +39,8 @@ pub struct LightingInputs<'a> {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct LightingSettings {
-    /// Scale applied before tone mapping.
+    /// The exposure the tonemap pass applies: pixels with several surfaces are resolved in
+    /// tone-mapped space with it.
     pub exposure: f32,
     /// 0 lit, 1 normals, 2 albedo, 3 depth, 4 samples (`DEBUG_VIEW_*` in `scene.glsl`).
     pub debug_view: u32,
@@ -71,17 +73,22 @@ pub struct LightingPass {
 impl LightingPass {
     /// Compiles the shader for G-buffer images of `samples` samples whose normal image has
     /// `normal_format` (one of [`crate::passes::slots::GBUFFER_NORMAL_FORMATS`]), with an
-    /// emissive/occlusion image or without, and creates the pipeline.
+    /// emissive/occlusion image or without, writing linear HDR colour (`hdr`) or the
+    /// tone-mapped image, and creates the pipeline.
     pub fn new(
         ctx: &GpuContext,
         shaders: &ShaderCompiler,
         samples: vk::SampleCountFlags,
         normal_format: vk::Format,
         emissive_occlusion: bool,
+        hdr: bool,
     ) -> crate::Result<Self> {
         let samples = samples.as_raw().max(1).to_string();
         let mut defines = vec![("SAMPLES", samples.as_str())];
         defines.extend_from_slice(normal_defines(Some(normal_format)));
+        if hdr {
+            defines.push(("HDR_OUTPUT", "1"));
+        }
         let pipeline = Pipeline::compute(ctx, "lighting", &shaders.compile("lighting/lighting.comp", &defines)?)?;
         let extras_pipeline = if emissive_occlusion {
             defines.push(("EMISSIVE_OCCLUSION", "1"));
@@ -103,9 +110,10 @@ impl LightingPass {
         let samples = bound_image(plan, pass, "depth").map_or(vk::SampleCountFlags::TYPE_1, |(_, s)| s);
         let normal = bound_image(plan, pass, "normal").map_or(crate::passes::slots::GBUFFER_NORMAL_PACKED, |(f, _)| f);
         let emissive_occlusion = bound_image(plan, pass, "emissive_occlusion").is_some();
+        let hdr = !lighting_output_defines(plan, pass).is_empty();
         Ok(Self {
             settings: LightingSettings::from_plan(pass)?,
-            ..Self::new(ctx, shaders, samples, normal, emissive_occlusion)?
+            ..Self::new(ctx, shaders, samples, normal, emissive_occlusion, hdr)?
         })
     }
 
@@ -164,7 +172,7 @@ impl PassKind for LightingKind {
     fn info(&self) -> PassKindInfo {
         PassKindInfo {
             name: "lighting",
-            doc: "deferred lighting in compute: sun, point lights and sky ambient, tone-mapped, sRGB-encoded",
+            doc: "deferred lighting in compute: sun, point lights and sky ambient, written as linear HDR colour (tonemap maps it)",
             reads: vec![
                 ms(slot(
                     "depth",
@@ -199,8 +207,8 @@ impl PassKind for LightingKind {
                 "output",
                 Usage::StorageImageWrite(Stages::Compute),
                 true,
-                FormatRule::Exact(LIT_OUTPUT_FORMAT),
-                "lit image",
+                FormatRule::OneOf(LIGHTING_OUTPUT_FORMATS),
+                LIGHTING_OUTPUT_DOC,
             )],
             settings: lighting_settings(),
             slots_from_shader: false,

@@ -5,7 +5,10 @@
 
 use super::gbuffer::{bound_image, bound_samples, packed_id_bits, visibility_defines};
 use super::lighting::LightingSettings;
-use super::slots::{lighting_settings, ms, slot, LIT_OUTPUT_FORMAT, VISIBILITY_FORMATS};
+use super::slots::{
+    lighting_output_defines, lighting_settings, ms, slot, LIGHTING_OUTPUT_DOC, LIGHTING_OUTPUT_FORMATS,
+    VISIBILITY_FORMATS,
+};
 use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
@@ -36,6 +39,7 @@ impl LightingVisibilityPass {
         let format = bound_image(plan, pass, "ids").map(|(f, _)| f);
         let mut defines = vec![("SAMPLES", samples.as_str())];
         defines.extend_from_slice(visibility_defines(format));
+        defines.extend_from_slice(lighting_output_defines(plan, pass));
         let spirv = shaders.compile("lighting/lighting_visibility.comp", &defines)?;
         Ok(Self {
             name: pass.name.clone(),
@@ -87,7 +91,7 @@ impl PassKind for LightingVisibilityKind {
                 ms(slot("depth", Usage::Sampled(Stages::Compute), true, FormatRule::Depth, "the depth the ids were drawn with")),
                 ms(slot("ids", Usage::Sampled(Stages::Compute), true, FormatRule::OneOf(VISIBILITY_FORMATS), "instance id and triangle id per sample (packed R32_UINT or R32G32_UINT)")),
             ],
-            writes: vec![slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image")],
+            writes: vec![slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::OneOf(LIGHTING_OUTPUT_FORMATS), LIGHTING_OUTPUT_DOC)],
             settings: lighting_settings(),
             slots_from_shader: false,
         }

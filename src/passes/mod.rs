@@ -4,6 +4,7 @@
 
 pub(crate) mod aa_edges;
 pub(crate) mod compute;
+pub(crate) mod depth_resolve;
 pub(crate) mod fxaa;
 pub(crate) mod gbuffer;
 pub(crate) mod gbuffer_compressed;
@@ -15,6 +16,7 @@ pub(crate) mod lighting_visibility;
 pub mod overlay;
 pub mod shared;
 pub(crate) mod slots;
+pub(crate) mod tonemap;
 pub(crate) mod transparent;
 pub mod transparent_sort;
 pub(crate) mod visibility_ids;
@@ -68,6 +70,7 @@ pub const SHIPPED_GRAPHS: &[LibraryGraph] = &[
         text: include_str!("../../graph/visibility_buffer.ron"),
     },
     LibraryGraph { name: "fxaa", file: "graph/fxaa.ron", text: include_str!("../../graph/fxaa.ron") },
+    LibraryGraph { name: "post", file: "graph/post.ron", text: include_str!("../../graph/post.ron") },
 ];
 
 /// A registry holding every built-in pass kind; register an engine's own kinds on top of it.
@@ -94,6 +97,8 @@ pub fn register_builtin_kinds(kinds: &mut KindRegistry) -> crate::Result<()> {
     kinds.register(lighting_compressed::LightingCompressedKind)?;
     kinds.register(lighting::LightingKind)?;
     kinds.register(fxaa::FxaaKind)?;
+    kinds.register(tonemap::TonemapKind)?;
+    kinds.register(depth_resolve::DepthResolveKind)?;
     kinds.register(gbuffer::GbufferKind(GeometryMode::Append))?;
     kinds.register(hiz_build::HizBuildKind)?;
     kinds.register(instance_cull::InstanceCullKind)?;

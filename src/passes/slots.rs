@@ -31,8 +31,33 @@ pub const VISIBILITY_FORMATS: &[vk::Format] = &[VISIBILITY_PACKED, vk::Format::R
 pub const AA_MASK_FORMAT: vk::Format = vk::Format::R8_UINT;
 /// Format of the Hi-Z pyramid (reversed-Z depth, minimum reduction).
 pub const HIZ_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
-/// The lighting pass's output format (sRGB-encoded values in a UNORM image, so it can be storage).
+/// The lighting passes' output format: linear HDR colour, scene radiance before exposure and
+/// tone mapping (the `tonemap` pass maps it to [`LIT_OUTPUT_FORMAT`]).
+pub const HDR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// The `depth_resolve` pass's output format: one reversed-Z depth per pixel.
+pub const RESOLVED_DEPTH_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+/// The tone-mapped image's format (sRGB-encoded values in a UNORM image, so it can be storage):
+/// the `tonemap` pass's output, which the transparent, FXAA and overlay passes read or write.
 pub const LIT_OUTPUT_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+
+/// What a lighting pass writes: linear HDR colour for a tonemap pass, or the tone-mapped image
+/// itself (the pass then applies the curve in place, as graphs without a tonemap pass expect).
+pub(crate) const LIGHTING_OUTPUT_FORMATS: &[vk::Format] = &[HDR_FORMAT, LIT_OUTPUT_FORMAT];
+/// What a lighting pass's `output` slot holds, in either format.
+pub(crate) const LIGHTING_OUTPUT_DOC: &str =
+    "linear HDR colour (R16G16B16A16_SFLOAT: scene radiance before exposure, for a tonemap pass), or the tone-mapped, sRGB-encoded image (R8G8B8A8_UNORM)";
+
+/// The lighting shaders' defines for the format bound to their `output` (`HDR_OUTPUT` for
+/// [`HDR_FORMAT`]).
+pub(crate) fn lighting_output_defines(
+    plan: &crate::graph::plan::CompiledGraph,
+    pass: &crate::graph::plan::PlannedPass,
+) -> &'static [(&'static str, &'static str)] {
+    match crate::passes::gbuffer::bound_image(plan, pass, "output") {
+        Some((HDR_FORMAT, _)) => &[("HDR_OUTPUT", "1")],
+        _ => &[],
+    }
+}
 
 pub(crate) const fn slot(
     name: &'static str,
@@ -116,7 +141,7 @@ pub(crate) fn redraw_list_slots() -> Vec<SlotDecl> {
 
 pub(crate) fn lighting_settings() -> Vec<SettingDecl> {
     vec![
-        SettingDecl::real("exposure", 0.8, (0.0, 1.0e6), "scale applied before tone mapping"),
+        SettingDecl::real("exposure", 0.8, (0.0, 1.0e6), "the exposure the tonemap pass applies: edge pixels of multisampled G-buffers are resolved in tone-mapped space with it"),
         SettingDecl::choice::<DebugView>(
             "debug_view",
             "show a G-buffer channel instead of the lit image (samples: distinct surfaces per pixel as a heatmap)",

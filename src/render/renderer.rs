@@ -22,6 +22,7 @@ use view::View;
 mod adapt;
 mod completed;
 mod graphs;
+mod readback;
 mod view;
 mod views;
 mod world_sync;
@@ -30,6 +31,7 @@ pub use view::{ViewFrame, ViewId};
 pub use views::MAX_VIEWS;
 
 pub use super::drawn::DrawnInstances;
+pub use readback::OutputF32;
 
 /// Output size.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -9,7 +9,9 @@ pub(crate) mod pool;
 use super::gbuffer::bound_samples;
 use super::gbuffer_compressed::BoundGbuffer;
 use super::lighting::LightingSettings;
-use super::slots::{lighting_settings, ms, slot, COUNTERS_BYTES, LIT_OUTPUT_FORMAT};
+use super::slots::{
+    lighting_output_defines, lighting_settings, ms, slot, COUNTERS_BYTES, LIGHTING_OUTPUT_DOC, LIGHTING_OUTPUT_FORMATS,
+};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
@@ -111,6 +113,7 @@ impl LightingCompressedPass {
         if with_stats {
             defines.push(("WRITE_STATS", "1"));
         }
+        defines.extend_from_slice(lighting_output_defines(plan, pass));
         let pipeline =
             Pipeline::compute(ctx, &pass.name, &shaders.compile("lighting/lighting_compressed.comp", &defines)?)?;
         let stats_clear = with_stats
@@ -186,7 +189,7 @@ impl PassKind for LightingCompressedKind {
                 slot("sample_claim", Usage::StorageBufferRead(Stages::Compute), false, FormatRule::Any, "the samples gbuffer_compressed's fragments claimed (with a depth without stencil): the covered samples in one word instead of a read of every depth sample"),
             ],
             writes: vec![
-                slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::Exact(LIT_OUTPUT_FORMAT), "lit image"),
+                slot("output", Usage::StorageImageWrite(Stages::Compute), true, FormatRule::OneOf(LIGHTING_OUTPUT_FORMATS), LIGHTING_OUTPUT_DOC),
                 slot("stats", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "pool counters and a blocks-per-pixel histogram (created when unbound; read as `pass.stats`)").exactly(COUNTERS_BYTES).creates(Creates::buffer().always()).counters(Counters::ThisFrame),
             ],
             settings: {
