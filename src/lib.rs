@@ -104,7 +104,8 @@ mod readme_limits {
             crate::gpu::shader::MAX_INCLUDE_DEPTH,
             crate::gpu::shader::MAX_INCLUDED_BYTES >> 20
         );
-        for stated in [files, buffers, expressions, world, size, scene, image_side, dispatch, includes] {
+        let views = format!("at most `MAX_VIEWS` ({}) views", crate::render::MAX_VIEWS);
+        for stated in [files, buffers, expressions, world, size, scene, image_side, dispatch, includes, views] {
             assert!(readme.contains(&stated), "the README does not say \"{stated}\"");
         }
     }

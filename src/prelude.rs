@@ -3,8 +3,9 @@
 //! - the device: [`GpuContext`] (owned, or [`GpuContext::from_host`] with the engine's
 //!   [`HostHandles`]), [`ShaderCompiler`];
 //! - the scene: [`Scene`], [`Instance`], [`Material`], [`Camera`], [`SceneSource`];
-//! - rendering: [`Renderer`] with a [`GraphSpec`], [`Imports`] of the engine's own images and
-//!   buffers, [`FrameStats`] and [`PassTiming`] as plain data;
+//! - rendering: [`Renderer`] with a [`GraphSpec`], its views ([`ViewId`], [`ViewFrame`]),
+//!   [`Imports`] of the engine's own images and buffers, [`FrameStats`] and [`PassTiming`] as
+//!   plain data, outputs read back as [`OutputF32`];
 //! - an engine's own pass kinds: [`PassKind`] registered in a [`KindRegistry`] (on top of
 //!   [`builtin_kinds`]), with the pieces a kind declares ([`SlotDecl`], [`SettingDecl`] and
 //!   [`crate::choice!`], [`Creates`], [`Counters`], [`Quantity`]) and records with
@@ -24,7 +25,9 @@ pub use crate::graph::{
 };
 pub use crate::passes::builtin_kinds;
 pub use crate::passes::shared::{SceneCounts, SceneInputs};
-pub use crate::render::{FrameObserver, FramePipeline, GraphSpec, RenderSettings, Renderer};
+pub use crate::render::{
+    FrameObserver, FramePipeline, GraphSpec, OutputF32, RenderSettings, Renderer, ViewFrame, ViewId, MAX_VIEWS,
+};
 pub use crate::scene::source::LoadOptions;
 pub use crate::scene::world::{InstanceHandle, LightHandle, World, WorldError};
 pub use crate::scene::{Camera, Instance, Material, MeshData, PointLight, Projection, Scene, SceneSource, Transform};
