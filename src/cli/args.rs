@@ -572,7 +572,7 @@ pub fn parse_jitter(s: &str) -> Result<JitterArg, String> {
     let mut v = [0.0f32; 2];
     for (slot, p) in v.iter_mut().zip(&parts) {
         let x: f32 = p.trim().parse().map_err(|_| format!("'{p}' in '{s}' is not a number"))?;
-        if !(x.abs() <= 1.0) {
+        if x.is_nan() || x.abs() > 1.0 {
             return Err(format!("'{p}' in '{s}' must be a sub-pixel jitter, at most 1 pixel in magnitude"));
         }
         *slot = x;

@@ -224,11 +224,14 @@ fn finite1(v: f32) -> bool {
 /// the far plane for orthographic), with the distance to the plane beyond `radius + REL_EPS·M`.
 ///
 /// Conservative: a sphere that intersects the frustum is always kept (as may be one near a
-/// corner that does not). Planes, in view space with `d = −z`:
-/// perspective `±sx·x + d ≥ 0`, `±sy·y + d ≥ 0` (normal length `√(1 + s²)`), `d ≥ near`;
-/// orthographic `1 ∓ sx·x ≥ 0`, `1 ∓ sy·y ≥ 0`, `near ≤ d ≤ far`.
-/// These planes pass through the eye, so any field of view below 180°, any aspect and any near
-/// distance work.
+/// corner that does not). Planes, in view space with `d = −z` and the offset `(cx, cy)`:
+/// perspective `sx·x + (1 − cx)·d ≥ 0`, `−sx·x + (1 + cx)·d ≥ 0` (normal length
+/// `√(sx² + (1 ∓ cx)²)`), the same in y, `near ≤ d ≤ far` (`far` may be infinite);
+/// orthographic `sx·x − cx ≥ −1`, `sx·x − cx ≤ 1`, the same in y, `near ≤ d ≤ far`, with
+/// `REL_EPS·|c|` more room for the rounding of the offset.
+/// The perspective side planes pass through the eye, so any field of view below 180°, any
+/// aspect, offset and near distance work. The allowance `REL_EPS·M·|n|` also covers the
+/// rounding of `(1 ∓ c)·d` (relative `ε`, and `M ≥ d`).
 ///
 /// GLSL: `bool cull_sphere_in_frustum(CullView view, vec3 center, float radius)`.
 pub fn sphere_in_frustum(view: &CullView, center: Vec3, radius: f32) -> bool {
@@ -413,7 +416,12 @@ fn finish(view: &CullView, t: (f32, f32, f32, f32), u: (f32, f32, f32, f32), d_l
 ///    denominator `ρ² cos θ_t`, i.e. ≤ `6ε(1 + |t|)·√(1+t²)` in `t`; with `√(1+t²) ≤ M/d_lo` both
 ///    are below `8ε·(M/d_lo)·(1 + |t|)`, and the allowance is `REL_EPS·(M/d_lo)·(1 + |t|)`.
 ///    Orthographic: `c.x ± r`, `c.y ± r`, allowance `REL_EPS·M`.
-/// 4. Pixel rectangle as described on the module; nearest depth `near / d_lo` (perspective) or
+/// 4. NDC `sx·t − cx` and `cy − sy·u`, widened by `REL_EPS·|c|` for the offset's rounding; pixel
+///    rectangle as described on the module; nearest depth `near / d_lo` (perspective, infinite
+///    far), `max(k·(1 + REL_EPS) − near/(far − near), 0)` with `k = (near/d_lo)·far/(far − near)`
+///    (perspective, finite far: while `d_lo ≤ far`, `k` is the larger term, so its allowance
+///    covers the subtraction and the rasterizer's own rounding of `near·far/(far − near)/d`; past
+///    the far plane nothing is drawn and 0 bounds every depth) or
 ///    `(far − d_lo + REL_EPS·far)/(far − near)` (orthographic).
 pub fn project_sphere(view: &CullView, center: Vec3, radius: f32) -> ScreenBounds {
     if !finite3(center) || !finite1(radius) || radius < 0.0 {

@@ -191,7 +191,7 @@ impl Camera {
         if !(self.near.is_finite() && self.near > 0.0) {
             return Err(format!("near plane {} must be positive", self.near));
         }
-        if !(self.jitter.abs().max_element() <= 1.0) {
+        if !self.jitter.is_finite() || self.jitter.abs().max_element() > 1.0 {
             return Err(format!("jitter {} pixels must be finite and at most 1 pixel per axis", self.jitter));
         }
         self.projection.validate(self.near)

@@ -150,7 +150,7 @@ impl Projection {
                 Ok(())
             }
             Projection::OrthographicOffCenter { left, right, bottom, top, far } => {
-                if ![left, right, bottom, top].into_iter().all(f32::is_finite) || !(left < right && bottom < top) {
+                if !([left, right, bottom, top].into_iter().all(f32::is_finite) && left < right && bottom < top) {
                     return Err(format!(
                         "orthographic box left {left}, right {right}, bottom {bottom}, top {top} must be finite \
                          with left < right and bottom < top"
@@ -272,10 +272,11 @@ impl ProjectionParts {
             return Err("the projection matrix is skewed: x and y or depth are mixed".into());
         }
         let (sx, sy) = (c[0][0], -c[1][1]);
-        if !(sx > 0.0) {
+        // (Finite: checked above.)
+        if sx <= 0.0 {
             return Err(format!("the projection matrix's x scale {sx} must be positive (a mirrored image)"));
         }
-        if !(sy > 0.0) {
+        if sy <= 0.0 {
             return Err(format!(
                 "the projection matrix's y scale {} must be negative: Vulkan's NDC y points down",
                 c[1][1]
@@ -287,12 +288,12 @@ impl ProjectionParts {
                 return Err("the orthographic projection matrix is oblique: x or y depends on depth".into());
             }
             // depth = a·z + b = (far − d)/(far − near): a = 1/(far − near), b = far/(far − near).
-            if !(a > 0.0) {
+            if a <= 0.0 {
                 return Err(format!("the projection matrix is not reversed-Z: depth grows with distance ({a})"));
             }
             let (a64, b64) = (a as f64, b as f64);
             let (near, far) = ((b64 - 1.0) / a64, b64 / a64);
-            if !(near > 0.0) {
+            if near <= 0.0 {
                 return Err(format!("the projection matrix's near plane {near} must be in front of the eye"));
             }
             (Vec2::new(-c[3][0], c[3][1]), near as f32, far as f32)
@@ -312,7 +313,7 @@ impl ProjectionParts {
             let (near, far) = if a == 0.0 { (b64, f64::INFINITY) } else { (b64 / (1.0 + a64), b64 / a64) };
             (Vec2::new(c[2][0], -c[2][1]), near as f32, far as f32)
         };
-        if !(near > 0.0 && near.is_finite()) || far.is_nan() || !(far > near) {
+        if !(near > 0.0 && near.is_finite()) || far.is_nan() || far <= near {
             return Err(format!("the projection matrix's near {near} and far {far} planes are unusable"));
         }
         Ok(Self { scale: Vec2::new(sx, sy), offset, near, far, orthographic })
