@@ -18,7 +18,7 @@ use common::GpuTest;
 use cullgraph::cull::hiz::{is_occluded, HiZPyramid, HizVariant};
 use cullgraph::cull::math::{self as cm, CullView, ScreenBounds};
 use cullgraph::gpu::{transfer, Bind, Pipeline, UploadBatch};
-use glam::{DMat3, DVec3, Mat3, Quat, Vec3};
+use glam::{DMat3, DVec3, Mat3, Quat, Vec2, Vec3};
 use rand::{Rng, SeedableRng};
 
 const SHADER: &str = r#"#version 460
@@ -28,7 +28,7 @@ layout(local_size_x = 64) in;
 
 struct Case {
     vec3 rot0; vec3 rot1; vec3 rot2;   // columns of the world->view rotation
-    vec2 scale; float near; float far; uint ortho; uvec2 viewport;
+    vec2 scale; float near; float far; uint ortho; uvec2 viewport; vec2 offset;
     uint kind;                          // 0: sphere (a = center, radius), 1: box (a = min, b = max)
     vec3 a; vec3 b; float radius;
     uint pyramid;
@@ -64,6 +64,7 @@ void main() {
     view.far = c.far;
     view.orthographic = c.ortho;
     view.viewport = c.viewport;
+    view.offset = c.offset;
     Result r;
     uvec4 rect;
     float depth;
@@ -98,6 +99,7 @@ struct GpuCase {
     far: f32,
     ortho: u32,
     viewport: [u32; 2],
+    offset: [f32; 2],
     kind: u32,
     a: [f32; 3],
     b: [f32; 3],
@@ -164,20 +166,32 @@ fn random_case(rng: &mut rand::rngs::SmallRng, pyramids: &[HiZPyramid]) -> Case 
     let aspect = 10f32.powf(rng.random_range(-1.0..1.0));
     let near = 10f32.powf(rng.random_range(-4.0..0.5));
     let ortho = rng.random_bool(0.25);
-    let view = if ortho {
+    let mut view = if ortho {
         let height = 10f32.powf(rng.random_range(-1.0..3.0));
         CullView::orthographic(rotation, height, aspect, near, near + 10f32.powf(rng.random_range(0.0..4.0)), size)
     } else {
         let fov = if rng.random_bool(0.1) { 179.0f32 } else { rng.random_range(1.0..179.0) };
         CullView::perspective(rotation, fov.to_radians(), aspect, near, size)
     };
+    // Off-centre (a VR eye's, up to a whole view width), a sub-pixel jitter, or neither; a finite
+    // far plane for a third of the perspective views.
+    view.offset = match rng.random_range(0..3) {
+        0 => Vec2::new(rng.random_range(-1.5..1.5), rng.random_range(-1.5..1.5)),
+        1 => Vec2::new(rng.random_range(-1.0..1.0) / size.x as f32, rng.random_range(-1.0..1.0) / size.y as f32),
+        _ => Vec2::ZERO,
+    };
+    if !ortho && rng.random_bool(0.33) {
+        view.far = near * 10f32.powf(rng.random_range(0.3..4.0));
+    }
     let (sx, sy) = (view.scale.x as f64, view.scale.y as f64);
-    let (nx, ny) = (rng.random_range(-1.5..1.5), rng.random_range(-1.5..1.5));
+    // NDC position of the center, offset included: t = (ndc.x + cx)/sx, u = (cy − ndc.y)/sy.
+    let (nx, ny) =
+        (rng.random_range(-1.5..1.5) + view.offset.x as f64, rng.random_range(-1.5..1.5) - view.offset.y as f64);
     let (c, r) = if ortho {
         let d = near as f64 + (view.far - near) as f64 * rng.random_range(-0.05..1.1);
         (DVec3::new(nx / sx, -ny / sy, -d), 10f64.powf(rng.random_range(-3.0..0.5)) / sy)
     } else {
-        let d = near as f64 * 10f64.powf(rng.random_range(-0.2..4.0));
+        let d = near as f64 * 10f64.powf(rng.random_range(-0.2..4.0)).min(1.2 * view.far as f64 / near as f64);
         (DVec3::new(nx * d / sx, -ny * d / sy, -d), d * 10f64.powf(rng.random_range(-4.0..0.3)))
     };
     let center = rotation.as_dmat3().transpose() * c;
@@ -239,10 +253,18 @@ fn exact(case: &Case) -> Option<(Option<[i64; 4]>, f64)> {
         }
     }
     let (w, h) = (v.viewport.x as f64, v.viewport.y as f64);
-    let px = |t: f64| ((sx * t + 1.0) * 0.5 * w).floor();
-    let py = |t: f64| ((-sy * t + 1.0) * 0.5 * h).floor();
+    let (cx, cy) = (v.offset.x as f64, v.offset.y as f64);
+    let px = |t: f64| ((sx * t - cx + 1.0) * 0.5 * w).floor();
+    let py = |t: f64| ((cy - sy * t + 1.0) * 0.5 * h).floor();
     let (x0, x1, y0, y1) = (px(tx.0), px(tx.1), py(ty.1), py(ty.0));
-    let depth = if v.orthographic { (v.far as f64 - d_min) / (v.far as f64 - near) } else { near / d_min };
+    let far = v.far as f64;
+    let depth = if v.orthographic {
+        (far - d_min) / (far - near)
+    } else if far.is_finite() {
+        near * (far - d_min) / (d_min * (far - near))
+    } else {
+        near / d_min
+    };
     if x1 < 0.0 || y1 < 0.0 || x0 >= w || y0 >= h {
         return Some((None, depth));
     }
@@ -292,6 +314,7 @@ fn gpu_and_cpu_make_the_same_decisions() {
             far: c.view.far,
             ortho: c.view.orthographic as u32,
             viewport: c.view.viewport.to_array(),
+            offset: c.view.offset.to_array(),
             kind: (!c.sphere) as u32,
             a: c.a.to_array(),
             b: c.b.to_array(),
@@ -365,13 +388,14 @@ fn gpu_and_cpu_make_the_same_decisions() {
         }
         let describe = || {
             format!(
-                "case {i}: {} a={:?} b={:?} r={:e} rot={:?} scale={:?} near={:e} far={:e} ortho={} viewport={:?}\n  cpu {want:?}\n  gpu {got:?}",
+                "case {i}: {} a={:?} b={:?} r={:e} rot={:?} scale={:?} offset={:?} near={:e} far={:e} ortho={} viewport={:?}\n  cpu {want:?}\n  gpu {got:?}",
                 if case.sphere { "sphere" } else { "box" },
                 case.a.to_array(),
                 case.b.to_array(),
                 case.radius,
                 view.rotation.to_cols_array(),
                 view.scale.to_array(),
+                view.offset.to_array(),
                 view.near,
                 view.far,
                 view.orthographic,
@@ -445,9 +469,10 @@ fn headers_compile_without_a_pyramid_reader() {
             v.rotation = mat3(1.0);
             v.scale = vec2(1.0);
             v.near = 0.1;
-            v.far = 0.0;
+            v.far = 1.0e30;
             v.orthographic = 0u;
             v.viewport = uvec2(64u);
+            v.offset = vec2(0.0);
             status = cull_project_sphere(v, vec3(0.0, 0.0, -5.0), 1.0, rect, depth);
         }"#;
     gpu.shaders().compile_source("test/cull_headers.comp", source, &[]).unwrap_or_else(|e| panic!("{e}"));

@@ -5,7 +5,8 @@
 //!
 //! Cases: spheres and boxes of every size (sub-pixel to screen-filling), straddling the near
 //! plane, behind the eye, around the eye, off to the side; perspective with 1°–179° field of view
-//! and orthographic; aspect 0.1–10; viewports 1×1, 3×3, 1023×767, thin and random up to 4096;
+//! (with and without a far plane) and orthographic, each centred, off-centre or jittered;
+//! aspect 0.1–10; viewports 1×1, 3×3, 1023×767, thin and random up to 4096;
 //! worlds 10⁷ from the origin with hi/lo eye-relative inputs; instance boxes with zero and
 //! negative scales through `Scene::instance_bounds`.
 
@@ -39,6 +40,10 @@ struct CamSpec {
     depth_range: f32,
     quat: [f32; 4],
     size: (u32, u32),
+    /// NDC offset: centred, off-centre (a VR eye's) or a sub-pixel jitter.
+    offset: (f32, f32),
+    /// A finite far plane for perspective (depth_range beyond near).
+    finite_far: bool,
 }
 
 fn log_uniform(lo: f32, hi: f32) -> impl Strategy<Value = f32> {
@@ -65,8 +70,10 @@ fn cam_strategy() -> impl Strategy<Value = CamSpec> {
         log_uniform(0.1, 1e5),
         prop::array::uniform4(-1.0f32..1.0),
         size,
+        prop_oneof![Just((0.0f32, 0.0f32)), (-1.5f32..1.5, -1.5f32..1.5), (-0.01f32..0.01, -0.01f32..0.01)],
+        prop::bool::weighted(0.3),
     )
-        .prop_map(|(ortho, fov_deg, aspect, near, height, depth_range, quat, size)| CamSpec {
+        .prop_map(|(ortho, fov_deg, aspect, near, height, depth_range, quat, size, offset, finite_far)| CamSpec {
             ortho,
             fov_deg,
             aspect,
@@ -75,6 +82,8 @@ fn cam_strategy() -> impl Strategy<Value = CamSpec> {
             depth_range,
             quat,
             size,
+            offset,
+            finite_far,
         })
 }
 
@@ -86,6 +95,15 @@ impl CamSpec {
     }
 
     fn view(&self) -> CullView {
+        let mut view = self.centred_view();
+        view.offset = glam::Vec2::new(self.offset.0, self.offset.1);
+        if self.finite_far && !self.ortho {
+            view.far = self.near + self.depth_range;
+        }
+        view
+    }
+
+    fn centred_view(&self) -> CullView {
         let size = UVec2::new(self.size.0, self.size.1);
         if self.ortho {
             CullView::orthographic(
@@ -121,8 +139,13 @@ impl Truth {
     /// Framebuffer position of a view-space point in front of the eye.
     fn pixel(&self, v: DVec3) -> (f64, f64) {
         let (sx, sy) = (self.view.scale.x as f64, self.view.scale.y as f64);
+        let (cx, cy) = (self.view.offset.x as f64, self.view.offset.y as f64);
         let d = -v.z;
-        let (nx, ny) = if self.view.orthographic { (sx * v.x, -sy * v.y) } else { (sx * v.x / d, -sy * v.y / d) };
+        let (nx, ny) = if self.view.orthographic {
+            (sx * v.x - cx, cy - sy * v.y)
+        } else {
+            (sx * v.x / d - cx, cy - sy * v.y / d)
+        };
         ((nx + 1.0) * 0.5 * self.view.viewport.x as f64, (ny + 1.0) * 0.5 * self.view.viewport.y as f64)
     }
     fn pixel_index(&self, v: DVec3) -> Option<(u32, u32)> {
@@ -133,9 +156,11 @@ impl Truth {
     }
     fn depth(&self, v: DVec3) -> f64 {
         let d = -v.z;
+        let (n, f) = (self.view.near as f64, self.view.far as f64);
         if self.view.orthographic {
-            let (n, f) = (self.view.near as f64, self.view.far as f64);
             (f - d) / (f - n)
+        } else if f.is_finite() {
+            n * (f - d) / (d * (f - n))
         } else {
             self.near() / d
         }
@@ -143,14 +168,15 @@ impl Truth {
     /// Inside the closed view frustum.
     fn inside(&self, v: DVec3) -> bool {
         let (sx, sy) = (self.view.scale.x as f64, self.view.scale.y as f64);
+        let (cx, cy) = (self.view.offset.x as f64, self.view.offset.y as f64);
         let d = -v.z;
-        if d < self.near() {
+        if d < self.near() || d > self.view.far as f64 {
             return false;
         }
         if self.view.orthographic {
-            d <= self.view.far as f64 && (sx * v.x).abs() <= 1.0 && (sy * v.y).abs() <= 1.0
+            (sx * v.x - cx).abs() <= 1.0 && (sy * v.y - cy).abs() <= 1.0
         } else {
-            (sx * v.x).abs() <= d && (sy * v.y).abs() <= d
+            (sx * v.x - cx * d).abs() <= d && (sy * v.y - cy * d).abs() <= d
         }
     }
 }
@@ -250,7 +276,10 @@ fn place(view: &CullView, spec: &BoundSpec) -> (DVec3, f64) {
             return (DVec3::new(0.3 * spec.t * r, 0.2 * spec.ndc.0 * r, 0.5 * spec.ndc.1 * r), r);
         }
     };
-    let (x, y) = if ortho { (ndc.0 / sx, -ndc.1 / sy) } else { (ndc.0 * d.abs() / sx, -ndc.1 * d.abs() / sy) };
+    // NDC (x, y) ↔ t = (x + cx)/sx, u = (cy − y)/sy per unit of distance (perspective).
+    let (cx, cy) = (view.offset.x as f64, view.offset.y as f64);
+    let (tx, ty) = ((ndc.0 + cx) / sx, (cy - ndc.1) / sy);
+    let (x, y) = if ortho { (tx, ty) } else { (tx * d.abs(), ty * d.abs()) };
     (DVec3::new(x, y, -d), r)
 }
 

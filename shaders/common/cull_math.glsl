@@ -9,8 +9,10 @@
 //
 // Conventions (see src/oracle/mod.rs): inputs are eye-relative (world minus eye, after the hi/lo
 // subtraction); `rotation` is world->view, view looks down -Z, d = -z_view. Perspective:
-// ndc = (sx*x, -sy*y) / d, depth = near / d; orthographic: ndc = (sx*x, -sy*y),
-// depth = (far - d) / (far - near). Pixels: px = (ndc + 1) * size / 2, row 0 at the top.
+// ndc = (sx*x/d - cx, cy - sy*y/d), depth = near / d (infinite far) or
+// near*(far - d) / (d*(far - near)); orthographic: ndc = (sx*x - cx, cy - sy*y),
+// depth = (far - d) / (far - near). (cx, cy) is the offset of an off-centre projection and of
+// the sub-pixel jitter. Pixels: px = (ndc + 1) * size / 2, row 0 at the top.
 // Rectangles are inclusive uvec4(x0, y0, x1, y1).
 //
 // Conservativeness: distances and extents are widened by CULL_REL_EPS * M (M bounds the length of
@@ -44,9 +46,10 @@ struct CullView {
     mat3 rotation;    // world -> view
     vec2 scale;       // (sx, sy)
     float near;       // near-plane distance (depth 1)
-    float far;        // orthographic far-plane distance (depth 0); unused for perspective
-    uint orthographic;// 0: perspective (infinite far), 1: orthographic
+    float far;        // far-plane distance (depth 0); +infinity for a perspective without one
+    uint orthographic;// 0: perspective, 1: orthographic
     uvec2 viewport;   // target size in pixels = Hi-Z level 0 size
+    vec2 offset;      // (cx, cy): NDC offset (off-centre projection, jitter)
 };
 
 // rotation * p, summed as (r0*x + r1*y) + r2*z per row.
@@ -75,8 +78,8 @@ bool cull_finite1(float v) {
     return !isnan(v) && !isinf(v) && abs(v) <= CULL_MAX_COORD;
 }
 
-// Frustum test of a sphere: false only when it lies entirely outside one plane (4 sides + near,
-// + far for orthographic) by more than its radius plus the allowance.
+// Frustum test of a sphere: false only when it lies entirely outside one plane (4 sides, near,
+// far) by more than its radius plus the allowance.
 bool cull_sphere_in_frustum(CullView view, vec3 center, float radius) {
     if (!cull_finite3(center) || !cull_finite1(radius)) return true;
     precise vec3 c = cull_to_view(view.rotation, center);
@@ -84,21 +87,41 @@ bool cull_sphere_in_frustum(CullView view, vec3 center, float radius) {
     precise float rm = radius + CULL_REL_EPS * (cull_l1(center) + radius);
     precise float sx = view.scale.x;
     precise float sy = view.scale.y;
-    if (d + rm < view.near) return false;
+    precise float cx = view.offset.x;
+    precise float cy = view.offset.y;
+    if (d + rm < view.near || d - rm > view.far) return false;
     if (view.orthographic == 0u) {
-        precise float lx = sqrt(1.0 + sx * sx);
-        precise float ly = sqrt(1.0 + sy * sy);
+        precise float wl = 1.0 - cx;
+        precise float wr = 1.0 + cx;
+        precise float wb = 1.0 - cy;
+        precise float wt = 1.0 + cy;
+        precise float ll = sqrt(sx * sx + wl * wl);
+        precise float lr = sqrt(sx * sx + wr * wr);
+        precise float lb = sqrt(sy * sy + wb * wb);
+        precise float lt = sqrt(sy * sy + wt * wt);
         precise float sxx = sx * c.x;
         precise float syy = sy * c.y;
-        precise float bx = -(rm * lx);
-        precise float by = -(rm * ly);
-        if (sxx + d < bx || d - sxx < bx) return false;
-        if (syy + d < by || d - syy < by) return false;
+        precise float el = sxx + wl * d;
+        precise float er = wr * d - sxx;
+        precise float eb = syy + wb * d;
+        precise float et = wt * d - syy;
+        precise float bl = -(rm * ll);
+        precise float br = -(rm * lr);
+        precise float bb = -(rm * lb);
+        precise float bt = -(rm * lt);
+        if (el < bl || er < br) return false;
+        if (eb < bb || et < bt) return false;
     } else {
-        if (d - rm > view.far) return false;
-        precise float ex = sx * (abs(c.x) - rm);
-        precise float ey = sy * (abs(c.y) - rm);
-        if (ex > 1.0 || ey > 1.0) return false;
+        precise float ox = CULL_REL_EPS * abs(cx);
+        precise float oy = CULL_REL_EPS * abs(cy);
+        precise float xl = sx * (c.x - rm) - cx;
+        precise float xh = sx * (c.x + rm) - cx;
+        precise float yl = sy * (c.y - rm) - cy;
+        precise float yh = sy * (c.y + rm) - cy;
+        precise float bx = 1.0 + ox;
+        precise float by = 1.0 + oy;
+        if (xl > bx || xh < -bx) return false;
+        if (yl > by || yh < -by) return false;
     }
     return true;
 }
@@ -121,26 +144,34 @@ bool cull_aabb_in_frustum(CullView view, vec3 bmin, vec3 bmax) {
     vec3 row2 = vec3(r[0].z, r[1].z, r[2].z);
     precise float sx = view.scale.x;
     precise float sy = view.scale.y;
+    precise float cx = view.offset.x;
+    precise float cy = view.offset.y;
     if (cull_reach(-row2, -view.near, center, half_extent) < -m) return false;
+    if (cull_reach(row2, view.far, center, half_extent) < -m) return false;
     precise vec3 ax = row0 * sx;
     precise vec3 ay = row1 * sy;
+    precise float wl = 1.0 - cx;
+    precise float wr = 1.0 + cx;
+    precise float wb = 1.0 - cy;
+    precise float wt = 1.0 + cy;
     if (view.orthographic == 0u) {
-        precise float lx = sqrt(1.0 + sx * sx);
-        precise float ly = sqrt(1.0 + sy * sy);
-        precise float bx = -(m * lx);
-        precise float by = -(m * ly);
-        precise vec3 nl = ax - row2;
-        precise vec3 nr = -ax - row2;
-        precise vec3 nb = ay - row2;
-        precise vec3 nt = -ay - row2;
-        if (cull_reach(nl, 0.0, center, half_extent) < bx || cull_reach(nr, 0.0, center, half_extent) < bx) return false;
-        if (cull_reach(nb, 0.0, center, half_extent) < by || cull_reach(nt, 0.0, center, half_extent) < by) return false;
+        precise float ll = sqrt(sx * sx + wl * wl);
+        precise float lr = sqrt(sx * sx + wr * wr);
+        precise float lb = sqrt(sy * sy + wb * wb);
+        precise float lt = sqrt(sy * sy + wt * wt);
+        precise vec3 nl = ax - row2 * wl;
+        precise vec3 nr = -ax - row2 * wr;
+        precise vec3 nb = ay - row2 * wb;
+        precise vec3 nt = -ay - row2 * wt;
+        if (cull_reach(nl, 0.0, center, half_extent) < -(m * ll) || cull_reach(nr, 0.0, center, half_extent) < -(m * lr)) return false;
+        if (cull_reach(nb, 0.0, center, half_extent) < -(m * lb) || cull_reach(nt, 0.0, center, half_extent) < -(m * lt)) return false;
     } else {
-        if (cull_reach(row2, view.far, center, half_extent) < -m) return false;
-        precise float bx = -(m * sx);
-        precise float by = -(m * sy);
-        if (cull_reach(ax, 1.0, center, half_extent) < bx || cull_reach(-ax, 1.0, center, half_extent) < bx) return false;
-        if (cull_reach(ay, 1.0, center, half_extent) < by || cull_reach(-ay, 1.0, center, half_extent) < by) return false;
+        precise float ox = CULL_REL_EPS * abs(cx);
+        precise float oy = CULL_REL_EPS * abs(cy);
+        precise float bx = -(m * sx) - ox;
+        precise float by = -(m * sy) - oy;
+        if (cull_reach(ax, wl, center, half_extent) < bx || cull_reach(-ax, wr, center, half_extent) < bx) return false;
+        if (cull_reach(ay, wb, center, half_extent) < by || cull_reach(-ay, wt, center, half_extent) < by) return false;
     }
     return true;
 }
@@ -177,11 +208,19 @@ bool cull_pixel_rect(CullView view, vec2 lo, vec2 hi, out uvec4 rect) {
 uint cull_finish(CullView view, vec2 t, vec2 et, vec2 u, vec2 eu, float d_lo, out uvec4 rect, out float nearest_depth) {
     precise float sx = view.scale.x;
     precise float sy = view.scale.y;
-    precise vec2 lo = vec2(sx * (t.x - et.x), -(sy * (u.y + eu.y)));
-    precise vec2 hi = vec2(sx * (t.y + et.y), -(sy * (u.x - eu.x)));
+    precise float cx = view.offset.x;
+    precise float cy = view.offset.y;
+    precise float ox = CULL_REL_EPS * abs(cx);
+    precise float oy = CULL_REL_EPS * abs(cy);
+    precise vec2 lo = vec2((sx * (t.x - et.x) - cx) - ox, (cy - sy * (u.y + eu.y)) - oy);
+    precise vec2 hi = vec2((sx * (t.y + et.y) - cx) + ox, (cy - sy * (u.x - eu.x)) + oy);
     precise float depth;
     if (view.orthographic != 0u) {
         depth = (view.far - (d_lo - CULL_REL_EPS * view.far)) / (view.far - view.near);
+    } else if (view.far <= CULL_MAX_COORD) {
+        // Finite far: near*far/(d*(far - near)) - near/(far - near), the first term raised.
+        precise float k = (view.near / d_lo) * (view.far / (view.far - view.near));
+        depth = max((k + CULL_REL_EPS * k) - view.near / (view.far - view.near), 0.0);
     } else {
         depth = view.near / d_lo;
     }

@@ -355,6 +355,17 @@ pub struct RenderArgs {
     /// 640x360@10`: the renderer keeps the scene and rebuilds only what depends on the size.
     #[arg(long = "resize", value_name = "WxH@N", value_parser = super::views::parse_resize, conflicts_with = "watch")]
     pub resizes: Vec<((u32, u32), u32)>,
+    /// Projection (all reversed-Z): `infinite` (perspective without a far plane, the default),
+    /// `far:D` (perspective whose far plane at distance D culls), `ortho:H` (orthographic, H world
+    /// units tall, far plane just past the scene) or `offcenter:L,R,U,D` (asymmetric perspective,
+    /// as a VR eye's: the left, right, up and down edges in degrees from the view axis, in the
+    /// OpenXR sense, so left and down are usually negative).
+    #[arg(long, value_name = "KIND", value_parser = parse_projection, allow_hyphen_values = true)]
+    pub projection: Option<ProjectionArg>,
+    /// Sub-pixel jitter of each frame, as temporal anti-aliasing uses: `halton` (the Halton(2, 3)
+    /// sequence, centred on the pixel) or a fixed `X,Y` in pixels (+y down, at most 1).
+    #[arg(long, value_name = "halton|X,Y", value_parser = parse_jitter, allow_hyphen_values = true)]
+    pub jitter: Option<JitterArg>,
     /// Number of frames to render (stats are recorded for each; the image is the last frame).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub frames: u32,
@@ -492,6 +503,115 @@ pub fn parse_camera_path(s: &str) -> Result<cullgraph::scene::CameraPath, String
     s.parse()
 }
 
+/// `--projection`: which projection, with its numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ProjectionArg {
+    /// `infinite`: perspective without a far plane.
+    Infinite,
+    /// `far:D`: perspective with a far plane at `D`.
+    Far(f32),
+    /// `ortho:H`: orthographic, `H` world units tall.
+    Ortho(f32),
+    /// `offcenter:L,R,U,D`: edge angles in degrees.
+    OffCenter([f32; 4]),
+}
+
+impl std::fmt::Display for ProjectionArg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ProjectionArg::Infinite => write!(f, "infinite"),
+            ProjectionArg::Far(d) => write!(f, "far:{d}"),
+            ProjectionArg::Ortho(h) => write!(f, "ortho:{h}"),
+            ProjectionArg::OffCenter([l, r, u, d]) => write!(f, "offcenter:{l},{r},{u},{d}"),
+        }
+    }
+}
+
+/// Parses `infinite`, `far:D`, `ortho:H` or `offcenter:L,R,U,D`; the numbers must be finite
+/// and positive (distances) or inside (−90, 90) degrees with left < right and down < up.
+pub fn parse_projection(s: &str) -> Result<ProjectionArg, String> {
+    let number = |p: &str, what: &str| -> Result<f32, String> {
+        let x: f32 = p.trim().parse().map_err(|_| format!("{what} '{p}' in '{s}' is not a number"))?;
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(format!("{what} '{p}' in '{s}' is not finite"))
+        }
+    };
+    let positive = |p: &str, what: &str| {
+        let x = number(p, what)?;
+        if x > 0.0 {
+            Ok(x)
+        } else {
+            Err(format!("{what} {x} in '{s}' must be positive"))
+        }
+    };
+    let (kind, rest) = s.split_once(':').unwrap_or((s, ""));
+    match (kind, rest) {
+        ("infinite", "") => Ok(ProjectionArg::Infinite),
+        ("far", d) if !d.is_empty() => Ok(ProjectionArg::Far(positive(d, "far distance")?)),
+        ("ortho", h) if !h.is_empty() => Ok(ProjectionArg::Ortho(positive(h, "orthographic height")?)),
+        ("offcenter", angles) if !angles.is_empty() => {
+            let parts: Vec<&str> = angles.split(',').collect();
+            if parts.len() != 4 {
+                return Err(format!("'{s}' is not offcenter:LEFT,RIGHT,UP,DOWN (four angles in degrees)"));
+            }
+            let mut a = [0.0f32; 4];
+            for ((slot, p), what) in a.iter_mut().zip(&parts).zip(["left", "right", "up", "down"]) {
+                *slot = number(p, &format!("{what} angle"))?;
+                if !(*slot > -90.0 && *slot < 90.0) {
+                    return Err(format!("{what} angle {slot} in '{s}' must be in (-90, 90) degrees"));
+                }
+            }
+            let [l, r, u, d] = a;
+            if !(l < r && d < u) {
+                return Err(format!("'{s}' needs left < right and down < up (left {l}, right {r}, up {u}, down {d})"));
+            }
+            Ok(ProjectionArg::OffCenter(a))
+        }
+        _ => Err(format!("'{s}' is not infinite, far:D, ortho:H or offcenter:L,R,U,D")),
+    }
+}
+
+/// `--jitter`: the Halton sequence, or one fixed jitter in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum JitterArg {
+    /// Halton(2, 3), one point per frame.
+    Halton,
+    /// The same jitter every frame.
+    Fixed(glam::Vec2),
+}
+
+impl JitterArg {
+    /// The jitter of frame `frame`, in pixels.
+    pub fn at(&self, frame: u32) -> glam::Vec2 {
+        match *self {
+            JitterArg::Halton => cullgraph::scene::projection::halton_jitter(frame as u64),
+            JitterArg::Fixed(j) => j,
+        }
+    }
+}
+
+/// Parses `halton` or `X,Y` (pixels, each finite and at most 1 in magnitude).
+pub fn parse_jitter(s: &str) -> Result<JitterArg, String> {
+    if s == "halton" {
+        return Ok(JitterArg::Halton);
+    }
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 2 {
+        return Err(format!("'{s}' is not halton or X,Y (pixels)"));
+    }
+    let mut v = [0.0f32; 2];
+    for (slot, p) in v.iter_mut().zip(&parts) {
+        let x: f32 = p.trim().parse().map_err(|_| format!("'{p}' in '{s}' is not a number"))?;
+        if x.is_nan() || x.abs() > 1.0 {
+            return Err(format!("'{p}' in '{s}' must be a sub-pixel jitter, at most 1 pixel in magnitude"));
+        }
+        *slot = x;
+    }
+    Ok(JitterArg::Fixed(glam::Vec2::from_array(v)))
+}
+
 /// Parses `x,y,z` into finite numbers.
 pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
     let parts: Vec<&str> = s.split(',').collect();
@@ -512,6 +632,30 @@ pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn parses_projections_and_jitter_with_clear_errors() {
+        assert_eq!(parse_projection("infinite"), Ok(ProjectionArg::Infinite));
+        assert_eq!(parse_projection("far:250"), Ok(ProjectionArg::Far(250.0)));
+        assert_eq!(parse_projection("ortho:12.5"), Ok(ProjectionArg::Ortho(12.5)));
+        assert_eq!(
+            parse_projection("offcenter:-45,40,42,-50"),
+            Ok(ProjectionArg::OffCenter([-45.0, 40.0, 42.0, -50.0]))
+        );
+        assert!(parse_projection("far:-3").unwrap_err().contains("must be positive"));
+        assert!(parse_projection("far:").unwrap_err().contains("is not infinite, far:D"));
+        assert!(parse_projection("ortho:nan").unwrap_err().contains("not finite"));
+        assert!(parse_projection("offcenter:-45,40,42").unwrap_err().contains("four angles"));
+        assert!(parse_projection("offcenter:-95,40,42,-50").unwrap_err().contains("(-90, 90)"));
+        assert!(parse_projection("offcenter:40,-45,42,-50").unwrap_err().contains("left < right"));
+        assert!(parse_projection("fisheye").unwrap_err().contains("is not infinite"));
+        assert_eq!(parse_jitter("halton"), Ok(JitterArg::Halton));
+        assert_eq!(parse_jitter("0.25,-0.5"), Ok(JitterArg::Fixed(glam::Vec2::new(0.25, -0.5))));
+        assert!(parse_jitter("3,0").unwrap_err().contains("at most 1 pixel"));
+        assert!(parse_jitter("nan,0").unwrap_err().contains("at most 1 pixel"));
+        assert!(parse_jitter("1").unwrap_err().contains("halton or X,Y"));
+        assert_eq!(JitterArg::Halton.at(0), cullgraph::scene::projection::halton_jitter(0));
+    }
 
     #[test]
     fn parses_sizes_and_vectors_with_clear_errors() {

@@ -1,7 +1,7 @@
 //! `cullgraph render`: load a scene, render frames headlessly through a render graph, write the
 //! image and stats; with `--watch`, keep rendering and hot-reload the graph and its shaders.
 
-use super::args::RenderArgs;
+use super::args::{ProjectionArg, RenderArgs};
 use super::memory::{Need, Room, Use};
 use super::paths;
 use super::views;
@@ -57,7 +57,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let mut scene = args.scene.load()?;
     spinner.finish_and_clear();
 
-    let mut camera = camera_from_args(args, scene.default_camera(width as f32 / height as f32))?;
+    let mut camera = camera_from_args(args, scene.default_camera(width as f32 / height as f32), &scene)?;
     if let Some(offset) = args.world_offset {
         scene.translate(offset);
         camera.eye += offset;
@@ -141,7 +141,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         if let Some((w, h)) = views::size_at(&args.resizes, frame) {
             renderer.resize(&shaders, w, h)?;
         }
-        let camera = args.camera_path.camera_at(&camera, frame);
+        let mut camera = args.camera_path.camera_at(&camera, frame);
+        if let Some(jitter) = args.jitter {
+            camera.jitter = jitter.at(frame);
+        }
         if let Some(animation) = animation.as_mut() {
             animation.step(&mut renderer, &shaders)?;
         }
@@ -424,7 +427,7 @@ fn write_file(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
     std::fs::write(path, bytes).map_err(|source| Error::Io { path: path.display().to_string(), source })
 }
 
-fn camera_from_args(args: &RenderArgs, default: Camera) -> Result<Camera> {
+fn camera_from_args(args: &RenderArgs, default: Camera, scene: &cullgraph::scene::Scene) -> Result<Camera> {
     let mut camera = default;
     if let Some(eye) = args.eye {
         camera.eye = eye;
@@ -438,8 +441,65 @@ fn camera_from_args(args: &RenderArgs, default: Camera) -> Result<Camera> {
     if let Some(near) = args.near {
         camera.near = near;
     }
+    apply_lens(args, &mut camera, args.fov, scene)?;
     camera.validate().map_err(|e| Error::Invalid(format!("camera: {e}")))?;
     Ok(camera)
+}
+
+/// `--projection` (with the field of view `fov`) and the first frame's `--jitter` on `camera`.
+pub(super) fn apply_lens(
+    args: &RenderArgs,
+    camera: &mut Camera,
+    fov: Option<f32>,
+    scene: &cullgraph::scene::Scene,
+) -> Result<()> {
+    if let Some(projection) = args.projection {
+        camera.projection = projection_from_arg(projection, camera, fov, scene);
+        camera
+            .projection
+            .validate(camera.near)
+            .map_err(|e| Error::Invalid(format!("--projection {projection}: {e}")))?;
+    }
+    if let Some(jitter) = args.jitter {
+        camera.jitter = jitter.at(0);
+    }
+    Ok(())
+}
+
+/// The projection `--projection` names, with the field of view of `--fov` or of the camera (60°
+/// when it has none), and an orthographic far plane just past the farthest corner of the scene.
+fn projection_from_arg(
+    arg: ProjectionArg,
+    camera: &Camera,
+    fov: Option<f32>,
+    scene: &cullgraph::scene::Scene,
+) -> Projection {
+    let fov_y_deg = fov.unwrap_or(match camera.projection {
+        Projection::Perspective { fov_y_deg } | Projection::PerspectiveFar { fov_y_deg, .. } => fov_y_deg,
+        _ => 60.0,
+    });
+    match arg {
+        ProjectionArg::Infinite => Projection::Perspective { fov_y_deg },
+        ProjectionArg::Far(far) => Projection::PerspectiveFar { fov_y_deg, far },
+        ProjectionArg::Ortho(height) => {
+            let reach = scene.world_bounds().map_or(1.0, |(min, max)| {
+                (0..8)
+                    .map(|i| {
+                        let corner = glam::DVec3::new(
+                            if i & 1 == 0 { min.x } else { max.x },
+                            if i & 2 == 0 { min.y } else { max.y },
+                            if i & 4 == 0 { min.z } else { max.z },
+                        );
+                        (corner - camera.eye).length()
+                    })
+                    .fold(0.0, f64::max)
+            });
+            Projection::Orthographic { height, far: (reach * 1.01 + camera.near as f64 + 1.0) as f32 }
+        }
+        ProjectionArg::OffCenter([left_deg, right_deg, up_deg, down_deg]) => {
+            Projection::OffCenter { left_deg, right_deg, up_deg, down_deg, far: f32::INFINITY }
+        }
+    }
 }
 
 /// A progress bar (or spinner when `len` is None), drawn only on a terminal and outside CI.

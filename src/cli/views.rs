@@ -92,6 +92,7 @@ pub fn view_camera(args: &RenderArgs, scene: &Scene, view: &ViewArg) -> Result<C
     if let Some(near) = args.near {
         camera.near = near;
     }
+    super::render::apply_lens(args, &mut camera, view.fov.or(args.fov), scene)?;
     camera.validate().map_err(|e| cullgraph::Error::Invalid(format!("--view {}: camera: {e}", view_label(view))))?;
     Ok(camera)
 }
@@ -139,7 +140,16 @@ pub fn render_views(
             }
         }
         step(renderer)?;
-        let frame_cameras: Vec<Camera> = cameras.iter().map(|c| args.camera_path.camera_at(c, frame)).collect();
+        let frame_cameras: Vec<Camera> = cameras
+            .iter()
+            .map(|c| {
+                let mut camera = args.camera_path.camera_at(c, frame);
+                if let Some(jitter) = args.jitter {
+                    camera.jitter = jitter.at(frame);
+                }
+                camera
+            })
+            .collect();
         let views: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&frame_cameras).collect();
         let last = frame + 1 == args.frames;
         let rendered = if last {

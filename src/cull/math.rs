@@ -36,7 +36,7 @@
 //! NaN or infinite inputs give "visible" (kept by the frustum tests, `CrossesNear` for the
 //! projections).
 
-use crate::scene::{Camera, Projection};
+use crate::scene::{Camera, ProjectionParts};
 use glam::{Mat3, UVec2, Vec2, Vec3};
 
 /// Relative error allowance `K·ε` with `K = 32`, `ε = 2⁻²⁴`: distances and view-space extents are
@@ -75,46 +75,65 @@ pub struct CullView {
     pub scale: Vec2,
     /// Near-plane distance (depth 1), > 0.
     pub near: f32,
-    /// Far-plane distance (depth 0) of an orthographic projection; unused (infinite) for
-    /// perspective.
+    /// Far-plane distance (depth 0): finite for orthographic, `f32::INFINITY` for a perspective
+    /// without a far plane.
     pub far: f32,
     /// Orthographic instead of perspective.
     pub orthographic: bool,
     /// Target size in pixels (the Hi-Z pyramid's level 0).
     pub viewport: UVec2,
+    /// `(cx, cy)`: NDC offset of an off-centre projection and of the sub-pixel jitter:
+    /// `ndc = (sx·x/d − cx, cy − sy·y/d)` (perspective) or `(sx·x − cx, cy − sy·y)`.
+    pub offset: Vec2,
 }
 
 impl CullView {
     /// Perspective with vertical field of view `fov_y` (radians), `aspect` = width / height.
     pub fn perspective(rotation: Mat3, fov_y: f32, aspect: f32, near: f32, viewport: UVec2) -> Self {
         let f = 1.0 / (fov_y * 0.5).tan();
-        Self { rotation, scale: Vec2::new(f / aspect, f), near, far: f32::INFINITY, orthographic: false, viewport }
+        Self {
+            rotation,
+            scale: Vec2::new(f / aspect, f),
+            near,
+            far: f32::INFINITY,
+            orthographic: false,
+            viewport,
+            offset: Vec2::ZERO,
+        }
     }
 
     /// Orthographic showing `height` world units vertically, between `near` and `far`.
     pub fn orthographic(rotation: Mat3, height: f32, aspect: f32, near: f32, far: f32, viewport: UVec2) -> Self {
         let sy = 2.0 / height;
-        Self { rotation, scale: Vec2::new(sy / aspect, sy), near, far, orthographic: true, viewport }
+        Self {
+            rotation,
+            scale: Vec2::new(sy / aspect, sy),
+            near,
+            far,
+            orthographic: true,
+            viewport,
+            offset: Vec2::ZERO,
+        }
     }
 
-    /// The view of `camera` on a `width` × `height` target, with exactly the scale factors of
-    /// [`Camera::projection_matrix`] (what the rasterizer uses).
-    pub fn from_camera(camera: &Camera, width: u32, height: u32) -> Self {
-        let aspect = width as f32 / height as f32;
-        let p = camera.projection_matrix(aspect);
-        let scale = Vec2::new(p.x_axis.x, -p.y_axis.y);
-        let (far, orthographic) = match camera.projection {
-            Projection::Perspective { .. } => (f32::INFINITY, false),
-            Projection::Orthographic { far, .. } => (far, true),
-        };
+    /// A view with `rotation` projecting as `parts` onto a `viewport`-sized target.
+    pub fn from_parts(rotation: Mat3, parts: &ProjectionParts, viewport: UVec2) -> Self {
         Self {
-            rotation: camera.view_rotation(),
-            scale,
-            near: camera.near,
-            far,
-            orthographic,
-            viewport: UVec2::new(width, height),
+            rotation,
+            scale: parts.scale,
+            near: parts.near,
+            far: parts.far,
+            orthographic: parts.orthographic,
+            viewport,
+            offset: parts.offset,
         }
+    }
+
+    /// The view of `camera` on a `width` × `height` target, jitter included: exactly the numbers
+    /// of the matrix the rasterizer draws with ([`Camera::jittered_view_projection_rel_eye`]).
+    pub fn from_camera(camera: &Camera, width: u32, height: u32) -> Self {
+        let parts = camera.jittered_projection_parts(width, height);
+        Self::from_parts(camera.view_rotation(), &parts, UVec2::new(width, height))
     }
 }
 
@@ -205,11 +224,14 @@ fn finite1(v: f32) -> bool {
 /// the far plane for orthographic), with the distance to the plane beyond `radius + REL_EPS·M`.
 ///
 /// Conservative: a sphere that intersects the frustum is always kept (as may be one near a
-/// corner that does not). Planes, in view space with `d = −z`:
-/// perspective `±sx·x + d ≥ 0`, `±sy·y + d ≥ 0` (normal length `√(1 + s²)`), `d ≥ near`;
-/// orthographic `1 ∓ sx·x ≥ 0`, `1 ∓ sy·y ≥ 0`, `near ≤ d ≤ far`.
-/// These planes pass through the eye, so any field of view below 180°, any aspect and any near
-/// distance work.
+/// corner that does not). Planes, in view space with `d = −z` and the offset `(cx, cy)`:
+/// perspective `sx·x + (1 − cx)·d ≥ 0`, `−sx·x + (1 + cx)·d ≥ 0` (normal length
+/// `√(sx² + (1 ∓ cx)²)`), the same in y, `near ≤ d ≤ far` (`far` may be infinite);
+/// orthographic `sx·x − cx ≥ −1`, `sx·x − cx ≤ 1`, the same in y, `near ≤ d ≤ far`, with
+/// `REL_EPS·|c|` more room for the rounding of the offset.
+/// The perspective side planes pass through the eye, so any field of view below 180°, any
+/// aspect, offset and near distance work. The allowance `REL_EPS·M·|n|` also covers the
+/// rounding of `(1 ∓ c)·d` (relative `ε`, and `M ≥ d`).
 ///
 /// GLSL: `bool cull_sphere_in_frustum(CullView view, vec3 center, float radius)`.
 pub fn sphere_in_frustum(view: &CullView, center: Vec3, radius: f32) -> bool {
@@ -220,25 +242,28 @@ pub fn sphere_in_frustum(view: &CullView, center: Vec3, radius: f32) -> bool {
     let d = -c.z;
     let rm = radius + REL_EPS * (l1(center) + radius);
     let (sx, sy) = (view.scale.x, view.scale.y);
-    if d + rm < view.near {
+    let (cx, cy) = (view.offset.x, view.offset.y);
+    if d + rm < view.near || d - rm > view.far {
         return false;
     }
     if !view.orthographic {
-        let lx = (1.0 + sx * sx).sqrt();
-        let ly = (1.0 + sy * sy).sqrt();
+        let (wl, wr, wb, wt) = (1.0 - cx, 1.0 + cx, 1.0 - cy, 1.0 + cy);
+        let (ll, lr) = ((sx * sx + wl * wl).sqrt(), (sx * sx + wr * wr).sqrt());
+        let (lb, lt) = ((sy * sy + wb * wb).sqrt(), (sy * sy + wt * wt).sqrt());
         let sxx = sx * c.x;
         let syy = sy * c.y;
-        if sxx + d < -(rm * lx) || d - sxx < -(rm * lx) {
+        if sxx + wl * d < -(rm * ll) || wr * d - sxx < -(rm * lr) {
             return false;
         }
-        if syy + d < -(rm * ly) || d - syy < -(rm * ly) {
+        if syy + wb * d < -(rm * lb) || wt * d - syy < -(rm * lt) {
             return false;
         }
     } else {
-        if d - rm > view.far {
+        let (ox, oy) = (REL_EPS * cx.abs(), REL_EPS * cy.abs());
+        if sx * (c.x - rm) - cx > 1.0 + ox || sx * (c.x + rm) - cx < -(1.0 + ox) {
             return false;
         }
-        if sx * (c.x.abs() - rm) > 1.0 || sy * (c.y.abs() - rm) > 1.0 {
+        if sy * (c.y - rm) - cy > 1.0 + oy || sy * (c.y + rm) - cy < -(1.0 + oy) {
             return false;
         }
     }
@@ -269,30 +294,28 @@ pub fn aabb_in_frustum(view: &CullView, min: Vec3, max: Vec3) -> bool {
     // Largest value of n·p + w over the box.
     let reach = |n: Vec3, w: f32| (dot3(n, center) + dot3(n.abs(), half)) + w;
     let (sx, sy) = (view.scale.x, view.scale.y);
-    // d = -row2·p ≥ near.
-    if reach(-row2, -view.near) < -m {
+    let (cx, cy) = (view.offset.x, view.offset.y);
+    // d = -row2·p ≥ near; far - d = far + row2·p ≥ 0 (never false for an infinite far).
+    if reach(-row2, -view.near) < -m || reach(row2, view.far) < -m {
         return false;
     }
+    let (ax, ay) = (row0 * sx, row1 * sy);
+    let (wl, wr, wb, wt) = (1.0 - cx, 1.0 + cx, 1.0 - cy, 1.0 + cy);
     if !view.orthographic {
-        let lx = (1.0 + sx * sx).sqrt();
-        let ly = (1.0 + sy * sy).sqrt();
-        let (ax, ay) = (row0 * sx, row1 * sy);
-        if reach(ax - row2, 0.0) < -(m * lx) || reach(-ax - row2, 0.0) < -(m * lx) {
+        let (ll, lr) = ((sx * sx + wl * wl).sqrt(), (sx * sx + wr * wr).sqrt());
+        let (lb, lt) = ((sy * sy + wb * wb).sqrt(), (sy * sy + wt * wt).sqrt());
+        if reach(ax - row2 * wl, 0.0) < -(m * ll) || reach(-ax - row2 * wr, 0.0) < -(m * lr) {
             return false;
         }
-        if reach(ay - row2, 0.0) < -(m * ly) || reach(-ay - row2, 0.0) < -(m * ly) {
+        if reach(ay - row2 * wb, 0.0) < -(m * lb) || reach(-ay - row2 * wt, 0.0) < -(m * lt) {
             return false;
         }
     } else {
-        // far - d = far + row2·p ≥ 0.
-        if reach(row2, view.far) < -m {
+        let (ox, oy) = (REL_EPS * cx.abs(), REL_EPS * cy.abs());
+        if reach(ax, wl) < -(m * sx) - ox || reach(-ax, wr) < -(m * sx) - ox {
             return false;
         }
-        let (ax, ay) = (row0 * sx, row1 * sy);
-        if reach(ax, 1.0) < -(m * sx) || reach(-ax, 1.0) < -(m * sx) {
-            return false;
-        }
-        if reach(ay, 1.0) < -(m * sy) || reach(-ay, 1.0) < -(m * sy) {
+        if reach(ay, wb) < -(m * sy) - oy || reach(-ay, wt) < -(m * sy) - oy {
             return false;
         }
     }
@@ -352,10 +375,19 @@ fn pixel_rect(view: &CullView, lo: Vec2, hi: Vec2) -> Option<PixelRect> {
 /// (y up), each with its outward allowance `e`, and the lowered nearest distance `d_lo`.
 fn finish(view: &CullView, t: (f32, f32, f32, f32), u: (f32, f32, f32, f32), d_lo: f32) -> ScreenBounds {
     let (sx, sy) = (view.scale.x, view.scale.y);
-    let lo = Vec2::new(sx * (t.0 - t.2), -(sy * (u.1 + u.3)));
-    let hi = Vec2::new(sx * (t.1 + t.3), -(sy * (u.0 - u.2)));
+    let (cx, cy) = (view.offset.x, view.offset.y);
+    let (ox, oy) = (REL_EPS * cx.abs(), REL_EPS * cy.abs());
+    let lo = Vec2::new((sx * (t.0 - t.2) - cx) - ox, (cy - sy * (u.1 + u.3)) - oy);
+    let hi = Vec2::new((sx * (t.1 + t.3) - cx) + ox, (cy - sy * (u.0 - u.2)) + oy);
     let nearest_depth = if view.orthographic {
         (view.far - (d_lo - REL_EPS * view.far)) / (view.far - view.near)
+    } else if view.far <= MAX_COORD {
+        // near·far / (d·(far − near)) − near / (far − near), the first term raised by REL_EPS
+        // (relative) for the rounding here and the rasterizer's (a few ε of it each). While
+        // d_lo ≤ far the first term is the larger, so that covers the second's rounding too;
+        // beyond the far plane nothing is drawn (true depths < 0), and 0 bounds them.
+        let k = (view.near / d_lo) * (view.far / (view.far - view.near));
+        ((k + REL_EPS * k) - view.near / (view.far - view.near)).max(0.0)
     } else {
         view.near / d_lo
     };
@@ -384,7 +416,12 @@ fn finish(view: &CullView, t: (f32, f32, f32, f32), u: (f32, f32, f32, f32), d_l
 ///    denominator `ρ² cos θ_t`, i.e. ≤ `6ε(1 + |t|)·√(1+t²)` in `t`; with `√(1+t²) ≤ M/d_lo` both
 ///    are below `8ε·(M/d_lo)·(1 + |t|)`, and the allowance is `REL_EPS·(M/d_lo)·(1 + |t|)`.
 ///    Orthographic: `c.x ± r`, `c.y ± r`, allowance `REL_EPS·M`.
-/// 4. Pixel rectangle as described on the module; nearest depth `near / d_lo` (perspective) or
+/// 4. NDC `sx·t − cx` and `cy − sy·u`, widened by `REL_EPS·|c|` for the offset's rounding; pixel
+///    rectangle as described on the module; nearest depth `near / d_lo` (perspective, infinite
+///    far), `max(k·(1 + REL_EPS) − near/(far − near), 0)` with `k = (near/d_lo)·far/(far − near)`
+///    (perspective, finite far: while `d_lo ≤ far`, `k` is the larger term, so its allowance
+///    covers the subtraction and the rasterizer's own rounding of `near·far/(far − near)/d`; past
+///    the far plane nothing is drawn and 0 bounds every depth) or
 ///    `(far − d_lo + REL_EPS·far)/(far − near)` (orthographic).
 pub fn project_sphere(view: &CullView, center: Vec3, radius: f32) -> ScreenBounds {
     if !finite3(center) || !finite1(radius) || radius < 0.0 {

@@ -3,10 +3,10 @@
 //! All instances' triangles are placed in world space in `f64`, made relative to the camera eye
 //! and cast to `f32` (as the GPU sees them after the hi/lo subtraction), and put into one
 //! `obvhs` compressed wide BVH. Each pixel sample casts a primary ray through the same projection
-//! the rasterizer uses ([`CullView::from_camera`]): perspective rays start at the eye and are
-//! parameterised by view distance `d` (direction with view-space `z = −1`), so `t ∈ [near, ∞)`
-//! is exactly the unclipped range; orthographic rays start on the eye plane and run over
-//! `t ∈ [near, far]`.
+//! the rasterizer uses, off-centre offset and jitter included ([`CullView::from_camera`]):
+//! perspective rays start at the eye and are parameterised by view distance `d` (direction with
+//! view-space `z = −1`), so `t ∈ [near, far]` (`far` infinite or not) is exactly the unclipped
+//! range; orthographic rays start on the eye plane and run over `t ∈ [near, far]`.
 //!
 //! The ray–triangle test is watertight (Woop, Benthin & Wald 2013, with the `f64` fallback for
 //! edge functions that round to zero), so a ray through a shared edge never slips between two
@@ -235,8 +235,13 @@ impl RaycastOracle {
                             primary_ray(view, to_world, x as f64 + ox as f64, y as f64 + oy as f64);
                         if let Some((instance, t)) = self.closest_hit(origin, dir, view.near, t_max) {
                             *id = instance;
-                            *z =
-                                if view.orthographic { (view.far - t) / (view.far - view.near) } else { view.near / t };
+                            *z = if view.orthographic {
+                                (view.far - t) / (view.far - view.near)
+                            } else if view.far.is_finite() {
+                                view.near * (view.far - t) / (t * (view.far - view.near))
+                            } else {
+                                view.near / t
+                            };
                         }
                     }
                 });
@@ -252,13 +257,16 @@ fn primary_ray(view: &CullView, to_world: &DMat3, fx: f64, fy: f64) -> (Vec3A, V
     let ndc_x = 2.0 * fx / view.viewport.x as f64 - 1.0;
     let ndc_y = 2.0 * fy / view.viewport.y as f64 - 1.0;
     let (sx, sy) = (view.scale.x as f64, view.scale.y as f64);
+    // ndc = (sx·t − cx, cy − sy·u), t and u per unit distance (perspective) or view x, y.
+    let t = (ndc_x + view.offset.x as f64) / sx;
+    let u = (view.offset.y as f64 - ndc_y) / sy;
     if view.orthographic {
-        let origin = *to_world * DVec3::new(ndc_x / sx, -ndc_y / sy, 0.0);
+        let origin = *to_world * DVec3::new(t, u, 0.0);
         let dir = *to_world * DVec3::NEG_Z;
         (Vec3A::from(origin.as_vec3()), Vec3A::from(dir.as_vec3()), view.far)
     } else {
-        let dir = *to_world * DVec3::new(ndc_x / sx, -ndc_y / sy, -1.0);
-        (Vec3A::ZERO, Vec3A::from(dir.as_vec3()), f32::INFINITY)
+        let dir = *to_world * DVec3::new(t, u, -1.0);
+        (Vec3A::ZERO, Vec3A::from(dir.as_vec3()), view.far)
     }
 }
 
@@ -381,7 +389,7 @@ mod tests {
     }
 
     fn camera(eye: DVec3, projection: Projection, near: f32) -> Camera {
-        Camera { eye, target: eye + DVec3::NEG_Z, up: Vec3::Y, projection, near }
+        Camera { eye, target: eye + DVec3::NEG_Z, up: Vec3::Y, projection, near, ..Default::default() }
     }
 
     #[test]

@@ -39,7 +39,10 @@ pub fn render_reference(
     let shared = overrides.iter().filter(|(name, _)| SHARED_PARAMS.contains(&name.as_str())).cloned();
     let spec = GraphSpec::builtin("no_cull")?.with_overrides(shared);
     let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), RenderSettings::new(big_w, big_h), &spec)?;
-    let (_, big) = renderer.render_to_image(camera)?;
+    // The reference is the scene's true coverage, so unjittered: a sub-pixel jitter is a
+    // sampling choice of the image under test, whose error against the truth is what is measured.
+    let unjittered = Camera { jitter: glam::Vec2::ZERO, ..camera.clone() };
+    let (_, big) = renderer.render_to_image(&unjittered)?;
     drop(renderer);
     rgba_from_bytes(width, height, downsample_box_srgb(big.as_raw(), width, height, n)?)
 }

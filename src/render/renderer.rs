@@ -260,6 +260,12 @@ impl Renderer {
         self.main_view().plan()
     }
 
+    /// What the main view's graph is compiled for: its size and the scene's quantities (with
+    /// the room a world keeps to grow).
+    pub fn plan_inputs(&self) -> &FrameInputs {
+        &self.main_view().graphs.compiled
+    }
+
     /// The main view's graph runtime (resources, memory, timings).
     pub fn runtime(&self) -> &GraphRuntime {
         self.main_view().runtime()

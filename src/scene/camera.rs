@@ -1,27 +1,12 @@
-//! Cameras with reversed-Z projections: depth 1 at the near plane, 0 at infinity (perspective)
-//! or at the far plane (orthographic).
+//! Cameras with reversed-Z projections ([`Projection`]): depth 1 at the near plane, 0 at the far
+//! plane or at infinity; optionally jittered by a sub-pixel offset for temporal anti-aliasing.
 //!
 //! Views are built relative to the eye: the GPU receives a rotation-only view matrix and
-//! subtracts the (hi/lo split) eye position from every world position first.
+//! subtracts the (hi/lo split) eye position from every world position first. An engine's own
+//! view and projection matrices become a camera through [`Camera::from_matrices`].
 
-use glam::{DVec3, Mat3, Mat4, Vec3, Vec4};
-
-/// How the camera projects.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Projection {
-    /// Perspective with an infinite far plane.
-    Perspective {
-        /// Vertical field of view in degrees (0, 180).
-        fov_y_deg: f32,
-    },
-    /// Orthographic.
-    Orthographic {
-        /// Visible height in world units.
-        height: f32,
-        /// Distance of the far plane (depth 0).
-        far: f32,
-    },
-}
+pub use super::projection::{Projection, ProjectionParts};
+use glam::{DMat4, DVec3, DVec4, Mat3, Mat4, Vec2, Vec3};
 
 /// A camera looking from `eye` at `target`.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,6 +21,10 @@ pub struct Camera {
     pub projection: Projection,
     /// Near-plane distance (depth 1).
     pub near: f32,
+    /// Sub-pixel jitter in pixels (+x right, +y down), at most 1 in magnitude per axis: the
+    /// raster and the culling use the jittered projection, motion vectors the unjittered one
+    /// ([`crate::passes::shared::gpu_types::FrameConstants`]). Zero by default.
+    pub jitter: Vec2,
 }
 
 impl Default for Camera {
@@ -46,6 +35,7 @@ impl Default for Camera {
             up: Vec3::Y,
             projection: Projection::Perspective { fov_y_deg: 60.0 },
             near: 0.1,
+            jitter: Vec2::ZERO,
         }
     }
 }
@@ -64,6 +54,7 @@ impl Camera {
             up: Vec3::Y,
             projection: Projection::Perspective { fov_y_deg },
             near: 0.1,
+            jitter: Vec2::ZERO,
         };
         let corners: Vec<DVec3> = (0..8)
             .map(|i| DVec3::new(pick(i & 1, min.x, max.x), pick(i & 2, min.y, max.y), pick(i & 4, min.z, max.z)))
@@ -118,36 +109,70 @@ impl Camera {
         Mat3::from_cols(r, u, -f).transpose()
     }
 
-    /// Projection matrix for `aspect` (width / height), reversed-Z.
-    pub fn projection_matrix(&self, aspect: f32) -> Mat4 {
-        match self.projection {
-            Projection::Perspective { fov_y_deg } => {
-                let f = 1.0 / (fov_y_deg.to_radians() * 0.5).tan();
-                // clip.z = near, clip.w = -z_view: depth = near / distance, 1 at the near plane.
-                Mat4::from_cols(
-                    Vec4::new(f / aspect, 0.0, 0.0, 0.0),
-                    Vec4::new(0.0, -f, 0.0, 0.0),
-                    Vec4::new(0.0, 0.0, 0.0, -1.0),
-                    Vec4::new(0.0, 0.0, self.near, 0.0),
-                )
-            }
-            Projection::Orthographic { height, far } => {
-                let sy = 2.0 / height;
-                let range = far - self.near;
-                // depth = (far + z_view) / (far - near): 1 at -near, 0 at -far.
-                Mat4::from_cols(
-                    Vec4::new(sy / aspect, 0.0, 0.0, 0.0),
-                    Vec4::new(0.0, -sy, 0.0, 0.0),
-                    Vec4::new(0.0, 0.0, 1.0 / range, 0.0),
-                    Vec4::new(0.0, 0.0, far / range, 1.0),
-                )
-            }
-        }
+    /// The projection's numbers for `aspect` (width / height), without the jitter.
+    pub fn projection_parts(&self, aspect: f32) -> ProjectionParts {
+        self.projection.parts(aspect, self.near)
     }
 
-    /// Projection times rotation: maps eye-relative world positions to clip space.
+    /// The projection's numbers on a `width` × `height` target with this camera's jitter: what
+    /// the rasterizer and the culling use.
+    pub fn jittered_projection_parts(&self, width: u32, height: u32) -> ProjectionParts {
+        self.projection_parts(width as f32 / height as f32).jittered(self.jitter, width, height)
+    }
+
+    /// Projection matrix for `aspect` (width / height), reversed-Z, without the jitter.
+    pub fn projection_matrix(&self, aspect: f32) -> Mat4 {
+        self.projection_parts(aspect).matrix()
+    }
+
+    /// Projection times rotation: maps eye-relative world positions to clip space, without the
+    /// jitter.
     pub fn view_projection_rel_eye(&self, aspect: f32) -> Mat4 {
         self.projection_matrix(aspect) * Mat4::from_mat3(self.view_rotation())
+    }
+
+    /// [`Camera::view_projection_rel_eye`] with the jitter on a `width` × `height` target: the
+    /// matrix the rasterizer draws with.
+    pub fn jittered_view_projection_rel_eye(&self, width: u32, height: u32) -> Mat4 {
+        self.jittered_projection_parts(width, height).matrix() * Mat4::from_mat3(self.view_rotation())
+    }
+
+    /// A camera from an engine's matrices: `view` maps world to view space (right-handed, looking
+    /// down −Z; rigid: a rotation and a translation, in `f64` for large worlds) and `projection`
+    /// is a reversed-Z projection ([`Projection::from_matrix`] says which are accepted). The
+    /// jitter is zero.
+    ///
+    /// Errors say what is wrong: non-finite entries, a view matrix with scale, shear or a
+    /// reflection, or a projection that is singular, skewed or not reversed-Z.
+    pub fn from_matrices(view: DMat4, projection: Mat4) -> Result<Camera, String> {
+        if !view.is_finite() {
+            return Err("the view matrix has a non-finite entry".into());
+        }
+        if view.row(3) != DVec4::new(0.0, 0.0, 0.0, 1.0) {
+            return Err(format!("the view matrix's last row {} must be (0, 0, 0, 1)", view.row(3)));
+        }
+        let r = glam::DMat3::from_mat4(view);
+        // Rigid: Rᵀ·R = I up to what an engine's f32 rotation leaves (well below 1e-4).
+        let off =
+            (r.transpose() * r - glam::DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if off > 1e-4 {
+            return Err(format!(
+                "the view matrix is not rigid: its rotation part is scaled or sheared (RᵀR differs from the identity by {off:.3e})"
+            ));
+        }
+        if r.determinant() < 0.0 {
+            return Err("the view matrix mirrors (its rotation part has a negative determinant)".into());
+        }
+        let (projection, near) = Projection::from_matrix(projection)?;
+        // Row i of R is view axis i in world coordinates; the eye maps to the origin. (R's own
+        // inverse, not its transpose: an f32 rotation is orthonormal only to ~1e-7, which the
+        // transpose would turn into a unit of error 10^7 from the origin.)
+        let eye = -(r.inverse() * view.w_axis.truncate());
+        let forward = -r.row(2);
+        let camera =
+            Camera { eye, target: eye + forward, up: r.row(1).as_vec3(), projection, near, jitter: Vec2::ZERO };
+        camera.validate()?;
+        Ok(camera)
     }
 
     /// Checks the camera for values that cannot produce an image.
@@ -166,15 +191,10 @@ impl Camera {
         if !(self.near.is_finite() && self.near > 0.0) {
             return Err(format!("near plane {} must be positive", self.near));
         }
-        match self.projection {
-            Projection::Perspective { fov_y_deg } if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) => {
-                Err(format!("field of view {fov_y_deg} degrees must be in (0, 180)"))
-            }
-            Projection::Orthographic { height, far } if !(height > 0.0 && far > self.near && far.is_finite()) => {
-                Err(format!("orthographic height {height} must be positive and far {far} beyond near {}", self.near))
-            }
-            _ => Ok(()),
+        if !self.jitter.is_finite() || self.jitter.abs().max_element() > 1.0 {
+            return Err(format!("jitter {} pixels must be finite and at most 1 pixel per axis", self.jitter));
         }
+        self.projection.validate(self.near)
     }
 }
 
@@ -189,6 +209,66 @@ fn pick(bit: usize, a: f64, b: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec4;
+
+    #[test]
+    fn engine_matrices_give_back_the_camera_that_made_them() {
+        let cam = Camera {
+            eye: DVec3::new(1.0e7 + 0.25, 3.0, -2.0e6),
+            target: DVec3::new(1.0e7 + 10.0, 1.0, -2.0e6 - 4.0),
+            projection: Projection::OffCenter {
+                left_deg: -45.0,
+                right_deg: 40.0,
+                up_deg: 42.0,
+                down_deg: -50.0,
+                far: 500.0,
+            },
+            near: 0.05,
+            ..Default::default()
+        };
+        let r = cam.view_rotation().as_dmat3();
+        let view = DMat4::from_mat3(r) * DMat4::from_translation(-cam.eye);
+        let back = Camera::from_matrices(view, cam.projection_matrix(1.0)).unwrap();
+        assert!((back.eye - cam.eye).length() < 1e-6, "{} vs {}", back.eye, cam.eye);
+        assert!((back.view_rotation().as_dmat3() - r).to_cols_array().iter().all(|v| v.abs() < 1e-6));
+        let (m0, m1) = (cam.view_projection_rel_eye(1.0), back.view_projection_rel_eye(1.0));
+        for (a, b) in m0.to_cols_array().iter().zip(m1.to_cols_array()) {
+            assert!((a - b).abs() <= 1e-5 * a.abs().max(1.0), "{m0} vs {m1}");
+        }
+    }
+
+    #[test]
+    fn bad_view_matrices_are_refused_with_the_reason() {
+        let projection = Camera::default().projection_matrix(1.0);
+        let refused = |view: DMat4, words: &str| {
+            let e = Camera::from_matrices(view, projection).expect_err(words);
+            assert!(e.contains(words), "{e:?} should say {words:?}");
+        };
+        let mut nan = DMat4::IDENTITY;
+        nan.w_axis.x = f64::NAN;
+        refused(nan, "non-finite");
+        refused(DMat4::from_scale(DVec3::splat(2.0)), "scaled or sheared");
+        refused(
+            DMat4::from_cols_array(&[1.0, 0.0, 0.0, 0.0, 0.3, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
+            "sheared",
+        );
+        refused(DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0)), "mirrors");
+        refused(
+            DMat4::from_cols_array(&[1.0, 0.0, 0.0, 0.5, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
+            "last row",
+        );
+        let e = Camera::from_matrices(DMat4::IDENTITY, Mat4::ZERO).unwrap_err();
+        assert!(e.contains("singular"), "{e}");
+        assert!(Camera::from_matrices(DMat4::IDENTITY, projection).is_ok());
+    }
+
+    #[test]
+    fn jitter_is_checked() {
+        let cam = Camera { jitter: Vec2::new(0.5, f32::NAN), ..Default::default() };
+        assert!(cam.validate().unwrap_err().contains("jitter"));
+        let cam = Camera { jitter: Vec2::new(2.0, 0.0), ..Default::default() };
+        assert!(cam.validate().unwrap_err().contains("at most 1 pixel"));
+    }
 
     #[test]
     fn reversed_z_depth_is_one_at_near_and_falls_with_distance() {

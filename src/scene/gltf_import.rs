@@ -292,7 +292,7 @@ fn camera_of(document: &gltf::Document, placed: &nodes::Placed<'_>, notes: &mut 
         }
     };
     let eye = w.translation;
-    let cam = Camera { eye, target: eye + forward.as_dvec3() * 10.0, up, projection, near };
+    let cam = Camera { eye, target: eye + forward.as_dvec3() * 10.0, up, projection, near, ..Default::default() };
     match cam.validate() {
         Ok(()) => Some(cam),
         Err(why) => {

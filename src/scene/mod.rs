@@ -11,6 +11,7 @@ pub mod error;
 pub mod gltf_import;
 pub mod mesh;
 pub mod procedural;
+pub mod projection;
 pub mod source;
 mod tangents;
 pub mod texture;
@@ -18,10 +19,11 @@ pub mod validate;
 pub mod world;
 
 pub use bounds::{Aabb, Sphere};
-pub use camera::{Camera, Projection};
+pub use camera::Camera;
 pub use camera_path::CameraPath;
 pub use error::SceneError;
 pub use mesh::{decode_octahedral, encode_octahedral, encode_tangent, MeshData, Vertex};
+pub use projection::{Projection, ProjectionParts};
 pub use source::SceneSource;
 pub use texture::{AlphaMode, Texture, TextureRef, TextureSlot};
 

@@ -1,5 +1,6 @@
 //! GPU-side layouts of scene and frame data; mirrors `shaders/common/scene.glsl`.
 
+use crate::scene::projection::jitter_ndc;
 use crate::scene::{Camera, Instance, Material, PointLight, Scene, Transform};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Mat4, Vec3};
@@ -200,7 +201,7 @@ impl GpuPointLight {
 }
 
 /// The culling view of a frame as the shaders read it (`CullView` in `cull_math.glsl`,
-/// scalar layout, 64 bytes).
+/// scalar layout, 72 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuCullView {
@@ -210,12 +211,14 @@ pub struct GpuCullView {
     pub scale: [f32; 2],
     /// Near-plane distance.
     pub near: f32,
-    /// Orthographic far-plane distance.
+    /// Far-plane distance (infinity for a perspective without one).
     pub far: f32,
     /// 1 for orthographic.
     pub orthographic: u32,
     /// Viewport (Hi-Z level 0) size.
     pub viewport: [u32; 2],
+    /// NDC offset (see [`crate::cull::math::CullView::offset`]): off-centre projection and jitter.
+    pub offset: [f32; 2],
 }
 
 impl GpuCullView {
@@ -229,6 +232,7 @@ impl GpuCullView {
             far: v.far,
             orthographic: v.orthographic as u32,
             viewport: v.viewport.to_array(),
+            offset: v.offset.to_array(),
         }
     }
 }
@@ -267,16 +271,21 @@ pub struct FrameConstants {
     pub view_proj_unjittered: [[f32; 4]; 4],
     /// Last frame's world relative to last frame's eye, to clip, without its jitter.
     pub prev_view_proj_unjittered: [[f32; 4]; 4],
-    /// xy: this frame's jitter, zw: last frame's, in NDC units (2 / size per pixel).
+    /// xy: this frame's jitter, zw: last frame's, in NDC units (2 / size per pixel): the amount
+    /// `view_proj` moves a point's NDC position by (+y down, as NDC).
     pub jitter: [f32; 4],
 }
 
 impl FrameConstants {
     /// Constants for `camera` looking at `scene` on a `width` x `height` target, where
-    /// `previous` was last frame's camera (the same camera on the first frame).
+    /// `previous` was last frame's camera (the same camera on the first frame). `view_proj` and
+    /// the culling views carry each camera's jitter; the `*_unjittered` matrices do not.
     pub fn new(scene: &Scene, camera: &Camera, previous: &Camera, width: u32, height: u32) -> Self {
         let aspect = width as f32 / height as f32;
-        let vp: Mat4 = camera.view_projection_rel_eye(aspect);
+        let vp: Mat4 = camera.jittered_view_projection_rel_eye(width, height);
+        let vp_unjittered: Mat4 = camera.view_projection_rel_eye(aspect);
+        let jitter = jitter_ndc(camera.jitter, width, height);
+        let prev_jitter = jitter_ndc(previous.jitter, width, height);
         let (eye_hi, eye_lo) = split_hi_lo(camera.eye);
         let (prev_eye_hi, prev_eye_lo) = split_hi_lo(previous.eye);
         let prev_vp: Mat4 = previous.view_projection_rel_eye(aspect);
@@ -294,9 +303,9 @@ impl FrameConstants {
             prev_cull_view: GpuCullView::new(previous, width, height),
             prev_eye_hi: prev_eye_hi.extend(0.0).to_array(),
             prev_eye_lo: prev_eye_lo.extend(0.0).to_array(),
-            view_proj_unjittered: vp.to_cols_array_2d(),
+            view_proj_unjittered: vp_unjittered.to_cols_array_2d(),
             prev_view_proj_unjittered: prev_vp.to_cols_array_2d(),
-            jitter: [0.0; 4],
+            jitter: [jitter.x, jitter.y, prev_jitter.x, prev_jitter.y],
         }
     }
 }
@@ -357,13 +366,40 @@ mod tests {
     }
 
     #[test]
+    fn the_raster_gets_the_jittered_matrix_and_motion_vectors_the_unjittered_ones() {
+        let scene = Scene::default();
+        let (w, h) = (64, 48);
+        let previous = Camera { jitter: glam::Vec2::new(0.25, -0.125), ..Default::default() };
+        let camera =
+            Camera { eye: DVec3::new(0.5, 2.0, 9.0), jitter: glam::Vec2::new(-0.375, 0.4), ..previous.clone() };
+        let k = FrameConstants::new(&scene, &camera, &previous, w, h);
+        let aspect = w as f32 / h as f32;
+        let cols = |m: Mat4| m.to_cols_array_2d();
+        assert_eq!(k.view_proj, cols(camera.jittered_view_projection_rel_eye(w, h)));
+        assert_eq!(k.view_proj_unjittered, cols(camera.view_projection_rel_eye(aspect)));
+        // Last frame's unjittered matrix: not last frame's jittered one, nor this frame's.
+        assert_eq!(k.prev_view_proj_unjittered, cols(previous.view_projection_rel_eye(aspect)));
+        assert_ne!(k.prev_view_proj_unjittered, cols(previous.jittered_view_projection_rel_eye(w, h)));
+        assert_eq!(k.jitter, [-0.375 * 2.0 / 64.0, 0.4 * 2.0 / 48.0, 0.25 * 2.0 / 64.0, -0.125 * 2.0 / 48.0]);
+        // The jittered and unjittered matrices differ by exactly the jitter in NDC.
+        let p = glam::Vec4::new(0.3, -0.2, -4.0, 1.0);
+        let (a, b) =
+            (Mat4::from_cols_array_2d(&k.view_proj) * p, Mat4::from_cols_array_2d(&k.view_proj_unjittered) * p);
+        let moved = a.truncate().truncate() / a.w - b.truncate().truncate() / b.w;
+        assert!((moved - glam::Vec2::new(k.jitter[0], k.jitter[1])).abs().max_element() < 1e-6, "{moved}");
+        // The culling views carry each frame's jitter too (they test against pyramids of jittered depth).
+        assert_eq!(k.cull_view.offset, [-k.jitter[0], k.jitter[1]]);
+        assert_eq!(k.prev_cull_view.offset, [-k.jitter[2], k.jitter[3]]);
+    }
+
+    #[test]
     fn layouts_match_the_shader_sizes() {
         assert_eq!(std::mem::size_of::<GpuInstance>(), 64);
         assert_eq!(std::mem::size_of::<GpuMaterialTexture>(), 48);
         assert_eq!(std::mem::size_of::<GpuMaterial>(), 64 + 5 * 48);
         assert_eq!(std::mem::size_of::<GpuPointLight>(), 32);
-        assert_eq!(std::mem::size_of::<GpuCullView>(), 64);
-        assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16 + 2 * 64 + 2 * 16 + 2 * 64 + 16);
+        assert_eq!(std::mem::size_of::<GpuCullView>(), 72);
+        assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16 + 2 * 72 + 2 * 16 + 2 * 64 + 16);
         assert_eq!(std::mem::size_of::<DrawIndexedIndirect>(), 20);
     }
 }

@@ -7,7 +7,7 @@ use super::{DrawnInstances, Renderer};
 use crate::error::{Error, Result};
 use crate::gpu::transfer::record_image_to_buffer;
 use crate::gpu::{Access, Buffer, BufferDesc, Image, MemoryLocation, ShaderCompiler};
-use crate::graph::{CompiledGraph, GraphRuntime};
+use crate::graph::{CompiledGraph, FrameInputs, GraphRuntime};
 use crate::passes::shared::SceneInputs;
 use crate::render::{GraphSpec, RenderSettings};
 use crate::scene::Camera;
@@ -99,7 +99,9 @@ impl Renderer {
             return Ok(());
         }
         let spec = state.graphs.spec.clone();
-        let compiled = self.compiled_for(&spec, &settings).map_err(|e| view.error(e))?;
+        // The scene's quantities are what the running graph was compiled for: only the size
+        // changes (counting them again walks every instance).
+        let compiled = FrameInputs { width, height, ..state.graphs.compiled.clone() };
         let mut runtime = build_runtime(&self.ctx, shaders, &compiled, &spec).map_err(|e| view.error(e))?;
         let frame = self.frame_index;
         let state = self.view_state_mut(view)?;

@@ -260,5 +260,6 @@ fn street_camera(origin: DVec3, g: usize) -> Camera {
         up: Vec3::Y,
         projection: Projection::Perspective { fov_y_deg: 60.0 },
         near: 0.1,
+        ..Default::default()
     }
 }
