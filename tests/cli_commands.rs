@@ -95,7 +95,28 @@ fn bench_writes_speed_against_error_as_json_markdown_and_plots() {
 
     let (code, _, err) = run(&["bench", "--suites", "culling,speed", "--out", out]);
     assert_eq!(code, 1);
-    assert!(err.contains("unknown suite 'speed' (known: culling, hiz, msaa, dynamic)"), "{err}");
+    assert!(err.contains("unknown suite 'speed' (known: culling, hiz, msaa, dynamic, views)"), "{err}");
+}
+
+#[test]
+fn bench_views_reports_each_view_count_and_the_resize() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().to_str().unwrap();
+    let args =
+        ["bench", "--suites", "views", "--instances", "300", "--size", "32x24", "--warmup", "0", "--frames", "2"];
+    let (code, _, err) = run(&[&args[..], &["--out", out]].concat());
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("bench.json")).unwrap()).unwrap();
+    let views = &json["views"];
+    let rows = views["rows"].as_array().unwrap();
+    assert_eq!(rows.iter().map(|r| r["views"].as_u64().unwrap()).collect::<Vec<_>>(), [1, 2, 4, 8, 16]);
+    for pair in rows.windows(2) {
+        assert!(pair[1]["view_bytes"].as_u64() > pair[0]["view_bytes"].as_u64(), "each view adds its own resources");
+    }
+    assert_eq!(rows[4]["drawn"].as_array().unwrap().len(), 16);
+    assert_eq!(views["resize_pipelines"], 0);
+    assert_eq!(views["scene_kept"], true);
 }
 
 #[test]

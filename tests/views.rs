@@ -180,3 +180,53 @@ fn a_second_view_shares_the_scene() {
     assert_eq!(r.gpu_scene().instances.handle(), instances, "the scene was not uploaded again");
     gpu.assert_clean();
 }
+
+#[test]
+fn views_of_a_growing_world_each_match_their_camera_alone() {
+    use common::{boxes_camera, boxes_scene};
+    use cullgraph::scene::world::World;
+    use cullgraph::scene::{Instance, Transform};
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (mut world, _) = World::new(boxes_scene()).unwrap();
+    // Three views with different sizes and graphs: each compiles for the world's quantities as
+    // its own kinds count them, and each must follow the world's growth.
+    let views = [
+        (RenderSettings::new(64, 48), "two_phase", boxes_camera()),
+        (RenderSettings::new(40, 30), "no_cull", Camera { eye: DVec3::new(-4.0, 2.0, 5.0), ..boxes_camera() }),
+        (RenderSettings::new(32, 32), "one_phase", Camera { eye: DVec3::new(0.5, 6.0, 1.0), ..boxes_camera() }),
+    ];
+    let spec = |g: &str| GraphSpec::builtin(g).unwrap();
+    let mut r = Renderer::from_world(&gpu, &shaders, &world, views[0].0.clone(), &spec(views[0].1)).unwrap();
+    let mut ids = vec![ViewId::MAIN];
+    for (settings, graph, _) in &views[1..] {
+        ids.push(r.add_view(&shaders, settings.clone(), &spec(graph)).unwrap());
+    }
+    r.enable_verification(&shaders).unwrap();
+    let mut alone: Vec<Renderer> = views
+        .iter()
+        .map(|(settings, graph, _)| {
+            Renderer::from_world(&gpu, &shaders, &world, settings.clone(), &spec(graph)).unwrap()
+        })
+        .collect();
+    for round in 0..5 {
+        for k in 0..8 {
+            let t = Transform {
+                linear: glam::Mat3::from_diagonal(glam::Vec3::splat(0.5)),
+                translation: DVec3::new(-3.0 + k as f64 * 0.8, 0.25, -2.0 - round as f64 * 0.9),
+            };
+            world.insert(Instance { transform: t, mesh: 0, material: 2, flags: 0 }).unwrap();
+        }
+        r.sync(&shaders, &world).unwrap();
+        let frame: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(views.iter().map(|v| &v.2)).collect();
+        let together = r.render_views_to_rgba8(&frame).unwrap();
+        for (v, ((stats, image), renderer)) in together.iter().zip(&mut alone).enumerate() {
+            renderer.sync(&shaders, &world).unwrap();
+            let (expected_stats, expected) = renderer.render_to_rgba8(&views[v].2).unwrap();
+            assert!(*image == expected, "round {round}, view {v}: the image differs from its camera alone");
+            assert_eq!(counts(stats), counts(&expected_stats), "round {round}, view {v}");
+            assert_eq!(stats.verify.as_ref().unwrap().false_negatives, 0, "round {round}, view {v}");
+        }
+    }
+    gpu.assert_clean();
+}

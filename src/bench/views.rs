@@ -1,6 +1,7 @@
 //! Many views over one world: a city rendered through 1, 2, 4, 8 and 16 views in one frame
-//! (four split-screen cameras at street level, then orthographic views from above, as shadow
-//! maps see the city), each view culled by its own graph; what each view costs beside the
+//! (four split-screen cameras at street level, a quarter of the output each, then orthographic
+//! views from above, as shadow maps see the city, square and as tall as the output), each view
+//! culled by its own graph; what each view costs beside the
 //! shared scene; and resizing a view (CPU time, its next frame, and that nothing is uploaded).
 
 use super::median;
@@ -122,7 +123,8 @@ pub fn run(
         renderer.set_step_timing(false);
         let mut ids = vec![ViewId::MAIN];
         for i in 1..n {
-            let settings = if i < 4 { quarter.clone() } else { RenderSettings::new(1024, 1024) };
+            // Shadow-like views are square, as tall as the output.
+            let settings = if i < 4 { quarter.clone() } else { RenderSettings::new(h, h) };
             ids.push(renderer.add_view(shaders, settings, &spec)?);
         }
         let cameras: Vec<Camera> = (0..n).map(|i| camera(&scene, i)).collect();
