@@ -110,7 +110,7 @@ fn bench_views_reports_each_view_count_and_the_resize() {
         serde_json::from_str(&std::fs::read_to_string(tmp.path().join("bench.json")).unwrap()).unwrap();
     let views = &json["views"];
     let rows = views["rows"].as_array().unwrap();
-    assert_eq!(rows.iter().map(|r| r["views"].as_u64().unwrap()).collect::<Vec<_>>(), [1, 2, 4, 8, 16]);
+    assert_eq!(rows.iter().map(|r| r["views"].as_u64().unwrap()).collect::<Vec<_>>(), [1, 2, 4, 8, 16, 64]);
     for pair in rows.windows(2) {
         assert!(pair[1]["view_bytes"].as_u64() > pair[0]["view_bytes"].as_u64(), "each view adds its own resources");
     }

@@ -152,7 +152,10 @@ fn renders_an_image_and_stats() {
     assert_eq!(stats["frames"][1]["instances"], 300);
     let passes: Vec<&str> =
         stats["frames"][1]["gpu_ms"].as_array().unwrap().iter().map(|t| t["name"].as_str().unwrap()).collect();
-    assert_eq!(passes, ["draw_early", "hiz", "cull_late", "draw_late", "lighting", "transparent_sort", "transparent"]);
+    assert_eq!(
+        passes,
+        ["draw_early", "hiz", "cull_late", "draw_late", "lighting", "tonemap", "transparent_sort", "transparent"]
+    );
     // Two-phase culling: frame 1 draws early what frame 0 found visible, the list frame 0's
     // late phase wrote (reported under the draw that drew it; frame 0 had none).
     let culling = |frame: usize| stats["frames"][frame]["culling"].as_array().unwrap().clone();

@@ -90,7 +90,7 @@ fn shipped_graphs_load_and_compile() {
         ("graph/occluder_prepass.ron", 9),
         ("graph/examples/tint.ron", 3),
         ("graph/examples/history.ron", 3),
-        ("graph/examples/host_target.ron", 2),
+        ("graph/examples/host_target.ron", 3),
         ("graph/examples/host_depth_and_pyramid.ron", 3),
     ] {
         let g = graph::load_file(&root.join(file), &[], &env(), &builtin_kinds()).unwrap_or_else(|e| panic!("{e}"));

@@ -416,6 +416,7 @@ fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
     name: "reversed",
     extends: "{base}",
     resources: {{
+        "hdr_reversed": Image(format: R16G16B16A16_SFLOAT),
         "color_reversed": Image(format: R8G8B8A8_UNORM),
         "marks": Image(format: R8G8B8A8_UNORM),
         "difference": Image(format: R8G8B8A8_UNORM),
@@ -433,8 +434,16 @@ fn the_image_does_not_depend_on_the_order_of_a_pixels_list() {
             name: "lighting_reversed",
             kind: "lighting_compressed",
             reads: {{"depth": "depth", "gbuffer": "gbuffer", "gbuffer_pool": "gbuffer_pool"}},
-            writes: {{"output": "color_reversed"}},
+            writes: {{"output": "hdr_reversed"}},
             settings: {{"exposure": "exposure", "light_tiles": "light_tiles", "shared_blocks": "shared_blocks"}},
+        ),
+        // Tone-mapped as the frame's own lighting is, so that the two images compare bit for bit.
+        Pass(
+            name: "tonemap_reversed",
+            kind: "tonemap",
+            reads: {{"input": "hdr_reversed"}},
+            writes: {{"output": "color_reversed"}},
+            settings: {{"exposure": "exposure"}},
         ),
         Pass(
             name: "difference",

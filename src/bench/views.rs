@@ -75,9 +75,10 @@ pub struct ViewsReport {
     pub scene_kept: bool,
 }
 
-/// The `i`-th camera of a frame of many views: four split-screen street cameras looking inward
-/// from the city's corners, then orthographic views from above over a grid of tiles.
-fn camera(scene: &Scene, i: usize) -> Camera {
+/// The `i`-th camera of a frame of `n` views: four split-screen street cameras looking inward
+/// from the city's corners, then orthographic views from above over a grid of tiles that covers
+/// the city.
+fn camera(scene: &Scene, i: usize, n: usize) -> Camera {
     let (min, max) = scene.world_bounds().unwrap_or((DVec3::splat(-1.0), DVec3::splat(1.0)));
     let center = (min + max) * 0.5;
     if i < 4 {
@@ -89,8 +90,9 @@ fn camera(scene: &Scene, i: usize) -> Camera {
         };
     }
     let tile = i - 4;
-    let (tx, tz) = ((tile % 4) as f64, (tile / 4) as f64);
-    let size = (max - min) / 4.0;
+    let grid = ((n.saturating_sub(4)) as f64).sqrt().ceil().max(1.0) as usize;
+    let (tx, tz) = ((tile % grid) as f64, (tile / grid) as f64);
+    let size = (max - min) / grid as f64;
     let at = DVec3::new(min.x + (tx + 0.5) * size.x, center.y, min.z + (tz + 0.5) * size.z.max(1e-3));
     let height = (max.y - min.y).max(1.0) + 10.0;
     Camera {
@@ -127,7 +129,7 @@ pub fn run(
             let settings = if i < 4 { quarter.clone() } else { RenderSettings::new(h, h) };
             ids.push(renderer.add_view(shaders, settings, &spec)?);
         }
-        let cameras: Vec<Camera> = (0..n).map(|i| camera(&scene, i)).collect();
+        let cameras: Vec<Camera> = (0..n).map(|i| camera(&scene, i, n)).collect();
         let frame: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&cameras).collect();
         // Every view runs the same graph: its instance-cull passes by name.
         let cull_names: Vec<String> =

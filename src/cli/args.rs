@@ -133,7 +133,7 @@ pub struct BenchArgs {
     /// What to measure, comma-separated: `culling` (the culling graphs on cities of growing
     /// size), `hiz` (the pyramid builds), `msaa` (speed against error of every anti-aliasing
     /// method), `dynamic` (instances moved, inserted and removed every frame), `views` (1 to
-    /// 16 views of the largest `--instances` city in one frame, memory per view, resizing).
+    /// 64 views of the largest `--instances` city in one frame, memory per view, resizing).
     #[arg(long, value_delimiter = ',', default_values_t = ["culling".to_string(), "hiz".into()])]
     pub suites: Vec<String>,
     /// Instances moved per frame in the `dynamic` suite (on the largest `--instances` city),

@@ -14,8 +14,8 @@ const DEFAULT_MOVED: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
 /// The suites `--suites` takes.
 const SUITES: &[&str] = &["culling", "hiz", "msaa", "dynamic", "views"];
 
-/// View counts of the `views` suite.
-const VIEW_COUNTS: [usize; 5] = [1, 2, 4, 8, 16];
+/// View counts of the `views` suite, up to the most a renderer holds.
+const VIEW_COUNTS: [usize; 6] = [1, 2, 4, 8, 16, cullgraph::render::MAX_VIEWS];
 
 /// Runs the command.
 pub fn run(args: &BenchArgs) -> Result<()> {
