@@ -226,3 +226,34 @@ fn the_command_line_writes_motion_as_openexr() {
     assert!(moving > 500, "the orbiting camera moves most of the city: {moving} pixels");
     gpu.assert_clean();
 }
+
+/// A world whose scene buffers are made anew (here: a mesh registered while a quad moves) starts
+/// with previous = current: that frame shows no motion, not the contents of a fresh buffer, and
+/// the next move shows as before.
+#[test]
+fn a_rebuilt_scene_starts_without_motion() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut at = [DVec3::new(-0.6, 0.0, 0.0), DVec3::new(0.6, 0.0, 0.0)];
+    let (mut world, handles) = World::new(two_quads(at)).unwrap();
+    let settings = RenderSettings::new(SIZE.0, SIZE.1);
+    let mut r = Renderer::from_world(&gpu, &shaders, &world, settings, &post()).unwrap();
+    let camera = common::camera_on_z();
+    let frame = |world: &World, r: &mut Renderer| -> OutputF32 {
+        r.sync(&shaders, world).unwrap();
+        r.render(&camera).unwrap();
+        r.read_output_f32("motion").unwrap()
+    };
+    frame(&world, &mut r);
+    at[0].x += 0.1;
+    world.set_transform(handles[0], common::scaled_at(at[0], SIDE)).unwrap();
+    world.add_mesh("another quad", &common::quad_mesh()).unwrap();
+    let rebuilt = frame(&world, &mut r);
+    assert!(rebuilt.data.iter().all(|&v| v == 0.0), "a rebuilt scene shows no motion at its first frame");
+    let before = at;
+    at[0].x += 0.1;
+    world.set_transform(handles[0], common::scaled_at(at[0], SIDE)).unwrap();
+    let moved = frame(&world, &mut r);
+    assert!(check(&moved, &camera, &camera, &at, &before) > 100, "the quads cover pixels");
+    gpu.assert_clean();
+}
