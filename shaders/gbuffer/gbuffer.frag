@@ -2,7 +2,8 @@
 // G-buffer geometry pass, fragment stage: albedo + metallic, normal + roughness (its two formats:
 // ../common/gbuffer_normal.glsl) and, with EMISSIVE_OCCLUSION, emissive + occlusion, from the
 // material's factors and textures. Masked materials' fragments below their alpha cutoff are
-// discarded.
+// discarded. With MOTION, the motion vector at MOTION_LOCATION (src/passes/gbuffer.rs): in
+// pixels, from this frame's position to last frame's, x right, y down.
 #include "../common/material_surface.glsl"
 #include "../common/gbuffer_normal.glsl"
 
@@ -18,6 +19,9 @@ layout(location = 0) out vec4 out_albedo_metallic;
 layout(location = 1) out NORMAL_TEXEL out_normal_roughness;
 #ifdef EMISSIVE_OCCLUSION
 layout(location = 2) out vec4 out_emissive_occlusion;   // R8G8B8A8_SRGB
+#endif
+#ifdef MOTION
+#include "motion.glsl"
 #endif
 
 void main() {
@@ -35,5 +39,8 @@ void main() {
     out_normal_roughness = encode_normal_roughness(s.normal, s.roughness);
 #ifdef EMISSIVE_OCCLUSION
     out_emissive_occlusion = vec4(s.emissive, s.occlusion);
+#endif
+#ifdef MOTION
+    write_motion();
 #endif
 }

@@ -23,12 +23,28 @@ layout(location = 4) flat out uint out_instance;   // instance id (the visibilit
 layout(location = 5) out vec2 out_uv;
 layout(location = 6) out vec4 out_tangent;         // world tangent, w: bitangent sign
 
+#ifdef MOTION
+// Motion vectors: the instance's record of the world's previous frame.
+layout(set = 0, binding = 8, scalar) readonly buffer PrevInstances { GpuInstance prev_instances[]; };
+// Unjittered clip positions now and last frame: the fragment divides each by its w (the
+// difference of projected points is not linear across a triangle; clip positions are).
+layout(location = 7) out vec4 out_clip;
+layout(location = 8) out vec4 out_prev_clip;
+#endif
+
 void main() {
     uint id = draw_instance_ids[gl_InstanceIndex];
     GpuInstance inst = instances[id];
     out_instance = id;
     vec3 rel = instance_rel_eye(inst, in_position, frame.eye_hi.xyz, frame.eye_lo.xyz);
     gl_Position = frame.view_proj * vec4(rel, 1.0);
+#ifdef MOTION
+    // Last frame's position relative to last frame's eye, through last frame's unjittered
+    // matrix: neither frame's jitter shows as motion.
+    vec3 prev_rel = instance_rel_eye(prev_instances[id], in_position, frame.prev_eye_hi.xyz, frame.prev_eye_lo.xyz);
+    out_clip = frame.view_proj_unjittered * vec4(rel, 1.0);
+    out_prev_clip = frame.prev_view_proj_unjittered * vec4(prev_rel, 1.0);
+#endif
     out_normal = instance_normal(inst, oct_decode(in_normal_oct));
     out_material = instance_material(inst);
     bool mirrored = instance_is_mirrored(inst);

@@ -381,7 +381,7 @@ pub struct RenderArgs {
     pub hdr_out: Option<PathBuf>,
     /// Write the last frame's motion vectors (the graph's output `motion`: pixels from this
     /// frame's position to the last frame's, x right, y down) as a 32-bit float OpenEXR image
-    /// (R = x, G = y, B = 0). No shipped graph writes it yet.
+    /// (R = x, G = y, B = 0). `builtin:post` has it.
     #[arg(long, value_name = "FILE.exr")]
     pub motion_out: Option<PathBuf>,
     /// Write the last frame's depth (the graph's output `depth_resolved`, else `depth`:

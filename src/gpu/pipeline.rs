@@ -122,7 +122,7 @@ impl PipelineMemo {
 }
 
 /// A pipeline with its reflected layout. Pipelines made from the same shaders and state share
-/// their Vulkan objects (see [`PipelineMemo`]).
+/// their Vulkan objects: a device keeps a memo of the live ones ([`GpuContext::pipelines_made`]).
 #[derive(Clone)]
 pub struct Pipeline(Arc<PipelineObjects>);
 

@@ -7,6 +7,13 @@
 //! - `gbuffer_equal`: the MSAA Z-prepass baseline: depth EQUAL against a finished depth buffer,
 //!   one stencil bit per sample so each sample is written once.
 //!
+//! `gbuffer` and `gbuffer_append` also write per-pixel motion vectors where the graph binds
+//! `motion` ([`MOTION_FORMAT`], `shaders/gbuffer/motion.glsl`): each vertex is projected with
+//! this frame's unjittered matrix and, at its instance's previous transform
+//! ([`GpuScene::previous_instances`]), with last frame's unjittered matrix relative to last
+//! frame's eye; the fragment takes the difference of the two projections, in pixels. `gbuffer`
+//! always clears `motion` to 0, the value the background keeps.
+//!
 //! The color targets are cleared only with the `clear_colors` setting. Readers tell background
 //! from geometry by depth (0 = nothing drawn), so a clear would only write texels nobody reads,
 //! a full-screen write that is a large share of a culled frame (`docs/history.md`).
@@ -16,8 +23,8 @@
 
 use super::slots::{
     clear_colors_setting, draw_list_slots, ms, redraw_list_slots, slot, EMISSIVE_OCCLUSION_SLOT_DOC,
-    GBUFFER_ALBEDO_FORMAT, GBUFFER_EMISSIVE_OCCLUSION_FORMAT, GBUFFER_NORMAL_FORMATS, NORMAL_SLOT_DOC,
-    VISIBILITY_FORMATS,
+    GBUFFER_ALBEDO_FORMAT, GBUFFER_EMISSIVE_OCCLUSION_FORMAT, GBUFFER_NORMAL_FORMATS, MOTION_FORMAT, MOTION_SLOT_DOC,
+    NORMAL_SLOT_DOC, VISIBILITY_FORMATS,
 };
 use crate::gpu::barrier::layout_for_format;
 use crate::gpu::cmd_set_full_viewport;
@@ -153,7 +160,20 @@ impl GeometryShaders {
         depth: (vk::Format, vk::SampleCountFlags),
         equal: bool,
     ) -> crate::Result<Self> {
-        let vertex = shaders.compile("gbuffer/gbuffer.vert", &[])?;
+        Self::compile_with_vertex(shaders, &[], fragment, color_formats, depth, equal)
+    }
+
+    /// As [`GeometryShaders::compile`], with `gbuffer.vert`'s defines (`MOTION`: the clip
+    /// positions motion vectors are made from; its `gl_Position` is the same either way).
+    pub fn compile_with_vertex(
+        shaders: &ShaderCompiler,
+        vertex_defines: &[(&str, &str)],
+        fragment: Option<(&str, &[(&str, &str)])>,
+        color_formats: &[vk::Format],
+        depth: (vk::Format, vk::SampleCountFlags),
+        equal: bool,
+    ) -> crate::Result<Self> {
+        let vertex = shaders.compile("gbuffer/gbuffer.vert", vertex_defines)?;
         // Masked materials keep a share of the samples (shaders/common/material_surface.glsl).
         let samples = depth.1.as_raw().max(1).to_string();
         let fragment = fragment
@@ -308,6 +328,8 @@ pub struct GbufferPass {
     clear_colors: bool,
     /// Visibility ids packed in one word (`visibility_ids`): the triangle bits are pushed.
     packed_ids: bool,
+    /// Whether `motion` is bound: the pipelines write motion vectors after the other targets.
+    motion: bool,
 }
 
 impl GbufferPass {
@@ -330,6 +352,10 @@ impl GbufferPass {
             ));
         }
         let emissive_occlusion = bound_image(plan, pass, "emissive_occlusion").is_some();
+        let motion = bound_image(plan, pass, "motion");
+        if motion.is_some() && surface != 2 {
+            return Err(invalid(MOTION_TARGETS.into()));
+        }
         if mode == GeometryMode::Equal && !crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL)
         {
             return Err(invalid(format!(
@@ -353,12 +379,22 @@ impl GbufferPass {
                 None => ("gbuffer/gbuffer.frag", normal_defines(normal).to_vec(), &surface_colors),
             };
             let id_format = ids.map(|(f, _)| [f]);
-            let formats = id_format.as_ref().map_or(formats, |f| f.as_slice());
+            let mut formats = id_format.as_ref().map_or(formats, |f| f.as_slice()).to_vec();
             if extras {
                 defines.push(("EMISSIVE_OCCLUSION", "1"));
             }
             defines.extend_from_slice(no_masks);
-            let compiled = GeometryShaders::compile(shaders, Some((path, defines.as_slice())), formats, depth, equal)?;
+            // Motion vectors come after the targets this variant writes.
+            let motion_location = formats.len().to_string();
+            let mut vertex_defines: Vec<(&str, &str)> = Vec::new();
+            if let Some((format, _)) = motion {
+                formats.push(format);
+                defines.extend([("MOTION", "1"), ("MOTION_LOCATION", motion_location.as_str())]);
+                vertex_defines.push(("MOTION", "1"));
+            }
+            let fragment = Some((path, defines.as_slice()));
+            let compiled =
+                GeometryShaders::compile_with_vertex(shaders, &vertex_defines, fragment, &formats, depth, equal)?;
             Ok(LazyPipeline::geometry(&pass.name, compiled))
         };
         let row = |extras: bool| -> crate::Result<[Option<LazyPipeline>; 2]> {
@@ -373,9 +409,15 @@ impl GbufferPass {
             // gbuffer_append loads its targets and declares no clear_colors.
             clear_colors: mode != GeometryMode::Append && pass.flag("clear_colors")?,
             packed_ids,
+            motion: motion.is_some(),
         })
     }
 }
+
+/// Why a geometry pass refuses its `motion` binding: motion vectors are written beside a
+/// G-buffer's surface.
+const MOTION_TARGETS: &str =
+    "motion vectors are written beside albedo and normal: bind both with motion (not ids, nor a depth-only pass)";
 
 impl PassNode for GbufferPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
@@ -392,16 +434,23 @@ impl PassNode for GbufferPass {
         let scene = &inputs.scene;
         let extras = self.pipelines.writes_extras(scene.emission_or_occlusion);
         let pipeline = self.pipelines.pick(rec.ctx, scene.emission_or_occlusion, scene.alpha_masks)?;
+        // Motion vectors are cleared to 0 by the first pass whatever `clear_colors` says: the
+        // background has no fragment to write its 0.
+        let motion_load = match self.mode {
+            GeometryMode::Append => vk::AttachmentLoadOp::LOAD,
+            _ => vk::AttachmentLoadOp::CLEAR,
+        };
         let colors: Vec<vk::RenderingAttachmentInfo> = GBUFFER_COLOR_SLOTS
             .iter()
-            .chain(&["ids"])
+            .chain(&["ids", "motion"])
             .filter(|&&s| extras || s != "emissive_occlusion")
-            .filter_map(|s| slots.image(s))
-            .map(|image| {
+            .filter(|&&s| self.motion || s != "motion")
+            .filter_map(|s| slots.image(s).map(|image| (*s, image)))
+            .map(|(s, image)| {
                 vk::RenderingAttachmentInfo::default()
                     .image_view(image.view())
                     .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(color_load)
+                    .load_op(if s == "motion" { motion_load } else { color_load })
                     .store_op(vk::AttachmentStoreOp::STORE)
                     .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
             })
@@ -412,6 +461,8 @@ impl PassNode for GbufferPass {
             GeometryMode::Equal => DrawSource::redraw_lists(slots, scene)?,
             _ => vec![DrawSource::bound(slots, LIST_SLOTS)?.unwrap_or_else(|| DrawSource::unculled(scene))],
         };
+        let previous = [Bind::Buffer(8, scene.previous_instances().handle())];
+        let extra: &[Bind] = if self.motion { &previous } else { &[] };
         record_geometry(
             rec.ctx,
             rec.cmd,
@@ -422,7 +473,7 @@ impl PassNode for GbufferPass {
             &colors,
             depth,
             depth_load,
-            &[],
+            extra,
             push,
         );
         Ok(())
@@ -446,6 +497,7 @@ impl PassKind for GbufferKind {
                     ms(slot("emissive_occlusion", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_EMISSIVE_OCCLUSION_FORMAT), EMISSIVE_OCCLUSION_SLOT_DOC)),
                     ms(slot("ids", Usage::ColorAttachment, false, FormatRule::OneOf(VISIBILITY_FORMATS), "visibility buffer: instance id and triangle id, packed in R32_UINT or as R32G32_UINT (instead of albedo and normal)")),
                     ms(slot("depth", Usage::DepthAttachment, true, FormatRule::Depth, "reversed-Z depth (cleared to 0, stencil to 0)")),
+                    ms(slot("motion", Usage::ColorAttachment, false, FormatRule::Exact(MOTION_FORMAT), MOTION_SLOT_DOC)),
                 ],
                 settings: vec![clear_colors_setting()],
                 slots_from_shader: false,
@@ -460,6 +512,7 @@ impl PassKind for GbufferKind {
                     ms(slot("emissive_occlusion", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_EMISSIVE_OCCLUSION_FORMAT), EMISSIVE_OCCLUSION_SLOT_DOC)),
                     ms(slot("ids", Usage::ColorAttachmentLoad, false, FormatRule::OneOf(VISIBILITY_FORMATS), "visibility buffer: instance id and triangle id (packed R32_UINT or R32G32_UINT)")),
                     ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "reversed-Z depth")),
+                    ms(slot("motion", Usage::ColorAttachmentLoad, false, FormatRule::Exact(MOTION_FORMAT), MOTION_SLOT_DOC)),
                 ],
                 settings: vec![],
                 slots_from_shader: false,
@@ -528,6 +581,9 @@ fn targets_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
             check.pass.name
         );
         return Some((at, message));
+    }
+    if let Some(motion) = bound("motion").filter(|_| surface != 2) {
+        return Some((motion.pos, format!("pass '{}': {MOTION_TARGETS}", check.pass.name)));
     }
     None
 }

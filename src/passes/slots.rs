@@ -21,6 +21,11 @@ pub(crate) const EMISSIVE_OCCLUSION_SLOT_DOC: &str =
     "emissive rgb and ambient occlusion a (optional: without it, surfaces emit nothing and are not occluded)";
 /// What the G-buffer's `normal` slots hold, in either format.
 pub(crate) const NORMAL_SLOT_DOC: &str = "normal and roughness (packed R32_UINT, or R16G16B16A16_SFLOAT)";
+/// The geometry passes' motion-vector format: per pixel, in pixels, from this frame's position to
+/// last frame's, x right, y down (`shaders/gbuffer/motion.glsl`); 0 where no geometry was drawn.
+pub const MOTION_FORMAT: vk::Format = vk::Format::R16G16_SFLOAT;
+/// What the geometry passes' `motion` slots hold.
+pub(crate) const MOTION_SLOT_DOC: &str = "motion vectors (R16G16_SFLOAT, optional): pixels from this frame's position to last frame's, x right, y down, unjittered; 0 where nothing is drawn (with albedo and normal)";
 /// The visibility buffer's packed format: instance id and triangle id in one 32-bit word, the
 /// triangle in the low bits (as many as the scene's largest mesh needs; `passes::visibility_ids`).
 pub const VISIBILITY_PACKED: vk::Format = vk::Format::R32_UINT;

@@ -278,7 +278,8 @@ impl Renderer {
         self.drawn_in_view(ViewId::MAIN)
     }
 
-    /// The main view's constants as frame `frame` was given them ([`FrameConstants`]), once it
+    /// The main view's constants as frame `frame` was given them
+    /// ([`crate::passes::shared::gpu_types::FrameConstants`]), once it
     /// has completed (the buffer is reused `FRAMES_IN_FLIGHT` frames later).
     pub fn frame_constants_of(&self, frame: u64) -> &Buffer {
         &self.main_view().inputs.slot(frame).constants

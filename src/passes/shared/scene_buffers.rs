@@ -17,6 +17,11 @@ pub struct GpuScene {
     pub indices: Buffer,
     /// [`GpuInstance`] per scene instance, in scene order.
     pub instances: Buffer,
+    /// Each instance's record as the previous frame of the world had it, for motion vectors:
+    /// kept by a changing world's renderer ([`GpuScene::add_previous_instances`]); `None` for a
+    /// scene that never moves, whose previous transforms are its current ones
+    /// ([`GpuScene::previous_instances`]).
+    pub prev_instances: Option<Buffer>,
     /// [`GpuMaterial`] per material.
     pub materials: Buffer,
     /// Instance ids grouped by draw group (face cull, mesh), each group in spatial order (Morton
@@ -161,7 +166,28 @@ impl GpuScene {
             &self.group_bounds,
             &self.instance_triangles,
         ];
-        buffers.iter().map(|b| b.size()).sum::<u64>() + self.textures.bytes()
+        let previous = self.prev_instances.as_ref().map_or(0, |b| b.size());
+        buffers.iter().map(|b| b.size()).sum::<u64>() + previous + self.textures.bytes()
+    }
+
+    /// The instance records of the world's previous frame ([`GpuScene::prev_instances`]), or the
+    /// current ones for a scene that never moves.
+    pub fn previous_instances(&self) -> &Buffer {
+        self.prev_instances.as_ref().unwrap_or(&self.instances)
+    }
+
+    /// Makes [`GpuScene::prev_instances`], a buffer the size of [`GpuScene::instances`] with
+    /// undefined contents: its owner copies the current records into it before any frame reads
+    /// it (a changing world's renderer does at its next frame).
+    pub fn add_previous_instances(&mut self, ctx: &GpuContext) -> crate::Result<()> {
+        let desc = crate::gpu::BufferDesc {
+            name: "previous instances",
+            size: self.instances.size().max(std::mem::size_of::<GpuInstance>() as u64),
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            location: crate::gpu::MemoryLocation::GpuOnly,
+        };
+        self.prev_instances = Some(Buffer::new(ctx, &desc)?);
+        Ok(())
     }
 
     /// Creates the device buffers and queues their contents on `batch`.
@@ -213,7 +239,14 @@ impl GpuScene {
                 vk::BufferUsageFlags::INDEX_BUFFER | storage,
                 bytemuck::cast_slice(&scene.indices),
             )?,
-            instances: batch.buffer(ctx, "instances", storage, bytemuck::cast_slice(&instances))?,
+            // A changing world copies them to its previous instances (motion vectors).
+            instances: batch.buffer(
+                ctx,
+                "instances",
+                storage | vk::BufferUsageFlags::TRANSFER_SRC,
+                bytemuck::cast_slice(&instances),
+            )?,
+            prev_instances: None,
             materials: batch.buffer(ctx, "materials", storage, bytemuck::cast_slice(&materials))?,
             draw_instance_ids: batch.buffer(
                 ctx,

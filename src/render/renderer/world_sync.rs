@@ -12,6 +12,18 @@
 //! cost the copy engine about a microsecond each on an H100, thousands of times the bytes they
 //! move.)
 //!
+//! Motion vectors need each instance's transform of the previous frame: the scene keeps a
+//! second copy of the instance records ([`GpuScene::prev_instances`]). At a frame that
+//! scatters updates, or that follows one that did, the whole current table is copied there
+//! before the scatter writes the new records, so that every slot's previous record is the one
+//! it had last frame: an instance moved last frame but not this one gets previous = current
+//! (no stale motion), which copying only this frame's moved slots would miss. The copy moves
+//! 64 bytes a slot (a million slots: 64 MB, some tens of microseconds on an H100) and only
+//! while something moves. The world's previous frame is the renderer's previous frame: a view
+//! that skipped frames sees its camera's motion since its own last frame, but the instances'
+//! motion since the world's last frame. A scene made anew (a rebuild, below) starts with
+//! previous = current: its instances show no motion at that frame.
+//!
 //! A group without a free slot, or an instance of a group the layout lacks, grows the layout
 //! at its end ([`SlotLayout::grow`]); a registered mesh, material or texture, or more lights
 //! than the light buffers hold, also makes the scene's buffers anew (the textures only when one
@@ -88,6 +100,11 @@ pub(super) struct WorldMirror {
     recent: std::collections::VecDeque<(u64, UpdateStats)>,
     /// Per frame in flight, a timer of the scatter and the frame it timed.
     timers: Vec<(GpuTimer, Option<u64>)>,
+    /// Whether the last recorded frame scattered updates: this frame then copies the current
+    /// records to the previous ones even if it scatters none (previous = current again).
+    moved_last: bool,
+    /// Whether the scene's previous records are still to be filled (a new scene).
+    refresh_previous: bool,
 }
 
 impl WorldMirror {
@@ -189,7 +206,8 @@ impl WorldMirror {
         let (timer, timed) = &mut self.timers[k];
         timer.reset(cmd);
         *timed = Some(frame);
-        if self.moves.is_empty() && self.whole.is_empty() {
+        let scatters = !self.moves.is_empty() || !self.whole.is_empty();
+        if !scatters && !self.moved_last && !self.refresh_previous {
             return Ok(());
         }
         let device = ctx.device();
@@ -199,6 +217,24 @@ impl WorldMirror {
             layout: ash::vk::ImageLayout::UNDEFINED,
         };
         timer.begin(cmd, "update scene");
+        if let Some(previous) = &scene.prev_instances {
+            // Last frame's records become the previous ones before the scatter replaces them.
+            let transfer = Access {
+                stage: ash::vk::PipelineStageFlags2::COPY,
+                access: ash::vk::AccessFlags2::TRANSFER_READ | ash::vk::AccessFlags2::TRANSFER_WRITE,
+                layout: ash::vk::ImageLayout::UNDEFINED,
+            };
+            cmd_barriers(device, cmd, &[memory_barrier(all, transfer)], &[]);
+            let region = ash::vk::BufferCopy { src_offset: 0, dst_offset: 0, size: scene.instances.size() };
+            // SAFETY: cmd is recording; both buffers live as long as the scene, which outlives
+            // the frames that use it.
+            unsafe { device.cmd_copy_buffer(cmd, scene.instances.handle(), previous.handle(), &[region]) };
+            cmd_barriers(device, cmd, &[memory_barrier(transfer, all)], &[]);
+        }
+        if !scatters {
+            timer.end(cmd);
+            return Ok(());
+        }
         // Earlier frames may still read what this overwrites.
         let compute_rw = Access {
             stage: ash::vk::PipelineStageFlags2::COMPUTE_SHADER,
@@ -253,6 +289,8 @@ impl WorldMirror {
     /// The frame `frame` was recorded: the queued updates are in it, and the syncs before it
     /// are its figures.
     pub(super) fn recorded(&mut self, frame: u64) {
+        self.moved_last = !self.moves.is_empty() || !self.whole.is_empty();
+        self.refresh_previous = false;
         self.clear_updates();
         if let Some(stats) = self.pending.take() {
             self.recent.push_back((frame, stats));
@@ -355,7 +393,9 @@ impl Renderer {
         let compiled = with_room_to_grow(&spec.kinds, &counted?, &settings);
         let runtime = build_runtime(ctx, shaders, &compiled, spec)?;
         let mut uploads = UploadBatch::default();
-        let gpu_scene = Arc::new(GpuScene::upload_with(ctx, &scene, layout.draw_list(&scene), &mut uploads)?);
+        let mut gpu_scene = GpuScene::upload_with(ctx, &scene, layout.draw_list(&scene), &mut uploads)?;
+        gpu_scene.add_previous_instances(ctx)?;
+        let gpu_scene = Arc::new(gpu_scene);
         let light_capacity = with_room(scene.lights.len() as u64) as usize;
         let mut renderer =
             Self::assemble(ctx, scene, gpu_scene, light_capacity, uploads, runtime, compiled, settings, spec)?;
@@ -380,6 +420,8 @@ impl Renderer {
             timers: (0..FRAMES_IN_FLIGHT)
                 .map(|_| GpuTimer::new(ctx, 1).map(|t| (t, None)))
                 .collect::<std::result::Result<_, _>>()?,
+            moved_last: false,
+            refresh_previous: true,
         });
         Ok(renderer)
     }
@@ -589,7 +631,9 @@ impl Renderer {
         // recorded yet (the batch that holds it is replaced below).
         let reuse = !textures_changed && self.uploads.pending.is_none();
         let textures = reuse.then(|| self.gpu_scene.textures.clone());
-        let gpu_scene = GpuScene::upload_reusing(&self.ctx, &scene, layout.draw_list(&scene), &mut uploads, textures)?;
+        let mut gpu_scene =
+            GpuScene::upload_reusing(&self.ctx, &scene, layout.draw_list(&scene), &mut uploads, textures)?;
+        gpu_scene.add_previous_instances(&self.ctx)?;
         let gpu_scene = Arc::new(gpu_scene);
         let light_capacity = with_room(scene.lights.len() as u64).max(self.light_capacity as u64) as usize;
         let mut inputs = Vec::with_capacity(self.views.len());
@@ -615,6 +659,9 @@ impl Renderer {
         self.uploads.pending = Some(uploads);
         let mirror = self.world.as_mut().expect("a world renderer");
         mirror.clear_updates();
+        // The new scene's previous records are its current ones (no motion at its first frame).
+        mirror.refresh_previous = true;
+        mirror.moved_last = false;
         mirror.layout = layout;
         mirror.handles = world_handles(world);
         mirror.version = world.version();
