@@ -230,3 +230,43 @@ fn views_of_a_growing_world_each_match_their_camera_alone() {
     }
     gpu.assert_clean();
 }
+
+/// More views than one dispatch culls (16): the views culled together give each view the image
+/// and the figures of the views culled one at a time, frame after frame.
+#[test]
+fn views_culled_together_match_views_culled_one_at_a_time() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, overview) = city_view(600, (16, 12));
+    let street = street_camera(&scene);
+    let spec = GraphSpec::default_graph();
+    let orbit = cullgraph::scene::CameraPath::Orbit;
+    let cameras: Vec<Camera> =
+        (0..18).map(|i| orbit.camera_at(if i % 2 == 0 { &overview } else { &street }, i as u32 * 7)).collect();
+    let mut renderers = Vec::new();
+    for together in [true, false] {
+        let mut r = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(16, 12)).unwrap();
+        let mut ids = vec![ViewId::MAIN];
+        for i in 1..cameras.len() {
+            // Sizes differ, so that each view's pyramid has its own size.
+            let size = RenderSettings::new(12 + i as u32, 10 + (i as u32 % 3));
+            ids.push(r.add_view(&shaders, size, &spec).unwrap());
+        }
+        r.set_views_culled_together(together);
+        renderers.push((r, ids));
+    }
+    for frame in 0..3 {
+        let mut results = Vec::new();
+        for (r, ids) in &mut renderers {
+            let frames: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&cameras).collect();
+            results.push(r.render_views_to_rgba8(&frames).unwrap());
+        }
+        for (v, (together, apart)) in results[0].iter().zip(&results[1]).enumerate() {
+            assert!(together.1 == apart.1, "frame {frame}, view {v}: the image differs");
+            assert_eq!(counts(&together.0), counts(&apart.0), "frame {frame}, view {v}");
+        }
+        let occluded: u32 = results[0].iter().map(|(s, _)| s.occlusion_culled).sum();
+        assert!(frame == 0 || occluded > 0, "frame {frame}: the views cull by occlusion");
+    }
+    gpu.assert_clean();
+}

@@ -23,6 +23,13 @@
 #define THREADS 256u
 layout(local_size_x = 256) in;
 
+#ifdef MULTI_VIEW
+// One row of workgroups per view (gl_WorkGroupID.y), each placing that view's survivors.
+#include "cull_views.glsl"
+layout(set = 0, binding = 2, scalar) readonly buffer Groups { DrawGroup groups[]; };
+layout(set = 0, binding = 3) readonly buffer SlotInstances { uint slot_instances[]; };
+layout(set = 0, binding = 14, scalar) readonly buffer ViewTable { ViewBuffers view_table[]; };
+#else
 layout(set = 0, binding = 0) readonly buffer DrawBits { uint draw_bits[]; };
 layout(set = 0, binding = 1) buffer Scratch { uint scratch[]; };
 layout(set = 0, binding = 2, scalar) readonly buffer Groups { DrawGroup groups[]; };
@@ -41,6 +48,8 @@ layout(set = 0, binding = 10) writeonly buffer VisibleIds { uint visible_ids[]; 
 layout(set = 0, binding = 11, scalar) writeonly buffer ListCommands { DrawCommand list_commands[]; };
 layout(set = 0, binding = 12) writeonly buffer ListCount { uint list_count[FACE_CULL_REGIONS]; };
 layout(set = 0, binding = 13, scalar) writeonly buffer ListStats { CullStats list_stats; };
+#endif
+
 #endif
 
 layout(push_constant) uniform Push {
@@ -306,6 +315,9 @@ void write_commands() {
 }
 
 void main() {
+#ifdef MULTI_VIEW
+    select_view_buffers(view_table[gl_WorkGroupID.y], gl_WorkGroupID.y);
+#endif
     if (gl_WorkGroupID.x == 0u) {
         write_commands();
         return;

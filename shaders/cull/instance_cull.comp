@@ -42,6 +42,32 @@ CullRecord load_record(uint slot) {
     r.half_z = b.w;
     return r;
 }
+#ifdef MULTI_VIEW
+#include "cull_views.glsl"
+layout(set = 0, binding = 2, scalar) readonly buffer Groups { DrawGroup groups[]; };
+layout(set = 0, binding = 10, scalar) readonly buffer ViewTable { ViewBuffers view_table[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer FrameRef { FrameConstants f; };
+FrameRef g_frame;
+#define frame g_frame.f
+void select_view(uint v) {
+    ViewBuffers b = view_table[v];
+    select_view_buffers(b, v);
+    g_frame = FrameRef(b.constants);
+}
+#ifdef HAS_HIZ
+layout(set = 0, binding = 9) uniform sampler2D hiz_views[MAX_CULL_VIEWS];
+// Each view's pyramid, indexed by constants (sampled-image arrays may not be indexed
+// dynamically everywhere, lavapipe included).
+#define HIZ_CASE(i) if (g_view == uint(i)) return texelFetch(hiz_views[i], t, mip).r;
+float hiz_load(uint level, uvec2 texel) {
+    ivec2 t = ivec2(texel);
+    int mip = int(hiz_stored_mip(level));
+    HIZ_CASE(0) HIZ_CASE(1) HIZ_CASE(2) HIZ_CASE(3) HIZ_CASE(4) HIZ_CASE(5) HIZ_CASE(6) HIZ_CASE(7)
+    HIZ_CASE(8) HIZ_CASE(9) HIZ_CASE(10) HIZ_CASE(11) HIZ_CASE(12) HIZ_CASE(13) HIZ_CASE(14) HIZ_CASE(15)
+    return 0.0;
+}
+#endif
+#else
 layout(set = 0, binding = 1, scalar) readonly buffer Frame { FrameConstants frame; };
 layout(set = 0, binding = 2, scalar) readonly buffer Groups { DrawGroup groups[]; };
 #ifdef ATOMIC_APPEND
@@ -65,6 +91,8 @@ layout(set = 0, binding = 9) uniform sampler2D hiz_tex;
 float hiz_load(uint level, uvec2 texel) { return texelFetch(hiz_tex, ivec2(texel), int(hiz_stored_mip(level))).r; }
 #endif
 
+#endif
+
 layout(push_constant) uniform Push {
     uint slot_count;
     uint superblocks;          // ceil(blocks / CULL_SUPERBLOCK)
@@ -72,6 +100,7 @@ layout(push_constant) uniform Push {
     float occluder_distance;   // PHASE_OCCLUDERS/REST: farthest occluder center distance
     float occluder_size;       // smallest projected radius / view height
     uint occluder_triangles;   // meshes this cheap are candidates unflagged (0: flagged only)
+    uint view_count;           // MULTI_VIEW: views in the table
 } pc;
 
 shared uint sh_draw[CULL_WORDS_PER_BLOCK];
@@ -204,10 +233,9 @@ Decision decide(CullRecord r, bool evaluated, bool was_visible) {
     return d;
 }
 
-void main() {
-    uint lane = gl_LocalInvocationIndex;
-    uint block = gl_WorkGroupID.x;
-    uint slot = block * CULL_BLOCK + lane;
+// Decides and records one block of slots for the selected view (MULTI_VIEW) or the one view.
+// `loaded`: the slot's record when `preloaded` (every view reads the one load).
+void cull_block(uint lane, uint block, uint slot, bool preloaded, CullRecord loaded) {
     if (lane < CULL_WORDS_PER_BLOCK) {
         sh_draw[lane] = 0u;
         sh_vis[lane] = 0u;
@@ -230,8 +258,8 @@ void main() {
 #else
     bool evaluated = in_range;
 #endif
-    CullRecord r = CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u);
-    if (evaluated) r = load_record(slot);
+    CullRecord r = loaded;
+    if (evaluated && !preloaded) r = load_record(slot);
     // An empty slot is not tested: its visibility bit is written 0, so an instance that takes
     // the slot later inherits nothing.
     if (evaluated && record_empty(r)) evaluated = false;
@@ -303,5 +331,25 @@ void main() {
         // Nothing reads this word in this dispatch: the compact step's copy of the run number.
         if (block == 0u) scratch[SCRATCH_PLACE_RUN] = run;
     }
+#endif
+}
+
+void main() {
+    uint lane = gl_LocalInvocationIndex;
+    uint block = gl_WorkGroupID.x;
+    uint slot = block * CULL_BLOCK + lane;
+    CullRecord none = CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u);
+#ifdef MULTI_VIEW
+    // The slot's record is read once, and tested against every view.
+    CullRecord r = none;
+    if (slot < pc.slot_count) r = load_record(slot);
+    for (uint v = 0u; v < pc.view_count; ++v) {
+        select_view(v);
+        // The last view's shared words are read before they are zeroed for this one.
+        barrier();
+        cull_block(lane, block, slot, true, r);
+    }
+#else
+    cull_block(lane, block, slot, false, none);
 #endif
 }

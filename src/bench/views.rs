@@ -36,11 +36,15 @@ pub struct ViewsBench {
 pub struct ViewsRow {
     /// Views rendered each frame.
     pub views: usize,
-    /// Median GPU milliseconds of all views' instance-cull passes together.
+    /// Median GPU milliseconds of culling every view, the views culled together (one test and
+    /// one compact dispatch per phase for up to 16 views): the longest view's cull scope, each
+    /// of which covers the shared dispatches.
     pub cull_ms: f64,
-    /// Median GPU milliseconds of the whole frame (every view).
+    /// The same with each view culled in dispatches of its own: the sum of the views' scopes.
+    pub cull_separate_ms: f64,
+    /// Median GPU milliseconds of the whole frame (every view), culled together.
     pub frame_ms: f64,
-    /// Instance-cull dispatch steps recorded per frame.
+    /// Instance-cull passes per view.
     pub cull_passes: usize,
     /// Device bytes of every view's graph resources together (the scene is shared).
     pub view_bytes: u64,
@@ -134,17 +138,26 @@ pub fn run(
         // Every view runs the same graph: its instance-cull passes by name.
         let cull_names: Vec<String> =
             renderer.plan().passes.iter().filter(|p| p.kind == "instance_cull").map(|p| p.name.clone()).collect();
-        let (mut cull, mut total) = (Vec::new(), Vec::new());
+        let (mut cull, mut separate, mut total) = (Vec::new(), Vec::new(), Vec::new());
         let mut drawn = Vec::new();
-        for f in 0..bench.warmup + bench.frames {
-            let stats = renderer.render_views(&frame)?;
-            if f < bench.warmup {
-                continue;
+        for together in [true, false] {
+            renderer.set_views_culled_together(together);
+            for f in 0..bench.warmup + bench.frames {
+                let stats = renderer.render_views(&frame)?;
+                if f < bench.warmup {
+                    continue;
+                }
+                let per_view = stats
+                    .iter()
+                    .map(|s| s.gpu_ms.iter().filter(|t| cull_names.contains(&t.name)).map(|t| t.ms).sum::<f64>());
+                if together {
+                    cull.push(per_view.fold(0.0, f64::max));
+                    total.push(stats.iter().map(|s| s.gpu_total_ms).fold(0.0, f64::max));
+                    drawn = stats.iter().map(|s| s.drawn).collect();
+                } else {
+                    separate.push(per_view.sum::<f64>());
+                }
             }
-            let timings = stats.iter().flat_map(|s| &s.gpu_ms);
-            cull.push(timings.filter(|t| cull_names.contains(&t.name)).map(|t| t.ms).sum::<f64>());
-            total.push(stats.iter().map(|s| s.gpu_total_ms).sum::<f64>());
-            drawn = stats.iter().map(|s| s.drawn).collect();
         }
         let cull_passes = cull_names.len() * n;
         let view_bytes = ids
@@ -155,6 +168,7 @@ pub fn run(
         report.rows.push(ViewsRow {
             views: n,
             cull_ms: median(&mut cull),
+            cull_separate_ms: median(&mut separate),
             frame_ms: median(&mut total),
             cull_passes,
             view_bytes,
@@ -197,18 +211,19 @@ impl ViewsReport {
     pub fn markdown(&self) -> String {
         let mut md = format!(
             "## Views\n\nCity of {} instances on {}; the scene ({:.1} MB) is shared by every view.\n\n\
-             | views | cull passes | cull GPU ms | frame GPU ms | view resources MB | drawn per view |\n\
-             |---|---|---|---|---|---|\n",
+             | views | cull GPU ms, together | cull GPU ms, one view at a time | ratio | frame GPU ms | view resources MB | drawn per view |\n\
+             |---|---|---|---|---|---|---|\n",
             self.instances,
             self.device,
             self.scene_bytes as f64 / 1e6
         );
         for r in &self.rows {
             md += &format!(
-                "| {} | {} | {:.3} | {:.3} | {:.1} | {:?} |\n",
+                "| {} | {:.3} | {:.3} | {:.2} | {:.3} | {:.1} | {:?} |\n",
                 r.views,
-                r.cull_passes,
                 r.cull_ms,
+                r.cull_separate_ms,
+                r.cull_separate_ms / r.cull_ms.max(1e-9),
                 r.frame_ms,
                 r.view_bytes as f64 / 1e6,
                 r.drawn

@@ -35,12 +35,33 @@ pub struct Buffer {
     name: String,
     /// Owned by a host engine: never destroyed here.
     external: bool,
+    /// Created with a device address ([`Buffer::device_address`]).
+    addressable: bool,
 }
 
 impl Buffer {
     /// Wraps a host engine's buffer of `size` bytes without taking ownership.
     pub fn from_host(ctx: &GpuContext, name: &str, buffer: vk::Buffer, size: u64) -> Self {
-        Self { shared: ctx.shared.clone(), handle: buffer, allocation: None, size, name: name.into(), external: true }
+        Self {
+            shared: ctx.shared.clone(),
+            handle: buffer,
+            allocation: None,
+            size,
+            name: name.into(),
+            external: true,
+            addressable: false,
+        }
+    }
+
+    /// The buffer's device address, for shaders that reach it through a pointer; `None` where
+    /// the device gives storage buffers no addresses, or for a buffer that is not one.
+    pub fn device_address(&self) -> Option<u64> {
+        if !self.addressable {
+            return None;
+        }
+        let info = vk::BufferDeviceAddressInfo::default().buffer(self.handle);
+        // SAFETY: a live buffer of this device, created with SHADER_DEVICE_ADDRESS.
+        Some(unsafe { self.shared.device.get_buffer_device_address(&info) })
     }
 
     /// Creates a buffer and binds fresh memory to it.
@@ -55,8 +76,9 @@ impl Buffer {
         let device = &shared.device;
         // Vulkan forbids size 0; an empty scene array still needs a bindable buffer.
         let alloc_size = desc.size.max(16);
+        let usage = with_address(ctx, desc.usage);
         let info =
-            vk::BufferCreateInfo::default().size(alloc_size).usage(desc.usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+            vk::BufferCreateInfo::default().size(alloc_size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: valid device and create info.
         let handle = unsafe { device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         // SAFETY: handle was just created.
@@ -85,6 +107,7 @@ impl Buffer {
             size: desc.size,
             name: desc.name.into(),
             external: false,
+            addressable: with_address(ctx, desc.usage).contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS),
         };
         bound.vk("vkBindBufferMemory")?;
         Ok(buffer)
@@ -94,7 +117,7 @@ impl Buffer {
     /// whose lifetimes do not overlap). The block must outlive the buffer.
     pub fn new_in(ctx: &GpuContext, desc: &BufferDesc<'_>, block: &MemoryBlock, offset: u64) -> GpuResult<Self> {
         check_size(desc)?;
-        let info = create_info(desc);
+        let info = create_info(desc).usage(with_address(ctx, desc.usage));
         // SAFETY: valid device and create info.
         let handle = unsafe { ctx.device().create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         let buffer = Self {
@@ -104,6 +127,7 @@ impl Buffer {
             size: desc.size,
             name: desc.name.into(),
             external: false,
+            addressable: with_address(ctx, desc.usage).contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS),
         };
         // SAFETY: the caller placed the buffer where its requirements fit.
         unsafe { ctx.device().bind_buffer_memory(handle, block.memory(), block.offset() + offset) }
@@ -114,7 +138,7 @@ impl Buffer {
     /// What a buffer of `desc` needs from memory, without creating one (Vulkan 1.3 maintenance4).
     pub fn requirements(ctx: &GpuContext, desc: &BufferDesc<'_>) -> GpuResult<vk::MemoryRequirements> {
         check_size(desc)?;
-        let info = create_info(desc);
+        let info = create_info(desc).usage(with_address(ctx, desc.usage));
         let query = vk::DeviceBufferMemoryRequirements::default().create_info(&info);
         let mut out = vk::MemoryRequirements2::default();
         // SAFETY: valid create info.
@@ -187,6 +211,16 @@ fn check_size(desc: &BufferDesc<'_>) -> GpuResult<()> {
         });
     }
     Ok(())
+}
+
+/// `usage`, with device addresses for a storage buffer where the device gives them
+/// ([`crate::gpu::DeviceCaps::buffer_addresses`]).
+fn with_address(ctx: &GpuContext, usage: vk::BufferUsageFlags) -> vk::BufferUsageFlags {
+    if ctx.caps().buffer_addresses && usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) {
+        usage | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
+    } else {
+        usage
+    }
 }
 
 fn create_info<'a>(desc: &BufferDesc<'_>) -> vk::BufferCreateInfo<'a> {

@@ -97,6 +97,11 @@ pub struct DeviceCaps {
     /// [`HostHandles::enabled_device_extensions`] (which then promises the feature too), on a
     /// host's device. The sample-claim G-buffer can then claim in draw order (`claim_order`).
     pub sample_interlock: bool,
+    /// Storage buffers have device addresses (`Buffer::device_address`): the device has
+    /// `bufferDeviceAddress` on (a required feature) and cullgraph allocates with it, which it
+    /// knows only of its own allocator (not of a host's, [`HostHandles::allocator`]). Without it
+    /// the instance-cull pass culls each view in a dispatch of its own.
+    pub buffer_addresses: bool,
 }
 
 /// State shared by the context and every resource created from it; dropped last.
@@ -255,7 +260,8 @@ impl GpuContext {
         owned: Option<OwnedParts>,
         enabled_extension: &dyn Fn(&CStr) -> bool,
     ) -> GpuResult<Self> {
-        let caps = query_caps(&instance, physical_device, queue_family, enabled_extension);
+        let mut caps = query_caps(&instance, physical_device, queue_family, enabled_extension);
+        caps.buffer_addresses = allocator.is_none();
         let allocator = match allocator {
             Some(a) => a,
             None => {
@@ -264,7 +270,7 @@ impl GpuContext {
                     device: device.clone(),
                     physical_device,
                     debug_settings: Default::default(),
-                    buffer_device_address: false,
+                    buffer_device_address: true,
                     allocation_sizes: Default::default(),
                 };
                 let a = Allocator::new(&desc)
@@ -601,5 +607,6 @@ fn query_caps(
         },
         post_depth_coverage: has(ash::ext::post_depth_coverage::NAME),
         sample_interlock: has(ash::ext::fragment_shader_interlock::NAME) && sample_interlock_supported(instance, pd),
+        buffer_addresses: false,
     }
 }

@@ -57,6 +57,8 @@ impl RequiredFeatures {
         f.v12.sampler_filter_minmax = vk::TRUE;
         f.v12.shader_int8 = vk::TRUE;
         f.v12.storage_buffer8_bit_access = vk::TRUE;
+        // One instance-cull dispatch reaches every view's buffers through their addresses.
+        f.v12.buffer_device_address = vk::TRUE;
         f.v13.synchronization2 = vk::TRUE;
         f.v13.dynamic_rendering = vk::TRUE;
         f.v13.maintenance4 = vk::TRUE;
@@ -90,6 +92,7 @@ impl RequiredFeatures {
         check(w.scalar_block_layout, h.scalar_block_layout, "scalarBlockLayout");
         check(w.host_query_reset, h.host_query_reset, "hostQueryReset");
         check(w.sampler_filter_minmax, h.sampler_filter_minmax, "samplerFilterMinmax");
+        check(w.buffer_device_address, h.buffer_device_address, "bufferDeviceAddress");
         check(w.shader_int8, h.shader_int8, "shaderInt8");
         check(w.storage_buffer8_bit_access, h.storage_buffer8_bit_access, "storageBuffer8BitAccess");
         let (w, h) = (&self.v13, &available.v13);

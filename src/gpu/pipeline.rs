@@ -18,6 +18,8 @@ pub enum Bind {
     StorageImage(u32, vk::ImageView),
     /// A sampled image with its sampler, in the given layout.
     Sampled(u32, vk::ImageView, vk::Sampler, vk::ImageLayout),
+    /// A sampled image with its sampler at an element of an array binding (binding, element).
+    SampledAt(u32, u32, vk::ImageView, vk::Sampler, vk::ImageLayout),
 }
 
 /// Sets the dynamic viewport (depth range 0..1) and scissor of a [`Pipeline::graphics`] draw to the
@@ -360,7 +362,7 @@ impl Pipeline {
             .copied()
             .filter(|b| {
                 let n = match *b {
-                    Bind::Buffer(n, _) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) => n,
+                    Bind::Buffer(n, _) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) | Bind::SampledAt(n, ..) => n,
                 };
                 self.0.interface.bindings.contains_key(&n)
             })
@@ -369,41 +371,64 @@ impl Pipeline {
         if binds.is_empty() {
             return;
         }
-        let mut buffer_infos = Vec::with_capacity(binds.len());
-        let mut image_infos = Vec::with_capacity(binds.len());
-        for b in binds {
-            match *b {
-                Bind::Buffer(_, buffer) => {
-                    buffer_infos.push([vk::DescriptorBufferInfo::default().buffer(buffer).range(vk::WHOLE_SIZE)])
-                }
-                Bind::StorageImage(_, view) => image_infos
-                    .push([vk::DescriptorImageInfo::default().image_view(view).image_layout(vk::ImageLayout::GENERAL)]),
-                Bind::Sampled(_, view, sampler, layout) => image_infos
-                    .push([vk::DescriptorImageInfo::default().image_view(view).sampler(sampler).image_layout(layout)]),
-            }
+        // One write per binding, or per run of consecutive elements of an array binding (some
+        // implementations, lavapipe among them, keep only one of several writes to a binding).
+        struct Group {
+            binding: u32,
+            first: u32,
+            buffers: Vec<vk::DescriptorBufferInfo>,
+            images: Vec<vk::DescriptorImageInfo>,
+            fallback: vk::DescriptorType,
         }
-        let (mut bi, mut ii) = (0, 0);
-        let writes: Vec<vk::WriteDescriptorSet> = binds
+        let mut groups: Vec<Group> = Vec::with_capacity(binds.len());
+        for b in binds {
+            let (binding, element) = match *b {
+                Bind::Buffer(n, _) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) => (n, 0),
+                Bind::SampledAt(n, element, ..) => (n, element),
+            };
+            let image = match *b {
+                Bind::Buffer(..) => None,
+                Bind::StorageImage(_, view) => {
+                    Some(vk::DescriptorImageInfo::default().image_view(view).image_layout(vk::ImageLayout::GENERAL))
+                }
+                Bind::Sampled(_, view, sampler, layout) | Bind::SampledAt(_, _, view, sampler, layout) => {
+                    Some(vk::DescriptorImageInfo::default().image_view(view).sampler(sampler).image_layout(layout))
+                }
+            };
+            if let (Bind::SampledAt(..), Some(info), Some(last)) = (b, image, groups.last_mut()) {
+                if last.binding == binding
+                    && !last.images.is_empty()
+                    && last.first + last.images.len() as u32 == element
+                {
+                    last.images.push(info);
+                    continue;
+                }
+            }
+            let fallback = match b {
+                Bind::Buffer(..) => vk::DescriptorType::STORAGE_BUFFER,
+                Bind::StorageImage(..) => vk::DescriptorType::STORAGE_IMAGE,
+                Bind::Sampled(..) | Bind::SampledAt(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            };
+            let buffers = match *b {
+                Bind::Buffer(_, buffer) => {
+                    vec![vk::DescriptorBufferInfo::default().buffer(buffer).range(vk::WHOLE_SIZE)]
+                }
+                _ => Vec::new(),
+            };
+            groups.push(Group { binding, first: element, buffers, images: image.into_iter().collect(), fallback });
+        }
+        let writes: Vec<vk::WriteDescriptorSet> = groups
             .iter()
-            .map(|b| {
-                let binding = match *b {
-                    Bind::Buffer(n, _) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) => n,
-                };
-                let kind = self.0.interface.bindings.get(&binding).map(|i| i.kind).unwrap_or(match b {
-                    Bind::Buffer(..) => vk::DescriptorType::STORAGE_BUFFER,
-                    Bind::StorageImage(..) => vk::DescriptorType::STORAGE_IMAGE,
-                    Bind::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                });
-                let w = vk::WriteDescriptorSet::default().dst_binding(binding).descriptor_type(kind);
-                match b {
-                    Bind::Buffer(..) => {
-                        bi += 1;
-                        w.buffer_info(&buffer_infos[bi - 1])
-                    }
-                    _ => {
-                        ii += 1;
-                        w.image_info(&image_infos[ii - 1])
-                    }
+            .map(|g| {
+                let kind = self.0.interface.bindings.get(&g.binding).map_or(g.fallback, |i| i.kind);
+                let w = vk::WriteDescriptorSet::default()
+                    .dst_binding(g.binding)
+                    .dst_array_element(g.first)
+                    .descriptor_type(kind);
+                if g.buffers.is_empty() {
+                    w.image_info(&g.images)
+                } else {
+                    w.buffer_info(&g.buffers)
                 }
             })
             .collect();

@@ -48,8 +48,8 @@ pub use env::{DeviceEnv, Environment, NoDevice};
 pub use error::{GraphError, GraphErrors, Pos, COMMAND_LINE};
 pub(crate) use executor::Captured;
 pub use executor::{
-    CompletedTimings, FrameData, GraphRuntime, Import, Imports, PassContext, PassNode, ResourceBytes, SlotBindings,
-    StepTimer, FRAMES_IN_FLIGHT,
+    CompletedTimings, FrameData, FrameRecording, GraphRuntime, Import, Imports, PassContext, PassNode, ResourceBytes,
+    SlotBindings, StepTimer, FRAMES_IN_FLIGHT,
 };
 pub use kinds::{
     Adaptation, Bytes, Choice, CounterEntry, Counters, Created, Creates, DrawCounts, DrawList, DrawOrder, Extent,

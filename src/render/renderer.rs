@@ -22,6 +22,7 @@ use view::View;
 mod adapt;
 mod completed;
 mod graphs;
+mod lockstep;
 mod readback;
 mod view;
 mod views;
@@ -104,6 +105,8 @@ pub struct Renderer {
     views: Vec<View>,
     /// The number the next added view gets.
     next_view: u32,
+    /// Whether passes that can be recorded together for several views are ([`Renderer::set_views_culled_together`]).
+    cull_together: bool,
     frame_index: u64,
     /// What looks at each headless frame of the main view once it has completed.
     observers: Vec<Box<dyn FrameObserver>>,
@@ -166,6 +169,7 @@ impl Renderer {
             retired: Retired::default(),
             views: vec![main],
             next_view: 1,
+            cull_together: true,
             frame_index: 0,
             observers: Vec::new(),
             world: None,
@@ -353,9 +357,13 @@ impl Renderer {
             world.record_updates(&self.ctx, cmd, frame, &self.gpu_scene)?;
             self.ctx.end_label(cmd);
         }
-        for (&at, frame_view) in order.iter().zip(views) {
-            self.views[at].record(&self.ctx, cmd, frame, frame_view.camera, frame_view.imports)?;
-        }
+        let mut slots: Vec<Option<&mut View>> = self.views.iter_mut().map(Some).collect();
+        let listed = order
+            .iter()
+            .zip(views)
+            .filter_map(|(&at, fv)| slots[at].take().map(|view| (view, fv.camera, fv.imports)))
+            .collect();
+        lockstep::record(&self.ctx, cmd, frame, listed, self.cull_together)?;
 
         // Uploads and replaced state recorded FRAMES_IN_FLIGHT frames ago have executed by now.
         let in_flight = FRAMES_IN_FLIGHT as u64;

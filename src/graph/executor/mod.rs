@@ -136,6 +136,23 @@ pub const FRAMES_IN_FLIGHT: usize = 3;
 /// Room per pass in the timestamp pool for the steps [`GraphRuntime::set_step_timing`] times.
 pub const MAX_TIMED_STEPS: u32 = 4;
 
+/// A frame of one runtime being recorded pass by pass ([`GraphRuntime::begin_frame`]).
+pub struct FrameRecording {
+    /// What the executor knew of each resource before the frame, restored if it is abandoned.
+    before: Tracker,
+    /// The newest completed frame's times, for kinds that read them.
+    completed: Option<CompletedTimings>,
+}
+
+/// Stands in for a node while another records on its behalf.
+struct Placeholder;
+
+impl PassNode for Placeholder {
+    fn record(&mut self, _: &PassContext<'_>) -> crate::Result<()> {
+        Err(crate::Error::Invalid("a pass node was recorded while another recorded for it".into()))
+    }
+}
+
 /// A compiled graph with its resources and pass instances, ready to record frames.
 pub struct GraphRuntime {
     ctx: GpuContext,
@@ -255,25 +272,25 @@ impl GraphRuntime {
     /// knows of each resource's state), so the host may discard `cmd` and record again.
     pub fn record(&mut self, cmd: vk::CommandBuffer, inputs: &FrameData<'_>, imports: &Imports) -> crate::Result<u64> {
         profiling::scope!("cullgraph::record_graph", self.plan.name.as_str());
-        self.bind_imports(imports)?;
-        let before = self.tracker.clone();
-        match self.record_passes(cmd, inputs, imports) {
-            Ok(frame) => Ok(frame),
-            Err(e) => {
-                self.tracker = before;
-                Err(e)
+        let recording = self.begin_frame(cmd, imports)?;
+        for index in 0..self.plan.passes.len() {
+            if let Err(e) = self.record_pass(&recording, cmd, index, inputs) {
+                self.abandon_frame(recording);
+                return Err(e);
             }
         }
+        Ok(self.end_frame(recording, cmd, imports))
     }
 
-    fn record_passes(
-        &mut self,
-        cmd: vk::CommandBuffer,
-        inputs: &FrameData<'_>,
-        imports: &Imports,
-    ) -> crate::Result<u64> {
+    /// Starts recording a frame pass by pass ([`GraphRuntime::record_pass`], then
+    /// [`GraphRuntime::end_frame`], or [`GraphRuntime::abandon_frame`] after an error), for a
+    /// host that interleaves the passes of several runtimes (the views of one renderer) so that
+    /// passes of the same kind can be recorded together ([`GraphRuntime::record_passes_together`]).
+    /// [`GraphRuntime::record`] does all of it for one runtime.
+    pub fn begin_frame(&mut self, cmd: vk::CommandBuffer, imports: &Imports) -> crate::Result<FrameRecording> {
+        self.bind_imports(imports)?;
+        let before = self.tracker.clone();
         let frame = self.frame;
-        let device = self.ctx.device().clone();
         if frame == 0 || self.history_reset {
             self.clear_history(cmd);
             self.history_reset = false;
@@ -282,93 +299,194 @@ impl GraphRuntime {
             self.copy_inherited(cmd, frame);
         }
         let completed = if self.reads_timings { self.newest_timings(frame) } else { None };
-        let timer = &self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
-        timer.borrow_mut().reset(cmd);
-        timer.borrow_mut().begin(cmd, "frame");
-        for (index, (pass, node)) in self.plan.passes.iter().zip(self.nodes.iter_mut()).enumerate() {
-            profiling::scope!("cullgraph::record_pass", pass.name.as_str());
-            let mut memory = Vec::new();
-            let mut images = Vec::new();
-            for b in &pass.barriers {
-                let Some(phys) = self.resources.index(b.resource, b.version, frame) else { continue };
-                // The plan knows the passes; what the executor itself did to the memory since
-                // (copying counters or captured lists to the host) only the tracker knows, so a
-                // planned source also waits for that.
-                let pending = self.tracker.pending(self.resources.alias_set(phys));
-                let src = match b.src {
-                    Some(planned) => Access {
-                        stage: planned.stage | pending.stage,
-                        access: planned.access | pending.access,
-                        ..planned
-                    },
-                    None => pending,
-                };
-                match self.resources.get(phys) {
-                    Physical::Image(image) => {
-                        let old = if b.discard { vk::ImageLayout::UNDEFINED } else { self.tracker.state(phys).layout };
-                        images.push(image_barrier(image, Access { layout: old, ..src }, b.dst));
-                    }
-                    Physical::Buffer(_) => memory.push(memory_barrier(src, b.dst)),
-                    Physical::Unbound => {}
-                }
-            }
-            if let Some((src, dst)) = node.own_dependency() {
-                memory.push(memory_barrier(src, dst));
-            }
-            // One global barrier carries every buffer dependency of the pass.
-            let merged: Vec<vk::MemoryBarrier2> = memory
-                .into_iter()
-                .reduce(|a, b| {
-                    a.src_stage_mask(a.src_stage_mask | b.src_stage_mask)
-                        .src_access_mask(a.src_access_mask | b.src_access_mask)
-                        .dst_stage_mask(a.dst_stage_mask | b.dst_stage_mask)
-                        .dst_access_mask(a.dst_access_mask | b.dst_access_mask)
-                })
-                .into_iter()
-                .collect();
-            cmd_barriers(&device, cmd, &merged, &images);
+        let mut timer = self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize].borrow_mut();
+        timer.reset(cmd);
+        timer.begin(cmd, "frame");
+        Ok(FrameRecording { before, completed })
+    }
 
-            self.ctx.begin_label(cmd, &pass.name);
-            timer.borrow_mut().begin(cmd, &pass.name);
-            let rec = PassContext {
-                ctx: &self.ctx,
-                cmd,
-                frame: inputs,
-                slots: SlotBindings { pass, resources: &self.resources, frame },
-                steps: StepTimer::new(self.step_timing.then_some(timer), &pass.name),
-                timings: completed.as_ref(),
-            };
-            node.record(&rec)?;
-            rec.steps.finish(cmd);
-            timer.borrow_mut().end(cmd);
-            self.ctx.end_label(cmd);
-            for b in &pass.bindings {
-                if let Some(phys) = self.resources.index(b.resource, b.version, frame) {
-                    self.tracker.apply(phys, b.usage.access(), b.usage.writes());
-                }
-            }
-            if let Some(capture) = &self.capture {
-                let copies: Vec<_> = capture.copies_of(index, &pass.bindings).collect();
-                for &(binding, host) in &copies {
-                    copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, host, 0, u64::MAX);
-                }
-                if !copies.is_empty() {
-                    cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
-                }
-            }
-            let ring = &self.counter_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize];
-            for source in self.counter_sources.iter().filter(|s| s.pass == index) {
-                let (binding, offset, record) = (&source.binding, source.offset, source.bytes);
-                copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, ring, offset, record);
-            }
+    /// Records pass `index` of the frame `recording` began (passes in plan order).
+    pub fn record_pass(
+        &mut self,
+        recording: &FrameRecording,
+        cmd: vk::CommandBuffer,
+        index: usize,
+        inputs: &FrameData<'_>,
+    ) -> crate::Result<()> {
+        profiling::scope!("cullgraph::record_pass", self.plan.passes[index].name.as_str());
+        self.open_pass(cmd, index);
+        let frame = self.frame;
+        let timer = &self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+        let pass = &self.plan.passes[index];
+        let rec = PassContext {
+            ctx: &self.ctx,
+            cmd,
+            frame: inputs,
+            slots: SlotBindings { pass, resources: &self.resources, frame },
+            steps: StepTimer::new(self.step_timing.then_some(timer), &pass.name),
+            timings: recording.completed.as_ref(),
+        };
+        self.nodes[index].record(&rec)?;
+        rec.steps.finish(cmd);
+        self.close_pass(cmd, index);
+        Ok(())
+    }
+
+    /// What decides whether pass `index` can be recorded together with passes of other
+    /// runtimes ([`GraphRuntime::record_passes_together`]): its kind and its node's key
+    /// ([`PassNode::together_key`]); `None` when it cannot be.
+    pub fn together_key(&self, index: usize) -> Option<(String, u64)> {
+        let pass = self.plan.passes.get(index)?;
+        Some((pass.kind.clone(), self.nodes[index].together_key()?))
+    }
+
+    /// Records pass `index` of several runtimes' frames at once (equal
+    /// [`GraphRuntime::together_key`]s): each runtime's barriers, labels and timestamps as
+    /// for its own pass, the commands by the first runtime's node for all of them. Every
+    /// runtime's pass scope covers the shared commands, so each reports their whole time.
+    pub fn record_passes_together(
+        runtimes: &mut [&mut GraphRuntime],
+        recordings: &[&FrameRecording],
+        cmd: vk::CommandBuffer,
+        index: usize,
+        inputs: &[FrameData<'_>],
+    ) -> crate::Result<()> {
+        for runtime in runtimes.iter_mut() {
+            runtime.open_pass(cmd, index);
         }
+        let mut lead_node = std::mem::replace(&mut runtimes[0].nodes[index], Box::new(Placeholder));
+        let recorded = {
+            let mut others: Vec<Box<dyn PassNode>> = runtimes[1..]
+                .iter_mut()
+                .map(|r| std::mem::replace(&mut r.nodes[index], Box::new(Placeholder)))
+                .collect();
+            let contexts: Vec<PassContext<'_>> = runtimes
+                .iter()
+                .zip(inputs)
+                .zip(recordings)
+                .map(|((r, inputs), recording)| {
+                    let pass = &r.plan.passes[index];
+                    PassContext {
+                        ctx: &r.ctx,
+                        cmd,
+                        frame: inputs,
+                        slots: SlotBindings { pass, resources: &r.resources, frame: r.frame },
+                        steps: StepTimer::new(None, &pass.name),
+                        timings: recording.completed.as_ref(),
+                    }
+                })
+                .collect();
+            let mut other_refs: Vec<&mut (dyn PassNode + 'static)> = others.iter_mut().map(|n| &mut **n).collect();
+            let recorded = lead_node.record_together(&contexts, &mut other_refs);
+            drop(other_refs);
+            drop(contexts);
+            for (r, node) in runtimes[1..].iter_mut().zip(others) {
+                r.nodes[index] = node;
+            }
+            recorded
+        };
+        runtimes[0].nodes[index] = lead_node;
+        recorded?;
+        for runtime in runtimes.iter_mut() {
+            runtime.close_pass(cmd, index);
+        }
+        Ok(())
+    }
+
+    /// Ends the frame `recording` began once every pass is recorded; returns its number.
+    pub fn end_frame(&mut self, recording: FrameRecording, cmd: vk::CommandBuffer, imports: &Imports) -> u64 {
+        drop(recording);
+        let frame = self.frame;
         if !self.counter_sources.is_empty() {
-            cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
+            cmd_barriers(self.ctx.device(), cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
         }
-        timer.borrow_mut().end(cmd);
+        self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize].borrow_mut().end(cmd);
         self.release_imports(cmd, imports);
         self.frame += 1;
-        Ok(frame)
+        frame
+    }
+
+    /// Forgets the frame `recording` began, after an error: nothing of it is consumed (what
+    /// the executor knows of each resource's state is as before it), so the host may discard
+    /// the command buffer and record again.
+    pub fn abandon_frame(&mut self, recording: FrameRecording) {
+        self.tracker = recording.before;
+    }
+
+    /// Pass `index`'s barriers (its planned ones, widened by what the tracker knows the executor
+    /// did since), debug label and the start of its timestamp scope.
+    fn open_pass(&mut self, cmd: vk::CommandBuffer, index: usize) {
+        let frame = self.frame;
+        let pass = &self.plan.passes[index];
+        let mut memory = Vec::new();
+        let mut images = Vec::new();
+        for b in &pass.barriers {
+            let Some(phys) = self.resources.index(b.resource, b.version, frame) else { continue };
+            // The plan knows the passes; what the executor itself did to the memory since
+            // (copying counters or captured lists to the host) only the tracker knows, so a
+            // planned source also waits for that.
+            let pending = self.tracker.pending(self.resources.alias_set(phys));
+            let src = match b.src {
+                Some(planned) => {
+                    Access { stage: planned.stage | pending.stage, access: planned.access | pending.access, ..planned }
+                }
+                None => pending,
+            };
+            match self.resources.get(phys) {
+                Physical::Image(image) => {
+                    let old = if b.discard { vk::ImageLayout::UNDEFINED } else { self.tracker.state(phys).layout };
+                    images.push(image_barrier(image, Access { layout: old, ..src }, b.dst));
+                }
+                Physical::Buffer(_) => memory.push(memory_barrier(src, b.dst)),
+                Physical::Unbound => {}
+            }
+        }
+        if let Some((src, dst)) = self.nodes[index].own_dependency() {
+            memory.push(memory_barrier(src, dst));
+        }
+        // One global barrier carries every buffer dependency of the pass.
+        let merged: Vec<vk::MemoryBarrier2> = memory
+            .into_iter()
+            .reduce(|a, b| {
+                a.src_stage_mask(a.src_stage_mask | b.src_stage_mask)
+                    .src_access_mask(a.src_access_mask | b.src_access_mask)
+                    .dst_stage_mask(a.dst_stage_mask | b.dst_stage_mask)
+                    .dst_access_mask(a.dst_access_mask | b.dst_access_mask)
+            })
+            .into_iter()
+            .collect();
+        cmd_barriers(self.ctx.device(), cmd, &merged, &images);
+        self.ctx.begin_label(cmd, &pass.name);
+        self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize].borrow_mut().begin(cmd, &pass.name);
+    }
+
+    /// The end of pass `index`'s timestamp scope and label; what it did to its resources, for
+    /// the tracker; and its captured slots' and counters' copies to the host.
+    fn close_pass(&mut self, cmd: vk::CommandBuffer, index: usize) {
+        let frame = self.frame;
+        let device = self.ctx.device().clone();
+        self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize].borrow_mut().end(cmd);
+        self.ctx.end_label(cmd);
+        let pass = &self.plan.passes[index];
+        for b in &pass.bindings {
+            if let Some(phys) = self.resources.index(b.resource, b.version, frame) {
+                self.tracker.apply(phys, b.usage.access(), b.usage.writes());
+            }
+        }
+        if let Some(capture) = &self.capture {
+            let copies: Vec<_> = capture.copies_of(index, &pass.bindings).collect();
+            for &(binding, host) in &copies {
+                copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, host, 0, u64::MAX);
+            }
+            if !copies.is_empty() {
+                cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
+            }
+        }
+        let ring = &self.counter_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+        for source in self.counter_sources.iter().filter(|s| s.pass == index) {
+            let (binding, offset, record) = (&source.binding, source.offset, source.bytes);
+            copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, ring, offset, record);
+        }
     }
 
     /// Checks the host's resources against the graph's declarations and binds them for this frame.

@@ -160,4 +160,32 @@ pub trait PassNode: Send {
     fn own_dependency(&mut self) -> Option<(Access, Access)> {
         None
     }
+
+    /// Passes whose nodes return equal keys can be recorded together, one call of
+    /// [`PassNode::record_together`] for several runtimes (the views of one renderer): the same
+    /// kind with settings that one dispatch can serve. `None` (the default): never.
+    fn together_key(&self) -> Option<u64> {
+        None
+    }
+
+    /// Records this pass for several runtimes at once: `contexts[0]` is this node's own,
+    /// `contexts[1..]` those of `others` (the same kind's nodes, with equal
+    /// [`PassNode::together_key`]s), whose state it may use through [`PassNode::as_any_mut`].
+    /// The executor's barriers before and after are already each runtime's.
+    fn record_together(
+        &mut self,
+        contexts: &[PassContext<'_>],
+        others: &mut [&mut (dyn PassNode + 'static)],
+    ) -> crate::Result<()> {
+        let _ = others;
+        match contexts {
+            [own] => self.record(own),
+            _ => Err(crate::Error::Invalid("this pass cannot be recorded together with others".into())),
+        }
+    }
+
+    /// The node as `Any`, for [`PassNode::record_together`] to reach the other nodes' state.
+    fn as_any_mut(&mut self) -> Option<&mut dyn Any> {
+        None
+    }
 }

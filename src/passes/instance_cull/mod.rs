@@ -30,6 +30,7 @@
 //! from run to run.
 
 pub mod counters;
+mod views;
 
 use super::slots::{
     slot, COMMANDS_BYTES, COUNTERS_BYTES, COUNT_BYTES, DRAW_COMMANDS, DRAW_COUNTS, HIZ_FORMAT, IDS_BYTES,
@@ -202,6 +203,12 @@ pub(crate) struct InstanceCullPass {
     init: Option<Pipeline>,
     sampler: Sampler,
     scratch: Option<Scratch>,
+    /// The test step's variant: with equal ones (and settings), passes of several views are
+    /// culled together.
+    defines: Vec<(String, String)>,
+    /// The pipelines of culling several views in one dispatch, where the device gives buffers
+    /// addresses (ordered compaction only).
+    together: Option<views::Together>,
 }
 
 impl InstanceCullPass {
@@ -254,7 +261,21 @@ impl InstanceCullPass {
             let defines: &[(&str, &str)] = if visible_out { &[("VISIBLE_OUT", "1")] } else { &[] };
             (Some(compute("compact", "cull/cull_compact.comp", defines)?), None)
         };
-        Ok(Self { settings, test, compact, init, sampler: Sampler::nearest_clamp(ctx)?, scratch: None })
+        let defines: Vec<(String, String)> = defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+        let together = match ctx.caps().buffer_addresses && !atomic {
+            true => Some(views::Together::new(ctx, shaders, &pass.name, &defines)?),
+            false => None,
+        };
+        Ok(Self {
+            settings,
+            test,
+            compact,
+            init,
+            sampler: Sampler::nearest_clamp(ctx)?,
+            scratch: None,
+            defines,
+            together,
+        })
     }
 
     /// Scratch buffers for `slots` instances and `groups` draw groups (created on first use).
@@ -337,6 +358,28 @@ fn step_barrier(ctx: &GpuContext, cmd: vk::CommandBuffer) {
 }
 
 impl PassNode for InstanceCullPass {
+    fn together_key(&self) -> Option<u64> {
+        use std::hash::{Hash, Hasher};
+        self.together.as_ref()?;
+        let mut hasher = std::collections::hash_map::DefaultHasher::new();
+        self.defines.hash(&mut hasher);
+        let s = &self.settings;
+        (s.occluder_distance.to_bits(), s.occluder_size.to_bits(), s.occluder_triangles).hash(&mut hasher);
+        Some(hasher.finish())
+    }
+
+    fn record_together(
+        &mut self,
+        contexts: &[PassContext<'_>],
+        others: &mut [&mut (dyn PassNode + 'static)],
+    ) -> crate::Result<()> {
+        self.record_views(contexts, others)
+    }
+
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        Some(self)
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let (ctx, cmd, frame) = (rec.ctx, rec.cmd, SceneInputs::of(rec)?);
         let scene = &frame.scene;

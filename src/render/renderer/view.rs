@@ -4,13 +4,12 @@
 use super::adapt::Adaptations;
 use super::graphs::Graphs;
 use crate::error::{Error, Result};
-use crate::gpu::{Access, GpuContext, Image};
-use crate::graph::{CompiledGraph, FrameData, GraphRuntime, Imports};
+use crate::gpu::{Access, Image};
+use crate::graph::{CompiledGraph, GraphRuntime, Imports};
 use crate::passes::shared::gpu_types::{FrameConstants, GpuPointLight};
 use crate::passes::shared::SceneInputs;
 use crate::render::RenderSettings;
 use crate::scene::{Camera, Scene};
-use ash::vk;
 
 /// Names a view of a [`super::Renderer`]. Ids are never given out twice: a removed view's id
 /// stays refused.
@@ -103,30 +102,6 @@ impl View {
         if !lights.is_empty() {
             slot.lights.write_bytes(0, bytemuck::cast_slice(&lights))?;
         }
-        Ok(())
-    }
-
-    /// Records this view's graph for renderer frame `frame` (its data written before).
-    pub fn record(
-        &mut self,
-        ctx: &GpuContext,
-        cmd: vk::CommandBuffer,
-        frame: u64,
-        camera: &Camera,
-        imports: &Imports,
-    ) -> Result<()> {
-        self.inputs.select(frame);
-        let data = FrameData {
-            frame,
-            extent: vk::Extent2D { width: self.settings.width, height: self.settings.height },
-            shared: &self.inputs,
-        };
-        ctx.begin_label(cmd, &self.id.to_string());
-        let recorded = self.graphs.runtime.record(cmd, &data, imports);
-        ctx.end_label(cmd);
-        let local = recorded.map_err(|e| self.error(e))?;
-        self.graphs.recorded(frame, local);
-        self.previous_camera = Some(camera.clone());
         Ok(())
     }
 

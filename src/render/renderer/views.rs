@@ -71,6 +71,15 @@ impl Renderer {
         Ok(())
     }
 
+    /// Whether the views of a frame are culled together (the default): the instance-cull passes
+    /// of views running the same pass with the same settings test every view in one dispatch
+    /// per phase, reading each instance once (at most 16 views per dispatch; where the device
+    /// gives buffers no addresses, one dispatch per view). Off, each view culls in dispatches of
+    /// its own, as a renderer per view would; the images and figures are the same either way.
+    pub fn set_views_culled_together(&mut self, on: bool) {
+        self.cull_together = on;
+    }
+
     /// The views, main first, in the order they were added.
     pub fn views(&self) -> impl Iterator<Item = ViewId> + '_ {
         self.views.iter().map(|v| v.id)

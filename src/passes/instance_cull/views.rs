@@ -1,0 +1,239 @@
+//! Several views culled together: one test dispatch reads each slot's record once and tests it
+//! against every view, and one compact dispatch places every view's survivors (one row of
+//! workgroups per view). Each view keeps its own scratch, decision bits, counts, visibility and
+//! draw lists, reached through their device addresses in a table (`shaders/cull/cull_views.glsl`).
+
+use super::{blocks_of, step_barrier, InstanceCullPass, CULL_SUPERBLOCK};
+use crate::gpu::barrier::{cmd_barriers, memory_barrier};
+use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, ShaderCompiler};
+use crate::graph::executor::PassContext;
+use crate::graph::{PassNode, FRAMES_IN_FLIGHT};
+use crate::passes::shared::SceneInputs;
+use ash::vk;
+
+/// The most views one dispatch culls (`MAX_CULL_VIEWS` in `cull_views.glsl`): their pyramids
+/// are an array of samplers indexed by constants. More views take more dispatches.
+pub const MAX_TOGETHER: usize = 16;
+
+/// Addresses per view in the table (`ViewBuffers`).
+const TABLE_WORDS: usize = 14;
+
+/// The pipelines and tables of culling several views at once, made on first use.
+pub(super) struct Together {
+    test: Pipeline,
+    compact: Pipeline,
+    /// Per frame in flight, one table per dispatch of the frame.
+    tables: Vec<Vec<Buffer>>,
+}
+
+impl Together {
+    pub fn new(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        name: &str,
+        defines: &[(String, String)],
+    ) -> crate::Result<Self> {
+        let with = |extra: &[(&str, &str)]| -> Vec<(String, String)> {
+            let mut all = defines.to_vec();
+            all.extend(extra.iter().map(|(k, v)| (k.to_string(), v.to_string())));
+            all
+        };
+        let compile = |file: &str, defines: Vec<(String, String)>| -> crate::Result<crate::gpu::Spirv> {
+            let refs: Vec<(&str, &str)> = defines.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+            Ok(shaders.compile(file, &refs)?)
+        };
+        let test_spirv = compile("cull/instance_cull.comp", with(&[("MULTI_VIEW", "1")]))?;
+        let visible_out = defines.iter().any(|(k, _)| k == "VISIBLE_OUT");
+        let mut compact_defines = vec![("MULTI_VIEW".to_string(), "1".to_string())];
+        if visible_out {
+            compact_defines.push(("VISIBLE_OUT".into(), "1".into()));
+        }
+        let compact_spirv = compile("cull/cull_compact.comp", compact_defines)?;
+        Ok(Self {
+            test: Pipeline::compute(ctx, &format!("{name} (test, views)"), &test_spirv)?,
+            compact: Pipeline::compute(ctx, &format!("{name} (compact, views)"), &compact_spirv)?,
+            tables: (0..FRAMES_IN_FLIGHT).map(|_| Vec::new()).collect(),
+        })
+    }
+
+    /// The table of dispatch `chunk` of frame `frame`, made on first use.
+    fn table(&mut self, ctx: &GpuContext, frame: u64, chunk: usize) -> crate::Result<&mut Buffer> {
+        let ring = &mut self.tables[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+        while ring.len() <= chunk {
+            ring.push(Buffer::new(
+                ctx,
+                &BufferDesc {
+                    name: "cull view table",
+                    size: (MAX_TOGETHER * TABLE_WORDS * 8) as u64,
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                    location: MemoryLocation::CpuToGpu,
+                },
+            )?);
+        }
+        Ok(&mut ring[chunk])
+    }
+}
+
+/// One view's addresses, in `ViewBuffers` order; `None` when one it needs has none.
+fn addresses(rec: &PassContext<'_>, node: &InstanceCullPass) -> crate::Result<Option<[u64; TABLE_WORDS]>> {
+    let scratch = node.scratch.as_ref().expect("ensured before");
+    let frame = SceneInputs::of(rec)?;
+    let optional = |slot: &str| rec.slots.buffer(slot).map_or(Some(0), Buffer::device_address);
+    let required = |slot: &str| rec.slots.buffer(slot).and_then(Buffer::device_address);
+    let words = [
+        frame.constants().device_address(),
+        scratch.group_counts.device_address(),
+        scratch.scan.device_address(),
+        scratch.draw_bits.device_address(),
+        optional("visibility_prev"),
+        optional("visibility"),
+        required("draw_instance_ids"),
+        required("draw_commands"),
+        required("draw_count"),
+        required("stats"),
+        optional("visible_ids"),
+        optional("list_commands"),
+        optional("list_count"),
+        optional("list_stats"),
+    ];
+    let mut out = [0u64; TABLE_WORDS];
+    for (o, w) in out.iter_mut().zip(words) {
+        match w {
+            Some(address) => *o = address,
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(out))
+}
+
+impl InstanceCullPass {
+    /// Records this pass for every view of `contexts` (`others` being the nodes of
+    /// `contexts[1..]`), at most [`MAX_TOGETHER`] per dispatch pair; one at a time when some
+    /// buffer has no address.
+    pub(super) fn record_views(
+        &mut self,
+        contexts: &[PassContext<'_>],
+        others: &mut [&mut (dyn PassNode + 'static)],
+    ) -> crate::Result<()> {
+        let ctx = contexts[0].ctx;
+        let cmd = contexts[0].cmd;
+        let scene = &SceneInputs::of(&contexts[0])?.scene;
+        let (slots, groups) = (scene.instance_count, scene.regions.groups());
+        let mut nodes: Vec<&mut InstanceCullPass> = Vec::with_capacity(contexts.len());
+        // SAFETY of the casts: `together_key` equal means the same kind, whose nodes are this type.
+        let mut rest: Vec<&mut InstanceCullPass> = others
+            .iter_mut()
+            .map(|n| {
+                n.as_any_mut().and_then(|a| a.downcast_mut::<InstanceCullPass>()).ok_or_else(|| {
+                    crate::Error::Invalid("instance_cull: a pass recorded together is of another kind".into())
+                })
+            })
+            .collect::<crate::Result<_>>()?;
+        nodes.push(self);
+        nodes.append(&mut rest);
+        let device = ctx.device();
+        let mut fresh = false;
+        for node in nodes.iter_mut() {
+            node.ensure_scratch(ctx, slots, groups)?;
+            let scratch = node.scratch.as_mut().expect("ensured above");
+            if scratch.fresh {
+                // SAFETY: cmd recording; the buffers are the pass's own.
+                unsafe {
+                    device.cmd_fill_buffer(cmd, scratch.scan.handle(), 0, vk::WHOLE_SIZE, 0);
+                    device.cmd_fill_buffer(cmd, scratch.group_counts.handle(), 0, vk::WHOLE_SIZE, 0);
+                }
+                scratch.fresh = false;
+                fresh = true;
+            }
+        }
+        if fresh {
+            cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::COMPUTE_WRITE)], &[]);
+        }
+        let mut tables = Vec::with_capacity(contexts.len());
+        for (rec, node) in contexts.iter().zip(nodes.iter()) {
+            match addresses(rec, node)? {
+                Some(t) => tables.push(t),
+                // A buffer without an address (a host's): each view on its own.
+                None => {
+                    for (rec, node) in contexts.iter().zip(nodes.iter_mut()) {
+                        node.record(rec)?;
+                    }
+                    return Ok(());
+                }
+            }
+        }
+        // Last frame's run of this pass used the same scratch.
+        step_barrier(ctx, cmd);
+        let blocks = blocks_of(slots);
+        let superblocks = blocks.div_ceil(CULL_SUPERBLOCK);
+        let settings = nodes[0].settings.clone();
+        let lead = &mut nodes[0];
+        if lead.together.is_none() {
+            return Err(crate::Error::Invalid(
+                "instance_cull: the pipelines of culling views together are missing".into(),
+            ));
+        }
+        let frame = contexts[0].frame.frame;
+        for (chunk, range) in
+            (0..contexts.len()).step_by(MAX_TOGETHER).map(|s| s..(s + MAX_TOGETHER).min(contexts.len())).enumerate()
+        {
+            let n = range.len();
+            let together = lead.together.as_mut().expect("checked above");
+            let words: Vec<u64> = tables[range.clone()].iter().flatten().copied().collect();
+            let table = together.table(ctx, frame, chunk)?;
+            table.write_bytes(0, bytemuck::cast_slice(&words))?;
+            let table = table.handle();
+            let mut test_binds = vec![
+                Bind::Buffer(0, scene.cull_records.handle()),
+                Bind::Buffer(2, scene.draw_groups.handle()),
+                Bind::Buffer(10, table),
+            ];
+            // Every element of the pyramid array is bound: the views' own, then the first again.
+            let hiz: Vec<_> = contexts[range.clone()].iter().filter_map(|rec| rec.slots.image("hiz")).collect();
+            if hiz.len() == n {
+                for element in 0..MAX_TOGETHER {
+                    let image = hiz[element.min(n - 1)];
+                    test_binds.push(Bind::SampledAt(
+                        9,
+                        element as u32,
+                        image.view(),
+                        lead.sampler.handle(),
+                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    ));
+                }
+            }
+            let push: [u32; 7] = [
+                slots,
+                superblocks,
+                groups,
+                settings.occluder_distance.to_bits(),
+                settings.occluder_size.to_bits(),
+                settings.occluder_triangles,
+                n as u32,
+            ];
+            contexts[0].step("test");
+            together.test.bind(cmd);
+            together.test.push_bindings(cmd, &test_binds);
+            together.test.push_constants(cmd, &push);
+            // SAFETY: cmd recording with the pipeline bound.
+            unsafe { device.cmd_dispatch(cmd, blocks, 1, 1) };
+            step_barrier(ctx, cmd);
+            contexts[0].step("compact");
+            together.compact.bind(cmd);
+            together.compact.push_bindings(
+                cmd,
+                &[
+                    Bind::Buffer(2, scene.draw_groups.handle()),
+                    Bind::Buffer(3, scene.draw_instance_ids.handle()),
+                    Bind::Buffer(14, table),
+                ],
+            );
+            let [first0, first1, first2, first3] = scene.regions.first;
+            together.compact.push_constants(cmd, &[slots, groups, superblocks, first0, first1, first2, first3]);
+            // Workgroup 0 of each row writes its view's commands, workgroup 1 + b places block b.
+            // SAFETY: as above.
+            unsafe { device.cmd_dispatch(cmd, blocks + 1, n as u32, 1) };
+        }
+        Ok(())
+    }
+}
