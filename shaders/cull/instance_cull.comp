@@ -103,6 +103,12 @@ layout(push_constant) uniform Push {
     uint view_count;           // MULTI_VIEW: views in the table
 } pc;
 
+#ifdef MULTI_VIEW
+// Every view's decision bits and counters side by side: all views decide before one barrier.
+shared uint mv_draw[MAX_CULL_VIEWS][CULL_WORDS_PER_BLOCK];
+shared uint mv_vis[MAX_CULL_VIEWS][CULL_WORDS_PER_BLOCK];
+shared uint mv_counts[MAX_CULL_VIEWS][4];
+#endif
 shared uint sh_draw[CULL_WORDS_PER_BLOCK];
 shared uint sh_vis[CULL_WORDS_PER_BLOCK];
 shared uint sh_counts[4];
@@ -334,22 +340,98 @@ void cull_block(uint lane, uint block, uint slot, bool preloaded, CullRecord loa
 #endif
 }
 
+#ifdef MULTI_VIEW
+// Tests the block's slots against every view: each record is read once, every view decides
+// into its own shared words before one barrier, then invocations write the views' words and
+// block records side by side (8 per view for the words, one per view for the records).
+void cull_views(uint lane, uint block, uint slot) {
+    uint n = pc.view_count;
+    if (lane < n * CULL_WORDS_PER_BLOCK) {
+        mv_draw[lane / CULL_WORDS_PER_BLOCK][lane % CULL_WORDS_PER_BLOCK] = 0u;
+        mv_vis[lane / CULL_WORDS_PER_BLOCK][lane % CULL_WORDS_PER_BLOCK] = 0u;
+    }
+    if (lane < n * 4u) mv_counts[lane / 4u][lane % 4u] = 0u;
+    bool in_range = slot < pc.slot_count;
+    CullRecord r = CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u);
+    if (in_range) r = load_record(slot);
+    bool empty = in_range && record_empty(r);
+    uint word = lane >> 5u;
+    uint bit = 1u << (lane & 31u);
+    barrier();
+    for (uint v = 0u; v < n; ++v) {
+        select_view(v);
+#ifdef HAS_VIS_PREV
+        bool was_visible = in_range && ((vis_prev[slot >> 5] >> (slot & 31u)) & 1u) != 0u;
+#else
+        bool was_visible = false;
+#endif
+#ifdef PHASE_EARLY
+        bool evaluated = was_visible && !empty;
+#else
+        bool evaluated = in_range && !empty;
+#endif
+        Decision d = decide(r, evaluated, was_visible);
+        OR_INTO_SHARED(mv_draw[v], word, d.draw ? bit : 0u)
+        if (d.draw) count_group_survivor(d.group, 0u);
+#ifdef VISIBLE_OUT
+        if (d.visible_now) count_group_survivor(d.group, pc.group_count);
+#endif
+#ifdef WRITE_VIS
+        OR_INTO_SHARED(mv_vis[v], word, d.visible_now ? bit : 0u)
+#endif
+        uvec4 counts = subgroupAdd(uvec4(d.evaluated, d.frustum_culled, d.occlusion_culled, d.visible_now));
+        if (subgroupElect()) {
+            for (uint i = 0u; i < 4u; ++i) {
+                if (counts[i] != 0u) atomicAdd(mv_counts[v][i], counts[i]);
+            }
+        }
+    }
+    barrier();
+    // The views' words: 8 invocations per view.
+    if (lane < n * CULL_WORDS_PER_BLOCK) {
+        uint v = lane / CULL_WORDS_PER_BLOCK;
+        uint w = lane % CULL_WORDS_PER_BLOCK;
+        select_view(v);
+        draw_bits[block * CULL_WORDS_PER_BLOCK + w] = mv_draw[v][w];
+#ifdef WRITE_VIS
+        // The visibility buffer holds ceil(slots / 32) words; the last block may run past it.
+        uint vis_word = block * CULL_WORDS_PER_BLOCK + w;
+        if (vis_word < (pc.slot_count + 31u) / 32u) vis_now[vis_word] = mv_vis[v][w];
+#endif
+    }
+    // The views' block records: one invocation per view, after the words' invocations.
+    uint records = MAX_CULL_VIEWS * CULL_WORDS_PER_BLOCK;
+    if (lane >= records && lane < records + n) {
+        uint v = lane - records;
+        select_view(v);
+        uint run = scratch[SCRATCH_TEST_RUN];
+        uint count = 0u;
+        for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) count += bitCount(mv_draw[v][w]);
+        scratch[scratch_block(pc.superblocks, block)] = count;
+#ifdef VISIBLE_OUT
+        uint visible = 0u;
+        for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) visible += bitCount(mv_vis[v][w]);
+        scratch[scratch_visible_block(pc.superblocks, pc.slot_count, block)] = visible;
+#endif
+        uint at = scratch_super(pc.superblocks, run, block / CULL_SUPERBLOCK);
+        if (count != 0u) atomicAdd(scratch[at + SUPER_SURVIVORS], count);
+        if (mv_counts[v][0] != 0u) atomicAdd(scratch[at + SUPER_TESTED], mv_counts[v][0]);
+        if (mv_counts[v][1] != 0u) atomicAdd(scratch[at + SUPER_FRUSTUM], mv_counts[v][1]);
+        if (mv_counts[v][2] != 0u) atomicAdd(scratch[at + SUPER_OCCLUSION], mv_counts[v][2]);
+        if (mv_counts[v][3] != 0u) atomicAdd(scratch[at + SUPER_VISIBLE], mv_counts[v][3]);
+        // Nothing reads this word in this dispatch: the compact step's copy of the run number.
+        if (block == 0u) scratch[SCRATCH_PLACE_RUN] = run;
+    }
+}
+#endif
+
 void main() {
     uint lane = gl_LocalInvocationIndex;
     uint block = gl_WorkGroupID.x;
     uint slot = block * CULL_BLOCK + lane;
-    CullRecord none = CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u);
 #ifdef MULTI_VIEW
-    // The slot's record is read once, and tested against every view.
-    CullRecord r = none;
-    if (slot < pc.slot_count) r = load_record(slot);
-    for (uint v = 0u; v < pc.view_count; ++v) {
-        select_view(v);
-        // The last view's shared words are read before they are zeroed for this one.
-        barrier();
-        cull_block(lane, block, slot, true, r);
-    }
+    cull_views(lane, block, slot);
 #else
-    cull_block(lane, block, slot, false, none);
+    cull_block(lane, block, slot, false, CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u));
 #endif
 }
