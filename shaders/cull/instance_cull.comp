@@ -239,9 +239,8 @@ Decision decide(CullRecord r, bool evaluated, bool was_visible) {
     return d;
 }
 
-// Decides and records one block of slots for the selected view (MULTI_VIEW) or the one view.
-// `loaded`: the slot's record when `preloaded` (every view reads the one load).
-void cull_block(uint lane, uint block, uint slot, bool preloaded, CullRecord loaded) {
+// Decides and records one block of slots for the one view (MULTI_VIEW: cull_views).
+void cull_block(uint lane, uint block, uint slot) {
     if (lane < CULL_WORDS_PER_BLOCK) {
         sh_draw[lane] = 0u;
         sh_vis[lane] = 0u;
@@ -264,8 +263,8 @@ void cull_block(uint lane, uint block, uint slot, bool preloaded, CullRecord loa
 #else
     bool evaluated = in_range;
 #endif
-    CullRecord r = loaded;
-    if (evaluated && !preloaded) r = load_record(slot);
+    CullRecord r = CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u);
+    if (evaluated) r = load_record(slot);
     // An empty slot is not tested: its visibility bit is written 0, so an instance that takes
     // the slot later inherits nothing.
     if (evaluated && record_empty(r)) evaluated = false;
@@ -432,6 +431,6 @@ void main() {
 #ifdef MULTI_VIEW
     cull_views(lane, block, slot);
 #else
-    cull_block(lane, block, slot, false, CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u));
+    cull_block(lane, block, slot);
 #endif
 }

@@ -171,12 +171,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     drop(pipeline);
     bar.finish_and_clear();
-    // Memory as planned for the last frame: `--pool-adapt` may have re-planned the graph.
-    let memory = renderer.runtime().memory();
-    stats.transient_bytes = memory.bytes_with_aliasing;
-    stats.transient_bytes_without_aliasing = memory.bytes_without_aliasing;
-    stats.resources = renderer.runtime().resource_bytes();
-    stats.texture_bytes = renderer.gpu_scene().textures.bytes();
+    note_memory(&mut stats, &renderer);
     let scene = args.reference.is_some().then(|| match &animation {
         Some(animation) => animation.world.live_scene(),
         None => renderer.scene().clone(),
@@ -216,15 +211,19 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         );
     }
     if args.verify {
-        let VerifyTotals { frames, visible, missed, extra } = verified;
-        println!(
-            "verify: {frames} frame(s), {visible} visible instance-frames, {missed} false negatives, {extra} false positives"
-        );
-        if missed > 0 {
-            return Err(Error::Invalid(format!("culling removed {missed} visible instance-frame(s)")));
-        }
+        verified.report("frame(s)")?;
     }
     validation_verdict(&ctx)
+}
+
+/// The main view's graph memory as planned for the last frame (`--pool-adapt` may have
+/// re-planned it) and the scene's textures.
+fn note_memory(stats: &mut RunStats, renderer: &Renderer) {
+    let memory = renderer.runtime().memory();
+    stats.transient_bytes = memory.bytes_with_aliasing;
+    stats.transient_bytes_without_aliasing = memory.bytes_without_aliasing;
+    stats.resources = renderer.runtime().resource_bytes();
+    stats.texture_bytes = renderer.gpu_scene().textures.bytes();
 }
 
 /// The pixels of one `--view`.
@@ -259,11 +258,7 @@ fn run_views(
     };
     views::render_views(args, &mut renderer, shaders, spec, cameras, &mut stats, step, seen)?;
     bar.finish_and_clear();
-    let memory = renderer.runtime().memory();
-    stats.transient_bytes = memory.bytes_with_aliasing;
-    stats.transient_bytes_without_aliasing = memory.bytes_without_aliasing;
-    stats.resources = renderer.runtime().resource_bytes();
-    stats.texture_bytes = renderer.gpu_scene().textures.bytes();
+    note_memory(&mut stats, &renderer);
     drop(renderer);
     if let Some(path) = &args.stats {
         paths::output_file("--stats", path)?;
@@ -288,13 +283,7 @@ fn run_views(
         );
     }
     if args.verify {
-        let VerifyTotals { frames, visible, missed, extra } = verified;
-        println!(
-            "verify: {frames} view-frame(s), {visible} visible instance-frames, {missed} false negatives, {extra} false positives"
-        );
-        if missed > 0 {
-            return Err(Error::Invalid(format!("culling removed {missed} visible instance-frame(s)")));
-        }
+        verified.report("view-frame(s)")?;
     }
     validation_verdict(ctx)
 }
@@ -318,6 +307,19 @@ struct VerifyTotals {
 }
 
 impl VerifyTotals {
+    /// Prints the totals of the `frames` checked (named `what`); an error if anything visible
+    /// was culled.
+    fn report(self, what: &str) -> Result<()> {
+        let Self { frames, visible, missed, extra } = self;
+        println!(
+            "verify: {frames} {what}, {visible} visible instance-frames, {missed} false negatives, {extra} false positives"
+        );
+        if missed > 0 {
+            return Err(Error::Invalid(format!("culling removed {missed} visible instance-frame(s)")));
+        }
+        Ok(())
+    }
+
     fn add(&mut self, v: &cullgraph::stats::VerifyStats) {
         self.frames += 1;
         self.visible += v.visible as u64;
