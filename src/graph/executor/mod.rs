@@ -116,11 +116,14 @@ pub(crate) fn copy_to_host(
     dst: &Buffer,
     offset: u64,
     max_bytes: u64,
+    wait: bool,
 ) {
     let Some(phys) = resources.index(binding.resource, binding.version, frame) else { return };
     let Physical::Buffer(src) = resources.get(phys) else { return };
     let device = ctx.device();
-    cmd_barriers(device, cmd, &[memory_barrier(tracker.pending(&[phys]), Access::TRANSFER_READ)], &[]);
+    if wait {
+        cmd_barriers(device, cmd, &[memory_barrier(tracker.pending(&[phys]), Access::TRANSFER_READ)], &[]);
+    }
     let size = src.size().min(max_bytes).min(dst.size().saturating_sub(offset));
     if size > 0 {
         let region = vk::BufferCopy { src_offset: 0, dst_offset: offset, size };
@@ -128,6 +131,22 @@ pub(crate) fn copy_to_host(
         unsafe { device.cmd_copy_buffer(cmd, src.handle(), dst.handle(), &[region]) };
     }
     tracker.apply(phys, Access::TRANSFER_READ, false);
+}
+
+/// One global memory barrier with every stage and access of `barriers` (none if empty).
+fn merge_memory_barriers(
+    barriers: impl IntoIterator<Item = vk::MemoryBarrier2<'static>>,
+) -> Vec<vk::MemoryBarrier2<'static>> {
+    barriers
+        .into_iter()
+        .reduce(|a, b| {
+            a.src_stage_mask(a.src_stage_mask | b.src_stage_mask)
+                .src_access_mask(a.src_access_mask | b.src_access_mask)
+                .dst_stage_mask(a.dst_stage_mask | b.dst_stage_mask)
+                .dst_access_mask(a.dst_access_mask | b.dst_access_mask)
+        })
+        .into_iter()
+        .collect()
 }
 
 /// Frames of one runtime that may execute at once (timestamp pools are ringed this many times).
@@ -351,8 +370,19 @@ impl GraphRuntime {
         index: usize,
         inputs: &[FrameData<'_>],
     ) -> crate::Result<()> {
+        // Every view's barriers in one call, then every view's scope: a barrier per view would
+        // drain the queue once per view.
+        let (mut memory, mut images) = (Vec::new(), Vec::new());
         for runtime in runtimes.iter_mut() {
-            runtime.open_pass(cmd, index);
+            let (m, i) = runtime.pass_barriers(index);
+            memory.extend(m);
+            images.extend(i);
+        }
+        if let Some(lead) = runtimes.first() {
+            cmd_barriers(lead.ctx.device(), cmd, &merge_memory_barriers(memory), &images);
+        }
+        for runtime in runtimes.iter() {
+            runtime.begin_scope(cmd, index);
         }
         let mut lead_node = std::mem::replace(&mut runtimes[0].nodes[index], Box::new(Placeholder));
         let recorded = {
@@ -364,20 +394,24 @@ impl GraphRuntime {
                 .iter()
                 .zip(inputs)
                 .zip(recordings)
-                .map(|((r, inputs), recording)| {
+                .enumerate()
+                .map(|(i, ((r, inputs), recording))| {
                     let pass = &r.plan.passes[index];
+                    // The lead's timer times the shared steps.
+                    let timer = &r.timers[(r.frame % FRAMES_IN_FLIGHT as u64) as usize];
                     PassContext {
                         ctx: &r.ctx,
                         cmd,
                         frame: inputs,
                         slots: SlotBindings { pass, resources: &r.resources, frame: r.frame },
-                        steps: StepTimer::new(None, &pass.name),
+                        steps: StepTimer::new((i == 0 && r.step_timing).then_some(timer), &pass.name),
                         timings: recording.completed.as_ref(),
                     }
                 })
                 .collect();
             let mut other_refs: Vec<&mut (dyn PassNode + 'static)> = others.iter_mut().map(|n| &mut **n).collect();
             let recorded = lead_node.record_together(&contexts, &mut other_refs);
+            contexts[0].steps.finish(cmd);
             drop(other_refs);
             drop(contexts);
             for (r, node) in runtimes[1..].iter_mut().zip(others) {
@@ -387,8 +421,23 @@ impl GraphRuntime {
         };
         runtimes[0].nodes[index] = lead_node;
         recorded?;
+        // Scopes close in reverse (labels nest); then one barrier before every view's copies.
+        for runtime in runtimes.iter().rev() {
+            runtime.end_scope(cmd);
+        }
+        let mut wait =
+            Access { stage: vk::PipelineStageFlags2::NONE, access: vk::AccessFlags2::NONE, ..Access::TRANSFER_READ };
         for runtime in runtimes.iter_mut() {
-            runtime.close_pass(cmd, index);
+            runtime.track_pass(index);
+            let w = runtime.copies_wait_for(index);
+            wait.stage |= w.stage;
+            wait.access |= w.access;
+        }
+        if let (Some(lead), false) = (runtimes.first(), wait.stage.is_empty()) {
+            cmd_barriers(lead.ctx.device(), cmd, &[memory_barrier(wait, Access::TRANSFER_READ)], &[]);
+        }
+        for runtime in runtimes.iter_mut() {
+            runtime.copy_out(cmd, index, false);
         }
         Ok(())
     }
@@ -416,6 +465,17 @@ impl GraphRuntime {
     /// Pass `index`'s barriers (its planned ones, widened by what the tracker knows the executor
     /// did since), debug label and the start of its timestamp scope.
     fn open_pass(&mut self, cmd: vk::CommandBuffer, index: usize) {
+        let (memory, images) = self.pass_barriers(index);
+        cmd_barriers(self.ctx.device(), cmd, &memory, &images);
+        self.begin_scope(cmd, index);
+    }
+
+    /// The barriers pass `index` needs before it: one global memory barrier for every buffer
+    /// dependency, and its images' barriers.
+    fn pass_barriers(
+        &mut self,
+        index: usize,
+    ) -> (Vec<vk::MemoryBarrier2<'static>>, Vec<vk::ImageMemoryBarrier2<'static>>) {
         let frame = self.frame;
         let pass = &self.plan.passes[index];
         let mut memory = Vec::new();
@@ -445,47 +505,102 @@ impl GraphRuntime {
             memory.push(memory_barrier(src, dst));
         }
         // One global barrier carries every buffer dependency of the pass.
-        let merged: Vec<vk::MemoryBarrier2> = memory
-            .into_iter()
-            .reduce(|a, b| {
-                a.src_stage_mask(a.src_stage_mask | b.src_stage_mask)
-                    .src_access_mask(a.src_access_mask | b.src_access_mask)
-                    .dst_stage_mask(a.dst_stage_mask | b.dst_stage_mask)
-                    .dst_access_mask(a.dst_access_mask | b.dst_access_mask)
-            })
-            .into_iter()
-            .collect();
-        cmd_barriers(self.ctx.device(), cmd, &merged, &images);
-        self.ctx.begin_label(cmd, &pass.name);
-        self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize].borrow_mut().begin(cmd, &pass.name);
+        (merge_memory_barriers(memory), images)
+    }
+
+    /// The start of pass `index`'s label and timestamp scope.
+    fn begin_scope(&self, cmd: vk::CommandBuffer, index: usize) {
+        let name = &self.plan.passes[index].name;
+        self.ctx.begin_label(cmd, name);
+        self.timers[(self.frame % FRAMES_IN_FLIGHT as u64) as usize].borrow_mut().begin(cmd, name);
     }
 
     /// The end of pass `index`'s timestamp scope and label; what it did to its resources, for
     /// the tracker; and its captured slots' and counters' copies to the host.
     fn close_pass(&mut self, cmd: vk::CommandBuffer, index: usize) {
-        let frame = self.frame;
-        let device = self.ctx.device().clone();
-        self.timers[(frame % FRAMES_IN_FLIGHT as u64) as usize].borrow_mut().end(cmd);
+        self.end_scope(cmd);
+        self.track_pass(index);
+        self.copy_out(cmd, index, true);
+    }
+
+    /// The end of the open pass's timestamp scope and label.
+    fn end_scope(&self, cmd: vk::CommandBuffer) {
+        self.timers[(self.frame % FRAMES_IN_FLIGHT as u64) as usize].borrow_mut().end(cmd);
         self.ctx.end_label(cmd);
-        let pass = &self.plan.passes[index];
-        for b in &pass.bindings {
+    }
+
+    /// What pass `index` did to its resources, for the tracker.
+    fn track_pass(&mut self, index: usize) {
+        let frame = self.frame;
+        for b in &self.plan.passes[index].bindings {
             if let Some(phys) = self.resources.index(b.resource, b.version, frame) {
                 self.tracker.apply(phys, b.usage.access(), b.usage.writes());
             }
         }
+    }
+
+    /// The copy sources after pass `index`: its captured slots, then its counters.
+    fn copy_sources(&self, index: usize) -> impl Iterator<Item = &crate::graph::plan::Binding> + '_ {
+        let pass = &self.plan.passes[index];
+        let captured = self.capture.iter().flat_map(move |c| c.copies_of(index, &pass.bindings).map(|(b, _)| b));
+        captured.chain(self.counter_sources.iter().filter(move |s| s.pass == index).map(|s| &s.binding))
+    }
+
+    /// What the copies after pass `index` wait for.
+    fn copies_wait_for(&self, index: usize) -> Access {
+        let mut wait =
+            Access { stage: vk::PipelineStageFlags2::NONE, access: vk::AccessFlags2::NONE, ..Access::TRANSFER_READ };
+        for b in self.copy_sources(index) {
+            if let Some(phys) = self.resources.index(b.resource, b.version, self.frame) {
+                let pending = self.tracker.pending(&[phys]);
+                wait.stage |= pending.stage;
+                wait.access |= pending.access;
+            }
+        }
+        wait
+    }
+
+    /// Pass `index`'s captured slots' and counters' copies to the host; `wait`: each copy waits
+    /// for its source with a barrier of its own (false: the caller recorded one for them all,
+    /// [`GraphRuntime::copies_wait_for`]).
+    fn copy_out(&mut self, cmd: vk::CommandBuffer, index: usize, wait: bool) {
+        let frame = self.frame;
+        let pass = &self.plan.passes[index];
         if let Some(capture) = &self.capture {
             let copies: Vec<_> = capture.copies_of(index, &pass.bindings).collect();
             for &(binding, host) in &copies {
-                copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, host, 0, u64::MAX);
+                copy_to_host(
+                    &self.ctx,
+                    cmd,
+                    &self.resources,
+                    &mut self.tracker,
+                    frame,
+                    binding,
+                    host,
+                    0,
+                    u64::MAX,
+                    wait,
+                );
             }
             if !copies.is_empty() {
-                cmd_barriers(&device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
+                cmd_barriers(self.ctx.device(), cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::HOST_READ)], &[]);
             }
         }
         let ring = &self.counter_ring[(frame % FRAMES_IN_FLIGHT as u64) as usize];
         for source in self.counter_sources.iter().filter(|s| s.pass == index) {
             let (binding, offset, record) = (&source.binding, source.offset, source.bytes);
-            copy_to_host(&self.ctx, cmd, &self.resources, &mut self.tracker, frame, binding, ring, offset, record);
+            copy_to_host(
+                &self.ctx,
+                cmd,
+                &self.resources,
+                &mut self.tracker,
+                frame,
+                binding,
+                ring,
+                offset,
+                record,
+                wait,
+            );
         }
     }
 
