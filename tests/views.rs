@@ -239,34 +239,115 @@ fn views_culled_together_match_views_culled_one_at_a_time() {
     let shaders = gpu.shaders();
     let (scene, overview) = city_view(600, (16, 12));
     let street = street_camera(&scene);
-    let spec = GraphSpec::default_graph();
     let orbit = cullgraph::scene::CameraPath::Orbit;
-    let cameras: Vec<Camera> =
-        (0..18).map(|i| orbit.camera_at(if i % 2 == 0 { &overview } else { &street }, i as u32 * 7)).collect();
+    // Every phase and test of the pass: two phases against this frame's pyramid (more views than
+    // one dispatch takes), frustum only, occluders then the rest, one phase against last frame's.
+    for (graph, views) in [("default", 18), ("frustum", 5), ("occluder_prepass", 5), ("one_phase", 5)] {
+        let spec = GraphSpec::builtin(graph).unwrap();
+        let cameras: Vec<Camera> =
+            (0..views).map(|i| orbit.camera_at(if i % 2 == 0 { &overview } else { &street }, i as u32 * 7)).collect();
+        let mut renderers = Vec::new();
+        for together in [true, false] {
+            let mut r =
+                Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(16, 12), &spec).unwrap();
+            let mut ids = vec![ViewId::MAIN];
+            for i in 1..cameras.len() {
+                // Sizes differ, so that each view's pyramid has its own size.
+                let size = RenderSettings::new(12 + i as u32, 10 + (i as u32 % 3));
+                ids.push(r.add_view(&shaders, size, &spec).unwrap());
+            }
+            r.set_views_culled_together(together);
+            renderers.push((r, ids));
+        }
+        let mut culled = 0;
+        for frame in 0..3 {
+            let mut results = Vec::new();
+            for (r, ids) in &mut renderers {
+                let frames: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&cameras).collect();
+                results.push(r.render_views_to_rgba8(&frames).unwrap());
+            }
+            for (v, (together, apart)) in results[0].iter().zip(&results[1]).enumerate() {
+                assert!(together.1 == apart.1, "{graph}, frame {frame}, view {v}: the image differs");
+                assert_eq!(counts(&together.0), counts(&apart.0), "{graph}, frame {frame}, view {v}");
+            }
+            culled += results[0].iter().map(|(s, _)| s.occlusion_culled + s.frustum_culled).sum::<u32>();
+            if graph == "default" {
+                let occluded: u32 = results[0].iter().map(|(s, _)| s.occlusion_culled).sum();
+                assert!(frame == 0 || occluded > 0, "frame {frame}: the views cull by occlusion");
+            }
+        }
+        assert!(culled > 0, "{graph}: the views cull");
+    }
+    gpu.assert_clean();
+}
+
+/// Orthographic views from above, each over one tile of a `grid` x `grid` partition of the
+/// scene's bound, as shadow maps see a city.
+fn tile_cameras(scene: &cullgraph::scene::Scene, grid: usize) -> Vec<Camera> {
+    let (min, max) = scene.world_bounds().expect("the city has instances");
+    let size = (max - min) / grid as f64;
+    let height = (max.y - min.y).max(1.0) + 10.0;
+    (0..grid * grid)
+        .map(|tile| {
+            let (tx, tz) = ((tile % grid) as f64, (tile / grid) as f64);
+            let at = DVec3::new(min.x + (tx + 0.5) * size.x, (min.y + max.y) * 0.5, min.z + (tz + 0.5) * size.z);
+            Camera {
+                eye: at + DVec3::new(0.0, height, 0.0),
+                target: at,
+                up: glam::Vec3::Z,
+                projection: cullgraph::scene::Projection::Orthographic {
+                    height: size.x.max(size.z) as f32,
+                    far: (2.0 * height) as f32,
+                },
+                near: 1.0,
+                ..Default::default()
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn tile_views_culled_together_cull_exactly_what_each_culls_alone() {
+    // Views that each see one part of the world, as shadow maps of a city do, and instances on
+    // their edges: each view's counts and image must equal its own run's. The city is large
+    // enough that a block of one mesh's slots spans a few tiles, not the whole city.
+    const INSTANCES: usize = 30000;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, _) = city_view(INSTANCES, (16, 16));
+    let mut cameras = tile_cameras(&scene, 5);
+    cameras.insert(0, street_camera(&scene));
+    let spec = GraphSpec::builtin("frustum").unwrap();
     let mut renderers = Vec::new();
     for together in [true, false] {
-        let mut r = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(16, 12)).unwrap();
+        let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(16, 16), &spec).unwrap();
         let mut ids = vec![ViewId::MAIN];
-        for i in 1..cameras.len() {
-            // Sizes differ, so that each view's pyramid has its own size.
-            let size = RenderSettings::new(12 + i as u32, 10 + (i as u32 % 3));
-            ids.push(r.add_view(&shaders, size, &spec).unwrap());
+        for _ in 1..cameras.len() {
+            ids.push(r.add_view(&shaders, RenderSettings::new(16, 16), &spec).unwrap());
         }
         r.set_views_culled_together(together);
         renderers.push((r, ids));
     }
-    for frame in 0..3 {
-        let mut results = Vec::new();
-        for (r, ids) in &mut renderers {
-            let frames: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&cameras).collect();
-            results.push(r.render_views_to_rgba8(&frames).unwrap());
-        }
-        for (v, (together, apart)) in results[0].iter().zip(&results[1]).enumerate() {
-            assert!(together.1 == apart.1, "frame {frame}, view {v}: the image differs");
-            assert_eq!(counts(&together.0), counts(&apart.0), "frame {frame}, view {v}");
-        }
-        let occluded: u32 = results[0].iter().map(|(s, _)| s.occlusion_culled).sum();
-        assert!(frame == 0 || occluded > 0, "frame {frame}: the views cull by occlusion");
+    let mut results = Vec::new();
+    for (r, ids) in &mut renderers {
+        let frames: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&cameras).collect();
+        results.push(r.render_views_to_rgba8(&frames).unwrap());
     }
+    let mut drawn_by_tiles = 0;
+    for (v, (together, apart)) in results[0].iter().zip(&results[1]).enumerate() {
+        assert!(together.1 == apart.1, "view {v}: the image differs");
+        assert_eq!(counts(&together.0), counts(&apart.0), "view {v}");
+        if v > 0 {
+            // Each tile draws its part of the city and culls the rest by frustum.
+            assert!(
+                together.0.drawn > 0 && together.0.frustum_culled > together.0.drawn,
+                "view {v}: {:?}",
+                counts(&together.0)
+            );
+            drawn_by_tiles += together.0.drawn;
+        }
+    }
+    // The tiles cover the city: instances on their edges are drawn by several.
+    assert!(drawn_by_tiles >= INSTANCES as u32, "the tiles drew {drawn_by_tiles} of {INSTANCES}");
     gpu.assert_clean();
 }

@@ -326,6 +326,18 @@ bool cull_hiz_occluded(uvec4 rect, float nearest_depth, uvec2 base_size, bool fi
     uvec2 size = hiz_level_size(base_size, level);
     uvec2 lo = hiz_texel_of_pixel(rect.xy, level, size);
     uvec2 hi = hiz_texel_of_pixel(rect.zw, level, size);
+    // At most 2x2 texels (the coarse footprint): the four loads at once, not one after another
+    // (a smaller footprint loads some texel twice).
+    if (hi.x - lo.x <= 1u && hi.y - lo.y <= 1u) {
+        float d00 = hiz_load(level, lo);
+        float d10 = hiz_load(level, uvec2(hi.x, lo.y));
+        float d01 = hiz_load(level, uvec2(lo.x, hi.y));
+        float d11 = hiz_load(level, hi);
+        bool behind = nearest_depth < d00;
+        behind = behind && nearest_depth < d10;
+        behind = behind && nearest_depth < d01;
+        return behind && nearest_depth < d11;
+    }
     for (uint ty = lo.y; ty <= hi.y; ++ty) {
         for (uint tx = lo.x; tx <= hi.x; ++tx) {
             if (!(nearest_depth < hiz_load(level, uvec2(tx, ty)))) return false;

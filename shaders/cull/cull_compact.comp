@@ -24,7 +24,8 @@
 layout(local_size_x = 256) in;
 
 #ifdef MULTI_VIEW
-// One row of workgroups per view (gl_WorkGroupID.y), each placing that view's survivors.
+// Workgroup v < view_count writes view v's commands; every other workgroup places one block's
+// survivors of every view that has any there.
 #include "cull_views.glsl"
 layout(set = 0, binding = 2, scalar) readonly buffer Groups { DrawGroup groups[]; };
 layout(set = 0, binding = 3) readonly buffer SlotInstances { uint slot_instances[]; };
@@ -57,6 +58,9 @@ layout(push_constant) uniform Push {
     uint group_count;
     uint superblocks;
     uint region_first[FACE_CULL_REGIONS];  // first group of each face cull's region
+#ifdef MULTI_VIEW
+    uint view_count;
+#endif
 } pc;
 
 // Placing a block: its draw bits [0] and visibility bits [1], and the survivors / visible slots
@@ -314,13 +318,49 @@ void write_commands() {
 #endif
 }
 
+#ifdef MULTI_VIEW
+// Which views have survivors or visible slots in the block.
+shared uint sh_views_with_work;
+
+// Places block `block` of every view that has something there, one view after another.
+void place_block_of_views(uint block) {
+    uint lane = gl_LocalInvocationIndex;
+    if (lane == 0u) sh_views_with_work = 0u;
+    barrier();
+    if (lane < pc.view_count) {
+        select_view_buffers(view_table[lane], lane);
+        uint work = scratch[scratch_block(pc.superblocks, block)];
+#ifdef VISIBLE_OUT
+        work |= scratch[scratch_visible_block(pc.superblocks, pc.slot_count, block)];
+#endif
+        if (work != 0u) atomicOr(sh_views_with_work, 1u << lane);
+    }
+    barrier();
+    uint views = sh_views_with_work;
+    while (views != 0u) {
+        uint v = findLSB(views);
+        views &= views - 1u;
+        select_view_buffers(view_table[v], v);
+        place_block(block, scratch[SCRATCH_PLACE_RUN]);
+        // The next view reuses the shared words.
+        barrier();
+    }
+}
+#endif
+
 void main() {
 #ifdef MULTI_VIEW
-    select_view_buffers(view_table[gl_WorkGroupID.y], gl_WorkGroupID.y);
-#endif
+    if (gl_WorkGroupID.x < pc.view_count) {
+        select_view_buffers(view_table[gl_WorkGroupID.x], gl_WorkGroupID.x);
+        write_commands();
+        return;
+    }
+    place_block_of_views(gl_WorkGroupID.x - pc.view_count);
+#else
     if (gl_WorkGroupID.x == 0u) {
         write_commands();
         return;
     }
     place_block(gl_WorkGroupID.x - 1u, scratch[SCRATCH_PLACE_RUN]);
+#endif
 }

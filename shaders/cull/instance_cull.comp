@@ -22,6 +22,7 @@
 #extension GL_KHR_shader_subgroup_ballot : require
 // The hiz_build pass stores chain levels from HIZ_FIRST_LEVEL (1) on: never test below it.
 #define CULL_HIZ_MIN_LEVEL 1u
+
 #include "../common/scene.glsl"
 #include "../common/hiz.glsl"
 #include "cull_common.glsl"
@@ -46,14 +47,20 @@ CullRecord load_record(uint slot) {
 #include "cull_views.glsl"
 layout(set = 0, binding = 2, scalar) readonly buffer Groups { DrawGroup groups[]; };
 layout(set = 0, binding = 10, scalar) readonly buffer ViewTable { ViewBuffers view_table[]; };
-layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer FrameRef { FrameConstants f; };
-FrameRef g_frame;
-#define frame g_frame.f
-void select_view(uint v) {
-    ViewBuffers b = view_table[v];
-    select_view_buffers(b, v);
-    g_frame = FrameRef(b.constants);
-}
+// What deciding reads of each view's constants (ViewCull in src/passes/instance_cull/views.rs),
+// as a uniform buffer: the views' loop index is the same in every invocation, so implementations
+// can read these through their constant caches instead of once per invocation (the field names
+// are FrameConstants', so `frame.x` below is the selected view's).
+struct ViewCull {
+    CullView cull_view;
+    CullView prev_cull_view;
+    vec4 eye_hi;
+    vec4 eye_lo;
+    vec4 prev_eye_hi;
+    vec4 prev_eye_lo;
+};
+layout(set = 0, binding = 11, scalar) uniform ViewCulls { ViewCull view_culls[MAX_CULL_VIEWS]; };
+#define frame view_culls[g_view]
 #ifdef HAS_HIZ
 layout(set = 0, binding = 9) uniform sampler2D hiz_views[MAX_CULL_VIEWS];
 // Each view's pyramid, indexed by constants (sampled-image arrays may not be indexed
@@ -104,10 +111,15 @@ layout(push_constant) uniform Push {
 } pc;
 
 #ifdef MULTI_VIEW
-// Every view's decision bits and counters side by side: all views decide before one barrier.
-shared uint mv_draw[MAX_CULL_VIEWS][CULL_WORDS_PER_BLOCK];
-shared uint mv_vis[MAX_CULL_VIEWS][CULL_WORDS_PER_BLOCK];
-shared uint mv_counts[MAX_CULL_VIEWS][4];
+// Each slot's decisions for every view, one bit per view: [0] drawn | visible now << 16,
+// [1] evaluated | frustum-culled << 16, [2] occlusion-culled; and the slot's draw group.
+shared uint mv_bits[3][CULL_BLOCK];
+shared uint mv_group[CULL_BLOCK];
+// Last frame's visibility words of the block, per view.
+shared uint mv_prev[MAX_CULL_VIEWS][CULL_WORDS_PER_BLOCK];
+// Per view and word: the set bits of drawn, visible now, evaluated, frustum-culled and
+// occlusion-culled, a byte each (the last in .y).
+shared uvec2 mv_pop[MAX_CULL_VIEWS][CULL_WORDS_PER_BLOCK];
 #endif
 shared uint sh_draw[CULL_WORDS_PER_BLOCK];
 shared uint sh_vis[CULL_WORDS_PER_BLOCK];
@@ -340,27 +352,50 @@ void cull_block(uint lane, uint block, uint slot) {
 }
 
 #ifdef MULTI_VIEW
-// Tests the block's slots against every view: each record is read once, every view decides
-// into its own shared words before one barrier, then invocations write the views' words and
-// block records side by side (8 per view for the words, one per view for the records).
+// Adds the set bits of `bits` (word `w` of the block) to their draw groups' counts at
+// `counts`: one atomic per group the word holds (slots are sorted by group, so usually one).
+void count_word_groups(uint w, uint bits, uint counts) {
+    uint first = mv_group[w * 32u];
+    if (first == mv_group[w * 32u + 31u]) {
+        atomicAdd(group_counts[counts + first], bitCount(bits));
+        return;
+    }
+    while (bits != 0u) {
+        uint j = findLSB(bits);
+        uint g = mv_group[w * 32u + j];
+        uint same = 0u;
+        for (uint k = j; k < 32u && mv_group[w * 32u + k] == g; ++k) same |= 1u << k;
+        atomicAdd(group_counts[counts + g], bitCount(bits & same));
+        bits &= ~same;
+    }
+}
+
+// Tests the block's slots against every view. Each record is read once; every invocation keeps its slot's decisions as one bit per view,
+// and after one barrier the views' words are gathered from those bits, 8 invocations per view
+// (no per-view subgroup operations, whatever the view decided), then one invocation per view
+// writes its block record.
 void cull_views(uint lane, uint block, uint slot) {
     uint n = pc.view_count;
+#ifdef HAS_VIS_PREV
     if (lane < n * CULL_WORDS_PER_BLOCK) {
-        mv_draw[lane / CULL_WORDS_PER_BLOCK][lane % CULL_WORDS_PER_BLOCK] = 0u;
-        mv_vis[lane / CULL_WORDS_PER_BLOCK][lane % CULL_WORDS_PER_BLOCK] = 0u;
+        uint v = lane / CULL_WORDS_PER_BLOCK;
+        uint w = lane % CULL_WORDS_PER_BLOCK;
+        select_view_buffers(view_table[v], v);
+        uint word = block * CULL_WORDS_PER_BLOCK + w;
+        mv_prev[v][w] = word < (pc.slot_count + 31u) / 32u ? vis_prev[word] : 0u;
     }
-    if (lane < n * 4u) mv_counts[lane / 4u][lane % 4u] = 0u;
+#endif
     bool in_range = slot < pc.slot_count;
     CullRecord r = CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u);
     if (in_range) r = load_record(slot);
     bool empty = in_range && record_empty(r);
-    uint word = lane >> 5u;
-    uint bit = 1u << (lane & 31u);
     barrier();
+
+    uint drawn_visible = 0u, evaluated_frustum = 0u, occlusion = 0u;
     for (uint v = 0u; v < n; ++v) {
-        select_view(v);
+        g_view = v;
 #ifdef HAS_VIS_PREV
-        bool was_visible = in_range && ((vis_prev[slot >> 5] >> (slot & 31u)) & 1u) != 0u;
+        bool was_visible = in_range && ((mv_prev[v][lane >> 5u] >> (lane & 31u)) & 1u) != 0u;
 #else
         bool was_visible = false;
 #endif
@@ -370,54 +405,72 @@ void cull_views(uint lane, uint block, uint slot) {
         bool evaluated = in_range && !empty;
 #endif
         Decision d = decide(r, evaluated, was_visible);
-        OR_INTO_SHARED(mv_draw[v], word, d.draw ? bit : 0u)
-        if (d.draw) count_group_survivor(d.group, 0u);
-#ifdef VISIBLE_OUT
-        if (d.visible_now) count_group_survivor(d.group, pc.group_count);
-#endif
-#ifdef WRITE_VIS
-        OR_INTO_SHARED(mv_vis[v], word, d.visible_now ? bit : 0u)
-#endif
-        uvec4 counts = subgroupAdd(uvec4(d.evaluated, d.frustum_culled, d.occlusion_culled, d.visible_now));
-        if (subgroupElect()) {
-            for (uint i = 0u; i < 4u; ++i) {
-                if (counts[i] != 0u) atomicAdd(mv_counts[v][i], counts[i]);
-            }
-        }
+        drawn_visible |= (d.draw ? 1u << v : 0u) | (d.visible_now ? 0x10000u << v : 0u);
+        evaluated_frustum |= (d.evaluated ? 1u << v : 0u) | (d.frustum_culled ? 0x10000u << v : 0u);
+        occlusion |= d.occlusion_culled ? 1u << v : 0u;
     }
+    mv_bits[0][lane] = drawn_visible;
+    mv_bits[1][lane] = evaluated_frustum;
+    mv_bits[2][lane] = occlusion;
+    mv_group[lane] = record_group(r);
     barrier();
-    // The views' words: 8 invocations per view.
+
+    // Word w of view v, gathered from the 32 slots' bits (the start rotated by w so that the
+    // invocations of one view read different banks).
     if (lane < n * CULL_WORDS_PER_BLOCK) {
         uint v = lane / CULL_WORDS_PER_BLOCK;
         uint w = lane % CULL_WORDS_PER_BLOCK;
-        select_view(v);
-        draw_bits[block * CULL_WORDS_PER_BLOCK + w] = mv_draw[v][w];
+        uint draw = 0u, visible = 0u, evaluated = 0u, frustum = 0u, occluded = 0u;
+        for (uint i = 0u; i < 32u; ++i) {
+            uint j = (i + w) & 31u;
+            uint k = w * 32u + j;
+            uint a = mv_bits[0][k], b = mv_bits[1][k], c = mv_bits[2][k];
+            draw |= ((a >> v) & 1u) << j;
+            visible |= ((a >> (16u + v)) & 1u) << j;
+            evaluated |= ((b >> v) & 1u) << j;
+            frustum |= ((b >> (16u + v)) & 1u) << j;
+            occluded |= ((c >> v) & 1u) << j;
+        }
+        select_view_buffers(view_table[v], v);
+        draw_bits[block * CULL_WORDS_PER_BLOCK + w] = draw;
 #ifdef WRITE_VIS
         // The visibility buffer holds ceil(slots / 32) words; the last block may run past it.
         uint vis_word = block * CULL_WORDS_PER_BLOCK + w;
-        if (vis_word < (pc.slot_count + 31u) / 32u) vis_now[vis_word] = mv_vis[v][w];
+        if (vis_word < (pc.slot_count + 31u) / 32u) vis_now[vis_word] = visible;
 #endif
+        if (draw != 0u) count_word_groups(w, draw, 0u);
+#ifdef VISIBLE_OUT
+        if (visible != 0u) count_word_groups(w, visible, pc.group_count);
+#endif
+        mv_pop[v][w] = uvec2(bitCount(draw) | bitCount(visible) << 8u | bitCount(evaluated) << 16u
+                                 | bitCount(frustum) << 24u,
+                             bitCount(occluded));
     }
-    // The views' block records: one invocation per view, after the words' invocations.
-    uint records = MAX_CULL_VIEWS * CULL_WORDS_PER_BLOCK;
-    if (lane >= records && lane < records + n) {
-        uint v = lane - records;
-        select_view(v);
+    barrier();
+
+    // The views' block records, one invocation per view.
+    if (lane < n) {
+        uint v = lane;
+        select_view_buffers(view_table[v], v);
+        uvec4 sums = uvec4(0u);
+        uint occluded = 0u;
+        for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) {
+            uvec2 p = mv_pop[v][w];
+            sums += (uvec4(p.x) >> uvec4(0u, 8u, 16u, 24u)) & 0xFFu;
+            occluded += p.y;
+        }
+        uint count = sums.x;
         uint run = scratch[SCRATCH_TEST_RUN];
-        uint count = 0u;
-        for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) count += bitCount(mv_draw[v][w]);
         scratch[scratch_block(pc.superblocks, block)] = count;
 #ifdef VISIBLE_OUT
-        uint visible = 0u;
-        for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) visible += bitCount(mv_vis[v][w]);
-        scratch[scratch_visible_block(pc.superblocks, pc.slot_count, block)] = visible;
+        scratch[scratch_visible_block(pc.superblocks, pc.slot_count, block)] = sums.y;
 #endif
         uint at = scratch_super(pc.superblocks, run, block / CULL_SUPERBLOCK);
         if (count != 0u) atomicAdd(scratch[at + SUPER_SURVIVORS], count);
-        if (mv_counts[v][0] != 0u) atomicAdd(scratch[at + SUPER_TESTED], mv_counts[v][0]);
-        if (mv_counts[v][1] != 0u) atomicAdd(scratch[at + SUPER_FRUSTUM], mv_counts[v][1]);
-        if (mv_counts[v][2] != 0u) atomicAdd(scratch[at + SUPER_OCCLUSION], mv_counts[v][2]);
-        if (mv_counts[v][3] != 0u) atomicAdd(scratch[at + SUPER_VISIBLE], mv_counts[v][3]);
+        if (sums.z != 0u) atomicAdd(scratch[at + SUPER_TESTED], sums.z);
+        if (sums.w != 0u) atomicAdd(scratch[at + SUPER_FRUSTUM], sums.w);
+        if (occluded != 0u) atomicAdd(scratch[at + SUPER_OCCLUSION], occluded);
+        if (sums.y != 0u) atomicAdd(scratch[at + SUPER_VISIBLE], sums.y);
         // Nothing reads this word in this dispatch: the compact step's copy of the run number.
         if (block == 0u) scratch[SCRATCH_PLACE_RUN] = run;
     }

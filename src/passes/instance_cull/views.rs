@@ -1,6 +1,6 @@
 //! Several views culled together: one test dispatch reads each slot's record once and tests it
-//! against every view, and one compact dispatch places every view's survivors (one row of
-//! workgroups per view). Each view keeps its own scratch, decision bits, counts, visibility and
+//! against every view, and one compact dispatch places every view's survivors (a workgroup per
+//! block, for every view with survivors in it). Each view keeps its own scratch, decision bits, counts, visibility and
 //! draw lists, reached through their device addresses in a table (`shaders/cull/cull_views.glsl`).
 
 use super::{blocks_of, step_barrier, InstanceCullPass, CULL_SUPERBLOCK};
@@ -8,6 +8,7 @@ use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::{PassNode, FRAMES_IN_FLIGHT};
+use crate::passes::shared::gpu_types::{FrameConstants, GpuCullView};
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 
@@ -18,12 +19,39 @@ pub const MAX_TOGETHER: usize = 16;
 /// Addresses per view in the table (`ViewBuffers`).
 const TABLE_WORDS: usize = 14;
 
+/// What the test step reads of each view's constants (`ViewCull` in `instance_cull.comp`,
+/// scalar layout): handed on from the constants the host wrote, as a uniform buffer.
+#[repr(C)]
+#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct ViewCull {
+    cull_view: GpuCullView,
+    prev_cull_view: GpuCullView,
+    eye_hi: [f32; 4],
+    eye_lo: [f32; 4],
+    prev_eye_hi: [f32; 4],
+    prev_eye_lo: [f32; 4],
+}
+
+impl ViewCull {
+    fn of(c: &FrameConstants) -> Self {
+        Self {
+            cull_view: c.cull_view,
+            prev_cull_view: c.prev_cull_view,
+            eye_hi: c.eye_hi,
+            eye_lo: c.eye_lo,
+            prev_eye_hi: c.prev_eye_hi,
+            prev_eye_lo: c.prev_eye_lo,
+        }
+    }
+}
+
 /// The pipelines and tables of culling several views at once, made on first use.
 pub(super) struct Together {
     test: Pipeline,
     compact: Pipeline,
-    /// Per frame in flight, one table per dispatch of the frame.
-    tables: Vec<Vec<Buffer>>,
+    /// Per frame in flight, one table and one buffer of culling constants per dispatch of the
+    /// frame.
+    tables: Vec<Vec<(Buffer, Buffer)>>,
 }
 
 impl Together {
@@ -56,19 +84,22 @@ impl Together {
         })
     }
 
-    /// The table of dispatch `chunk` of frame `frame`, made on first use.
-    fn table(&mut self, ctx: &GpuContext, frame: u64, chunk: usize) -> crate::Result<&mut Buffer> {
+    /// The table and the culling constants of dispatch `chunk` of frame `frame`, made on first
+    /// use.
+    fn table(&mut self, ctx: &GpuContext, frame: u64, chunk: usize) -> crate::Result<&mut (Buffer, Buffer)> {
         let ring = &mut self.tables[(frame % FRAMES_IN_FLIGHT as u64) as usize];
         while ring.len() <= chunk {
-            ring.push(Buffer::new(
-                ctx,
-                &BufferDesc {
-                    name: "cull view table",
-                    size: (MAX_TOGETHER * TABLE_WORDS * 8) as u64,
-                    usage: vk::BufferUsageFlags::STORAGE_BUFFER,
-                    location: MemoryLocation::CpuToGpu,
-                },
-            )?);
+            let host = |name, size, usage| {
+                Buffer::new(ctx, &BufferDesc { name, size, usage, location: MemoryLocation::CpuToGpu })
+            };
+            ring.push((
+                host("cull view table", (MAX_TOGETHER * TABLE_WORDS * 8) as u64, vk::BufferUsageFlags::STORAGE_BUFFER)?,
+                host(
+                    "cull view constants",
+                    (MAX_TOGETHER * std::mem::size_of::<ViewCull>()) as u64,
+                    vk::BufferUsageFlags::UNIFORM_BUFFER,
+                )?,
+            ));
         }
         Ok(&mut ring[chunk])
     }
@@ -180,13 +211,19 @@ impl InstanceCullPass {
             let n = range.len();
             let together = lead.together.as_mut().expect("checked above");
             let words: Vec<u64> = tables[range.clone()].iter().flatten().copied().collect();
-            let table = together.table(ctx, frame, chunk)?;
+            let mut culls = [ViewCull::default(); MAX_TOGETHER];
+            for (cull, rec) in culls.iter_mut().zip(&contexts[range.clone()]) {
+                *cull = ViewCull::of(SceneInputs::of(rec)?.constants_written());
+            }
+            let (table, constants) = together.table(ctx, frame, chunk)?;
             table.write_bytes(0, bytemuck::cast_slice(&words))?;
-            let table = table.handle();
+            constants.write_bytes(0, bytemuck::cast_slice(&culls))?;
+            let (table, constants) = (table.handle(), constants.handle());
             let mut test_binds = vec![
                 Bind::Buffer(0, scene.cull_records.handle()),
                 Bind::Buffer(2, scene.draw_groups.handle()),
                 Bind::Buffer(10, table),
+                Bind::Buffer(11, constants),
             ];
             // Every element of the pyramid array is bound: the views' own, then the first again.
             let hiz: Vec<_> = contexts[range.clone()].iter().filter_map(|rec| rec.slots.image("hiz")).collect();
@@ -229,10 +266,13 @@ impl InstanceCullPass {
                 ],
             );
             let [first0, first1, first2, first3] = scene.regions.first;
-            together.compact.push_constants(cmd, &[slots, groups, superblocks, first0, first1, first2, first3]);
-            // Workgroup 0 of each row writes its view's commands, workgroup 1 + b places block b.
+            together
+                .compact
+                .push_constants(cmd, &[slots, groups, superblocks, first0, first1, first2, first3, n as u32]);
+            // Workgroup v < n writes view v's commands, workgroup n + b places block b of every
+            // view with survivors there.
             // SAFETY: as above.
-            unsafe { device.cmd_dispatch(cmd, blocks + 1, n as u32, 1) };
+            unsafe { device.cmd_dispatch(cmd, n as u32 + blocks, 1, 1) };
         }
         Ok(())
     }

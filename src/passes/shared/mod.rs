@@ -36,8 +36,20 @@ pub const VERTEX_ATTRIBUTES: [(u32, vk::Format, u32); 4] = [
 pub(crate) struct FrameSlot {
     /// This frame's [`FrameConstants`].
     pub constants: Buffer,
+    /// What `constants` was last given, for passes that read it on the host
+    /// ([`SceneInputs::constants_written`]).
+    pub written: FrameConstants,
     /// This frame's point lights ([`GpuPointLight`] each).
     pub lights: Buffer,
+}
+
+impl FrameSlot {
+    /// Writes this frame's constants.
+    pub fn write_constants(&mut self, constants: &FrameConstants) -> crate::Result<()> {
+        self.constants.write_bytes(0, bytemuck::bytes_of(constants))?;
+        self.written = *constants;
+        Ok(())
+    }
 }
 
 /// What one view's graph reads besides its slots: the world's scene on the GPU (shared by every
@@ -70,6 +82,7 @@ impl SceneInputs {
                 };
                 Ok(FrameSlot {
                     constants: host(&format!("frame constants {i}"), std::mem::size_of::<FrameConstants>() as u64)?,
+                    written: FrameConstants::default(),
                     lights: host(&format!("lights {i}"), light_bytes)?,
                 })
             })
@@ -107,6 +120,12 @@ impl SceneInputs {
     /// This frame's constants ([`FrameConstants`]).
     pub fn constants(&self) -> &Buffer {
         &self.frames[self.current].constants
+    }
+
+    /// This frame's constants as the host wrote them (what [`SceneInputs::constants`] holds),
+    /// for a pass that hands some of them on in its own buffers.
+    pub fn constants_written(&self) -> &FrameConstants {
+        &self.frames[self.current].written
     }
 
     /// This frame's point lights.

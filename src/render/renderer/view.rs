@@ -98,7 +98,7 @@ impl View {
         let constants = FrameConstants::new(scene, camera, previous, self.settings.width, self.settings.height);
         let lights: Vec<GpuPointLight> = scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();
         let slot = self.inputs.slot_mut(frame);
-        slot.constants.write_bytes(0, bytemuck::bytes_of(&constants))?;
+        slot.write_constants(&constants)?;
         if !lights.is_empty() {
             slot.lights.write_bytes(0, bytemuck::cast_slice(&lights))?;
         }
