@@ -117,6 +117,47 @@ fn bench_views_reports_each_view_count_and_the_resize() {
     assert_eq!(rows[4]["drawn"].as_array().unwrap().len(), 16);
     assert_eq!(views["resize_pipelines"], 0);
     assert_eq!(views["scene_kept"], true);
+    // The shared dispatches were timed step by step.
+    assert!(rows[4]["cull_test_ms"].as_f64().unwrap() > 0.0 && rows[4]["cull_compact_ms"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn bench_views_with_chosen_counts_checks_each_view_against_exact_visibility() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().to_str().unwrap();
+    let args = [
+        "bench",
+        "--suites",
+        "views",
+        "--instances",
+        "300",
+        "--size",
+        "32x24",
+        "--warmup",
+        "0",
+        "--frames",
+        "1",
+        "--view-counts",
+        "3",
+        "--verify",
+    ];
+    let (code, _, err) = run(&[&args[..], &["--out", out]].concat());
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("bench.json")).unwrap()).unwrap();
+    let rows = json["views"]["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 1);
+    assert_eq!(rows[0]["views"], 3);
+    assert_eq!(rows[0]["false_negatives"], 0);
+    // Culled together or one at a time, each view culls the same share of what it cannot see.
+    let together = rows[0]["invisible_culled"].as_array().unwrap();
+    assert_eq!(together.len(), 3);
+    assert_eq!(together, rows[0]["invisible_culled_alone"].as_array().unwrap());
+    assert!(together.iter().all(|s| (0.0..=1.0).contains(&s.as_f64().unwrap())));
+
+    let (code, _, err) = run(&["bench", "--suites", "views", "--view-counts", "65", "--out", out]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("65 views: a renderer holds 1 to 64"), "{err}");
 }
 
 #[test]

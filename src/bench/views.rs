@@ -7,6 +7,7 @@
 use super::median;
 use crate::error::Result;
 use crate::gpu::{GpuContext, ShaderCompiler};
+use crate::oracle::Verify;
 use crate::render::{GraphSpec, RenderSettings, Renderer, ViewId};
 use crate::scene::source::LoadOptions;
 use crate::scene::{Camera, Projection, Scene, SceneSource};
@@ -29,6 +30,9 @@ pub struct ViewsBench {
     pub warmup: u32,
     /// Frames measured (medians are reported).
     pub frames: u32,
+    /// Also check one frame of each row against exact visibility, culled together and one view
+    /// at a time.
+    pub verify: bool,
 }
 
 /// One view count.
@@ -42,6 +46,12 @@ pub struct ViewsRow {
     pub cull_ms: f64,
     /// The same with each view culled in dispatches of its own: the sum of the views' scopes.
     pub cull_separate_ms: f64,
+    /// Of `cull_ms`, measured in frames of their own with step timing on: the median GPU
+    /// milliseconds of the test dispatches (every view decided) and of the compact dispatches
+    /// (every view's survivors placed and commands written).
+    pub cull_test_ms: f64,
+    /// See `cull_test_ms`.
+    pub cull_compact_ms: f64,
     /// Median GPU milliseconds of the whole frame (every view), culled together.
     pub frame_ms: f64,
     /// Instance-cull passes per view.
@@ -50,6 +60,13 @@ pub struct ViewsRow {
     pub view_bytes: u64,
     /// Instances drawn per view in the last frame.
     pub drawn: Vec<u32>,
+    /// With `verify`: per view, the share of the instances it cannot see that it culled, its
+    /// views culled together.
+    pub invisible_culled: Vec<f64>,
+    /// The same, each view culled on its own.
+    pub invisible_culled_alone: Vec<f64>,
+    /// With `verify`: false negatives of every view in both frames together (0: none).
+    pub false_negatives: u32,
 }
 
 /// The figures of one run.
@@ -159,6 +176,41 @@ pub fn run(
                 }
             }
         }
+        // The steps of the shared dispatches, timed in the lead view's scopes.
+        let (mut test, mut compact) = (Vec::new(), Vec::new());
+        renderer.set_views_culled_together(true);
+        renderer.set_step_timing(true);
+        for f in 0..bench.warmup + bench.frames {
+            let stats = renderer.render_views(&frame)?;
+            if f < bench.warmup {
+                continue;
+            }
+            let step = |suffix: &str| {
+                stats[0]
+                    .gpu_ms
+                    .iter()
+                    .filter(|t| cull_names.iter().any(|c| t.name == format!("{c}/{suffix}")))
+                    .map(|t| t.ms)
+                    .sum::<f64>()
+            };
+            test.push(step("test"));
+            compact.push(step("compact"));
+        }
+        let (mut invisible_culled, mut invisible_culled_alone, mut false_negatives) = (Vec::new(), Vec::new(), 0);
+        if bench.verify {
+            renderer.set_step_timing(false);
+            renderer.enable_verification(shaders)?;
+            for together in [true, false] {
+                renderer.set_views_culled_together(together);
+                let shares = if together { &mut invisible_culled } else { &mut invisible_culled_alone };
+                for stats in renderer.render_views(&frame)? {
+                    let Some(v) = stats.verify else { continue };
+                    let invisible = (bench.instances as u64).saturating_sub(v.visible as u64);
+                    shares.push(if invisible == 0 { 1.0 } else { 1.0 - v.false_positives as f64 / invisible as f64 });
+                    false_negatives += v.false_negatives;
+                }
+            }
+        }
         let cull_passes = cull_names.len() * n;
         let view_bytes = ids
             .iter()
@@ -169,10 +221,15 @@ pub fn run(
             views: n,
             cull_ms: median(&mut cull),
             cull_separate_ms: median(&mut separate),
+            cull_test_ms: median(&mut test),
+            cull_compact_ms: median(&mut compact),
             frame_ms: median(&mut total),
             cull_passes,
             view_bytes,
             drawn,
+            invisible_culled,
+            invisible_culled_alone,
+            false_negatives,
         });
     }
 
@@ -211,22 +268,34 @@ impl ViewsReport {
     pub fn markdown(&self) -> String {
         let mut md = format!(
             "## Views\n\nCity of {} instances on {}; the scene ({:.1} MB) is shared by every view.\n\n\
-             | views | cull GPU ms, together | cull GPU ms, one view at a time | ratio | frame GPU ms | view resources MB | drawn per view |\n\
-             |---|---|---|---|---|---|---|\n",
+             | views | cull GPU ms, together | of which test, compact | cull GPU ms, one view at a time | ratio | frame GPU ms | view resources MB | drawn per view |\n\
+             |---|---|---|---|---|---|---|---|\n",
             self.instances,
             self.device,
             self.scene_bytes as f64 / 1e6
         );
         for r in &self.rows {
             md += &format!(
-                "| {} | {:.3} | {:.3} | {:.2} | {:.3} | {:.1} | {:?} |\n",
+                "| {} | {:.3} | {:.3}, {:.3} | {:.3} | {:.2} | {:.3} | {:.1} | {:?} |\n",
                 r.views,
                 r.cull_ms,
+                r.cull_test_ms,
+                r.cull_compact_ms,
                 r.cull_separate_ms,
                 r.cull_separate_ms / r.cull_ms.max(1e-9),
                 r.frame_ms,
                 r.view_bytes as f64 / 1e6,
                 r.drawn
+            );
+        }
+        for r in self.rows.iter().filter(|r| !r.invisible_culled.is_empty()) {
+            let shares = |s: &[f64]| s.iter().map(|x| format!("{:.1}", 100.0 * x)).collect::<Vec<_>>().join(", ");
+            md += &format!(
+                "\n{} views, share of each view's invisible instances culled (%): together [{}], one at a time [{}]; false negatives {}.\n",
+                r.views,
+                shares(&r.invisible_culled),
+                shares(&r.invisible_culled_alone),
+                r.false_negatives
             );
         }
         md += &format!(

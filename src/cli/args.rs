@@ -179,6 +179,9 @@ pub struct BenchArgs {
     /// `fxaa` run at one sample, the others at each of `--msaa-samples`.
     #[arg(long, value_delimiter = ',', default_values_t = cullgraph::bench::msaa::ONE_SAMPLE_METHODS.iter().chain(cullgraph::bench::msaa::MSAA_METHODS).map(|m| m.to_string()))]
     pub msaa_methods: Vec<String>,
+    /// Views suite: the view counts, comma-separated (each from 1 to the most a renderer holds).
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2, 4, 8, 16, cullgraph::render::MAX_VIEWS], value_parser = parse_view_count)]
+    pub view_counts: Vec<usize>,
     /// MSAA suite: sample counts, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [2u32, 4, 8], value_parser = parse_msaa_samples)]
     pub msaa_samples: Vec<u32>,
@@ -627,6 +630,15 @@ pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
         *slot = x;
     }
     Ok(DVec3::from_array(v))
+}
+
+/// A view count of the views suite: 1 to [`cullgraph::render::MAX_VIEWS`].
+fn parse_view_count(s: &str) -> std::result::Result<usize, String> {
+    let n: usize = s.trim().parse().map_err(|_| format!("'{s}' is not a view count"))?;
+    if n == 0 || n > cullgraph::render::MAX_VIEWS {
+        return Err(format!("{n} views: a renderer holds 1 to {}", cullgraph::render::MAX_VIEWS));
+    }
+    Ok(n)
 }
 
 #[cfg(test)]

@@ -14,9 +14,6 @@ const DEFAULT_MOVED: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
 /// The suites `--suites` takes.
 const SUITES: &[&str] = &["culling", "hiz", "msaa", "dynamic", "views"];
 
-/// View counts of the `views` suite, up to the most a renderer holds.
-const VIEW_COUNTS: [usize; 6] = [1, 2, 4, 8, 16, cullgraph::render::MAX_VIEWS];
-
 /// Runs the command.
 pub fn run(args: &BenchArgs) -> Result<()> {
     if let Some(unknown) = args.suites.iter().find(|s| !SUITES.contains(&s.as_str())) {
@@ -132,9 +129,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 instances: largest,
                 width,
                 height,
-                views: VIEW_COUNTS.to_vec(),
+                views: args.view_counts.clone(),
                 warmup: args.warmup,
                 frames: args.frames,
+                verify: args.verify,
             },
             &progress,
         )?;
