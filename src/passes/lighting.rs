@@ -49,7 +49,11 @@ pub struct LightingSettings {
 }
 
 impl LightingSettings {
-    /// From the pass's graph settings (`exposure`, `debug_view`).
+    /// The settings that are push constants, which a lighting pass takes without being made
+    /// again ([`crate::graph::PassNode::live_settings`]).
+    pub const LIVE: &'static [&'static str] = &["exposure", "debug_view", "light_tiles"];
+
+    /// From the pass's graph settings (`exposure`, `debug_view`, `light_tiles`).
     pub fn from_plan(pass: &PlannedPass) -> crate::Result<Self> {
         let exposure = pass.real("exposure")? as f32;
         // The variants' order is `DEBUG_VIEW_*`'s.
@@ -148,6 +152,15 @@ impl LightingPass {
 }
 
 impl PassNode for LightingPass {
+    fn live_settings(&self) -> &'static [&'static str] {
+        LightingSettings::LIVE
+    }
+
+    fn apply_settings(&mut self, pass: &PlannedPass) -> crate::Result<()> {
+        self.settings = LightingSettings::from_plan(pass)?;
+        Ok(())
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let inputs = SceneInputs::of(rec)?;
         let slots = &rec.slots;

@@ -52,6 +52,15 @@ impl LightingVisibilityPass {
 }
 
 impl PassNode for LightingVisibilityPass {
+    fn live_settings(&self) -> &'static [&'static str] {
+        LightingSettings::LIVE
+    }
+
+    fn apply_settings(&mut self, pass: &PlannedPass) -> crate::Result<()> {
+        self.settings = LightingSettings::from_plan(pass)?;
+        Ok(())
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let slots = &rec.slots;
         let (depth, ids, output) =

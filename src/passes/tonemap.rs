@@ -39,6 +39,15 @@ impl TonemapPass {
 }
 
 impl PassNode for TonemapPass {
+    fn live_settings(&self) -> &'static [&'static str] {
+        &["exposure"]
+    }
+
+    fn apply_settings(&mut self, pass: &PlannedPass) -> crate::Result<()> {
+        self.settings.exposure = pass.real("exposure")? as f32;
+        Ok(())
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let input = rec.slots.required_image("input")?;
         let output = rec.slots.required_image("output")?;

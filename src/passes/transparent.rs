@@ -37,6 +37,15 @@ pub struct TransparentPass {
 }
 
 impl PassNode for TransparentPass {
+    fn live_settings(&self) -> &'static [&'static str] {
+        &["exposure"]
+    }
+
+    fn apply_settings(&mut self, pass: &crate::graph::plan::PlannedPass) -> crate::Result<()> {
+        self.exposure = pass.real("exposure")? as f32;
+        Ok(())
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let inputs = SceneInputs::of(rec)?;
         let scene = &inputs.scene;

@@ -34,6 +34,15 @@ pub use views::MAX_VIEWS;
 pub use super::drawn::DrawnInstances;
 pub use readback::OutputF32;
 
+/// How [`Renderer::set_graph_params`] applied a change of params.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParamsApplied {
+    /// Only settings the passes take live changed: nothing was made again.
+    Live,
+    /// Something else changed (a shader variant, a size): the graph was rebuilt.
+    Rebuilt,
+}
+
 /// Output size.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RenderSettings {
@@ -205,6 +214,36 @@ impl Renderer {
         let runtime = build_runtime(&self.ctx, shaders, &compiled, spec).map_err(|e| view.error(e))?;
         let frame = self.frame_index;
         self.view_state_mut(view)?.graphs.reload(spec, runtime, compiled, frame)
+    }
+
+    /// Sets the main view's graph params (`name`, value expression), as `--param` does at load:
+    /// see [`Renderer::set_view_graph_params`].
+    pub fn set_graph_params(&mut self, shaders: &ShaderCompiler, params: &[(&str, &str)]) -> Result<ParamsApplied> {
+        self.set_view_graph_params(shaders, ViewId::MAIN, params).map_err(unwrap_main)
+    }
+
+    /// Sets `view`'s graph params (`name`, value expression; later values of a name replace
+    /// earlier ones). When only settings that the passes take live change (the exposure, the
+    /// debug view), nothing is made again and the next frame records with them; otherwise the
+    /// graph is rebuilt as by [`Renderer::reload_view_graph`]. On error nothing changes.
+    pub fn set_view_graph_params(
+        &mut self,
+        shaders: &ShaderCompiler,
+        view: ViewId,
+        params: &[(&str, &str)],
+    ) -> Result<ParamsApplied> {
+        let graphs = &self.view_state(view)?.graphs;
+        let mut spec = graphs.spec.clone();
+        spec.overrides.retain(|(name, _)| !params.iter().any(|(p, _)| p == name));
+        let spec = spec.with_overrides(params.iter().map(|(n, v)| (n.to_string(), v.to_string())));
+        let plan = spec.compile_for(&self.ctx, shaders, &graphs.compiled).map_err(|e| view.error(e))?;
+        let graphs = &mut self.view_state_mut(view)?.graphs;
+        if graphs.runtime.update_settings(plan).map_err(|e| view.error(e))? {
+            graphs.spec = spec;
+            return Ok(ParamsApplied::Live);
+        }
+        self.reload_view_graph(shaders, view, &spec)?;
+        Ok(ParamsApplied::Rebuilt)
     }
 
     /// Puts back the graph that the last [`Renderer::reload_graph`] replaced, as it was, when

@@ -261,6 +261,41 @@ impl GraphRuntime {
         })
     }
 
+    /// Takes `plan`, the same graph compiled again with other params, without making anything
+    /// again, when it differs from the running plan only in settings that the passes' nodes take
+    /// live ([`PassNode::live_settings`]): exposure, say. Returns whether it did; `false` leaves
+    /// everything as it was (the graph must then be rebuilt for `plan`).
+    pub fn update_settings(&mut self, plan: CompiledGraph) -> crate::Result<bool> {
+        let without_settings = |p: &CompiledGraph| {
+            let mut p = p.clone();
+            for pass in &mut p.passes {
+                pass.settings.clear();
+            }
+            p
+        };
+        if without_settings(&self.plan) != without_settings(&plan) {
+            return Ok(false);
+        }
+        let mut changed = Vec::new();
+        for (index, (old, new)) in self.plan.passes.iter().zip(&plan.passes).enumerate() {
+            let live = self.nodes[index].live_settings();
+            let names: std::collections::BTreeSet<&String> = new.settings.keys().chain(old.settings.keys()).collect();
+            let differ: Vec<&String> =
+                names.into_iter().filter(|n| old.settings.get(*n) != new.settings.get(*n)).collect();
+            if differ.iter().any(|n| !live.contains(&n.as_str())) {
+                return Ok(false);
+            }
+            if !differ.is_empty() {
+                changed.push(index);
+            }
+        }
+        for index in changed {
+            self.nodes[index].apply_settings(&plan.passes[index])?;
+        }
+        self.plan = plan;
+        Ok(true)
+    }
+
     /// The plan being executed.
     pub fn plan(&self) -> &CompiledGraph {
         &self.plan

@@ -184,6 +184,20 @@ pub trait PassNode: Send {
         }
     }
 
+    /// The settings this node takes without being made again
+    /// ([`crate::graph::GraphRuntime::update_settings`]): push constants, say, as opposed to
+    /// what its pipelines or resources were made with. `[]` (the default): none.
+    fn live_settings(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// Takes `pass`'s settings, of which only [`PassNode::live_settings`] differ from those the
+    /// node has; frames already recorded keep the old ones.
+    fn apply_settings(&mut self, pass: &PlannedPass) -> crate::Result<()> {
+        let _ = pass;
+        Ok(())
+    }
+
     /// The node as `Any`, for [`PassNode::record_together`] to reach the other nodes' state.
     fn as_any_mut(&mut self) -> Option<&mut dyn Any> {
         None

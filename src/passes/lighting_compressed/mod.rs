@@ -132,6 +132,15 @@ impl LightingCompressedPass {
 }
 
 impl PassNode for LightingCompressedPass {
+    fn live_settings(&self) -> &'static [&'static str] {
+        LightingSettings::LIVE
+    }
+
+    fn apply_settings(&mut self, pass: &PlannedPass) -> crate::Result<()> {
+        self.settings = LightingSettings::from_plan(pass)?;
+        Ok(())
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let inputs = SceneInputs::of(rec)?;
         let slots = &rec.slots;
