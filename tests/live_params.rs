@@ -67,7 +67,8 @@ fn every_shipped_lighting_method_takes_the_exposure_live() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
     let (scene, camera) = city_view(200, (16, 12));
-    for graph in ["default", "msaa_per_sample", "msaa_zprepass", "msaa_compressed", "visibility_buffer", "fxaa", "post"] {
+    for graph in ["default", "msaa_per_sample", "msaa_zprepass", "msaa_compressed", "visibility_buffer", "fxaa", "post"]
+    {
         let spec = GraphSpec::builtin(graph).unwrap();
         let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(16, 12), &spec).unwrap();
         r.render(&camera).unwrap();

@@ -900,11 +900,7 @@ fn per_sample_msaa_shades_parallel_surfaces_at_their_own_depths() {
     };
     scene.instances.push(place(Vec3::new(1.0, 1.0, 1.0), DVec3::new(0.0, 0.0, 0.0)));
     scene.instances.push(place(Vec3::new(4.0, 4.0, 1.0), DVec3::new(0.7, 0.4, -3.0)));
-    scene.lights.push(cullgraph::scene::PointLight {
-        position: DVec3::new(0.3, 0.2, 1.0),
-        color: Vec3::new(6.0, 6.0, 6.0),
-        range: 6.0,
-    });
+    scene.lights.push(cullgraph::scene::PointLight::point(DVec3::new(0.3, 0.2, 1.0), Vec3::new(6.0, 6.0, 6.0), 6.0));
     let camera = Camera { eye: DVec3::new(0.0, 0.0, 5.0), target: DVec3::new(0.0, 0.0, 0.0), ..Default::default() };
     let size = (64, 48);
     let per_sample = render(&gpu, &scene, &camera, size, &spec("builtin:msaa_per_sample", &[]), 2).0;

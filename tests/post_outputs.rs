@@ -65,7 +65,7 @@ fn lit_quad() -> cullgraph::scene::Scene {
         material: white,
         flags: 0,
     });
-    let light = PointLight { position: glam::DVec3::new(0.0, 0.0, 0.5), color: glam::Vec3::splat(40.0), range: 4.0 };
+    let light = PointLight::point(glam::DVec3::new(0.0, 0.0, 0.5), glam::Vec3::splat(40.0), 4.0);
     scene.lights.push(light);
     scene
 }

@@ -75,7 +75,7 @@ fn bad_values_name_the_handle_and_change_nothing() {
     assert_eq!(e, WorldError::UnknownMesh { handle: "instance #0 (generation 0)".into(), mesh: 7, meshes: 1 });
     assert!(matches!(w.set_materials(&[(h[1], 3)]), Err(WorldError::UnknownMaterial { material: 3, .. })));
     assert!(w.set_flags(&[(h[1], 1 << 6)]).unwrap_err().to_string().contains("more than 6 bits"));
-    let mut bad_light = PointLight { position: DVec3::ZERO, color: Vec3::ONE, range: 0.0 };
+    let mut bad_light = PointLight::point(DVec3::ZERO, Vec3::ONE, 0.0);
     assert!(w.insert_light(bad_light).unwrap_err().to_string().contains("range 0"));
     bad_light.range = 1.0;
     bad_light.color = Vec3::NAN;
@@ -107,7 +107,7 @@ fn the_journal_lists_each_change_and_is_trimmed_to_what_consumers_need() {
     let (mut w, h) = world(2);
     assert_eq!(w.version(), 0);
     w.set_transform(h[1], at(3.0)).unwrap();
-    let light = w.insert_light(PointLight { position: DVec3::Y, color: Vec3::ONE, range: 5.0 }).unwrap();
+    let light = w.insert_light(PointLight::point(DVec3::Y, Vec3::ONE, 5.0)).unwrap();
     w.remove(h[0]).unwrap();
     assert_eq!(w.changes_since(0).unwrap(), [Change::Transform(1), Change::Light(light.index()), Change::Instance(0)]);
     assert_eq!(w.changes_since(2).unwrap(), [Change::Instance(0)]);

@@ -95,7 +95,8 @@ struct FrameConstants {
 // Point light relative to the eye: xyz position, w range; rgb color.
 struct GpuPointLight {
     vec4 position_range;
-    vec4 color;
+    vec4 color;   // rgb: color, w: spot angle scale 1 / (cos inner - cos outer)
+    vec4 spot;    // xyz: spot direction (travel), w: cos outer angle (< -1: a point light)
 };
 
 // A split world position (hi + lo) relative to the split eye. The hi parts are whole numbers

@@ -54,6 +54,19 @@ float light_falloff(float dist, float range) {
     return w * w / (dist * dist + 1.0);
 }
 
+// Radiance a point or spot light sends to a surface `dist` away, `l` the unit direction from
+// the surface to the light: the range window, and for a spot light (spot.w, the cos of its outer
+// angle, at least -1) its cone as KHR_lights_punctual defines it, color.w being
+// 1 / (cos inner - cos outer).
+vec3 punctual_radiance(vec4 color, vec4 spot, vec3 l, float dist, float range) {
+    vec3 radiance = color.rgb * light_falloff(dist, range);
+    if (spot.w >= -1.0) {
+        float t = clamp((dot(-l, spot.xyz) - spot.w) * color.w, 0.0, 1.0);
+        radiance *= t * t;
+    }
+    return radiance;
+}
+
 vec3 ambient_light(Surface s, vec3 sky) {
     float up = s.normal.y * 0.5 + 0.5;
     vec3 hemi = mix(sky * 0.35, sky, up);

@@ -121,7 +121,8 @@ vec3 shade_tile_lights(Surface s) {
             float dist = length(to_light);
             float range = lights[i].position_range.w;
             if (dist >= range) continue;
-            radiance += brdf_light(s, v, to_light / max(dist, 1e-6), lights[i].color.rgb * light_falloff(dist, range));
+            vec3 l = to_light / max(dist, 1e-6);
+            radiance += brdf_light(s, v, l, punctual_radiance(lights[i].color, lights[i].spot, l, dist, range));
         }
     }
     for (uint i = TILE_MAX_LIGHTS; i < count; ++i) {
@@ -129,7 +130,8 @@ vec3 shade_tile_lights(Surface s) {
         float dist = length(to_light);
         float range = lights[i].position_range.w;
         if (dist >= range) continue;
-        radiance += brdf_light(s, v, to_light / max(dist, 1e-6), lights[i].color.rgb * light_falloff(dist, range));
+        vec3 l = to_light / max(dist, 1e-6);
+            radiance += brdf_light(s, v, l, punctual_radiance(lights[i].color, lights[i].spot, l, dist, range));
     }
     return radiance;
 }

@@ -14,6 +14,7 @@ mod accessor;
 mod buffers;
 mod flags;
 mod images;
+mod lights;
 mod materials;
 mod nodes;
 mod primitive;
@@ -30,6 +31,8 @@ use std::path::Path;
 
 pub use images::MAX_IMAGE_SIDE;
 pub use primitive::{fan_to_list, strip_to_list};
+
+pub use lights::RANGE_CUTOFF as LIGHT_RANGE_CUTOFF;
 
 /// Point lights placed in a file that has none when [`LoadOptions::lights`] is `None`.
 pub const DEFAULT_FILE_LIGHTS: usize = 4;
@@ -71,8 +74,9 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
 
 /// Loads a glTF 2.0 file and returns the scene with the [`ImportReport`] of what was left out.
 ///
-/// Adds point lights (`options.lights`, default [`DEFAULT_FILE_LIGHTS`]) above the scene,
-/// since glTF lights are not read.
+/// Reads the file's `KHR_lights_punctual` lights (the first directional light is the sun); a
+/// file without lights gets point lights (`options.lights`, default [`DEFAULT_FILE_LIGHTS`])
+/// placed above the scene.
 pub fn load_with_report(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), SceneError> {
     let file = path.display().to_string();
     // The checks below are meant to leave the `gltf` crate nothing to panic on; this is the
@@ -164,11 +168,17 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
     }
 
     scene.camera = placed.iter().find_map(|p| camera_of(&document, p, &mut report.notes));
-    if let Some(bounds) = scene.world_bounds() {
+    let (sun, file_lights) = lights::import(&document, &placed, &mut report.notes);
+    if let Some(sun) = sun {
+        scene.sun = sun;
+    }
+    if !file_lights.is_empty() || sun.is_some() {
+        scene.lights = file_lights;
+    } else if let Some(bounds) = scene.world_bounds() {
         let n = light_count;
         scene.lights = procedural::lights::scatter(&bounds, n, options.seed);
         if n > 0 {
-            report.notes.push(format!("glTF lights are not read; {n} point lights were placed above the scene"));
+            report.notes.push(format!("the file has no lights; {n} point lights were placed above the scene"));
         }
     }
     Ok((scene, report))
@@ -303,7 +313,7 @@ fn camera_of(document: &gltf::Document, placed: &nodes::Placed<'_>, notes: &mut 
 }
 
 /// Extensions the import applies.
-const SUPPORTED_EXTENSIONS: [&str; 1] = ["KHR_texture_transform"];
+const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_texture_transform", "KHR_lights_punctual"];
 
 /// Notes for parts of the file that cullgraph does not use.
 fn note_ignored_features(document: &gltf::Document, notes: &mut Vec<String>) {

@@ -198,7 +198,8 @@ pub struct Instance {
     pub flags: u32,
 }
 
-/// A point light with a finite range (its contribution is 0 beyond it).
+/// A point light with a finite range (its contribution is 0 beyond it), or a spot light when
+/// it has a cone.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointLight {
     /// World position.
@@ -207,6 +208,43 @@ pub struct PointLight {
     pub color: Vec3,
     /// Distance at which the light's contribution reaches zero.
     pub range: f32,
+    /// The cone of a spot light (`None`: it shines every way).
+    pub spot: Option<SpotCone>,
+}
+
+impl PointLight {
+    /// A light shining every way.
+    pub fn point(position: DVec3, color: Vec3, range: f32) -> Self {
+        Self { position, color, range, spot: None }
+    }
+}
+
+/// The cone of a spot light, as `KHR_lights_punctual` defines it: full intensity within
+/// `inner_angle` of `direction`, falling smoothly to 0 at `outer_angle`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotCone {
+    /// Direction the light travels (normalised).
+    pub direction: Vec3,
+    /// Radians from the axis where the falloff starts (0 to `outer_angle`).
+    pub inner_angle: f32,
+    /// Radians from the axis where the light ends (above 0, at most pi/2).
+    pub outer_angle: f32,
+}
+
+/// What is wrong with a spot light's cone, if anything.
+pub(crate) fn spot_cone_error(cone: &SpotCone) -> Option<String> {
+    let d = cone.direction;
+    if !d.is_finite() || (d.length() - 1.0).abs() > 1e-3 {
+        return Some(format!("spot direction {d} must be finite and of length 1"));
+    }
+    let (inner, outer) = (cone.inner_angle, cone.outer_angle);
+    let ok = inner.is_finite()
+        && outer.is_finite()
+        && inner >= 0.0
+        && inner <= outer
+        && outer > 0.0
+        && outer <= std::f32::consts::FRAC_PI_2 + 1e-6;
+    (!ok).then(|| format!("spot angles inner {inner}, outer {outer}: need 0 <= inner <= outer, 0 < outer <= pi/2"))
 }
 
 /// A directional light (the sun).

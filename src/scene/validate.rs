@@ -60,6 +60,9 @@ pub fn validate_scene(scene: &Scene) -> Result<(), SceneError> {
         if !(l.range.is_finite() && l.range > 0.0) {
             return Err(SceneError::invalid(place, format!("range {} must be positive and finite", l.range)));
         }
+        if let Some(e) = l.spot.and_then(|cone| super::spot_cone_error(&cone)) {
+            return Err(SceneError::invalid(place, e));
+        }
     }
     let sun = &scene.sun;
     if !sun.direction.is_finite() || sun.direction.length_squared() < 1e-12 || !sun.color.is_finite() {
@@ -337,9 +340,9 @@ mod tests {
         s.meshes[0].first_index = 3;
         assert!(validate_scene(&s).unwrap_err().to_string().contains("outside the index pool"));
         let mut s = one_triangle();
-        s.lights.push(PointLight { position: DVec3::ZERO, color: Vec3::ONE, range: 0.0 });
+        s.lights.push(PointLight::point(DVec3::ZERO, Vec3::ONE, 0.0));
         assert!(validate_scene(&s).unwrap_err().to_string().starts_with("light #0: range"));
-        s.lights[0] = PointLight { position: DVec3::NAN, color: Vec3::ONE, range: 1.0 };
+        s.lights[0] = PointLight::point(DVec3::NAN, Vec3::ONE, 1.0);
         assert!(validate_scene(&s).unwrap_err().to_string().starts_with("light #0: position"));
     }
 }

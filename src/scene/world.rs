@@ -17,7 +17,7 @@
 //! Every method checks its input before changing anything: a bulk change is applied whole or
 //! not at all.
 
-use super::{Instance, Material, MeshData, PointLight, Scene, SceneError, Transform};
+use super::{DirectionalLight, Instance, Material, MeshData, PointLight, Scene, SceneError, Transform};
 use std::fmt;
 
 /// A persistent reference to one instance of a [`World`].
@@ -133,6 +133,8 @@ pub enum Change {
     Material(u32),
     /// This texture was registered.
     Texture(u32),
+    /// The sun changed.
+    Sun,
 }
 
 /// Slots of a table with generations and a free list.
@@ -535,6 +537,30 @@ impl World {
         }
     }
 
+    /// The sun.
+    pub fn sun(&self) -> DirectionalLight {
+        self.scene.sun
+    }
+
+    /// Sets the sun (direction it travels, colour times intensity); renderers take it at their
+    /// next sync.
+    pub fn set_sun(&mut self, sun: DirectionalLight) -> Result<(), WorldError> {
+        let length = sun.direction.length();
+        let message = if !sun.direction.is_finite() || (length - 1.0).abs() > 1e-3 {
+            Some(format!("direction {} must be finite and of length 1", sun.direction))
+        } else if !sun.color.is_finite() || sun.color.min_element() < 0.0 {
+            Some(format!("color {} must be finite and non-negative", sun.color))
+        } else {
+            None
+        };
+        if let Some(message) = message {
+            return Err(WorldError::Invalid { handle: "the sun".into(), message });
+        }
+        self.scene.sun = sun;
+        self.record(Change::Sun);
+        Ok(())
+    }
+
     /// Whether light `index` is live.
     pub fn is_light_live(&self, index: u32) -> bool {
         self.lights.alive.get(index as usize).copied().unwrap_or(false)
@@ -607,5 +633,8 @@ fn light_error(l: &PointLight) -> Option<String> {
     if !l.color.is_finite() || l.color.min_element() < 0.0 {
         return Some(format!("color {} must be finite and non-negative", l.color));
     }
-    (!(l.range.is_finite() && l.range > 0.0)).then(|| format!("range {} must be positive and finite", l.range))
+    if !(l.range.is_finite() && l.range > 0.0) {
+        return Some(format!("range {} must be positive and finite", l.range));
+    }
+    l.spot.and_then(|cone| super::spot_cone_error(&cone))
 }

@@ -163,7 +163,7 @@ pub fn boxes_scene() -> cullgraph::scene::Scene {
     scene.instances.push(place(Vec3::ONE, DVec3::new(-1.5, 0.5, 0.0), red));
     scene.instances.push(place(Vec3::new(1.0, 2.0, 1.0), DVec3::new(1.5, 1.0, 0.0), blue));
     scene.instances.push(place(Vec3::splat(0.5), DVec3::new(0.0, 0.25, 1.5), red));
-    scene.lights.push(PointLight { position: DVec3::new(0.0, 2.0, 2.0), color: Vec3::new(4.0, 3.0, 2.0), range: 8.0 });
+    scene.lights.push(PointLight::point(DVec3::new(0.0, 2.0, 2.0), Vec3::new(4.0, 3.0, 2.0), 8.0));
     scene
 }
 

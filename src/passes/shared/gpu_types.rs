@@ -188,15 +188,31 @@ impl GpuMaterial {
 pub struct GpuPointLight {
     /// xyz: eye-relative position, w: range.
     pub position_range: [f32; 4],
-    /// rgb: color.
+    /// rgb: color, w: the spot cone's angle scale, 1 / (cos inner - cos outer) (0 for a point
+    /// light).
     pub color: [f32; 4],
+    /// xyz: the direction a spot light travels, w: cos of its outer angle (below -1 for a point
+    /// light, so that every direction is inside).
+    pub spot: [f32; 4],
 }
 
 impl GpuPointLight {
     /// The light relative to `eye`.
     pub fn new(light: &PointLight, eye: DVec3) -> Self {
         let p = (light.position - eye).as_vec3();
-        Self { position_range: [p.x, p.y, p.z, light.range], color: [light.color.x, light.color.y, light.color.z, 0.0] }
+        let (spot, scale) = match light.spot {
+            Some(cone) => {
+                let (cos_inner, cos_outer) = (cone.inner_angle.cos(), cone.outer_angle.cos());
+                let d = cone.direction;
+                ([d.x, d.y, d.z, cos_outer], 1.0 / (cos_inner - cos_outer).max(1e-3))
+            }
+            None => ([0.0, 0.0, 0.0, -2.0], 0.0),
+        };
+        Self {
+            position_range: [p.x, p.y, p.z, light.range],
+            color: [light.color.x, light.color.y, light.color.z, scale],
+            spot,
+        }
     }
 }
 

@@ -465,6 +465,7 @@ impl Renderer {
                 Change::Instance(i) => instances.push(i),
                 Change::Transform(_) => moves += 1,
                 Change::Light(_) => lights = true,
+                Change::Sun => self.scene.sun = world.scene().sun,
                 Change::Mesh(_) => reupload = true,
                 Change::Texture(_) => {
                     reupload = true;

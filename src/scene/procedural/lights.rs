@@ -14,7 +14,7 @@ pub const WARM: Vec3 = Vec3::new(1.0, 0.78, 0.52);
 /// A light whose radiance at distance `reach` (straight below it, say) is about `brightness`,
 /// and which fades out completely at `range`.
 pub fn light(position: DVec3, tint: Vec3, brightness: f32, reach: f32, range: f32) -> PointLight {
-    PointLight { position, color: tint * brightness * (reach * reach + 1.0), range }
+    PointLight::point(position, tint * brightness * (reach * reach + 1.0), range)
 }
 
 /// `n` point lights spread over the box `bounds` (world min, max): a jittered grid over x/z,
