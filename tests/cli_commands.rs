@@ -119,6 +119,17 @@ fn bench_views_reports_each_view_count_and_the_resize() {
     assert_eq!(views["scene_kept"], true);
     // The shared dispatches were timed step by step.
     assert!(rows[4]["cull_test_ms"].as_f64().unwrap() > 0.0 && rows[4]["cull_compact_ms"].as_f64().unwrap() > 0.0);
+    // Two eyes of --size each, drawn both ways (lavapipe has multiview).
+    let stereo = &views["multiview"];
+    assert_eq!((&stereo["width"], &stereo["height"], &stereo["multiview"]), (&32.into(), &24.into(), &true.into()));
+    let drawn: Vec<u64> = stereo["drawn"].as_array().unwrap().iter().map(|d| d.as_u64().unwrap()).collect();
+    let union = stereo["union"].as_u64().unwrap();
+    assert!(drawn.iter().all(|&d| d > 0 && d <= union) && union <= 300, "{stereo}");
+    for key in ["separate_own_ms", "separate_union_ms", "multiview_union_ms"] {
+        assert!(stereo[key].as_f64().unwrap() > 0.0, "{key}: {stereo}");
+    }
+    let markdown = std::fs::read_to_string(tmp.path().join("bench.md")).unwrap();
+    assert!(markdown.contains("| one multiview pass, the union list |"), "{markdown}");
 }
 
 #[test]

@@ -5,6 +5,7 @@ mod common;
 
 use ash::vk;
 use common::{boxes_camera, boxes_scene, readback_buffer, GpuTest};
+use cullgraph::gpu::features::MULTIVIEW_EXTENSION;
 use cullgraph::gpu::transfer::record_image_to_buffer;
 use cullgraph::gpu::{
     Access, Buffer, BufferDesc, GpuContext, HostHandles, HostImage, MemoryLocation, RequiredFeatures, ShaderCompiler,
@@ -68,6 +69,8 @@ impl Host {
         let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
         let ext_names: Vec<_> = extensions.iter().map(|e| e.as_ptr()).collect();
         let mut required = RequiredFeatures::new();
+        // Listing the multiview name is the engine's word that the feature is on.
+        required.v11.multiview = extensions.contains(&MULTIVIEW_EXTENSION).into();
         let mut features2 = required.chain();
         let info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
@@ -503,6 +506,36 @@ fn the_compressed_g_buffer_runs_on_a_host_device_only_where_the_host_enabled_pos
         assert_eq!(render(&ctx).unwrap(), reference, "embedded MSAA frame differs from the owned-context frame");
     }
     host.shut_down_clean(allocator);
+}
+
+#[test]
+fn the_multiview_measurement_is_skipped_on_a_host_device_without_multiview() {
+    use cullgraph::bench::multiview::{self, MultiviewBench};
+    let scene = cullgraph::scene::SceneSource::Builtin("city".into())
+        .load(&cullgraph::scene::source::LoadOptions { instances: Some(100), ..Default::default() })
+        .unwrap();
+    let head = cullgraph::bench::views::camera(&scene, 0, 1);
+    let bench = MultiviewBench { width: 64, height: 48, warmup: 0, frames: 1 };
+    let shaders =
+        ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap();
+    for enabled in [false, true] {
+        let extensions = match enabled {
+            true => [REQUIRED_DEVICE_EXTENSIONS, &[MULTIVIEW_EXTENSION]].concat(),
+            false => REQUIRED_DEVICE_EXTENSIONS.to_vec(),
+        };
+        let host = Host::with_extensions(extensions);
+        let allocator = host.allocator();
+        {
+            let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
+            // Lavapipe supports multiview; only a host that enabled it has it.
+            assert_eq!(ctx.caps().multiview, enabled);
+            let report = multiview::run(&ctx, &shaders, &scene, &head, &bench, &|_| {}).unwrap();
+            assert_eq!((report.multiview, report.multiview_union_ms.is_some()), (enabled, enabled));
+            assert!(report.drawn.iter().all(|&d| d > 0 && d <= report.union), "{report:?}");
+            assert_eq!(report.markdown().contains("Multiview is not on"), !enabled);
+        }
+        host.shut_down_clean(allocator);
+    }
 }
 
 #[test]

@@ -13,12 +13,14 @@
 //!   baselines.
 //! - [`plot`](crate::bench::plot): SVG plots of the culling and MSAA figures.
 //! - [`views`](crate::bench::views): many views over one world in one frame, what each view
-//!   costs beside the shared scene, and resizing a view.
+//!   costs beside the shared scene, and resizing a view; with [`multiview`](crate::bench::multiview),
+//!   two VR eyes drawn in one multiview pass against a pass per eye.
 
 pub mod culling;
 pub mod dynamic;
 pub mod hiz;
 pub mod msaa;
+pub mod multiview;
 pub mod peer;
 pub mod plot;
 pub mod views;

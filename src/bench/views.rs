@@ -94,12 +94,16 @@ pub struct ViewsReport {
     pub resize_pipelines: u64,
     /// Whether the scene's buffers stayed the same through the resizes (nothing uploaded).
     pub scene_kept: bool,
+    /// Two VR eyes (the first street camera's, `width` x `height` each) drawn with multiview
+    /// against a pass per eye.
+    #[serde(default)]
+    pub multiview: Option<super::multiview::MultiviewReport>,
 }
 
 /// The `i`-th camera of a frame of `n` views: four split-screen street cameras looking inward
 /// from the city's corners, then orthographic views from above over a grid of tiles that covers
 /// the city.
-fn camera(scene: &Scene, i: usize, n: usize) -> Camera {
+pub fn camera(scene: &Scene, i: usize, n: usize) -> Camera {
     let (min, max) = scene.world_bounds().unwrap_or((DVec3::splat(-1.0), DVec3::splat(1.0)));
     let center = (min + max) * 0.5;
     if i < 4 {
@@ -233,6 +237,9 @@ pub fn run(
         });
     }
 
+    let stereo = super::multiview::MultiviewBench { width: w, height: h, warmup: bench.warmup, frames: bench.frames };
+    report.multiview = Some(super::multiview::run(ctx, shaders, &scene, &camera(&scene, 0, 1), &stereo, progress)?);
+
     progress(&format!("views: resizing {w}x{h}"));
     let camera = scene.default_camera(w as f32 / h as f32);
     let mut renderer = Renderer::with_graph(ctx, shaders, scene, RenderSettings::new(w, h), &spec)?;
@@ -307,6 +314,9 @@ impl ViewsReport {
             self.resize_pipelines,
             if self.scene_kept { "kept" } else { "uploaded again" }
         );
+        if let Some(multiview) = &self.multiview {
+            md += &multiview.markdown();
+        }
         md
     }
 }

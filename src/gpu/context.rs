@@ -68,6 +68,10 @@ pub struct HostHandles {
     /// feature too: list it only if the device was created with it and with
     /// `fragmentShaderSampleInterlock` on; the sample-claim G-buffer then claims in draw order.
     ///
+    /// List [`MULTIVIEW_EXTENSION`] (`VK_KHR_multiview`) only if the device was created with the
+    /// Vulkan 1.1 `multiview` feature on ([`DeviceCaps::multiview`]).
+    ///
+    /// [`MULTIVIEW_EXTENSION`]: super::features::MULTIVIEW_EXTENSION
     /// [`OPTIONAL_DEVICE_EXTENSIONS`]: super::features::OPTIONAL_DEVICE_EXTENSIONS
     pub enabled_device_extensions: Vec<CString>,
 }
@@ -102,6 +106,12 @@ pub struct DeviceCaps {
     /// knows only of its own allocator (not of a host's, [`HostHandles::allocator`]). Without it
     /// the instance-cull pass culls each view in a dispatch of its own.
     pub buffer_addresses: bool,
+    /// The Vulkan 1.1 `multiview` feature is on (render passes with a view mask, `gl_ViewIndex`):
+    /// supported, on a device cullgraph creates; supported and
+    /// [`MULTIVIEW_EXTENSION`](super::features::MULTIVIEW_EXTENSION) listed in
+    /// [`HostHandles::enabled_device_extensions`], on a host's device. Only the multiview
+    /// measurement of the views bench needs it (`crate::bench::multiview`).
+    pub multiview: bool,
 }
 
 /// State shared by the context and every resource created from it; dropped last.
@@ -519,6 +529,8 @@ fn create_device(instance: &ash::Instance, chosen: &DeviceInfo, queue_family: u3
     // Not needed by cullgraph itself, but a caller of `FramePipeline::submit_with` can only make
     // timeline semaphores on a device that enabled them (every Vulkan 1.2 device supports them).
     required.v12.timeline_semaphore = supported.v12.timeline_semaphore;
+    // Optional: only the views bench's multiview measurement draws with it (`DeviceCaps::multiview`).
+    required.v11.multiview = supported.v11.multiview;
     let mut missing: Vec<String> = required.missing_from(&supported).into_iter().map(String::from).collect();
     // SAFETY: valid handles.
     let exts = unsafe { instance.enumerate_device_extension_properties(chosen.handle) }
@@ -608,5 +620,9 @@ fn query_caps(
         post_depth_coverage: has(ash::ext::post_depth_coverage::NAME),
         sample_interlock: has(ash::ext::fragment_shader_interlock::NAME) && sample_interlock_supported(instance, pd),
         buffer_addresses: false,
+        // Core since 1.1: the extension's name is only a host's word that the feature is on
+        // (an owned device says yes to every name, having enabled what is supported).
+        multiview: enabled_extension(super::features::MULTIVIEW_EXTENSION)
+            && RequiredFeatures::supported_by(instance, pd).v11.multiview == vk::TRUE,
     }
 }

@@ -15,6 +15,16 @@ pub const REQUIRED_DEVICE_EXTENSIONS: &[&CStr] = &[ash::khr::push_descriptor::NA
 /// lists them in `HostHandles::enabled_device_extensions`.
 pub const OPTIONAL_DEVICE_EXTENSIONS: &[&CStr] = &[ash::ext::post_depth_coverage::NAME];
 
+/// The name a host lists in `HostHandles::enabled_device_extensions` to say that it created the
+/// device with the Vulkan 1.1 `multiview` feature on (`VkPhysicalDeviceVulkan11Features`).
+/// Multiview is core since 1.1, so it needs no extension on a 1.3 device, but Vulkan cannot be
+/// asked which features a device was created with: the name is the host's word that it was
+/// (as `VK_EXT_fragment_shader_interlock` is for its feature). cullgraph turns the feature on
+/// where the device supports it on a device it creates itself. Only the multiview measurement
+/// of `cullgraph bench --suites views` (`crate::bench::multiview`) draws with it, and is skipped
+/// without it.
+pub const MULTIVIEW_EXTENSION: &CStr = ash::khr::multiview::NAME;
+
 /// Whether `extensions` (as Vulkan lists them) has the one called `name`.
 pub(crate) fn lists_extension(extensions: &[vk::ExtensionProperties], name: &CStr) -> bool {
     extensions.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name))

@@ -182,7 +182,32 @@ impl Pipeline {
 
     /// A graphics pipeline for dynamic rendering.
     pub fn graphics(ctx: &GpuContext, name: &str, desc: &GraphicsDesc<'_>) -> GpuResult<Self> {
-        let key = graphics_key(name, desc);
+        Self::graphics_with_views(ctx, name, desc, 0)
+    }
+
+    /// A graphics pipeline for dynamic rendering with multiview: it draws inside rendering
+    /// whose `viewMask` is `view_mask` (each set bit a layer of the attachments, `gl_ViewIndex`
+    /// in the shaders), and needs [`crate::gpu::DeviceCaps::multiview`] when `view_mask` is not 0.
+    pub fn graphics_multiview(
+        ctx: &GpuContext,
+        name: &str,
+        desc: &GraphicsDesc<'_>,
+        view_mask: u32,
+    ) -> GpuResult<Self> {
+        if view_mask != 0 && !ctx.caps().multiview {
+            return Err(GpuError::InvalidResource {
+                name: name.into(),
+                reason: format!("view mask {view_mask:#b} needs the multiview feature, which is not on"),
+            });
+        }
+        Self::graphics_with_views(ctx, name, desc, view_mask)
+    }
+
+    fn graphics_with_views(ctx: &GpuContext, name: &str, desc: &GraphicsDesc<'_>, view_mask: u32) -> GpuResult<Self> {
+        let mut key = graphics_key(name, desc);
+        if let PipelineKey::Graphics { state, .. } = &mut key {
+            state.push(view_mask as i64);
+        }
         if let Some(made) = ctx.shared.pipelines.get(&key) {
             return Ok(made);
         }
@@ -286,6 +311,7 @@ impl Pipeline {
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR, vk::DynamicState::CULL_MODE];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .view_mask(view_mask)
             .color_attachment_formats(desc.color_formats)
             .depth_attachment_format(desc.depth_format)
             .stencil_attachment_format(
