@@ -10,6 +10,7 @@ pub mod camera_path;
 pub mod error;
 pub mod gltf_import;
 pub mod mesh;
+pub mod pool_ranges;
 pub mod procedural;
 pub mod projection;
 pub mod source;
@@ -247,6 +248,15 @@ pub(crate) fn spot_cone_error(cone: &SpotCone) -> Option<String> {
     (!ok).then(|| format!("spot angles inner {inner}, outer {outer}: need 0 <= inner <= outer, 0 < outer <= pi/2"))
 }
 
+/// Where [`Scene::put_mesh`] writes a mesh: its first vertex and first index in the pools, and
+/// its entry in the mesh table (`None`: a new one).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MeshPlace {
+    pub vertex: usize,
+    pub index: usize,
+    pub slot: Option<u32>,
+}
+
 /// A directional light (the sun).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DirectionalLight {
@@ -294,13 +304,26 @@ impl Scene {
     ///
     /// `place` names the mesh in errors (e.g. `mesh 'wall' primitive 0 (accessor 3)`).
     pub fn add_mesh(&mut self, name: &str, data: &MeshData, place: &str) -> Result<u32, SceneError> {
+        let at = MeshPlace { vertex: self.vertices.len(), index: self.indices.len(), slot: None };
+        self.put_mesh(name, data, place, at)
+    }
+
+    /// Writes a mesh's vertices and indices at `at` in the pools (growing them where it runs
+    /// past their end) and its entry at `at.slot` of the mesh table (appended when `None`);
+    /// returns its index. What a live world does to reuse the pool space of removed meshes.
+    pub(crate) fn put_mesh(
+        &mut self,
+        name: &str,
+        data: &MeshData,
+        place: &str,
+        at: MeshPlace,
+    ) -> Result<u32, SceneError> {
         let (vertices, bounds, sphere) = data.validate(place)?;
         let mesh = Mesh {
             name: name.into(),
-            first_index: u32::try_from(self.indices.len()).map_err(|_| SceneError::too_large(place, "index pool"))?,
+            first_index: u32::try_from(at.index).map_err(|_| SceneError::too_large(place, "index pool"))?,
             index_count: data.indices.len() as u32,
-            vertex_offset: u32::try_from(self.vertices.len())
-                .map_err(|_| SceneError::too_large(place, "vertex pool"))?,
+            vertex_offset: u32::try_from(at.vertex).map_err(|_| SceneError::too_large(place, "vertex pool"))?,
             vertex_count: vertices.len() as u32,
             bounds,
             sphere,
@@ -308,12 +331,30 @@ impl Scene {
         // Pools of millions of entries: a failed allocation is this mesh's error, not an abort.
         let no_memory =
             |what: &str, n: usize| SceneError::invalid(place, format!("cannot allocate memory for {n} more {what}"));
-        self.vertices.try_reserve(vertices.len()).map_err(|_| no_memory("vertices", vertices.len()))?;
-        self.indices.try_reserve(data.indices.len()).map_err(|_| no_memory("indices", data.indices.len()))?;
-        self.vertices.extend_from_slice(&vertices);
-        self.indices.extend_from_slice(&data.indices);
-        self.meshes.push(mesh);
-        Ok(self.meshes.len() as u32 - 1)
+        let vertex_end = at.vertex + vertices.len();
+        let index_end = at.index + data.indices.len();
+        let more_vertices = vertex_end.saturating_sub(self.vertices.len());
+        let more_indices = index_end.saturating_sub(self.indices.len());
+        self.vertices.try_reserve(more_vertices).map_err(|_| no_memory("vertices", more_vertices))?;
+        self.indices.try_reserve(more_indices).map_err(|_| no_memory("indices", more_indices))?;
+        if self.vertices.len() < vertex_end {
+            self.vertices.resize(vertex_end, Default::default());
+        }
+        if self.indices.len() < index_end {
+            self.indices.resize(index_end, 0);
+        }
+        self.vertices[at.vertex..vertex_end].copy_from_slice(&vertices);
+        self.indices[at.index..index_end].copy_from_slice(&data.indices);
+        match at.slot {
+            Some(slot) => {
+                self.meshes[slot as usize] = mesh;
+                Ok(slot)
+            }
+            None => {
+                self.meshes.push(mesh);
+                Ok(self.meshes.len() as u32 - 1)
+            }
+        }
     }
 
     /// Appends a material and returns its index.

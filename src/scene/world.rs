@@ -195,8 +195,13 @@ pub struct World {
     scene: Scene,
     instances: Slots,
     lights: Slots,
-    /// Whether each mesh is registered (unregistered meshes keep their place in the pools).
+    /// Whether each mesh is registered.
     meshes_live: Vec<bool>,
+    /// Entries of the mesh table that unregistered meshes left, reused by later registrations.
+    free_meshes: Vec<u32>,
+    /// Free ranges of the vertex and index pools, given back by unregistered meshes.
+    vertex_ranges: super::pool_ranges::PoolRanges,
+    index_ranges: super::pool_ranges::PoolRanges,
     materials_live: Vec<bool>,
     /// Changes in order; the first is the change that made version `journal_start + 1`.
     journal: Vec<Change>,
@@ -213,6 +218,9 @@ impl World {
             instances: Slots::full(n),
             lights: Slots::full(scene.lights.len()),
             meshes_live: vec![true; scene.meshes.len()],
+            free_meshes: Vec::new(),
+            vertex_ranges: super::pool_ranges::PoolRanges::new(scene.vertices.len() as u32),
+            index_ranges: super::pool_ranges::PoolRanges::new(scene.indices.len() as u32),
             materials_live: vec![true; scene.materials.len()],
             scene,
             journal: Vec::new(),
@@ -456,24 +464,50 @@ impl World {
         self.edit(changes, |i, f| i.flags = f)
     }
 
-    /// Registers a mesh (appended to the vertex and index pools) and returns its index.
+    /// Registers a mesh and returns its index: its vertices and indices take the smallest free
+    /// ranges of the pools that hold them (space unregistered meshes gave back) before the pools
+    /// grow, and it takes an unregistered mesh's index when there is one.
     pub fn add_mesh(&mut self, name: &str, data: &MeshData) -> Result<u32, WorldError> {
-        let mesh = self.scene.add_mesh(name, data, &format!("mesh '{name}'"))?;
-        self.meshes_live.push(true);
+        let place = format!("mesh '{name}'");
+        let too_large = |pool| WorldError::from(SceneError::too_large(&place, pool));
+        let vertices = u32::try_from(data.positions.len()).map_err(|_| too_large("vertex pool"))?;
+        let indices = u32::try_from(data.indices.len()).map_err(|_| too_large("index pool"))?;
+        let (mut vertex_ranges, mut index_ranges) = (self.vertex_ranges.clone(), self.index_ranges.clone());
+        let vertex = vertex_ranges.take(vertices).ok_or_else(|| too_large("vertex pool"))?;
+        let index = index_ranges.take(indices).ok_or_else(|| too_large("index pool"))?;
+        let slot = self.free_meshes.last().copied();
+        let at = super::MeshPlace { vertex: vertex as usize, index: index as usize, slot };
+        let mesh = self.scene.put_mesh(name, data, &place, at)?;
+        (self.vertex_ranges, self.index_ranges) = (vertex_ranges, index_ranges);
+        if slot.is_some() {
+            self.free_meshes.pop();
+            self.meshes_live[mesh as usize] = true;
+        } else {
+            self.meshes_live.push(true);
+        }
         self.record(Change::Mesh(mesh));
         Ok(mesh)
     }
 
-    /// Unregisters a mesh no live instance uses. Its vertices and indices keep their place in
-    /// the pools (a later registration does not reuse them).
+    /// Unregisters a mesh no live instance uses: its vertices, indices and index go to later
+    /// registrations.
     pub fn remove_mesh(&mut self, mesh: u32) -> Result<(), WorldError> {
         if let Some(e) = self.unknown_mesh(|| "remove_mesh".into(), mesh) {
             return Err(e);
         }
         self.refuse_in_use(&format!("mesh {mesh} '{}'", self.scene.meshes[mesh as usize].name), |i| i.mesh == mesh)?;
         self.meshes_live[mesh as usize] = false;
+        let m = &self.scene.meshes[mesh as usize];
+        self.vertex_ranges.give_back(m.vertex_offset, m.vertex_count);
+        self.index_ranges.give_back(m.first_index, m.index_count);
+        self.free_meshes.push(mesh);
         self.record(Change::Mesh(mesh));
         Ok(())
+    }
+
+    /// Entries of the vertex and index pools, in use or free (what the GPU holds).
+    pub fn pool_sizes(&self) -> (usize, usize) {
+        (self.scene.vertices.len(), self.scene.indices.len())
     }
 
     /// Registers a texture (decoded RGBA8) for materials to use and returns its index. Textures
