@@ -76,3 +76,17 @@ fn a_thousand_add_remove_cycles_keep_the_pools_bounded_and_the_image_right() {
     assert!(image == fresh.render_to_rgba8(&boxes_camera()).unwrap().1, "the reused pool space draws the new meshes");
     gpu.assert_clean();
 }
+
+#[test]
+fn removed_materials_give_their_index_to_the_next() {
+    let (mut world, _) = World::new(boxes_scene()).unwrap();
+    let materials = world.scene().materials.len();
+    for cycle in 0..1000 {
+        let m = world
+            .add_material(cullgraph::scene::Material { name: format!("churn {cycle}"), ..Default::default() })
+            .unwrap();
+        assert_eq!(m as usize, materials, "cycle {cycle}: the freed index is reused");
+        world.remove_material(m).unwrap();
+    }
+    assert_eq!(world.scene().materials.len(), materials + 1);
+}

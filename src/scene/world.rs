@@ -527,12 +527,22 @@ impl World {
         super::validate::material_problem(&material, self.scene.textures.len()).map_or(Ok(()), |message| {
             Err(WorldError::Invalid { handle: format!("material '{}'", material.name), message })
         })?;
-        if self.scene.materials.len() >= super::validate::MAX_MATERIALS {
+        if !self.materials_live.contains(&false) && self.scene.materials.len() >= super::validate::MAX_MATERIALS {
             let message = format!("more than {} materials", super::validate::MAX_MATERIALS);
             return Err(WorldError::Invalid { handle: format!("material '{}'", material.name), message });
         }
-        let index = self.scene.add_material(material);
-        self.materials_live.push(true);
+        // An unregistered material's index is reused.
+        let index = match self.materials_live.iter().position(|live| !live) {
+            Some(free) => {
+                self.scene.materials[free] = material;
+                self.materials_live[free] = true;
+                free as u32
+            }
+            None => {
+                self.materials_live.push(true);
+                self.scene.add_material(material)
+            }
+        };
         self.record(Change::Material(index));
         Ok(index)
     }
@@ -550,7 +560,7 @@ impl World {
         Ok(())
     }
 
-    /// Unregisters a material no live instance uses.
+    /// Unregisters a material no live instance uses; a later registration takes its index.
     pub fn remove_material(&mut self, index: u32) -> Result<(), WorldError> {
         if let Some(e) = self.unknown_material(|| "remove_material".into(), index) {
             return Err(e);
