@@ -90,3 +90,27 @@ fn removed_materials_give_their_index_to_the_next() {
     }
     assert_eq!(world.scene().materials.len(), materials + 1);
 }
+
+#[test]
+fn removed_textures_free_their_texels_and_their_index() {
+    use cullgraph::scene::{Material, Texture, TextureRef, TextureSlot};
+    let (mut world, _) = World::new(boxes_scene()).unwrap();
+    let big = || Texture { name: "big".into(), width: 64, height: 64, rgba: vec![200; 64 * 64 * 4] };
+    let first = world.add_texture(big()).unwrap();
+    let mut material = Material { name: "textured".into(), ..Default::default() };
+    material.textures[TextureSlot::BaseColor as usize] = Some(TextureRef::new(first));
+    let m = world.add_material(material.clone()).unwrap();
+    let e = world.remove_texture(first).unwrap_err().to_string();
+    assert!(e.contains("is used by 1 material(s), the first"), "{e}");
+    world.remove_material(m).unwrap();
+    world.remove_texture(first).unwrap();
+    assert_eq!(world.scene().textures[first as usize].rgba.len(), 4, "the texels are freed");
+    assert!(world.remove_texture(first).unwrap_err().to_string().contains("no such texture"));
+    assert!(world.add_material(material).unwrap_err().to_string().contains(&format!("texture {first} was removed")));
+    for _ in 0..1000 {
+        let t = world.add_texture(big()).unwrap();
+        assert_eq!(t, first, "the freed index is reused");
+        world.remove_texture(t).unwrap();
+    }
+    assert_eq!(world.scene().textures.len() as u32, first + 1);
+}

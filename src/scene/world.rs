@@ -203,6 +203,8 @@ pub struct World {
     vertex_ranges: super::pool_ranges::PoolRanges,
     index_ranges: super::pool_ranges::PoolRanges,
     materials_live: Vec<bool>,
+    /// Texture indices that removed textures left, reused by later registrations.
+    free_textures: Vec<u32>,
     /// Changes in order; the first is the change that made version `journal_start + 1`.
     journal: Vec<Change>,
     journal_start: u64,
@@ -222,6 +224,7 @@ impl World {
             vertex_ranges: super::pool_ranges::PoolRanges::new(scene.vertices.len() as u32),
             index_ranges: super::pool_ranges::PoolRanges::new(scene.indices.len() as u32),
             materials_live: vec![true; scene.materials.len()],
+            free_textures: Vec::new(),
             scene,
             journal: Vec::new(),
             journal_start: 0,
@@ -510,20 +513,72 @@ impl World {
         (self.scene.vertices.len(), self.scene.indices.len())
     }
 
-    /// Registers a texture (decoded RGBA8) for materials to use and returns its index. Textures
-    /// stay registered: a material that no longer uses one does not free it.
+    /// Registers a texture (decoded RGBA8) for materials to use and returns its index (a removed
+    /// texture's index when there is one).
     pub fn add_texture(&mut self, texture: super::Texture) -> Result<u32, WorldError> {
         if let Some(message) = super::validate::texture_problem(&texture) {
             return Err(WorldError::Invalid { handle: format!("texture '{}'", texture.name), message });
         }
-        self.scene.textures.push(std::sync::Arc::new(texture));
-        let index = (self.scene.textures.len() - 1) as u32;
+        let texture = std::sync::Arc::new(texture);
+        let index = match self.free_textures.pop() {
+            Some(free) => {
+                self.scene.textures[free as usize] = texture;
+                free
+            }
+            None => {
+                self.scene.textures.push(texture);
+                (self.scene.textures.len() - 1) as u32
+            }
+        };
         self.record(Change::Texture(index));
         Ok(index)
     }
 
+    /// Removes a texture no registered material uses: its texels are freed (a 1x1 texel holds
+    /// its place until a later registration takes its index).
+    pub fn remove_texture(&mut self, index: u32) -> Result<(), WorldError> {
+        let live = (index as usize) < self.scene.textures.len() && !self.free_textures.contains(&index);
+        if !live {
+            return Err(WorldError::Invalid {
+                handle: format!("texture {index}"),
+                message: format!(
+                    "no such texture ({} are registered)",
+                    self.scene.textures.len() - self.free_textures.len()
+                ),
+            });
+        }
+        let users: Vec<u32> = (0..self.scene.materials.len() as u32)
+            .filter(|&m| self.materials_live[m as usize])
+            .filter(|&m| self.scene.materials[m as usize].textures.iter().flatten().any(|t| t.texture == index))
+            .collect();
+        if let Some(&first) = users.first() {
+            return Err(WorldError::Invalid {
+                handle: format!("texture {index} '{}'", self.scene.textures[index as usize].name),
+                message: format!(
+                    "is used by {} material(s), the first {first}; change or remove them first",
+                    users.len()
+                ),
+            });
+        }
+        let name = self.scene.textures[index as usize].name.clone();
+        self.scene.textures[index as usize] =
+            std::sync::Arc::new(super::Texture::solid(&format!("{name} (removed)"), [0; 4]));
+        self.free_textures.push(index);
+        self.record(Change::Texture(index));
+        Ok(())
+    }
+
+    /// A problem of `material` beyond the scene's checks: a texture this world removed.
+    fn removed_texture_of(&self, material: &Material) -> Option<String> {
+        let removed = material.textures.iter().flatten().find(|t| self.free_textures.contains(&t.texture))?;
+        Some(format!("texture {} was removed", removed.texture))
+    }
+
     /// Registers a material and returns its index.
     pub fn add_material(&mut self, material: Material) -> Result<u32, WorldError> {
+        if let Some(message) = self.removed_texture_of(&material) {
+            return Err(WorldError::Invalid { handle: format!("material '{}'", material.name), message });
+        }
         super::validate::material_problem(&material, self.scene.textures.len()).map_or(Ok(()), |message| {
             Err(WorldError::Invalid { handle: format!("material '{}'", material.name), message })
         })?;
@@ -552,7 +607,9 @@ impl World {
         if let Some(e) = self.unknown_material(|| "set_material".into(), index) {
             return Err(e);
         }
-        if let Some(message) = super::validate::material_problem(&material, self.scene.textures.len()) {
+        if let Some(message) = super::validate::material_problem(&material, self.scene.textures.len())
+            .or_else(|| self.removed_texture_of(&material))
+        {
             return Err(WorldError::Invalid { handle: format!("material {index} '{}'", material.name), message });
         }
         self.scene.materials[index as usize] = material;
