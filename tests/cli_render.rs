@@ -426,3 +426,24 @@ fn animate_drives_traffic_and_culling_stays_exact() {
     assert_eq!(code, 1);
     assert!(err.contains("--animate drives traffic through builtin:city"), "{err}");
 }
+
+/// `--stream N`: the scene arrives in a live world in N pieces, one a frame, each verified
+/// against exact visibility; once all are in, the frame is the plain render's.
+#[test]
+fn stream_adds_the_scene_in_pieces_and_ends_on_the_plain_image() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (streamed, plain) = (tmp.path().join("s.png"), tmp.path().join("p.png"));
+    let base = ["render", "--instances", "1500", "--size", "64x48", "--frames", "5"];
+    let (code, stdout, err) =
+        run(&[&base[..], &["--stream", "3", "--verify", "--out", streamed.to_str().unwrap()]].concat());
+    assert_eq!(code, 0, "{stdout}{err}");
+    for piece in ["piece 1/3: 500 instances", "piece 2/3: 500 instances", "piece 3/3: 500 instances"] {
+        assert!(stdout.contains(piece), "{stdout}");
+    }
+    assert!(stdout.contains("0 false negatives"), "{stdout}");
+    let (code, stdout, err) = run(&[&base[..], &["--out", plain.to_str().unwrap()]].concat());
+    assert_eq!(code, 0, "{stdout}{err}");
+    assert!(std::fs::read(&streamed).unwrap() == std::fs::read(&plain).unwrap(), "the streamed frame differs");
+    let (code, _, err) = run(&["render", "--stream", "2", "--animate", "--out", plain.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+}

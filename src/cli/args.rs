@@ -449,6 +449,12 @@ pub struct RenderArgs {
     /// second; the renderer applies the changes each frame (30 frames a second of traffic).
     #[arg(long)]
     pub animate: bool,
+    /// Stream the scene into a live world in N pieces (slabs along its longest axis): frame 0
+    /// draws the first piece, and each following frame adds one more. Each piece registers only the meshes,
+    /// materials and textures that earlier pieces did not, and the renderer applies it at once
+    /// (a line per piece reports what it added and what the sync cost).
+    #[arg(long, value_name = "N", conflicts_with = "animate", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub stream: Option<u32>,
     /// Override a graph parameter, NAME=VALUE (repeatable), e.g. `--param exposure=1.2`.
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
     pub params: Vec<(String, String)>,

@@ -84,7 +84,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         ..Default::default()
     };
     let settings = RenderSettings::new(width, height);
-    let (mut animation, mut renderer) = if args.animate {
+    let (mut animation, mut renderer) = if args.animate || args.stream.is_some() {
         let animation = Animation::new(args, scene)?;
         let renderer = Renderer::from_world(&ctx, &shaders, &animation.world, settings, &spec)?;
         (Some(animation), renderer)
@@ -526,10 +526,19 @@ fn watch_deadline(seconds: Option<f64>) -> Option<Instant> {
     Some(Instant::now() + duration)
 }
 
-/// `--animate`: the city's world and its traffic, stepped once a frame.
+/// `--animate` and `--stream`: a live world, changed once a frame.
 struct Animation {
     world: cullgraph::scene::world::World,
-    traffic: cullgraph::scene::procedural::traffic::Traffic,
+    driver: Driver,
+}
+
+/// What changes the world each frame.
+enum Driver {
+    /// `--animate`: the city's traffic.
+    Traffic(cullgraph::scene::procedural::traffic::Traffic),
+    /// `--stream N`: the scene's pieces, `next` the one the next frame adds (the first is in
+    /// the world from the start, and frame 0 draws it alone).
+    Stream { merge: Box<cullgraph::scene::merge::SceneMerge>, pieces: Vec<Vec<usize>>, next: usize, frame: u32 },
 }
 
 impl Animation {
@@ -537,6 +546,9 @@ impl Animation {
     const STEP: f64 = 1.0 / 30.0;
 
     fn new(args: &RenderArgs, scene: cullgraph::scene::Scene) -> Result<Self> {
+        if let Some(n) = args.stream {
+            return Self::stream(scene, n as usize);
+        }
         if scene.name != "builtin:city" {
             return Err(cullgraph::Error::Invalid(format!(
                 "--animate drives traffic through builtin:city; the scene is {}",
@@ -554,12 +566,60 @@ impl Animation {
             churn,
             args.scene.seed,
         )?;
-        Ok(Self { world, traffic })
+        Ok(Self { world, driver: Driver::Traffic(traffic) })
+    }
+
+    /// A world holding the first of `n` pieces of `scene` (its sun and camera too), the others
+    /// to come.
+    fn stream(scene: cullgraph::scene::Scene, n: usize) -> Result<Self> {
+        use cullgraph::scene::merge::SceneMerge;
+        let empty = cullgraph::scene::Scene {
+            name: scene.name.clone(),
+            sun: scene.sun,
+            camera: scene.camera.clone(),
+            ..Default::default()
+        };
+        let (mut world, _) = cullgraph::scene::world::World::new(empty)?;
+        let mut merge = SceneMerge::new(scene, cullgraph::scene::Transform::default())?;
+        let pieces = merge.pieces(n);
+        let first = merge.add(&mut world, &pieces[0])?;
+        println!(
+            "piece 1/{}: {} instances, {} meshes, {} materials, {} textures",
+            pieces.len(),
+            first.instances.len(),
+            first.meshes,
+            first.materials,
+            first.textures
+        );
+        Ok(Self { world, driver: Driver::Stream { merge: Box::new(merge), pieces, next: 1, frame: 0 } })
     }
 
     fn step(&mut self, renderer: &mut Renderer, shaders: &ShaderCompiler) -> Result<()> {
-        self.traffic.step(&mut self.world, Self::STEP)?;
-        renderer.sync(shaders, &self.world)?;
+        match &mut self.driver {
+            Driver::Traffic(traffic) => {
+                traffic.step(&mut self.world, Self::STEP)?;
+                renderer.sync(shaders, &self.world)?;
+            }
+            Driver::Stream { merge, pieces, next, frame } => {
+                *frame += 1;
+                let Some(piece) = pieces.get(*next).filter(|_| *frame > 1) else { return Ok(()) };
+                let added = merge.add(&mut self.world, piece)?;
+                let sync = renderer.sync(shaders, &self.world)?;
+                *next += 1;
+                println!(
+                    "piece {}/{}: {} instances, {} meshes, {} materials, {} textures; sync {:.2} ms CPU, {:.1} MB uploaded{}",
+                    *next,
+                    pieces.len(),
+                    added.instances.len(),
+                    added.meshes,
+                    added.materials,
+                    added.textures,
+                    sync.cpu_ms,
+                    sync.bytes_uploaded as f64 / 1e6,
+                    if sync.relayout { ", laid out anew" } else { "" }
+                );
+            }
+        }
         // The only renderer of this world has applied everything.
         self.world.trim_journal(renderer.synced_version().unwrap_or(0));
         Ok(())

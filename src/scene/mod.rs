@@ -9,6 +9,7 @@ pub mod camera;
 pub mod camera_path;
 pub mod error;
 pub mod gltf_import;
+pub mod merge;
 pub mod mesh;
 pub mod pool_ranges;
 pub mod procedural;
@@ -319,10 +320,24 @@ impl Scene {
         at: MeshPlace,
     ) -> Result<u32, SceneError> {
         let (vertices, bounds, sphere) = data.validate(place)?;
+        self.put_mesh_vertices(name, &vertices, &data.indices, (bounds, sphere), place, at)
+    }
+
+    /// [`Scene::put_mesh`] of vertices and indices checked before (another scene's mesh), with
+    /// their bounds.
+    pub(crate) fn put_mesh_vertices(
+        &mut self,
+        name: &str,
+        vertices: &[Vertex],
+        indices: &[u32],
+        (bounds, sphere): (Aabb, Sphere),
+        place: &str,
+        at: MeshPlace,
+    ) -> Result<u32, SceneError> {
         let mesh = Mesh {
             name: name.into(),
             first_index: u32::try_from(at.index).map_err(|_| SceneError::too_large(place, "index pool"))?,
-            index_count: data.indices.len() as u32,
+            index_count: indices.len() as u32,
             vertex_offset: u32::try_from(at.vertex).map_err(|_| SceneError::too_large(place, "vertex pool"))?,
             vertex_count: vertices.len() as u32,
             bounds,
@@ -332,7 +347,7 @@ impl Scene {
         let no_memory =
             |what: &str, n: usize| SceneError::invalid(place, format!("cannot allocate memory for {n} more {what}"));
         let vertex_end = at.vertex + vertices.len();
-        let index_end = at.index + data.indices.len();
+        let index_end = at.index + indices.len();
         let more_vertices = vertex_end.saturating_sub(self.vertices.len());
         let more_indices = index_end.saturating_sub(self.indices.len());
         self.vertices.try_reserve(more_vertices).map_err(|_| no_memory("vertices", more_vertices))?;
@@ -343,8 +358,8 @@ impl Scene {
         if self.indices.len() < index_end {
             self.indices.resize(index_end, 0);
         }
-        self.vertices[at.vertex..vertex_end].copy_from_slice(&vertices);
-        self.indices[at.index..index_end].copy_from_slice(&data.indices);
+        self.vertices[at.vertex..vertex_end].copy_from_slice(vertices);
+        self.indices[at.index..index_end].copy_from_slice(indices);
         match at.slot {
             Some(slot) => {
                 self.meshes[slot as usize] = mesh;

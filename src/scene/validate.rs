@@ -28,6 +28,12 @@ pub fn validate_scene(scene: &Scene) -> Result<(), SceneError> {
     if scene.instances.is_empty() {
         return Err(SceneError::invalid(scene_place(scene), "scene has no instances"));
     }
+    validate_contents(scene)
+}
+
+/// [`validate_scene`] but for the instance list's being empty: what a live world starts from,
+/// which may be empty until something is streamed in.
+pub fn validate_contents(scene: &Scene) -> Result<(), SceneError> {
     if scene.materials.len() > MAX_MATERIALS {
         return Err(SceneError::invalid(
             scene_place(scene),

@@ -214,7 +214,7 @@ impl World {
     /// A world holding `scene` (checked as at load), every instance live: the handle of instance
     /// `i` of the scene is `handles[i]`.
     pub fn new(scene: Scene) -> Result<(Self, Vec<InstanceHandle>), SceneError> {
-        super::validate::validate_scene(&scene)?;
+        super::validate::validate_contents(&scene)?;
         let n = scene.instances.len();
         let world = Self {
             instances: Slots::full(n),
@@ -471,16 +471,40 @@ impl World {
     /// ranges of the pools that hold them (space unregistered meshes gave back) before the pools
     /// grow, and it takes an unregistered mesh's index when there is one.
     pub fn add_mesh(&mut self, name: &str, data: &MeshData) -> Result<u32, WorldError> {
+        self.place_mesh(name, data.positions.len(), data.indices.len(), |scene, place, at| {
+            scene.put_mesh(name, data, place, at)
+        })
+    }
+
+    /// Registers mesh `mesh` of `source` (checked when `source` was loaded) as
+    /// [`World::add_mesh`] does.
+    pub(crate) fn add_mesh_of(&mut self, source: &Scene, mesh: u32) -> Result<u32, WorldError> {
+        let m = &source.meshes[mesh as usize];
+        let vertices = &source.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
+        let indices = &source.indices[m.first_index as usize..(m.first_index + m.index_count) as usize];
+        self.place_mesh(&m.name, vertices.len(), indices.len(), |scene, place, at| {
+            scene.put_mesh_vertices(&m.name, vertices, indices, (m.bounds, m.sphere), place, at)
+        })
+    }
+
+    /// Finds room for a mesh of `vertices` and `indices` and registers it with `put`.
+    fn place_mesh(
+        &mut self,
+        name: &str,
+        vertices: usize,
+        indices: usize,
+        put: impl FnOnce(&mut Scene, &str, super::MeshPlace) -> Result<u32, SceneError>,
+    ) -> Result<u32, WorldError> {
         let place = format!("mesh '{name}'");
         let too_large = |pool| WorldError::from(SceneError::too_large(&place, pool));
-        let vertices = u32::try_from(data.positions.len()).map_err(|_| too_large("vertex pool"))?;
-        let indices = u32::try_from(data.indices.len()).map_err(|_| too_large("index pool"))?;
+        let vertices = u32::try_from(vertices).map_err(|_| too_large("vertex pool"))?;
+        let indices = u32::try_from(indices).map_err(|_| too_large("index pool"))?;
         let (mut vertex_ranges, mut index_ranges) = (self.vertex_ranges.clone(), self.index_ranges.clone());
         let vertex = vertex_ranges.take(vertices).ok_or_else(|| too_large("vertex pool"))?;
         let index = index_ranges.take(indices).ok_or_else(|| too_large("index pool"))?;
         let slot = self.free_meshes.last().copied();
         let at = super::MeshPlace { vertex: vertex as usize, index: index as usize, slot };
-        let mesh = self.scene.put_mesh(name, data, &place, at)?;
+        let mesh = put(&mut self.scene, &place, at)?;
         (self.vertex_ranges, self.index_ranges) = (vertex_ranges, index_ranges);
         if slot.is_some() {
             self.free_meshes.pop();
