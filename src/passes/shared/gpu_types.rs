@@ -413,7 +413,7 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuInstance>(), 64);
         assert_eq!(std::mem::size_of::<GpuMaterialTexture>(), 48);
         assert_eq!(std::mem::size_of::<GpuMaterial>(), 64 + 5 * 48);
-        assert_eq!(std::mem::size_of::<GpuPointLight>(), 32);
+        assert_eq!(std::mem::size_of::<GpuPointLight>(), 48);
         assert_eq!(std::mem::size_of::<GpuCullView>(), 72);
         assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16 + 2 * 72 + 2 * 16 + 2 * 64 + 16);
         assert_eq!(std::mem::size_of::<DrawIndexedIndirect>(), 20);
