@@ -26,9 +26,14 @@ pub use crate::graph::{
 pub use crate::passes::builtin_kinds;
 pub use crate::passes::shared::{SceneCounts, SceneInputs};
 pub use crate::render::{
-    FrameObserver, FramePipeline, GraphSpec, OutputF32, RenderSettings, Renderer, ViewFrame, ViewId, MAX_VIEWS,
+    FrameObserver, FramePipeline, GraphSpec, OutputF32, ParamsApplied, RenderSettings, Renderer, ViewFrame, ViewId,
+    MAX_VIEWS,
 };
+pub use crate::scene::merge::SceneMerge;
 pub use crate::scene::source::LoadOptions;
 pub use crate::scene::world::{InstanceHandle, LightHandle, World, WorldError};
-pub use crate::scene::{Camera, Instance, Material, MeshData, PointLight, Projection, Scene, SceneSource, Transform};
+pub use crate::scene::{
+    Camera, DirectionalLight, Instance, Material, MeshData, PointLight, Projection, Scene, SceneSource, SpotCone,
+    Transform,
+};
 pub use crate::stats::{FrameStats, UpdateStats};
