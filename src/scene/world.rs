@@ -20,11 +20,13 @@
 use super::{DirectionalLight, Instance, Material, MeshData, PointLight, Scene, SceneError, Transform};
 use std::fmt;
 
-/// A persistent reference to one instance of a [`World`].
+/// A persistent reference to one instance of a [`World`]; it belongs to that world, and any
+/// other refuses it ([`WorldError::ForeignHandle`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct InstanceHandle {
     index: u32,
     generation: u32,
+    world: u32,
 }
 
 impl InstanceHandle {
@@ -37,6 +39,11 @@ impl InstanceHandle {
     pub fn generation(self) -> u32 {
         self.generation
     }
+
+    /// The id of the world it belongs to ([`World::id`]).
+    pub fn world(self) -> u32 {
+        self.world
+    }
 }
 
 impl fmt::Display for InstanceHandle {
@@ -45,17 +52,24 @@ impl fmt::Display for InstanceHandle {
     }
 }
 
-/// A persistent reference to one point light of a [`World`].
+/// A persistent reference to one point light of a [`World`]; it belongs to that world, like
+/// an [`InstanceHandle`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct LightHandle {
     index: u32,
     generation: u32,
+    world: u32,
 }
 
 impl LightHandle {
     /// The light's index in the light table.
     pub fn index(self) -> u32 {
         self.index
+    }
+
+    /// The id of the world it belongs to ([`World::id`]).
+    pub fn world(self) -> u32 {
+        self.world
     }
 }
 
@@ -68,11 +82,29 @@ impl fmt::Display for LightHandle {
 /// Why a change to a [`World`] was refused. Nothing was changed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum WorldError {
-    /// The handle's instance or light was removed (or never belonged to this world).
-    #[error("{handle}: stale handle (removed, or from another world)")]
+    /// The handle's instance or light was removed.
+    #[error("{handle}: stale handle (removed)")]
     Stale {
         /// The handle, as displayed.
         handle: String,
+    },
+    /// A renderer of one world was given another to sync with.
+    #[error("sync: this renderer renders world {renders}; world {given} was given (a renderer renders the world it was made from)")]
+    ForeignWorld {
+        /// The world the renderer was made from.
+        renders: u32,
+        /// The world it was given.
+        given: u32,
+    },
+    /// The handle belongs to another world.
+    #[error("{handle}: a handle of world {owner} given to world {world}")]
+    ForeignHandle {
+        /// The handle, as displayed.
+        handle: String,
+        /// The world it belongs to.
+        owner: u32,
+        /// The world it was given to.
+        world: u32,
     },
     /// A mesh index that names no registered mesh.
     #[error("{handle}: mesh {mesh} does not exist ({meshes} meshes are registered)")]
@@ -94,7 +126,8 @@ pub enum WorldError {
         /// Materials there are.
         materials: usize,
     },
-    /// A value the GPU cannot use: not finite, beyond the world's range, flags beyond 8 bits.
+    /// A value the GPU cannot use: not finite, a zero scale, beyond the world's range, flags
+    /// beyond 6 bits.
     #[error("{handle}: {message}")]
     Invalid {
         /// What it was given to.
@@ -192,6 +225,8 @@ impl Slots {
 pub struct World {
     /// Meshes, materials, the sun and the camera as in a [`Scene`]; `instances` and `lights`
     /// hold every index ever used, removed ones included (see [`World::is_live`]).
+    /// This world's id, unique in the process: what its handles carry.
+    id: u32,
     scene: Scene,
     instances: Slots,
     lights: Slots,
@@ -216,7 +251,10 @@ impl World {
     pub fn new(scene: Scene) -> Result<(Self, Vec<InstanceHandle>), SceneError> {
         super::validate::validate_contents(&scene)?;
         let n = scene.instances.len();
+        static NEXT_ID: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(1);
+        let id = NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let world = Self {
+            id,
             instances: Slots::full(n),
             lights: Slots::full(scene.lights.len()),
             meshes_live: vec![true; scene.meshes.len()],
@@ -229,7 +267,7 @@ impl World {
             journal: Vec::new(),
             journal_start: 0,
         };
-        let handles = (0..n as u32).map(|index| InstanceHandle { index, generation: 0 }).collect();
+        let handles = (0..n as u32).map(|index| InstanceHandle { index, generation: 0, world: id }).collect();
         Ok((world, handles))
     }
 
@@ -271,14 +309,20 @@ impl World {
 
     /// The handles of every live instance, in index order.
     pub fn handles(&self) -> impl Iterator<Item = InstanceHandle> + '_ {
-        (0..self.instances.alive.len() as u32)
-            .filter(|&i| self.is_live(i))
-            .map(|index| InstanceHandle { index, generation: self.instances.generations[index as usize] })
+        (0..self.instances.alive.len() as u32).filter(|&i| self.is_live(i)).map(|index| InstanceHandle {
+            index,
+            generation: self.instances.generations[index as usize],
+            world: self.id,
+        })
     }
 
     /// The handle of the live instance at `index`.
     pub fn handle_at(&self, index: u32) -> Option<InstanceHandle> {
-        self.is_live(index).then(|| InstanceHandle { index, generation: self.instances.generations[index as usize] })
+        self.is_live(index).then(|| InstanceHandle {
+            index,
+            generation: self.instances.generations[index as usize],
+            world: self.id,
+        })
     }
 
     /// The instance `handle` refers to.
@@ -330,11 +374,34 @@ impl World {
         self.journal_start += n as u64;
     }
 
+    /// This world's id, unique in the process; its handles carry it.
+    pub fn id(&self) -> u32 {
+        self.id
+    }
+
     fn check_instance(&self, handle: InstanceHandle) -> Result<(), WorldError> {
+        self.check_owner(handle.world, || handle.to_string())?;
         if self.instances.check(handle.index, handle.generation) {
             Ok(())
         } else {
             Err(WorldError::Stale { handle: handle.to_string() })
+        }
+    }
+
+    fn check_light(&self, handle: LightHandle) -> Result<(), WorldError> {
+        self.check_owner(handle.world, || handle.to_string())?;
+        if self.lights.check(handle.index, handle.generation) {
+            Ok(())
+        } else {
+            Err(WorldError::Stale { handle: handle.to_string() })
+        }
+    }
+
+    fn check_owner(&self, owner: u32, handle: impl FnOnce() -> String) -> Result<(), WorldError> {
+        if owner == self.id {
+            Ok(())
+        } else {
+            Err(WorldError::ForeignHandle { handle: handle(), owner, world: self.id })
         }
     }
 
@@ -381,7 +448,7 @@ impl World {
     /// Adds an instance; its handle stays valid until it is removed.
     pub fn insert(&mut self, instance: Instance) -> Result<InstanceHandle, WorldError> {
         let (index, generation) = self.instances.next();
-        let handle = InstanceHandle { index, generation };
+        let handle = InstanceHandle { index, generation, world: self.id };
         if let Some(e) = self.instance_error(&handle, &instance) {
             return Err(e);
         }
@@ -694,7 +761,7 @@ impl World {
     /// Adds a point light.
     pub fn insert_light(&mut self, light: PointLight) -> Result<LightHandle, WorldError> {
         let (index, generation) = self.lights.next();
-        let handle = LightHandle { index, generation };
+        let handle = LightHandle { index, generation, world: self.id };
         if let Some(message) = light_error(&light) {
             return Err(WorldError::Invalid { handle: handle.to_string(), message });
         }
@@ -706,9 +773,7 @@ impl World {
 
     /// Changes a point light (position, color, range).
     pub fn set_light(&mut self, handle: LightHandle, light: PointLight) -> Result<(), WorldError> {
-        if !self.lights.check(handle.index, handle.generation) {
-            return Err(WorldError::Stale { handle: handle.to_string() });
-        }
+        self.check_light(handle)?;
         if let Some(message) = light_error(&light) {
             return Err(WorldError::Invalid { handle: handle.to_string(), message });
         }
@@ -719,9 +784,7 @@ impl World {
 
     /// Removes a point light.
     pub fn remove_light(&mut self, handle: LightHandle) -> Result<PointLight, WorldError> {
-        if !self.lights.check(handle.index, handle.generation) {
-            return Err(WorldError::Stale { handle: handle.to_string() });
-        }
+        self.check_light(handle)?;
         self.lights.release(handle.index);
         self.record(Change::Light(handle.index));
         Ok(self.scene.lights[handle.index as usize])
@@ -729,9 +792,11 @@ impl World {
 
     /// The handles of the lights the world started with (index order).
     pub fn light_handles(&self) -> impl Iterator<Item = LightHandle> + '_ {
-        (0..self.lights.alive.len() as u32)
-            .filter(|&i| self.is_light_live(i))
-            .map(|index| LightHandle { index, generation: self.lights.generations[index as usize] })
+        (0..self.lights.alive.len() as u32).filter(|&i| self.is_light_live(i)).map(|index| LightHandle {
+            index,
+            generation: self.lights.generations[index as usize],
+            world: self.id,
+        })
     }
 }
 
@@ -747,6 +812,16 @@ fn put<T>(items: &mut Vec<T>, index: u32, value: T) {
 fn transform_error(t: &Transform) -> Option<String> {
     if !t.linear.is_finite() {
         return Some(format!("transform {:?} is not finite", t.linear));
+    }
+    // A zero scale along any axis (a singular matrix) flattens the instance to nothing: its
+    // normals and bounds are undefined.
+    let det = t.linear.determinant();
+    let scale = t.linear.x_axis.length() * t.linear.y_axis.length() * t.linear.z_axis.length();
+    if !det.is_finite() || !scale.is_finite() {
+        return Some(format!("transform {:?} scales beyond what a float holds", t.linear));
+    }
+    if scale == 0.0 || det.abs() <= 1e-12 * scale {
+        return Some(format!("transform {:?} has a zero scale (it is singular)", t.linear));
     }
     super::position_error("translation", t.translation)
 }

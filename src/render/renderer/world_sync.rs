@@ -78,6 +78,8 @@ const WHOLE: u32 = 1 << 31;
 
 /// What a renderer keeps of the world it mirrors.
 pub(super) struct WorldMirror {
+    /// The id of the world it mirrors ([`World::id`]): another world is refused.
+    world: u32,
     /// The world version applied last.
     version: u64,
     layout: SlotLayout,
@@ -400,6 +402,7 @@ impl Renderer {
         let mut renderer =
             Self::assemble(ctx, scene, gpu_scene, light_capacity, uploads, runtime, compiled, settings, spec)?;
         renderer.world = Some(WorldMirror {
+            world: world.id(),
             version: world.version(),
             layout,
             handles: world_handles(world),
@@ -445,6 +448,12 @@ impl Renderer {
         let mirror = self.world.as_mut().ok_or_else(|| {
             Error::Invalid("sync: this renderer was made from a scene, not a world (Renderer::from_world)".into())
         })?;
+        if mirror.world != world.id() {
+            return Err(Error::World(crate::scene::world::WorldError::ForeignWorld {
+                renders: mirror.world,
+                given: world.id(),
+            }));
+        }
         let Some(changes) = world.changes_since(mirror.version) else {
             return self.rebuild(shaders, world, start, Layout::Fresh, true);
         };
