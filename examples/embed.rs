@@ -4,7 +4,8 @@
 //! ([`REQUIRED_DEVICE_EXTENSIONS`], the [`OPTIONAL_DEVICE_EXTENSIONS`] the device has, and
 //! [`RequiredFeatures`]), hands the handles over with the list of what it enabled, and records
 //! cullgraph's frame into its own command buffer, which it submits itself. cullgraph never
-//! submits or waits here; the output image is left in `GENERAL` for the engine to sample or copy.
+//! submits or waits here; the output image is left in the layout and access that
+//! `Renderer::output()` reports, for the engine to transition, sample or copy.
 //!
 //! The world changes every frame, as a game's does: some buildings move, one is added and one
 //! removed, and the renderer takes only those changes (`Renderer::sync`).

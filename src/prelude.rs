@@ -34,6 +34,6 @@ pub use crate::scene::source::LoadOptions;
 pub use crate::scene::world::{InstanceHandle, LightHandle, World, WorldError};
 pub use crate::scene::{
     Camera, DirectionalLight, Instance, Material, MeshData, PointLight, Projection, Scene, SceneSource, SpotCone,
-    Transform,
+    Texture, TextureRef, TextureSlot, Transform,
 };
 pub use crate::stats::{FrameStats, UpdateStats};

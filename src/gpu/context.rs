@@ -329,6 +329,15 @@ impl GpuContext {
         self.shared.queue_family
     }
 
+    /// Runs `use_queue` with the queue every pass runs on ([`GpuContext::queue_family`]), held
+    /// for the call: Vulkan requires a queue's submissions and presents to be externally
+    /// synchronised, and cullgraph's own submissions take the same lock. An engine that let
+    /// cullgraph create the device submits and presents its own work this way.
+    pub fn with_queue<R>(&self, use_queue: impl FnOnce(vk::Queue) -> R) -> R {
+        let queue = self.shared.queue.lock().unwrap_or_else(|p| p.into_inner());
+        use_queue(*queue)
+    }
+
     /// Device name, limits and timing facts.
     pub fn caps(&self) -> &DeviceCaps {
         &self.shared.caps

@@ -65,6 +65,20 @@ impl GraphSpec {
         }
     }
 
+    /// A graph from RON text held by the host (a variant written at run time, say), named
+    /// `name` in its errors (`name:line:col`); `extends` reaches the shipped graphs, and files
+    /// relative to the working directory.
+    pub fn from_text(name: &str, text: impl Into<String>) -> Self {
+        Self {
+            text: text.into(),
+            file: name.to_string(),
+            dir: None,
+            overrides: Vec::new(),
+            kinds: builtin_kinds(),
+            settings: Vec::new(),
+        }
+    }
+
     /// A graph file on disk.
     pub fn from_file(path: &Path) -> Result<Self> {
         let text = crate::files::read_limited_text(path, crate::files::GRAPH_LIMIT, "graph file")

@@ -314,9 +314,21 @@ impl Renderer {
         self.main_view().runtime()
     }
 
+    /// Starts or stops copying every view's draw lists to the host each frame, for
+    /// [`Renderer::drawn`], [`Renderer::drawn_in_view`] and [`Renderer::drawn_handles`] (the
+    /// visible set an engine reads back, with or without the `verify` feature). An attached
+    /// observer that needs the lists keeps them on.
+    pub fn capture_draw_lists(&mut self, on: bool) -> Result<()> {
+        let on = on || self.observers.iter().any(|o| o.needs_draw_lists());
+        for view in &mut self.views {
+            view.graphs.runtime.capture_draw_lists(on)?;
+        }
+        Ok(())
+    }
+
     /// What each drawing pass of the main view drew in the last completed frame, in pass order
-    /// (`None` unless an attached observer asked for the draw lists,
-    /// [`FrameObserver::needs_draw_lists`]).
+    /// (`None` unless draw lists are captured: [`Renderer::capture_draw_lists`], or an
+    /// attached observer that needs them, [`FrameObserver::needs_draw_lists`]).
     pub fn drawn(&self) -> Result<Option<Vec<DrawnInstances>>> {
         self.drawn_in_view(ViewId::MAIN)
     }

@@ -45,7 +45,7 @@ use crate::graph::{FrameInputs, Growth, KindRegistry, Quantities, FRAMES_IN_FLIG
 use crate::passes::shared::gpu_types::GpuInstance;
 use crate::passes::shared::slot_layout::{group_key, SlotLayout};
 use crate::passes::shared::{GpuScene, LaidOutScene, SceneInputs};
-use crate::render::{GraphSpec, RenderSettings};
+use crate::render::{GraphSpec, RenderSettings, ViewId};
 use crate::scene::world::{Change, InstanceHandle, World};
 use crate::scene::Scene;
 use crate::stats::UpdateStats;
@@ -439,6 +439,33 @@ impl Renderer {
     /// renderer).
     pub fn slot_of(&self, index: u32) -> Option<u32> {
         self.world.as_ref()?.layout.slot_of(index)
+    }
+
+    /// The world instances `view` drew in its last completed frame, as the handles they had
+    /// when their slots were written, in slot order without repeats (`None` unless draw lists
+    /// are captured, [`Renderer::capture_draw_lists`], or before a frame completed; an error
+    /// for a renderer made from a scene, whose [`Renderer::drawn_in_view`] names instances).
+    pub fn drawn_handles(&self, view: ViewId) -> Result<Option<Vec<InstanceHandle>>> {
+        let mirror = self.world.as_ref().ok_or_else(|| {
+            Error::Invalid("drawn_handles: this renderer was made from a scene, not a world (see drawn_in_view)".into())
+        })?;
+        let Some(lists) = self.drawn_in_view(view)? else { return Ok(None) };
+        let mut slots: Vec<u32> = Vec::new();
+        for list in lists {
+            match list {
+                crate::render::DrawnInstances::All => slots.extend(0..mirror.layout.slots()),
+                crate::render::DrawnInstances::Some(ids) => slots.extend(ids),
+            }
+        }
+        slots.sort_unstable();
+        slots.dedup();
+        Ok(Some(
+            slots
+                .into_iter()
+                .filter_map(|slot| mirror.layout.instance_in(slot))
+                .filter_map(|index| mirror.handles.get(index as usize).copied().flatten())
+                .collect(),
+        ))
     }
 
     /// Applies the changes `world` had since the last sync; they take effect at the next
