@@ -67,7 +67,7 @@ fn the_visible_set_reads_back_as_world_handles() {
         }
         assert!(drawn.iter().all(|h| world.instance(*h).is_ok()), "{graph}: live handles of this world");
     }
-    let mut plain = Renderer::new(&gpu, &shaders, world.live_scene(), RenderSettings::new(48, 32)).unwrap();
+    let plain = Renderer::new(&gpu, &shaders, world.live_scene(), RenderSettings::new(48, 32)).unwrap();
     assert!(plain.drawn_handles(ViewId::MAIN).unwrap_err().to_string().contains("made from a scene"));
     gpu.assert_clean();
 }
