@@ -3,7 +3,8 @@
 // ../common/gbuffer_normal.glsl) and, with EMISSIVE_OCCLUSION, emissive + occlusion, from the
 // material's factors and textures. Masked materials' fragments below their alpha cutoff are
 // discarded. With MOTION, the motion vector at MOTION_LOCATION (src/passes/gbuffer.rs): in
-// pixels, from this frame's position to last frame's, x right, y down.
+// pixels, from this frame's position to last frame's, x right, y down. With OBJECT_ID, the
+// instance id plus one at OBJECT_ID_LOCATION.
 #include "../common/material_surface.glsl"
 #include "../common/gbuffer_normal.glsl"
 
@@ -22,6 +23,11 @@ layout(location = 2) out vec4 out_emissive_occlusion;   // R8G8B8A8_SRGB
 #endif
 #ifdef MOTION
 #include "motion.glsl"
+#endif
+#ifdef OBJECT_ID
+// The drawn instance's id plus one (0: the background), for picking.
+layout(location = 4) flat in uint in_instance;
+layout(location = OBJECT_ID_LOCATION) out uint out_object_id;
 #endif
 
 void main() {
@@ -42,5 +48,8 @@ void main() {
 #endif
 #ifdef MOTION
     write_motion();
+#endif
+#ifdef OBJECT_ID
+    out_object_id = in_instance + 1u;
 #endif
 }

@@ -330,6 +330,8 @@ pub struct GbufferPass {
     packed_ids: bool,
     /// Whether `motion` is bound: the pipelines write motion vectors after the other targets.
     motion: bool,
+    /// Whether `object_id` is bound: the pipelines write each pixel's instance id last.
+    object_id: bool,
 }
 
 impl GbufferPass {
@@ -355,6 +357,10 @@ impl GbufferPass {
         let motion = bound_image(plan, pass, "motion");
         if motion.is_some() && surface != 2 {
             return Err(invalid(MOTION_TARGETS.into()));
+        }
+        let object_id = bound_image(plan, pass, "object_id");
+        if object_id.is_some() && surface != 2 {
+            return Err(invalid(OBJECT_ID_TARGETS.into()));
         }
         if mode == GeometryMode::Equal && !crate::gpu::image::aspect_of(depth.0).contains(vk::ImageAspectFlags::STENCIL)
         {
@@ -392,6 +398,11 @@ impl GbufferPass {
                 defines.extend([("MOTION", "1"), ("MOTION_LOCATION", motion_location.as_str())]);
                 vertex_defines.push(("MOTION", "1"));
             }
+            let object_id_location = formats.len().to_string();
+            if let Some((format, _)) = object_id {
+                formats.push(format);
+                defines.extend([("OBJECT_ID", "1"), ("OBJECT_ID_LOCATION", object_id_location.as_str())]);
+            }
             let fragment = Some((path, defines.as_slice()));
             let compiled =
                 GeometryShaders::compile_with_vertex(shaders, &vertex_defines, fragment, &formats, depth, equal)?;
@@ -410,9 +421,21 @@ impl GbufferPass {
             clear_colors: mode != GeometryMode::Append && pass.flag("clear_colors")?,
             packed_ids,
             motion: motion.is_some(),
+            object_id: object_id.is_some(),
         })
     }
 }
+
+/// The format of object ids (`Renderer::pick`).
+pub const OBJECT_ID_FORMAT: vk::Format = vk::Format::R32_UINT;
+
+/// What the `object_id` slot holds.
+const OBJECT_ID_SLOT_DOC: &str =
+    "each pixel's instance id plus one, 0 for the background (R32_UINT, one sample; cleared by gbuffer, kept by gbuffer_append), read by Renderer::pick";
+
+/// Why a geometry pass refuses its `object_id` binding.
+const OBJECT_ID_TARGETS: &str =
+    "object ids are written beside albedo and normal: bind both with object_id (not ids, nor a depth-only pass)";
 
 /// Why a geometry pass refuses its `motion` binding: motion vectors are written beside a
 /// G-buffer's surface.
@@ -434,23 +457,24 @@ impl PassNode for GbufferPass {
         let scene = &inputs.scene;
         let extras = self.pipelines.writes_extras(scene.emission_or_occlusion);
         let pipeline = self.pipelines.pick(rec.ctx, scene.emission_or_occlusion, scene.alpha_masks)?;
-        // Motion vectors are cleared to 0 by the first pass whatever `clear_colors` says: the
-        // background has no fragment to write its 0.
+        // Motion vectors and object ids are cleared to 0 by the first pass whatever
+        // `clear_colors` says: the background has no fragment to write its 0.
         let motion_load = match self.mode {
             GeometryMode::Append => vk::AttachmentLoadOp::LOAD,
             _ => vk::AttachmentLoadOp::CLEAR,
         };
         let colors: Vec<vk::RenderingAttachmentInfo> = GBUFFER_COLOR_SLOTS
             .iter()
-            .chain(&["ids", "motion"])
+            .chain(&["ids", "motion", "object_id"])
             .filter(|&&s| extras || s != "emissive_occlusion")
             .filter(|&&s| self.motion || s != "motion")
+            .filter(|&&s| self.object_id || s != "object_id")
             .filter_map(|s| slots.image(s).map(|image| (*s, image)))
             .map(|(s, image)| {
                 vk::RenderingAttachmentInfo::default()
                     .image_view(image.view())
                     .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(if s == "motion" { motion_load } else { color_load })
+                    .load_op(if s == "motion" || s == "object_id" { motion_load } else { color_load })
                     .store_op(vk::AttachmentStoreOp::STORE)
                     .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
             })
@@ -498,6 +522,7 @@ impl PassKind for GbufferKind {
                     ms(slot("ids", Usage::ColorAttachment, false, FormatRule::OneOf(VISIBILITY_FORMATS), "visibility buffer: instance id and triangle id, packed in R32_UINT or as R32G32_UINT (instead of albedo and normal)")),
                     ms(slot("depth", Usage::DepthAttachment, true, FormatRule::Depth, "reversed-Z depth (cleared to 0, stencil to 0)")),
                     ms(slot("motion", Usage::ColorAttachment, false, FormatRule::Exact(MOTION_FORMAT), MOTION_SLOT_DOC)),
+                    slot("object_id", Usage::ColorAttachment, false, FormatRule::Exact(OBJECT_ID_FORMAT), OBJECT_ID_SLOT_DOC),
                 ],
                 settings: vec![clear_colors_setting()],
                 slots_from_shader: false,
@@ -513,6 +538,7 @@ impl PassKind for GbufferKind {
                     ms(slot("ids", Usage::ColorAttachmentLoad, false, FormatRule::OneOf(VISIBILITY_FORMATS), "visibility buffer: instance id and triangle id (packed R32_UINT or R32G32_UINT)")),
                     ms(slot("depth", Usage::DepthAttachmentLoad, true, FormatRule::Depth, "reversed-Z depth")),
                     ms(slot("motion", Usage::ColorAttachmentLoad, false, FormatRule::Exact(MOTION_FORMAT), MOTION_SLOT_DOC)),
+                    slot("object_id", Usage::ColorAttachmentLoad, false, FormatRule::Exact(OBJECT_ID_FORMAT), OBJECT_ID_SLOT_DOC),
                 ],
                 settings: vec![],
                 slots_from_shader: false,

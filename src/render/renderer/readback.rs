@@ -47,6 +47,8 @@ fn layout(format: vk::Format) -> Option<(u64, u32)> {
         // A copy of a depth-stencil image's depth aspect packs 4 bytes per texel.
         F::R32_SFLOAT | F::D32_SFLOAT | F::D32_SFLOAT_S8_UINT => (4, 1),
         F::R8G8B8A8_UNORM | F::R8G8B8A8_SRGB => (4, 4),
+        // Object ids: read as integers by `Renderer::pick`.
+        F::R32_UINT => (4, 1),
         _ => return None,
     })
 }
@@ -78,7 +80,35 @@ impl Renderer {
         self.read_output_of(view, name).map_err(|e| view.error(e))
     }
 
+    /// What `view` showed at pixel (`x`, `y`) of its last frame: the instance id drawn there
+    /// (the slot of a world renderer's instance, see [`Renderer::pick_handle`]), `None` for the
+    /// background. The graph writes ids where its geometry passes bind an `object_id` image
+    /// (R32_UINT, one sample) that it lists as an output, as `builtin:post` does; errors name
+    /// the view, the output and the pixel. Submits a copy and waits for it, as
+    /// [`Renderer::read_output_f32`] does.
+    pub fn pick(&mut self, view: ViewId, x: u32, y: u32) -> Result<Option<u32>> {
+        let (out, bytes) = self.read_output_bytes(view, "object_id").map_err(|e| view.error(e))?;
+        if out.format != vk::Format::R32_UINT {
+            let why = format!("output 'object_id' is {:?}; object ids are R32_UINT", out.format);
+            return Err(view.error(Error::Invalid(why)));
+        }
+        if x >= out.width || y >= out.height {
+            let why = format!("pixel ({x}, {y}) is outside the {}x{} output", out.width, out.height);
+            return Err(view.error(Error::Invalid(why)));
+        }
+        let at = ((y * out.width + x) * 4) as usize;
+        let id = u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+        Ok(id.checked_sub(1))
+    }
+
     fn read_output_of(&mut self, view: ViewId, name: &str) -> Result<OutputF32> {
+        let (mut out, bytes) = self.read_output_bytes(view, name)?;
+        out.data = decode(out.format, &bytes);
+        Ok(out)
+    }
+
+    /// Output `name` of `view` copied back: its description (no data) and its bytes.
+    fn read_output_bytes(&mut self, view: ViewId, name: &str) -> Result<(OutputF32, Vec<u8>)> {
         let ctx = self.ctx.clone();
         let state = self.view_state_mut(view)?;
         let plan = state.plan();
@@ -123,7 +153,7 @@ impl Renderer {
         })?;
         // The copy's barriers leave the image in `state`; the next frame also waits for the read.
         state.graphs.runtime.note_output_use(index, Access { layout: access.layout, ..Access::TRANSFER_READ });
-        let data = decode(format, buffer.read_bytes()?);
-        Ok(OutputF32 { name: name.to_string(), format, width, height, channels, data })
+        let bytes = buffer.read_bytes()?.to_vec();
+        Ok((OutputF32 { name: name.to_string(), format, width, height, channels, data: Vec::new() }, bytes))
     }
 }

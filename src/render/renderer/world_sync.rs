@@ -468,6 +468,16 @@ impl Renderer {
         ))
     }
 
+    /// The world instance `view` showed at pixel (`x`, `y`) of its last frame, `None` for the
+    /// background ([`Renderer::pick`] through this renderer's slots).
+    pub fn pick_handle(&mut self, view: ViewId, x: u32, y: u32) -> Result<Option<InstanceHandle>> {
+        let Some(slot) = self.pick(view, x, y)? else { return Ok(None) };
+        let mirror = self.world.as_ref().ok_or_else(|| {
+            Error::Invalid("pick_handle: this renderer was made from a scene, not a world (see pick)".into())
+        })?;
+        Ok(mirror.layout.instance_in(slot).and_then(|index| mirror.handles.get(index as usize).copied().flatten()))
+    }
+
     /// Applies the changes `world` had since the last sync; they take effect at the next
     /// recorded frame.
     pub fn sync(&mut self, shaders: &ShaderCompiler, world: &World) -> Result<UpdateStats> {
