@@ -1,6 +1,7 @@
 //! Handles belong to their world: another world refuses them, a renderer refuses to sync with
 //! a world it was not made from, and a zero or non-finite scale is refused; every refusal is a
-//! typed error naming the handle, and nothing is applied.
+//! typed error naming the handle, and nothing is applied. A clone is another world. The
+//! README's world example compiles against the prelude as written.
 
 mod common;
 
@@ -93,4 +94,68 @@ fn zero_and_non_finite_scales_are_refused_naming_the_handle() {
     // A mirrored or tiny but invertible scale is fine.
     w.set_transform(h[1], flat(Mat3::from_diagonal(Vec3::new(-1.0, 1e-3, 2.0)))).unwrap();
     assert_eq!(w.version(), version + 1);
+}
+
+#[test]
+fn a_clone_is_another_world_that_a_renderer_of_the_original_refuses() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (mut a, ha) = World::new(boxes_scene()).unwrap();
+    let mut r =
+        Renderer::from_world(&gpu, &shaders, &a, RenderSettings::new(64, 48), &GraphSpec::default_graph()).unwrap();
+    let before = r.render_to_rgba8(&boxes_camera()).unwrap().1;
+    let mut copy = a.clone();
+    assert_ne!(copy.id(), a.id());
+    foreign(copy.remove(ha[1]).unwrap_err(), &copy, &a);
+    // The clone changes apart from the original, to the same version: with the original's id
+    // the renderer would take it for the original, already synced.
+    let own = copy.handle_at(1).unwrap();
+    copy.remove(own).unwrap();
+    a.set_transform(
+        ha[2],
+        Transform { translation: DVec3::new(1.5, 1.0, -2.0), ..a.instance(ha[2]).unwrap().transform },
+    )
+    .unwrap();
+    assert_eq!(copy.version(), a.version());
+    let e = r.sync(&shaders, &copy).unwrap_err();
+    assert!(matches!(e, cullgraph::Error::World(WorldError::ForeignWorld { .. })), "{e}");
+    assert!(r.render_to_rgba8(&boxes_camera()).unwrap().1 == before, "nothing of the clone was applied");
+    r.sync(&shaders, &a).unwrap();
+    assert!(a.is_live(1), "the original keeps the instance the clone removed");
+    gpu.assert_clean();
+}
+
+/// The README's world example ("A world that changes"), as written, with only the prelude.
+#[test]
+fn the_readme_world_example_compiles_against_the_prelude() {
+    use cullgraph::prelude::*;
+    #[allow(clippy::too_many_arguments)]
+    fn readme(
+        ctx: GpuContext,
+        shaders: ShaderCompiler,
+        scene: Scene,
+        settings: RenderSettings,
+        spec: GraphSpec,
+        (moved, turned, transform, mesh_data): (Transform, Transform, Transform, MeshData),
+        (width, height, rgba): (u32, u32, Vec<u8>),
+    ) -> std::result::Result<UpdateStats, Box<dyn std::error::Error>> {
+        let (mesh, material) = (0, 0);
+        // From here on the README's lines.
+        let (mut world, handles) = World::new(scene)?; // a handle per instance
+        let mut renderer = Renderer::from_world(&ctx, &shaders, &world, settings, &spec)?;
+        world.set_transforms(&[(handles[3], moved), (handles[7], turned)])?; // f64 translations
+        let car = world.insert(Instance { transform, mesh, material, flags: 0 })?;
+        world.remove(handles[9])?; // its handle goes stale
+        let mesh = world.add_mesh("truck", &mesh_data)?; // meshes and materials at run time
+        world.set_meshes(&[(car, mesh)])?;
+        let paint = world.add_texture(Texture { name: "paint".into(), width, height, rgba })?;
+        let mut red = Material { name: "red".into(), ..Default::default() };
+        red.textures[TextureSlot::BaseColor as usize] = Some(TextureRef::new(paint));
+        let red = world.add_material(red)?;
+        world.set_materials(&[(car, red)])?; // textured materials too
+        let update = renderer.sync(&shaders, &world)?; // before recording the next frame
+        Ok(update)
+    }
+    // Compiling is the point: the other tests render worlds.
+    let _ = readme;
 }

@@ -220,13 +220,37 @@ impl Slots {
     }
 }
 
+/// A world's id, unique in the process; a clone of it is a fresh id, so that a cloned
+/// [`World`] is another world.
+#[derive(Debug)]
+struct Id(u32);
+
+impl Id {
+    fn fresh() -> Self {
+        static NEXT_ID: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(1);
+        // Relaxed: only uniqueness matters.
+        Self(NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
+    }
+}
+
+impl Clone for Id {
+    fn clone(&self) -> Self {
+        Self::fresh()
+    }
+}
+
 /// A scene that changes between frames; see the module documentation.
+///
+/// A clone is another world, with an id of its own: the original's handles are refused by it
+/// (its own come from [`World::handles`] and [`World::handle_at`]), and a renderer of the
+/// original refuses to sync it. (With the same id, a clone that changed apart from the original
+/// would pass a renderer's check while its journal and version mean other changes.)
 #[derive(Clone, Debug)]
 pub struct World {
+    /// This world's id, unique in the process: what its handles carry.
+    id: Id,
     /// Meshes, materials, the sun and the camera as in a [`Scene`]; `instances` and `lights`
     /// hold every index ever used, removed ones included (see [`World::is_live`]).
-    /// This world's id, unique in the process: what its handles carry.
-    id: u32,
     scene: Scene,
     instances: Slots,
     lights: Slots,
@@ -251,8 +275,7 @@ impl World {
     pub fn new(scene: Scene) -> Result<(Self, Vec<InstanceHandle>), SceneError> {
         super::validate::validate_contents(&scene)?;
         let n = scene.instances.len();
-        static NEXT_ID: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(1);
-        let id = NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let id = Id::fresh();
         let world = Self {
             id,
             instances: Slots::full(n),
@@ -267,7 +290,7 @@ impl World {
             journal: Vec::new(),
             journal_start: 0,
         };
-        let handles = (0..n as u32).map(|index| InstanceHandle { index, generation: 0, world: id }).collect();
+        let handles = (0..n as u32).map(|index| InstanceHandle { index, generation: 0, world: world.id.0 }).collect();
         Ok((world, handles))
     }
 
@@ -312,7 +335,7 @@ impl World {
         (0..self.instances.alive.len() as u32).filter(|&i| self.is_live(i)).map(|index| InstanceHandle {
             index,
             generation: self.instances.generations[index as usize],
-            world: self.id,
+            world: self.id.0,
         })
     }
 
@@ -321,7 +344,7 @@ impl World {
         self.is_live(index).then(|| InstanceHandle {
             index,
             generation: self.instances.generations[index as usize],
-            world: self.id,
+            world: self.id.0,
         })
     }
 
@@ -376,7 +399,7 @@ impl World {
 
     /// This world's id, unique in the process; its handles carry it.
     pub fn id(&self) -> u32 {
-        self.id
+        self.id.0
     }
 
     fn check_instance(&self, handle: InstanceHandle) -> Result<(), WorldError> {
@@ -398,10 +421,10 @@ impl World {
     }
 
     fn check_owner(&self, owner: u32, handle: impl FnOnce() -> String) -> Result<(), WorldError> {
-        if owner == self.id {
+        if owner == self.id.0 {
             Ok(())
         } else {
-            Err(WorldError::ForeignHandle { handle: handle(), owner, world: self.id })
+            Err(WorldError::ForeignHandle { handle: handle(), owner, world: self.id.0 })
         }
     }
 
@@ -448,7 +471,7 @@ impl World {
     /// Adds an instance; its handle stays valid until it is removed.
     pub fn insert(&mut self, instance: Instance) -> Result<InstanceHandle, WorldError> {
         let (index, generation) = self.instances.next();
-        let handle = InstanceHandle { index, generation, world: self.id };
+        let handle = InstanceHandle { index, generation, world: self.id.0 };
         if let Some(e) = self.instance_error(&handle, &instance) {
             return Err(e);
         }
@@ -761,7 +784,7 @@ impl World {
     /// Adds a point light.
     pub fn insert_light(&mut self, light: PointLight) -> Result<LightHandle, WorldError> {
         let (index, generation) = self.lights.next();
-        let handle = LightHandle { index, generation, world: self.id };
+        let handle = LightHandle { index, generation, world: self.id.0 };
         if let Some(message) = light_error(&light) {
             return Err(WorldError::Invalid { handle: handle.to_string(), message });
         }
@@ -795,7 +818,7 @@ impl World {
         (0..self.lights.alive.len() as u32).filter(|&i| self.is_light_live(i)).map(|index| LightHandle {
             index,
             generation: self.lights.generations[index as usize],
-            world: self.id,
+            world: self.id.0,
         })
     }
 }
