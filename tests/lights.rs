@@ -92,11 +92,8 @@ fn the_world_sets_the_sun_and_refuses_a_bad_one() {
 
 #[test]
 fn khr_lights_punctual_lights_are_imported() {
-    use base64::Engine;
     let dir = tempfile::tempdir().unwrap();
-    let bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect();
-    let uri =
-        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let uri = common::triangle_data_uri();
     // Rotated -90 degrees about X, a node's -Z points down.
     let down = [-std::f32::consts::FRAC_1_SQRT_2, 0.0, 0.0, std::f32::consts::FRAC_1_SQRT_2];
     let doc = json!({

@@ -70,11 +70,8 @@ fn a_city_streamed_in_pieces_draws_what_the_whole_world_draws() {
 
 #[test]
 fn a_gltf_file_loads_into_a_live_world() {
-    use base64::Engine;
     let dir = tempfile::tempdir().unwrap();
-    let bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect();
-    let uri =
-        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let uri = common::triangle_data_uri();
     let doc = serde_json::json!({
         "asset": {"version": "2.0"},
         "extensionsUsed": ["KHR_lights_punctual"],

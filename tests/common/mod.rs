@@ -199,3 +199,11 @@ pub fn readback_buffer(ctx: &GpuContext, name: &str, bytes: u64) -> Buffer {
     )
     .unwrap()
 }
+
+/// The buffer of a glTF triangle (three VEC3 positions, 36 bytes: (0,0,0), (1,0,0), (0,1,0)) as
+/// a data URI, for small glTF documents written by tests.
+pub fn triangle_data_uri() -> String {
+    use base64::Engine;
+    let bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+    format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin))
+}

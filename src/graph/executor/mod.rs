@@ -460,8 +460,7 @@ impl GraphRuntime {
         for runtime in runtimes.iter().rev() {
             runtime.end_scope(cmd);
         }
-        let mut wait =
-            Access { stage: vk::PipelineStageFlags2::NONE, access: vk::AccessFlags2::NONE, ..Access::TRANSFER_READ };
+        let mut wait = Access::NONE;
         for runtime in runtimes.iter_mut() {
             runtime.track_pass(index);
             let w = runtime.copies_wait_for(index);
@@ -583,8 +582,7 @@ impl GraphRuntime {
 
     /// What the copies after pass `index` wait for.
     fn copies_wait_for(&self, index: usize) -> Access {
-        let mut wait =
-            Access { stage: vk::PipelineStageFlags2::NONE, access: vk::AccessFlags2::NONE, ..Access::TRANSFER_READ };
+        let mut wait = Access::NONE;
         for b in self.copy_sources(index) {
             if let Some(phys) = self.resources.index(b.resource, b.version, self.frame) {
                 let pending = self.tracker.pending(&[phys]);
