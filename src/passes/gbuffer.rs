@@ -611,6 +611,9 @@ fn targets_error(check: &KindCheck<'_>) -> Option<(Pos, String)> {
     if let Some(motion) = bound("motion").filter(|_| surface != 2) {
         return Some((motion.pos, format!("pass '{}': {MOTION_TARGETS}", check.pass.name)));
     }
+    if let Some(object_id) = bound("object_id").filter(|_| surface != 2) {
+        return Some((object_id.pos, format!("pass '{}': {OBJECT_ID_TARGETS}", check.pass.name)));
+    }
     None
 }
 
