@@ -27,11 +27,11 @@ pub use crate::passes::builtin_kinds;
 pub use crate::passes::shared::{SceneCounts, SceneInputs};
 pub use crate::render::{
     FrameObserver, FramePipeline, GraphSpec, OutputF32, ParamsApplied, RenderSettings, Renderer, ViewFrame, ViewId,
-    MAX_VIEWS,
+    MAX_VIEWS, USER_DATA_IMPORT,
 };
 pub use crate::scene::merge::SceneMerge;
 pub use crate::scene::source::LoadOptions;
-pub use crate::scene::world::{InstanceHandle, LightHandle, World, WorldError};
+pub use crate::scene::world::{InstanceHandle, LightHandle, World, WorldError, MAX_USER_WORDS};
 pub use crate::scene::{
     Camera, DirectionalLight, Instance, Material, MeshData, PointLight, Projection, Scene, SceneSource, SpotCone,
     Texture, TextureRef, TextureSlot, Transform,

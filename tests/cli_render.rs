@@ -441,6 +441,8 @@ fn stream_adds_the_scene_in_pieces_and_ends_on_the_plain_image() {
         assert!(stdout.contains(piece), "{stdout}");
     }
     assert!(stdout.contains("0 false negatives"), "{stdout}");
+    let probe = stdout.lines().find(|l| l.starts_with("registration into 1500 instances: 1 mesh")).unwrap_or_default();
+    assert!(probe.contains("MB uploaded") && !probe.contains("laid out anew"), "{stdout}");
     let (code, stdout, err) = run(&[&base[..], &["--out", plain.to_str().unwrap()]].concat());
     assert_eq!(code, 0, "{stdout}{err}");
     assert!(std::fs::read(&streamed).unwrap() == std::fs::read(&plain).unwrap(), "the streamed frame differs");

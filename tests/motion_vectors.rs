@@ -250,9 +250,10 @@ fn the_command_line_writes_motion_as_openexr() {
     gpu.assert_clean();
 }
 
-/// A world whose scene buffers are made anew (here: a mesh registered while a quad moves) starts
-/// with previous = current: that frame shows no motion, not the contents of a fresh buffer, and
-/// the next move shows as before.
+/// A mesh registered while a quad moves is written in place: that frame shows the move. A world
+/// laid out anew (here: its journal trimmed past the renderer's last sync) starts with previous
+/// = current: that frame shows no motion, not the contents of a fresh buffer, and the next move
+/// shows as before.
 #[test]
 fn a_rebuilt_scene_starts_without_motion() {
     let gpu = GpuTest::new();
@@ -262,21 +263,29 @@ fn a_rebuilt_scene_starts_without_motion() {
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
     let mut r = Renderer::from_world(&gpu, &shaders, &world, settings, &post()).unwrap();
     let camera = common::camera_on_z();
-    let frame = |world: &World, r: &mut Renderer| -> OutputF32 {
-        r.sync(&shaders, world).unwrap();
+    let frame = |world: &World, r: &mut Renderer| -> (OutputF32, bool) {
+        let stats = r.sync(&shaders, world).unwrap();
         r.render(&camera).unwrap();
-        r.read_output_f32("motion").unwrap()
+        (r.read_output_f32("motion").unwrap(), stats.relayout)
     };
     frame(&world, &mut r);
+    let before = at;
     at[0].x += 0.1;
     world.set_transform(handles[0], common::scaled_at(at[0], SIDE)).unwrap();
     world.add_mesh("another quad", &common::quad_mesh()).unwrap();
-    let rebuilt = frame(&world, &mut r);
+    let (registered, relayout) = frame(&world, &mut r);
+    assert!(!relayout, "a registration keeps the layout");
+    assert!(check(&registered, &camera, &camera, &at, &before) > 100, "the move shows beside a registration");
+    at[0].x += 0.1;
+    world.set_transform(handles[0], common::scaled_at(at[0], SIDE)).unwrap();
+    world.trim_journal(world.version());
+    let (rebuilt, relayout) = frame(&world, &mut r);
+    assert!(relayout, "a journal that no longer reaches the last sync lays the world out anew");
     assert!(rebuilt.data.iter().all(|&v| v == 0.0), "a rebuilt scene shows no motion at its first frame");
     let before = at;
     at[0].x += 0.1;
     world.set_transform(handles[0], common::scaled_at(at[0], SIDE)).unwrap();
-    let moved = frame(&world, &mut r);
+    let (moved, _) = frame(&world, &mut r);
     assert!(check(&moved, &camera, &camera, &at, &before) > 100, "the quads cover pixels");
     gpu.assert_clean();
 }

@@ -131,7 +131,8 @@ fn every_shipped_graph_compiles_to_its_recorded_plan() {
 }
 
 /// Graph examples that use only built-in kinds.
-const EXAMPLES: [&str; 6] = ["msaa_overlay", "tint", "history", "hiz_debug", "host_target", "host_depth_and_pyramid"];
+const EXAMPLES: [&str; 7] =
+    ["msaa_overlay", "tint", "history", "hiz_debug", "host_target", "host_depth_and_pyramid", "user_tint"];
 
 /// Every shipped graph and example compiled for a city of 1,000 instances at 320x240.
 fn shipped_plans() -> Vec<(String, CompiledGraph)> {

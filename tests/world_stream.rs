@@ -104,3 +104,116 @@ fn a_gltf_file_loads_into_a_live_world() {
     let e = world.load_gltf(&dir.path().join("missing.gltf"), placement, &LoadOptions::default()).unwrap_err();
     assert!(e.to_string().contains("missing.gltf"), "{e}");
 }
+
+/// A cube whose faces each span the whole texture.
+fn textured_cube() -> cullgraph::scene::MeshData {
+    let mut m = common::cube_mesh();
+    m.uvs = (0..m.positions.len()).map(|i| [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]][i % 4].into()).collect();
+    m
+}
+
+/// A `side` x `side` checker of `rgb` and black whose alpha ramps across (what a masked
+/// material's coverage-preserving mips change).
+fn checker(name: &str, side: u32, rgb: [u8; 3]) -> cullgraph::scene::Texture {
+    let rgba = (0..side * side)
+        .flat_map(|i| {
+            let (x, y) = (i % side, i / side);
+            let c = if (x / 4 + y / 4) % 2 == 0 { rgb } else { [0, 0, 0] };
+            [c[0], c[1], c[2], (x * 255 / side.max(1)) as u8]
+        })
+        .collect();
+    cullgraph::scene::Texture { name: name.into(), width: side, height: side, rgba }
+}
+
+/// Registering meshes, textures and materials into a live world writes only what they add,
+/// with the layout kept: a texture size class outgrows its array (carried over on the GPU), a
+/// removed texture's index comes back in another class, and a material that masks a texture
+/// makes its mips again. After each step the renderer draws exactly what a renderer made
+/// afresh from the same world draws.
+#[test]
+fn registrations_upload_only_what_they_add() {
+    use cullgraph::scene::{AlphaMode, Instance, Material, TextureRef};
+    use glam::Vec3;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut scene = boxes_scene();
+    // Enough instances that a whole upload would show in the figures.
+    let base = scene.instances[1];
+    for i in 0..3000 {
+        let at = DVec3::new(-30.0 - (i % 50) as f64, 0.5, -30.0 - (i / 50) as f64);
+        scene.instances.push(Instance { transform: Transform { translation: at, ..base.transform }, ..base });
+    }
+    let (mut world, _) = World::new(scene).unwrap();
+    let size = RenderSettings::new(96, 72);
+    let spec = GraphSpec::default_graph();
+    let mut r = Renderer::from_world(&gpu, &shaders, &world, size.clone(), &spec).unwrap();
+    let camera = boxes_camera();
+    let mut last = r.render_to_rgba8(&camera).unwrap().1;
+    let mut compare = |world: &World, r: &mut Renderer, what: &str| {
+        let stats = r.sync(&shaders, world).unwrap();
+        assert!(!stats.relayout, "{what}: the layout is kept");
+        let got = r.render_to_rgba8(&camera).unwrap().1;
+        let mut fresh = Renderer::from_world(&gpu, &shaders, world, size.clone(), &spec).unwrap();
+        let want = fresh.render_to_rgba8(&camera).unwrap().1;
+        let differ = got.chunks_exact(4).zip(want.chunks_exact(4)).filter(|(a, b)| a != b).count();
+        assert_eq!(differ, 0, "{what}: pixels differ from a renderer made afresh");
+        let changed = got.chunks_exact(4).zip(last.chunks_exact(4)).filter(|(a, b)| a != b).count();
+        assert!(changed > 10, "{what}: the change shows ({changed} pixels changed)");
+        last = got;
+        stats.bytes_uploaded
+    };
+
+    // One mesh, texture and material, and an instance of them.
+    let cube = world.add_mesh("textured cube", &textured_cube()).unwrap();
+    let first = world.add_texture(checker("first", 64, [250, 200, 20])).unwrap();
+    let mut material = Material { name: "textured".into(), albedo: Vec3::ONE, ..Default::default() };
+    material.textures[0] = Some(TextureRef::new(first));
+    let textured = world.add_material(material.clone()).unwrap();
+    let place = |x: f64, z: f64, material| Instance {
+        transform: Transform { linear: Mat3::from_diagonal(Vec3::splat(0.6)), translation: DVec3::new(x, 0.3, z) },
+        mesh: cube,
+        material,
+        flags: 0,
+    };
+    world.insert(place(-0.4, -1.2, textured)).unwrap();
+    let bytes = compare(&world, &mut r, "one registration");
+    let texels = 64 * 64 * 4 * 4 / 3 + 64;
+    let mesh = 24 * 32 + 36 * 4;
+    assert!(bytes >= texels && bytes <= texels + mesh + 4096, "one registration uploaded {bytes} bytes");
+
+    // More textures of that class than its array holds: the array grows on the GPU.
+    let mut materials = Vec::new();
+    for k in 0..9u8 {
+        let t = world.add_texture(checker(&format!("t{k}"), 64, [40 + 20 * k, 255 - 20 * k, 90])).unwrap();
+        let mut m = material.clone();
+        m.textures[0] = Some(TextureRef::new(t));
+        materials.push((t, world.add_material(m).unwrap()));
+    }
+    let handles: Vec<_> = materials
+        .iter()
+        .enumerate()
+        .map(|(k, &(_, m))| world.insert(place(-2.4 + 0.6 * k as f64, 2.2, m)).unwrap())
+        .collect();
+    compare(&world, &mut r, "a grown texture class");
+
+    // A texture removed, its index taken by one of another class.
+    world.remove(handles[3]).unwrap();
+    let (gone, gone_material) = materials[3];
+    world.remove_material(gone_material).unwrap();
+    world.remove_texture(gone).unwrap();
+    let again = world.add_texture(checker("bigger", 128, [20, 90, 250])).unwrap();
+    assert_eq!(again, gone, "the removed texture's index is reused");
+    let mut m = material.clone();
+    m.textures[0] = Some(TextureRef::new(again));
+    let m = world.add_material(m).unwrap();
+    world.insert(place(-0.6, 2.2, m)).unwrap();
+    compare(&world, &mut r, "a texture index in another class");
+
+    // The first texture now masked: its mips are made again to keep its coverage.
+    material.textures[0] = Some(TextureRef::new(first));
+    material.alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
+    world.set_material(textured, material).unwrap();
+    let bytes = compare(&world, &mut r, "a texture masked");
+    assert!(bytes >= texels && bytes <= texels + 4096, "masking a texture uploaded {bytes} bytes");
+    gpu.assert_clean();
+}

@@ -602,6 +602,10 @@ impl Animation {
             }
             Driver::Stream { merge, pieces, next, frame } => {
                 *frame += 1;
+                if *next == pieces.len() && *frame > 1 {
+                    *next += 1;
+                    register_probe(&mut self.world, renderer, shaders)?;
+                }
                 let Some(piece) = pieces.get(*next).filter(|_| *frame > 1) else { return Ok(()) };
                 let added = merge.add(&mut self.world, piece)?;
                 let sync = renderer.sync(shaders, &self.world)?;
@@ -624,6 +628,42 @@ impl Animation {
         self.world.trim_journal(renderer.synced_version().unwrap_or(0));
         Ok(())
     }
+}
+
+/// After the last piece of `--stream`: one mesh, material and texture registered into the
+/// full world, with an instance of them out of view, to show what a registration costs a world
+/// that size.
+fn register_probe(
+    world: &mut cullgraph::scene::world::World,
+    renderer: &mut Renderer,
+    shaders: &ShaderCompiler,
+) -> Result<()> {
+    use cullgraph::scene::{Instance, Material, MeshData, Texture, TextureRef, Transform};
+    let mut cube = MeshData::default();
+    for i in 0..8u32 {
+        cube.positions.push(glam::Vec3::new((i & 1) as f32, (i >> 1 & 1) as f32, (i >> 2 & 1) as f32));
+    }
+    cube.indices = vec![
+        0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5,
+    ];
+    let mesh = world.add_mesh("stream probe", &cube)?;
+    let texture = world.add_texture(Texture::solid("stream probe", [200, 120, 40, 255]))?;
+    let mut material = Material { name: "stream probe".into(), ..Default::default() };
+    material.textures[0] = Some(TextureRef::new(texture));
+    let material = world.add_material(material)?;
+    // Far below the scene: out of view, so that the frames after it show what the plain
+    // render of the scene shows.
+    let transform = Transform { translation: glam::DVec3::new(0.0, -1.0e5, 0.0), ..Default::default() };
+    world.insert(Instance { transform, mesh, material, flags: 0 })?;
+    let sync = renderer.sync(shaders, world)?;
+    println!(
+        "registration into {} instances: 1 mesh, 1 material, 1 texture, 1 instance; sync {:.2} ms CPU, {:.3} MB uploaded{}",
+        world.live_instances() - 1,
+        sync.cpu_ms,
+        sync.bytes_uploaded as f64 / 1e6,
+        if sync.relayout { ", laid out anew" } else { "" }
+    );
+    Ok(())
 }
 
 #[cfg(test)]

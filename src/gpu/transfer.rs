@@ -3,6 +3,7 @@
 use super::barrier::{cmd_barriers, image_barrier, image_barrier_raw, memory_barrier, Access};
 use super::buffer::{Buffer, BufferDesc};
 use super::context::GpuContext;
+use super::edits::Edits;
 use super::error::GpuResult;
 use super::image::Image;
 use ash::vk;
@@ -17,6 +18,8 @@ use gpu_allocator::MemoryLocation;
 pub struct UploadBatch {
     copies: Vec<(Buffer, vk::Buffer, u64)>,
     images: Vec<ImageUpload>,
+    /// Edits of resources already in use, recorded after the uploads above.
+    pub edits: Edits,
 }
 
 /// Texels for an image: a staging buffer and where each part of it goes.
@@ -43,7 +46,20 @@ impl UploadBatch {
         usage: vk::BufferUsageFlags,
         data: &[u8],
     ) -> GpuResult<Buffer> {
-        let size = data.len() as u64;
+        self.buffer_with_room(ctx, name, usage, data, 0)
+    }
+
+    /// As [`UploadBatch::buffer`], the buffer at least `size` bytes long (room for what is to
+    /// come; the bytes past `data` are undefined).
+    pub fn buffer_with_room(
+        &mut self,
+        ctx: &GpuContext,
+        name: &str,
+        usage: vk::BufferUsageFlags,
+        data: &[u8],
+        size: u64,
+    ) -> GpuResult<Buffer> {
+        let size = size.max(data.len() as u64);
         let dst = Buffer::new(
             ctx,
             &BufferDesc {
@@ -53,10 +69,10 @@ impl UploadBatch {
                 location: MemoryLocation::GpuOnly,
             },
         )?;
-        if size > 0 {
+        if !data.is_empty() {
             let staging =
                 Buffer::with_data(ctx, &format!("{name} (staging)"), vk::BufferUsageFlags::TRANSFER_SRC, data)?;
-            self.copies.push((staging, dst.handle(), size));
+            self.copies.push((staging, dst.handle(), data.len() as u64));
         }
         Ok(dst)
     }
@@ -80,18 +96,25 @@ impl UploadBatch {
 
     /// True when nothing is queued.
     pub fn is_empty(&self) -> bool {
-        self.copies.is_empty() && self.images.is_empty()
+        self.copies.is_empty() && self.images.is_empty() && self.edits.is_empty()
     }
 
     /// Bytes queued for upload.
     pub fn bytes(&self) -> u64 {
-        self.copies.iter().map(|c| c.2).sum::<u64>() + self.images.iter().map(|i| i.staging.size()).sum::<u64>()
+        self.copies.iter().map(|c| c.2).sum::<u64>()
+            + self.images.iter().map(|i| i.staging.size()).sum::<u64>()
+            + self.edits.bytes()
     }
 
     /// Records the copies and a barrier that orders them before every later access (read or
     /// write: an uploaded buffer may be a counter that shaders update).
     pub fn record(&self, ctx: &GpuContext, cmd: vk::CommandBuffer) {
-        if self.is_empty() {
+        self.record_uploads(ctx, cmd);
+        self.edits.record(ctx, cmd);
+    }
+
+    fn record_uploads(&self, ctx: &GpuContext, cmd: vk::CommandBuffer) {
+        if self.copies.is_empty() && self.images.is_empty() {
             return;
         }
         let device = ctx.device();
@@ -145,7 +168,8 @@ impl UploadBatch {
     }
 
     /// Records, submits and waits (headless use only).
-    pub fn submit_and_wait(self, ctx: &GpuContext) -> GpuResult<()> {
+    pub fn submit_and_wait(mut self, ctx: &GpuContext) -> GpuResult<()> {
+        self.edits.stage(ctx)?;
         if self.is_empty() {
             return Ok(());
         }

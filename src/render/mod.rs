@@ -13,4 +13,6 @@ pub use crate::graph::FRAMES_IN_FLIGHT;
 pub use frame_pipeline::FramePipeline;
 pub use graph_spec::GraphSpec;
 pub use observer::FrameObserver;
-pub use renderer::{DrawnInstances, OutputF32, ParamsApplied, RenderSettings, Renderer, ViewFrame, ViewId, MAX_VIEWS};
+pub use renderer::{
+    DrawnInstances, OutputF32, ParamsApplied, RenderSettings, Renderer, ViewFrame, ViewId, MAX_VIEWS, USER_DATA_IMPORT,
+};

@@ -31,6 +31,12 @@ mod world_sync;
 pub use view::{ViewFrame, ViewId};
 pub use views::MAX_VIEWS;
 
+/// The name under which a graph imports the world's user data
+/// ([`crate::scene::world::World::with_user_data`]): `Imported(Buffer(size: ...))` resource
+/// `user_data` is bound to the renderer's [`GpuScene::user_data`] (words per slot, in slot
+/// order) unless the host provides a buffer of that name.
+pub const USER_DATA_IMPORT: &str = "user_data";
+
 pub use super::drawn::DrawnInstances;
 pub use readback::OutputF32;
 
@@ -408,11 +414,31 @@ impl Renderer {
             world.record_updates(&self.ctx, cmd, frame, &self.gpu_scene)?;
             self.ctx.end_label(cmd);
         }
+        // The scene's user data is every graph's to import as `user_data`, unless the host
+        // gives a buffer of that name itself.
+        let with_user_data: Vec<Option<Imports>> = views
+            .iter()
+            .map(|fv| {
+                let data = self.gpu_scene.user_data.as_ref()?;
+                if fv.imports.get(USER_DATA_IMPORT).is_some() {
+                    return None;
+                }
+                let read = Access {
+                    stage: vk::PipelineStageFlags2::ALL_COMMANDS,
+                    access: vk::AccessFlags2::SHADER_STORAGE_READ,
+                    layout: vk::ImageLayout::UNDEFINED,
+                };
+                Some(fv.imports.clone().buffer(USER_DATA_IMPORT, data.handle(), data.size(), read, read))
+            })
+            .collect();
         let mut slots: Vec<Option<&mut View>> = self.views.iter_mut().map(Some).collect();
         let listed = order
             .iter()
             .zip(views)
-            .filter_map(|(&at, fv)| slots[at].take().map(|view| (view, fv.camera, fv.imports)))
+            .zip(&with_user_data)
+            .filter_map(|((&at, fv), merged)| {
+                slots[at].take().map(|view| (view, fv.camera, merged.as_ref().unwrap_or(fv.imports)))
+            })
             .collect();
         lockstep::record(&self.ctx, cmd, frame, listed, self.cull_together)?;
 

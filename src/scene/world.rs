@@ -168,7 +168,12 @@ pub enum Change {
     Texture(u32),
     /// The sun changed.
     Sun,
+    /// The user data of the instance at this index changed ([`World::set_user_data`]).
+    UserData(u32),
 }
+
+/// The most 32-bit words of user data an instance may carry ([`World::with_user_data`]).
+pub const MAX_USER_WORDS: u32 = 16;
 
 /// Slots of a table with generations and a free list.
 #[derive(Clone, Debug, Default)]
@@ -267,12 +272,29 @@ pub struct World {
     /// Changes in order; the first is the change that made version `journal_start + 1`.
     journal: Vec<Change>,
     journal_start: u64,
+    /// Words of user data per instance, and every instance index's words.
+    user_words: u32,
+    user_data: Vec<u32>,
 }
 
 impl World {
     /// A world holding `scene` (checked as at load), every instance live: the handle of instance
     /// `i` of the scene is `handles[i]`.
     pub fn new(scene: Scene) -> Result<(Self, Vec<InstanceHandle>), SceneError> {
+        Self::with_user_data(scene, 0)
+    }
+
+    /// As [`World::new`], every instance carrying `words` 32-bit words of user data (at most
+    /// [`MAX_USER_WORDS`]), zero until set ([`World::set_user_data`]). The GPU holds them per
+    /// slot, beside the instance records: the renderer's `Renderer::user_data` buffer, which a
+    /// graph reads as the imported buffer `user_data`.
+    pub fn with_user_data(scene: Scene, words: u32) -> Result<(Self, Vec<InstanceHandle>), SceneError> {
+        if words > MAX_USER_WORDS {
+            return Err(SceneError::invalid(
+                "the world's user data",
+                format!("{words} words an instance; at most {MAX_USER_WORDS}"),
+            ));
+        }
         super::validate::validate_contents(&scene)?;
         let n = scene.instances.len();
         let id = Id::fresh();
@@ -286,6 +308,8 @@ impl World {
             index_ranges: super::pool_ranges::PoolRanges::new(scene.indices.len() as u32),
             materials_live: vec![true; scene.materials.len()],
             free_textures: Vec::new(),
+            user_words: words,
+            user_data: vec![0; n * words as usize],
             scene,
             journal: Vec::new(),
             journal_start: 0,
@@ -477,8 +501,53 @@ impl World {
         }
         self.instances.take();
         put(&mut self.scene.instances, index, instance);
+        let words = self.user_words as usize;
+        let at = index as usize * words;
+        if self.user_data.len() < at + words {
+            self.user_data.resize(at + words, 0);
+        }
+        self.user_data[at..at + words].fill(0);
         self.record(Change::Instance(index));
         Ok(handle)
+    }
+
+    /// Words of user data each instance carries (0: none).
+    pub fn user_words(&self) -> u32 {
+        self.user_words
+    }
+
+    /// The user data of instance `handle` ([`World::user_words`] words).
+    pub fn user_data(&self, handle: InstanceHandle) -> Result<&[u32], WorldError> {
+        self.check_instance(handle)?;
+        Ok(self.user_data_at(handle.index))
+    }
+
+    /// The user data of instance index `index` (live or not; zeros past the table).
+    pub fn user_data_at(&self, index: u32) -> &[u32] {
+        let words = self.user_words as usize;
+        self.user_data.get(index as usize * words..(index as usize + 1) * words).unwrap_or(&[])
+    }
+
+    /// Sets instances' user data: `(handle, words)` each, every one checked first (live, of this
+    /// world, exactly [`World::user_words`] words), then all applied. Renderers upload only
+    /// these instances' words at their next sync.
+    pub fn set_user_data(&mut self, changes: &[(InstanceHandle, &[u32])]) -> Result<(), WorldError> {
+        for (handle, data) in changes {
+            self.check_instance(*handle)?;
+            if data.len() != self.user_words as usize {
+                let message =
+                    format!("user data of {} words; the world declares {} an instance", data.len(), self.user_words);
+                return Err(WorldError::Invalid { handle: handle.to_string(), message });
+            }
+        }
+        let words = self.user_words as usize;
+        for (handle, data) in changes {
+            let at = handle.index as usize * words;
+            self.user_data[at..at + words].copy_from_slice(data);
+            self.journal.push(Change::UserData(handle.index));
+        }
+        self.bound_journal();
+        Ok(())
     }
 
     /// Removes an instance; its handle (and every copy of it) becomes stale.

@@ -2,7 +2,7 @@
 //! group, each group in spatial order, the same order as the unculled draw list) and one entry
 //! per draw group. Uploaded once; the passes never touch the full instance records.
 
-use super::gpu_types::split_hi_lo;
+use super::gpu_types::{split_hi_lo, DrawIndexedIndirect};
 use super::scene_buffers::DrawList;
 use crate::scene::Scene;
 use bytemuck::{Pod, Zeroable};
@@ -116,6 +116,32 @@ pub struct GpuGroupBounds {
     pub pad: f32,
 }
 
+impl GpuDrawGroup {
+    /// The group that unculled draw command `command` draws.
+    pub fn of(command: &DrawIndexedIndirect) -> Self {
+        Self {
+            first_slot: command.first_instance,
+            slot_count: command.instance_count,
+            index_count: command.index_count,
+            first_index: command.first_index,
+            vertex_offset: command.vertex_offset,
+            pad: [0; 3],
+        }
+    }
+}
+
+impl GpuGroupBounds {
+    /// The local bounds of `mesh`.
+    pub fn of(mesh: &crate::scene::Mesh) -> Self {
+        Self {
+            center: mesh.bounds.center().to_array(),
+            radius: local_radius(mesh),
+            half_extent: mesh.bounds.half_extent().to_array(),
+            pad: 0.0,
+        }
+    }
+}
+
 /// The culling view of the scene.
 pub struct CullData {
     /// One record per slot.
@@ -138,14 +164,7 @@ impl CullData {
                 for slot in c.first_instance..c.first_instance + c.instance_count {
                     group_of_slot[slot as usize] = g as u32;
                 }
-                GpuDrawGroup {
-                    first_slot: c.first_instance,
-                    slot_count: c.instance_count,
-                    index_count: c.index_count,
-                    first_index: c.first_index,
-                    vertex_offset: c.vertex_offset,
-                    pad: [0; 3],
-                }
+                GpuDrawGroup::of(c)
             })
             .collect();
         let records = draws
@@ -163,13 +182,7 @@ impl CullData {
                     return GpuGroupBounds::default();
                 }
                 let inst = &scene.instances[draws.instance_ids[c.first_instance as usize] as usize];
-                let mesh = &scene.meshes[inst.mesh as usize];
-                GpuGroupBounds {
-                    center: mesh.bounds.center().to_array(),
-                    radius: local_radius(mesh),
-                    half_extent: mesh.bounds.half_extent().to_array(),
-                    pad: 0.0,
-                }
+                GpuGroupBounds::of(&scene.meshes[inst.mesh as usize])
             })
             .collect();
         Self { records, groups, bounds }

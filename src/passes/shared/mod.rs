@@ -11,6 +11,7 @@ pub mod face_cull;
 pub mod gpu_types;
 pub(crate) mod lazy_pipeline;
 pub mod scene_buffers;
+pub mod scene_growth;
 pub mod slot_layout;
 pub mod textures;
 pub(crate) mod transparent_draw;

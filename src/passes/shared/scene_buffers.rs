@@ -12,41 +12,47 @@ use std::sync::Arc;
 /// Scene buffers on the device.
 pub struct GpuScene {
     /// Shared vertex pool ([`crate::scene::Vertex`]).
-    pub vertices: Buffer,
+    pub vertices: Arc<Buffer>,
     /// Shared index pool (u32).
-    pub indices: Buffer,
+    pub indices: Arc<Buffer>,
     /// [`GpuInstance`] per scene instance, in scene order.
-    pub instances: Buffer,
+    pub instances: Arc<Buffer>,
     /// Each instance's record as the previous frame of the world had it, for motion vectors:
     /// kept by a changing world's renderer ([`GpuScene::add_previous_instances`]); `None` for a
     /// scene that never moves, whose previous transforms are its current ones
     /// ([`GpuScene::previous_instances`]).
-    pub prev_instances: Option<Buffer>,
+    pub prev_instances: Option<Arc<Buffer>>,
     /// [`GpuMaterial`] per material.
-    pub materials: Buffer,
+    pub materials: Arc<Buffer>,
     /// Instance ids grouped by draw group (face cull, mesh), each group in spatial order (Morton
     /// order of the instances' origins, equal codes in instance order).
-    pub draw_instance_ids: Buffer,
+    pub draw_instance_ids: Arc<Buffer>,
     /// One [`DrawIndexedIndirect`] per draw group (empty for a changing world's reserved groups).
-    pub draw_commands: Buffer,
+    pub draw_commands: Arc<Buffer>,
     /// The number of commands of each face-cull region (read by `vkCmdDrawIndexedIndirectCount`).
-    pub draw_count: Buffer,
+    pub draw_count: Arc<Buffer>,
     /// Where each face cull's groups are, in every command list of this scene; their total is
     /// the number of draw groups (the most commands a frame can issue).
     pub regions: DrawRegions,
     /// [`super::cull_data::GpuCullRecord`] per slot (draw-list order).
-    pub cull_records: Buffer,
+    pub cull_records: Arc<Buffer>,
     /// [`super::cull_data::GpuDrawGroup`] per draw group (empty for a changing world's reserved groups).
-    pub draw_groups: Buffer,
+    pub draw_groups: Arc<Buffer>,
     /// [`super::cull_data::GpuGroupBounds`] per draw group (empty for a changing world's reserved groups): the local bounds that
     /// a changing world's moved instances get their cull bounds from.
-    pub group_bounds: Buffer,
+    pub group_bounds: Arc<Buffer>,
     /// The scene's textures, in size-class arrays (shared with the next upload of a changing
     /// world whose textures did not change).
     pub textures: Arc<GpuTextures>,
     /// Per instance: its mesh's first index and vertex offset (`uvec2`), for passes that rebuild
     /// a triangle from its id (the visibility buffer).
-    pub instance_triangles: Buffer,
+    pub instance_triangles: Arc<Buffer>,
+    /// A changing world's user data ([`crate::scene::world::World::with_user_data`]):
+    /// [`GpuScene::user_words`] words per slot, in slot order (an empty slot's are undefined);
+    /// `None` without user data.
+    pub user_data: Option<Arc<Buffer>>,
+    /// Words of user data per slot (0: none).
+    pub user_words: u32,
     /// Number of instances.
     pub instance_count: u32,
     /// Triangles over all instances.
@@ -173,7 +179,7 @@ impl GpuScene {
     /// The instance records of the world's previous frame ([`GpuScene::prev_instances`]), or the
     /// current ones for a scene that never moves.
     pub fn previous_instances(&self) -> &Buffer {
-        self.prev_instances.as_ref().unwrap_or(&self.instances)
+        self.prev_instances.as_deref().unwrap_or(&self.instances)
     }
 
     /// Makes [`GpuScene::prev_instances`], a buffer the size of [`GpuScene::instances`] with
@@ -183,10 +189,33 @@ impl GpuScene {
         let desc = crate::gpu::BufferDesc {
             name: "previous instances",
             size: self.instances.size().max(std::mem::size_of::<GpuInstance>() as u64),
-            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            // Carried into a larger successor when a changing world grows.
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
             location: crate::gpu::MemoryLocation::GpuOnly,
         };
-        self.prev_instances = Some(Buffer::new(ctx, &desc)?);
+        self.prev_instances = Some(Arc::new(Buffer::new(ctx, &desc)?));
+        Ok(())
+    }
+
+    /// Adds [`GpuScene::user_data`]: `words` words per slot, `data` in slot order, with room
+    /// to grow; queued on `batch`.
+    pub fn add_user_data(
+        &mut self,
+        ctx: &GpuContext,
+        batch: &mut UploadBatch,
+        words: u32,
+        data: &[u32],
+    ) -> crate::Result<()> {
+        if words == 0 {
+            return Ok(());
+        }
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let size = super::scene_growth::with_room(bytes.len() as u64);
+        self.user_data = Some(Arc::new(batch.buffer_with_room(ctx, "user data", usage, bytes, size)?));
+        self.user_words = words;
         Ok(())
     }
 
@@ -215,6 +244,29 @@ impl GpuScene {
         batch: &mut UploadBatch,
         textures: Option<Arc<GpuTextures>>,
     ) -> crate::Result<Self> {
+        Self::upload_inner(ctx, scene, draws, batch, textures, false)
+    }
+
+    /// As [`GpuScene::upload_reusing`], every buffer with room to grow
+    /// ([`super::scene_growth`]): a changing world's scene.
+    pub fn upload_with_room(
+        ctx: &GpuContext,
+        scene: &Scene,
+        draws: DrawList,
+        batch: &mut UploadBatch,
+        textures: Option<Arc<GpuTextures>>,
+    ) -> crate::Result<Self> {
+        Self::upload_inner(ctx, scene, draws, batch, textures, true)
+    }
+
+    fn upload_inner(
+        ctx: &GpuContext,
+        scene: &Scene,
+        draws: DrawList,
+        batch: &mut UploadBatch,
+        textures: Option<Arc<GpuTextures>>,
+        room: bool,
+    ) -> crate::Result<Self> {
         profiling::scope!("cullgraph::upload_scene");
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let instances: Vec<GpuInstance> = scene.instances.iter().map(GpuInstance::new).collect();
@@ -226,70 +278,52 @@ impl GpuScene {
             scene.materials.iter().map(|m| GpuMaterial::new(m, textures.placements())).collect();
         let cull = super::cull_data::CullData::new(scene, &draws);
         let count = draws.regions.len;
+        // Every scene buffer can be carried into a larger successor (a changing world's growth).
+        let mut make = |name: &str, usage: vk::BufferUsageFlags, data: &[u8]| -> crate::Result<Arc<Buffer>> {
+            let size = if room { super::scene_growth::with_room(data.len() as u64) } else { 0 };
+            let usage = usage | storage | vk::BufferUsageFlags::TRANSFER_SRC;
+            Ok(Arc::new(batch.buffer_with_room(ctx, name, usage, data, size)?))
+        };
+        let none = vk::BufferUsageFlags::empty();
         Ok(Self {
-            vertices: batch.buffer(
-                ctx,
-                "vertices",
-                vk::BufferUsageFlags::VERTEX_BUFFER | storage,
-                bytemuck::cast_slice(&scene.vertices),
-            )?,
-            indices: batch.buffer(
-                ctx,
-                "indices",
-                vk::BufferUsageFlags::INDEX_BUFFER | storage,
-                bytemuck::cast_slice(&scene.indices),
-            )?,
+            vertices: make("vertices", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&scene.vertices))?,
+            indices: make("indices", vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&scene.indices))?,
             // A changing world copies them to its previous instances (motion vectors).
-            instances: batch.buffer(
-                ctx,
-                "instances",
-                storage | vk::BufferUsageFlags::TRANSFER_SRC,
-                bytemuck::cast_slice(&instances),
-            )?,
+            instances: make("instances", none, bytemuck::cast_slice(&instances))?,
             prev_instances: None,
-            materials: batch.buffer(ctx, "materials", storage, bytemuck::cast_slice(&materials))?,
-            draw_instance_ids: batch.buffer(
-                ctx,
-                "draw instance ids",
-                storage,
-                bytemuck::cast_slice(&draws.instance_ids),
-            )?,
-            draw_commands: batch.buffer(
-                ctx,
+            materials: make("materials", none, bytemuck::cast_slice(&materials))?,
+            draw_instance_ids: make("draw instance ids", none, bytemuck::cast_slice(&draws.instance_ids))?,
+            draw_commands: make(
                 "draw commands",
-                vk::BufferUsageFlags::INDIRECT_BUFFER | storage,
+                vk::BufferUsageFlags::INDIRECT_BUFFER,
                 bytemuck::cast_slice(&draws.commands),
             )?,
-            draw_count: batch.buffer(
-                ctx,
-                "draw count",
-                vk::BufferUsageFlags::INDIRECT_BUFFER | storage,
-                bytemuck::cast_slice(&count),
-            )?,
+            draw_count: make("draw count", vk::BufferUsageFlags::INDIRECT_BUFFER, bytemuck::cast_slice(&count))?,
             // Readable back, for checks of the bounds a changing world's updates derive.
-            cull_records: batch.buffer(
-                ctx,
-                "cull records",
-                storage | vk::BufferUsageFlags::TRANSFER_SRC,
-                bytemuck::cast_slice(&cull.records),
-            )?,
-            draw_groups: batch.buffer(ctx, "draw groups", storage, bytemuck::cast_slice(&cull.groups))?,
-            group_bounds: batch.buffer(ctx, "group bounds", storage, bytemuck::cast_slice(&cull.bounds))?,
-            instance_triangles: batch.buffer(
-                ctx,
+            cull_records: make("cull records", none, bytemuck::cast_slice(&cull.records))?,
+            draw_groups: make("draw groups", none, bytemuck::cast_slice(&cull.groups))?,
+            group_bounds: make("group bounds", none, bytemuck::cast_slice(&cull.bounds))?,
+            instance_triangles: make(
                 "instance triangle bases",
-                storage,
+                none,
                 bytemuck::cast_slice(&instance_triangle_bases(scene)),
             )?,
             regions: draws.regions,
             textures,
+            user_data: None,
+            user_words: 0,
             instance_count: scene.instances.len() as u32,
             triangles: drawn_triangles(scene),
-            max_mesh_triangles: scene.meshes.iter().map(|m| m.index_count / 3).max().unwrap_or(0),
+            max_mesh_triangles: max_mesh_triangles(scene),
             emission_or_occlusion: scene.materials.iter().any(|m| m.has_emission_or_occlusion()),
             alpha_masks: scene.materials.iter().any(|m| matches!(m.alpha_mode, crate::scene::AlphaMode::Mask { .. })),
         })
     }
+}
+
+/// Triangles of the largest mesh of `scene`.
+pub(crate) fn max_mesh_triangles(scene: &Scene) -> u32 {
+    scene.meshes.iter().map(|m| m.index_count / 3).max().unwrap_or(0)
 }
 
 /// Triangles over the instances of `scene` (a changing world's empty slots draw none).
@@ -303,7 +337,7 @@ pub(crate) fn drawn_triangles(scene: &Scene) -> u64 {
 }
 
 /// Per instance: `[first_index, vertex_offset]` of its mesh in the shared pools.
-fn instance_triangle_bases(scene: &Scene) -> Vec<[u32; 2]> {
+pub(crate) fn instance_triangle_bases(scene: &Scene) -> Vec<[u32; 2]> {
     scene
         .instances
         .iter()

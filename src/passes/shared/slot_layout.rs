@@ -266,26 +266,30 @@ impl SlotLayout {
         Scene { instances, ..scene.clone() }
     }
 
+    /// Group `g`'s unculled draw command: every slot of it (none for a group in reserve).
+    pub fn command(&self, g: usize, scene: &Scene) -> DrawIndexedIndirect {
+        let group = &self.groups[g];
+        if group.spare() {
+            return DrawIndexedIndirect::default();
+        }
+        let mesh = &scene.meshes[group.key.1 as usize];
+        DrawIndexedIndirect {
+            index_count: mesh.index_count,
+            instance_count: group.capacity,
+            first_index: mesh.first_index,
+            vertex_offset: mesh.vertex_offset as i32,
+            first_instance: group.first_slot,
+        }
+    }
+
     /// The unculled draw list: every slot of every group (empty ones draw nothing), slot `s`
     /// drawing instance record `s`.
     pub fn draw_list(&self, scene: &Scene) -> DrawList {
         let mut region_len = [0u32; FACE_CULL_REGIONS];
-        let commands = self
-            .groups
-            .iter()
+        let commands = (0..self.groups.len())
             .map(|g| {
-                region_len[g.key.0] += 1;
-                if g.spare() {
-                    return DrawIndexedIndirect::default();
-                }
-                let mesh = &scene.meshes[g.key.1 as usize];
-                DrawIndexedIndirect {
-                    index_count: mesh.index_count,
-                    instance_count: g.capacity,
-                    first_index: mesh.first_index,
-                    vertex_offset: mesh.vertex_offset as i32,
-                    first_instance: g.first_slot,
-                }
+                region_len[self.groups[g].key.0] += 1;
+                self.command(g, scene)
             })
             .collect();
         DrawList { instance_ids: (0..self.slots()).collect(), commands, regions: DrawRegions::from_lengths(region_len) }

@@ -20,9 +20,10 @@
 //! thins foliage and fences until they vanish in the distance.
 
 use crate::gpu::texture_array::TextureArray;
-use crate::gpu::{Bind, GpuContext, Sampler, UploadBatch};
+use crate::gpu::{Bind, Edits, GpuContext, Sampler, UploadBatch};
 use crate::scene::{Scene, Texture, TextureSlot};
 use ash::vk;
+use std::sync::Arc;
 
 /// Size classes: sides 16, 32, ..., 2048.
 pub const TEXTURE_CLASSES: usize = 8;
@@ -50,17 +51,27 @@ pub fn class_side(class: usize) -> u32 {
 
 /// See the module documentation.
 pub struct GpuTextures {
-    /// One array per class (a 1x1 array of one layer for a class no texture uses).
-    arrays: Vec<TextureArray>,
-    /// Keeps the sampler the bindings name alive.
-    _sampler: Sampler,
+    /// One array per class (a 1x1 array of one layer for a class no texture uses), shared
+    /// with the textures that follow these in a changing world where they did not change.
+    arrays: Vec<Arc<TextureArray>>,
+    /// The sampler the bindings name.
+    sampler: Arc<Sampler>,
     /// The arrays' bindings, made once: every geometry pass pushes them per draw list.
     bindings: Vec<Bind>,
     /// Per scene texture: `class << 16 | layer`.
     placement: Vec<u32>,
     /// Scene textures that did not fit their class's array and show the placeholder.
     placeholder_textures: Vec<u32>,
+    /// Per scene texture, how its mips were made: (sRGB, mask cutoff).
+    made: Vec<MipsMade>,
+    /// Per class, the layers given out so far (the next new one), and those given back.
+    layers_used: Vec<u32>,
+    free_layers: Vec<Vec<u32>>,
 }
+
+/// How a texture's mips were made: averaged as sRGB colour or not, with the coverage of which
+/// mask cutoff kept (its bits; `None`: no masked material takes it as base colour).
+type MipsMade = (bool, Option<u32>);
 
 /// Which layer of which class every texture gets, when a class holds at most `capacity` layers.
 #[derive(Debug, PartialEq)]
@@ -122,11 +133,13 @@ impl GpuTextures {
         }
         let placeholder = Texture::placeholder("textures beyond a full size class");
         let mut arrays = Vec::with_capacity(TEXTURE_CLASSES);
+        let mut layers_used = Vec::with_capacity(TEXTURE_CLASSES);
         for (class, ids) in placed.members.iter().enumerate() {
             if ids.is_empty() {
                 let array = TextureArray::new(ctx, &format!("textures {class} (unused)"), 1, 1)?;
                 queue(ctx, batch, &array, &[vec![255u8; 4]])?;
-                arrays.push(array);
+                arrays.push(Arc::new(array));
+                layers_used.push(0);
                 continue;
             }
             let side = class_side(class);
@@ -139,39 +152,22 @@ impl GpuTextures {
             }
             let array = TextureArray::new(ctx, &format!("textures {side}x{side}"), side, layers.len() as u32)?;
             queue(ctx, batch, &array, &layers)?;
-            arrays.push(array);
+            arrays.push(Arc::new(array));
+            layers_used.push(layers.len() as u32);
         }
-        // Anisotropic filtering keeps grazing surfaces sharp where the GPU filters in hardware;
-        // a CPU rasterizer (lavapipe) takes dozens of times longer per texel with it, so there
-        // textures are filtered trilinearly.
-        let anisotropic = ctx.caps().kind != vk::PhysicalDeviceType::CPU;
-        let sampler = Sampler::new(
-            ctx,
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::LINEAR)
-                .min_filter(vk::Filter::LINEAR)
-                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
-                .address_mode_u(vk::SamplerAddressMode::REPEAT)
-                .address_mode_v(vk::SamplerAddressMode::REPEAT)
-                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .anisotropy_enable(anisotropic)
-                .max_anisotropy(ctx.caps().limits.max_sampler_anisotropy.min(8.0))
-                .max_lod(vk::LOD_CLAMP_NONE),
-        )?;
-        let layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let bindings = arrays
-            .iter()
-            .enumerate()
-            .flat_map(|(c, a)| {
-                let at = TEXTURE_BINDING + 2 * c as u32;
-                [
-                    Bind::Sampled(at, a.srgb_view(), sampler.handle(), layout),
-                    Bind::Sampled(at + 1, a.linear_view(), sampler.handle(), layout),
-                ]
-            })
-            .collect();
+        let sampler = Arc::new(texture_sampler(ctx)?);
         let placeholder_textures = placed.overflow.iter().map(|&i| i as u32).collect();
-        Ok(Self { arrays, _sampler: sampler, bindings, placement: placed.placement, placeholder_textures })
+        let made = srgb.iter().zip(&cutoffs).map(|(&s, c)| (s, c.map(f32::to_bits))).collect();
+        Ok(Self {
+            bindings: bindings(&arrays, &sampler),
+            arrays,
+            sampler,
+            placement: placed.placement,
+            placeholder_textures,
+            made,
+            layers_used,
+            free_layers: vec![Vec::new(); TEXTURE_CLASSES],
+        })
     }
 
     /// Scene textures that did not fit their size class's array (more than the device's
@@ -197,8 +193,137 @@ impl GpuTextures {
 
     /// Device bytes of the texture arrays.
     pub fn bytes(&self) -> u64 {
-        self.arrays.iter().map(TextureArray::bytes).sum()
+        self.arrays.iter().map(|a| a.bytes()).sum()
     }
+
+    /// The textures of a changing world after its textures `changed` (registered or removed)
+    /// or the materials that use them did: only the textures that changed, and those whose
+    /// mips a material now wants made otherwise, are made and queued on `edits`, each into a
+    /// layer of its class (its own when it stays in its class, else a free one); a class out
+    /// of layers grows, its layers carried over on the GPU. `None` when a class would need
+    /// more layers than the device allows (the textures are then laid out anew, with
+    /// placeholders, by [`GpuTextures::upload`]).
+    pub fn updated(
+        &self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        changed: &[u32],
+        edits: &mut Edits,
+    ) -> crate::Result<Option<Self>> {
+        if !self.placeholder_textures.is_empty() {
+            return Ok(None);
+        }
+        let srgb = srgb_uses(scene);
+        let cutoffs = mask_cutoffs(scene);
+        let wanted = |t: usize| (srgb[t], cutoffs[t].map(f32::to_bits));
+        let count = scene.textures.len();
+        let mut redo: Vec<usize> = changed.iter().map(|&t| t as usize).filter(|&t| t < count).collect();
+        redo.extend((0..count).filter(|&t| self.made.get(t) != Some(&wanted(t))));
+        redo.sort_unstable();
+        redo.dedup();
+        let capacity = (ctx.caps().limits.max_image_array_layers as usize).clamp(1, 1 << 16) as u32;
+        let mut next = Self {
+            arrays: self.arrays.clone(),
+            sampler: self.sampler.clone(),
+            bindings: self.bindings.clone(),
+            placement: self.placement.clone(),
+            placeholder_textures: Vec::new(),
+            made: self.made.clone(),
+            layers_used: self.layers_used.clone(),
+            free_layers: self.free_layers.clone(),
+        };
+        next.placement.resize(count, NO_TEXTURE);
+        next.made.resize(count, (false, None));
+        for &t in &redo {
+            let texture = &scene.textures[t];
+            let class = class_of(texture.width, texture.height);
+            let old = next.placement[t];
+            if old == NO_TEXTURE || (old >> 16) as usize != class {
+                if old != NO_TEXTURE {
+                    next.free_layers[(old >> 16) as usize].push(old & 0xFFFF);
+                }
+                let layer = match next.free_layers[class].pop() {
+                    Some(layer) => layer,
+                    None => {
+                        next.layers_used[class] += 1;
+                        next.layers_used[class] - 1
+                    }
+                };
+                if layer >= capacity {
+                    return Ok(None);
+                }
+                next.placement[t] = (class as u32) << 16 | layer;
+            }
+            next.made[t] = wanted(t);
+        }
+        let mut grew = false;
+        for class in 0..TEXTURE_CLASSES {
+            let (side, needed) = (class_side(class), next.layers_used[class]);
+            let old = &next.arrays[class];
+            // A class no texture used until now holds a 1x1 stand-in, nothing to carry.
+            let held = if old.size() == side { old.layers() } else { 0 };
+            if needed <= held {
+                continue;
+            }
+            let layers = (needed + needed / 2 + 4).min(capacity);
+            let array = TextureArray::new(ctx, &format!("textures {side}x{side}"), side, layers)?;
+            edits.carry_layers((held > 0).then(|| old.clone()), &array);
+            next.arrays[class] = Arc::new(array);
+            grew = true;
+        }
+        if grew {
+            next.bindings = bindings(&next.arrays, &next.sampler);
+        }
+        for &t in &redo {
+            let (class, layer) = ((next.placement[t] >> 16) as usize, next.placement[t] & 0xFFFF);
+            let side = class_side(class);
+            let chain = mip_chain(&resample(&scene.textures[t], side), side, srgb[t], cutoffs[t]);
+            edits.write_layer(&next.arrays[class], layer, &chain);
+        }
+        Ok(Some(next))
+    }
+
+    /// Whether `other` places every texture where these do (materials then need no rewrite).
+    pub fn same_placements(&self, other: &GpuTextures) -> bool {
+        self.placement == other.placement
+    }
+}
+
+/// The sampler of every texture array: trilinear, repeating.
+fn texture_sampler(ctx: &GpuContext) -> crate::Result<Sampler> {
+    // Anisotropic filtering keeps grazing surfaces sharp where the GPU filters in hardware;
+    // a CPU rasterizer (lavapipe) takes dozens of times longer per texel with it, so there
+    // textures are filtered trilinearly.
+    let anisotropic = ctx.caps().kind != vk::PhysicalDeviceType::CPU;
+    Ok(Sampler::new(
+        ctx,
+        &vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .address_mode_u(vk::SamplerAddressMode::REPEAT)
+            .address_mode_v(vk::SamplerAddressMode::REPEAT)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .anisotropy_enable(anisotropic)
+            .max_anisotropy(ctx.caps().limits.max_sampler_anisotropy.min(8.0))
+            .max_lod(vk::LOD_CLAMP_NONE),
+    )?)
+}
+
+/// The bindings of `shaders/common/textures.glsl`: per class, its sRGB then its linear view.
+fn bindings(arrays: &[Arc<TextureArray>], sampler: &Sampler) -> Vec<Bind> {
+    let layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    arrays
+        .iter()
+        .enumerate()
+        .flat_map(|(c, a)| {
+            let at = TEXTURE_BINDING + 2 * c as u32;
+            [
+                Bind::Sampled(at, a.srgb_view(), sampler.handle(), layout),
+                Bind::Sampled(at + 1, a.linear_view(), sampler.handle(), layout),
+            ]
+        })
+        .collect()
 }
 
 /// Per scene texture, whether a material samples it as sRGB colour.

@@ -25,14 +25,17 @@
 //! previous = current: its instances show no motion at that frame.
 //!
 //! A group without a free slot, or an instance of a group the layout lacks, grows the layout
-//! at its end ([`SlotLayout::grow`]); a registered mesh, material or texture, or more lights
-//! than the light buffers hold, also makes the scene's buffers anew (the textures only when one
-//! was registered). Every slot and group keeps its
-//! index, so the culling history stays valid: it is kept, and when the slots or groups outgrow
-//! what the graph was compiled for (both grow by half again), the recompiled graph inherits it
-//! ([`crate::graph::GraphRuntime::inherit_history`]). Only a face-cull region out of reserved
-//! groups, or a journal that no longer reaches back to the last sync, lays the world out anew
-//! in spatial order, with the history cleared.
+//! at its end ([`SlotLayout::grow`]). That, a registered mesh, material or texture, or more
+//! lights than the light buffers hold, is applied in place
+//! ([`crate::passes::shared::scene_growth`]): only the new slots, groups, meshes, materials
+//! and textures are written, and a buffer that no longer holds what the world needs is
+//! carried into a larger one on the GPU. Every slot and group keeps its index, so the culling
+//! history stays valid: it is kept, and when the slots or groups outgrow what the graph was
+//! compiled for (both grow by half again), the recompiled graph inherits it
+//! ([`crate::graph::GraphRuntime::inherit_history`]). The scene is uploaded again from the
+//! host, laid out as before, only when a texture size class needs more layers than the device
+//! allows. A face-cull region out of reserved groups, or a journal that no longer reaches back
+//! to the last sync, lays the world out anew in spatial order, with the history cleared.
 
 use super::graphs::build_runtime;
 use super::Renderer;
@@ -92,10 +95,17 @@ pub(super) struct WorldMirror {
     moves: Vec<MoveUpdate>,
     whole: Vec<SlotUpdate>,
     update_of_slot: Vec<u32>,
-    /// Per frame in flight, the host-visible buffers its moves and whole records are read from.
-    segments: Vec<[Option<Buffer>; 2]>,
+    /// The user data waiting for the next recorded frame: per entry the slot, then its
+    /// [`GpuScene::user_words`] words; per slot where its entry starts (`u32::MAX`: none).
+    user: Vec<u32>,
+    user_of_slot: Vec<u32>,
+    /// Per frame in flight, the host-visible buffers its moves, whole records and user data
+    /// are read from.
+    segments: Vec<[Option<Buffer>; 3]>,
     /// The scatter of moves and of whole records.
     scatter: [Pipeline; 2],
+    /// The scatter of user data (`None`: the world has none).
+    scatter_user: Option<Pipeline>,
     /// What the syncs since the last recorded frame did, for that frame's figures.
     pending: Option<UpdateStats>,
     /// Recent frames' figures, by frame.
@@ -107,6 +117,8 @@ pub(super) struct WorldMirror {
     moved_last: bool,
     /// Whether the scene's previous records are still to be filled (a new scene).
     refresh_previous: bool,
+    /// Words of user data per instance ([`World::user_words`]).
+    user_words: u32,
 }
 
 impl WorldMirror {
@@ -179,8 +191,31 @@ impl WorldMirror {
         self.whole.push(SlotUpdate { slot, group, instance });
     }
 
+    /// Queues `data` as `slot`'s user data (replacing any queued before).
+    fn queue_user_data(&mut self, slot: u32, data: &[u32]) {
+        if data.is_empty() {
+            return;
+        }
+        if self.user_of_slot.len() <= slot as usize {
+            self.user_of_slot.resize(slot as usize + 1, u32::MAX);
+        }
+        match self.user_of_slot[slot as usize] {
+            u32::MAX => {
+                self.user_of_slot[slot as usize] = self.user.len() as u32;
+                self.user.push(slot);
+                self.user.extend_from_slice(data);
+            }
+            at => self.user[at as usize + 1..at as usize + 1 + data.len()].copy_from_slice(data),
+        }
+    }
+
     /// Forgets the queued updates (recorded, or for buffers being replaced).
     fn clear_updates(&mut self) {
+        let words = self.user_words() as usize;
+        for entry in self.user.chunks_exact(words + 1) {
+            self.user_of_slot[entry[0] as usize] = u32::MAX;
+        }
+        self.user.clear();
         for slot in self.moves.iter().map(|u| u.slot).chain(self.whole.iter().map(|u| u.slot)) {
             self.update_of_slot[slot as usize] = u32::MAX;
         }
@@ -190,7 +225,14 @@ impl WorldMirror {
 
     /// Bytes queued.
     fn queued_bytes(&self) -> u64 {
-        (std::mem::size_of_val(self.moves.as_slice()) + std::mem::size_of_val(self.whole.as_slice())) as u64
+        (std::mem::size_of_val(self.moves.as_slice())
+            + std::mem::size_of_val(self.whole.as_slice())
+            + std::mem::size_of_val(self.user.as_slice())) as u64
+    }
+
+    /// Words of user data per instance.
+    fn user_words(&self) -> u32 {
+        self.user_words
     }
 
     /// Records frame `frame`'s scatter of the queued updates into `cmd`, timed. The buffer of
@@ -209,7 +251,7 @@ impl WorldMirror {
         timer.reset(cmd);
         *timed = Some(frame);
         let scatters = !self.moves.is_empty() || !self.whole.is_empty();
-        if !scatters && !self.moved_last && !self.refresh_previous {
+        if !scatters && !self.moved_last && !self.refresh_previous && self.user.is_empty() {
             return Ok(());
         }
         let device = ctx.device();
@@ -233,7 +275,7 @@ impl WorldMirror {
             unsafe { device.cmd_copy_buffer(cmd, scene.instances.handle(), previous.handle(), &[region]) };
             cmd_barriers(device, cmd, &[memory_barrier(transfer, all)], &[]);
         }
-        if !scatters {
+        if !scatters && self.user.is_empty() {
             timer.end(cmd);
             return Ok(());
         }
@@ -244,6 +286,16 @@ impl WorldMirror {
             layout: ash::vk::ImageLayout::UNDEFINED,
         };
         cmd_barriers(device, cmd, &[memory_barrier(all, compute_rw)], &[]);
+        if let (Some(pipeline), Some(user_data), false) = (&self.scatter_user, &scene.user_data, self.user.is_empty()) {
+            let bytes: &[u8] = bytemuck::cast_slice(&self.user);
+            let segment = fill_segment(ctx, &mut self.segments[k][2], &format!("user data updates {k}"), bytes)?;
+            let count = self.user.len() as u32 / (self.user_words + 1);
+            pipeline.bind(cmd);
+            pipeline.push_bindings(cmd, &[Bind::Buffer(0, segment.handle()), Bind::Buffer(1, user_data.handle())]);
+            pipeline.push_constants(cmd, &[count, self.user_words]);
+            // SAFETY: cmd recording with the user data scatter bound.
+            unsafe { device.cmd_dispatch(cmd, count.div_ceil(64), 1, 1) };
+        }
         // Whole records first: a move queued for the same slot was folded into its record.
         let lists: [(&[u8], usize); 2] = [
             (bytemuck::cast_slice(&self.whole), self.whole.len()),
@@ -253,19 +305,7 @@ impl WorldMirror {
             if count == 0 {
                 continue;
             }
-            let segment = &mut self.segments[k][list];
-            let current = segment.as_ref().map_or(0, |b| b.size());
-            if current < bytes.len() as u64 {
-                let desc = BufferDesc {
-                    name: &format!("world updates {k}.{list}"),
-                    size: (bytes.len() as u64).max(current * 2).max(64 << 10),
-                    usage: ash::vk::BufferUsageFlags::STORAGE_BUFFER,
-                    location: MemoryLocation::CpuToGpu,
-                };
-                *segment = Some(Buffer::new(ctx, &desc)?);
-            }
-            let segment = segment.as_mut().expect("sized above");
-            segment.write_bytes(0, bytes)?;
+            let segment = fill_segment(ctx, &mut self.segments[k][list], &format!("world updates {k}.{list}"), bytes)?;
             let pipeline = &self.scatter[list];
             pipeline.bind(cmd);
             pipeline.push_bindings(
@@ -319,6 +359,37 @@ impl WorldMirror {
     fn note(&mut self, stats: &UpdateStats) {
         self.pending.get_or_insert_with(Default::default).add(stats);
     }
+}
+
+/// `segment` holding `bytes` (made, or made larger, where it does not hold them).
+fn fill_segment<'a>(ctx: &GpuContext, segment: &'a mut Option<Buffer>, name: &str, bytes: &[u8]) -> Result<&'a Buffer> {
+    let current = segment.as_ref().map_or(0, |b| b.size());
+    if current < bytes.len() as u64 {
+        let desc = BufferDesc {
+            name,
+            size: (bytes.len() as u64).max(current * 2).max(64 << 10),
+            usage: ash::vk::BufferUsageFlags::STORAGE_BUFFER,
+            location: MemoryLocation::CpuToGpu,
+        };
+        *segment = Some(Buffer::new(ctx, &desc)?);
+    }
+    let segment = segment.as_mut().expect("sized above");
+    segment.write_bytes(0, bytes)?;
+    Ok(segment)
+}
+
+/// The user data of `world` in the slot order of `layout` (zeros for empty slots).
+fn slot_user_data(world: &World, layout: &SlotLayout) -> Vec<u32> {
+    let words = world.user_words() as usize;
+    let mut data = vec![0u32; layout.slots() as usize * words];
+    if words > 0 {
+        for (slot, out) in data.chunks_exact_mut(words).enumerate() {
+            if let Some(i) = layout.instance_in(slot as u32) {
+                out.copy_from_slice(world.user_data_at(i));
+            }
+        }
+    }
+    data
 }
 
 /// `n` with room to grow by half again.
@@ -395,8 +466,9 @@ impl Renderer {
         let compiled = with_room_to_grow(&spec.kinds, &counted?, &settings);
         let runtime = build_runtime(ctx, shaders, &compiled, spec)?;
         let mut uploads = UploadBatch::default();
-        let mut gpu_scene = GpuScene::upload_with(ctx, &scene, layout.draw_list(&scene), &mut uploads)?;
+        let mut gpu_scene = GpuScene::upload_with_room(ctx, &scene, layout.draw_list(&scene), &mut uploads, None)?;
         gpu_scene.add_previous_instances(ctx)?;
+        gpu_scene.add_user_data(ctx, &mut uploads, world.user_words(), &slot_user_data(world, &layout))?;
         let gpu_scene = Arc::new(gpu_scene);
         let light_capacity = with_room(scene.lights.len() as u64) as usize;
         let mut renderer =
@@ -409,7 +481,9 @@ impl Renderer {
             moves: Vec::new(),
             whole: Vec::new(),
             update_of_slot: Vec::new(),
-            segments: (0..FRAMES_IN_FLIGHT).map(|_| [None, None]).collect(),
+            user: Vec::new(),
+            user_of_slot: Vec::new(),
+            segments: (0..FRAMES_IN_FLIGHT).map(|_| [None, None, None]).collect(),
             scatter: [
                 Pipeline::compute(
                     ctx,
@@ -418,6 +492,14 @@ impl Renderer {
                 )?,
                 Pipeline::compute(ctx, "world scatter", &shaders.compile("world/scatter.comp", &[])?)?,
             ],
+            scatter_user: match world.user_words() {
+                0 => None,
+                _ => Some(Pipeline::compute(
+                    ctx,
+                    "world scatter (user data)",
+                    &shaders.compile("world/scatter_user_data.comp", &[])?,
+                )?),
+            },
             pending: None,
             recent: Default::default(),
             timers: (0..FRAMES_IN_FLIGHT)
@@ -425,6 +507,7 @@ impl Renderer {
                 .collect::<std::result::Result<_, _>>()?,
             moved_last: false,
             refresh_previous: true,
+            user_words: world.user_words(),
         });
         Ok(renderer)
     }
@@ -499,46 +582,41 @@ impl Renderer {
         }
         // Moves take the cheap path below; anything else about an instance the general one.
         let mut instances = Vec::new();
-        let mut materials = Vec::new();
-        // Meshes, materials or lights beyond the light buffers: the scene's buffers are made
-        // anew (the slots stay).
-        let mut reupload = false;
-        let mut textures_changed = false;
+        let mut registered = Registered::default();
         let mut lights = false;
         let mut moves = 0usize;
+        let mut user_changed = Vec::new();
         for change in changes {
             match *change {
                 Change::Instance(i) => instances.push(i),
                 Change::Transform(_) => moves += 1,
                 Change::Light(_) => lights = true,
                 Change::Sun => self.scene.sun = world.scene().sun,
-                Change::Mesh(_) => reupload = true,
-                Change::Texture(_) => {
-                    reupload = true;
-                    textures_changed = true;
-                }
-                Change::Material(m) => {
-                    reupload = true;
-                    materials.push(m);
-                }
+                Change::Mesh(m) => registered.meshes.push(m),
+                Change::Texture(t) => registered.textures.push(t),
+                Change::Material(m) => registered.materials.push(m),
+                Change::UserData(i) => user_changed.push(i),
             }
         }
+        registered.dedup();
+        let textures_changed = !registered.textures.is_empty();
+        let materials = &registered.materials;
         if !materials.is_empty() {
             // A material's sidedness decides its instances' draw groups: they are re-placed
             // where it changed (a rare event, so a pass over the instances is fine).
-            materials.sort_unstable();
             instances.extend((0..world.instance_slots() as u32).filter(|&i| {
                 world.is_live(i) && materials.binary_search(&world.scene().instances[i as usize].material).is_ok()
             }));
         }
         if lights {
             let live = live_lights(world);
-            reupload |= live.len() > self.light_capacity;
+            registered.lights_outgrown = live.len() > self.light_capacity;
             self.scene.lights = live;
         }
         instances.sort_unstable();
         instances.dedup();
         mirror.layout.release_quarantine(self.frame_index);
+        let slots_before = mirror.layout.slots();
         // Slots first: a region without reserve lays the world out anew, which replaces the
         // layout whole (so a half-updated one does not matter), before anything is written.
         let layout = &mut mirror.layout;
@@ -578,11 +656,16 @@ impl Renderer {
             }
             mirror.handles[i as usize] = world.handle_at(i);
         }
-        if grew || reupload {
-            return self.rebuild(shaders, world, start, Layout::Kept, textures_changed);
-        }
-        moved_in_place.sort_unstable();
         let queued_before = mirror.queued_bytes();
+        let mut edited_bytes = 0;
+        if grew || !registered.is_empty() {
+            match self.grow_in_place(shaders, world, &registered, slots_before)? {
+                Some(bytes) => edited_bytes = bytes,
+                None => return self.rebuild(shaders, world, start, Layout::Kept, textures_changed),
+            }
+        }
+        let mirror = self.world.as_mut().expect("a world renderer");
+        moved_in_place.sort_unstable();
         for &slot in &touched {
             let contents = mirror.layout.slot_contents(slot, world.scene());
             let before = &self.scene.instances[slot as usize];
@@ -597,6 +680,10 @@ impl Renderer {
             } else {
                 let group = mirror.layout.group_of_slot(slot) as u32;
                 mirror.queue_whole(slot, group, record);
+                // An instance new to its slot brings its user data along.
+                if let Some(i) = mirror.layout.instance_in(slot) {
+                    mirror.queue_user_data(slot, world.user_data_at(i));
+                }
             }
             self.scene.instances[slot as usize] = contents;
         }
@@ -616,10 +703,15 @@ impl Renderer {
                 mirror.queue_move(slot, rows, translation_lo);
             }
         }
+        for &i in &user_changed {
+            if let Some(slot) = mirror.layout.slot_of(i) {
+                mirror.queue_user_data(slot, world.user_data_at(i));
+            }
+        }
         mirror.version = world.version();
         let stats = UpdateStats {
-            instances_changed: (instances.len() + moves) as u64,
-            bytes_uploaded: mirror.queued_bytes() - queued_before,
+            instances_changed: (instances.len() + moves + user_changed.len()) as u64,
+            bytes_uploaded: mirror.queued_bytes() - queued_before + edited_bytes,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
             gpu_ms: 0.0,
             relayout: false,
@@ -652,26 +744,8 @@ impl Renderer {
         scene.lights = live_lights(world);
         let lights_outgrown = scene.lights.len() > self.light_capacity;
         // Every view's graph first, so that an error leaves all of them as they were.
-        let mut layout = layout;
-        let mut recompiled = Vec::new();
-        for view in &self.views {
-            let kinds = &view.graphs.spec.kinds;
-            let (counted, counted_scene, counted_layout) = quantities(kinds, scene, layout);
-            (scene, layout) = (counted_scene, counted_layout);
-            let counted = counted.map_err(|e| view.error(e))?;
-            if lights_outgrown || outgrows(kinds, &counted, &view.graphs.compiled) {
-                let needed = with_room_to_grow(kinds, &counted, &view.settings);
-                let mut runtime =
-                    build_runtime(&self.ctx, shaders, &needed, &view.graphs.spec).map_err(|e| view.error(e))?;
-                if how == Layout::Kept {
-                    // Slots and groups kept their indices: last frame's visibility still holds.
-                    runtime.inherit_history(&view.graphs.runtime);
-                }
-                recompiled.push(Some((runtime, needed)));
-            } else {
-                recompiled.push(None);
-            }
-        }
+        let (recompiled, scene, layout) = self.recompile_views(shaders, scene, layout, how, lights_outgrown);
+        let recompiled = recompiled?;
         let mut uploads = UploadBatch::default();
         // Textures are the slowest part of an upload (resampling and mips on the CPU): they are
         // made again only when the world registered one, or when their upload has not been
@@ -679,29 +753,13 @@ impl Renderer {
         let reuse = !textures_changed && self.uploads.pending.is_none();
         let textures = reuse.then(|| self.gpu_scene.textures.clone());
         let mut gpu_scene =
-            GpuScene::upload_reusing(&self.ctx, &scene, layout.draw_list(&scene), &mut uploads, textures)?;
+            GpuScene::upload_with_room(&self.ctx, &scene, layout.draw_list(&scene), &mut uploads, textures)?;
         gpu_scene.add_previous_instances(&self.ctx)?;
-        let gpu_scene = Arc::new(gpu_scene);
+        let user_data = slot_user_data(world, &layout);
+        gpu_scene.add_user_data(&self.ctx, &mut uploads, world.user_words(), &user_data)?;
         let light_capacity = with_room(scene.lights.len() as u64).max(self.light_capacity as u64) as usize;
-        let mut inputs = Vec::with_capacity(self.views.len());
-        for _ in &self.views {
-            inputs.push(SceneInputs::new(&self.ctx, gpu_scene.clone(), light_capacity)?);
-        }
-        let (frame, last_use) = (self.frame_index, self.frame_index.saturating_sub(1));
-        for ((view, runtime), inputs) in self.views.iter_mut().zip(recompiled).zip(inputs) {
-            match runtime {
-                Some((runtime, needed)) => view.graphs.install(runtime, needed, frame)?,
-                // Slots were given out anew: last frame's visibility and draw lists name other
-                // instances now.
-                None if how == Layout::Fresh => view.graphs.runtime.reset_history(),
-                None => {}
-            }
-            let old = std::mem::replace(&mut view.inputs, inputs);
-            self.retired.inputs.push((last_use, old));
-        }
+        self.install_scene(Arc::new(gpu_scene), light_capacity, recompiled, how)?;
         let bytes = uploads.bytes();
-        self.gpu_scene = gpu_scene;
-        self.light_capacity = light_capacity;
         // A batch not recorded yet would fill the buffers being replaced: it goes unrecorded.
         self.uploads.pending = Some(uploads);
         let mirror = self.world.as_mut().expect("a world renderer");
@@ -722,6 +780,197 @@ impl Renderer {
         };
         mirror.note(&stats);
         Ok(stats)
+    }
+
+    /// Every view's graph for `scene` laid out as `layout`: recompiled where the scene outgrew
+    /// what it was compiled for (or the light buffers are outgrown), with the culling history
+    /// inherited when the layout is [`Layout::Kept`]; `None` where the graph still holds it.
+    /// The scene and layout are handed back whatever the outcome.
+    #[allow(clippy::type_complexity)]
+    fn recompile_views(
+        &self,
+        shaders: &ShaderCompiler,
+        mut scene: Scene,
+        mut layout: SlotLayout,
+        how: Layout,
+        lights_outgrown: bool,
+    ) -> (Result<Vec<Option<(crate::graph::GraphRuntime, FrameInputs)>>>, Scene, SlotLayout) {
+        let mut recompiled = Vec::new();
+        for view in &self.views {
+            let kinds = &view.graphs.spec.kinds;
+            let (counted, counted_scene, counted_layout) = quantities(kinds, scene, layout);
+            (scene, layout) = (counted_scene, counted_layout);
+            let counted = match counted {
+                Ok(counted) => counted,
+                Err(e) => return (Err(view.error(e)), scene, layout),
+            };
+            if lights_outgrown || outgrows(kinds, &counted, &view.graphs.compiled) {
+                let needed = with_room_to_grow(kinds, &counted, &view.settings);
+                let mut runtime = match build_runtime(&self.ctx, shaders, &needed, &view.graphs.spec) {
+                    Ok(runtime) => runtime,
+                    Err(e) => return (Err(view.error(e)), scene, layout),
+                };
+                if how == Layout::Kept {
+                    // Slots and groups kept their indices: last frame's visibility still holds.
+                    runtime.inherit_history(&view.graphs.runtime);
+                }
+                recompiled.push(Some((runtime, needed)));
+            } else {
+                recompiled.push(None);
+            }
+        }
+        (Ok(recompiled), scene, layout)
+    }
+
+    /// Makes `gpu_scene` the scene every view reads from the next recorded frame on: each
+    /// view's inputs anew (the old ones kept until the frames that use them have completed)
+    /// and its recompiled graph, if any, installed.
+    fn install_scene(
+        &mut self,
+        gpu_scene: Arc<GpuScene>,
+        light_capacity: usize,
+        recompiled: Vec<Option<(crate::graph::GraphRuntime, FrameInputs)>>,
+        how: Layout,
+    ) -> Result<()> {
+        let mut inputs = Vec::with_capacity(self.views.len());
+        for _ in &self.views {
+            inputs.push(SceneInputs::new(&self.ctx, gpu_scene.clone(), light_capacity)?);
+        }
+        let (frame, last_use) = (self.frame_index, self.frame_index.saturating_sub(1));
+        for ((view, runtime), inputs) in self.views.iter_mut().zip(recompiled).zip(inputs) {
+            match runtime {
+                Some((runtime, needed)) => view.graphs.install(runtime, needed, frame)?,
+                // Slots were given out anew: last frame's visibility and draw lists name other
+                // instances now.
+                None if how == Layout::Fresh => view.graphs.runtime.reset_history(),
+                None => {}
+            }
+            let old = std::mem::replace(&mut view.inputs, inputs);
+            self.retired.inputs.push((last_use, old));
+        }
+        self.gpu_scene = gpu_scene;
+        self.light_capacity = light_capacity;
+        Ok(())
+    }
+
+    /// Applies what `registered` lists, and the slots opened since `slots_before`, in place
+    /// ([`crate::passes::shared::scene_growth`]): only those meshes, materials, textures,
+    /// groups and slots are written, on the pending batch's edits. Returns the bytes that
+    /// takes, or `None` when the scene must be laid out anew from the host instead (a texture
+    /// size class beyond the device's layers).
+    fn grow_in_place(
+        &mut self,
+        shaders: &ShaderCompiler,
+        world: &World,
+        registered: &Registered,
+        slots_before: u32,
+    ) -> Result<Option<u64>> {
+        let source = world.scene();
+        let mirror = self.world.as_mut().expect("a world renderer");
+        // The renderer's copy of the world: the registered meshes' pool ranges, the tables,
+        // and the new slots (empty until the instances placed there are written).
+        self.scene.meshes.clone_from(&source.meshes);
+        self.scene.materials.clone_from(&source.materials);
+        self.scene.textures.clone_from(&source.textures);
+        self.scene.vertices.resize(source.vertices.len(), Default::default());
+        self.scene.indices.resize(source.indices.len(), 0);
+        for &m in &registered.meshes {
+            let mesh = &source.meshes[m as usize];
+            let vertices = mesh.vertex_offset as usize..(mesh.vertex_offset + mesh.vertex_count) as usize;
+            let indices = mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize;
+            self.scene.vertices[vertices.clone()].copy_from_slice(&source.vertices[vertices]);
+            self.scene.indices[indices.clone()].copy_from_slice(&source.indices[indices]);
+        }
+        let slots = mirror.layout.slots();
+        for slot in slots_before..slots {
+            let contents = mirror.layout.slot_contents(slot, source);
+            let empty = crate::scene::Instance { flags: crate::scene::FLAG_EMPTY_SLOT, ..contents };
+            self.scene.instances.push(empty);
+        }
+        // Every view's graph before anything on the GPU changes, so that an error leaves them
+        // as they were.
+        let layout = std::mem::take(&mut mirror.layout);
+        let scene = std::mem::take(&mut self.scene);
+        let lights_outgrown = registered.lights_outgrown;
+        let (recompiled, scene, layout) = self.recompile_views(shaders, scene, layout, Layout::Kept, lights_outgrown);
+        self.scene = scene;
+        let mirror = self.world.as_mut().expect("a world renderer");
+        mirror.layout = layout;
+        let recompiled = recompiled?;
+
+        let mut batch = self.uploads.pending.take().unwrap_or_default();
+        let bytes_before = batch.edits.bytes();
+        let textures = if registered.textures.is_empty() && registered.materials.is_empty() {
+            Some(self.gpu_scene.textures.clone())
+        } else {
+            self.gpu_scene
+                .textures
+                .updated(&self.ctx, &self.scene, &registered.textures, &mut batch.edits)?
+                .map(Arc::new)
+        };
+        let Some(textures) = textures else {
+            // The batch may hold half of these edits: the scene laid out anew replaces it.
+            self.uploads.pending = Some(batch);
+            return Ok(None);
+        };
+        let placements_moved = !textures.same_placements(&self.gpu_scene.textures);
+        let next = self.gpu_scene.grown(&self.ctx, &self.scene, textures, &mut batch.edits)?;
+        for &m in &registered.meshes {
+            next.write_mesh(&mut batch.edits, &self.scene, m);
+        }
+        let mirror = self.world.as_mut().expect("a world renderer");
+        let layout = &mirror.layout;
+        for (g, group) in layout.groups.iter().enumerate() {
+            let opened = !group.spare() && group.first_slot >= slots_before;
+            let remeshed = !group.spare() && registered.meshes.binary_search(&group.key.1).is_ok();
+            if opened || remeshed {
+                next.write_group(&mut batch.edits, &self.scene, layout, g);
+            }
+        }
+        next.write_slot_ids(&mut batch.edits, slots_before..slots);
+        let materials: Vec<u32> = if placements_moved {
+            (0..self.scene.materials.len() as u32).collect()
+        } else {
+            registered.materials.clone()
+        };
+        for m in materials {
+            next.write_material(&mut batch.edits, &self.scene, m);
+        }
+        batch.edits.stage(&self.ctx)?;
+        let bytes = batch.edits.bytes() - bytes_before;
+        self.uploads.pending = Some(batch);
+        // The new slots' records (empty; the instances placed there are queued after).
+        for slot in slots_before..slots {
+            let group = mirror.layout.group_of_slot(slot) as u32;
+            mirror.queue_whole(slot, group, GpuInstance::new(&self.scene.instances[slot as usize]));
+        }
+        let light_capacity =
+            if lights_outgrown { with_room(self.scene.lights.len() as u64) as usize } else { self.light_capacity };
+        self.install_scene(Arc::new(next), light_capacity, recompiled, Layout::Kept)?;
+        Ok(Some(bytes))
+    }
+}
+
+/// What a sync registered, changed or unregistered besides instances.
+#[derive(Default)]
+struct Registered {
+    meshes: Vec<u32>,
+    materials: Vec<u32>,
+    textures: Vec<u32>,
+    /// More lights than the light buffers hold.
+    lights_outgrown: bool,
+}
+
+impl Registered {
+    fn dedup(&mut self) {
+        for list in [&mut self.meshes, &mut self.materials, &mut self.textures] {
+            list.sort_unstable();
+            list.dedup();
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.meshes.is_empty() && self.materials.is_empty() && self.textures.is_empty() && !self.lights_outgrown
     }
 }
 

@@ -1,0 +1,168 @@
+//! A changing world's scene grows in place: registering a mesh, material or texture, or
+//! opening a new range of slots, writes only what changed into the scene's buffers.
+//!
+//! A world's scene is uploaded with room to grow in every buffer ([`with_room`]). Its successor
+//! ([`GpuScene::grown`]) keeps each buffer that still holds what the world needs, so frames in
+//! flight and the next one share it, and makes a larger one for each that does not, its
+//! contents carried over on the GPU ([`Edits::carry`]): nothing is uploaded again from the host.
+//! The caller then queues the changed parts (`write_*`), which land in the successor's buffers
+//! at the next recorded frame, after the frames before it are done with what they overwrite.
+
+use super::cull_data::{GpuDrawGroup, GpuGroupBounds};
+use super::gpu_types::GpuMaterial;
+use super::scene_buffers::{drawn_triangles, max_mesh_triangles, GpuScene};
+use super::slot_layout::SlotLayout;
+use super::textures::GpuTextures;
+use crate::gpu::{Buffer, BufferDesc, Edits, GpuContext, MemoryLocation};
+use crate::scene::{AlphaMode, Scene};
+use ash::vk;
+use std::ops::Range;
+use std::sync::Arc;
+
+/// `bytes` with room to grow by half again (and a little more for tiny buffers), in whole
+/// 256-byte blocks.
+pub fn with_room(bytes: u64) -> u64 {
+    (bytes + bytes / 2 + 256).next_multiple_of(256)
+}
+
+/// What every scene buffer may be used for beyond storage: carried into a successor, written.
+fn usage(extra: vk::BufferUsageFlags) -> vk::BufferUsageFlags {
+    extra
+        | vk::BufferUsageFlags::STORAGE_BUFFER
+        | vk::BufferUsageFlags::TRANSFER_SRC
+        | vk::BufferUsageFlags::TRANSFER_DST
+}
+
+/// The byte offset of element `range.start` of a buffer of `T`.
+fn at<T>(range: &Range<u32>) -> u64 {
+    range.start as u64 * std::mem::size_of::<T>() as u64
+}
+
+impl GpuScene {
+    /// The scene that `scene` (a changing world's scene in slot order, laid out in the same
+    /// groups as this one) needs: this scene's buffers where they hold it, and larger ones
+    /// where they do not, this one's contents carried over by `edits`. Its textures are
+    /// `textures`. What changed is still to be written (`write_*`).
+    pub fn grown(
+        &self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        textures: Arc<GpuTextures>,
+        edits: &mut Edits,
+    ) -> crate::Result<Self> {
+        let mut fit = |old: &Arc<Buffer>, needed: u64, extra: vk::BufferUsageFlags| -> crate::Result<Arc<Buffer>> {
+            if needed <= old.size() {
+                return Ok(old.clone());
+            }
+            let desc = BufferDesc {
+                name: old.name(),
+                size: with_room(needed),
+                usage: usage(extra),
+                location: MemoryLocation::GpuOnly,
+            };
+            let new = Arc::new(Buffer::new(ctx, &desc)?);
+            edits.carry(old.clone(), &new, old.size());
+            Ok(new)
+        };
+        let slots = scene.instances.len() as u64;
+        let size_of = |n: u64, one: usize| n * one as u64;
+        let none = vk::BufferUsageFlags::empty();
+        let instances =
+            fit(&self.instances, size_of(slots, std::mem::size_of::<super::gpu_types::GpuInstance>()), none)?;
+        let prev_instances = match &self.prev_instances {
+            Some(previous) => Some(fit(previous, instances.size(), none)?),
+            None => None,
+        };
+        let user_data = match &self.user_data {
+            Some(data) => Some(fit(data, size_of(slots, 4 * self.user_words as usize), none)?),
+            None => None,
+        };
+        Ok(Self {
+            user_data,
+            user_words: self.user_words,
+            vertices: fit(
+                &self.vertices,
+                std::mem::size_of_val(scene.vertices.as_slice()) as u64,
+                vk::BufferUsageFlags::VERTEX_BUFFER,
+            )?,
+            indices: fit(&self.indices, size_of(scene.indices.len() as u64, 4), vk::BufferUsageFlags::INDEX_BUFFER)?,
+            instances,
+            prev_instances,
+            materials: fit(
+                &self.materials,
+                size_of(scene.materials.len() as u64, std::mem::size_of::<GpuMaterial>()),
+                none,
+            )?,
+            draw_instance_ids: fit(&self.draw_instance_ids, size_of(slots, 4), none)?,
+            draw_commands: self.draw_commands.clone(),
+            draw_count: self.draw_count.clone(),
+            regions: self.regions,
+            cull_records: fit(
+                &self.cull_records,
+                size_of(slots, std::mem::size_of::<super::cull_data::GpuCullRecord>()),
+                none,
+            )?,
+            draw_groups: self.draw_groups.clone(),
+            group_bounds: self.group_bounds.clone(),
+            instance_triangles: fit(&self.instance_triangles, size_of(slots, 8), none)?,
+            textures,
+            instance_count: slots as u32,
+            triangles: drawn_triangles(scene),
+            max_mesh_triangles: max_mesh_triangles(scene),
+            emission_or_occlusion: scene.materials.iter().any(|m| m.has_emission_or_occlusion()),
+            alpha_masks: scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. })),
+        })
+    }
+
+    /// Queues mesh `mesh` of `scene` (its vertices and indices) into the pools.
+    pub fn write_mesh(&self, edits: &mut Edits, scene: &Scene, mesh: u32) {
+        let m = &scene.meshes[mesh as usize];
+        let vertices = m.vertex_offset..m.vertex_offset + m.vertex_count;
+        let indices = m.first_index..m.first_index + m.index_count;
+        edits.write(
+            &self.vertices,
+            at::<crate::scene::Vertex>(&vertices),
+            bytemuck::cast_slice(&scene.vertices[vertices.start as usize..vertices.end as usize]),
+        );
+        edits.write(
+            &self.indices,
+            at::<u32>(&indices),
+            bytemuck::cast_slice(&scene.indices[indices.start as usize..indices.end as usize]),
+        );
+    }
+
+    /// Queues draw group `g` of `layout` (its command, its culling entry and local bounds, and
+    /// its slots' triangle bases) as `scene` has its mesh.
+    pub fn write_group(&self, edits: &mut Edits, scene: &Scene, layout: &SlotLayout, g: usize) {
+        let command = layout.command(g, scene);
+        let group = layout.groups[g];
+        let index = g as u32..g as u32 + 1;
+        edits.write(
+            &self.draw_commands,
+            at::<super::gpu_types::DrawIndexedIndirect>(&index),
+            bytemuck::bytes_of(&command),
+        );
+        edits.write(&self.draw_groups, at::<GpuDrawGroup>(&index), bytemuck::bytes_of(&GpuDrawGroup::of(&command)));
+        if group.spare() {
+            return;
+        }
+        let mesh = &scene.meshes[group.key.1 as usize];
+        edits.write(&self.group_bounds, at::<GpuGroupBounds>(&index), bytemuck::bytes_of(&GpuGroupBounds::of(mesh)));
+        let slots = group.first_slot..group.first_slot + group.capacity;
+        let bases = vec![[mesh.first_index, mesh.vertex_offset]; group.capacity as usize];
+        edits.write(&self.instance_triangles, at::<[u32; 2]>(&slots), bytemuck::cast_slice(&bases));
+    }
+
+    /// Queues the draw-list entries of new slots `slots` (slot `s` draws record `s`).
+    pub fn write_slot_ids(&self, edits: &mut Edits, slots: Range<u32>) {
+        let ids: Vec<u32> = slots.clone().collect();
+        edits.write(&self.draw_instance_ids, at::<u32>(&slots), bytemuck::cast_slice(&ids));
+    }
+
+    /// Queues material `material` of `scene`, its textures where [`GpuScene::textures`] has them.
+    pub fn write_material(&self, edits: &mut Edits, scene: &Scene, material: u32) {
+        let record = GpuMaterial::new(&scene.materials[material as usize], self.textures.placements());
+        let index = material..material + 1;
+        edits.write(&self.materials, at::<GpuMaterial>(&index), bytemuck::bytes_of(&record));
+    }
+}
