@@ -212,8 +212,20 @@ fn registrations_upload_only_what_they_add() {
     // The first texture now masked: its mips are made again to keep its coverage.
     material.textures[0] = Some(TextureRef::new(first));
     material.alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
-    world.set_material(textured, material).unwrap();
+    world.set_material(textured, material.clone()).unwrap();
     let bytes = compare(&world, &mut r, "a texture masked");
     assert!(bytes >= texels && bytes <= texels + 4096, "masking a texture uploaded {bytes} bytes");
+
+    // Materials that become double-sided, then blended: their instances change draw groups.
+    let (_, other) = materials[0];
+    let mut sides = world.scene().materials[other as usize].clone();
+    sides.double_sided = true;
+    sides.albedo = Vec3::new(0.3, 1.0, 0.3);
+    world.set_material(other, sides.clone()).unwrap();
+    compare(&world, &mut r, "a material made double-sided");
+    sides.alpha_mode = AlphaMode::Blend;
+    sides.alpha = 0.5;
+    world.set_material(other, sides).unwrap();
+    compare(&world, &mut r, "a material made blended");
     gpu.assert_clean();
 }

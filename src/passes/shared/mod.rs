@@ -208,7 +208,7 @@ pub fn scene_quantities() -> [Quantity; 5] {
             "materials",
             "materials",
             |s| Some(SceneCounts::downcast(s)?.scene.materials.len() as u64),
-            Growth::Exact,
+            Growth::Grows,
         ),
         scene_quantity(
             "triangles",

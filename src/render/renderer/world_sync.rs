@@ -600,12 +600,21 @@ impl Renderer {
         }
         registered.dedup();
         let textures_changed = !registered.textures.is_empty();
-        let materials = &registered.materials;
-        if !materials.is_empty() {
-            // A material's sidedness decides its instances' draw groups: they are re-placed
-            // where it changed (a rare event, so a pass over the instances is fine).
+        // A material's sidedness and blending decide its instances' draw groups: they are
+        // re-placed where those changed (a rare event, so a pass over the instances is fine). A
+        // material new to the renderer has no instances placed yet.
+        let regrouped: Vec<u32> = registered
+            .materials
+            .iter()
+            .copied()
+            .filter(|&m| {
+                let (old, new) = (self.scene.materials.get(m as usize), &world.scene().materials[m as usize]);
+                old.is_some_and(|old| !groups_alike(old, new))
+            })
+            .collect();
+        if !regrouped.is_empty() {
             instances.extend((0..world.instance_slots() as u32).filter(|&i| {
-                world.is_live(i) && materials.binary_search(&world.scene().instances[i as usize].material).is_ok()
+                world.is_live(i) && regrouped.binary_search(&world.scene().instances[i as usize].material).is_ok()
             }));
         }
         if lights {
@@ -949,6 +958,13 @@ impl Renderer {
         self.install_scene(Arc::new(next), light_capacity, recompiled, Layout::Kept)?;
         Ok(Some(bytes))
     }
+}
+
+/// Whether instances of material `a` and of material `b` fall into the same draw groups
+/// ([`crate::passes::shared::face_cull::FaceCull::of`]: blending, then sidedness).
+fn groups_alike(a: &crate::scene::Material, b: &crate::scene::Material) -> bool {
+    use crate::scene::AlphaMode;
+    (a.alpha_mode == AlphaMode::Blend) == (b.alpha_mode == AlphaMode::Blend) && a.double_sided == b.double_sided
 }
 
 /// What a sync registered, changed or unregistered besides instances.
