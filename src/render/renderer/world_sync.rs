@@ -269,9 +269,12 @@ impl WorldMirror {
                 layout: ash::vk::ImageLayout::UNDEFINED,
             };
             cmd_barriers(device, cmd, &[memory_barrier(all, transfer)], &[]);
-            let region = ash::vk::BufferCopy { src_offset: 0, dst_offset: 0, size: scene.instances.size() };
+            // The slots in use: the buffers have room beyond them.
+            let used = scene.instance_count as u64 * std::mem::size_of::<GpuInstance>() as u64;
+            let size = used.min(scene.instances.size()).min(previous.size()).max(1);
+            let region = ash::vk::BufferCopy { src_offset: 0, dst_offset: 0, size };
             // SAFETY: cmd is recording; both buffers live as long as the scene, which outlives
-            // the frames that use it.
+            // the frames that use it, and hold at least one record.
             unsafe { device.cmd_copy_buffer(cmd, scene.instances.handle(), previous.handle(), &[region]) };
             cmd_barriers(device, cmd, &[memory_barrier(transfer, all)], &[]);
         }
@@ -690,7 +693,7 @@ impl Renderer {
                 let group = mirror.layout.group_of_slot(slot) as u32;
                 mirror.queue_whole(slot, group, record);
                 // An instance new to its slot brings its user data along.
-                if let Some(i) = mirror.layout.instance_in(slot) {
+                if let Some(i) = mirror.layout.instance_in(slot).filter(|_| mirror.user_words > 0) {
                     mirror.queue_user_data(slot, world.user_data_at(i));
                 }
             }
