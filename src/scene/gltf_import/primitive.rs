@@ -13,7 +13,7 @@ pub(super) enum Converted {
     /// Triangle-list geometry, the place string to hand to `Scene::add_mesh`, and notes on
     /// attributes that were unusable (normals recomputed from the faces, texture coordinates or
     /// tangents dropped).
-    Mesh(MeshData, String, Vec<String>),
+    Mesh(Box<MeshData>, String, Vec<String>),
     /// A primitive that cannot be drawn as triangles, with the reason.
     Skipped(String),
 }
@@ -134,7 +134,7 @@ pub(super) fn convert(primitive: &Primitive<'_>, buffers: &[Vec<u8>], place: &st
         ));
         mesh.normals.clear();
     }
-    Ok(Converted::Mesh(mesh, place_for_mesh, notes))
+    Ok(Converted::Mesh(Box::new(mesh), place_for_mesh, notes))
 }
 
 /// Reads an attribute the mesh can do without (texture coordinates, tangents): one that is
