@@ -395,3 +395,21 @@ fn broken_files_name_the_place() {
         "animation 'wave' (#0) channel 1: it animates the morph weights of node 'mover' (#5), whose mesh has no morph targets",
     );
 }
+
+#[test]
+fn deformations_are_validated_and_animations_checked_against_the_scene() {
+    let (mut scene, _) = imported();
+    scene.validate().unwrap();
+    let anim = scene.animation.clone().unwrap();
+    assert_eq!(anim.problem(&scene), None);
+    let mut fewer = scene.clone();
+    fewer.instances.truncate(1);
+    assert_eq!(anim.problem(&fewer).unwrap(), "animated instance 1 does not exist (1 instances)");
+    // A deformation that does not match its mesh's vertices.
+    let bar = scene.instances[0].mesh as usize;
+    let mut deform = (**scene.meshes[bar].deform.as_ref().unwrap()).clone();
+    deform.weights.pop();
+    scene.meshes[bar].deform = Some(std::sync::Arc::new(deform));
+    let e = scene.validate().unwrap_err().to_string();
+    assert_eq!(e, "mesh #0 'bar/0': deformation: 6 joints and 5 weights for 6 vertices");
+}

@@ -104,6 +104,27 @@ impl MeshDeform {
         Aabb::from_points(p).ok_or_else(|| SceneError::invalid("mesh deformation", "the mesh has no vertices"))
     }
 
+    /// What is wrong with this deformation for a mesh of `vertices` vertices, if anything:
+    /// influence or offset counts that differ from it, or joints past [`MeshDeform::joint_count`].
+    pub fn problem(&self, vertices: usize) -> Option<String> {
+        if self.is_skinned() && (self.joints.len() != vertices || self.weights.len() != vertices) {
+            return Some(format!(
+                "{} joints and {} weights for {vertices} vertices",
+                self.joints.len(),
+                self.weights.len()
+            ));
+        }
+        if let Some(t) = self
+            .morph_targets
+            .iter()
+            .position(|t| t.positions.len() != vertices || !(t.normals.is_empty() || t.normals.len() == vertices))
+        {
+            return Some(format!("morph target {t} does not have one offset per vertex ({vertices})"));
+        }
+        let past = self.joints.iter().flatten().any(|&j| j as u32 >= self.joint_count.max(1));
+        past.then(|| format!("a joint index is at or past the joint count {}", self.joint_count))
+    }
+
     /// The blended matrix of vertex `i` (its joints checked against `joint_matrices` before).
     fn skin_matrix(&self, i: usize, joint_matrices: &[Mat4]) -> Mat4 {
         let (j, w) = (self.joints[i], self.weights[i]);

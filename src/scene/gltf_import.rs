@@ -5,10 +5,15 @@
 //! Materials keep their textures (every glTF image becomes a scene texture, decoded to RGBA8),
 //! samplers, texture transforms and alpha modes.
 //!
+//! Skins (joints and weights, reduced to the 4 heaviest per vertex), morph targets (position
+//! and normal offsets) and animations (translation, rotation, scale and weights; STEP, LINEAR
+//! and CUBICSPLINE) go to the meshes' [`MeshDeform`](super::MeshDeform) and the scene's
+//! [`SceneAnimation`](super::SceneAnimation); the instances are placed in the rest pose.
+//!
 //! Broken files give a [`SceneError`] whose place names the file, the node or the mesh,
-//! primitive and accessor; they never panic. What is dropped or replaced on the way
-//! (non-triangle primitives, unusable images, animations, unused meshes) is listed in an
-//! [`ImportReport`].
+//! primitive and accessor (or the skin, animation and channel); they never panic. What is
+//! dropped or replaced on the way (non-triangle primitives, unusable images, morphed tangents,
+//! animations of nothing drawn, unused meshes) is listed in an [`ImportReport`].
 
 mod accessor;
 mod animation;

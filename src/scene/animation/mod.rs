@@ -69,6 +69,27 @@ impl SceneAnimation {
         self.placement
     }
 
+    /// What is wrong with this animation for `scene`, if anything: an animated instance the
+    /// scene does not have, or a skin with fewer joints than its instance's mesh uses.
+    pub fn problem(&self, scene: &super::Scene) -> Option<String> {
+        for a in &self.instances {
+            let Some(instance) = scene.instances.get(a.instance as usize) else {
+                return Some(format!(
+                    "animated instance {} does not exist ({} instances)",
+                    a.instance,
+                    scene.instances.len()
+                ));
+            };
+            let deform = scene.meshes.get(instance.mesh as usize).and_then(|m| m.deform.as_deref());
+            let used = deform.map_or(0, |d| d.joint_count as usize);
+            let joints = a.skin.and_then(|s| self.skins.get(s as usize)).map_or(0, |s| s.joints.len());
+            if a.skin.is_some() && joints < used {
+                return Some(format!("instance {}: its skin has {joints} joints, its mesh uses {used}", a.instance));
+            }
+        }
+        None
+    }
+
     /// Sets the transform every pose is placed by (its root nodes' parent).
     pub fn set_placement(&mut self, placement: Transform) {
         self.placement = placement;
