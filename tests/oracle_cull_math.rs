@@ -610,6 +610,7 @@ fn instance_boxes_with_zero_and_negative_scale() {
                 vertex_count: 0,
                 bounds: local,
                 sphere: Sphere { center: local.center(), radius: local.half_extent().length() },
+                deform: None,
             });
             let instance = Instance { transform: Transform { linear, translation }, mesh: 0, material: 0, flags: 0 };
             let (wmin, wmax) = scene.instance_bounds(&instance);

@@ -5,19 +5,27 @@
 //! Materials keep their textures (every glTF image becomes a scene texture, decoded to RGBA8),
 //! samplers, texture transforms and alpha modes.
 //!
+//! Skins (joints and weights, reduced to the 4 heaviest per vertex), morph targets (position
+//! and normal offsets) and animations (translation, rotation, scale and weights; STEP, LINEAR
+//! and CUBICSPLINE) go to the meshes' [`MeshDeform`](super::MeshDeform) and the scene's
+//! [`SceneAnimation`](super::SceneAnimation); the instances are placed in the rest pose.
+//!
 //! Broken files give a [`SceneError`] whose place names the file, the node or the mesh,
-//! primitive and accessor; they never panic. What is dropped or replaced on the way
-//! (non-triangle primitives, unusable images, animations, unused meshes) is listed in an
-//! [`ImportReport`].
+//! primitive and accessor (or the skin, animation and channel); they never panic. What is
+//! dropped or replaced on the way (non-triangle primitives, unusable images, morphed tangents,
+//! animations of nothing drawn, unused meshes) is listed in an [`ImportReport`].
 
 mod accessor;
+mod animation;
 mod buffers;
 mod flags;
 mod images;
 mod lights;
 mod materials;
+mod morph;
 mod nodes;
 mod primitive;
+mod skin;
 mod totals;
 
 use super::camera::{Camera, Projection};
@@ -133,28 +141,32 @@ fn import(path: &Path, options: &LoadOptions) -> Result<(Scene, ImportReport), S
     let mut meshes = MeshImport { buffers: &buffers, file: &short, shared: HashMap::new(), default_material: None };
     // Per glTF mesh: the (cullgraph mesh, material) of each drawable primitive, once imported.
     let mut imported: Vec<Option<Vec<DrawnPrimitive>>> = vec![None; document.meshes().len()];
-    let mut skinned = 0usize;
+    let mut candidates = Vec::new();
     for p in &placed {
         let Some(mesh) = p.node.mesh() else { continue };
-        skinned += usize::from(p.node.skin().is_some());
         if imported[mesh.index()].is_none() {
             let prims = meshes.import(&mesh, &mut scene, &mut report)?;
             imported[mesh.index()] = Some(prims);
         }
         let what = format!("its {}", mesh_label(&mesh));
-        for &(mesh_id, material) in imported[mesh.index()].iter().flatten().flatten() {
+        for (prim, drawn) in imported[mesh.index()].iter().flatten().enumerate() {
+            let Some((mesh_id, material)) = *drawn else { continue };
             // A node whose geometry reaches past the coordinate range is the user's to hear of
             // (lights placed above it would be refused otherwise, blaming the importer's light).
             let bounds = &scene.meshes[mesh_id as usize].bounds;
             if let Some(e) = crate::scene::validate::bounds_error(&what, bounds, &p.world) {
                 return Err(SceneError::invalid(format!("{short}: {}", nodes::node_label(&p.node)), e));
             }
+            let deform = scene.meshes[mesh_id as usize].deform.as_deref();
+            let skinned = skinned_primitive(p, &mesh, prim, deform, &short, &mut report.notes)?;
+            let targets = deform.map_or(0, |d| d.morph_targets.len());
+            let instance = scene.instances.len() as u32;
+            candidates.push(animation::Candidate { instance, node: p.node.index(), skinned, targets });
             scene.instances.push(Instance { transform: p.world, mesh: mesh_id, material, flags: p.flags });
         }
     }
-    if skinned > 0 {
-        report.notes.push(format!("skins are ignored: {skinned} skinned nodes are drawn in their bind pose"));
-    }
+    scene.animation = animation::build(&document, &placed, &candidates, &buffers, &short, &mut report.notes)?
+        .map(std::sync::Arc::new);
     let unused = imported.iter().filter(|m| m.is_none()).count();
     if unused > 0 {
         report.notes.push(format!("{unused} meshes are not used by any node of the drawn scene and were not imported"));
@@ -236,8 +248,11 @@ impl MeshImport<'_> {
                 None => {
                     let converted = match primitive::convert(&prim, self.buffers, &place)? {
                         primitive::Converted::Skipped(why) => Err(why),
-                        primitive::Converted::Mesh(data, mesh_place, notes) => {
+                        primitive::Converted::Mesh(mut data, mesh_place, notes) => {
                             report.notes.extend(notes);
+                            if !data.morph_targets.is_empty() {
+                                data.morph_weights = mesh.weights().map(<[f32]>::to_vec).unwrap_or_default();
+                            }
                             Ok(scene.add_mesh(&format!("{base_name}/{}", prim.index()), &data, &mesh_place)?)
                         }
                     };
@@ -258,12 +273,65 @@ impl MeshImport<'_> {
                 Some(i) => i as u32,
                 None => *self.default_material.get_or_insert_with(|| scene.add_material(Material::default())),
             };
-            if prim.morph_targets().len() > 0 {
-                report.notes.push(format!("{place}: morph targets are ignored (base shape drawn)"));
-            }
             prims.push(Some((id, material)));
         }
         Ok(prims)
+    }
+}
+
+/// Whether primitive `prim` of `mesh`, placed at `placed`, is deformed by the node's skin: the
+/// node has one and the primitive has joints. Refuses joint indices past the skin's joints; notes
+/// a skin without joints to move and joints without a skin.
+fn skinned_primitive(
+    placed: &nodes::Placed<'_>,
+    mesh: &gltf::Mesh<'_>,
+    prim: usize,
+    deform: Option<&crate::scene::MeshDeform>,
+    file: &str,
+    notes: &mut Vec<String>,
+) -> Result<bool, SceneError> {
+    let node = nodes::node_label(&placed.node);
+    match (placed.node.skin(), deform.filter(|d| d.is_skinned())) {
+        (None, None) => Ok(false),
+        (Some(skin), None) => {
+            notes.push(format!(
+                "{node} has {} but its {} primitive {prim} has no JOINTS_0; it is drawn rigidly",
+                skin::skin_label(&skin),
+                mesh_label(mesh)
+            ));
+            Ok(false)
+        }
+        (None, Some(_)) => {
+            notes.push(format!(
+                "{node}: its {} primitive {prim} has joints but the node has no skin; it is drawn in its bind pose",
+                mesh_label(mesh)
+            ));
+            Ok(false)
+        }
+        (Some(skin), Some(d)) => {
+            let joints = skin.joints().len();
+            if d.joint_count as usize > joints {
+                let accessors: Vec<String> = mesh
+                    .primitives()
+                    .nth(prim)
+                    .map(|p| {
+                        (0..)
+                            .map_while(|set| p.get(&gltf::mesh::Semantic::Joints(set)).map(|a| (set, a.index())))
+                            .map(|(set, a)| format!("JOINTS_{set} accessor {a}"))
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                return Err(SceneError::invalid(
+                    format!("{file}: {node}: its {} primitive {prim}, {}", mesh_label(mesh), accessors.join(", ")),
+                    format!(
+                        "joint index {} is out of range: {} has {joints} joints",
+                        d.joint_count - 1,
+                        skin::skin_label(&skin)
+                    ),
+                ));
+            }
+            Ok(true)
+        }
     }
 }
 
@@ -320,9 +388,6 @@ fn note_ignored_features(document: &gltf::Document, notes: &mut Vec<String>) {
     let used: Vec<&str> = document.extensions_used().filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
     if !used.is_empty() {
         notes.push(format!("extensions are ignored: {}", used.join(", ")));
-    }
-    if document.animations().len() > 0 {
-        notes.push(format!("{} animations are ignored (the rest pose is drawn)", document.animations().len()));
     }
 }
 

@@ -1,6 +1,7 @@
 //! Vertex format and mesh data as sources produce it, with the checks every mesh passes.
 
 use super::bounds::{Aabb, Sphere};
+use super::deform::{MeshDeform, MorphTarget};
 use super::error::SceneError;
 use glam::{Vec2, Vec3};
 
@@ -48,6 +49,10 @@ pub fn decode_octahedral(e: [i16; 2]) -> Vec3 {
     Vec3::new(x, y, z).normalize()
 }
 
+/// What [`MeshData::validate`] gives: pool vertices, local bounds of the rest shape, and the
+/// deformation of a skinned or morphed mesh.
+pub type MeshParts = (Vec<Vertex>, Aabb, Sphere, Option<MeshDeform>);
+
 /// Raw triangle-list geometry of one mesh before it joins the pool.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshData {
@@ -62,15 +67,27 @@ pub struct MeshData {
     /// Tangents (xyz unit, w ±1 handedness), one per position; empty to generate them from the
     /// texture coordinates (MikkTSpace).
     pub tangents: Vec<glam::Vec4>,
+    /// Skin joint indices, four per position; empty for a mesh that is not skinned.
+    pub joints: Vec<[u16; 4]>,
+    /// Skin weights of `joints`, one per position (at least 0, not all 0; normalised to sum 1
+    /// by [`MeshData::validate`]); empty with `joints`.
+    pub weights: Vec<glam::Vec4>,
+    /// Morph targets (offsets from the rest shape).
+    pub morph_targets: Vec<MorphTarget>,
+    /// Default weights of the morph targets (glTF mesh `weights`); missing ones are 0.
+    pub morph_weights: Vec<f32>,
 }
 
 impl MeshData {
-    /// Checks the mesh and converts it to pool vertices, returning them with local bounds.
+    /// Checks the mesh and converts it to pool vertices, returning them with local bounds (of
+    /// the rest shape) and the mesh's deformation, if it has one.
     ///
     /// Refuses: no triangles, an index count not a multiple of 3, an index past the vertex
     /// count, non-finite positions, a normal count that differs from the position count, and a
     /// mesh whose triangles all have zero area. Missing or zero normals are computed from faces.
-    pub fn validate(&self, place: &str) -> Result<(Vec<Vertex>, Aabb, Sphere), SceneError> {
+    /// Deformation: joints and weights one per position, weights finite, at least 0 and not
+    /// all 0 (they are normalised to sum 1), morph targets one offset per position, finite.
+    pub fn validate(&self, place: &str) -> Result<MeshParts, SceneError> {
         let err = |m: String| SceneError::invalid(place, m);
         if self.indices.is_empty() || self.positions.is_empty() {
             return Err(err("mesh has no triangles".into()));
@@ -97,6 +114,7 @@ impl MeshData {
         if !self.tangents.is_empty() && self.tangents.len() != n {
             return Err(err(format!("{} tangents for {} positions", self.tangents.len(), n)));
         }
+        let deform = self.validate_deform(place)?;
         let face_normals = self.area_weighted_normals();
         let has_area = face_normals.iter().any(|v| *v != Vec3::ZERO);
         if !has_area {
@@ -129,7 +147,7 @@ impl MeshData {
         let points: Vec<Vec3> = (0..n).filter(|&i| used[i]).map(|i| self.positions[i]).collect();
         let bounds = Aabb::from_points(points.iter().copied()).ok_or_else(|| err("mesh has no vertices".into()))?;
         let sphere = Sphere::around(&points, &bounds);
-        Ok((vertices, bounds, sphere))
+        Ok((vertices, bounds, sphere, deform))
     }
 
     /// The share of triangle area whose given vertex normals are nearly perpendicular to the

@@ -4,9 +4,11 @@
 //! Instance translations are `f64` on the CPU so that worlds far from the origin keep their
 //! precision; the GPU receives them as hi/lo `f32` pairs and subtracts the eye position first.
 
+pub mod animation;
 pub mod bounds;
 pub mod camera;
 pub mod camera_path;
+pub mod deform;
 pub mod error;
 pub mod gltf_import;
 pub mod merge;
@@ -20,11 +22,13 @@ pub mod texture;
 pub mod validate;
 pub mod world;
 
+pub use animation::{InstancePose, SceneAnimation};
 pub use bounds::{Aabb, Sphere};
 pub use camera::Camera;
 pub use camera_path::CameraPath;
+pub use deform::{MeshDeform, MorphTarget};
 pub use error::SceneError;
-pub use mesh::{decode_octahedral, encode_octahedral, encode_tangent, MeshData, Vertex};
+pub use mesh::{decode_octahedral, encode_octahedral, encode_tangent, MeshData, MeshParts, Vertex};
 pub use projection::{Projection, ProjectionParts};
 pub use source::SceneSource;
 pub use texture::{AlphaMode, Texture, TextureRef, TextureSlot};
@@ -80,6 +84,9 @@ pub struct Mesh {
     pub bounds: Aabb,
     /// Local-space bounding sphere (contains `bounds`' vertices).
     pub sphere: Sphere,
+    /// How the mesh deforms (skin influences, morph targets); `None` for a rigid mesh. Its
+    /// `bounds` and `sphere` are those of the rest shape.
+    pub deform: Option<std::sync::Arc<deform::MeshDeform>>,
 }
 
 /// Surface parameters of the shading model (glTF metallic-roughness): factors, each multiplied
@@ -298,6 +305,9 @@ pub struct Scene {
     pub sun: DirectionalLight,
     /// A camera the source suggests (glTF camera), if any.
     pub camera: Option<Camera>,
+    /// What plays the scene's animations (glTF skins, morph weights, node animations): the
+    /// instances they move and the clips; `None` for a static scene.
+    pub animation: Option<std::sync::Arc<SceneAnimation>>,
 }
 
 impl Scene {
@@ -319,18 +329,19 @@ impl Scene {
         place: &str,
         at: MeshPlace,
     ) -> Result<u32, SceneError> {
-        let (vertices, bounds, sphere) = data.validate(place)?;
-        self.put_mesh_vertices(name, &vertices, &data.indices, (bounds, sphere), place, at)
+        let (vertices, bounds, sphere, deform) = data.validate(place)?;
+        let deform = deform.map(std::sync::Arc::new);
+        self.put_mesh_vertices(name, &vertices, &data.indices, (bounds, sphere, deform), place, at)
     }
 
     /// [`Scene::put_mesh`] of vertices and indices checked before (another scene's mesh), with
-    /// their bounds.
+    /// their bounds and deformation.
     pub(crate) fn put_mesh_vertices(
         &mut self,
         name: &str,
         vertices: &[Vertex],
         indices: &[u32],
-        (bounds, sphere): (Aabb, Sphere),
+        (bounds, sphere, deform): (Aabb, Sphere, Option<std::sync::Arc<deform::MeshDeform>>),
         place: &str,
         at: MeshPlace,
     ) -> Result<u32, SceneError> {
@@ -342,6 +353,7 @@ impl Scene {
             vertex_count: vertices.len() as u32,
             bounds,
             sphere,
+            deform,
         };
         // Pools of millions of entries: a failed allocation is this mesh's error, not an abort.
         let no_memory =
@@ -396,6 +408,12 @@ impl Scene {
         }
         for light in &mut self.lights {
             light.position += offset;
+        }
+        if let Some(animation) = &mut self.animation {
+            let animation = std::sync::Arc::make_mut(animation);
+            let mut placement = animation.placement();
+            placement.translation += offset;
+            animation.set_placement(placement);
         }
         if let Some(camera) = &mut self.camera {
             camera.eye += offset;

@@ -203,6 +203,9 @@ fn validate_meshes(scene: &Scene) -> Result<(), SceneError> {
                 format!("index {bad} at element {at} is out of range (the mesh has {} vertices)", m.vertex_count),
             ));
         }
+        if let Some(e) = m.deform.as_ref().and_then(|d| d.problem(m.vertex_count as usize)) {
+            return Err(SceneError::invalid(place(), format!("deformation: {e}")));
+        }
         let b = &m.bounds;
         if !(b.min.is_finite() && b.max.is_finite() && b.min.cmple(b.max).all()) {
             return Err(SceneError::invalid(place(), format!("bounds {}..{} are not a finite box", b.min, b.max)));

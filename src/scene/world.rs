@@ -642,7 +642,7 @@ impl World {
         let vertices = &source.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
         let indices = &source.indices[m.first_index as usize..(m.first_index + m.index_count) as usize];
         self.place_mesh(&m.name, vertices.len(), indices.len(), |scene, place, at| {
-            scene.put_mesh_vertices(&m.name, vertices, indices, (m.bounds, m.sphere), place, at)
+            scene.put_mesh_vertices(&m.name, vertices, indices, (m.bounds, m.sphere, m.deform.clone()), place, at)
         })
     }
 

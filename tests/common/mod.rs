@@ -70,6 +70,7 @@ pub fn quad_mesh() -> cullgraph::scene::MeshData {
         uvs: vec![Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)],
         indices: vec![0, 1, 2, 0, 2, 3],
         tangents: Vec::new(),
+        ..Default::default()
     }
 }
 

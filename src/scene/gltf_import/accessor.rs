@@ -200,3 +200,65 @@ fn strided<'b>(
         })?;
     Ok(&data[view_start + offset..view_start + needed])
 }
+
+/// Components per element of `dims` (the element types animations and skins use).
+fn components(dims: Dimensions) -> usize {
+    match dims {
+        Dimensions::Scalar => 1,
+        Dimensions::Vec2 => 2,
+        Dimensions::Vec3 => 3,
+        Dimensions::Vec4 | Dimensions::Mat2 => 4,
+        Dimensions::Mat3 => 9,
+        Dimensions::Mat4 => 16,
+    }
+}
+
+/// Reads an accessor of `dims` elements as flat floats: `FLOAT`, or one of the `normalized`
+/// integer types, mapped to [0, 1] or [-1, 1] as glTF specifies. `what` names the allowed types
+/// in the error.
+pub(super) fn read_floats(
+    accessor: &Accessor<'_>,
+    buffers: &[Vec<u8>],
+    dims: Dimensions,
+    normalized: &[DataType],
+    what: &str,
+) -> Result<Vec<f32>, String> {
+    let types: Vec<DataType> = std::iter::once(DataType::F32).chain(normalized.iter().copied()).collect();
+    expect_type(accessor, dims, &types, what)?;
+    let c = components(dims);
+    let ty = accessor.data_type();
+    if ty != DataType::F32 && !accessor.normalized() {
+        return Err(format!("must be {what}, found integers that are not normalized"));
+    }
+    let size = ty.size();
+    let decode = move |b: &[u8]| -> f32 {
+        match ty {
+            DataType::I8 => (b[0] as i8 as f32 / 127.0).max(-1.0),
+            DataType::U8 => b[0] as f32 / 255.0,
+            DataType::I16 => (i16::from_le_bytes([b[0], b[1]]) as f32 / 32767.0).max(-1.0),
+            DataType::U16 => u16::from_le_bytes([b[0], b[1]]) as f32 / 65535.0,
+            _ => f32_at(b, 0),
+        }
+    };
+    // Matrices of 1- and 2-byte components pad their columns to 4 bytes; no type used here has them.
+    let elements = read(accessor, buffers, c * size, |b| {
+        let mut e = [0.0f32; 16];
+        for (i, v) in e.iter_mut().take(c).enumerate() {
+            *v = decode(&b[i * size..]);
+        }
+        e
+    })?;
+    Ok(elements.iter().flat_map(|e| e[..c].iter().copied()).collect())
+}
+
+/// Reads skin joint indices: a `VEC4` of `UNSIGNED_BYTE` or `UNSIGNED_SHORT`.
+pub(super) fn read_joints(accessor: &Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<[u16; 4]>, String> {
+    expect_type(accessor, Dimensions::Vec4, &[DataType::U8, DataType::U16], "VEC4 of UNSIGNED_BYTE or UNSIGNED_SHORT")?;
+    if accessor.normalized() {
+        return Err("joint indices must not be normalized".into());
+    }
+    match accessor.data_type() {
+        DataType::U8 => read(accessor, buffers, 4, |b| [b[0] as u16, b[1] as u16, b[2] as u16, b[3] as u16]),
+        _ => read(accessor, buffers, 8, |b| std::array::from_fn(|i| u16::from_le_bytes([b[2 * i], b[2 * i + 1]]))),
+    }
+}

@@ -131,7 +131,7 @@ fn revisit_message(document: &Document, parent: &[Option<usize>], i: usize, from
 }
 
 /// A node's local transform, checked for finiteness; notes a projective matrix row.
-fn local_transform(node: &Node<'_>, notes: &mut Vec<String>) -> Result<Transform, String> {
+pub(super) fn local_transform(node: &Node<'_>, notes: &mut Vec<String>) -> Result<Transform, String> {
     match node.transform() {
         NodeTransform::Matrix { matrix: m } => {
             if m.iter().flatten().any(|v| !v.is_finite()) {

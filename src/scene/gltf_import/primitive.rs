@@ -13,7 +13,7 @@ pub(super) enum Converted {
     /// Triangle-list geometry, the place string to hand to `Scene::add_mesh`, and notes on
     /// attributes that were unusable (normals recomputed from the faces, texture coordinates or
     /// tangents dropped).
-    Mesh(MeshData, String, Vec<String>),
+    Mesh(Box<MeshData>, String, Vec<String>),
     /// A primitive that cannot be drawn as triangles, with the reason.
     Skipped(String),
 }
@@ -108,8 +108,21 @@ pub(super) fn convert(primitive: &Primitive<'_>, buffers: &[Vec<u8>], place: &st
         accessor::read_vec4(acc, buffers).map(|v| v.into_iter().map(Vec4::from_array).collect())
     });
     let tangents = if uvs.is_empty() { Vec::new() } else { tangents };
-    let mut notes: Vec<String> = normal_note.into_iter().chain(uv_note).chain(tangent_note).collect();
-    let mut mesh = MeshData { uvs, tangents, positions, normals, indices };
+    let ((joints, weights), influence_note) = super::skin::read_influences(primitive, buffers, n, place)?;
+    let (morph_targets, morph_note) = super::morph::read_targets(primitive, buffers, n, place)?;
+    let mut notes: Vec<String> =
+        normal_note.into_iter().chain(uv_note).chain(tangent_note).chain(influence_note).chain(morph_note).collect();
+    let mut mesh = MeshData {
+        uvs,
+        tangents,
+        positions,
+        normals,
+        indices,
+        joints,
+        weights,
+        morph_targets,
+        morph_weights: Vec::new(),
+    };
     // Normals that contradict the faces (all +Y on walls, say) would light the mesh as if it
     // were flat; recompute them from the faces and say so.
     if let Some(share) = mesh.normal_disagreement().filter(|&s| s > NORMAL_DISAGREEMENT_LIMIT) {
@@ -121,7 +134,7 @@ pub(super) fn convert(primitive: &Primitive<'_>, buffers: &[Vec<u8>], place: &st
         ));
         mesh.normals.clear();
     }
-    Ok(Converted::Mesh(mesh, place_for_mesh, notes))
+    Ok(Converted::Mesh(Box::new(mesh), place_for_mesh, notes))
 }
 
 /// Reads an attribute the mesh can do without (texture coordinates, tangents): one that is

@@ -15,7 +15,7 @@ use std::collections::HashSet;
 
 /// What a primitive's geometry depends on: two primitives with the same key become the same
 /// cullgraph mesh, read once (a file that repeats one primitive 20,000 times costs one mesh).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub(super) struct PrimitiveKey {
     mode: &'static str,
     indices: Option<usize>,
@@ -23,6 +23,8 @@ pub(super) struct PrimitiveKey {
     normal: Option<usize>,
     uv: Option<usize>,
     tangent: Option<usize>,
+    /// The accessors of the joint influences (`JOINTS_n`, `WEIGHTS_n`) and morph targets.
+    deform: Vec<Option<usize>>,
 }
 
 impl PrimitiveKey {
@@ -36,8 +38,26 @@ impl PrimitiveKey {
             normal: attribute(Semantic::Normals),
             uv: attribute(Semantic::TexCoords(0)),
             tangent: attribute(Semantic::Tangents),
+            deform: deform_accessors(primitive),
         }
     }
+}
+
+/// The accessors that deform `primitive`, in a fixed order: the joint and weight sets, then
+/// each morph target's positions, normals and tangents.
+fn deform_accessors(primitive: &Primitive<'_>) -> Vec<Option<usize>> {
+    let mut out = Vec::new();
+    for set in 0.. {
+        let (j, w) = (primitive.get(&Semantic::Joints(set)), primitive.get(&Semantic::Weights(set)));
+        if j.is_none() && w.is_none() {
+            break;
+        }
+        out.extend([j.map(|a| a.index()), w.map(|a| a.index())]);
+    }
+    for target in primitive.morph_targets() {
+        out.extend([target.positions(), target.normals(), target.tangents()].map(|a| a.map(|a| a.index())));
+    }
+    out
 }
 
 /// Whether a primitive of this mode is drawn (the others are skipped with a report).
