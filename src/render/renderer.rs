@@ -21,6 +21,7 @@ use view::View;
 
 mod adapt;
 mod completed;
+mod deform;
 mod graphs;
 mod lockstep;
 mod readback;

@@ -14,6 +14,7 @@ pub mod gltf_import;
 pub mod merge;
 pub mod mesh;
 pub mod pool_ranges;
+pub mod posing;
 pub mod procedural;
 pub mod projection;
 pub mod source;

@@ -170,6 +170,8 @@ pub enum Change {
     Sun,
     /// The user data of the instance at this index changed ([`World::set_user_data`]).
     UserData(u32),
+    /// The pose of the instance at this index changed ([`World::set_pose`]).
+    Pose(u32),
 }
 
 /// The most 32-bit words of user data an instance may carry ([`World::with_user_data`]).
@@ -275,6 +277,9 @@ pub struct World {
     /// Words of user data per instance, and every instance index's words.
     user_words: u32,
     user_data: Vec<u32>,
+    /// The posed instances by index, and the joint boxes of each deformable mesh posed so far.
+    poses: std::collections::BTreeMap<u32, super::posing::Pose>,
+    joint_boxes: std::collections::HashMap<u32, std::sync::Arc<super::posing::JointBoxes>>,
 }
 
 impl World {
@@ -310,6 +315,8 @@ impl World {
             free_textures: Vec::new(),
             user_words: words,
             user_data: vec![0; n * words as usize],
+            poses: Default::default(),
+            joint_boxes: Default::default(),
             scene,
             journal: Vec::new(),
             journal_start: 0,
@@ -511,6 +518,113 @@ impl World {
         Ok(handle)
     }
 
+    /// Poses instance `handle`, whose mesh deforms (glTF skin or morph targets,
+    /// [`crate::scene::Mesh::deform`]): `joints` take the mesh's bind-space vertices into the
+    /// instance's local space (at least the mesh's [`crate::scene::deform::MeshDeform::joint_count`],
+    /// none for a mesh that is only morphed), `morph_weights` weigh its morph targets (missing
+    /// ones 0). The first pose gives the instance its own copy of the mesh, which renderers
+    /// deform on the GPU and cull with a bound of the pose; setting the instance another mesh
+    /// ends the pose. Everything is checked first; an error names the handle.
+    pub fn set_pose(
+        &mut self,
+        handle: InstanceHandle,
+        joints: &[glam::Mat4],
+        morph_weights: &[f32],
+    ) -> Result<(), WorldError> {
+        self.check_instance(handle)?;
+        let index = handle.index;
+        let source = self.poses.get(&index).map_or(self.scene.instances[index as usize].mesh, |p| p.source);
+        let invalid = |message: String| WorldError::Invalid { handle: handle.to_string(), message };
+        let mesh = &self.scene.meshes[source as usize];
+        let Some(deform) = mesh.deform.clone() else {
+            return Err(invalid(format!("mesh {source} '{}' has no skin and no morph targets to pose", mesh.name)));
+        };
+        if deform.is_skinned() && joints.len() < deform.joint_count as usize {
+            return Err(invalid(format!(
+                "{} joint matrices; mesh {source} '{}' needs {}",
+                joints.len(),
+                mesh.name,
+                deform.joint_count
+            )));
+        }
+        if morph_weights.len() > deform.morph_targets.len() {
+            return Err(invalid(format!(
+                "{} morph weights; mesh {source} '{}' has {} morph targets",
+                morph_weights.len(),
+                mesh.name,
+                deform.morph_targets.len()
+            )));
+        }
+        let finite_joints = joints.iter().all(|m| m.is_finite() && m.row(3) == glam::Vec4::W);
+        if !finite_joints || !morph_weights.iter().all(|w| w.is_finite()) {
+            return Err(invalid("joint matrices must be finite and affine, morph weights finite".into()));
+        }
+        let boxes = match self.joint_boxes.get(&source) {
+            Some(boxes) => boxes.clone(),
+            None => {
+                let rest = &self.scene.vertices
+                    [mesh.vertex_offset as usize..(mesh.vertex_offset + mesh.vertex_count) as usize];
+                let boxes = std::sync::Arc::new(super::posing::JointBoxes::new(&deform, rest));
+                self.joint_boxes.insert(source, boxes.clone());
+                boxes
+            }
+        };
+        let (bounds, sphere) = boxes.bound(joints, morph_weights);
+        let own = match self.poses.get(&index) {
+            Some(pose) => pose.mesh,
+            None => {
+                let own = self.copy_mesh(source, index)?;
+                self.scene.instances[index as usize].mesh = own;
+                self.record(Change::Instance(index));
+                own
+            }
+        };
+        let copy = &mut self.scene.meshes[own as usize];
+        (copy.bounds, copy.sphere) = (bounds, sphere);
+        let pose =
+            super::posing::Pose { source, mesh: own, joints: joints.to_vec(), morph_weights: morph_weights.to_vec() };
+        self.poses.insert(index, pose);
+        self.record(Change::Pose(index));
+        Ok(())
+    }
+
+    /// The pose of instance `handle` (`None`: not posed).
+    pub fn pose(&self, handle: InstanceHandle) -> Result<Option<&super::posing::Pose>, WorldError> {
+        self.check_instance(handle)?;
+        Ok(self.poses.get(&handle.index))
+    }
+
+    /// Every posed instance index with its pose.
+    pub fn posed(&self) -> impl Iterator<Item = (u32, &super::posing::Pose)> + '_ {
+        self.poses.iter().map(|(&i, p)| (i, p))
+    }
+
+    /// The pose of instance index `index`, if it is posed.
+    pub fn pose_at(&self, index: u32) -> Option<&super::posing::Pose> {
+        self.poses.get(&index)
+    }
+
+    /// Registers a copy of mesh `source` for instance index `index` to deform (its vertices
+    /// and indices; no deformation of its own).
+    fn copy_mesh(&mut self, source: u32, index: u32) -> Result<u32, WorldError> {
+        let m = self.scene.meshes[source as usize].clone();
+        let vertices =
+            self.scene.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize].to_vec();
+        let indices = self.scene.indices[m.first_index as usize..(m.first_index + m.index_count) as usize].to_vec();
+        let name = format!("{} (posed instance {index})", m.name);
+        self.place_mesh(&name, vertices.len(), indices.len(), |scene, place, at| {
+            scene.put_mesh_vertices(&name, &vertices, &indices, (m.bounds, m.sphere, None), place, at)
+        })
+    }
+
+    /// Ends the pose of instance index `index` (removed, or given another mesh): its copy of
+    /// the mesh is unregistered.
+    fn unpose(&mut self, index: u32) -> Option<super::posing::Pose> {
+        let pose = self.poses.remove(&index)?;
+        self.free_mesh(pose.mesh);
+        Some(pose)
+    }
+
     /// Words of user data each instance carries (0: none).
     pub fn user_words(&self) -> u32 {
         self.user_words
@@ -555,7 +669,11 @@ impl World {
         self.check_instance(handle)?;
         self.instances.release(handle.index);
         self.record(Change::Instance(handle.index));
-        Ok(self.scene.instances[handle.index as usize])
+        let mut instance = self.scene.instances[handle.index as usize];
+        if let Some(pose) = self.unpose(handle.index) {
+            instance.mesh = pose.source;
+        }
+        Ok(instance)
     }
 
     /// Replaces whole instances: each `(handle, instance)` is checked first, then all are applied.
@@ -569,6 +687,10 @@ impl World {
         for (handle, instance) in changes {
             self.scene.instances[handle.index as usize] = *instance;
             self.record(Change::Instance(handle.index));
+            // Another mesh than its posed copy ends the pose.
+            if self.poses.get(&handle.index).is_some_and(|p| p.mesh != instance.mesh) {
+                self.unpose(handle.index);
+            }
         }
         Ok(())
     }
@@ -681,14 +803,26 @@ impl World {
         if let Some(e) = self.unknown_mesh(|| "remove_mesh".into(), mesh) {
             return Err(e);
         }
-        self.refuse_in_use(&format!("mesh {mesh} '{}'", self.scene.meshes[mesh as usize].name), |i| i.mesh == mesh)?;
+        let what = format!("mesh {mesh} '{}'", self.scene.meshes[mesh as usize].name);
+        self.refuse_in_use(&what, |i| i.mesh == mesh)?;
+        let posed: Vec<u32> = self.poses.iter().filter(|(_, p)| p.source == mesh).map(|(&i, _)| i).collect();
+        if let Some(&first) = posed.first() {
+            let first = self.handle_at(first).expect("posed instances are live");
+            return Err(WorldError::InUse { what, users: posed.len(), first });
+        }
+        self.free_mesh(mesh);
+        Ok(())
+    }
+
+    /// Unregisters `mesh`, which no instance uses.
+    fn free_mesh(&mut self, mesh: u32) {
+        self.joint_boxes.remove(&mesh);
         self.meshes_live[mesh as usize] = false;
         let m = &self.scene.meshes[mesh as usize];
         self.vertex_ranges.give_back(m.vertex_offset, m.vertex_count);
         self.index_ranges.give_back(m.first_index, m.index_count);
         self.free_meshes.push(mesh);
         self.record(Change::Mesh(mesh));
-        Ok(())
     }
 
     /// Entries of the vertex and index pools, in use or free (what the GPU holds).

@@ -119,6 +119,8 @@ pub(super) struct WorldMirror {
     refresh_previous: bool,
     /// Words of user data per instance ([`World::user_words`]).
     user_words: u32,
+    /// The posed instances' deformations (made at the first pose).
+    deformer: Option<super::deform::Deformer>,
 }
 
 impl WorldMirror {
@@ -211,6 +213,9 @@ impl WorldMirror {
 
     /// Forgets the queued updates (recorded, or for buffers being replaced).
     fn clear_updates(&mut self) {
+        if let Some(deformer) = &mut self.deformer {
+            deformer.clear();
+        }
         let words = self.user_words() as usize;
         for entry in self.user.chunks_exact(words + 1) {
             self.user_of_slot[entry[0] as usize] = u32::MAX;
@@ -228,6 +233,7 @@ impl WorldMirror {
         (std::mem::size_of_val(self.moves.as_slice())
             + std::mem::size_of_val(self.whole.as_slice())
             + std::mem::size_of_val(self.user.as_slice())) as u64
+            + self.deformer.as_ref().map_or(0, |d| d.queued_bytes())
     }
 
     /// Words of user data per instance.
@@ -251,7 +257,8 @@ impl WorldMirror {
         timer.reset(cmd);
         *timed = Some(frame);
         let scatters = !self.moves.is_empty() || !self.whole.is_empty();
-        if !scatters && !self.moved_last && !self.refresh_previous && self.user.is_empty() {
+        let deforms = self.deformer.as_ref().is_some_and(|d| d.pending());
+        if !scatters && !self.moved_last && !self.refresh_previous && self.user.is_empty() && !deforms {
             return Ok(());
         }
         let device = ctx.device();
@@ -278,7 +285,7 @@ impl WorldMirror {
             unsafe { device.cmd_copy_buffer(cmd, scene.instances.handle(), previous.handle(), &[region]) };
             cmd_barriers(device, cmd, &[memory_barrier(transfer, all)], &[]);
         }
-        if !scatters && self.user.is_empty() {
+        if !scatters && self.user.is_empty() && !deforms {
             timer.end(cmd);
             return Ok(());
         }
@@ -289,6 +296,11 @@ impl WorldMirror {
             layout: ash::vk::ImageLayout::UNDEFINED,
         };
         cmd_barriers(device, cmd, &[memory_barrier(all, compute_rw)], &[]);
+        if let Some(deformer) = self.deformer.as_mut().filter(|_| deforms) {
+            // The poses' bounds into their groups before the scatters derive cull records.
+            deformer.record(ctx, cmd, k, scene)?;
+            cmd_barriers(device, cmd, &[memory_barrier(compute_rw, compute_rw)], &[]);
+        }
         if let (Some(pipeline), Some(user_data), false) = (&self.scatter_user, &scene.user_data, self.user.is_empty()) {
             let bytes: &[u8] = bytemuck::cast_slice(&self.user);
             let segment = fill_segment(ctx, &mut self.segments[k][2], &format!("user data updates {k}"), bytes)?;
@@ -365,7 +377,12 @@ impl WorldMirror {
 }
 
 /// `segment` holding `bytes` (made, or made larger, where it does not hold them).
-fn fill_segment<'a>(ctx: &GpuContext, segment: &'a mut Option<Buffer>, name: &str, bytes: &[u8]) -> Result<&'a Buffer> {
+pub(super) fn fill_segment<'a>(
+    ctx: &GpuContext,
+    segment: &'a mut Option<Buffer>,
+    name: &str,
+    bytes: &[u8],
+) -> Result<&'a Buffer> {
     let current = segment.as_ref().map_or(0, |b| b.size());
     if current < bytes.len() as u64 {
         let desc = BufferDesc {
@@ -511,6 +528,7 @@ impl Renderer {
             moved_last: false,
             refresh_previous: true,
             user_words: world.user_words(),
+            deformer: None,
         });
         Ok(renderer)
     }
@@ -589,6 +607,7 @@ impl Renderer {
         let mut lights = false;
         let mut moves = 0usize;
         let mut user_changed = Vec::new();
+        let mut posed = Vec::new();
         for change in changes {
             match *change {
                 Change::Instance(i) => instances.push(i),
@@ -599,6 +618,7 @@ impl Renderer {
                 Change::Texture(t) => registered.textures.push(t),
                 Change::Material(m) => registered.materials.push(m),
                 Change::UserData(i) => user_changed.push(i),
+                Change::Pose(i) => posed.push(i),
             }
         }
         registered.dedup();
@@ -720,9 +740,15 @@ impl Renderer {
                 mirror.queue_user_data(slot, world.user_data_at(i));
             }
         }
+        posed.sort_unstable();
+        posed.dedup();
+        let edited_before = self.uploads.pending.as_ref().map_or(0, |b| b.edits.bytes());
+        self.queue_poses(shaders, world, &posed)?;
+        let edited_bytes = edited_bytes + self.uploads.pending.as_ref().map_or(0, |b| b.edits.bytes()) - edited_before;
+        let mirror = self.world.as_mut().expect("a world renderer");
         mirror.version = world.version();
         let stats = UpdateStats {
-            instances_changed: (instances.len() + moves + user_changed.len()) as u64,
+            instances_changed: (instances.len() + moves + user_changed.len() + posed.len()) as u64,
             bytes_uploaded: mirror.queued_bytes() - queued_before + edited_bytes,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
             gpu_ms: 0.0,
@@ -783,6 +809,14 @@ impl Renderer {
         mirror.handles = world_handles(world);
         mirror.version = world.version();
         self.scene = scene;
+        // The pool holds the rest shape of every posed copy again, and the batch that wrote the
+        // deformation data may be gone: every pose is queued anew.
+        if let Some(deformer) = &mut mirror.deformer {
+            deformer.forget_data();
+        }
+        let posed: Vec<u32> = world.posed().map(|(i, _)| i).collect();
+        self.queue_poses(shaders, world, &posed)?;
+        let mirror = self.world.as_mut().expect("a world renderer");
         let stats = UpdateStats {
             instances_changed: world.live_instances() as u64,
             bytes_uploaded: bytes,
@@ -792,6 +826,31 @@ impl Renderer {
         };
         mirror.note(&stats);
         Ok(stats)
+    }
+
+    /// Queues the deformations of posed instance indices `posed` (those with a slot), and a
+    /// move of each slot in place so that its cull record is derived again from the bound of
+    /// its pose.
+    fn queue_poses(&mut self, shaders: &ShaderCompiler, world: &World, posed: &[u32]) -> Result<()> {
+        let mirror = self.world.as_mut().expect("a world renderer");
+        let mut batch = None;
+        for &i in posed {
+            let (Some(pose), Some(slot)) = (world.pose_at(i), mirror.layout.slot_of(i)) else { continue };
+            if mirror.deformer.is_none() {
+                mirror.deformer = Some(super::deform::Deformer::new(&self.ctx, shaders)?);
+            }
+            let batch = batch.get_or_insert_with(|| self.uploads.pending.take().unwrap_or_default());
+            let group = mirror.layout.group_of_slot(slot) as u32;
+            let deformer = mirror.deformer.as_mut().expect("made above");
+            deformer.queue(&self.ctx, &mut batch.edits, world.scene(), i, pose, group)?;
+            let (rows, translation_lo) = GpuInstance::transform_words(&world.scene().instances[i as usize].transform);
+            mirror.queue_move(slot, rows, translation_lo);
+        }
+        if let Some(mut batch) = batch {
+            batch.edits.stage(&self.ctx)?;
+            self.uploads.pending = Some(batch);
+        }
+        Ok(())
     }
 
     /// Every view's graph for `scene` laid out as `layout`: recompiled where the scene outgrew
