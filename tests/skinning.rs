@@ -192,3 +192,30 @@ fn bad_poses_are_refused_naming_the_handle() {
         world.pool_sizes()
     );
 }
+
+/// Motion vectors include the deformation: a pose that changes shows motion on the bar alone,
+/// and a pose that stays shows none at the next frame.
+#[test]
+fn motion_vectors_follow_the_pose() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (mut world, handles, _) = world();
+    let right = handles[handles.len() - 1];
+    let camera = Camera { eye: DVec3::new(2.0, 2.0, 4.0), target: DVec3::new(2.0, 1.5, -1.0), ..Default::default() };
+    let mut r = renderer(&gpu, &world, "post", false);
+    let frame = |world: &World, r: &mut Renderer| {
+        r.sync(&shaders, world).unwrap();
+        r.render(&camera).unwrap();
+        let motion = r.read_output_f32("motion").unwrap();
+        motion.data.chunks_exact(2).filter(|m| m[0].abs() + m[1].abs() > 0.25).count()
+    };
+    world.set_pose(right, &bend(0.0), &[]).unwrap();
+    frame(&world, &mut r);
+    frame(&world, &mut r);
+    assert_eq!(frame(&world, &mut r), 0, "nothing moves");
+    world.set_pose(right, &bend(0.6), &[0.5]).unwrap();
+    let moving = frame(&world, &mut r);
+    assert!(moving > 10, "the bending bar shows motion: {moving} pixels");
+    assert_eq!(frame(&world, &mut r), 0, "a pose that stays shows no motion");
+    gpu.assert_clean();
+}

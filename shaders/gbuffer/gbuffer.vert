@@ -26,6 +26,8 @@ layout(location = 6) out vec4 out_tangent;         // world tangent, w: bitangen
 #ifdef MOTION
 // Motion vectors: the instance's record of the world's previous frame.
 layout(set = 0, binding = 8, scalar) readonly buffer PrevInstances { GpuInstance prev_instances[]; };
+// Each pool vertex's position last frame (a posed instance's copy moves with its pose).
+layout(set = 0, binding = 9, scalar) readonly buffer PrevPositions { vec3 prev_positions[]; };
 // Unjittered clip positions now and last frame: the fragment divides each by its w (the
 // difference of projected points is not linear across a triangle; clip positions are).
 layout(location = 7) out vec4 out_clip;
@@ -41,7 +43,8 @@ void main() {
 #ifdef MOTION
     // Last frame's position relative to last frame's eye, through last frame's unjittered
     // matrix: neither frame's jitter shows as motion.
-    vec3 prev_rel = instance_rel_eye(prev_instances[id], in_position, frame.prev_eye_hi.xyz, frame.prev_eye_lo.xyz);
+    vec3 prev_rel = instance_rel_eye(prev_instances[id], prev_positions[gl_VertexIndex], frame.prev_eye_hi.xyz,
+                                     frame.prev_eye_lo.xyz);
     out_clip = frame.view_proj_unjittered * vec4(rel, 1.0);
     out_prev_clip = frame.prev_view_proj_unjittered * vec4(prev_rel, 1.0);
 #endif

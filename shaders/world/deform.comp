@@ -46,10 +46,17 @@ layout(set = 0, binding = 1, scalar) readonly buffer Params { float params[]; };
 layout(set = 0, binding = 2, scalar) readonly buffer DeformData { uint deform_data[]; };
 layout(set = 0, binding = 3, scalar) buffer Vertices { PoolVertex vertices[]; };
 layout(set = 0, binding = 4, scalar) writeonly buffer Bounds { GroupBounds group_bounds[]; };
+// The positions the previous frame drew (motion vectors): the copy's position before this
+// frame's deformation. An entry with group REFRESH only sets them to the current positions (a
+// pose that changed last frame but not this one shows no motion).
+layout(set = 0, binding = 5, scalar) buffer PrevPositions { vec3 prev_positions[]; };
+
+const uint REFRESH = 0xFFFFFFFFu;
 
 layout(push_constant) uniform Push {
     uint count;
-    uint base;  // the entry of this dispatch's first row
+    uint base;   // the entry of this dispatch's first row
+    uint still;  // 1: the previous positions are the new ones (a scene uploaded again)
 } pc;
 
 mat3x4 joint_rows(uint at) {
@@ -63,8 +70,11 @@ void main() {
     if (e >= pc.count) return;
     Entry entry = entries[e];
     uint i = gl_GlobalInvocationID.x;
-    if (i == 0u) group_bounds[entry.group] = GroupBounds(entry.center_radius, entry.half_extent);
+    if (i == 0u && entry.group != REFRESH) group_bounds[entry.group] = GroupBounds(entry.center_radius, entry.half_extent);
     if (i >= entry.vertex_count) return;
+    PoolVertex before = vertices[entry.dst_vertex + i];
+    prev_positions[entry.dst_vertex + i] = vec3(before.px, before.py, before.pz);
+    if (entry.group == REFRESH) return;
 
     PoolVertex src = vertices[entry.src_vertex + i];
     vec3 p = vec3(src.px, src.py, src.pz);
@@ -105,4 +115,5 @@ void main() {
     dst.tangent_xy = packSnorm2x16(t.xy);
     dst.tangent_zw = packSnorm2x16(vec2(t.z, t.w < 0.0 ? -1.0 : 1.0));
     vertices[entry.dst_vertex + i] = dst;
+    if (pc.still != 0u) prev_positions[entry.dst_vertex + i] = p;
 }

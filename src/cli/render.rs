@@ -539,19 +539,33 @@ enum Driver {
     /// `--stream N`: the scene's pieces, `next` the one the next frame adds (the first is in
     /// the world from the start, and frame 0 draws it alone).
     Stream { merge: Box<cullgraph::scene::merge::SceneMerge>, pieces: Vec<Vec<usize>>, next: usize, frame: u32 },
+    /// `--animate` of a scene with animations: its first clip at [`Animation::CLIP_RATE`]
+    /// frames a second, every animated instance moved and posed each frame (`handles` by scene
+    /// instance).
+    Clip {
+        animation: std::sync::Arc<cullgraph::scene::animation::SceneAnimation>,
+        handles: Vec<cullgraph::scene::world::InstanceHandle>,
+        frame: u32,
+    },
 }
 
 impl Animation {
     /// Seconds of traffic per frame.
     const STEP: f64 = 1.0 / 30.0;
+    /// Frames a second of a played clip.
+    const CLIP_RATE: f64 = 60.0;
 
     fn new(args: &RenderArgs, scene: cullgraph::scene::Scene) -> Result<Self> {
         if let Some(n) = args.stream {
             return Self::stream(scene, n as usize);
         }
+        if let Some(animation) = scene.animation.clone() {
+            let (world, handles) = cullgraph::scene::world::World::new(scene)?;
+            return Ok(Self { world, driver: Driver::Clip { animation, handles, frame: 0 } });
+        }
         if scene.name != "builtin:city" {
             return Err(cullgraph::Error::Invalid(format!(
-                "--animate drives traffic through builtin:city; the scene is {}",
+                "--animate plays a scene's glTF animations or drives traffic through builtin:city; {} has no animation",
                 scene.name
             )));
         }
@@ -598,6 +612,25 @@ impl Animation {
         match &mut self.driver {
             Driver::Traffic(traffic) => {
                 traffic.step(&mut self.world, Self::STEP)?;
+                renderer.sync(shaders, &self.world)?;
+            }
+            Driver::Clip { animation, handles, frame } => {
+                *frame += 1;
+                let poses = animation.pose(0, *frame as f64 / Self::CLIP_RATE);
+                let moves: Vec<_> =
+                    poses.iter().filter_map(|p| handles.get(p.instance as usize).map(|&h| (h, p.transform))).collect();
+                self.world.set_transforms(&moves)?;
+                for pose in poses.iter().filter(|p| !p.joints.is_empty() || !p.morph_weights.is_empty()) {
+                    let Some(&handle) = handles.get(pose.instance as usize) else { continue };
+                    // Only a mesh with influences or targets deforms (a skin on a plain mesh moves nothing).
+                    let source = match self.world.pose(handle)? {
+                        Some(posed) => posed.source,
+                        None => self.world.instance(handle)?.mesh,
+                    };
+                    if self.world.scene().meshes[source as usize].deform.is_some() {
+                        self.world.set_pose(handle, &pose.joints, &pose.morph_weights)?;
+                    }
+                }
                 renderer.sync(shaders, &self.world)?;
             }
             Driver::Stream { merge, pieces, next, frame } => {

@@ -485,7 +485,8 @@ impl PassNode for GbufferPass {
             GeometryMode::Equal => DrawSource::redraw_lists(slots, scene)?,
             _ => vec![DrawSource::bound(slots, LIST_SLOTS)?.unwrap_or_else(|| DrawSource::unculled(scene))],
         };
-        let previous = [Bind::Buffer(8, scene.previous_instances().handle())];
+        let previous =
+            [Bind::Buffer(8, scene.previous_instances().handle()), Bind::Buffer(9, scene.prev_positions.handle())];
         let extra: &[Bind] = if self.motion { &previous } else { &[] };
         record_geometry(
             rec.ctx,

@@ -22,6 +22,10 @@ pub struct GpuScene {
     /// scene that never moves, whose previous transforms are its current ones
     /// ([`GpuScene::previous_instances`]).
     pub prev_instances: Option<Arc<Buffer>>,
+    /// Each pool vertex's position (`vec3`) as the previous frame drew it, for motion vectors:
+    /// the rest position, or for a posed instance's copy of its mesh the position of its
+    /// previous pose (written by the world's deformation, `shaders/world/deform.comp`).
+    pub prev_positions: Arc<Buffer>,
     /// [`GpuMaterial`] per material.
     pub materials: Arc<Buffer>,
     /// Instance ids grouped by draw group (face cull, mesh), each group in spatial order (Morton
@@ -161,6 +165,7 @@ impl GpuScene {
     pub fn bytes(&self) -> u64 {
         let buffers = [
             &self.vertices,
+            &self.prev_positions,
             &self.indices,
             &self.instances,
             &self.materials,
@@ -287,6 +292,7 @@ impl GpuScene {
         let none = vk::BufferUsageFlags::empty();
         Ok(Self {
             vertices: make("vertices", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&scene.vertices))?,
+            prev_positions: make("previous positions", none, bytemuck::cast_slice(&positions(&scene.vertices)))?,
             indices: make("indices", vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&scene.indices))?,
             // A changing world copies them to its previous instances (motion vectors).
             instances: make("instances", none, bytemuck::cast_slice(&instances))?,
@@ -319,6 +325,11 @@ impl GpuScene {
             alpha_masks: scene.materials.iter().any(|m| matches!(m.alpha_mode, crate::scene::AlphaMode::Mask { .. })),
         })
     }
+}
+
+/// The positions of `vertices`, as [`GpuScene::prev_positions`] holds them.
+pub(crate) fn positions(vertices: &[crate::scene::Vertex]) -> Vec<[f32; 3]> {
+    vertices.iter().map(|v| v.position).collect()
 }
 
 /// Triangles of the largest mesh of `scene`.

@@ -86,6 +86,7 @@ impl GpuScene {
                 vk::BufferUsageFlags::VERTEX_BUFFER,
             )?,
             indices: fit(&self.indices, size_of(scene.indices.len() as u64, 4), vk::BufferUsageFlags::INDEX_BUFFER)?,
+            prev_positions: fit(&self.prev_positions, size_of(scene.vertices.len() as u64, 12), none)?,
             instances,
             prev_instances,
             materials: fit(

@@ -21,6 +21,10 @@ use crate::scene::Scene;
 use std::collections::HashMap;
 use std::sync::Arc;
 
+/// The group of an entry that only refreshes the previous positions (`REFRESH` in
+/// `shaders/world/deform.comp`).
+const REFRESH: u32 = u32::MAX;
+
 /// One instance's deformation, as `shaders/world/deform.comp` reads it (64 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
@@ -48,6 +52,12 @@ pub(super) struct Deformer {
     entries: Vec<Entry>,
     entry_of: HashMap<u32, usize>,
     params: Vec<f32>,
+    /// The deformations the last recorded frame made, by instance index: those not deformed
+    /// again get their previous positions refreshed (no motion once a pose stops changing).
+    last: HashMap<u32, Entry>,
+    /// Whether the next frame's deformations show no motion (the scene was uploaded again,
+    /// its previous positions being the rest shape).
+    still: bool,
     /// Per frame in flight, the host-visible buffers the entries and params are read from.
     segments: Vec<[Option<Buffer>; 2]>,
 }
@@ -62,6 +72,8 @@ impl Deformer {
             entries: Vec::new(),
             entry_of: HashMap::new(),
             params: Vec::new(),
+            last: HashMap::new(),
+            still: false,
             segments: (0..FRAMES_IN_FLIGHT).map(|_| [None, None]).collect(),
         })
     }
@@ -159,9 +171,9 @@ impl Deformer {
         Ok(offset)
     }
 
-    /// Whether deformations wait for the next frame.
+    /// Whether deformations (or refreshes of last frame's) wait for the next frame.
     pub(super) fn pending(&self) -> bool {
-        !self.entries.is_empty()
+        !self.entries.is_empty() || !self.last.is_empty()
     }
 
     /// Bytes the queued deformations upload.
@@ -169,8 +181,9 @@ impl Deformer {
         (std::mem::size_of_val(self.entries.as_slice()) + std::mem::size_of_val(self.params.as_slice())) as u64
     }
 
-    /// Records frame `k`'s (its slot of the frames in flight) deformations; the caller orders
-    /// them after earlier frames' use of the pool and before the slot updates.
+    /// Records frame `k`'s (its slot of the frames in flight) deformations, and the refreshes
+    /// of last frame's that were not deformed again; the caller orders them after earlier
+    /// frames' use of the pool and before the slot updates.
     pub(super) fn record(
         &mut self,
         ctx: &GpuContext,
@@ -178,13 +191,21 @@ impl Deformer {
         k: usize,
         scene: &GpuScene,
     ) -> Result<()> {
-        let (Some(data), false) = (&self.data, self.entries.is_empty()) else { return Ok(()) };
+        let mut list = self.entries.clone();
+        list.extend(
+            self.last
+                .iter()
+                .filter(|(index, _)| !self.entry_of.contains_key(index))
+                .map(|(_, e)| Entry { group: REFRESH, ..*e }),
+        );
+        self.last = self.entry_of.iter().map(|(&index, &at)| (index, self.entries[at])).collect();
+        let (Some(data), false) = (&self.data, list.is_empty()) else { return Ok(()) };
         let params: &[f32] = if self.params.is_empty() { &[0.0] } else { &self.params };
         let entries = super::world_sync::fill_segment(
             ctx,
             &mut self.segments[k][0],
             &format!("deform entries {k}"),
-            bytemuck::cast_slice(&self.entries),
+            bytemuck::cast_slice(&list),
         )?
         .handle();
         let params = super::world_sync::fill_segment(
@@ -194,7 +215,7 @@ impl Deformer {
             bytemuck::cast_slice(params),
         )?
         .handle();
-        let most = self.entries.iter().map(|e| e.vertex_count).max().unwrap_or(0);
+        let most = list.iter().map(|e| e.vertex_count).max().unwrap_or(0);
         let limit = ctx.caps().limits.max_compute_work_group_count[1].max(1);
         self.pipeline.bind(cmd);
         self.pipeline.push_bindings(
@@ -205,13 +226,16 @@ impl Deformer {
                 Bind::Buffer(2, data.handle()),
                 Bind::Buffer(3, scene.vertices.handle()),
                 Bind::Buffer(4, scene.group_bounds.handle()),
+                Bind::Buffer(5, scene.prev_positions.handle()),
             ],
         );
         // A row of workgroups per instance, in as many dispatches as the device's rows allow.
-        let count = self.entries.len() as u32;
+        let count = list.len() as u32;
+        let still = self.still as u32;
+        self.still = false;
         for base in (0..count).step_by(limit as usize) {
             let rows = (count - base).min(limit);
-            self.pipeline.push_constants(cmd, &[count, base]);
+            self.pipeline.push_constants(cmd, &[count, base, still]);
             // SAFETY: cmd recording with the deform pipeline bound.
             unsafe { ctx.device().cmd_dispatch(cmd, most.div_ceil(64).max(1), rows, 1) };
         }
@@ -223,6 +247,8 @@ impl Deformer {
     pub(super) fn forget_data(&mut self) {
         self.placed.clear();
         self.data_words = 0;
+        self.last.clear();
+        self.still = true;
     }
 
     /// Forgets the queued deformations (recorded).

@@ -4,6 +4,7 @@
 //!   furniture, cars and street lamps ([`city`]).
 //! - `builtin:field`: many distinct mesh kinds scattered with random rotations and scales,
 //!   mirrored ones included ([`field`]).
+//! - `builtin:crowd`: skinned stalks swaying through a clip, for posed instances ([`crowd`]).
 //!
 //! [`traffic`] drives vehicles through a world made from the city.
 //!
@@ -11,6 +12,7 @@
 //! in the instance count with little work per instance.
 
 pub mod city;
+pub mod crowd;
 pub mod field;
 pub mod lights;
 pub mod shapes;
@@ -22,7 +24,7 @@ use super::{Instance, Material, Scene};
 use glam::Vec3;
 
 /// Names of the built-in scenes.
-pub const AVAILABLE: &[&str] = &["builtin:city", "builtin:field"];
+pub const AVAILABLE: &[&str] = &["builtin:city", "builtin:field", "builtin:crowd"];
 /// Largest accepted `instances` option: the most a scene may hold.
 pub const MAX_INSTANCES: usize = super::validate::MAX_INSTANCES;
 /// Largest accepted `kinds` option.
@@ -35,6 +37,7 @@ pub fn generate(name: &str, options: &LoadOptions) -> Result<Scene, SceneError> 
     match name.strip_prefix("builtin:").unwrap_or(name) {
         "city" => city::generate(options),
         "field" => field::generate(options),
+        "crowd" => crowd::generate(options),
         other => Err(SceneError::Builtin(format!(
             "unknown built-in scene 'builtin:{other}'; available: {}",
             AVAILABLE.join(", ")
