@@ -29,7 +29,10 @@ pub use crate::render::{
     FrameObserver, FramePipeline, GraphSpec, OutputF32, ParamsApplied, RenderSettings, Renderer, ViewFrame, ViewId,
     MAX_VIEWS, USER_DATA_IMPORT,
 };
+pub use crate::scene::animation::{InstancePose, SceneAnimation};
+pub use crate::scene::deform::{MeshDeform, MorphTarget};
 pub use crate::scene::merge::SceneMerge;
+pub use crate::scene::posing::Pose;
 pub use crate::scene::source::LoadOptions;
 pub use crate::scene::world::{InstanceHandle, LightHandle, World, WorldError, MAX_USER_WORDS};
 pub use crate::scene::{

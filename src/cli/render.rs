@@ -171,6 +171,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     drop(pipeline);
     bar.finish_and_clear();
+    if let Some(summary) = animation.as_ref().and_then(Animation::summary) {
+        println!("{summary}");
+    }
     note_memory(&mut stats, &renderer);
     let scene = args.reference.is_some().then(|| match &animation {
         Some(animation) => animation.world.live_scene(),
@@ -530,6 +533,8 @@ fn watch_deadline(seconds: Option<f64>) -> Option<Instant> {
 struct Animation {
     world: cullgraph::scene::world::World,
     driver: Driver,
+    /// CPU milliseconds of each played frame of a clip (sampling, posing and the sync).
+    clip_ms: Vec<f64>,
 }
 
 /// What changes the world each frame.
@@ -561,7 +566,7 @@ impl Animation {
         }
         if let Some(animation) = scene.animation.clone() {
             let (world, handles) = cullgraph::scene::world::World::new(scene)?;
-            return Ok(Self { world, driver: Driver::Clip { animation, handles, frame: 0 } });
+            return Ok(Self { world, driver: Driver::Clip { animation, handles, frame: 0 }, clip_ms: Vec::new() });
         }
         if scene.name != "builtin:city" {
             return Err(cullgraph::Error::Invalid(format!(
@@ -580,7 +585,7 @@ impl Animation {
             churn,
             args.scene.seed,
         )?;
-        Ok(Self { world, driver: Driver::Traffic(traffic) })
+        Ok(Self { world, driver: Driver::Traffic(traffic), clip_ms: Vec::new() })
     }
 
     /// A world holding the first of `n` pieces of `scene` (its sun and camera too), the others
@@ -605,7 +610,25 @@ impl Animation {
             first.materials,
             first.textures
         );
-        Ok(Self { world, driver: Driver::Stream { merge: Box::new(merge), pieces, next: 1, frame: 0 } })
+        Ok(Self {
+            world,
+            driver: Driver::Stream { merge: Box::new(merge), pieces, next: 1, frame: 0 },
+            clip_ms: Vec::new(),
+        })
+    }
+
+    /// What playing a clip cost a frame on the CPU: the median over the frames after the
+    /// first (which makes every posed copy), with the instances posed.
+    fn summary(&self) -> Option<String> {
+        let Driver::Clip { animation, .. } = &self.driver else { return None };
+        let mut ms: Vec<f64> = self.clip_ms.iter().skip(1).copied().collect();
+        ms.sort_by(f64::total_cmp);
+        let median = ms.get(ms.len() / 2)?;
+        let posed = self.world.posed().count();
+        Some(format!(
+            "animation: {} animated instances, {posed} posed; {median:.2} ms CPU a frame (median: sampling the clip, posing, syncing)",
+            animation.instances().len()
+        ))
     }
 
     fn step(&mut self, renderer: &mut Renderer, shaders: &ShaderCompiler) -> Result<()> {
@@ -615,6 +638,7 @@ impl Animation {
                 renderer.sync(shaders, &self.world)?;
             }
             Driver::Clip { animation, handles, frame } => {
+                let start = std::time::Instant::now();
                 *frame += 1;
                 let poses = animation.pose(0, *frame as f64 / Self::CLIP_RATE);
                 let moves: Vec<_> =
@@ -632,6 +656,7 @@ impl Animation {
                     }
                 }
                 renderer.sync(shaders, &self.world)?;
+                self.clip_ms.push(start.elapsed().as_secs_f64() * 1e3);
             }
             Driver::Stream { merge, pieces, next, frame } => {
                 *frame += 1;

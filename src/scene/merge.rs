@@ -35,6 +35,11 @@ pub struct Added {
     pub materials: usize,
     /// Textures registered.
     pub textures: usize,
+    /// The source's animation, placed where its instances were, when the whole source was
+    /// added at once ([`World::load_gltf`]): its instance `i` is `instances[i]` (play it with
+    /// [`super::animation::SceneAnimation::pose`], then [`World::set_transforms`] and
+    /// [`World::set_pose`]).
+    pub animation: Option<std::sync::Arc<super::animation::SceneAnimation>>,
 }
 
 impl SceneMerge {
@@ -204,7 +209,14 @@ impl World {
     ) -> Result<(Added, super::gltf_import::ImportReport), WorldError> {
         let options = super::source::LoadOptions { lights: Some(0), ..options.clone() };
         let (scene, report) = super::gltf_import::load_with_report(path, &options)?;
+        let animation = scene.animation.as_deref().map(|a| {
+            let mut placed = a.clone();
+            placed.set_placement(placement.then(&a.placement()));
+            std::sync::Arc::new(placed)
+        });
         let mut merge = SceneMerge::new(scene, placement)?;
-        Ok((merge.add_all(self)?, report))
+        let mut added = merge.add_all(self)?;
+        added.animation = animation;
+        Ok((added, report))
     }
 }
