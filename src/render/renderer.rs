@@ -405,15 +405,19 @@ impl Renderer {
         for (&at, frame_view) in order.iter().zip(views) {
             self.views[at].write_frame_data(&self.scene, frame, frame_view.camera)?;
         }
-        if let Some(batch) = &self.uploads.pending {
-            self.ctx.begin_label(cmd, "upload scene");
-            batch.record(&self.ctx, cmd);
-            self.ctx.end_label(cmd);
-        }
-        if let Some(world) = &mut self.world {
-            self.ctx.begin_label(cmd, "update scene");
-            world.record_updates(&self.ctx, cmd, frame, &self.gpu_scene)?;
-            self.ctx.end_label(cmd);
+        match &mut self.world {
+            Some(world) => {
+                self.ctx.begin_label(cmd, "update scene");
+                world.record_updates(&self.ctx, cmd, frame, &self.gpu_scene, self.uploads.pending.as_ref())?;
+                self.ctx.end_label(cmd);
+            }
+            None => {
+                if let Some(batch) = &self.uploads.pending {
+                    self.ctx.begin_label(cmd, "upload scene");
+                    batch.record(&self.ctx, cmd);
+                    self.ctx.end_label(cmd);
+                }
+            }
         }
         // The scene's user data is every graph's to import as `user_data`, unless the host
         // gives a buffer of that name itself.

@@ -89,8 +89,9 @@ pub struct UpdateStats {
     pub bytes_uploaded: u64,
     /// CPU milliseconds the sync took.
     pub cpu_ms: f64,
-    /// GPU milliseconds of the scatter of the changed slots into the scene buffers (0 when not
-    /// timed).
+    /// GPU milliseconds of applying the changes at the frame: the scene's uploads and edits
+    /// (registrations, growth), the posed instances' deformation and the scatter of the changed
+    /// slots (0 when not timed).
     pub gpu_ms: f64,
     /// Whether the world was laid out anew.
     pub relayout: bool,

@@ -251,6 +251,7 @@ impl WorldMirror {
         cmd: ash::vk::CommandBuffer,
         frame: u64,
         scene: &GpuScene,
+        uploads: Option<&UploadBatch>,
     ) -> Result<()> {
         let k = (frame % FRAMES_IN_FLIGHT as u64) as usize;
         let (timer, timed) = &mut self.timers[k];
@@ -258,7 +259,9 @@ impl WorldMirror {
         *timed = Some(frame);
         let scatters = !self.moves.is_empty() || !self.whole.is_empty();
         let deforms = self.deformer.as_ref().is_some_and(|d| d.pending());
-        if !scatters && !self.moved_last && !self.refresh_previous && self.user.is_empty() && !deforms {
+        let uploads = uploads.filter(|b| !b.is_empty());
+        let copies_previous = scatters || self.moved_last || self.refresh_previous;
+        if !copies_previous && self.user.is_empty() && !deforms && uploads.is_none() {
             return Ok(());
         }
         let device = ctx.device();
@@ -267,7 +270,15 @@ impl WorldMirror {
             access: ash::vk::AccessFlags2::MEMORY_READ | ash::vk::AccessFlags2::MEMORY_WRITE,
             layout: ash::vk::ImageLayout::UNDEFINED,
         };
+        // Uploads and edits of the scene (registrations, growth) are timed with the updates.
         timer.begin(cmd, "update scene");
+        if let Some(batch) = uploads {
+            batch.record(ctx, cmd);
+        }
+        if !copies_previous && self.user.is_empty() && !deforms {
+            timer.end(cmd);
+            return Ok(());
+        }
         if let Some(previous) = &scene.prev_instances {
             // Last frame's records become the previous ones before the scatter replaces them.
             let transfer = Access {

@@ -84,7 +84,7 @@ mod tests {
     #[test]
     fn unknown_names_list_the_available_scenes() {
         let e = generate("x", &LoadOptions::default()).unwrap_err().to_string();
-        assert_eq!(e, "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field");
+        assert_eq!(e, "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field, builtin:crowd");
         let e = generate("builtin:nope", &LoadOptions::default()).unwrap_err().to_string();
         assert!(e.contains("'builtin:nope'"), "{e}");
     }
