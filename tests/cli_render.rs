@@ -424,7 +424,7 @@ fn animate_drives_traffic_and_culling_stays_exact() {
     }
     let (code, _, err) = run(&["render", "--animate", "--scene", "builtin:field", "--out", png.to_str().unwrap()]);
     assert_eq!(code, 1);
-    assert!(err.contains("--animate drives traffic through builtin:city"), "{err}");
+    assert!(err.contains("--animate plays a scene's glTF animations or drives traffic through builtin:city; builtin:field has no animation"), "{err}");
 }
 
 /// `--stream N`: the scene arrives in a live world in N pieces, one a frame, each verified

@@ -248,7 +248,7 @@ fn field_supports_many_kinds() {
 
 #[test]
 fn absurd_parameters_are_refused_by_name() {
-    let cases: [(&str, LoadOptions, &str); 7] = [
+    let cases: [(&str, LoadOptions, &str); 10] = [
         ("city", options(Some(0), None, 1), "instances = 0"),
         ("city", options(Some(procedural::MAX_INSTANCES + 1), None, 1), "instances = 16777216"),
         ("field", options(Some(0), None, 1), "instances = 0"),
@@ -256,6 +256,9 @@ fn absurd_parameters_are_refused_by_name() {
         ("field", options(None, Some(100_001), 1), "kinds = 100001"),
         ("field", options(Some(usize::MAX), None, 1), "instances"),
         ("city", LoadOptions { lights: Some(usize::MAX), ..Default::default() }, "lights"),
+        ("crowd", options(Some(0), None, 1), "instances = 0"),
+        ("crowd", options(Some(100_001), None, 1), "instances = 100001"),
+        ("crowd", LoadOptions { lights: Some(usize::MAX), ..Default::default() }, "lights"),
     ];
     for (name, opts, fragment) in cases {
         match procedural::generate(name, &opts) {
@@ -266,7 +269,7 @@ fn absurd_parameters_are_refused_by_name() {
         }
     }
     let e = procedural::generate("x", &LoadOptions::default()).unwrap_err().to_string();
-    assert_eq!(e, "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field");
+    assert_eq!(e, "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field, builtin:crowd");
 }
 
 #[test]

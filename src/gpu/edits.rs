@@ -109,24 +109,7 @@ impl Edits {
     pub fn write_layer(&mut self, array: &TextureArray, layer: u32, chain: &[u8]) {
         let src_offset = self.open.len() as u64;
         self.open.extend_from_slice(chain);
-        let mut regions = Vec::with_capacity(array.mip_levels() as usize);
-        let (mut offset, mut side) = (0u64, array.size());
-        for mip in 0..array.mip_levels() {
-            regions.push(
-                vk::BufferImageCopy::default()
-                    .buffer_offset(offset)
-                    .image_subresource(
-                        vk::ImageSubresourceLayers::default()
-                            .aspect_mask(vk::ImageAspectFlags::COLOR)
-                            .mip_level(mip)
-                            .base_array_layer(layer)
-                            .layer_count(1),
-                    )
-                    .image_extent(vk::Extent3D { width: side, height: side, depth: 1 }),
-            );
-            offset += side as u64 * side as u64 * 4;
-            side = (side / 2).max(1);
-        }
+        let regions = array.layer_regions(layer, 0);
         let layers = array.range().base_array_layer(layer).layer_count(1);
         self.edits.push(Edit::WriteLayers { chunk: Chunk::Open, src_offset, image: array.handle(), layers, regions });
     }

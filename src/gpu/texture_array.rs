@@ -110,6 +110,29 @@ impl TextureArray {
             .layer_count(self.layers)
     }
 
+    /// The copy regions of one layer's whole mip chain (mip 0 first, tightly packed RGBA8)
+    /// starting at `offset` of a buffer, into layer `layer`.
+    pub fn layer_regions(&self, layer: u32, offset: u64) -> Vec<vk::BufferImageCopy> {
+        let (mut offset, mut side) = (offset, self.size);
+        (0..self.mip_levels)
+            .map(|mip| {
+                let region = vk::BufferImageCopy::default()
+                    .buffer_offset(offset)
+                    .image_subresource(
+                        vk::ImageSubresourceLayers::default()
+                            .aspect_mask(vk::ImageAspectFlags::COLOR)
+                            .mip_level(mip)
+                            .base_array_layer(layer)
+                            .layer_count(1),
+                    )
+                    .image_extent(vk::Extent3D { width: side, height: side, depth: 1 });
+                offset += side as u64 * side as u64 * 4;
+                side = (side / 2).max(1);
+                region
+            })
+            .collect()
+    }
+
     /// The image.
     pub fn handle(&self) -> vk::Image {
         self.handle

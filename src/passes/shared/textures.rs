@@ -447,24 +447,7 @@ fn queue(ctx: &GpuContext, batch: &mut UploadBatch, array: &TextureArray, layers
     let mut data = Vec::with_capacity(layers.iter().map(Vec::len).sum());
     let mut regions = Vec::new();
     for (layer, chain) in layers.iter().enumerate() {
-        let mut offset = data.len() as u64;
-        let mut size = array.size();
-        for mip in 0..array.mip_levels() {
-            regions.push(
-                vk::BufferImageCopy::default()
-                    .buffer_offset(offset)
-                    .image_subresource(
-                        vk::ImageSubresourceLayers::default()
-                            .aspect_mask(vk::ImageAspectFlags::COLOR)
-                            .mip_level(mip)
-                            .base_array_layer(layer as u32)
-                            .layer_count(1),
-                    )
-                    .image_extent(vk::Extent3D { width: size, height: size, depth: 1 }),
-            );
-            offset += (size * size * 4) as u64;
-            size = (size / 2).max(1);
-        }
+        regions.extend(array.layer_regions(layer as u32, data.len() as u64));
         data.extend_from_slice(chain);
     }
     batch.image(ctx, "textures", array.handle(), array.range(), &data, regions)?;
