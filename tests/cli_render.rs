@@ -469,3 +469,19 @@ fn animate_plays_skinned_and_morphed_scenes() {
         assert!(std::fs::read(&rest).unwrap() != std::fs::read(&posed).unwrap(), "{scene}: the animation shows");
     }
 }
+
+/// `--sun X,Y,Z` lights the scene from that direction; no direction is an error naming the flag.
+#[test]
+fn sun_flag_moves_the_light_and_refuses_no_direction() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (plain, lit) = (tmp.path().join("p.png"), tmp.path().join("s.png"));
+    let base = ["render", "--instances", "1000", "--size", "64x48", "--frames", "1"];
+    let (code, stdout, err) = run(&[&base[..], &["--out", plain.to_str().unwrap()]].concat());
+    assert_eq!(code, 0, "{stdout}{err}");
+    let (code, stdout, err) = run(&[&base[..], &["--sun", "1,0.2,-1", "--out", lit.to_str().unwrap()]].concat());
+    assert_eq!(code, 0, "{stdout}{err}");
+    assert!(std::fs::read(&plain).unwrap() != std::fs::read(&lit).unwrap(), "the sun moved");
+    let (code, _, err) = run(&[&base[..], &["--sun", "0,0,0"]].concat());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--sun") && err.contains("finite and not zero"), "{err}");
+}

@@ -441,6 +441,10 @@ pub struct RenderArgs {
     /// Move the scene and the camera together by x,y,z (large-world precision check).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "x,y,z")]
     pub world_offset: Option<DVec3>,
+    /// Replace the scene's sun by the default sun shining from direction x,y,z (towards the
+    /// sun, any length but zero).
+    #[arg(long, value_parser = parse_sun, allow_hyphen_values = true, value_name = "x,y,z")]
+    pub sun: Option<glam::Vec3>,
     /// Move the camera over the frames: still, orbit, dolly or shake.
     #[arg(long, default_value = "still", value_parser = parse_camera_path)]
     pub camera_path: cullgraph::scene::CameraPath,
@@ -621,6 +625,15 @@ pub fn parse_jitter(s: &str) -> Result<JitterArg, String> {
     Ok(JitterArg::Fixed(glam::Vec2::from_array(v)))
 }
 
+/// Parses `--sun x,y,z`: a direction towards the sun, finite and not zero.
+pub fn parse_sun(s: &str) -> Result<glam::Vec3, String> {
+    let v = parse_vec3(s)?.as_vec3();
+    if !v.is_finite() || v.length_squared() < 1e-12 {
+        return Err(format!("'{s}' is no direction: the sun's must be finite and not zero"));
+    }
+    Ok(v.normalize())
+}
+
 /// Parses `x,y,z` into finite numbers.
 pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
     let parts: Vec<&str> = s.split(',').collect();
@@ -682,6 +695,10 @@ mod tests {
         assert!(parse_size("100").unwrap_err().contains("WIDTHxHEIGHT"));
         assert!(parse_size("axb").unwrap_err().contains("not a whole number"));
         assert_eq!(parse_vec3("1,-2.5,3e7"), Ok(DVec3::new(1.0, -2.5, 3e7)));
+        assert_eq!(parse_sun("0,2,0"), Ok(glam::Vec3::Y));
+        for bad in ["0,0,0", "1e-30,0,0", "1e300,0,0", "nan,1,0", "1,2"] {
+            assert!(parse_sun(bad).is_err(), "{bad}");
+        }
         assert!(parse_vec3("1,2").is_err());
         assert!(parse_vec3("1,nan,2").unwrap_err().contains("not finite"));
         assert_eq!(parse_seconds("1.5"), Ok(1.5));

@@ -56,6 +56,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let spinner = progress(None, "loading scene");
     let mut scene = args.scene.load()?;
     spinner.finish_and_clear();
+    if let Some(towards) = args.sun {
+        // The sun's direction is the way its light travels.
+        scene.sun = cullgraph::scene::DirectionalLight { direction: -towards, ..Default::default() };
+    }
 
     let mut camera = camera_from_args(args, scene.default_camera(width as f32 / height as f32), &scene)?;
     if let Some(offset) = args.world_offset {

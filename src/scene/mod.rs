@@ -8,6 +8,7 @@ pub mod animation;
 pub mod bounds;
 pub mod camera;
 pub mod camera_path;
+pub mod cascades;
 pub mod deform;
 pub mod error;
 pub mod gltf_import;
