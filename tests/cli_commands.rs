@@ -119,6 +119,13 @@ fn bench_views_reports_each_view_count_and_the_resize() {
     assert_eq!(views["scene_kept"], true);
     // The shared dispatches were timed step by step.
     assert!(rows[4]["cull_test_ms"].as_f64().unwrap() > 0.0 && rows[4]["cull_compact_ms"].as_f64().unwrap() > 0.0);
+    // A street camera and four sun cascades, culled together and one at a time.
+    let cascades = &views["cascades"];
+    assert_eq!(cascades["cascades"], 4);
+    assert_eq!(cascades["drawn"].as_array().unwrap().len(), 5, "{cascades}");
+    for key in ["camera_alone_ms", "together_ms", "separate_ms"] {
+        assert!(cascades[key].as_f64().unwrap() > 0.0, "{key}: {cascades}");
+    }
     // Two eyes of --size each, drawn both ways (lavapipe has multiview).
     let stereo = &views["multiview"];
     assert_eq!((&stereo["width"], &stereo["height"], &stereo["multiview"]), (&32.into(), &24.into(), &true.into()));

@@ -1,7 +1,8 @@
 //! Many views over one world: a city rendered through 1, 2, 4, 8 and 16 views in one frame
 //! (four split-screen cameras at street level, a quarter of the output each, then orthographic
 //! views from above, as shadow maps see the city, square and as tall as the output), each view
-//! culled by its own graph; what each view costs beside the
+//! culled by its own graph; a street camera with the sun cascades fitted to it
+//! ([`crate::scene::cascades`]); what each view costs beside the
 //! shared scene; and resizing a view (CPU time, its next frame, and that nothing is uploaded).
 
 use super::median;
@@ -98,6 +99,26 @@ pub struct ViewsReport {
     /// against a pass per eye.
     #[serde(default)]
     pub multiview: Option<super::multiview::MultiviewReport>,
+    /// The first street camera at `width` x `height` with the sun's cascades fitted to it.
+    #[serde(default)]
+    pub cascades: Option<CascadesRow>,
+}
+
+/// A camera and the sun cascades fitted to it ([`crate::scene::cascades`]), each cascade a
+/// square view as tall as the output, culled with the camera.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct CascadesRow {
+    /// Cascades.
+    pub cascades: usize,
+    /// Median GPU milliseconds of culling the camera alone.
+    pub camera_alone_ms: f64,
+    /// Culling the camera and every cascade together (one test and one compact dispatch per
+    /// phase): the longest view's cull scope.
+    pub together_ms: f64,
+    /// The same, each view in dispatches of its own: the sum of the views' scopes.
+    pub separate_ms: f64,
+    /// Instances drawn by the camera, then each cascade, in the last frame.
+    pub drawn: Vec<u32>,
 }
 
 /// The `i`-th camera of a frame of `n` views: four split-screen street cameras looking inward
@@ -237,6 +258,8 @@ pub fn run(
         });
     }
 
+    report.cascades = Some(cascades(ctx, shaders, &scene, bench, &spec, progress)?);
+
     let stereo = super::multiview::MultiviewBench { width: w, height: h, warmup: bench.warmup, frames: bench.frames };
     report.multiview = Some(super::multiview::run(ctx, shaders, &scene, &camera(&scene, 0, 1), &stereo, progress)?);
 
@@ -268,6 +291,66 @@ pub fn run(
     report.resize_pipelines = ctx.pipelines_made() - pipelines;
     report.scene_kept = renderer.gpu_scene().instances.handle() == instances;
     Ok(report)
+}
+
+/// Culls the first street camera alone, then with the sun's cascades fitted to it, together
+/// and one view at a time.
+fn cascades(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    scene: &Scene,
+    bench: &ViewsBench,
+    spec: &GraphSpec,
+    progress: &dyn Fn(&str),
+) -> Result<CascadesRow> {
+    use crate::scene::cascades::{fit_cascades, CascadeSettings};
+    let (w, h) = (bench.width, bench.height);
+    let view = camera(scene, 0, 1);
+    let settings = CascadeSettings { resolution: h, ..Default::default() };
+    progress(&format!("views: a camera and {} sun cascades", settings.count));
+    let fitted =
+        fit_cascades(&view, w as f32 / h as f32, scene.sun.direction, &settings).map_err(crate::Error::Invalid)?;
+    let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), RenderSettings::new(w, h), spec)?;
+    renderer.set_step_timing(false);
+    let mut ids = vec![ViewId::MAIN];
+    for _ in &fitted {
+        ids.push(renderer.add_view(shaders, RenderSettings::new(h, h), spec)?);
+    }
+    let cameras: Vec<Camera> = std::iter::once(view).chain(fitted.iter().map(|c| c.camera.clone())).collect();
+    let cull_names: Vec<String> =
+        renderer.plan().passes.iter().filter(|p| p.kind == "instance_cull").map(|p| p.name.clone()).collect();
+    let cull_of = |s: &crate::stats::FrameStats| {
+        s.gpu_ms.iter().filter(|t| cull_names.contains(&t.name)).map(|t| t.ms).sum::<f64>()
+    };
+    let mut row = CascadesRow { cascades: fitted.len(), ..Default::default() };
+    let mut alone = Vec::new();
+    for f in 0..bench.warmup + bench.frames {
+        let stats = renderer.render_views(&[(ViewId::MAIN, &cameras[0])])?;
+        if f >= bench.warmup {
+            alone.push(cull_of(&stats[0]));
+        }
+    }
+    let frame: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&cameras).collect();
+    for together in [true, false] {
+        renderer.set_views_culled_together(together);
+        let mut times = Vec::new();
+        for f in 0..bench.warmup + bench.frames {
+            let stats = renderer.render_views(&frame)?;
+            if f < bench.warmup {
+                continue;
+            }
+            let per_view = stats.iter().map(cull_of);
+            times.push(if together { per_view.fold(0.0, f64::max) } else { per_view.sum() });
+            row.drawn = stats.iter().map(|s| s.drawn).collect();
+        }
+        if together {
+            row.together_ms = median(&mut times);
+        } else {
+            row.separate_ms = median(&mut times);
+        }
+    }
+    row.camera_alone_ms = median(&mut alone);
+    Ok(row)
 }
 
 impl ViewsReport {
@@ -314,6 +397,17 @@ impl ViewsReport {
             self.resize_pipelines,
             if self.scene_kept { "kept" } else { "uploaded again" }
         );
+        if let Some(c) = &self.cascades {
+            md += &format!(
+                "\nA street camera and {} sun cascades: culling the camera alone {:.3} GPU ms, with the cascades together {:.3} ({:.2}x), one view at a time {:.3}; drawn {:?}.\n",
+                c.cascades,
+                c.camera_alone_ms,
+                c.together_ms,
+                c.together_ms / c.camera_alone_ms.max(1e-9),
+                c.separate_ms,
+                c.drawn
+            );
+        }
         if let Some(multiview) = &self.multiview {
             md += &multiview.markdown();
         }
