@@ -192,10 +192,22 @@ impl Deformer {
         scene: &GpuScene,
     ) -> Result<()> {
         let mut list = self.entries.clone();
+        // A copy freed since last frame may have given its vertices to one deformed now: a
+        // refresh never touches vertices a deformation of this frame writes.
+        let mut written: Vec<(u32, u32)> =
+            self.entries.iter().map(|e| (e.dst_vertex, e.dst_vertex + e.vertex_count)).collect();
+        written.sort_unstable();
+        // The copies written now are disjoint, so sorted by start their ends are sorted too:
+        // of those starting before a range ends, the last reaches furthest.
+        let overlaps = |e: &Entry| {
+            let (start, end) = (e.dst_vertex, e.dst_vertex + e.vertex_count);
+            let before_end = written.partition_point(|&(s, _)| s < end);
+            before_end > 0 && written[before_end - 1].1 > start
+        };
         list.extend(
             self.last
                 .iter()
-                .filter(|(index, _)| !self.entry_of.contains_key(index))
+                .filter(|(index, e)| !self.entry_of.contains_key(index) && !overlaps(e))
                 .map(|(_, e)| Entry { group: REFRESH, ..*e }),
         );
         self.last = self.entry_of.iter().map(|(&index, &at)| (index, self.entries[at])).collect();
