@@ -485,3 +485,31 @@ fn sun_flag_moves_the_light_and_refuses_no_direction() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("--sun") && err.contains("finite and not zero"), "{err}");
 }
+
+/// `--stream` on a real level, frames submitted without waiting: the pieces grow the world in
+/// place while earlier frames still execute, and nothing they use is destroyed under them (the
+/// culling passes' scratch memory, sized for the slots, is replaced as the level grows; a
+/// validation message fails the command).
+#[test]
+fn streaming_a_level_while_frames_are_in_flight_is_clean() {
+    let level = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/nexuiz_ons-reborn.glb");
+    let level =
+        if level.exists() { level } else { std::path::Path::new("/work/shared/assets/nexuiz_ons-reborn.glb").into() };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("s.png");
+    let (code, stdout, err) = run(&[
+        "render",
+        "--scene",
+        level.to_str().unwrap(),
+        "--stream",
+        "4",
+        "--frames",
+        "7",
+        "--size",
+        "64x36",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}{err}");
+    assert!(stdout.contains("piece 4/4") && stdout.contains("registration into"), "{stdout}");
+}

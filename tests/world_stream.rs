@@ -229,3 +229,44 @@ fn registrations_upload_only_what_they_add() {
     compare(&world, &mut r, "a material made blended");
     gpu.assert_clean();
 }
+
+/// A world that grows in place between frames submitted without waiting, as an engine submits
+/// them: no validation message, and the last frame draws what a renderer made afresh draws.
+/// (`streaming_a_level_while_frames_are_in_flight_is_clean` in `tests/cli_render.rs` is the
+/// case that catches memory destroyed under a frame still executing.)
+#[test]
+fn growing_while_frames_are_in_flight_keeps_what_they_use() {
+    use cullgraph::render::FramePipeline;
+    use cullgraph::scene::Instance;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    // Large enough that the growth below stays within the room the graph was compiled with:
+    // the passes resize their own memory rather than the graph being made anew.
+    let mut scene = boxes_scene();
+    let base = scene.instances[1];
+    for i in 0..2000 {
+        let at = DVec3::new(-30.0 - (i % 40) as f64, 0.5, -30.0 - (i / 40) as f64);
+        scene.instances.push(Instance { transform: Transform { translation: at, ..base.transform }, ..base });
+    }
+    let (mut world, _) = World::new(scene).unwrap();
+    let spec = GraphSpec::default_graph();
+    let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(64, 48), &spec).unwrap();
+    let camera = boxes_camera();
+    let mut pipeline = FramePipeline::new(&gpu).unwrap();
+    let cube = world.add_mesh("small cube", &common::cube_mesh()).unwrap();
+    for round in 0..8 {
+        for k in 0..(4 << round.min(3)) {
+            let at = DVec3::new(-3.0 + 0.05 * k as f64, 0.1 + 0.2 * round as f64, -2.0);
+            let transform = Transform { linear: Mat3::from_diagonal(glam::Vec3::splat(0.05)), translation: at };
+            world.insert(Instance { transform, mesh: cube, material: 1, flags: 0 }).unwrap();
+        }
+        let stats = r.sync(&shaders, &world).unwrap();
+        assert!(!stats.relayout, "round {round}: grown in place");
+        pipeline.submit(&mut r, &camera).unwrap();
+    }
+    pipeline.finish(&r).unwrap();
+    let streamed = r.render_to_rgba8(&camera).unwrap().1;
+    let mut fresh = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(64, 48), &spec).unwrap();
+    assert!(streamed == fresh.render_to_rgba8(&camera).unwrap().1, "the grown world draws what a fresh one draws");
+    gpu.assert_clean();
+}

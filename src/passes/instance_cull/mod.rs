@@ -203,6 +203,9 @@ pub(crate) struct InstanceCullPass {
     init: Option<Pipeline>,
     sampler: Sampler,
     scratch: Option<Scratch>,
+    /// Scratch buffers replaced at a frame (the scene's slots or groups changed), kept until the
+    /// frames that used them can no longer be executing.
+    retired_scratch: Vec<(u64, Scratch)>,
     /// The test step's variant: with equal ones (and settings), passes of several views are
     /// culled together.
     defines: Vec<(String, String)>,
@@ -273,14 +276,21 @@ impl InstanceCullPass {
             init,
             sampler: Sampler::nearest_clamp(ctx)?,
             scratch: None,
+            retired_scratch: Vec::new(),
             defines,
             together,
         })
     }
 
-    /// Scratch buffers for `slots` instances and `groups` draw groups (created on first use).
-    fn ensure_scratch(&mut self, ctx: &GpuContext, slots: u32, groups: u32) -> crate::Result<()> {
+    /// Scratch buffers for `slots` instances and `groups` draw groups at frame `frame` (created
+    /// on first use, and made anew when the scene's counts change: the ones replaced are kept
+    /// until the frames in flight that use them have completed).
+    fn ensure_scratch(&mut self, ctx: &GpuContext, slots: u32, groups: u32, frame: u64) -> crate::Result<()> {
+        self.retired_scratch.retain(|(replaced, _)| frame < replaced + crate::graph::FRAMES_IN_FLIGHT as u64);
         if self.scratch.as_ref().is_none_or(|s| s.slots != slots || s.groups != groups) {
+            if let Some(old) = self.scratch.take() {
+                self.retired_scratch.push((frame, old));
+            }
             let blocks = blocks_of(slots) as u64;
             let storage = |name: &str, size: u64| {
                 Buffer::new(
@@ -394,7 +404,7 @@ impl PassNode for InstanceCullPass {
         let need = |slot: &str| rec.slots.required_buffer(slot);
         let (commands, draw_count) = (need("draw_commands")?, need("draw_count")?);
         let (draw_ids, stats) = (need("draw_instance_ids")?, need("stats")?);
-        self.ensure_scratch(ctx, slots, groups)?;
+        self.ensure_scratch(ctx, slots, groups, rec.frame.frame)?;
         let device = ctx.device();
         let scratch = self.scratch.as_mut().expect("ensured above");
         if scratch.fresh {

@@ -164,8 +164,9 @@ impl InstanceCullPass {
         nodes.append(&mut rest);
         let device = ctx.device();
         let mut fresh = false;
-        for node in nodes.iter_mut() {
-            node.ensure_scratch(ctx, slots, groups)?;
+        // `nodes[i]` records for `contexts[i]`, whose runtime counts its own frames.
+        for (node, context) in nodes.iter_mut().zip(contexts) {
+            node.ensure_scratch(ctx, slots, groups, context.frame.frame)?;
             let scratch = node.scratch.as_mut().expect("ensured above");
             if scratch.fresh {
                 // SAFETY: cmd recording; the buffers are the pass's own.
