@@ -330,10 +330,13 @@ impl World {
         &self.scene
     }
 
-    /// The world as a plain scene: its live instances (in index order) and live lights.
+    /// The world as a plain scene: its live instances (in index order) and live lights. The
+    /// scene's animation is left out: its instance indices are the world's, which this
+    /// compacts (a world plays an animation through handles, as `render --animate` does).
     pub fn live_scene(&self) -> Scene {
         let scene = &self.scene;
         Scene {
+            animation: None,
             instances: (0..scene.instances.len() as u32)
                 .filter(|&i| self.is_live(i))
                 .map(|i| scene.instances[i as usize])

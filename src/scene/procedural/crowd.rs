@@ -175,5 +175,8 @@ mod tests {
             assert!(a.joints[2] != b.joints[2], "stalk {} does not sway", a.instance);
             assert_eq!(a.transform, scene.instances[a.instance as usize].transform);
         }
+        // A world keeps the animation; its live scene, whose indices it compacts, does not.
+        let (world, _) = crate::scene::world::World::new(scene).unwrap();
+        assert!(world.scene().animation.is_some() && world.live_scene().animation.is_none());
     }
 }
