@@ -105,6 +105,19 @@ fn a_gltf_file_loads_into_a_live_world() {
     assert!(e.to_string().contains("missing.gltf"), "{e}");
 }
 
+/// The boxes scene with `n` more red cubes out of its camera's view, in rows of 50.
+fn boxes_and_far_cubes(n: usize) -> cullgraph::scene::Scene {
+    let mut scene = boxes_scene();
+    let base = scene.instances[1];
+    for i in 0..n {
+        let at = DVec3::new(-30.0 - (i % 50) as f64, 0.5, -30.0 - (i / 50) as f64);
+        scene
+            .instances
+            .push(cullgraph::scene::Instance { transform: Transform { translation: at, ..base.transform }, ..base });
+    }
+    scene
+}
+
 /// A cube whose faces each span the whole texture.
 fn textured_cube() -> cullgraph::scene::MeshData {
     let mut m = common::cube_mesh();
@@ -136,14 +149,8 @@ fn registrations_upload_only_what_they_add() {
     use glam::Vec3;
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
-    let mut scene = boxes_scene();
     // Enough instances that a whole upload would show in the figures.
-    let base = scene.instances[1];
-    for i in 0..3000 {
-        let at = DVec3::new(-30.0 - (i % 50) as f64, 0.5, -30.0 - (i / 50) as f64);
-        scene.instances.push(Instance { transform: Transform { translation: at, ..base.transform }, ..base });
-    }
-    let (mut world, _) = World::new(scene).unwrap();
+    let (mut world, _) = World::new(boxes_and_far_cubes(3000)).unwrap();
     let size = RenderSettings::new(96, 72);
     let spec = GraphSpec::default_graph();
     let mut r = Renderer::from_world(&gpu, &shaders, &world, size.clone(), &spec).unwrap();
@@ -242,13 +249,7 @@ fn growing_while_frames_are_in_flight_keeps_what_they_use() {
     let shaders = gpu.shaders();
     // Large enough that the growth below stays within the room the graph was compiled with:
     // the passes resize their own memory rather than the graph being made anew.
-    let mut scene = boxes_scene();
-    let base = scene.instances[1];
-    for i in 0..2000 {
-        let at = DVec3::new(-30.0 - (i % 40) as f64, 0.5, -30.0 - (i / 40) as f64);
-        scene.instances.push(Instance { transform: Transform { translation: at, ..base.transform }, ..base });
-    }
-    let (mut world, _) = World::new(scene).unwrap();
+    let (mut world, _) = World::new(boxes_and_far_cubes(2000)).unwrap();
     let spec = GraphSpec::default_graph();
     let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(64, 48), &spec).unwrap();
     let camera = boxes_camera();

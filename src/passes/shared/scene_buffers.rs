@@ -237,23 +237,12 @@ impl GpuScene {
         draws: DrawList,
         batch: &mut UploadBatch,
     ) -> crate::Result<Self> {
-        Self::upload_reusing(ctx, scene, draws, batch, None)
+        Self::upload_inner(ctx, scene, draws, batch, None, false)
     }
 
-    /// As [`GpuScene::upload_with`], taking `textures` (the GPU textures of a scene with the
-    /// same textures) instead of uploading them again.
-    pub fn upload_reusing(
-        ctx: &GpuContext,
-        scene: &Scene,
-        draws: DrawList,
-        batch: &mut UploadBatch,
-        textures: Option<Arc<GpuTextures>>,
-    ) -> crate::Result<Self> {
-        Self::upload_inner(ctx, scene, draws, batch, textures, false)
-    }
-
-    /// As [`GpuScene::upload_reusing`], every buffer with room to grow
-    /// ([`super::scene_growth`]): a changing world's scene.
+    /// As [`GpuScene::upload_with`], every buffer with room to grow
+    /// ([`super::scene_growth`]) and `textures` (the GPU textures of a scene with the same
+    /// textures) taken instead of uploaded again: a changing world's scene.
     pub fn upload_with_room(
         ctx: &GpuContext,
         scene: &Scene,

@@ -191,11 +191,12 @@ impl Deformer {
         k: usize,
         scene: &GpuScene,
     ) -> Result<()> {
+        // The queue stays until the frame is recorded whole (`clear`), so a failed recording can
+        // be recorded again.
         let mut list = self.entries.clone();
         // A copy freed since last frame may have given its vertices to one deformed now: a
         // refresh never touches vertices a deformation of this frame writes.
-        let mut written: Vec<(u32, u32)> =
-            self.entries.iter().map(|e| (e.dst_vertex, e.dst_vertex + e.vertex_count)).collect();
+        let mut written: Vec<(u32, u32)> = list.iter().map(|e| (e.dst_vertex, e.dst_vertex + e.vertex_count)).collect();
         written.sort_unstable();
         // The copies written now are disjoint, so sorted by start their ends are sorted too:
         // of those starting before a range ends, the last reaches furthest.
@@ -210,7 +211,7 @@ impl Deformer {
                 .filter(|(index, e)| !self.entry_of.contains_key(index) && !overlaps(e))
                 .map(|(_, e)| Entry { group: REFRESH, ..*e }),
         );
-        self.last = self.entry_of.iter().map(|(&index, &at)| (index, self.entries[at])).collect();
+        self.last = self.entry_of.iter().map(|(&index, &at)| (index, list[at])).collect();
         let (Some(data), false) = (&self.data, list.is_empty()) else { return Ok(()) };
         let params: &[f32] = if self.params.is_empty() { &[0.0] } else { &self.params };
         let entries = super::world_sync::fill_segment(
