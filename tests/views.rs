@@ -351,3 +351,46 @@ fn tile_views_culled_together_cull_exactly_what_each_culls_alone() {
     assert!(drawn_by_tiles >= INSTANCES as u32, "the tiles drew {drawn_by_tiles} of {INSTANCES}");
     gpu.assert_clean();
 }
+
+/// A scene whose last 32-slot word holds two draw groups (four boxes, then a double-sided
+/// quad) and ends before the word does: culled together, each view counts each instance in its
+/// own group. (The slots past the end once read as group 0, so the word was taken for one
+/// group's, and the quad was drawn as a box with the boxes' command.)
+#[test]
+fn views_culled_together_count_each_group_of_a_scene_ending_mid_word() {
+    use cullgraph::scene::{Instance, Material, Transform};
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut scene = common::boxes_scene();
+    let quad = scene.add_mesh("quad", &common::quad_mesh(), "quad").unwrap();
+    let two_sided = scene.add_material(Material {
+        name: "two-sided".into(),
+        albedo: glam::Vec3::new(0.1, 0.8, 0.2),
+        double_sided: true,
+        ..Default::default()
+    });
+    scene.instances.push(Instance {
+        transform: Transform {
+            linear: glam::Mat3::from_rotation_x(-1.2) * glam::Mat3::from_diagonal(glam::Vec3::splat(2.0)),
+            translation: DVec3::new(0.0, 1.0, -1.5),
+        },
+        mesh: quad,
+        material: two_sided,
+        flags: 0,
+    });
+    let above = Camera { eye: DVec3::new(0.0, 12.0, 0.5), target: DVec3::ZERO, ..Default::default() };
+    let mut images = Vec::new();
+    for together in [true, false] {
+        let spec = GraphSpec::default_graph();
+        let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(96, 64), &spec).unwrap();
+        r.set_views_culled_together(together);
+        let second = r.add_view(&shaders, RenderSettings::new(64, 64), &spec).unwrap();
+        let frames = [(ViewId::MAIN, &common::boxes_camera()), (second, &above)];
+        r.render_views_to_rgba8(&frames).unwrap();
+        let out = r.render_views_to_rgba8(&frames).unwrap();
+        images.push(out.into_iter().map(|(_, image)| image).collect::<Vec<_>>());
+    }
+    assert!(images[0][0] == images[1][0], "the first view's image differs when culled together");
+    assert!(images[0][1] == images[1][1], "the second view's image differs when culled together");
+    gpu.assert_clean();
+}

@@ -352,6 +352,9 @@ void cull_block(uint lane, uint block, uint slot) {
 }
 
 #ifdef MULTI_VIEW
+// The group of a lane past the last slot.
+#define NO_GROUP 0xFFFFFFFFu
+
 // Adds the set bits of `bits` (word `w` of the block) to their draw groups' counts at
 // `counts`: one atomic per group the word holds (slots are sorted by group, so usually one).
 void count_word_groups(uint w, uint bits, uint counts) {
@@ -412,7 +415,9 @@ void cull_views(uint lane, uint block, uint slot) {
     mv_bits[0][lane] = drawn_visible;
     mv_bits[1][lane] = evaluated_frustum;
     mv_bits[2][lane] = occlusion;
-    mv_group[lane] = record_group(r);
+    // Past the last slot, no group: a word that ends the scene is then never taken for one
+    // group's word (`count_word_groups`) because its first slot's group is group 0.
+    mv_group[lane] = in_range ? record_group(r) : NO_GROUP;
     barrier();
 
     // Word w of view v, gathered from the 32 slots' bits (the start rotated by w so that the
