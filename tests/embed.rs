@@ -355,6 +355,7 @@ impl HostOwnedImage {
             extent: vk::Extent2D { width: w, height: h },
             mip_levels: mips,
             samples: vk::SampleCountFlags::TYPE_1,
+            layer: 0,
         };
         Self { image, view, memory, host }
     }

@@ -66,6 +66,13 @@ struct GpuMaterial {
 
 #include "cull_math.glsl"
 
+// The sun's shadow cascades of a view (shadows.glsl samples them).
+struct SunShadows {
+    mat4 cascades[4];   // eye-relative world -> the cascade's clip space (orthographic)
+    vec4 texel;         // world size of a texel of each cascade's map
+    uvec4 info;         // x: cascades (0: no shadows), y: map size in texels
+};
+
 // Per-frame constants, relative to the eye.
 struct FrameConstants {
     mat4 view_proj;        // eye-relative world -> clip (rotation and projection only)
@@ -83,6 +90,7 @@ struct FrameConstants {
     mat4 view_proj_unjittered;      // view_proj without the sub-pixel jitter (for motion vectors)
     mat4 prev_view_proj_unjittered; // last frame's, relative to last frame's eye
     vec4 jitter;                    // xy: this frame's jitter, zw: last frame's, in NDC units
+    SunShadows sun_shadows;
 };
 
 // What the lighting pass shows (its `debug_view` setting).
@@ -91,6 +99,7 @@ struct FrameConstants {
 #define DEBUG_VIEW_ALBEDO 2u
 #define DEBUG_VIEW_DEPTH 3u
 #define DEBUG_VIEW_SAMPLES 4u   // distinct surfaces (or shaded samples) per pixel, as a heatmap
+#define DEBUG_VIEW_CASCADES 5u  // the lit image tinted by the shadow cascade that shades each pixel
 
 // Point light relative to the eye: xyz position, w range; rgb color.
 struct GpuPointLight {

@@ -9,6 +9,8 @@
 #ifndef CULLGRAPH_LIGHT_TILES_GLSL
 #define CULLGRAPH_LIGHT_TILES_GLSL
 
+#include "../common/shadows.glsl"
+
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
@@ -105,12 +107,12 @@ void tile_cull_lights(bool enabled) {
     barrier();
 }
 
-// Radiance towards the eye from surface `s`: sky ambient, the sun, and the tile's point lights
+// Radiance towards the eye from surface `s`: sky ambient, the sun (through its shadows), and the tile's point lights
 // (every light past the set's capacity too).
 vec3 shade_tile_lights(Surface s) {
     vec3 v = -normalize(s.position);
     vec3 radiance = ambient_light(s, frame.ambient.rgb) + s.emissive;
-    radiance += brdf_light(s, v, -frame.sun_direction.xyz, frame.sun_color.rgb);
+    radiance += brdf_light(s, v, -frame.sun_direction.xyz, frame.sun_color.rgb) * sun_visibility(s.position, s.normal);
     uint count = frame.size_lights.z;
     for (uint word = 0u; word < TILE_LIGHT_WORDS && word * 32u < count; ++word) {
         uint bits = tile_light_bits[word];

@@ -96,6 +96,10 @@ vec3 shade_sample(ivec2 pixel, uint s, vec2 center, out bool display) {
     if (debug_view == DEBUG_VIEW_NORMALS) return pow(surface.normal * 0.5 + 0.5, vec3(2.2));
     if (debug_view == DEBUG_VIEW_ALBEDO) return pow(am.rgb, vec3(2.2));
     if (debug_view == DEBUG_VIEW_DEPTH) return pow(vec3(fract(log2(depth) * 0.25)), vec3(2.2));
+    if (debug_view == DEBUG_VIEW_CASCADES) {
+        vec3 lit = tonemap_aces(shade_tile_lights(surface) * settings.exposure);
+        return lit * cascade_tint(sun_cascade_of(surface.position, surface.normal));
+    }
     return shade_tile_lights(surface);
 }
 

@@ -168,7 +168,8 @@ vec3 shade_block(Block b, vec2 center, float depth) {
     vec3 color = shade_tile_lights(s);
     if (settings.debug_view == DEBUG_VIEW_NORMALS) return pow(b.normal * 0.5 + 0.5, vec3(2.2));
     if (settings.debug_view == DEBUG_VIEW_ALBEDO) return pow(b.albedo, vec3(2.2));
-    return tonemap_aces(color * settings.exposure);
+    vec3 tint = settings.debug_view == DEBUG_VIEW_CASCADES ? cascade_tint(sun_cascade_of(s.position, s.normal)) : vec3(1.0);
+    return tonemap_aces(color * settings.exposure) * tint;
 }
 
 vec3 heat(uint surfaces) {

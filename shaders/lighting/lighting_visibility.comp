@@ -154,7 +154,8 @@ Surface rebuild(uint id, uint prim, vec2 center, float depth) {
 vec3 shade(Surface s) {
     if (settings.debug_view == DEBUG_VIEW_NORMALS) return pow(s.normal * 0.5 + 0.5, vec3(2.2));
     if (settings.debug_view == DEBUG_VIEW_ALBEDO) return pow(s.albedo, vec3(2.2));
-    return tonemap_aces(shade_tile_lights(s) * settings.exposure);
+    vec3 tint = settings.debug_view == DEBUG_VIEW_CASCADES ? cascade_tint(sun_cascade_of(s.position, s.normal)) : vec3(1.0);
+    return tonemap_aces(shade_tile_lights(s) * settings.exposure) * tint;
 }
 
 void main() {

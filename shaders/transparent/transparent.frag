@@ -1,6 +1,6 @@
 #version 460
 // Transparent (alphaMode BLEND) surfaces, drawn back to front after the lighting and blended
-// over the lit image: forward-shaded with the lighting passes' model (sun, every point light,
+// over the lit image: forward-shaded with the lighting passes' model (sun through its shadows, every point light,
 // sky ambient, occlusion, emission), tone-mapped and sRGB-encoded like their output, so the
 // blend happens on the encoded values as the output stores them.
 //
@@ -19,6 +19,7 @@
 layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
 layout(set = 0, binding = 3, scalar) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 4, scalar) readonly buffer Lights { GpuPointLight lights[]; };
+#include "../common/shadows.glsl"
 #ifndef SAMPLES
 #define SAMPLES 1
 #endif
@@ -46,7 +47,7 @@ layout(location = 0) out vec4 out_color;
 vec3 shade_every_light(Surface s) {
     vec3 v = -normalize(s.position);
     vec3 radiance = ambient_light(s, frame.ambient.rgb) + s.emissive;
-    radiance += brdf_light(s, v, -frame.sun_direction.xyz, frame.sun_color.rgb);
+    radiance += brdf_light(s, v, -frame.sun_direction.xyz, frame.sun_color.rgb) * sun_visibility(s.position, s.normal);
     for (uint i = 0u; i < frame.size_lights.z; ++i) {
         vec3 to_light = lights[i].position_range.xyz - s.position;
         float dist = length(to_light);

@@ -23,6 +23,7 @@ pub mod msaa;
 pub mod multiview;
 pub mod peer;
 pub mod plot;
+pub mod shadows;
 pub mod views;
 
 use crate::gpu::PassTiming;

@@ -133,7 +133,9 @@ pub struct BenchArgs {
     /// What to measure, comma-separated: `culling` (the culling graphs on cities of growing
     /// size), `hiz` (the pyramid builds), `msaa` (speed against error of every anti-aliasing
     /// method), `dynamic` (instances moved, inserted and removed every frame), `views` (1 to
-    /// 64 views of the largest `--instances` city in one frame, memory per view, resizing).
+    /// 64 views of the largest `--instances` city in one frame, memory per view, resizing),
+    /// `shadows` (the largest city's frame and passes with sun shadows off, on with every
+    /// caster drawn and on with caster culling; the maps' memory and image error).
     #[arg(long, value_delimiter = ',', default_values_t = ["culling".to_string(), "hiz".into()])]
     pub suites: Vec<String>,
     /// Instances moved per frame in the `dynamic` suite (on the largest `--instances` city),
@@ -188,8 +190,14 @@ pub struct BenchArgs {
     /// MSAA suite: point-light counts, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [5usize, 50, 500], value_parser = clap::value_parser!(u64).range(0..=MAX_LIGHTS as u64).map(|n| n as usize))]
     pub msaa_lights: Vec<usize>,
-    /// MSAA suite: the reference's supersampling per axis (4: 16 samples per pixel; 0: no
-    /// image error).
+    /// Shadows suite: sun cascades (1 to 4).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=4))]
+    pub shadow_cascades: u32,
+    /// Shadows suite: texels per side of each cascade's map.
+    #[arg(long, default_value_t = 2048, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub shadow_resolution: u32,
+    /// MSAA and shadows suites: the reference's supersampling per axis (4: 16 samples per
+    /// pixel; 0: no image error).
     #[arg(long, default_value_t = 4, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=64))]
     pub reference: u32,
     /// Masked materials keep all or none of a pixel's samples (a plain alpha test) instead of
@@ -445,6 +453,17 @@ pub struct RenderArgs {
     /// sun, any length but zero).
     #[arg(long, value_parser = parse_sun, allow_hyphen_values = true, value_name = "x,y,z")]
     pub sun: Option<glam::Vec3>,
+    /// Shadows of the sun, on or off: each view gets `--cascades` cascades fitted to its
+    /// camera, each a depth-only view culled in the camera's dispatches.
+    #[arg(long, action = clap::ArgAction::Set, value_parser = parse_on_off, default_value = "off", value_name = "on|off")]
+    pub shadows: bool,
+    /// Sun shadow cascades per view, 1 to 4 (with --shadows on).
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=4))]
+    pub cascades: u32,
+    /// With --shadows on: draw every caster into every cascade instead of culling them (the
+    /// baseline caster culling is measured against; the image is the same).
+    #[arg(long)]
+    pub no_caster_cull: bool,
     /// Move the camera over the frames: still, orbit, dolly or shake.
     #[arg(long, default_value = "still", value_parser = parse_camera_path)]
     pub camera_path: cullgraph::scene::CameraPath,
@@ -462,7 +481,7 @@ pub struct RenderArgs {
     /// Override a graph parameter, NAME=VALUE (repeatable), e.g. `--param exposure=1.2`.
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
     pub params: Vec<(String, String)>,
-    /// Shorthand for `--param debug_view=VIEW`: none, normals, albedo, depth or samples (distinct surfaces per pixel, MSAA graphs).
+    /// Shorthand for `--param debug_view=VIEW`: none, normals, albedo, depth, samples (distinct surfaces per pixel, MSAA graphs) or cascades (the lit image tinted by the shadow cascade of each pixel: red, green, blue, yellow from the nearest).
     #[arg(long, value_name = "VIEW")]
     pub debug_view: Option<String>,
     /// Keep rendering; recompile when the graph file or a shader changes (on error the last
@@ -623,6 +642,15 @@ pub fn parse_jitter(s: &str) -> Result<JitterArg, String> {
         *slot = x;
     }
     Ok(JitterArg::Fixed(glam::Vec2::from_array(v)))
+}
+
+/// Parses `on` or `off`.
+pub fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("'{s}' is neither on nor off")),
+    }
 }
 
 /// Parses `--sun x,y,z`: a direction towards the sun, finite and not zero.

@@ -2,7 +2,7 @@
 
 use super::args::BenchArgs;
 use super::memory::{Need, Room, SceneSize, Use};
-use cullgraph::bench::{culling, dynamic, hiz, msaa, plot, views};
+use cullgraph::bench::{culling, dynamic, hiz, msaa, plot, shadows, views};
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::scene::SceneSource;
 use cullgraph::{Error, Result};
@@ -12,7 +12,7 @@ use cullgraph::{Error, Result};
 const DEFAULT_MOVED: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
 
 /// The suites `--suites` takes.
-const SUITES: &[&str] = &["culling", "hiz", "msaa", "dynamic", "views"];
+const SUITES: &[&str] = &["culling", "hiz", "msaa", "dynamic", "views", "shadows"];
 
 /// Runs the command.
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -58,7 +58,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let room = Room::with_device(&ctx);
     let city = |instances: usize| SceneSize { instances: instances as u64, kinds: 0, lights: 32 };
     let pixels = args.size.0 as u64 * args.size.1 as u64;
-    for (on, usage) in [(suite("culling") || suite("views"), Use::Render), (suite("dynamic"), Use::Animate)] {
+    for (on, usage) in
+        [(suite("culling") || suite("views") || suite("shadows"), Use::Render), (suite("dynamic"), Use::Animate)]
+    {
         if on {
             room.check("--instances", &largest.to_string(), Need::of(city(largest), usage) + Need::image(pixels))?;
         }
@@ -120,6 +122,24 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         )?;
         finish_suite("culling", serde_json::to_value(&report).unwrap_or_default(), report.markdown())?;
         plot("culling.svg", plot::culling_svg(&report).map(Some))?;
+    }
+    if suite("shadows") {
+        let report = shadows::run(
+            &ctx,
+            &shaders,
+            &shadows::ShadowsBench {
+                instances: largest,
+                width,
+                height,
+                cascades: args.shadow_cascades,
+                resolution: args.shadow_resolution,
+                warmup: args.warmup,
+                frames: args.frames,
+                reference: args.reference,
+            },
+            &progress,
+        )?;
+        finish_suite("shadows", serde_json::to_value(&report).unwrap_or_default(), report.markdown())?;
     }
     if suite("views") {
         let report = views::run(

@@ -98,6 +98,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.verify {
         renderer.enable_verification(&shaders)?;
     }
+    renderer.set_shadows(&shaders, shadow_settings(args))?;
     stats.graph = renderer.plan().name.clone();
     super::post_out::check(args, &renderer)?;
     if args.watch {
@@ -186,7 +187,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     drop(renderer);
     if let (Some(n), Some(scene), Some((camera, image))) = (args.reference, scene, &last_frame) {
         let spinner = progress(None, "rendering the reference");
-        let error = image_reference_error(&ctx, &shaders, &scene, camera, image, n, &spec.overrides)?;
+        let shadows = shadow_settings(args);
+        let error = image_reference_error(&ctx, &shaders, &scene, camera, image, n, &spec.overrides, shadows.as_ref())?;
         spinner.finish_and_clear();
         stats.reference = Some(error);
     }
@@ -726,6 +728,15 @@ fn register_probe(
         if sync.relayout { ", laid out anew" } else { "" }
     );
     Ok(())
+}
+
+/// The shadows `--shadows`, `--cascades` and `--no-caster-cull` ask for.
+pub fn shadow_settings(args: &RenderArgs) -> Option<cullgraph::render::ShadowSettings> {
+    args.shadows.then(|| cullgraph::render::ShadowSettings {
+        cascades: args.cascades,
+        caster_culling: !args.no_caster_cull,
+        ..Default::default()
+    })
 }
 
 #[cfg(test)]

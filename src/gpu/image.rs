@@ -41,6 +41,8 @@ pub struct Image {
     name: String,
     /// Owned by a host engine: never destroyed here.
     external: bool,
+    /// The array layer this image is (0 but for a host's layer of an array).
+    layer: u32,
 }
 
 /// A host engine's image as cullgraph should see it (see [`Image::from_host`]).
@@ -59,6 +61,10 @@ pub struct HostImage {
     pub mip_levels: u32,
     /// Samples per texel.
     pub samples: vk::SampleCountFlags,
+    /// The array layer `view` shows: 0 for a plain 2D image. Barriers and the views cullgraph
+    /// makes of the image's parts cover this layer alone, so that several graphs can each
+    /// draw into their own layer of one array (the renderer's shadow maps).
+    pub layer: u32,
 }
 
 /// The aspect of a format: depth, depth+stencil or color.
@@ -131,6 +137,7 @@ impl Image {
             samples: desc.samples,
             name: desc.name.into(),
             external: false,
+            layer: 0,
         })
     }
 
@@ -152,6 +159,7 @@ impl Image {
             samples: host.samples,
             name: name.into(),
             external: true,
+            layer: host.layer,
         };
         image.create_part_views()?;
         Ok(image)
@@ -252,7 +260,7 @@ impl Image {
             .aspect_mask(self.aspect())
             .base_mip_level(base_mip)
             .level_count(count)
-            .base_array_layer(0)
+            .base_array_layer(self.layer)
             .layer_count(1)
     }
 }

@@ -4,6 +4,7 @@
 pub mod barrier;
 pub mod buffer;
 pub mod context;
+pub mod depth_array;
 pub mod device_select;
 pub mod edits;
 pub mod error;
@@ -23,6 +24,7 @@ pub mod workgroup_memory;
 pub use barrier::Access;
 pub use buffer::{Buffer, BufferDesc};
 pub use context::{ContextOptions, DeviceCaps, GpuContext, HostHandles};
+pub use depth_array::DepthArray;
 pub use device_select::DeviceSelector;
 pub use edits::Edits;
 pub use error::{GpuError, GpuResult};

@@ -25,6 +25,23 @@ impl Sampler {
         Self::new(ctx, &info)
     }
 
+    /// Bilinear depth comparison, clamped to the edge: a lookup returns the filtered share of
+    /// the four nearest texels that the reference depth is at or in front of (reversed-Z:
+    /// greater or equal), which is what a shadow map's percentage-closer filter adds up.
+    pub fn depth_compare(ctx: &GpuContext) -> GpuResult<Self> {
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .compare_enable(true)
+            .compare_op(vk::CompareOp::GREATER_OR_EQUAL)
+            .max_lod(0.0);
+        Self::new(ctx, &info)
+    }
+
     /// A sampler from a full create info.
     pub fn new(ctx: &GpuContext, info: &vk::SamplerCreateInfo<'_>) -> GpuResult<Self> {
         // SAFETY: valid device and create info.

@@ -10,7 +10,7 @@ use super::image_error::{downsample_box_srgb, image_error, ImageError};
 use crate::error::{Error, Result};
 use crate::gpu::{GpuContext, ShaderCompiler};
 use crate::render::output::{rgba_from_bytes, RgbaImage};
-use crate::render::{GraphSpec, RenderSettings, Renderer};
+use crate::render::{GraphSpec, RenderSettings, Renderer, ShadowSettings};
 use crate::scene::{Camera, Scene};
 
 /// Default supersampling factor per axis (`--reference` without a value): 4 x 4 = 16 samples.
@@ -31,14 +31,33 @@ pub fn render_reference(
     shaders: &ShaderCompiler,
     scene: &Scene,
     camera: &Camera,
+    size: (u32, u32),
+    n: u32,
+    overrides: &[(String, String)],
+) -> Result<RgbaImage> {
+    render_reference_shadowed(ctx, shaders, scene, camera, size, n, overrides, None)
+}
+
+/// [`render_reference`] with the sun's shadows drawn as `shadows` says (every caster drawn:
+/// the reference culls nothing). For the reference of a shadowed image, give it maps of `n`
+/// times the image's resolution, so that its shadow edges are resolved as finely as its pixels.
+#[allow(clippy::too_many_arguments)]
+pub fn render_reference_shadowed(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    scene: &Scene,
+    camera: &Camera,
     (width, height): (u32, u32),
     n: u32,
     overrides: &[(String, String)],
+    shadows: Option<&ShadowSettings>,
 ) -> Result<RgbaImage> {
     let (big_w, big_h) = reference_render_size(ctx, (width, height), n)?;
     let shared = overrides.iter().filter(|(name, _)| SHARED_PARAMS.contains(&name.as_str())).cloned();
     let spec = GraphSpec::builtin("no_cull")?.with_overrides(shared);
     let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), RenderSettings::new(big_w, big_h), &spec)?;
+    let every_caster = shadows.map(|s| ShadowSettings { caster_culling: false, ..s.clone() });
+    renderer.set_shadows(shaders, every_caster)?;
     // The reference is the scene's true coverage, so unjittered: a sub-pixel jitter is a
     // sampling choice of the image under test, whose error against the truth is what is measured.
     let unjittered = Camera { jitter: glam::Vec2::ZERO, ..camera.clone() };
@@ -47,8 +66,10 @@ pub fn render_reference(
     rgba_from_bytes(width, height, downsample_box_srgb(big.as_raw(), width, height, n)?)
 }
 
-/// Error of `image` (a render of `camera`'s view of `scene`) against the `n x n` reference.
-/// `overrides` as for [`render_reference`].
+/// Error of `image` (a render of `camera`'s view of `scene`, with the sun's shadows as `shadows`
+/// says) against the `n x n` reference. `overrides` as for [`render_reference`]; a shadowed
+/// image is compared with a reference whose shadow maps have `n` times the resolution.
+#[allow(clippy::too_many_arguments)]
 pub fn image_reference_error(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
@@ -57,9 +78,11 @@ pub fn image_reference_error(
     image: &RgbaImage,
     n: u32,
     overrides: &[(String, String)],
+    shadows: Option<&ShadowSettings>,
 ) -> Result<ImageError> {
     let size = image.dimensions();
-    let reference = render_reference(ctx, shaders, scene, camera, size, n, overrides)?;
+    let finer = shadows.map(|s| ShadowSettings { resolution: s.resolution.saturating_mul(n), ..s.clone() });
+    let reference = render_reference_shadowed(ctx, shaders, scene, camera, size, n, overrides, finer.as_ref())?;
     image_error(reference.as_raw(), image.as_raw(), size.0, size.1, n.saturating_mul(n))
 }
 
@@ -78,7 +101,7 @@ pub fn reference_error(
     let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), RenderSettings::new(width, height), spec)?;
     let (_, image) = renderer.render_to_image(camera)?;
     drop(renderer);
-    image_reference_error(ctx, shaders, scene, camera, &image, n, &spec.overrides)
+    image_reference_error(ctx, shaders, scene, camera, &image, n, &spec.overrides, None)
 }
 
 /// The reference's render size, `n·width x n·height`, checked against the device's

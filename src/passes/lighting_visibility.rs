@@ -52,6 +52,10 @@ impl LightingVisibilityPass {
 }
 
 impl PassNode for LightingVisibilityPass {
+    fn samples_sun_shadows(&self) -> bool {
+        true
+    }
+
     fn live_settings(&self) -> &'static [&'static str] {
         LightingSettings::LIVE
     }
@@ -73,6 +77,7 @@ impl PassNode for LightingVisibilityPass {
             Bind::Sampled(1, ids.sampled_view(), self.sampler.handle(), read),
             Bind::Buffer(2, inputs.constants().handle()),
             Bind::Buffer(3, inputs.lights().handle()),
+            inputs.sun_shadow_maps().bind(),
             Bind::StorageImage(4, output.view()),
             Bind::Buffer(5, scene.instances.handle()),
             Bind::Buffer(6, scene.materials.handle()),

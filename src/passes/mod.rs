@@ -32,6 +32,12 @@ pub const SHIPPED_GRAPHS: &[LibraryGraph] = &[
     LibraryGraph { name: "no_cull", file: "graph/no_cull.ron", text: include_str!("../../graph/no_cull.ron") },
     LibraryGraph { name: "frustum", file: "graph/frustum.ron", text: include_str!("../../graph/frustum.ron") },
     LibraryGraph { name: "two_phase", file: "graph/two_phase.ron", text: include_str!("../../graph/two_phase.ron") },
+    LibraryGraph { name: "shadow", file: "graph/shadow.ron", text: include_str!("../../graph/shadow.ron") },
+    LibraryGraph {
+        name: "shadow_no_cull",
+        file: "graph/shadow_no_cull.ron",
+        text: include_str!("../../graph/shadow_no_cull.ron"),
+    },
     LibraryGraph { name: "one_phase", file: "graph/one_phase.ron", text: include_str!("../../graph/one_phase.ron") },
     LibraryGraph {
         name: "occluder_prepass",

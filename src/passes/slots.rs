@@ -172,6 +172,9 @@ crate::choice! {
         Depth = "depth",
         /// Distinct surfaces per pixel, as a heatmap.
         Samples = "samples",
+        /// The lit image tinted by the sun shadow cascade that shades each pixel (red, green,
+        /// blue, yellow from the nearest; untinted beyond the last).
+        Cascades = "cascades",
     }
 }
 

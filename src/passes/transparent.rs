@@ -37,6 +37,10 @@ pub struct TransparentPass {
 }
 
 impl PassNode for TransparentPass {
+    fn samples_sun_shadows(&self) -> bool {
+        true
+    }
+
     fn live_settings(&self) -> &'static [&'static str] {
         &["exposure"]
     }
@@ -72,6 +76,7 @@ impl PassNode for TransparentPass {
             Bind::Buffer(2, inputs.constants().handle()),
             Bind::Buffer(3, scene.materials.handle()),
             Bind::Buffer(4, inputs.lights().handle()),
+            inputs.sun_shadow_maps().bind(),
             Bind::Sampled(5, depth.sampled_view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
         ];
         binds.extend_from_slice(scene.textures.bindings());

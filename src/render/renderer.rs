@@ -17,7 +17,7 @@ use crate::stats::FrameStats;
 use ash::vk;
 use graphs::{build_runtime, Graphs};
 use std::sync::Arc;
-use view::View;
+use view::{View, ViewRole};
 
 mod adapt;
 mod completed;
@@ -25,10 +25,12 @@ mod deform;
 mod graphs;
 mod lockstep;
 mod readback;
+mod sun_shadows;
 mod view;
 mod views;
 mod world_sync;
 
+pub use sun_shadows::ShadowSettings;
 pub use view::{ViewFrame, ViewId};
 pub use views::MAX_VIEWS;
 
@@ -87,6 +89,7 @@ struct Uploads {
 struct Retired {
     inputs: Vec<(u64, SceneInputs)>,
     views: Vec<(u64, View)>,
+    shadow_maps: Vec<(u64, crate::gpu::DepthArray)>,
 }
 
 impl Retired {
@@ -96,6 +99,7 @@ impl Retired {
         let in_flight = FRAMES_IN_FLIGHT as u64;
         self.inputs.retain(|(last, _)| frame < last + in_flight);
         self.views.retain(|(last, _)| frame < last + in_flight);
+        self.shadow_maps.retain(|(last, _)| frame < last + in_flight);
     }
 }
 
@@ -128,6 +132,8 @@ pub struct Renderer {
     observers: Vec<Box<dyn FrameObserver>>,
     /// The world this renderer mirrors, when made from one ([`Renderer::from_world`]).
     world: Option<world_sync::WorldMirror>,
+    /// The sun's shadows: settings, and each camera view's cascades and maps.
+    shadows: sun_shadows::SunShadows,
 }
 
 impl Renderer {
@@ -175,6 +181,7 @@ impl Renderer {
             inputs: SceneInputs::new(ctx, gpu_scene.clone(), light_capacity)?,
             previous_camera: None,
             adaptations: None,
+            role: ViewRole::Camera,
         };
         Ok(Self {
             ctx: ctx.clone(),
@@ -189,6 +196,7 @@ impl Renderer {
             frame_index: 0,
             observers: Vec::new(),
             world: None,
+            shadows: sun_shadows::SunShadows::new(ctx)?,
         })
     }
 
@@ -395,6 +403,9 @@ impl Renderer {
         let mut order = Vec::with_capacity(views.len());
         for (i, frame_view) in views.iter().enumerate() {
             let at = self.view_index(frame_view.view)?;
+            if self.views[at].role != ViewRole::Camera {
+                return Err(frame_view.view.error(Error::Invalid("this view does not exist".into())));
+            }
             if views[..i].iter().any(|earlier| earlier.view == frame_view.view) {
                 return Err(frame_view.view.error(Error::Invalid("listed twice in one frame".into())));
             }
@@ -402,8 +413,16 @@ impl Renderer {
             order.push(at);
         }
         let frame = self.frame_index;
-        for (&at, frame_view) in order.iter().zip(views) {
-            self.views[at].write_frame_data(&self.scene, frame, frame_view.camera)?;
+        let cameras: Vec<(ViewId, &Camera)> = views.iter().map(|fv| (fv.view, fv.camera)).collect();
+        let (cascades, sun_shadows) = self.plan_shadow_frame(cmd, &cameras)?;
+        for ((&at, frame_view), &shadows) in order.iter().zip(views).zip(&sun_shadows) {
+            self.views[at].write_frame_data(&self.scene, frame, frame_view.camera, shadows)?;
+        }
+        let mut cascade_order = Vec::with_capacity(cascades.len());
+        for cascade in &cascades {
+            let at = self.view_index(cascade.view)?;
+            self.views[at].write_frame_data(&self.scene, frame, &cascade.camera, Default::default())?;
+            cascade_order.push(at);
         }
         match &mut self.world {
             Some(world) => {
@@ -436,16 +455,21 @@ impl Renderer {
                 Some(fv.imports.clone().buffer(USER_DATA_IMPORT, data.handle(), data.size(), read, read))
             })
             .collect();
+        // The cascades first: each camera view's lighting waits for its own.
         let mut slots: Vec<Option<&mut View>> = self.views.iter_mut().map(Some).collect();
-        let listed = order
-            .iter()
-            .zip(views)
-            .zip(&with_user_data)
-            .filter_map(|((&at, fv), merged)| {
-                slots[at].take().map(|view| (view, fv.camera, merged.as_ref().unwrap_or(fv.imports)))
-            })
-            .collect();
+        let mut listed = Vec::with_capacity(cascades.len() + views.len());
+        for (&at, cascade) in cascade_order.iter().zip(&cascades) {
+            let view = slots[at].take().expect("each cascade listed once");
+            listed.push(lockstep::FramePart::new(view, &cascade.camera, &cascade.imports));
+        }
+        for ((&at, fv), merged) in order.iter().zip(views).zip(&with_user_data) {
+            let view = slots[at].take().expect("each view listed once");
+            let mut part = lockstep::FramePart::new(view, fv.camera, merged.as_ref().unwrap_or(fv.imports));
+            part.waits_for = cascades.iter().enumerate().filter(|(_, c)| c.of == fv.view).map(|(i, _)| i).collect();
+            listed.push(part);
+        }
         lockstep::record(&self.ctx, cmd, frame, listed, self.cull_together)?;
+        self.shadow_frame_recorded(cascades);
 
         // Uploads and replaced state recorded FRAMES_IN_FLIGHT frames ago have executed by now.
         let in_flight = FRAMES_IN_FLIGHT as u64;

@@ -10,7 +10,9 @@
 //!   projection and the splits, not on where the camera looks, so turning changes no texel
 //!   size; the diameter is rounded up to a sixteenth of a unit so rounding never flickers it;
 //! - its centre, seen from the sun, is snapped to whole texels, so moving the camera moves the
-//!   shadow map's texel grid by whole texels over the world, never a fraction.
+//!   shadow map's texel grid by whole texels over the world, never a fraction; its distance
+//!   along the sun is snapped to a texel too (the far plane reaches a texel further to keep the
+//!   slice), so that a small move leaves the farther cascades' cameras, and maps, unchanged.
 //!
 //! Casters between the sun and a slice must be drawn into its map even when the camera cannot
 //! see them (behind it, beyond a side plane, far along the sun): each cascade's camera starts
@@ -106,7 +108,7 @@ pub fn fit_cascades(
         // Snapped in the sun's basis, in absolute world coordinates.
         let center = view.eye + center_rel;
         let snap = |v: f64| (v / texel).floor() * texel;
-        let (x, y, z) = (snap(center.dot(right)), snap(center.dot(up)), center.dot(d));
+        let (x, y, z) = (snap(center.dot(right)), snap(center.dot(up)), snap(center.dot(d)));
         let snapped = right * x + up * y + d * z;
         let back = diameter * 0.5 + settings.caster_reach as f64;
         let eye = snapped - d * back;
@@ -114,7 +116,10 @@ pub fn fit_cascades(
             eye,
             target: snapped,
             up: up.as_vec3(),
-            projection: Projection::Orthographic { height: diameter as f32, far: (back + diameter * 0.5) as f32 },
+            projection: Projection::Orthographic {
+                height: diameter as f32,
+                far: (back + diameter * 0.5 + texel) as f32,
+            },
             near: 1e-3,
             jitter: glam::Vec2::ZERO,
         };

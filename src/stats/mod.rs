@@ -49,6 +49,35 @@ pub struct FrameStats {
     /// syncs before the frame).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub update: Option<UpdateStats>,
+    /// The view's sun shadow cascades that drew this frame, nearest first
+    /// ([`crate::render::Renderer::set_shadows`]); a cascade whose map did not need drawing
+    /// again is left out.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shadow_cascades: Vec<CascadeStats>,
+}
+
+/// What one sun shadow cascade of a view drew in a frame.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CascadeStats {
+    /// The cascade, 0 the nearest.
+    pub cascade: u32,
+    /// Instances outside its frustum.
+    pub frustum_culled: u32,
+    /// Instances in its frustum but hidden in its map.
+    pub occlusion_culled: u32,
+    /// Instances drawn into its map.
+    pub drawn: u32,
+    /// Triangles drawn.
+    pub triangles: u64,
+    /// GPU milliseconds per pass of its graph.
+    pub gpu_ms: Vec<PassTiming>,
+}
+
+impl CascadeStats {
+    /// GPU milliseconds of its passes together.
+    pub fn gpu_ms_total(&self) -> f64 {
+        self.gpu_ms.iter().map(|t| t.ms).sum()
+    }
 }
 
 impl FrameStats {

@@ -386,6 +386,12 @@ impl GraphRuntime {
         Ok(())
     }
 
+    /// The first pass that samples the renderer's sun shadow maps
+    /// ([`PassNode::samples_sun_shadows`]), if any.
+    pub fn first_pass_sampling_sun_shadows(&self) -> Option<usize> {
+        self.nodes.iter().position(|node| node.samples_sun_shadows())
+    }
+
     /// What decides whether pass `index` can be recorded together with passes of other
     /// runtimes ([`GraphRuntime::record_passes_together`]): its kind and its node's key
     /// ([`PassNode::together_key`]); `None` when it cannot be.

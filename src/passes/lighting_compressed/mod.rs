@@ -132,6 +132,10 @@ impl LightingCompressedPass {
 }
 
 impl PassNode for LightingCompressedPass {
+    fn samples_sun_shadows(&self) -> bool {
+        true
+    }
+
     fn live_settings(&self) -> &'static [&'static str] {
         LightingSettings::LIVE
     }
@@ -169,6 +173,7 @@ impl PassNode for LightingCompressedPass {
             Bind::Buffer(7, bound.pool.handle()),
             Bind::Buffer(2, inputs.constants().handle()),
             Bind::Buffer(3, inputs.lights().handle()),
+            inputs.sun_shadow_maps().bind(),
             Bind::StorageImage(4, output.view()),
         ];
         if let Some(stats) = stats {

@@ -290,6 +290,21 @@ pub struct FrameConstants {
     /// xy: this frame's jitter, zw: last frame's, in NDC units (2 / size per pixel): the amount
     /// `view_proj` moves a point's NDC position by (+y down, as NDC).
     pub jitter: [f32; 4],
+    /// The sun's shadow maps as this view samples them (all zero: no shadows).
+    pub sun_shadows: GpuSunShadows,
+}
+
+/// The sun's shadow cascades of one view (see `SunShadows` in `shadows.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSunShadows {
+    /// Per cascade: the view's eye-relative world to the cascade's clip space (orthographic:
+    /// x and y in -1..1 across the map, z the reversed depth the map holds).
+    pub cascades: [[[f32; 4]; 4]; 4],
+    /// Per cascade: the world size of one texel of its map.
+    pub texel: [f32; 4],
+    /// x: cascades (0: no shadows), y: map size in texels, z and w: unused.
+    pub info: [u32; 4],
 }
 
 impl FrameConstants {
@@ -322,6 +337,7 @@ impl FrameConstants {
             view_proj_unjittered: vp_unjittered.to_cols_array_2d(),
             prev_view_proj_unjittered: prev_vp.to_cols_array_2d(),
             jitter: [jitter.x, jitter.y, prev_jitter.x, prev_jitter.y],
+            sun_shadows: GpuSunShadows::default(),
         }
     }
 }
@@ -415,7 +431,8 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuMaterial>(), 64 + 5 * 48);
         assert_eq!(std::mem::size_of::<GpuPointLight>(), 48);
         assert_eq!(std::mem::size_of::<GpuCullView>(), 72);
-        assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16 + 2 * 72 + 2 * 16 + 2 * 64 + 16);
+        assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16 + 2 * 72 + 2 * 16 + 2 * 64 + 16 + 288);
+        assert_eq!(std::mem::size_of::<GpuSunShadows>(), 4 * 64 + 2 * 16);
         assert_eq!(std::mem::size_of::<DrawIndexedIndirect>(), 20);
     }
 }

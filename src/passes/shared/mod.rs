@@ -62,6 +62,28 @@ pub struct SceneInputs {
     pub scene: Arc<GpuScene>,
     frames: Vec<FrameSlot>,
     current: usize,
+    sun_shadow_maps: SunShadowMaps,
+}
+
+/// The sun's shadow maps a view's lighting samples (`shadows.glsl`): a `D32_SFLOAT` 2D array
+/// view in `SHADER_READ_ONLY_OPTIMAL` and its comparison sampler. The frame constants say how
+/// many cascades it holds; with none the lookups read nothing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SunShadowMaps {
+    /// The array view.
+    pub view: vk::ImageView,
+    /// A comparison sampler ([`crate::gpu::Sampler::depth_compare`]).
+    pub sampler: vk::Sampler,
+}
+
+impl SunShadowMaps {
+    /// Where `shadows.glsl` declares the maps.
+    pub const BINDING: u32 = 15;
+
+    /// The maps as a lighting pass binds them.
+    pub fn bind(&self) -> crate::gpu::Bind {
+        crate::gpu::Bind::Sampled(Self::BINDING, self.view, self.sampler, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+    }
 }
 
 impl SceneInputs {
@@ -88,7 +110,7 @@ impl SceneInputs {
                 })
             })
             .collect::<crate::Result<Vec<_>>>()?;
-        Ok(Self { scene, frames, current: 0 })
+        Ok(Self { scene, frames, current: 0, sun_shadow_maps: SunShadowMaps::default() })
     }
 
     /// The shared inputs of the frame `rec` records, or an error naming the pass when the host
@@ -132,6 +154,16 @@ impl SceneInputs {
     /// This frame's point lights.
     pub fn lights(&self) -> &Buffer {
         &self.frames[self.current].lights
+    }
+
+    /// The sun's shadow maps this view samples.
+    pub fn sun_shadow_maps(&self) -> SunShadowMaps {
+        self.sun_shadow_maps
+    }
+
+    /// Sets the shadow maps the next recorded frame samples (the renderer does, every frame).
+    pub(crate) fn set_sun_shadow_maps(&mut self, maps: SunShadowMaps) {
+        self.sun_shadow_maps = maps;
     }
 }
 

@@ -4,7 +4,7 @@
 use super::{Renderer, ViewId};
 use crate::error::Result;
 use crate::gpu::PassTiming;
-use crate::stats::FrameStats;
+use crate::stats::{CascadeStats, FrameStats};
 
 impl Renderer {
     /// GPU timings of a recorded frame of the main view if it has completed and its timestamps
@@ -54,6 +54,29 @@ impl Renderer {
             Some(world) => world.update_of(frame)?,
             None => None,
         };
+        stats.shadow_cascades = self.completed_cascade_stats(view, frame)?;
         Ok(stats)
+    }
+
+    /// What `view`'s sun shadow cascades drew in `frame`, for those that drew.
+    fn completed_cascade_stats(&self, view: ViewId, frame: u64) -> Result<Vec<CascadeStats>> {
+        let Some(shadows) = self.shadows.cameras.iter().find(|c| c.camera == view) else { return Ok(Vec::new()) };
+        let mut cascades = Vec::new();
+        for (cascade, &id) in shadows.cascades.iter().enumerate() {
+            let Some((runtime, index)) = self.view_state(id)?.graphs.runtime_of(frame) else { continue };
+            // Without a cull pass every instance is drawn.
+            let instances = self.world.as_ref().map_or(self.gpu_scene.instance_count, |w| w.instances());
+            let mut counts = FrameStats { drawn: instances, triangles: self.gpu_scene.triangles, ..Default::default() };
+            counts.add_counters(runtime.counter_entries(index)?);
+            cascades.push(CascadeStats {
+                cascade: cascade as u32,
+                frustum_culled: counts.frustum_culled,
+                occlusion_culled: counts.occlusion_culled,
+                drawn: counts.drawn,
+                triangles: counts.triangles,
+                gpu_ms: runtime.timings(index)?.into_iter().filter(|t| t.name != "frame").collect(),
+            });
+        }
+        Ok(cascades)
     }
 }

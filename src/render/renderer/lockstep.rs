@@ -3,6 +3,11 @@
 //! instance cull testing every view in one dispatch, [`crate::graph::PassNode::record_together`]).
 //! Each view's own passes keep their order, and views share nothing they write, so recording
 //! them interleaved records the same work as one after the other.
+//!
+//! The one exception is a view that samples what other views draw (a camera view and its sun
+//! shadow cascades): from its first pass that samples the shadow maps on, it waits until those
+//! views have recorded all their passes and ended their frames, whose release of the maps is
+//! the barrier its pass needs.
 
 use super::view::View;
 use crate::error::Result;
@@ -11,24 +16,39 @@ use crate::scene::Camera;
 use ash::vk;
 
 /// One view's part of the frame.
-struct Part<'a> {
+pub(super) struct FramePart<'a> {
     view: &'a mut View,
     camera: &'a Camera,
     imports: &'a Imports,
+    /// The parts (indices into the frame's list) that must have ended before this view's first
+    /// pass sampling the sun shadow maps.
+    pub waits_for: Vec<usize>,
     recording: Option<FrameRecording>,
+    /// The next pass to record.
+    next: usize,
+    ended: bool,
 }
 
-/// Records renderer frame `frame` of `views` (each with its camera and imports, in the order
+impl<'a> FramePart<'a> {
+    /// `view` seen by `camera` with `imports`, waiting for nothing.
+    pub fn new(view: &'a mut View, camera: &'a Camera, imports: &'a Imports) -> Self {
+        Self { view, camera, imports, waits_for: Vec::new(), recording: None, next: 0, ended: false }
+    }
+
+    fn passes(&self) -> usize {
+        self.view.plan().passes.len()
+    }
+}
+
+/// Records renderer frame `frame` of `parts` (each with its camera and imports, in the order
 /// given) into `cmd`. On an error every view's frame is abandoned: nothing is consumed.
 pub(super) fn record(
     ctx: &crate::gpu::GpuContext,
     cmd: vk::CommandBuffer,
     frame: u64,
-    views: Vec<(&mut View, &Camera, &Imports)>,
+    mut parts: Vec<FramePart<'_>>,
     together: bool,
 ) -> Result<()> {
-    let mut parts: Vec<Part<'_>> =
-        views.into_iter().map(|(view, camera, imports)| Part { view, camera, imports, recording: None }).collect();
     for part in &mut parts {
         part.view.inputs.select(frame);
     }
@@ -48,7 +68,12 @@ pub(super) fn record(
     recorded
 }
 
-fn record_one(ctx: &crate::gpu::GpuContext, cmd: vk::CommandBuffer, frame: u64, part: &mut Part<'_>) -> Result<()> {
+fn record_one(
+    ctx: &crate::gpu::GpuContext,
+    cmd: vk::CommandBuffer,
+    frame: u64,
+    part: &mut FramePart<'_>,
+) -> Result<()> {
     let View { graphs, inputs, settings, id, .. } = &mut *part.view;
     let data =
         FrameData { frame, extent: vk::Extent2D { width: settings.width, height: settings.height }, shared: &*inputs };
@@ -61,21 +86,43 @@ fn record_one(ctx: &crate::gpu::GpuContext, cmd: vk::CommandBuffer, frame: u64, 
     Ok(())
 }
 
+/// Whether part `i` may record its next pass now: it has one, and it does not wait for parts
+/// that have not ended.
+fn ready(parts: &[FramePart<'_>], i: usize) -> bool {
+    let part = &parts[i];
+    if part.next >= part.passes() {
+        return false;
+    }
+    let waiting = !part.waits_for.is_empty()
+        && part.view.graphs.runtime.first_pass_sampling_sun_shadows().is_some_and(|first| part.next >= first);
+    !waiting || part.waits_for.iter().all(|&p| parts[p].ended)
+}
+
+fn end_part(cmd: vk::CommandBuffer, frame: u64, part: &mut FramePart<'_>) {
+    let recording = part.recording.take().expect("begun");
+    let local = part.view.graphs.runtime.end_frame(recording, cmd, part.imports);
+    part.view.graphs.recorded(frame, local);
+    part.view.previous_camera = Some(part.camera.clone());
+    part.ended = true;
+}
+
 fn record_parts(
     ctx: &crate::gpu::GpuContext,
     cmd: vk::CommandBuffer,
     frame: u64,
-    parts: &mut [Part<'_>],
+    parts: &mut [FramePart<'_>],
     together: bool,
 ) -> Result<()> {
     for part in parts.iter_mut() {
         let recording = part.view.graphs.runtime.begin_frame(cmd, part.imports).map_err(|e| part.view.error(e))?;
         part.recording = Some(recording);
     }
-    let most = parts.iter().map(|p| p.view.plan().passes.len()).max().unwrap_or(0);
-    for index in 0..most {
-        // The views with a pass at `index`, grouped by what can be recorded together.
-        let mut left: Vec<usize> = (0..parts.len()).filter(|&i| index < parts[i].view.plan().passes.len()).collect();
+    let awaited: Vec<usize> = parts.iter().flat_map(|p| p.waits_for.iter().copied()).collect();
+    loop {
+        let ready_parts: Vec<usize> = (0..parts.len()).filter(|&i| ready(parts, i)).collect();
+        let Some(index) = ready_parts.iter().map(|&i| parts[i].next).min() else { break };
+        // The ready views at pass `index`, grouped by what can be recorded together.
+        let mut left: Vec<usize> = ready_parts.into_iter().filter(|&i| parts[i].next == index).collect();
         while let Some(&first) = left.first() {
             let key = parts[first].view.graphs.runtime.together_key(index).filter(|_| together);
             let group: Vec<usize> = match &key {
@@ -88,13 +135,17 @@ fn record_parts(
             };
             left.retain(|i| !group.contains(i));
             record_group(ctx, cmd, frame, parts, &group, index)?;
+            for &i in &group {
+                parts[i].next += 1;
+                // A view others wait for ends its frame at once: that releases what they sample.
+                if parts[i].next == parts[i].passes() && awaited.contains(&i) {
+                    end_part(cmd, frame, &mut parts[i]);
+                }
+            }
         }
     }
-    for part in parts.iter_mut() {
-        let recording = part.recording.take().expect("begun above");
-        let local = part.view.graphs.runtime.end_frame(recording, cmd, part.imports);
-        part.view.graphs.recorded(frame, local);
-        part.view.previous_camera = Some(part.camera.clone());
+    for part in parts.iter_mut().filter(|p| !p.ended) {
+        end_part(cmd, frame, part);
     }
     Ok(())
 }
@@ -105,11 +156,11 @@ fn record_group(
     ctx: &crate::gpu::GpuContext,
     cmd: vk::CommandBuffer,
     frame: u64,
-    parts: &mut [Part<'_>],
+    parts: &mut [FramePart<'_>],
     group: &[usize],
     index: usize,
 ) -> Result<()> {
-    let mut chosen: Vec<&mut Part<'_>> =
+    let mut chosen: Vec<&mut FramePart<'_>> =
         parts.iter_mut().enumerate().filter(|(i, _)| group.contains(i)).map(|(_, p)| p).collect();
     let first_id = chosen[0].view.id;
     let mut runtimes: Vec<&mut GraphRuntime> = Vec::with_capacity(chosen.len());

@@ -6,7 +6,7 @@ use super::graphs::Graphs;
 use crate::error::{Error, Result};
 use crate::gpu::{Access, Image};
 use crate::graph::{CompiledGraph, GraphRuntime, Imports};
-use crate::passes::shared::gpu_types::{FrameConstants, GpuPointLight};
+use crate::passes::shared::gpu_types::{FrameConstants, GpuPointLight, GpuSunShadows};
 use crate::passes::shared::SceneInputs;
 use crate::render::RenderSettings;
 use crate::scene::{Camera, Scene};
@@ -61,6 +61,16 @@ impl<'a> ViewFrame<'a> {
     }
 }
 
+/// What a view is to its renderer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum ViewRole {
+    /// A camera the host adds and lists in its frames.
+    Camera,
+    /// Cascade `cascade` of camera view `of`'s sun shadows: the renderer adds it to every frame
+    /// that lists `of` (`sun_shadows.rs`); the host never sees its id.
+    SunCascade { of: ViewId, cascade: u32 },
+}
+
 /// A view's state.
 pub(super) struct View {
     pub id: ViewId,
@@ -74,6 +84,8 @@ pub(super) struct View {
     pub previous_camera: Option<Camera>,
     /// Its kinds' adaptation policies, when enabled.
     pub adaptations: Option<Adaptations>,
+    /// A camera or a shadow cascade.
+    pub role: ViewRole,
 }
 
 impl View {
@@ -92,10 +104,18 @@ impl View {
         self.graphs.runtime.output_image(0)
     }
 
-    /// Writes frame `frame`'s constants and eye-relative lights for `camera`.
-    pub fn write_frame_data(&mut self, scene: &Scene, frame: u64, camera: &Camera) -> Result<()> {
+    /// Writes frame `frame`'s constants (with the sun's shadows as `sun_shadows` says) and
+    /// eye-relative lights for `camera`.
+    pub fn write_frame_data(
+        &mut self,
+        scene: &Scene,
+        frame: u64,
+        camera: &Camera,
+        sun_shadows: GpuSunShadows,
+    ) -> Result<()> {
         let previous = self.previous_camera.as_ref().unwrap_or(camera);
-        let constants = FrameConstants::new(scene, camera, previous, self.settings.width, self.settings.height);
+        let mut constants = FrameConstants::new(scene, camera, previous, self.settings.width, self.settings.height);
+        constants.sun_shadows = sun_shadows;
         let lights: Vec<GpuPointLight> = scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();
         let slot = self.inputs.slot_mut(frame);
         slot.write_constants(&constants)?;

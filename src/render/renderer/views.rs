@@ -2,7 +2,7 @@
 //! and reading each one's figures and images.
 
 use super::graphs::{build_runtime, Graphs};
-use super::view::{View, ViewFrame, ViewId};
+use super::view::{View, ViewFrame, ViewId, ViewRole};
 use super::{DrawnInstances, Renderer};
 use crate::error::{Error, Result};
 use crate::gpu::transfer::record_image_to_buffer;
@@ -43,7 +43,7 @@ impl Renderer {
     pub fn add_view(&mut self, shaders: &ShaderCompiler, settings: RenderSettings, spec: &GraphSpec) -> Result<ViewId> {
         profiling::scope!("cullgraph::Renderer::add_view");
         let id = ViewId(self.next_view);
-        if self.views.len() >= MAX_VIEWS {
+        if self.camera_views().count() >= MAX_VIEWS {
             return Err(id.error(Error::Invalid(format!("a renderer holds at most {MAX_VIEWS} views"))));
         }
         settings.validate().map_err(|e| id.error(e))?;
@@ -54,8 +54,21 @@ impl Renderer {
         graphs.runtime.set_step_timing(main.step_timing());
         graphs.runtime.capture_draw_lists(main.captures_draw_lists()).map_err(|e| id.error(e))?;
         let inputs = SceneInputs::new(&self.ctx, self.gpu_scene.clone(), self.light_capacity)?;
-        self.views.push(View { id, settings, graphs, inputs, previous_camera: None, adaptations: None });
+        self.views.push(View {
+            id,
+            settings,
+            graphs,
+            inputs,
+            previous_camera: None,
+            adaptations: None,
+            role: ViewRole::Camera,
+        });
         self.next_view += 1;
+        if let Err(e) = self.add_camera_shadows(shaders, id) {
+            let at = self.views.len() - 1;
+            self.views.remove(at);
+            return Err(id.error(e));
+        }
         Ok(id)
     }
 
@@ -68,6 +81,7 @@ impl Renderer {
         }
         let removed = self.views.remove(at);
         self.retired.views.push((self.frame_index.saturating_sub(1), removed));
+        self.remove_camera_shadows(view);
         Ok(())
     }
 
@@ -82,7 +96,7 @@ impl Renderer {
 
     /// The views, main first, in the order they were added.
     pub fn views(&self) -> impl Iterator<Item = ViewId> + '_ {
-        self.views.iter().map(|v| v.id)
+        self.camera_views()
     }
 
     /// Changes the main view's output size; see [`Renderer::resize_view`].
