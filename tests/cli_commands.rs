@@ -20,7 +20,8 @@ fn bench_writes_speed_against_error_as_json_markdown_and_plots() {
     let scene_count = scenes.split(',').count();
     #[rustfmt::skip]
     let (code, stdout, err) = run(&[
-        "bench", "--suites", "culling,hiz,msaa,dynamic", "--out", out, "--size", "64x36", "--warmup", "1", "--frames", "2",
+        "bench", "--suites", "culling,hiz,msaa,dynamic,shadows", "--out", out, "--size", "64x36", "--warmup", "1", "--frames", "2",
+        "--shadow-resolution", "128", "--shadow-cascades", "2",
         "--moved", "10,100",
         "--instances", "1000,2000", "--graphs", "no_cull,two_phase", "--verify", "--hiz-sizes", "33x17",
         "--msaa-scenes", &scenes, "--msaa-lights", "5", "--msaa-samples", "4", "--reference", "2",
@@ -53,6 +54,19 @@ fn bench_writes_speed_against_error_as_json_markdown_and_plots() {
         assert!(r["frame_ms"].as_f64().unwrap() > 0.0 && r["host_copy_ms"].as_f64().unwrap() > 0.0, "{r}");
     }
     assert!(dynamic["rebuild_cpu_ms"].as_f64().unwrap() > 0.0);
+    // Shadows: every configuration on the largest city; every caster drawn into both cascades
+    // without caster culling, fewer with it, none while the maps are kept and nothing moves.
+    let shadows = &json["shadows"];
+    assert_eq!((shadows["instances"].as_u64(), shadows["cascades"].as_u64()), (Some(2000), Some(2)));
+    let row =
+        |config: &str| shadows["rows"].as_array().unwrap().iter().find(|r| r["config"] == config).unwrap().clone();
+    assert_eq!(row("on, every caster drawn")["drawn"], serde_json::json!([2000, 2000]));
+    assert!(row("on, casters culled")["drawn"].as_array().unwrap().iter().all(|d| d.as_u64().unwrap() < 2000));
+    assert_eq!(row("on, casters culled, maps kept, camera still")["cascades_drawn"], 0.0);
+    assert!(
+        shadows["flip_on"].as_f64().unwrap() > 0.0
+            && shadows["shadow_map_bytes"].as_u64().unwrap() >= 2 * 128 * 128 * 4
+    );
     // Hi-Z: the size asked for, both methods.
     let hiz = json["hiz"].as_array().unwrap();
     assert!(hiz.iter().any(|h| h["method"] == "single") && hiz.iter().any(|h| h["method"] == "per_mip"));
@@ -95,7 +109,7 @@ fn bench_writes_speed_against_error_as_json_markdown_and_plots() {
 
     let (code, _, err) = run(&["bench", "--suites", "culling,speed", "--out", out]);
     assert_eq!(code, 1);
-    assert!(err.contains("unknown suite 'speed' (known: culling, hiz, msaa, dynamic, views)"), "{err}");
+    assert!(err.contains("unknown suite 'speed' (known: culling, hiz, msaa, dynamic, views, shadows)"), "{err}");
 }
 
 #[test]

@@ -513,3 +513,42 @@ fn streaming_a_level_while_frames_are_in_flight_is_clean() {
     assert_eq!(code, 0, "{stdout}{err}");
     assert!(stdout.contains("piece 4/4") && stdout.contains("registration into"), "{stdout}");
 }
+
+/// `--shadows on` on a real level, at a player spawn among alpha-masked trees: the foliage's
+/// holed shadows and everything else come out the same with caster culling as with every
+/// caster drawn (`--no-caster-cull`), and differ from the image without shadows.
+#[test]
+fn shadows_on_a_level_are_the_same_with_and_without_caster_culling() {
+    let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets");
+    let assets = if assets.exists() { assets } else { std::path::Path::new("/work/shared/assets").into() };
+    let spawns = std::fs::read_to_string(assets.join("nexuiz_spawns.txt")).unwrap();
+    let spawn: Vec<&str> = spawns.lines().filter(|l| l.starts_with("ons-reborn ")).nth(8).unwrap().split(' ').collect();
+    let level = assets.join("nexuiz_ons-reborn.glb");
+    let tmp = tempfile::tempdir().unwrap();
+    let image = |name: &str, extra: &[&str]| {
+        let out = tmp.path().join(name);
+        let eye = format!("--eye={}", spawn[1]);
+        let target = format!("--target={}", spawn[2]);
+        let base = [
+            "render",
+            "--scene",
+            level.to_str().unwrap(),
+            &eye,
+            &target,
+            "--size",
+            "160x90",
+            "--frames",
+            "2",
+            "--validation",
+        ];
+        let (code, stdout, err) = run(&[&base[..], extra, &["--out", out.to_str().unwrap()]].concat());
+        assert_eq!(code, 0, "{stdout}{err}");
+        std::fs::read(out).unwrap()
+    };
+    let culled = image("culled.png", &["--shadows", "on"]);
+    assert!(
+        culled == image("unculled.png", &["--shadows", "on", "--no-caster-cull"]),
+        "caster culling changed the image"
+    );
+    assert!(culled != image("unshadowed.png", &["--shadows", "off"]), "the level casts shadows");
+}

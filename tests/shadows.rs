@@ -240,13 +240,16 @@ fn transparent_surfaces_receive_shadows() {
 }
 
 #[test]
-fn moving_casters_and_a_moving_sun_give_the_image_of_unculled_casters() {
+fn moving_casters_and_moving_lights_give_the_image_of_unculled_casters() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
     let (mut scene, cube) = stage(Vec3::new(0.0, -1.0, -1.5));
     add_box(&mut scene, cube, DVec3::new(0.0, 9.0, 16.0), 3.0);
     add_box(&mut scene, cube, DVec3::new(-3.0, 1.0, 0.0), 2.0);
     let (mut world, handles) = World::new(scene).unwrap();
+    // A point light circling over the boxes, with its shadows.
+    let lamp = |t: f64| PointLight::point(DVec3::new(3.0 * t.cos(), 3.0, 3.0 * t.sin()), Vec3::splat(60.0), 15.0);
+    let light = world.insert_light(lamp(0.0)).unwrap();
     let size = RenderSettings::new(SIZE.0, SIZE.1);
     let make = |graph: &str, culling: bool| {
         let spec = GraphSpec::builtin(graph).unwrap();
@@ -277,6 +280,7 @@ fn moving_casters_and_a_moving_sun_give_the_image_of_unculled_casters() {
                 },
             )
             .unwrap();
+        world.set_light(light, lamp(t * 0.7)).unwrap();
         if frame >= 3 {
             let turn = Vec3::new(0.3 * (t as f32 - 3.0), -1.0, -1.5).normalize();
             world.set_sun(DirectionalLight { direction: turn, ..world.scene().sun }).unwrap();
@@ -331,7 +335,7 @@ fn maps_are_drawn_again_only_when_their_camera_the_sun_or_the_world_changed() {
     r.set_shadows(&shaders, Some(shadows(true))).unwrap();
     let drew = |r: &mut Renderer, camera: &Camera| -> (Vec<u32>, Vec<u8>) {
         let (stats, image) = r.render_to_rgba8(camera).unwrap();
-        (stats.shadow_cascades.iter().map(|c| c.cascade).collect(), image)
+        (stats.shadow_cascades.iter().map(|c| c.index).collect(), image)
     };
     let camera = camera();
     let (first, image) = drew(&mut r, &camera);
@@ -363,5 +367,68 @@ fn maps_are_drawn_again_only_when_their_camera_the_sun_or_the_world_changed() {
     // Kept off, every map is drawn every frame.
     r.set_shadow_maps_kept(false);
     assert_eq!(drew(&mut r, &stepped).0, [0, 1, 2, 3]);
+    gpu.assert_clean();
+}
+
+/// The ground lit by `light` alone (the sun is black), with a box of side `side` at `box_at`.
+fn local_stage(light: PointLight, box_at: DVec3, side: f32) -> Scene {
+    let (mut scene, cube) = stage(Vec3::new(0.0, -1.0, 0.0));
+    scene.sun.color = Vec3::ZERO;
+    scene.lights.push(light);
+    add_box(&mut scene, cube, box_at, side);
+    scene
+}
+
+/// `light`'s shadow falls on `shadowed` (on the ground, in view): darker with shadows than
+/// without, and the same image whether casters are culled or not.
+fn assert_light_shadows(scene: &Scene, shadowed: DVec3) {
+    let gpu = GpuTest::new();
+    let camera = camera();
+    let at = pixel_of(&camera, shadowed);
+    let (lit, _) = render(&gpu, scene, &camera, "default", None);
+    let (culled, _) = render(&gpu, scene, &camera, "default", Some(shadows(true)));
+    let (unculled, _) = render(&gpu, scene, &camera, "no_cull", Some(shadows(false)));
+    assert!(luma(&culled, at) < 0.8 * luma(&lit, at), "{at:?}: {} shadowed, {} lit", luma(&culled, at), luma(&lit, at));
+    assert!(culled.as_raw() == unculled.as_raw(), "caster culling changed the image");
+    gpu.assert_clean();
+}
+
+#[test]
+fn a_spot_light_casts_a_shadow() {
+    let mut light = PointLight::point(DVec3::new(0.0, 6.0, 0.0), Vec3::splat(150.0), 20.0);
+    light.spot = Some(SpotCone { direction: Vec3::NEG_Y, inner_angle: 0.4, outer_angle: 0.6 });
+    assert_light_shadows(&local_stage(light, DVec3::new(0.0, 2.0, 0.0), 1.0), DVec3::ZERO);
+}
+
+#[test]
+fn a_point_light_casts_a_shadow_through_its_cube() {
+    // The light, the box and the shadowed point on one line, along the cube's -x face.
+    let (light, ground) = (DVec3::new(3.0, 4.0, 0.0), DVec3::new(-1.5, 0.0, 0.3));
+    let box_at = light + (ground - light) * 0.6;
+    let scene = local_stage(PointLight::point(light, Vec3::splat(150.0), 20.0), box_at, 0.6);
+    assert_light_shadows(&scene, ground);
+}
+
+#[test]
+fn only_the_budget_of_lights_casts_shadows_and_a_larger_budget_is_refused() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (light, ground) = (DVec3::new(3.0, 4.0, 0.0), DVec3::new(-1.5, 0.0, 0.3));
+    let mut scene =
+        local_stage(PointLight::point(light, Vec3::splat(150.0), 20.0), light + (ground - light) * 0.6, 0.6);
+    // A brighter light elsewhere takes the only shadowed light's place.
+    scene.lights.push(PointLight::point(DVec3::new(-6.0, 3.0, 2.0), Vec3::splat(400.0), 20.0));
+    let camera = camera();
+    let at = pixel_of(&camera, ground);
+    let one = ShadowSettings { local_lights: 1, ..shadows(true) };
+    let (lit, _) = render(&gpu, &scene, &camera, "default", None);
+    let (budget_one, _) = render(&gpu, &scene, &camera, "default", Some(one));
+    let (budget_two, _) = render(&gpu, &scene, &camera, "default", Some(shadows(true)));
+    assert!((luma(&budget_one, at) - luma(&lit, at)).abs() < 2.0, "past the budget, the light casts no shadow");
+    assert!(luma(&budget_two, at) < luma(&lit, at) - 5.0, "within it, it does");
+    let spec = GraphSpec::default_graph();
+    let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    let e = r.set_shadows(&shaders, Some(ShadowSettings { local_lights: 5, ..shadows(true) })).unwrap_err();
+    assert!(e.to_string().contains("5 shadowed spot and point lights; at most 4"), "{e}");
     gpu.assert_clean();
 }

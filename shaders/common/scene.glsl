@@ -73,6 +73,13 @@ struct SunShadows {
     uvec4 info;         // x: cascades (0: no shadows), y: map size in texels
 };
 
+// The shadow maps of a view's spot and point lights (shadows.glsl samples them): face k is
+// layer k of the local shadow-map array.
+#define MAX_LOCAL_FACES 24
+struct LocalShadows {
+    mat4 faces[MAX_LOCAL_FACES];   // eye-relative world -> the face's clip space (perspective)
+};
+
 // Per-frame constants, relative to the eye.
 struct FrameConstants {
     mat4 view_proj;        // eye-relative world -> clip (rotation and projection only)
@@ -91,6 +98,7 @@ struct FrameConstants {
     mat4 prev_view_proj_unjittered; // last frame's, relative to last frame's eye
     vec4 jitter;                    // xy: this frame's jitter, zw: last frame's, in NDC units
     SunShadows sun_shadows;
+    LocalShadows local_shadows;
 };
 
 // What the lighting pass shows (its `debug_view` setting).
@@ -106,7 +114,9 @@ struct GpuPointLight {
     vec4 position_range;
     vec4 color;   // rgb: color, w: spot angle scale 1 / (cos inner - cos outer)
     vec4 spot;    // xyz: spot direction (travel), w: cos outer angle (< -1: a point light)
+    uvec4 shadow; // x: first shadow face (NO_SHADOW: none), y: faces (1 or 6), z: texel size at 1 unit (float bits)
 };
+#define NO_SHADOW 0xFFFFFFFFu
 
 // A split world position (hi + lo) relative to the split eye. The hi parts are whole numbers
 // (split_hi_lo in src/passes/shared/gpu_types.rs), so their difference is exact, and `precise` keeps

@@ -1,15 +1,20 @@
-// The sun's shadow: every lighting method and the transparent pass look its cascades up here.
-// The including shader declares `frame` (FrameConstants) first. The cascades are layers of one
-// D32 array, bound at SHADOW_BINDING with a comparison sampler (reversed-Z: a lookup gives the
-// share of texels the reference is at or in front of). With no cascades (frame.sun_shadows.info.x
-// == 0) nothing is read and everything is lit.
+// Shadows: every lighting method and the transparent pass look them up here. The including
+// shader declares `frame` (FrameConstants) first. The sun's cascades are layers of one D32
+// array, bound at SHADOW_BINDING, the spot and point lights' faces layers of another, bound at
+// LOCAL_SHADOW_BINDING, both with a comparison sampler (reversed-Z: a lookup gives the share of
+// texels the reference is at or in front of). With no cascades (frame.sun_shadows.info.x == 0),
+// or a light without faces (shadow.x == NO_SHADOW), nothing is read and the light is unblocked.
 #ifndef CULLGRAPH_SHADOWS_GLSL
 #define CULLGRAPH_SHADOWS_GLSL
 
 #ifndef SHADOW_BINDING
 #define SHADOW_BINDING 15
 #endif
+#ifndef LOCAL_SHADOW_BINDING
+#define LOCAL_SHADOW_BINDING 14
+#endif
 layout(set = 0, binding = SHADOW_BINDING) uniform sampler2DArrayShadow sun_shadow_maps;
+layout(set = 0, binding = LOCAL_SHADOW_BINDING) uniform sampler2DArrayShadow local_shadow_maps;
 
 // Offsets that keep a surface from shadowing itself, in texels of the cascade it is looked up
 // in: along its normal (the texel's footprint on a slope), then towards the sun (the depth the
@@ -55,6 +60,39 @@ float sun_visibility(vec3 p, vec3 normal) {
             float w = float((2 - abs(x)) * (2 - abs(y)));
             vec2 uv = map.xy + vec2(x, y) * texel;
             lit += w * texture(sun_shadow_maps, vec4(uv, float(c), map.z));
+        }
+    }
+    return lit / 16.0;
+}
+
+// The face of a cube map that holds direction `v` (from the light): +x, -x, +y, -y, +z, -z.
+uint cube_face(vec3 v) {
+    vec3 a = abs(v);
+    if (a.x >= a.y && a.x >= a.z) return v.x >= 0.0 ? 0u : 1u;
+    if (a.y >= a.z) return v.y >= 0.0 ? 2u : 3u;
+    return v.z >= 0.0 ? 4u : 5u;
+}
+
+// How much of light `light` reaches the eye-relative point `p` with normal `normal`, `l` the
+// unit direction from `p` to the light `dist` away: 0 in its shadow, 1 lit, filtered over 4x4
+// texels of its face as the sun's cascades are, with offsets in texels of the face at `p`.
+float local_light_visibility(GpuPointLight light, vec3 p, vec3 normal, vec3 l, float dist) {
+    uint first = light.shadow.x;
+    if (first == NO_SHADOW) return 1.0;
+    uint face = first + (light.shadow.y == 6u ? cube_face(-l) : 0u);
+    float texel = uintBitsToFloat(light.shadow.z) * dist;
+    vec3 q = p + normal * (texel * SHADOW_NORMAL_OFFSET) + l * (texel * SHADOW_SUN_OFFSET);
+    vec4 clip = frame.local_shadows.faces[face] * vec4(q, 1.0);
+    if (clip.w <= 0.0) return 1.0;
+    vec3 ndc = clip.xyz / clip.w;
+    vec2 uv = ndc.xy * 0.5 + 0.5;
+    ivec2 size = textureSize(local_shadow_maps, 0).xy;
+    vec2 step = 1.0 / vec2(size);
+    float lit = 0.0;
+    for (int y = -1; y <= 1; ++y) {
+        for (int x = -1; x <= 1; ++x) {
+            float w = float((2 - abs(x)) * (2 - abs(y)));
+            lit += w * texture(local_shadow_maps, vec4(uv + vec2(x, y) * step, float(face), ndc.z));
         }
     }
     return lit / 16.0;

@@ -54,7 +54,8 @@ vec3 shade_every_light(Surface s) {
         float range = lights[i].position_range.w;
         if (dist >= range) continue;
         vec3 l = to_light / max(dist, 1e-6);
-            radiance += brdf_light(s, v, l, punctual_radiance(lights[i].color, lights[i].spot, l, dist, range));
+            radiance += brdf_light(s, v, l, punctual_radiance(lights[i].color, lights[i].spot, l, dist, range))
+                * local_light_visibility(lights[i], s.position, s.normal, l, dist);
     }
     return radiance;
 }

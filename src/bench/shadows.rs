@@ -1,8 +1,9 @@
 //! The sun's shadows on the city: the frame and every pass with shadows off, on with every
 //! caster drawn into every cascade, and on with caster culling (the cascades' culls in the
 //! camera's dispatches, then one view at a time); the maps drawn every frame, and kept while
-//! nothing changed; the maps' memory; and the error of the shadowed image against a
-//! supersampled reference with shadow maps of that many times the resolution.
+//! nothing changed, with the camera still and walking; the maps' memory; and the error of the
+//! shadowed image against a supersampled reference with shadow maps of that many times the
+//! resolution.
 
 use super::{median, median_per_pass};
 use crate::error::Result;
@@ -47,10 +48,11 @@ pub struct ShadowsRow {
     /// Median GPU milliseconds of the camera's instance culls (with caster culling together,
     /// the dispatches it shares with its cascades).
     pub camera_cull_ms: f64,
-    /// Each cascade's passes (`c<k>/<pass>`), median GPU milliseconds each.
+    /// Each cascade's passes (`c<k>/<pass>`) and each light face's (`f<k>/<pass>`), median GPU
+    /// milliseconds each.
     pub cascade_passes: Vec<(String, f64)>,
-    /// Median GPU milliseconds of the cascades' passes other than their culls: the depth draws
-    /// and pyramids.
+    /// Median GPU milliseconds of the cascades' and faces' passes other than their culls: the
+    /// depth draws and pyramids.
     pub shadow_draw_ms: f64,
     /// The same with the cascades' culls where they were dispatched on their own (one view at
     /// a time); culled together they are in `camera_cull_ms`.
@@ -59,6 +61,8 @@ pub struct ShadowsRow {
     pub drawn: Vec<u32>,
     /// Cascades drawn per frame, on average.
     pub cascades_drawn: f64,
+    /// Spot and point light faces drawn per frame, on average.
+    pub faces_drawn: f64,
 }
 
 /// The figures of one run.
@@ -76,6 +80,10 @@ pub struct ShadowsReport {
     pub cascades: u32,
     /// Texels per side of a cascade's map.
     pub resolution: u32,
+    /// Spot and point lights that may cast shadows.
+    pub local_lights: u32,
+    /// Texels per side of a light face's map.
+    pub local_resolution: u32,
     /// Device bytes of the shadow maps.
     pub shadow_map_bytes: u64,
     /// The configurations.
@@ -121,20 +129,24 @@ pub fn run(
         height: bench.height,
         cascades: bench.cascades,
         resolution: bench.resolution,
+        local_lights: ShadowSettings::default().local_lights,
+        local_resolution: ShadowSettings::default().local_resolution,
         reference: bench.reference,
         ..Default::default()
     };
-    // (name, shadows, culled together, maps kept while unchanged)
-    let configs: [(&str, Option<ShadowSettings>, bool, bool); 5] = [
-        ("off", None, true, false),
-        ("on, every caster drawn", Some(settings(false)), true, false),
-        ("on, casters culled", Some(settings(true)), true, false),
-        ("on, casters culled one view at a time", Some(settings(true)), false, false),
-        ("on, casters culled, maps kept", Some(settings(true)), true, true),
+    // (name, shadows, culled together, maps kept while unchanged, camera walking)
+    let configs: [(&str, Option<ShadowSettings>, bool, bool, bool); 7] = [
+        ("off", None, true, false, false),
+        ("on, every caster drawn", Some(settings(false)), true, false, false),
+        ("on, casters culled", Some(settings(true)), true, false, false),
+        ("on, casters culled one view at a time", Some(settings(true)), false, false, false),
+        ("on, casters culled, maps kept, camera still", Some(settings(true)), true, true, false),
+        ("off, camera walking", None, true, false, true),
+        ("on, casters culled, maps kept, camera walking", Some(settings(true)), true, true, true),
     ];
     let spec = GraphSpec::default_graph();
     let mut images = Vec::new();
-    for (name, shadows, together, kept) in configs {
+    for (name, shadows, together, kept, walking) in configs {
         progress(&format!("shadows: {name}"));
         let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), size.clone(), &spec)?;
         renderer.set_views_culled_together(together);
@@ -144,9 +156,16 @@ pub fn run(
             renderer.plan().passes.iter().filter(|p| p.kind == "instance_cull").map(|p| p.name.clone()).collect();
         let (mut frame, mut camera_cull, mut draw, mut total) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let (mut camera_timings, mut cascade_timings) = (Vec::new(), Vec::new());
-        let (mut drawn, mut cascades_drawn) = (Vec::new(), 0usize);
+        let (mut drawn, mut cascades_drawn, mut faces_drawn) = (Vec::new(), 0usize, 0usize);
         for f in 0..bench.warmup + bench.frames {
-            let stats = renderer.render(&camera)?;
+            // Walking: 1.5 units a second at 60 frames a second, along the view.
+            let step = (camera.target - camera.eye).normalize() * (1.5 / 60.0) * f as f64;
+            let at = if walking {
+                Camera { eye: camera.eye + step, target: camera.target + step, ..camera.clone() }
+            } else {
+                camera.clone()
+            };
+            let stats = renderer.render(&at)?;
             if f < bench.warmup {
                 continue;
             }
@@ -156,7 +175,9 @@ pub fn run(
             let mut draw_ms = 0.0;
             let mut shadow_ms = 0.0;
             let mut named = Vec::new();
-            for c in &stats.shadow_cascades {
+            let views =
+                stats.shadow_cascades.iter().map(|c| ('c', c)).chain(stats.shadow_faces.iter().map(|f| ('f', f)));
+            for (kind, c) in views {
                 for t in &c.gpu_ms {
                     if !is_cull(&t.name) {
                         draw_ms += t.ms;
@@ -164,7 +185,7 @@ pub fn run(
                     if !together || !is_cull(&t.name) {
                         shadow_ms += t.ms;
                     }
-                    named.push(crate::gpu::PassTiming { name: format!("c{}/{}", c.cascade, t.name), ..t.clone() });
+                    named.push(crate::gpu::PassTiming { name: format!("{kind}{}/{}", c.index, t.name), ..t.clone() });
                 }
             }
             draw.push(draw_ms);
@@ -172,6 +193,7 @@ pub fn run(
             cascade_timings.push(named);
             camera_timings.push(stats.gpu_ms.clone());
             cascades_drawn += stats.shadow_cascades.len();
+            faces_drawn += stats.shadow_faces.len();
             drawn = stats.shadow_cascades.iter().map(|c| c.drawn).collect();
         }
         if shadows.is_some() {
@@ -195,6 +217,7 @@ pub fn run(
             shadow_ms: median(&mut total),
             drawn,
             cascades_drawn: cascades_drawn as f64 / bench.frames.max(1) as f64,
+            faces_drawn: faces_drawn as f64 / bench.frames.max(1) as f64,
         });
     }
     for (shadows, image) in images {
@@ -213,9 +236,9 @@ impl ShadowsReport {
     /// The report as Markdown.
     pub fn markdown(&self) -> String {
         let mut md = format!(
-            "## Shadows\n\nCity of {} instances at {}x{} on {}, the street camera with {} sun cascades of {}² \
-             ({:.1} MB of maps).\n\n\
-             | shadows | frame GPU ms | camera cull ms | cascades' draws and pyramids ms | shadow passes ms | cascades drawn per frame | drawn per cascade |\n\
+            "## Shadows\n\nCity of {} instances at {}x{} on {}, the street camera with {} sun cascades of {}² and \
+             its {} most important lights' faces of {}² ({:.1} MB of maps).\n\n\
+             | shadows | frame GPU ms | camera cull ms | shadow draws and pyramids ms | shadow passes ms | cascades, light faces drawn per frame | drawn per cascade |\n\
              |---|---|---|---|---|---|---|\n",
             self.instances,
             self.width,
@@ -223,12 +246,21 @@ impl ShadowsReport {
             self.device,
             self.cascades,
             self.resolution,
+            self.local_lights,
+            self.local_resolution,
             self.shadow_map_bytes as f64 / 1e6
         );
         for r in &self.rows {
             md += &format!(
-                "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1} | {:?} |\n",
-                r.config, r.frame_ms, r.camera_cull_ms, r.shadow_draw_ms, r.shadow_ms, r.cascades_drawn, r.drawn
+                "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1}, {:.1} | {:?} |\n",
+                r.config,
+                r.frame_ms,
+                r.camera_cull_ms,
+                r.shadow_draw_ms,
+                r.shadow_ms,
+                r.cascades_drawn,
+                r.faces_drawn,
+                r.drawn
             );
         }
         if self.reference > 0 {

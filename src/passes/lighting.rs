@@ -13,7 +13,7 @@ use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Stages, Usage};
 use crate::passes::gbuffer::{bound_image, normal_defines};
 use crate::passes::shared::lazy_pipeline::LazyPipeline;
-use crate::passes::shared::{SceneInputs, SunShadowMaps};
+use crate::passes::shared::{SceneInputs, ShadowMaps};
 use ash::vk;
 
 /// What the pass reads and writes.
@@ -31,8 +31,8 @@ pub struct LightingInputs<'a> {
     pub frame: &'a Buffer,
     /// Point lights.
     pub lights: &'a Buffer,
-    /// The sun's shadow maps.
-    pub sun_shadow_maps: SunShadowMaps,
+    /// The shadow maps.
+    pub shadow_maps: ShadowMaps,
     /// Output, in `GENERAL`.
     pub output: &'a Image,
 }
@@ -140,8 +140,8 @@ impl LightingPass {
             Bind::Buffer(3, io.frame.handle()),
             Bind::Buffer(4, io.lights.handle()),
             Bind::StorageImage(5, io.output.view()),
-            io.sun_shadow_maps.bind(),
         ];
+        binds.extend(io.shadow_maps.binds());
         let pipeline = match (io.emissive_occlusion, &mut self.extras_pipeline) {
             (Some(image), Some(extras)) => {
                 binds.push(Bind::Sampled(6, image.sampled_view(), s, read));
@@ -178,7 +178,7 @@ impl PassNode for LightingPass {
             emissive_occlusion: slots.image("emissive_occlusion").filter(|_| inputs.scene.emission_or_occlusion),
             frame: inputs.constants(),
             lights: inputs.lights(),
-            sun_shadow_maps: inputs.sun_shadow_maps(),
+            shadow_maps: inputs.shadow_maps(),
             output: slots.required_image("output")?,
         };
         let settings = self.settings;

@@ -77,7 +77,6 @@ impl PassNode for LightingVisibilityPass {
             Bind::Sampled(1, ids.sampled_view(), self.sampler.handle(), read),
             Bind::Buffer(2, inputs.constants().handle()),
             Bind::Buffer(3, inputs.lights().handle()),
-            inputs.sun_shadow_maps().bind(),
             Bind::StorageImage(4, output.view()),
             Bind::Buffer(5, scene.instances.handle()),
             Bind::Buffer(6, scene.materials.handle()),
@@ -85,6 +84,7 @@ impl PassNode for LightingVisibilityPass {
             Bind::Buffer(8, scene.indices.handle()),
             Bind::Buffer(9, scene.instance_triangles.handle()),
         ];
+        binds.extend(inputs.shadow_maps().binds());
         binds.extend_from_slice(scene.textures.bindings());
         let triangle_bits = if self.packed_ids { packed_id_bits(&self.name, scene)? } else { 0 };
         let push = [bytemuck::bytes_of(&self.settings), &triangle_bits.to_ne_bytes()].concat();

@@ -76,9 +76,9 @@ impl PassNode for TransparentPass {
             Bind::Buffer(2, inputs.constants().handle()),
             Bind::Buffer(3, scene.materials.handle()),
             Bind::Buffer(4, inputs.lights().handle()),
-            inputs.sun_shadow_maps().bind(),
             Bind::Sampled(5, depth.sampled_view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
         ];
+        binds.extend(inputs.shadow_maps().binds());
         binds.extend_from_slice(scene.textures.bindings());
         let stride = std::mem::size_of::<DrawIndexedIndirect>() as u64;
         let max = (list.commands.size() / stride).min(list.instance_ids.size() / 4).min(u32::MAX as u64) as u32;

@@ -14,6 +14,6 @@ pub use frame_pipeline::FramePipeline;
 pub use graph_spec::GraphSpec;
 pub use observer::FrameObserver;
 pub use renderer::{
-    DrawnInstances, OutputF32, ParamsApplied, RenderSettings, Renderer, ShadowSettings, ViewFrame, ViewId, MAX_VIEWS,
-    USER_DATA_IMPORT,
+    DrawnInstances, OutputF32, ParamsApplied, RenderSettings, Renderer, ShadowSettings, ViewFrame, ViewId,
+    MAX_SHADOWED_LIGHTS, MAX_VIEWS, USER_DATA_IMPORT,
 };

@@ -25,12 +25,12 @@ mod deform;
 mod graphs;
 mod lockstep;
 mod readback;
-mod sun_shadows;
+mod shadows;
 mod view;
 mod views;
 mod world_sync;
 
-pub use sun_shadows::ShadowSettings;
+pub use shadows::{ShadowSettings, MAX_SHADOWED_LIGHTS};
 pub use view::{ViewFrame, ViewId};
 pub use views::MAX_VIEWS;
 
@@ -133,7 +133,7 @@ pub struct Renderer {
     /// The world this renderer mirrors, when made from one ([`Renderer::from_world`]).
     world: Option<world_sync::WorldMirror>,
     /// The sun's shadows: settings, and each camera view's cascades and maps.
-    shadows: sun_shadows::SunShadows,
+    shadows: shadows::ShadowState,
 }
 
 impl Renderer {
@@ -196,7 +196,7 @@ impl Renderer {
             frame_index: 0,
             observers: Vec::new(),
             world: None,
-            shadows: sun_shadows::SunShadows::new(ctx)?,
+            shadows: shadows::ShadowState::new(ctx)?,
         })
     }
 
@@ -414,14 +414,14 @@ impl Renderer {
         }
         let frame = self.frame_index;
         let cameras: Vec<(ViewId, &Camera)> = views.iter().map(|fv| (fv.view, fv.camera)).collect();
-        let (cascades, sun_shadows) = self.plan_shadow_frame(cmd, &cameras)?;
-        for ((&at, frame_view), &shadows) in order.iter().zip(views).zip(&sun_shadows) {
+        let (cascades, shadow_data) = self.plan_shadow_frame(cmd, &cameras)?;
+        for ((&at, frame_view), shadows) in order.iter().zip(views).zip(&shadow_data) {
             self.views[at].write_frame_data(&self.scene, frame, frame_view.camera, shadows)?;
         }
         let mut cascade_order = Vec::with_capacity(cascades.len());
         for cascade in &cascades {
             let at = self.view_index(cascade.view)?;
-            self.views[at].write_frame_data(&self.scene, frame, &cascade.camera, Default::default())?;
+            self.views[at].write_frame_data(&self.scene, frame, &cascade.camera, &Default::default())?;
             cascade_order.push(at);
         }
         match &mut self.world {

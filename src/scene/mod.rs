@@ -12,6 +12,7 @@ pub mod cascades;
 pub mod deform;
 pub mod error;
 pub mod gltf_import;
+pub mod light_faces;
 pub mod merge;
 pub mod mesh;
 pub mod pool_ranges;

@@ -53,14 +53,17 @@ pub struct FrameStats {
     /// ([`crate::render::Renderer::set_shadows`]); a cascade whose map did not need drawing
     /// again is left out.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub shadow_cascades: Vec<CascadeStats>,
+    pub shadow_cascades: Vec<ShadowViewStats>,
+    /// The view's spot and point light shadow faces that drew this frame, in face order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shadow_faces: Vec<ShadowViewStats>,
 }
 
-/// What one sun shadow cascade of a view drew in a frame.
+/// What one shadow view of a camera view (a sun cascade, a light's face) drew in a frame.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct CascadeStats {
-    /// The cascade, 0 the nearest.
-    pub cascade: u32,
+pub struct ShadowViewStats {
+    /// The cascade (0 the nearest) or face.
+    pub index: u32,
     /// Instances outside its frustum.
     pub frustum_culled: u32,
     /// Instances in its frustum but hidden in its map.
@@ -73,7 +76,7 @@ pub struct CascadeStats {
     pub gpu_ms: Vec<PassTiming>,
 }
 
-impl CascadeStats {
+impl ShadowViewStats {
     /// GPU milliseconds of its passes together.
     pub fn gpu_ms_total(&self) -> f64 {
         self.gpu_ms.iter().map(|t| t.ms).sum()

@@ -173,9 +173,9 @@ impl PassNode for LightingCompressedPass {
             Bind::Buffer(7, bound.pool.handle()),
             Bind::Buffer(2, inputs.constants().handle()),
             Bind::Buffer(3, inputs.lights().handle()),
-            inputs.sun_shadow_maps().bind(),
             Bind::StorageImage(4, output.view()),
         ];
+        binds.extend(inputs.shadow_maps().binds());
         if let Some(stats) = stats {
             binds.push(Bind::Buffer(5, stats.handle()));
         }

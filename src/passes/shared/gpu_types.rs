@@ -194,6 +194,31 @@ pub struct GpuPointLight {
     /// xyz: the direction a spot light travels, w: cos of its outer angle (below -1 for a point
     /// light, so that every direction is inside).
     pub spot: [f32; 4],
+    /// Its shadow: x the first of its faces in [`GpuLocalShadows::faces`] ([`NO_SHADOW`]: it
+    /// casts none), y its faces (1: one view along its cone; 6: a cube), z the bits of the
+    /// world size of a texel of its maps one unit from the light, w unused.
+    pub shadow: [u32; 4],
+}
+
+/// [`GpuPointLight::shadow`]'s first face of a light that casts no shadow.
+pub const NO_SHADOW: u32 = u32::MAX;
+
+/// The most shadow-map faces of spot and point lights a view holds (4 point lights' cubes).
+pub const MAX_LOCAL_FACES: usize = 24;
+
+/// The shadow maps of a view's spot and point lights (see `LocalShadows` in `scene.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuLocalShadows {
+    /// Per face: the view's eye-relative world to the face's clip space (perspective,
+    /// reversed-Z), the face's layer being its index.
+    pub faces: [[[f32; 4]; 4]; MAX_LOCAL_FACES],
+}
+
+impl Default for GpuLocalShadows {
+    fn default() -> Self {
+        Self { faces: [[[0.0; 4]; 4]; MAX_LOCAL_FACES] }
+    }
 }
 
 impl GpuPointLight {
@@ -212,6 +237,7 @@ impl GpuPointLight {
             position_range: [p.x, p.y, p.z, light.range],
             color: [light.color.x, light.color.y, light.color.z, scale],
             spot,
+            shadow: [NO_SHADOW, 0, 0, 0],
         }
     }
 }
@@ -292,6 +318,8 @@ pub struct FrameConstants {
     pub jitter: [f32; 4],
     /// The sun's shadow maps as this view samples them (all zero: no shadows).
     pub sun_shadows: GpuSunShadows,
+    /// The spot and point lights' shadow maps as this view samples them.
+    pub local_shadows: GpuLocalShadows,
 }
 
 /// The sun's shadow cascades of one view (see `SunShadows` in `shadows.glsl`).
@@ -338,6 +366,7 @@ impl FrameConstants {
             prev_view_proj_unjittered: prev_vp.to_cols_array_2d(),
             jitter: [jitter.x, jitter.y, prev_jitter.x, prev_jitter.y],
             sun_shadows: GpuSunShadows::default(),
+            local_shadows: GpuLocalShadows::default(),
         }
     }
 }
@@ -429,9 +458,12 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuInstance>(), 64);
         assert_eq!(std::mem::size_of::<GpuMaterialTexture>(), 48);
         assert_eq!(std::mem::size_of::<GpuMaterial>(), 64 + 5 * 48);
-        assert_eq!(std::mem::size_of::<GpuPointLight>(), 48);
+        assert_eq!(std::mem::size_of::<GpuPointLight>(), 64);
         assert_eq!(std::mem::size_of::<GpuCullView>(), 72);
-        assert_eq!(std::mem::size_of::<FrameConstants>(), 2 * 64 + 6 * 16 + 2 * 72 + 2 * 16 + 2 * 64 + 16 + 288);
+        assert_eq!(
+            std::mem::size_of::<FrameConstants>(),
+            2 * 64 + 6 * 16 + 2 * 72 + 2 * 16 + 2 * 64 + 16 + 288 + 24 * 64
+        );
         assert_eq!(std::mem::size_of::<GpuSunShadows>(), 4 * 64 + 2 * 16);
         assert_eq!(std::mem::size_of::<DrawIndexedIndirect>(), 20);
     }

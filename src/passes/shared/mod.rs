@@ -62,27 +62,36 @@ pub struct SceneInputs {
     pub scene: Arc<GpuScene>,
     frames: Vec<FrameSlot>,
     current: usize,
-    sun_shadow_maps: SunShadowMaps,
+    shadow_maps: ShadowMaps,
 }
 
-/// The sun's shadow maps a view's lighting samples (`shadows.glsl`): a `D32_SFLOAT` 2D array
-/// view in `SHADER_READ_ONLY_OPTIMAL` and its comparison sampler. The frame constants say how
-/// many cascades it holds; with none the lookups read nothing.
+/// The shadow maps a view's lighting samples (`shadows.glsl`): the sun's cascades and the spot
+/// and point lights' faces, each a `D32_SFLOAT` 2D array view in `SHADER_READ_ONLY_OPTIMAL`, and
+/// their comparison sampler. The frame constants and lights say which layers hold what; a view
+/// without shadows reads none.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct SunShadowMaps {
-    /// The array view.
-    pub view: vk::ImageView,
+pub struct ShadowMaps {
+    /// The sun's cascades.
+    pub sun: vk::ImageView,
+    /// The spot and point lights' faces.
+    pub local: vk::ImageView,
     /// A comparison sampler ([`crate::gpu::Sampler::depth_compare`]).
     pub sampler: vk::Sampler,
 }
 
-impl SunShadowMaps {
-    /// Where `shadows.glsl` declares the maps.
-    pub const BINDING: u32 = 15;
+impl ShadowMaps {
+    /// Where `shadows.glsl` declares the sun's maps.
+    pub const SUN_BINDING: u32 = 15;
+    /// Where `shadows.glsl` declares the spot and point lights' maps.
+    pub const LOCAL_BINDING: u32 = 14;
 
     /// The maps as a lighting pass binds them.
-    pub fn bind(&self) -> crate::gpu::Bind {
-        crate::gpu::Bind::Sampled(Self::BINDING, self.view, self.sampler, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+    pub fn binds(&self) -> [crate::gpu::Bind; 2] {
+        let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        [
+            crate::gpu::Bind::Sampled(Self::SUN_BINDING, self.sun, self.sampler, read),
+            crate::gpu::Bind::Sampled(Self::LOCAL_BINDING, self.local, self.sampler, read),
+        ]
     }
 }
 
@@ -110,7 +119,7 @@ impl SceneInputs {
                 })
             })
             .collect::<crate::Result<Vec<_>>>()?;
-        Ok(Self { scene, frames, current: 0, sun_shadow_maps: SunShadowMaps::default() })
+        Ok(Self { scene, frames, current: 0, shadow_maps: ShadowMaps::default() })
     }
 
     /// The shared inputs of the frame `rec` records, or an error naming the pass when the host
@@ -156,14 +165,14 @@ impl SceneInputs {
         &self.frames[self.current].lights
     }
 
-    /// The sun's shadow maps this view samples.
-    pub fn sun_shadow_maps(&self) -> SunShadowMaps {
-        self.sun_shadow_maps
+    /// The shadow maps this view samples.
+    pub fn shadow_maps(&self) -> ShadowMaps {
+        self.shadow_maps
     }
 
     /// Sets the shadow maps the next recorded frame samples (the renderer does, every frame).
-    pub(crate) fn set_sun_shadow_maps(&mut self, maps: SunShadowMaps) {
-        self.sun_shadow_maps = maps;
+    pub(crate) fn set_shadow_maps(&mut self, maps: ShadowMaps) {
+        self.shadow_maps = maps;
     }
 }
 

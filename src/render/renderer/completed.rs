@@ -4,7 +4,7 @@
 use super::{Renderer, ViewId};
 use crate::error::Result;
 use crate::gpu::PassTiming;
-use crate::stats::{CascadeStats, FrameStats};
+use crate::stats::{FrameStats, ShadowViewStats};
 
 impl Renderer {
     /// GPU timings of a recorded frame of the main view if it has completed and its timestamps
@@ -54,29 +54,31 @@ impl Renderer {
             Some(world) => world.update_of(frame)?,
             None => None,
         };
-        stats.shadow_cascades = self.completed_cascade_stats(view, frame)?;
+        if let Some(shadows) = self.shadows.cameras.iter().find(|c| c.camera == view) {
+            stats.shadow_cascades = self.completed_shadow_stats(&shadows.sun.views, frame)?;
+            stats.shadow_faces = self.completed_shadow_stats(&shadows.local.views, frame)?;
+        }
         Ok(stats)
     }
 
-    /// What `view`'s sun shadow cascades drew in `frame`, for those that drew.
-    fn completed_cascade_stats(&self, view: ViewId, frame: u64) -> Result<Vec<CascadeStats>> {
-        let Some(shadows) = self.shadows.cameras.iter().find(|c| c.camera == view) else { return Ok(Vec::new()) };
-        let mut cascades = Vec::new();
-        for (cascade, &id) in shadows.cascades.iter().enumerate() {
-            let Some((runtime, index)) = self.view_state(id)?.graphs.runtime_of(frame) else { continue };
+    /// What the shadow views `views` drew in `frame`, for those that drew.
+    fn completed_shadow_stats(&self, views: &[ViewId], frame: u64) -> Result<Vec<ShadowViewStats>> {
+        let mut drawn = Vec::new();
+        for (index, &id) in views.iter().enumerate() {
+            let Some((runtime, local)) = self.view_state(id)?.graphs.runtime_of(frame) else { continue };
             // Without a cull pass every instance is drawn.
             let instances = self.world.as_ref().map_or(self.gpu_scene.instance_count, |w| w.instances());
             let mut counts = FrameStats { drawn: instances, triangles: self.gpu_scene.triangles, ..Default::default() };
-            counts.add_counters(runtime.counter_entries(index)?);
-            cascades.push(CascadeStats {
-                cascade: cascade as u32,
+            counts.add_counters(runtime.counter_entries(local)?);
+            drawn.push(ShadowViewStats {
+                index: index as u32,
                 frustum_culled: counts.frustum_culled,
                 occlusion_culled: counts.occlusion_culled,
                 drawn: counts.drawn,
                 triangles: counts.triangles,
-                gpu_ms: runtime.timings(index)?.into_iter().filter(|t| t.name != "frame").collect(),
+                gpu_ms: runtime.timings(local)?.into_iter().filter(|t| t.name != "frame").collect(),
             });
         }
-        Ok(cascades)
+        Ok(drawn)
     }
 }

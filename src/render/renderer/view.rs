@@ -3,10 +3,11 @@
 
 use super::adapt::Adaptations;
 use super::graphs::Graphs;
+use super::shadows::ViewShadowData;
 use crate::error::{Error, Result};
 use crate::gpu::{Access, Image};
 use crate::graph::{CompiledGraph, GraphRuntime, Imports};
-use crate::passes::shared::gpu_types::{FrameConstants, GpuPointLight, GpuSunShadows};
+use crate::passes::shared::gpu_types::{FrameConstants, GpuPointLight};
 use crate::passes::shared::SceneInputs;
 use crate::render::RenderSettings;
 use crate::scene::{Camera, Scene};
@@ -67,8 +68,11 @@ pub(super) enum ViewRole {
     /// A camera the host adds and lists in its frames.
     Camera,
     /// Cascade `cascade` of camera view `of`'s sun shadows: the renderer adds it to every frame
-    /// that lists `of` (`sun_shadows.rs`); the host never sees its id.
+    /// that lists `of` (`shadows.rs`); the host never sees its id.
     SunCascade { of: ViewId, cascade: u32 },
+    /// Face `face` of camera view `of`'s spot and point light shadows, drawn in the frames
+    /// where a shadowed light takes it (`shadows.rs`).
+    LightFace { of: ViewId, face: u32 },
 }
 
 /// A view's state.
@@ -104,19 +108,23 @@ impl View {
         self.graphs.runtime.output_image(0)
     }
 
-    /// Writes frame `frame`'s constants (with the sun's shadows as `sun_shadows` says) and
-    /// eye-relative lights for `camera`.
+    /// Writes frame `frame`'s constants and eye-relative lights for `camera`, with the shadows
+    /// `shadows` says.
     pub fn write_frame_data(
         &mut self,
         scene: &Scene,
         frame: u64,
         camera: &Camera,
-        sun_shadows: GpuSunShadows,
+        shadows: &ViewShadowData,
     ) -> Result<()> {
         let previous = self.previous_camera.as_ref().unwrap_or(camera);
         let mut constants = FrameConstants::new(scene, camera, previous, self.settings.width, self.settings.height);
-        constants.sun_shadows = sun_shadows;
-        let lights: Vec<GpuPointLight> = scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();
+        constants.sun_shadows = shadows.sun;
+        constants.local_shadows = shadows.local;
+        let mut lights: Vec<GpuPointLight> = scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();
+        for (light, &shadow) in lights.iter_mut().zip(&shadows.lights) {
+            light.shadow = shadow;
+        }
         let slot = self.inputs.slot_mut(frame);
         slot.write_constants(&constants)?;
         if !lights.is_empty() {

@@ -1,0 +1,537 @@
+//! Shadows: each camera view gets cascades of the sun fitted to its camera every frame
+//! ([`crate::scene::cascades`]) and the faces of its most important spot and point lights
+//! ([`crate::scene::light_faces`]); each cascade and face is a view of the renderer's world
+//! running a depth-only graph (`graph/shadow.ron`) into its layer of one of the camera view's
+//! two shadow-map arrays. They are recorded in lockstep with the cameras, so their culls share
+//! the cameras' dispatches, and each has finished drawing before the first pass of its camera
+//! that samples the maps ([`crate::graph::PassNode::samples_sun_shadows`]).
+
+use super::graphs::{build_runtime, Graphs};
+use super::view::{View, ViewId, ViewRole};
+use super::Renderer;
+use crate::error::{Error, Result};
+use crate::gpu::{Access, DepthArray, GpuContext, Sampler, ShaderCompiler};
+use crate::graph::Imports;
+use crate::passes::shared::gpu_types::{GpuLocalShadows, GpuSunShadows, MAX_LOCAL_FACES, NO_SHADOW};
+use crate::passes::shared::{SceneInputs, ShadowMaps};
+use crate::render::{GraphSpec, RenderSettings};
+use crate::scene::cascades::{fit_cascades, CascadeSettings, MAX_CASCADES};
+use crate::scene::light_faces::shadowed_lights;
+use crate::scene::{Camera, Scene};
+use ash::vk;
+use glam::Mat4;
+
+/// How a renderer draws the sun's shadows ([`Renderer::set_shadows`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShadowSettings {
+    /// Cascades per camera view, 1 to [`MAX_CASCADES`].
+    pub cascades: u32,
+    /// Width and height of each cascade's map in texels.
+    pub resolution: u32,
+    /// How far from each camera shadows reach, in world units (`None`: 150, or the scene's
+    /// diagonal when that is shorter).
+    pub distance: Option<f32>,
+    /// Between uniform (0) and logarithmic (1) cascade splits.
+    pub lambda: f32,
+    /// How far before each cascade, towards the sun, casters are drawn (`None`: the scene's
+    /// diagonal when shadows are set, so that nothing in the scene's bounds at that time is
+    /// left out).
+    pub caster_reach: Option<f32>,
+    /// Whether casters are culled (`graph/shadow.ron`: two-phase occlusion culling per
+    /// cascade and face, in the cameras' dispatches) or all drawn (`graph/shadow_no_cull.ron`).
+    pub caster_culling: bool,
+    /// The most spot and point lights that cast shadows in a view, 0 to
+    /// [`MAX_SHADOWED_LIGHTS`]: each frame, those that bring the most light to what the camera
+    /// sees (brightest and nearest, in front of it, within `distance` of its sphere). The
+    /// others light without shadows.
+    pub local_lights: u32,
+    /// Width and height of each spot or point light face's map in texels.
+    pub local_resolution: u32,
+}
+
+/// The most spot and point lights [`ShadowSettings::local_lights`] allows: each may be a cube
+/// of six faces, and a view holds [`crate::passes::shared::gpu_types::MAX_LOCAL_FACES`].
+pub const MAX_SHADOWED_LIGHTS: u32 = (MAX_LOCAL_FACES / 6) as u32;
+
+impl Default for ShadowSettings {
+    fn default() -> Self {
+        Self {
+            cascades: 4,
+            resolution: 1024,
+            distance: None,
+            lambda: 0.75,
+            caster_reach: None,
+            caster_culling: true,
+            local_lights: 2,
+            local_resolution: 512,
+        }
+    }
+}
+
+/// Where a view's graph reads the maps once they are drawn: the lighting in compute, the
+/// transparent surfaces in fragment shaders.
+const SAMPLED: Access = Access {
+    stage: vk::PipelineStageFlags2::from_raw(
+        vk::PipelineStageFlags2::COMPUTE_SHADER.as_raw() | vk::PipelineStageFlags2::FRAGMENT_SHADER.as_raw(),
+    ),
+    access: vk::AccessFlags2::SHADER_SAMPLED_READ,
+    layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+};
+
+/// One camera view's shadow views and maps.
+pub(super) struct CameraShadows {
+    /// The camera view.
+    pub camera: ViewId,
+    /// Its sun cascades, nearest first.
+    pub sun: MapSet,
+    /// Its spot and point lights' faces (as many as the most its lights can take).
+    pub local: MapSet,
+}
+
+/// Views that each draw one layer of a shadow-map array.
+pub(super) struct MapSet {
+    /// The views, layer by layer.
+    pub views: Vec<ViewId>,
+    /// One layer per view.
+    pub maps: DepthArray,
+    /// Whether a recorded frame has put every layer in the sampled layout (a frame whose
+    /// recording fails is discarded, so until one is recorded each frame does it again).
+    pub ready: bool,
+    /// What each layer was last drawn for (`None`: never drawn).
+    pub drawn_for: Vec<Option<MapKey>>,
+}
+
+impl MapSet {
+    /// The frame of layer `layer` seen by `camera`, unless it holds what it would draw.
+    fn frame(&self, layer: usize, camera: &Camera, key: MapKey, of: ViewId, keep: bool) -> Option<ShadowViewFrame> {
+        if keep && self.drawn_for[layer].as_ref() == Some(&key) {
+            return None;
+        }
+        // Every layer is in the sampled layout: since the last frame's reads, or since this
+        // frame's start (`MapSet::make_ready`).
+        let imports = Imports::new().image("depth", self.maps.layer(layer as u32), SAMPLED, SAMPLED);
+        Some(ShadowViewFrame { view: self.views[layer], camera: camera.clone(), imports, of, key })
+    }
+
+    /// Notes that `frame`, one of these views, was recorded.
+    fn recorded(&mut self, frame: &ShadowViewFrame) -> bool {
+        let Some(layer) = self.views.iter().position(|&v| v == frame.view) else { return false };
+        self.drawn_for[layer] = Some(frame.key.clone());
+        true
+    }
+
+    /// Puts every layer in the sampled layout, unless a recorded frame did (the layers no
+    /// light has taken yet are bound too). Their contents are undefined until drawn.
+    fn make_ready(&self, ctx: &GpuContext, cmd: vk::CommandBuffer) {
+        if !self.ready {
+            transition_to_sampled(ctx, cmd, &self.maps);
+        }
+    }
+}
+
+/// What a cascade's map depends on: its camera, the sun, and the world's version (any change of
+/// a world counts, which is conservative: a change the cascade cannot see redraws it too).
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct MapKey {
+    camera: Camera,
+    sun: glam::Vec3,
+    world_version: Option<u64>,
+}
+
+/// The renderer's shadow state.
+pub(super) struct ShadowState {
+    /// `None`: no shadows.
+    pub settings: Option<ShadowSettings>,
+    /// Per camera view with shadows.
+    pub cameras: Vec<CameraShadows>,
+    sampler: Sampler,
+    /// A one-layer array that views without shadows bind (never read: no cascades).
+    fallback: DepthArray,
+    fallback_ready: bool,
+    /// The resolved caster reach and distance for the scene.
+    reach: f32,
+    distance: f32,
+    /// Whether maps that would be drawn as they are are kept ([`Renderer::set_shadow_maps_kept`]).
+    keep_unchanged: bool,
+    /// The camera views whose maps the frame being recorded puts in the sampled layout.
+    made_ready: Vec<ViewId>,
+}
+
+impl ShadowState {
+    pub fn new(ctx: &GpuContext) -> Result<Self> {
+        Ok(Self {
+            settings: None,
+            cameras: Vec::new(),
+            sampler: Sampler::depth_compare(ctx)?,
+            fallback: DepthArray::new(ctx, "no shadow maps", 1, 1)?,
+            fallback_ready: false,
+            reach: 0.0,
+            distance: 0.0,
+            keep_unchanged: true,
+            made_ready: Vec::new(),
+        })
+    }
+
+    fn fallback_maps(&self) -> ShadowMaps {
+        let view = self.fallback.array_view();
+        ShadowMaps { sun: view, local: view, sampler: self.sampler.handle() }
+    }
+
+    /// Device memory the shadow maps take.
+    pub fn bytes(&self) -> u64 {
+        self.cameras.iter().map(|c| c.sun.maps.bytes() + c.local.maps.bytes()).sum()
+    }
+}
+
+/// What one camera view's frame constants and lights say of its shadows.
+#[derive(Default)]
+pub(super) struct ViewShadowData {
+    pub sun: GpuSunShadows,
+    pub local: GpuLocalShadows,
+    /// Per light of the scene: its [`crate::passes::shared::gpu_types::GpuPointLight::shadow`]
+    /// (empty: none casts a shadow).
+    pub lights: Vec<[u32; 4]>,
+}
+
+/// One cascade's or face's part of a frame: its view, camera and the import of its layer.
+pub(super) struct ShadowViewFrame {
+    pub view: ViewId,
+    pub camera: Camera,
+    pub imports: Imports,
+    /// The camera view whose lighting waits for it.
+    pub of: ViewId,
+    /// What its map is drawn for.
+    key: MapKey,
+}
+
+impl Renderer {
+    /// Turns the sun's shadows on with `settings`, or off (`None`), from the next frame on.
+    /// Every camera view gets its cascades; views added later get theirs when added. The
+    /// sun is the scene's ([`crate::scene::Scene::sun`], `World::set_sun`).
+    ///
+    /// Errors: a cascade count outside 1 to 4, a resolution of 0 or beyond the device, a
+    /// distance or reach that is not finite and positive, a lambda outside 0 to 1, more
+    /// shadowed lights than [`MAX_SHADOWED_LIGHTS`]; nothing changes then.
+    pub fn set_shadows(&mut self, shaders: &ShaderCompiler, settings: Option<ShadowSettings>) -> Result<()> {
+        profiling::scope!("cullgraph::Renderer::set_shadows");
+        let last_use = self.frame_index.saturating_sub(1);
+        let Some(settings) = settings else {
+            self.drop_all_shadows(last_use);
+            self.shadows.settings = None;
+            return Ok(());
+        };
+        let (reach, distance) = check_settings(&self.scene, &settings)?;
+        let cameras: Vec<ViewId> = self.camera_views().collect();
+        let mut made = Vec::new();
+        for camera in cameras {
+            match self.make_camera_shadows(shaders, camera, &settings) {
+                Ok(shadows) => made.push(shadows),
+                Err(e) => {
+                    for (shadows, views) in made {
+                        self.retire_camera_shadows(shadows, views, last_use);
+                    }
+                    return Err(camera.error(e));
+                }
+            }
+        }
+        self.drop_all_shadows(last_use);
+        for (shadows, views) in made {
+            self.views.extend(views);
+            self.shadows.cameras.push(shadows);
+        }
+        self.shadows.settings = Some(settings);
+        self.shadows.reach = reach;
+        self.shadows.distance = distance;
+        Ok(())
+    }
+
+    /// Whether a cascade's map is kept, not drawn again, while its camera, the sun and the
+    /// world are what they were when it was drawn (the default). Off, every map is drawn every
+    /// frame (to measure what drawing them costs).
+    pub fn set_shadow_maps_kept(&mut self, on: bool) {
+        self.shadows.keep_unchanged = on;
+    }
+
+    /// The shadow settings in force (`None`: no shadows).
+    pub fn shadows(&self) -> Option<&ShadowSettings> {
+        self.shadows.settings.as_ref()
+    }
+
+    /// Device memory the shadow maps take (0 without shadows).
+    pub fn shadow_map_bytes(&self) -> u64 {
+        self.shadows.bytes()
+    }
+
+    /// The views that are cameras (not cascades).
+    pub(super) fn camera_views(&self) -> impl Iterator<Item = ViewId> + '_ {
+        self.views.iter().filter(|v| v.role == ViewRole::Camera).map(|v| v.id)
+    }
+
+    /// Gives camera view `camera` its cascades (after [`Renderer::add_view`]) when shadows are on.
+    pub(super) fn add_camera_shadows(&mut self, shaders: &ShaderCompiler, camera: ViewId) -> Result<()> {
+        let Some(settings) = self.shadows.settings.clone() else { return Ok(()) };
+        let (shadows, views) = self.make_camera_shadows(shaders, camera, &settings)?;
+        self.views.extend(views);
+        self.shadows.cameras.push(shadows);
+        Ok(())
+    }
+
+    /// Removes camera view `camera`'s shadow views (with the view).
+    pub(super) fn remove_camera_shadows(&mut self, camera: ViewId) {
+        let last_use = self.frame_index.saturating_sub(1);
+        if let Some(at) = self.shadows.cameras.iter().position(|c| c.camera == camera) {
+            let shadows = self.shadows.cameras.remove(at);
+            let views = self.take_views(&[shadows.sun.views.as_slice(), &shadows.local.views].concat());
+            self.retire_camera_shadows(shadows, views, last_use);
+        }
+    }
+
+    fn drop_all_shadows(&mut self, last_use: u64) {
+        for shadows in std::mem::take(&mut self.shadows.cameras) {
+            let views = self.take_views(&[shadows.sun.views.as_slice(), &shadows.local.views].concat());
+            self.retire_camera_shadows(shadows, views, last_use);
+        }
+    }
+
+    fn take_views(&mut self, ids: &[ViewId]) -> Vec<View> {
+        let mut taken = Vec::new();
+        let mut at = 0;
+        while at < self.views.len() {
+            if ids.contains(&self.views[at].id) {
+                taken.push(self.views.remove(at));
+            } else {
+                at += 1;
+            }
+        }
+        taken
+    }
+
+    fn retire_camera_shadows(&mut self, shadows: CameraShadows, views: Vec<View>, last_use: u64) {
+        for view in views {
+            self.retired.views.push((last_use, view));
+        }
+        self.retired.shadow_maps.push((last_use, shadows.sun.maps));
+        self.retired.shadow_maps.push((last_use, shadows.local.maps));
+    }
+
+    /// Camera view `camera`'s cascades and light faces (views not yet in the list, with ids
+    /// from `next_view` on) and their maps.
+    fn make_camera_shadows(
+        &mut self,
+        shaders: &ShaderCompiler,
+        camera: ViewId,
+        settings: &ShadowSettings,
+    ) -> Result<(CameraShadows, Vec<View>)> {
+        let name = if settings.caster_culling { "shadow" } else { "shadow_no_cull" };
+        let kinds = self.view_state(camera)?.graphs.spec.kinds.clone();
+        let spec = GraphSpec::from_library(kinds, name)?;
+        let mut views = Vec::new();
+        let sun =
+            self.make_map_set(shaders, &spec, camera, settings.resolution, settings.cascades, true, &mut views)?;
+        let faces = settings.local_lights * 6;
+        let local = self.make_map_set(shaders, &spec, camera, settings.local_resolution, faces, false, &mut views)?;
+        Ok((CameraShadows { camera, sun, local }, views))
+    }
+
+    /// `count` shadow views of camera view `camera` drawing `resolution`² maps through `spec`
+    /// (added to `views`), with their array (one layer at least, so that there is always one to
+    /// bind).
+    #[allow(clippy::too_many_arguments)]
+    fn make_map_set(
+        &mut self,
+        shaders: &ShaderCompiler,
+        spec: &GraphSpec,
+        camera: ViewId,
+        resolution: u32,
+        count: u32,
+        sun: bool,
+        views: &mut Vec<View>,
+    ) -> Result<MapSet> {
+        let name = if sun { "sun shadow maps" } else { "light shadow maps" };
+        let maps = DepthArray::new(&self.ctx, name, resolution, count.max(1))?;
+        let size = RenderSettings::new(resolution, resolution);
+        let compiled = self.compiled_for(spec, &size)?;
+        let main = &self.views[0].graphs.runtime;
+        let (step_timing, capture) = (main.step_timing(), main.captures_draw_lists());
+        let mut ids = Vec::new();
+        for layer in 0..count {
+            let runtime = build_runtime(&self.ctx, shaders, &compiled, spec)?;
+            let mut graphs = Graphs::new(spec, runtime, compiled.clone());
+            graphs.runtime.set_step_timing(step_timing);
+            graphs.runtime.capture_draw_lists(capture)?;
+            let id = ViewId(self.next_view);
+            self.next_view += 1;
+            ids.push(id);
+            let role = if sun {
+                ViewRole::SunCascade { of: camera, cascade: layer }
+            } else {
+                ViewRole::LightFace { of: camera, face: layer }
+            };
+            views.push(View {
+                id,
+                settings: size.clone(),
+                graphs,
+                inputs: SceneInputs::new(&self.ctx, self.gpu_scene.clone(), self.light_capacity)?,
+                previous_camera: None,
+                adaptations: None,
+                role,
+            });
+        }
+        let drawn_for = vec![None; ids.len()];
+        Ok(MapSet { views: ids, maps, ready: false, drawn_for })
+    }
+
+    /// This frame's shadow views of the listed camera views (`cameras`: id and camera), with
+    /// what each camera view's constants and lights say of its shadows; views without shadows
+    /// get none. Points every listed camera view at its maps (or the unread fallback), and
+    /// makes the fallback ready until a frame that did so has been recorded.
+    pub(super) fn plan_shadow_frame(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        cameras: &[(ViewId, &Camera)],
+    ) -> Result<(Vec<ShadowViewFrame>, Vec<ViewShadowData>)> {
+        if !self.shadows.fallback_ready {
+            transition_to_sampled(&self.ctx, cmd, &self.shadows.fallback);
+        }
+        let mut frames = Vec::new();
+        let mut data = Vec::with_capacity(cameras.len());
+        let mut made_ready = Vec::new();
+        let fallback = self.shadows.fallback_maps();
+        let world_version = self.synced_version();
+        let keep = self.shadows.keep_unchanged;
+        let sun = self.scene.sun.direction;
+        for &(id, camera) in cameras {
+            let at = self.view_index(id)?;
+            let samples = self.views[at].graphs.runtime.first_pass_sampling_sun_shadows().is_some();
+            let shadows = self.shadows.cameras.iter_mut().find(|c| c.camera == id);
+            let (Some(settings), Some(shadows), true) = (&self.shadows.settings, shadows, samples) else {
+                self.views[at].inputs.set_shadow_maps(fallback);
+                data.push(ViewShadowData::default());
+                continue;
+            };
+            shadows.sun.make_ready(&self.ctx, cmd);
+            shadows.local.make_ready(&self.ctx, cmd);
+            made_ready.push(id);
+            let mut view_data = ViewShadowData::default();
+            let key = |camera: &Camera| MapKey { camera: camera.clone(), sun, world_version };
+            let view_settings = &self.views[at].settings;
+            let aspect = view_settings.width as f32 / view_settings.height as f32;
+            let fit = CascadeSettings {
+                count: settings.cascades,
+                distance: self.shadows.distance.max(camera.near * 2.0),
+                lambda: settings.lambda,
+                resolution: settings.resolution,
+                caster_reach: self.shadows.reach,
+            };
+            // A camera the cascades cannot be fitted to (no depth range to split) is lit
+            // without the sun's shadows, as the fallback says; the camera itself was checked.
+            if let Ok(cascades) = fit_cascades(camera, aspect, sun, &fit) {
+                view_data.sun.info = [cascades.len() as u32, settings.resolution, 0, 0];
+                for (c, cascade) in cascades.iter().enumerate() {
+                    view_data.sun.cascades[c] = relative_to(camera, &cascade.camera).to_cols_array_2d();
+                    view_data.sun.texel[c] = cascade.texel as f32;
+                    // A map whose camera, sun and world did not change since it was drawn is kept.
+                    frames.extend(shadows.sun.frame(c, &cascade.camera, key(&cascade.camera), id, keep));
+                }
+            }
+            let budget = settings.local_lights as usize;
+            let chosen = shadowed_lights(
+                &self.scene.lights,
+                camera,
+                self.shadows.distance as f64,
+                budget,
+                settings.local_resolution,
+            );
+            if !chosen.is_empty() {
+                view_data.lights = vec![[NO_SHADOW, 0, 0, 0]; self.scene.lights.len()];
+            }
+            let mut next_face = 0;
+            for light in chosen {
+                let first = next_face;
+                for face in &light.faces {
+                    view_data.local.faces[next_face] = relative_to(camera, face).to_cols_array_2d();
+                    frames.extend(shadows.local.frame(next_face, face, key(face), id, keep));
+                    next_face += 1;
+                }
+                view_data.lights[light.light] =
+                    [first as u32, light.faces.len() as u32, light.texel_per_unit.to_bits(), 0];
+            }
+            let maps = ShadowMaps {
+                sun: shadows.sun.maps.array_view(),
+                local: shadows.local.maps.array_view(),
+                sampler: self.shadows.sampler.handle(),
+            };
+            self.views[at].inputs.set_shadow_maps(maps);
+            data.push(view_data);
+        }
+        self.shadows.made_ready = made_ready;
+        Ok((frames, data))
+    }
+}
+
+/// Records the move of every layer of `maps` from undefined contents to the sampled layout.
+fn transition_to_sampled(ctx: &GpuContext, cmd: vk::CommandBuffer, maps: &DepthArray) {
+    let barriers = [crate::gpu::barrier::image_barrier_raw(maps.handle(), maps.range(), Access::NONE, SAMPLED)];
+    // SAFETY: `cmd` is recording; the image is ours, and no recorded frame has used it yet.
+    unsafe { ctx.device().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
+}
+
+/// The matrix from `view`'s eye-relative positions to `shadow`'s clip space.
+fn relative_to(view: &Camera, shadow: &Camera) -> Mat4 {
+    let offset = (view.eye - shadow.eye).as_vec3();
+    shadow.view_projection_rel_eye(1.0) * Mat4::from_translation(offset)
+}
+
+impl Renderer {
+    /// Notes what a frame planned by [`Renderer::plan_shadow_frame`] did, once it has been
+    /// recorded whole: the fallback's layout, and the maps its shadow views drew (a frame whose
+    /// recording failed is discarded by its host, so nothing is noted for it).
+    pub(super) fn shadow_frame_recorded(&mut self, frames: Vec<ShadowViewFrame>) {
+        self.shadows.fallback_ready = true;
+        let made_ready = std::mem::take(&mut self.shadows.made_ready);
+        for shadows in self.shadows.cameras.iter_mut().filter(|c| made_ready.contains(&c.camera)) {
+            shadows.sun.ready = true;
+            shadows.local.ready = true;
+        }
+        for frame in frames {
+            let Some(shadows) = self.shadows.cameras.iter_mut().find(|c| c.camera == frame.of) else { continue };
+            if !shadows.sun.recorded(&frame) {
+                shadows.local.recorded(&frame);
+            }
+        }
+    }
+}
+
+/// The caster reach and shadow distance `settings` resolve to on `scene`, or what is wrong
+/// with them.
+fn check_settings(scene: &Scene, settings: &ShadowSettings) -> Result<(f32, f32)> {
+    let bad = |what: String| Err(Error::Invalid(format!("shadows: {what}")));
+    if !(1..=MAX_CASCADES).contains(&settings.cascades) {
+        return bad(format!("{} cascades; 1 to {MAX_CASCADES} are possible", settings.cascades));
+    }
+    if settings.resolution == 0 || settings.local_resolution == 0 {
+        return bad("a shadow map of 0 texels".into());
+    }
+    if settings.local_lights > MAX_SHADOWED_LIGHTS {
+        return bad(format!(
+            "{} shadowed spot and point lights; at most {MAX_SHADOWED_LIGHTS} are possible",
+            settings.local_lights
+        ));
+    }
+    if !(0.0..=1.0).contains(&settings.lambda) {
+        return bad(format!("lambda {} is outside 0 to 1", settings.lambda));
+    }
+    let diagonal = scene.world_bounds().map_or(100.0, |(lo, hi)| (hi - lo).length() as f32).max(1.0);
+    let distance = settings.distance.unwrap_or(150f32.min(diagonal));
+    let reach = settings.caster_reach.unwrap_or(diagonal);
+    if !(distance.is_finite() && distance > 0.0) {
+        return bad(format!("distance {distance} must be finite and positive"));
+    }
+    if !(reach.is_finite() && reach >= 0.0) {
+        return bad(format!("caster reach {reach} must be finite and at least 0"));
+    }
+    if scene.sun.direction.length_squared() < 1e-12 || !scene.sun.direction.is_finite() {
+        return bad(format!("the sun's direction {} must be finite and not zero", scene.sun.direction));
+    }
+    Ok((reach, distance))
+}
