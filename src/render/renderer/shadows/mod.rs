@@ -6,20 +6,21 @@
 //! the cameras' dispatches, and each has finished drawing before the first pass of its camera
 //! that samples the maps ([`crate::graph::PassNode::samples_sun_shadows`]).
 
+mod frame;
+mod map_set;
+
 use super::graphs::{build_runtime, Graphs};
 use super::view::{View, ViewId, ViewRole};
 use super::Renderer;
 use crate::error::{Error, Result};
-use crate::gpu::{Access, DepthArray, GpuContext, Sampler, ShaderCompiler};
-use crate::graph::Imports;
-use crate::passes::shared::gpu_types::{GpuLocalShadows, GpuSunShadows, MAX_LOCAL_FACES, NO_SHADOW};
+use crate::gpu::{DepthArray, GpuContext, Sampler, ShaderCompiler};
+use crate::passes::shared::gpu_types::MAX_LOCAL_FACES;
 use crate::passes::shared::{SceneInputs, ShadowMaps};
 use crate::render::{GraphSpec, RenderSettings};
-use crate::scene::cascades::{fit_cascades, CascadeSettings, MAX_CASCADES};
-use crate::scene::light_faces::shadowed_lights;
-use crate::scene::{Camera, Scene};
-use ash::vk;
-use glam::Mat4;
+use crate::scene::cascades::MAX_CASCADES;
+use crate::scene::Scene;
+pub(super) use frame::ViewShadowData;
+use map_set::MapSet;
 
 /// How a renderer draws the sun's shadows ([`Renderer::set_shadows`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -68,16 +69,6 @@ impl Default for ShadowSettings {
     }
 }
 
-/// Where a view's graph reads the maps once they are drawn: the lighting in compute, the
-/// transparent surfaces in fragment shaders.
-const SAMPLED: Access = Access {
-    stage: vk::PipelineStageFlags2::from_raw(
-        vk::PipelineStageFlags2::COMPUTE_SHADER.as_raw() | vk::PipelineStageFlags2::FRAGMENT_SHADER.as_raw(),
-    ),
-    access: vk::AccessFlags2::SHADER_SAMPLED_READ,
-    layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-};
-
 /// One camera view's shadow views and maps.
 pub(super) struct CameraShadows {
     /// The camera view.
@@ -86,56 +77,6 @@ pub(super) struct CameraShadows {
     pub sun: MapSet,
     /// Its spot and point lights' faces (as many as the most its lights can take).
     pub local: MapSet,
-}
-
-/// Views that each draw one layer of a shadow-map array.
-pub(super) struct MapSet {
-    /// The views, layer by layer.
-    pub views: Vec<ViewId>,
-    /// One layer per view.
-    pub maps: DepthArray,
-    /// Whether a recorded frame has put every layer in the sampled layout (a frame whose
-    /// recording fails is discarded, so until one is recorded each frame does it again).
-    pub ready: bool,
-    /// What each layer was last drawn for (`None`: never drawn).
-    pub drawn_for: Vec<Option<MapKey>>,
-}
-
-impl MapSet {
-    /// The frame of layer `layer` seen by `camera`, unless it holds what it would draw.
-    fn frame(&self, layer: usize, camera: &Camera, key: MapKey, of: ViewId, keep: bool) -> Option<ShadowViewFrame> {
-        if keep && self.drawn_for[layer].as_ref() == Some(&key) {
-            return None;
-        }
-        // Every layer is in the sampled layout: since the last frame's reads, or since this
-        // frame's start (`MapSet::make_ready`).
-        let imports = Imports::new().image("depth", self.maps.layer(layer as u32), SAMPLED, SAMPLED);
-        Some(ShadowViewFrame { view: self.views[layer], camera: camera.clone(), imports, of, key })
-    }
-
-    /// Notes that `frame`, one of these views, was recorded.
-    fn recorded(&mut self, frame: &ShadowViewFrame) -> bool {
-        let Some(layer) = self.views.iter().position(|&v| v == frame.view) else { return false };
-        self.drawn_for[layer] = Some(frame.key.clone());
-        true
-    }
-
-    /// Puts every layer in the sampled layout, unless a recorded frame did (the layers no
-    /// light has taken yet are bound too). Their contents are undefined until drawn.
-    fn make_ready(&self, ctx: &GpuContext, cmd: vk::CommandBuffer) {
-        if !self.ready {
-            transition_to_sampled(ctx, cmd, &self.maps);
-        }
-    }
-}
-
-/// What a cascade's map depends on: its camera, the sun, and the world's version (any change of
-/// a world counts, which is conservative: a change the cascade cannot see redraws it too).
-#[derive(Clone, Debug, PartialEq)]
-pub(super) struct MapKey {
-    camera: Camera,
-    sun: glam::Vec3,
-    world_version: Option<u64>,
 }
 
 /// The renderer's shadow state.
@@ -181,27 +122,6 @@ impl ShadowState {
     pub fn bytes(&self) -> u64 {
         self.cameras.iter().map(|c| c.sun.maps.bytes() + c.local.maps.bytes()).sum()
     }
-}
-
-/// What one camera view's frame constants and lights say of its shadows.
-#[derive(Default)]
-pub(super) struct ViewShadowData {
-    pub sun: GpuSunShadows,
-    pub local: GpuLocalShadows,
-    /// Per light of the scene: its [`crate::passes::shared::gpu_types::GpuPointLight::shadow`]
-    /// (empty: none casts a shadow).
-    pub lights: Vec<[u32; 4]>,
-}
-
-/// One cascade's or face's part of a frame: its view, camera and the import of its layer.
-pub(super) struct ShadowViewFrame {
-    pub view: ViewId,
-    pub camera: Camera,
-    pub imports: Imports,
-    /// The camera view whose lighting waits for it.
-    pub of: ViewId,
-    /// What its map is drawn for.
-    key: MapKey,
 }
 
 impl Renderer {
@@ -379,126 +299,6 @@ impl Renderer {
         }
         let drawn_for = vec![None; ids.len()];
         Ok(MapSet { views: ids, maps, ready: false, drawn_for })
-    }
-
-    /// This frame's shadow views of the listed camera views (`cameras`: id and camera), with
-    /// what each camera view's constants and lights say of its shadows; views without shadows
-    /// get none. Points every listed camera view at its maps (or the unread fallback), and
-    /// makes the fallback ready until a frame that did so has been recorded.
-    pub(super) fn plan_shadow_frame(
-        &mut self,
-        cmd: vk::CommandBuffer,
-        cameras: &[(ViewId, &Camera)],
-    ) -> Result<(Vec<ShadowViewFrame>, Vec<ViewShadowData>)> {
-        if !self.shadows.fallback_ready {
-            transition_to_sampled(&self.ctx, cmd, &self.shadows.fallback);
-        }
-        let mut frames = Vec::new();
-        let mut data = Vec::with_capacity(cameras.len());
-        let mut made_ready = Vec::new();
-        let fallback = self.shadows.fallback_maps();
-        let world_version = self.synced_version();
-        let keep = self.shadows.keep_unchanged;
-        let sun = self.scene.sun.direction;
-        for &(id, camera) in cameras {
-            let at = self.view_index(id)?;
-            let samples = self.views[at].graphs.runtime.first_pass_sampling_sun_shadows().is_some();
-            let shadows = self.shadows.cameras.iter_mut().find(|c| c.camera == id);
-            let (Some(settings), Some(shadows), true) = (&self.shadows.settings, shadows, samples) else {
-                self.views[at].inputs.set_shadow_maps(fallback);
-                data.push(ViewShadowData::default());
-                continue;
-            };
-            shadows.sun.make_ready(&self.ctx, cmd);
-            shadows.local.make_ready(&self.ctx, cmd);
-            made_ready.push(id);
-            let mut view_data = ViewShadowData::default();
-            let key = |camera: &Camera| MapKey { camera: camera.clone(), sun, world_version };
-            let view_settings = &self.views[at].settings;
-            let aspect = view_settings.width as f32 / view_settings.height as f32;
-            let fit = CascadeSettings {
-                count: settings.cascades,
-                distance: self.shadows.distance.max(camera.near * 2.0),
-                lambda: settings.lambda,
-                resolution: settings.resolution,
-                caster_reach: self.shadows.reach,
-            };
-            // A camera the cascades cannot be fitted to (no depth range to split) is lit
-            // without the sun's shadows, as the fallback says; the camera itself was checked.
-            if let Ok(cascades) = fit_cascades(camera, aspect, sun, &fit) {
-                view_data.sun.info = [cascades.len() as u32, settings.resolution, 0, 0];
-                for (c, cascade) in cascades.iter().enumerate() {
-                    view_data.sun.cascades[c] = relative_to(camera, &cascade.camera).to_cols_array_2d();
-                    view_data.sun.texel[c] = cascade.texel as f32;
-                    // A map whose camera, sun and world did not change since it was drawn is kept.
-                    frames.extend(shadows.sun.frame(c, &cascade.camera, key(&cascade.camera), id, keep));
-                }
-            }
-            let budget = settings.local_lights as usize;
-            let chosen = shadowed_lights(
-                &self.scene.lights,
-                camera,
-                self.shadows.distance as f64,
-                budget,
-                settings.local_resolution,
-            );
-            if !chosen.is_empty() {
-                view_data.lights = vec![[NO_SHADOW, 0, 0, 0]; self.scene.lights.len()];
-            }
-            let mut next_face = 0;
-            for light in chosen {
-                let first = next_face;
-                for face in &light.faces {
-                    view_data.local.faces[next_face] = relative_to(camera, face).to_cols_array_2d();
-                    frames.extend(shadows.local.frame(next_face, face, key(face), id, keep));
-                    next_face += 1;
-                }
-                view_data.lights[light.light] =
-                    [first as u32, light.faces.len() as u32, light.texel_per_unit.to_bits(), 0];
-            }
-            let maps = ShadowMaps {
-                sun: shadows.sun.maps.array_view(),
-                local: shadows.local.maps.array_view(),
-                sampler: self.shadows.sampler.handle(),
-            };
-            self.views[at].inputs.set_shadow_maps(maps);
-            data.push(view_data);
-        }
-        self.shadows.made_ready = made_ready;
-        Ok((frames, data))
-    }
-}
-
-/// Records the move of every layer of `maps` from undefined contents to the sampled layout.
-fn transition_to_sampled(ctx: &GpuContext, cmd: vk::CommandBuffer, maps: &DepthArray) {
-    let barriers = [crate::gpu::barrier::image_barrier_raw(maps.handle(), maps.range(), Access::NONE, SAMPLED)];
-    // SAFETY: `cmd` is recording; the image is ours, and no recorded frame has used it yet.
-    unsafe { ctx.device().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
-}
-
-/// The matrix from `view`'s eye-relative positions to `shadow`'s clip space.
-fn relative_to(view: &Camera, shadow: &Camera) -> Mat4 {
-    let offset = (view.eye - shadow.eye).as_vec3();
-    shadow.view_projection_rel_eye(1.0) * Mat4::from_translation(offset)
-}
-
-impl Renderer {
-    /// Notes what a frame planned by [`Renderer::plan_shadow_frame`] did, once it has been
-    /// recorded whole: the fallback's layout, and the maps its shadow views drew (a frame whose
-    /// recording failed is discarded by its host, so nothing is noted for it).
-    pub(super) fn shadow_frame_recorded(&mut self, frames: Vec<ShadowViewFrame>) {
-        self.shadows.fallback_ready = true;
-        let made_ready = std::mem::take(&mut self.shadows.made_ready);
-        for shadows in self.shadows.cameras.iter_mut().filter(|c| made_ready.contains(&c.camera)) {
-            shadows.sun.ready = true;
-            shadows.local.ready = true;
-        }
-        for frame in frames {
-            let Some(shadows) = self.shadows.cameras.iter_mut().find(|c| c.camera == frame.of) else { continue };
-            if !shadows.sun.recorded(&frame) {
-                shadows.local.recorded(&frame);
-            }
-        }
     }
 }
 
