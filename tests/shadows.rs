@@ -9,11 +9,9 @@ mod common;
 use common::GpuTest;
 use cullgraph::render::output::RgbaImage;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer, ShadowSettings};
-use cullgraph::scene::texture::Sampler;
 use cullgraph::scene::world::World;
 use cullgraph::scene::*;
 use glam::{DVec3, Mat3, Vec3};
-use std::sync::Arc;
 
 const SIZE: (u32, u32) = (192, 120);
 
@@ -133,21 +131,7 @@ fn a_caster_far_along_the_sun_shadows_what_the_camera_sees() {
 /// A horizontal fence of bars (alpha-masked) above the ground, lit from above and in front.
 fn fence_stage() -> Scene {
     let (mut scene, _) = stage(Vec3::new(0.0, -1.0, 1.0));
-    let columns = 8;
-    let rgba: Vec<u8> = (0..columns * 2)
-        .flat_map(|i| if (i % columns) % 2 == 0 { [220, 220, 220, 255] } else { [0, 0, 0, 0] })
-        .collect();
-    scene.textures.push(Arc::new(Texture { name: "bars".into(), width: columns, height: 2, rgba }));
-    let sampler = Sampler { nearest_mag: true, nearest_min: true, ..Default::default() };
-    let mut fence = Material {
-        name: "fence".into(),
-        albedo: Vec3::ONE,
-        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
-        double_sided: true,
-        ..Default::default()
-    };
-    fence.textures[0] = Some(TextureRef { sampler, ..TextureRef::new(0) });
-    let fence = scene.add_material(fence);
+    let fence = common::bars_material(&mut scene, 8, true);
     let quad = scene.add_mesh("quad", &common::quad_mesh(), "quad").unwrap();
     // The quad faces +z; turned to face up, 4 units wide, 2 above the ground and 4 behind the
     // origin: its shadow falls 2 units towards the camera.

@@ -112,20 +112,7 @@ fn a_texture_transform_and_wrap_mode_tile_the_texture() {
 /// behind it.
 fn fence_and_box(columns: u32, nearest: bool, box_side: f64) -> Scene {
     let mut scene = common::sunlit_scene("textures");
-    let rgba: Vec<u8> = (0..columns * 2)
-        .flat_map(|i| if (i % columns).is_multiple_of(2) { [200, 200, 200, 255] } else { [0, 0, 0, 0] })
-        .collect();
-    scene.textures.push(Arc::new(Texture { name: "bars".into(), width: columns, height: 2, rgba }));
-    let sampler = Sampler { nearest_mag: nearest, nearest_min: nearest, ..Default::default() };
-    let mut fence = Material {
-        name: "fence".into(),
-        albedo: Vec3::ONE,
-        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
-        double_sided: true,
-        ..Default::default()
-    };
-    fence.textures[0] = Some(TextureRef { sampler, ..TextureRef::new(0) });
-    let fence = scene.add_material(fence);
+    let fence = common::bars_material(&mut scene, columns, nearest);
     let red =
         scene.add_material(Material { name: "red".into(), albedo: Vec3::new(0.9, 0.05, 0.05), ..Default::default() });
     let quad_mesh = scene.add_mesh("quad", &common::quad_mesh(), "quad").unwrap();

@@ -1,7 +1,7 @@
 //! Blocks of device memory that several resources share (render-graph transient aliasing).
 
 use super::context::{DeviceShared, GpuContext};
-use super::error::{GpuError, GpuResult};
+use super::error::{GpuError, GpuResult, VkResultExt};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
@@ -42,6 +42,18 @@ impl MemoryBlock {
             })
             .map_err(|source| GpuError::Allocation { name: name.into(), source })?;
         Ok(Self { shared: ctx.shared.clone(), allocation: Some(allocation), size })
+    }
+
+    /// A block of its own for optimally tiled image `image` (just created, without memory),
+    /// bound to it: the block must outlive the image.
+    pub fn bound_to_image(ctx: &GpuContext, name: &str, image: vk::Image) -> GpuResult<Self> {
+        // SAFETY: a valid image of this device.
+        let requirements = unsafe { ctx.device().get_image_memory_requirements(image) };
+        let block =
+            Self::new(ctx, name, requirements.size, requirements.alignment, requirements.memory_type_bits, false)?;
+        // SAFETY: the block fits the requirements; the caller keeps it as long as the image.
+        unsafe { ctx.device().bind_image_memory(image, block.memory(), block.offset()) }.vk("vkBindImageMemory")?;
+        Ok(block)
     }
 
     /// The `VkDeviceMemory` the block lives in.

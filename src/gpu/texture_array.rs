@@ -70,20 +70,8 @@ impl TextureArray {
             mip_levels,
             bytes: 0,
         };
-        // SAFETY: handle was just created.
-        let requirements = unsafe { ctx.device().get_image_memory_requirements(handle) };
-        let memory = MemoryBlock::new(
-            ctx,
-            name,
-            requirements.size,
-            requirements.alignment,
-            requirements.memory_type_bits,
-            false,
-        )?;
-        array.bytes = requirements.size;
-        // SAFETY: the block fits the requirements and lives as long as the image.
-        unsafe { array.shared.device.bind_image_memory(handle, memory.memory(), memory.offset()) }
-            .vk("vkBindImageMemory")?;
+        let memory = MemoryBlock::bound_to_image(ctx, name, handle)?;
+        array.bytes = memory.size();
         array.memory = Some(memory);
         array.linear_view = array.view(LINEAR_FORMAT)?;
         array.srgb_view = array.view(SRGB_FORMAT)?;

@@ -93,6 +93,28 @@ pub fn sunlit_scene(name: &str) -> cullgraph::scene::Scene {
     scene
 }
 
+/// Adds to `scene` a fence material: `columns` vertical bars of a texture, opaque grey and fully
+/// transparent by turns, alpha-masked and double-sided (`nearest` or bilinear filtering); returns
+/// its index.
+pub fn bars_material(scene: &mut cullgraph::scene::Scene, columns: u32, nearest: bool) -> u32 {
+    use cullgraph::scene::{texture::Sampler, AlphaMode, Material, Texture, TextureRef};
+    let rgba: Vec<u8> = (0..columns * 2)
+        .flat_map(|i| if (i % columns).is_multiple_of(2) { [200, 200, 200, 255] } else { [0, 0, 0, 0] })
+        .collect();
+    let texture = scene.textures.len() as u32;
+    scene.textures.push(std::sync::Arc::new(Texture { name: "bars".into(), width: columns, height: 2, rgba }));
+    let sampler = Sampler { nearest_mag: nearest, nearest_min: nearest, ..Default::default() };
+    let mut fence = Material {
+        name: "fence".into(),
+        albedo: glam::Vec3::ONE,
+        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+        double_sided: true,
+        ..Default::default()
+    };
+    fence.textures[0] = Some(TextureRef { sampler, ..TextureRef::new(texture) });
+    scene.add_material(fence)
+}
+
 /// The rgb of pixel (`x`, `y`).
 pub fn rgb(image: &cullgraph::render::output::RgbaImage, x: u32, y: u32) -> [u8; 3] {
     let p = image.get_pixel(x, y).0;
