@@ -7,6 +7,10 @@
 #ifndef CULLGRAPH_SHADOWS_GLSL
 #define CULLGRAPH_SHADOWS_GLSL
 
+// Without SHADOWS (a view without shadows: the lighting kinds pick that variant) nothing is
+// bound or looked up, and every light reaches every point.
+#ifdef SHADOWS
+
 #ifndef SHADOW_BINDING
 #define SHADOW_BINDING 15
 #endif
@@ -98,16 +102,25 @@ float local_light_visibility(GpuPointLight light, vec3 p, vec3 normal, vec3 l, f
     return lit / 16.0;
 }
 
-// The tint `DEBUG_VIEW_CASCADES` gives a pixel shaded by cascade `c` (-1: none).
-vec3 cascade_tint(int c) {
-    const vec3 tints[4] = vec3[](vec3(1.0, 0.35, 0.35), vec3(0.35, 1.0, 0.35), vec3(0.4, 0.5, 1.0), vec3(1.0, 1.0, 0.3));
-    return c < 0 ? vec3(1.0) : tints[c];
-}
-
 // The cascade that shades the eye-relative point `p` (-1: none).
 int sun_cascade_of(vec3 p, vec3 normal) {
     vec3 map;
     return sun_shadow_cascade(p, normal, map);
+}
+
+
+#else
+
+float sun_visibility(vec3 p, vec3 normal) { return 1.0; }
+float local_light_visibility(GpuPointLight light, vec3 p, vec3 normal, vec3 l, float dist) { return 1.0; }
+int sun_cascade_of(vec3 p, vec3 normal) { return -1; }
+
+#endif
+
+// The tint `DEBUG_VIEW_CASCADES` gives a pixel shaded by cascade `c` (-1: none).
+vec3 cascade_tint(int c) {
+    const vec3 tints[4] = vec3[](vec3(1.0, 0.35, 0.35), vec3(0.35, 1.0, 0.35), vec3(0.4, 0.5, 1.0), vec3(1.0, 1.0, 0.3));
+    return c < 0 ? vec3(1.0) : tints[c];
 }
 
 #endif

@@ -7,12 +7,12 @@ use super::slots::{
     GBUFFER_ALBEDO_FORMAT, GBUFFER_EMISSIVE_OCCLUSION_FORMAT, GBUFFER_NORMAL_FORMATS, LIGHTING_OUTPUT_DOC,
     LIGHTING_OUTPUT_FORMATS, NORMAL_SLOT_DOC,
 };
-use crate::gpu::{Bind, Buffer, GpuContext, Image, Pipeline, Sampler, ShaderCompiler};
+use crate::gpu::{Bind, Buffer, GpuContext, Image, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Stages, Usage};
 use crate::passes::gbuffer::{bound_image, normal_defines};
-use crate::passes::shared::lazy_pipeline::LazyPipeline;
+use crate::passes::shared::shadow_variants::ShadowVariants;
 use crate::passes::shared::{SceneInputs, ShadowMaps};
 use ash::vk;
 
@@ -67,11 +67,11 @@ impl LightingSettings {
 
 /// The lighting pass.
 pub struct LightingPass {
-    pipeline: Pipeline,
-    /// With an `emissive_occlusion` image bound: the pipeline that reads it, used while the
+    pipeline: ShadowVariants,
+    /// With an `emissive_occlusion` image bound: the pipelines that read it, used while the
     /// scene has emission or occlusion (the geometry passes write it only then), created when
     /// first used.
-    extras_pipeline: Option<LazyPipeline>,
+    extras_pipeline: Option<ShadowVariants>,
     sampler: Sampler,
     settings: LightingSettings,
 }
@@ -95,10 +95,12 @@ impl LightingPass {
         if hdr {
             defines.push(("HDR_OUTPUT", "1"));
         }
-        let pipeline = Pipeline::compute(ctx, "lighting", &shaders.compile("lighting/lighting.comp", &defines)?)?;
+        let mut pipeline = ShadowVariants::compute("lighting", shaders, "lighting/lighting.comp", &defines)?;
+        // Made now: a pipeline the device refuses fails the graph's build, not its first frame.
+        pipeline.pick(ctx, ShadowMaps::default(), &mut Vec::new())?;
         let extras_pipeline = if emissive_occlusion {
             defines.push(("EMISSIVE_OCCLUSION", "1"));
-            Some(LazyPipeline::compute("lighting", shaders.compile("lighting/lighting.comp", &defines)?))
+            Some(ShadowVariants::compute("lighting", shaders, "lighting/lighting.comp", &defines)?)
         } else {
             None
         };
@@ -141,13 +143,12 @@ impl LightingPass {
             Bind::Buffer(4, io.lights.handle()),
             Bind::StorageImage(5, io.output.view()),
         ];
-        binds.extend(io.shadow_maps.binds());
         let pipeline = match (io.emissive_occlusion, &mut self.extras_pipeline) {
             (Some(image), Some(extras)) => {
                 binds.push(Bind::Sampled(6, image.sampled_view(), s, read));
-                extras.get(ctx)?
+                extras.pick(ctx, io.shadow_maps, &mut binds)?
             }
-            _ => &self.pipeline,
+            _ => self.pipeline.pick(ctx, io.shadow_maps, &mut binds)?,
         };
         pipeline.dispatch_over(cmd, &binds, bytemuck::bytes_of(settings), io.output.extent());
         Ok(())

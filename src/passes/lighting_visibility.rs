@@ -9,18 +9,20 @@ use super::slots::{
     lighting_output_defines, lighting_settings, ms, slot, LIGHTING_OUTPUT_DOC, LIGHTING_OUTPUT_FORMATS,
     VISIBILITY_FORMATS,
 };
-use crate::gpu::{Bind, GpuContext, Pipeline, Sampler, ShaderCompiler};
+use crate::gpu::{Bind, GpuContext, Sampler, ShaderCompiler};
 use crate::graph::executor::PassContext;
 use crate::graph::plan::{CompiledGraph, PlannedPass};
 use crate::graph::{FormatRule, NodeSetup, PassKind, PassKindInfo, PassNode, Stages, Usage};
+use crate::passes::shared::shadow_variants::ShadowVariants;
 use crate::passes::shared::SceneInputs;
+use crate::passes::shared::ShadowMaps;
 use ash::vk;
 
 /// The `lighting_visibility` pass.
 pub struct LightingVisibilityPass {
     /// The pass's name in the graph, for messages.
     name: String,
-    pipeline: Pipeline,
+    pipeline: ShadowVariants,
     sampler: Sampler,
     settings: LightingSettings,
     /// Ids packed in one word: the scene's triangle bits are pushed after the settings.
@@ -40,10 +42,12 @@ impl LightingVisibilityPass {
         let mut defines = vec![("SAMPLES", samples.as_str())];
         defines.extend_from_slice(visibility_defines(format));
         defines.extend_from_slice(lighting_output_defines(plan, pass));
-        let spirv = shaders.compile("lighting/lighting_visibility.comp", &defines)?;
+        let mut pipeline = ShadowVariants::compute(&pass.name, shaders, "lighting/lighting_visibility.comp", &defines)?;
+        // Made now: a pipeline the device refuses fails the graph's build, not its first frame.
+        pipeline.pick(ctx, ShadowMaps::default(), &mut Vec::new())?;
         Ok(Self {
             name: pass.name.clone(),
-            pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
+            pipeline,
             sampler: Sampler::nearest_clamp(ctx)?,
             settings: LightingSettings::from_plan(pass)?,
             packed_ids: format == Some(crate::passes::slots::VISIBILITY_PACKED),
@@ -84,11 +88,11 @@ impl PassNode for LightingVisibilityPass {
             Bind::Buffer(8, scene.indices.handle()),
             Bind::Buffer(9, scene.instance_triangles.handle()),
         ];
-        binds.extend(inputs.shadow_maps().binds());
         binds.extend_from_slice(scene.textures.bindings());
         let triangle_bits = if self.packed_ids { packed_id_bits(&self.name, scene)? } else { 0 };
         let push = [bytemuck::bytes_of(&self.settings), &triangle_bits.to_ne_bytes()].concat();
-        self.pipeline.dispatch_over(rec.cmd, &binds, &push, output.extent());
+        let pipeline = self.pipeline.pick(rec.ctx, inputs.shadow_maps(), &mut binds)?;
+        pipeline.dispatch_over(rec.cmd, &binds, &push, output.extent());
         Ok(())
     }
 }

@@ -20,6 +20,8 @@ use crate::graph::{
     Adaptation, CounterEntry, Counters, Creates, FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode,
     Pos, SettingDecl, Stages, Usage,
 };
+use crate::passes::shared::shadow_variants::ShadowVariants;
+use crate::passes::shared::ShadowMaps;
 pub use counters::{GbufferCounters, GbufferPassStats};
 
 /// The kind's name in RON.
@@ -48,7 +50,7 @@ struct Push {
 
 /// The `lighting_compressed` pass.
 pub(crate) struct LightingCompressedPass {
-    pipeline: Pipeline,
+    pipeline: ShadowVariants,
     stats_clear: Option<Pipeline>,
     sampler: Sampler,
     settings: LightingSettings,
@@ -114,8 +116,9 @@ impl LightingCompressedPass {
             defines.push(("WRITE_STATS", "1"));
         }
         defines.extend_from_slice(lighting_output_defines(plan, pass));
-        let pipeline =
-            Pipeline::compute(ctx, &pass.name, &shaders.compile("lighting/lighting_compressed.comp", &defines)?)?;
+        let mut pipeline = ShadowVariants::compute(&pass.name, shaders, "lighting/lighting_compressed.comp", &defines)?;
+        // Made now: a pipeline the device refuses fails the graph's build, not its first frame.
+        pipeline.pick(ctx, ShadowMaps::default(), &mut Vec::new())?;
         let stats_clear = with_stats
             .then(|| -> crate::Result<Pipeline> {
                 let spirv = shaders.compile("lighting/stats_clear.comp", &[])?;
@@ -175,7 +178,6 @@ impl PassNode for LightingCompressedPass {
             Bind::Buffer(3, inputs.lights().handle()),
             Bind::StorageImage(4, output.view()),
         ];
-        binds.extend(inputs.shadow_maps().binds());
         if let Some(stats) = stats {
             binds.push(Bind::Buffer(5, stats.handle()));
         }
@@ -183,7 +185,8 @@ impl PassNode for LightingCompressedPass {
             binds.push(Bind::Buffer(6, claim.handle()));
         }
         let push = Push { settings: self.settings, pool_blocks: bound.pool_blocks };
-        self.pipeline.dispatch_over(rec.cmd, &binds, bytemuck::bytes_of(&push), output.extent());
+        let pipeline = self.pipeline.pick(rec.ctx, inputs.shadow_maps(), &mut binds)?;
+        pipeline.dispatch_over(rec.cmd, &binds, bytemuck::bytes_of(&push), output.extent());
         Ok(())
     }
 }

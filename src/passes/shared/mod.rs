@@ -12,6 +12,7 @@ pub mod gpu_types;
 pub(crate) mod lazy_pipeline;
 pub mod scene_buffers;
 pub mod scene_growth;
+pub(crate) mod shadow_variants;
 pub mod slot_layout;
 pub mod textures;
 pub(crate) mod transparent_draw;
@@ -71,6 +72,8 @@ pub struct SceneInputs {
 /// without shadows reads none.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ShadowMaps {
+    /// Whether the view has shadows: its lighting then takes the variant that samples them.
+    pub on: bool,
     /// The sun's cascades.
     pub sun: vk::ImageView,
     /// The spot and point lights' faces.

@@ -113,6 +113,7 @@ impl Renderer {
                     [first as u32, light.faces.len() as u32, light.texel_per_unit.to_bits(), 0];
             }
             let maps = ShadowMaps {
+                on: true,
                 sun: shadows.sun.maps.array_view(),
                 local: shadows.local.maps.array_view(),
                 sampler: self.shadows.sampler.handle(),

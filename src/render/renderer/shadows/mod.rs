@@ -115,7 +115,7 @@ impl ShadowState {
 
     fn fallback_maps(&self) -> ShadowMaps {
         let view = self.fallback.array_view();
-        ShadowMaps { sun: view, local: view, sampler: self.sampler.handle() }
+        ShadowMaps { on: false, sun: view, local: view, sampler: self.sampler.handle() }
     }
 
     /// Device memory the shadow maps take.
