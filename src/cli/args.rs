@@ -194,7 +194,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=4))]
     pub shadow_cascades: u32,
     /// Shadows suite: texels per side of each cascade's map.
-    #[arg(long, default_value_t = 2048, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub shadow_resolution: u32,
     /// MSAA and shadows suites: the reference's supersampling per axis (4: 16 samples per
     /// pixel; 0: no image error).
