@@ -22,12 +22,14 @@ use crate::scene::Scene;
 pub(super) use frame::ViewShadowData;
 use map_set::MapSet;
 
-/// How a renderer draws the sun's shadows ([`Renderer::set_shadows`]).
+/// How a renderer draws the shadows of the sun and of its views' most important spot and point
+/// lights ([`Renderer::set_shadows`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShadowSettings {
     /// Cascades per camera view, 1 to [`MAX_CASCADES`].
     pub cascades: u32,
-    /// Width and height of each cascade's map in texels.
+    /// Width and height of each cascade's map in texels (default 1024: on GPUs that rasterise
+    /// few pixels a clock, such as the H100 and H200, a map's cost is its texels).
     pub resolution: u32,
     /// How far from each camera shadows reach, in world units (`None`: 150, or the scene's
     /// diagonal when that is shorter).
