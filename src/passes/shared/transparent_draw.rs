@@ -33,11 +33,12 @@ pub fn transparent_pipeline(
 ) -> crate::Result<Pipeline> {
     let samples = samples.max(1).to_string();
     let mut defines = vec![("SAMPLES", samples.as_str())];
-    match shading {
-        TransparentShading::MarkSeen => defines.push(("VISIBILITY_ORACLE", "1")),
+    if shading == TransparentShading::MarkSeen {
+        defines.push(("VISIBILITY_ORACLE", "1"));
+    } else {
         // Transparent surfaces are few: they always take the shadow lookups (a view without
         // shadows binds an array that is never read), rather than a second pipeline.
-        TransparentShading::Blend => defines.push(("SHADOWS", "1")),
+        defines.push(("SHADOWS", "1"));
     }
     let vertex = shaders.compile("gbuffer/gbuffer.vert", &[])?;
     let fragment = shaders.compile("transparent/transparent.frag", &defines)?;
