@@ -29,17 +29,24 @@ impl Sampler {
     /// the four nearest texels that the reference depth is at or in front of (reversed-Z:
     /// greater or equal), which is what a shadow map's percentage-closer filter adds up.
     pub fn depth_compare(ctx: &GpuContext) -> GpuResult<Self> {
-        let info = vk::SamplerCreateInfo::default()
+        let info = Self::linear_clamp_info().compare_enable(true).compare_op(vk::CompareOp::GREATER_OR_EQUAL);
+        Self::new(ctx, &info)
+    }
+
+    /// Bilinear filtering of mip 0, clamped to the edge.
+    pub fn linear_clamp(ctx: &GpuContext) -> GpuResult<Self> {
+        Self::new(ctx, &Self::linear_clamp_info())
+    }
+
+    fn linear_clamp_info() -> vk::SamplerCreateInfo<'static> {
+        vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::LINEAR)
             .min_filter(vk::Filter::LINEAR)
             .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
             .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .compare_enable(true)
-            .compare_op(vk::CompareOp::GREATER_OR_EQUAL)
-            .max_lod(0.0);
-        Self::new(ctx, &info)
+            .max_lod(0.0)
     }
 
     /// A sampler from a full create info.

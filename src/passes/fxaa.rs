@@ -65,17 +65,9 @@ impl FxaaPass {
         // Each preset's word is a define fxaa.comp knows.
         let preset = pass.choice::<Preset>("preset")?.word();
         let spirv = shaders.compile("fxaa/fxaa.comp", &[("PRESET", preset)])?;
-        let info = vk::SamplerCreateInfo::default()
-            .mag_filter(vk::Filter::LINEAR)
-            .min_filter(vk::Filter::LINEAR)
-            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .max_lod(0.0);
         Ok(Self {
             pipeline: Pipeline::compute(ctx, &pass.name, &spirv)?,
-            sampler: Sampler::new(ctx, &info)?,
+            sampler: Sampler::linear_clamp(ctx)?,
             settings: FxaaSettings::from_plan(pass)?,
         })
     }

@@ -156,7 +156,7 @@ impl LightingPass {
 }
 
 impl PassNode for LightingPass {
-    fn samples_sun_shadows(&self) -> bool {
+    fn samples_shadow_maps(&self) -> bool {
         true
     }
 

@@ -56,7 +56,7 @@ impl LightingVisibilityPass {
 }
 
 impl PassNode for LightingVisibilityPass {
-    fn samples_sun_shadows(&self) -> bool {
+    fn samples_shadow_maps(&self) -> bool {
         true
     }
 

@@ -37,7 +37,7 @@ pub struct TransparentPass {
 }
 
 impl PassNode for TransparentPass {
-    fn samples_sun_shadows(&self) -> bool {
+    fn samples_shadow_maps(&self) -> bool {
         true
     }
 

@@ -386,10 +386,10 @@ impl GraphRuntime {
         Ok(())
     }
 
-    /// The first pass that samples the renderer's sun shadow maps
-    /// ([`PassNode::samples_sun_shadows`]), if any.
-    pub fn first_pass_sampling_sun_shadows(&self) -> Option<usize> {
-        self.nodes.iter().position(|node| node.samples_sun_shadows())
+    /// The first pass that samples the renderer's shadow maps
+    /// ([`PassNode::samples_shadow_maps`]), if any.
+    pub fn first_pass_sampling_shadows(&self) -> Option<usize> {
+        self.nodes.iter().position(|node| node.samples_shadow_maps())
     }
 
     /// What decides whether pass `index` can be recorded together with passes of other

@@ -161,14 +161,14 @@ pub trait PassNode: Send {
         None
     }
 
-    /// Passes whose nodes return equal keys can be recorded together, one call of
-    /// Whether the pass samples the renderer's sun shadow maps (bound from the frame's shared
-    /// data, not the graph): a renderer then records the shadow views' drawing before it.
-    /// `false` (the default): it does not.
-    fn samples_sun_shadows(&self) -> bool {
+    /// Whether the pass samples the renderer's shadow maps (the sun's and the lights', bound
+    /// from the frame's shared data, not the graph): a renderer then records the shadow views'
+    /// drawing before it. `false` (the default): it does not.
+    fn samples_shadow_maps(&self) -> bool {
         false
     }
 
+    /// Passes whose nodes return equal keys can be recorded together, one call of
     /// [`PassNode::record_together`] for several runtimes (the views of one renderer): the same
     /// kind with settings that one dispatch can serve. `None` (the default): never.
     fn together_key(&self) -> Option<u64> {

@@ -135,7 +135,7 @@ impl LightingCompressedPass {
 }
 
 impl PassNode for LightingCompressedPass {
-    fn samples_sun_shadows(&self) -> bool {
+    fn samples_shadow_maps(&self) -> bool {
         true
     }
 

@@ -21,7 +21,7 @@ pub(super) struct FramePart<'a> {
     camera: &'a Camera,
     imports: &'a Imports,
     /// The parts (indices into the frame's list) that must have ended before this view's first
-    /// pass sampling the sun shadow maps.
+    /// pass sampling the shadow maps.
     pub waits_for: Vec<usize>,
     recording: Option<FrameRecording>,
     /// The next pass to record.
@@ -94,7 +94,7 @@ fn ready(parts: &[FramePart<'_>], i: usize) -> bool {
         return false;
     }
     let waiting = !part.waits_for.is_empty()
-        && part.view.graphs.runtime.first_pass_sampling_sun_shadows().is_some_and(|first| part.next >= first);
+        && part.view.graphs.runtime.first_pass_sampling_shadows().is_some_and(|first| part.next >= first);
     !waiting || part.waits_for.iter().all(|&p| parts[p].ended)
 }
 

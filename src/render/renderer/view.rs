@@ -67,12 +67,10 @@ impl<'a> ViewFrame<'a> {
 pub(super) enum ViewRole {
     /// A camera the host adds and lists in its frames.
     Camera,
-    /// Cascade `cascade` of camera view `of`'s sun shadows: the renderer adds it to every frame
-    /// that lists `of` (`shadows.rs`); the host never sees its id.
-    SunCascade { of: ViewId, cascade: u32 },
-    /// Face `face` of camera view `of`'s spot and point light shadows, drawn in the frames
-    /// where a shadowed light takes it (`shadows.rs`).
-    LightFace { of: ViewId, face: u32 },
+    /// A sun cascade or a light's face of a camera view's shadows: the renderer adds it to the
+    /// frames that list that camera view and need its map drawn (`shadows/`, whose
+    /// `CameraShadows` say which camera view and layer it draws); the host never sees its id.
+    Shadow,
 }
 
 /// A view's state.

@@ -58,7 +58,7 @@ impl Renderer {
         let sun = self.scene.sun.direction;
         for &(id, camera) in cameras {
             let at = self.view_index(id)?;
-            let samples = self.views[at].graphs.runtime.first_pass_sampling_sun_shadows().is_some();
+            let samples = self.views[at].graphs.runtime.first_pass_sampling_shadows().is_some();
             let shadows = self.shadows.cameras.iter_mut().find(|c| c.camera == id);
             let (Some(settings), Some(shadows), true) = (&self.shadows.settings, shadows, samples) else {
                 self.views[at].inputs.set_shadow_maps(fallback);

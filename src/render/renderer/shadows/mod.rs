@@ -4,7 +4,7 @@
 //! running a depth-only graph (`graph/shadow.ron`) into its layer of one of the camera view's
 //! two shadow-map arrays. They are recorded in lockstep with the cameras, so their culls share
 //! the cameras' dispatches, and each has finished drawing before the first pass of its camera
-//! that samples the maps ([`crate::graph::PassNode::samples_sun_shadows`]).
+//! that samples the maps ([`crate::graph::PassNode::samples_shadow_maps`]).
 
 mod frame;
 mod map_set;
@@ -249,34 +249,31 @@ impl Renderer {
         let spec = GraphSpec::from_library(kinds, name)?;
         let mut views = Vec::new();
         let sun =
-            self.make_map_set(shaders, &spec, camera, settings.resolution, settings.cascades, true, &mut views)?;
+            self.make_map_set(shaders, &spec, "sun shadow maps", settings.resolution, settings.cascades, &mut views)?;
         let faces = settings.local_lights * 6;
-        let local = self.make_map_set(shaders, &spec, camera, settings.local_resolution, faces, false, &mut views)?;
+        let local =
+            self.make_map_set(shaders, &spec, "light shadow maps", settings.local_resolution, faces, &mut views)?;
         Ok((CameraShadows { camera, sun, local }, views))
     }
 
-    /// `count` shadow views of camera view `camera` drawing `resolution`² maps through `spec`
-    /// (added to `views`), with their array (one layer at least, so that there is always one to
-    /// bind).
-    #[allow(clippy::too_many_arguments)]
+    /// `count` shadow views drawing `resolution`² maps through `spec` (added to `views`), with
+    /// their array `name` (one layer at least, so that there is always one to bind).
     fn make_map_set(
         &mut self,
         shaders: &ShaderCompiler,
         spec: &GraphSpec,
-        camera: ViewId,
+        name: &str,
         resolution: u32,
         count: u32,
-        sun: bool,
         views: &mut Vec<View>,
     ) -> Result<MapSet> {
-        let name = if sun { "sun shadow maps" } else { "light shadow maps" };
         let maps = DepthArray::new(&self.ctx, name, resolution, count.max(1))?;
         let size = RenderSettings::new(resolution, resolution);
         let compiled = self.compiled_for(spec, &size)?;
         let main = &self.views[0].graphs.runtime;
         let (step_timing, capture) = (main.step_timing(), main.captures_draw_lists());
         let mut ids = Vec::new();
-        for layer in 0..count {
+        for _ in 0..count {
             let runtime = build_runtime(&self.ctx, shaders, &compiled, spec)?;
             let mut graphs = Graphs::new(spec, runtime, compiled.clone());
             graphs.runtime.set_step_timing(step_timing);
@@ -284,11 +281,6 @@ impl Renderer {
             let id = ViewId(self.next_view);
             self.next_view += 1;
             ids.push(id);
-            let role = if sun {
-                ViewRole::SunCascade { of: camera, cascade: layer }
-            } else {
-                ViewRole::LightFace { of: camera, face: layer }
-            };
             views.push(View {
                 id,
                 settings: size.clone(),
@@ -296,7 +288,7 @@ impl Renderer {
                 inputs: SceneInputs::new(&self.ctx, self.gpu_scene.clone(), self.light_capacity)?,
                 previous_camera: None,
                 adaptations: None,
-                role,
+                role: ViewRole::Shadow,
             });
         }
         let drawn_for = vec![None; ids.len()];
