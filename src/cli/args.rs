@@ -25,6 +25,9 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene headlessly and write a PNG and (optionally) JSON stats.
     Render(Box<RenderArgs>),
+    /// Fly through a scene in a window (X11), with the culling-stat overlay, graph switching,
+    /// shadows, frozen culling and hot reload; H in the window lists the keys.
+    View(Box<ViewArgs>),
     /// List the Vulkan devices the loader sees (index: name (type, API version)).
     Devices,
     /// Measure culling and Hi-Z speed with timestamp queries; write bench.json and bench.md.
@@ -496,6 +499,77 @@ pub struct RenderArgs {
     pub validation: bool,
     /// Read shaders from this directory instead of the copies built into the binary
     /// (env CULLGRAPH_SHADER_DIR).
+    #[arg(long, value_name = "DIR")]
+    pub shader_dir: Option<PathBuf>,
+}
+
+/// `cullgraph view` flags.
+#[derive(Args, Debug, Clone)]
+pub struct ViewArgs {
+    /// The scene.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Window size in pixels, WIDTHxHEIGHT (the frame follows the window when it is resized).
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Camera position x,y,z (default: the scene's camera, or a view that frames the scene).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub eye: Option<DVec3>,
+    /// Point the camera looks at, x,y,z.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub target: Option<DVec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long, value_name = "DEG")]
+    pub fov: Option<f32>,
+    /// Near-plane distance.
+    #[arg(long)]
+    pub near: Option<f32>,
+    /// Player spawn points, lines of `MAP x,y,z x,y,z` (eye, target); default:
+    /// `nexuiz_spawns.txt` beside a scene file, when there is one. C jumps to the next.
+    #[arg(long, value_name = "FILE")]
+    pub spawns: Option<PathBuf>,
+    /// Render graph to start with: a RON file (reloaded when it or a shader changes), or
+    /// `builtin:NAME`. G and Shift+G step through the built-in graphs.
+    #[arg(long, value_name = "FILE.ron|builtin:NAME")]
+    pub graph: Option<String>,
+    /// Start with the culling-stat overlay on (O toggles it).
+    #[arg(long)]
+    pub overlay: bool,
+    /// Override a graph parameter, NAME=VALUE (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = cullgraph::graph::parse_param_override)]
+    pub params: Vec<(String, String)>,
+    /// Shadows of the sun and the nearest lights, on or off (L toggles them).
+    #[arg(long, action = clap::ArgAction::Set, value_parser = parse_on_off, default_value = "off", value_name = "on|off")]
+    pub shadows: bool,
+    /// Sun shadow cascades per view, 1 to 4.
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=4))]
+    pub cascades: u32,
+    /// Start with the city's traffic running (T toggles it; `builtin:city` only).
+    #[arg(long)]
+    pub animate: bool,
+    /// Present FIFO (wait for the display's refresh) instead of mailbox or immediate.
+    #[arg(long)]
+    pub vsync: bool,
+    /// Present this many frames, then exit (with --screenshot: write the last one).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub frames: Option<u32>,
+    /// Where screenshots go: with --frames, the last presented frame; P writes here too
+    /// (default: out/view-N.png).
+    #[arg(long, value_name = "FILE.png")]
+    pub screenshot: Option<PathBuf>,
+    /// Play timed input from FILE: lines `FRAME key NAME down|up`, `FRAME press NAME`,
+    /// `FRAME look DX DY`, `FRAME wheel N`, `FRAME resize WxH` (frames advance 1/60 s each).
+    #[arg(long, value_name = "FILE")]
+    pub script: Option<PathBuf>,
+    /// Vulkan device by name substring or index; env CULLGRAPH_DEVICE.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub device: Option<String>,
+    /// Enable the Khronos validation layer with synchronization validation (exit status 1 if
+    /// it reported anything).
+    #[arg(long)]
+    pub validation: bool,
+    /// Read shaders from this directory (and reload them when they change) instead of the
+    /// copies built into the binary (env CULLGRAPH_SHADER_DIR).
     #[arg(long, value_name = "DIR")]
     pub shader_dir: Option<PathBuf>,
 }

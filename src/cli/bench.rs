@@ -54,6 +54,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         // Off unless CULLGRAPH_VALIDATION=1: the layers would slow what is timed.
         validation: ContextOptions::default().validation,
         app_name: "cullgraph bench".into(),
+        ..Default::default()
     })?;
     let room = Room::with_device(&ctx);
     let city = |instances: usize| SceneSize { instances: instances as u64, kinds: 0, lights: 32 };

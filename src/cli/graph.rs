@@ -86,6 +86,7 @@ fn load(file: &Path, params: &[(String, String)], device: Option<&str>) -> Resul
         device: DeviceSelector::or_from_env(device.map(|d| d.parse().unwrap_or_default())),
         validation: false,
         app_name: "cullgraph graph".into(),
+        ..Default::default()
     };
     Ok(match GpuContext::new(&options) {
         Ok(ctx) => {

@@ -8,6 +8,7 @@ mod memory;
 mod paths;
 mod post_out;
 mod render;
+mod view;
 mod views;
 mod watch;
 
@@ -22,6 +23,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         args::Command::Graph(g) => return graph::run(&g),
         args::Command::Render(r) => render::run(&r),
+        args::Command::View(v) => view::run(&v),
         args::Command::Devices => list_devices(),
         args::Command::Bench(b) => bench::run(&b),
         args::Command::Fuzz(f) => fuzz::run(&f),

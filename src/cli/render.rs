@@ -36,6 +36,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         device: DeviceSelector::or_from_env(args.device.as_deref().map(|d| d.parse().unwrap_or_default())),
         validation: args.validation || ContextOptions::default().validation,
         app_name: "cullgraph".into(),
+        ..Default::default()
     })?;
     let usage = if args.animate { Use::Animate } else { Use::Render };
     let room = Room::with_device(&ctx);
@@ -375,7 +376,7 @@ fn watch(
         Ok(())
     };
     render_once(renderer)?;
-    let mut files = FileWatch::new(watched_paths(args, renderer, shaders));
+    let mut files = FileWatch::new(watched_paths(args.graph.as_deref(), renderer, shaders));
     println!("watching {} file(s); Ctrl-C stops", files.paths().count());
     while deadline.is_none_or(|d| Instant::now() < d) {
         std::thread::sleep(Duration::from_millis(200));
@@ -414,7 +415,7 @@ fn watch(
             }
         }
         // Headers a changed shader now includes.
-        files.watch_also(watched_paths(args, renderer, shaders));
+        files.watch_also(watched_paths(args.graph.as_deref(), renderer, shaders));
     }
     Ok(())
 }
@@ -422,8 +423,8 @@ fn watch(
 /// The graph file, the files it extends, and every file on disk its shaders were compiled
 /// from: user shaders, the headers they include, and the shader library when it comes from a
 /// directory. (Built-in graphs and embedded shaders cannot change while the program runs.)
-fn watched_paths(args: &RenderArgs, renderer: &Renderer, shaders: &ShaderCompiler) -> Vec<PathBuf> {
-    let mut paths: Vec<PathBuf> = args.graph.iter().filter(|g| !g.starts_with("builtin:")).map(PathBuf::from).collect();
+pub(super) fn watched_paths(graph: Option<&str>, renderer: &Renderer, shaders: &ShaderCompiler) -> Vec<PathBuf> {
+    let mut paths: Vec<PathBuf> = graph.iter().filter(|g| !g.starts_with("builtin:")).map(PathBuf::from).collect();
     let library = &renderer.plan().kinds;
     let bases = renderer.plan().files.iter().skip(1).filter(|f| !library.graphs().any(|g| g.file == f.as_str()));
     paths.extend(bases.map(PathBuf::from));

@@ -24,6 +24,12 @@ pub struct ContextOptions {
     pub validation: bool,
     /// Application name reported to the driver.
     pub app_name: String,
+    /// Instance extensions to enable besides cullgraph's own: those a window's surface needs
+    /// (`ash_window::enumerate_required_extensions`). A loader without one is refused, naming it.
+    pub instance_extensions: Vec<CString>,
+    /// Device extensions to enable besides cullgraph's own (`VK_KHR_swapchain` to present to a
+    /// window). A device without one is refused, naming it.
+    pub device_extensions: Vec<CString>,
 }
 
 impl Default for ContextOptions {
@@ -32,6 +38,8 @@ impl Default for ContextOptions {
             device: DeviceSelector::or_from_env(None),
             validation: std::env::var(VALIDATION_ENV).is_ok_and(|v| v == "1"),
             app_name: "cullgraph".into(),
+            instance_extensions: Vec::new(),
+            device_extensions: Vec::new(),
         }
     }
 }
@@ -117,7 +125,6 @@ pub struct DeviceCaps {
 /// State shared by the context and every resource created from it; dropped last.
 pub(crate) struct DeviceShared {
     /// Keeps libvulkan loaded for as long as any handle exists.
-    #[allow(dead_code)]
     pub entry: ash::Entry,
     pub instance: ash::Instance,
     pub physical_device: vk::PhysicalDevice,
@@ -199,7 +206,7 @@ impl GpuContext {
         let queue_family = find_queue_family(&instance, chosen.handle).ok_or_else(|| {
             GpuError::NoDevice(format!("{} has no queue family with graphics and compute", chosen.name))
         })?;
-        let device = create_device(&instance, &chosen, queue_family)?;
+        let device = create_device(&instance, &chosen, queue_family, &options.device_extensions)?;
         std::mem::forget(guard);
         // SAFETY: family index validated above; one queue was requested.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
@@ -312,6 +319,11 @@ impl GpuContext {
     /// The logical device.
     pub fn device(&self) -> &ash::Device {
         &self.shared.device
+    }
+
+    /// The loader entry (for a host's instance-level extensions, such as a window's surface).
+    pub fn entry(&self) -> &ash::Entry {
+        &self.shared.entry
     }
 
     /// The instance.
@@ -492,6 +504,16 @@ fn create_instance(
         layer_names.push(VALIDATION_LAYER.as_ptr());
         ext_names.push(ash::ext::validation_features::NAME.as_ptr());
     }
+    let missing: Vec<String> = options
+        .instance_extensions
+        .iter()
+        .filter(|want| !has_ext(want))
+        .map(|want| want.to_string_lossy().into_owned())
+        .collect();
+    if !missing.is_empty() {
+        return Err(GpuError::Loader(format!("the Vulkan loader lacks instance extension(s) {}", missing.join(", "))));
+    }
+    ext_names.extend(options.instance_extensions.iter().map(|e| e.as_ptr()));
     // Synchronization validation is off by default in the layer; the Debian layer (1.3.239) only
     // understands VkValidationFeaturesEXT, not VK_EXT_layer_settings.
     let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
@@ -532,7 +554,12 @@ fn find_queue_family(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Option
     families.iter().position(|f| f.queue_flags.contains(wanted)).map(|i| i as u32)
 }
 
-fn create_device(instance: &ash::Instance, chosen: &DeviceInfo, queue_family: u32) -> GpuResult<ash::Device> {
+fn create_device(
+    instance: &ash::Instance,
+    chosen: &DeviceInfo,
+    queue_family: u32,
+    extra_extensions: &[CString],
+) -> GpuResult<ash::Device> {
     let supported = RequiredFeatures::supported_by(instance, chosen.handle);
     let mut required = RequiredFeatures::new();
     // Not needed by cullgraph itself, but a caller of `FramePipeline::submit_with` can only make
@@ -544,7 +571,7 @@ fn create_device(instance: &ash::Instance, chosen: &DeviceInfo, queue_family: u3
     // SAFETY: valid handles.
     let exts = unsafe { instance.enumerate_device_extension_properties(chosen.handle) }
         .vk("vkEnumerateDeviceExtensionProperties")?;
-    for want in REQUIRED_DEVICE_EXTENSIONS {
+    for want in REQUIRED_DEVICE_EXTENSIONS.iter().copied().chain(extra_extensions.iter().map(CString::as_c_str)) {
         if !lists_extension(&exts, want) {
             missing.push(want.to_string_lossy().into_owned());
         }
@@ -555,6 +582,7 @@ fn create_device(instance: &ash::Instance, chosen: &DeviceInfo, queue_family: u3
     let priorities = [1.0f32];
     let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
     let mut ext_names: Vec<*const c_char> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+    ext_names.extend(extra_extensions.iter().map(|e| e.as_ptr()));
     for want in super::features::OPTIONAL_DEVICE_EXTENSIONS {
         if lists_extension(&exts, want) {
             ext_names.push(want.as_ptr());

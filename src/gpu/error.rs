@@ -55,8 +55,8 @@ pub enum GpuError {
 /// Result alias of the GPU layer.
 pub type GpuResult<T> = Result<T, GpuError>;
 
-/// Attaches the name of the failing Vulkan call to a `vk::Result`.
-pub(crate) trait VkResultExt<T> {
+/// Attaches the name of the failing Vulkan call to a `vk::Result` (for a host's own calls too).
+pub trait VkResultExt<T> {
     /// Maps the error to [`GpuError::Vk`] naming `call`.
     fn vk(self, call: &'static str) -> GpuResult<T>;
 }

@@ -18,8 +18,12 @@ impl GpuTest {
     /// Creates the context (panics with a hint when Vulkan or the layer is missing).
     pub fn new() -> Self {
         let device = std::env::var("CULLGRAPH_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
-        let options =
-            ContextOptions { device: device.parse().unwrap(), validation: true, app_name: "cullgraph-test".into() };
+        let options = ContextOptions {
+            device: device.parse().unwrap(),
+            validation: true,
+            app_name: "cullgraph-test".into(),
+            ..Default::default()
+        };
         let ctx = GpuContext::new(&options)
             .unwrap_or_else(|e| panic!("cannot create a validated Vulkan context ({e}); run scripts/install-deps"));
         let log = ctx.validation_log().clone();

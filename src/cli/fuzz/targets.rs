@@ -91,6 +91,7 @@ impl Bench {
             device: cullgraph::gpu::DeviceSelector::or_from_env(None),
             validation: true,
             app_name: "cullgraph fuzz".into(),
+            ..Default::default()
         };
         let ctx = GpuContext::new(&options)?;
         let shaders = ShaderCompiler::new(cullgraph::gpu::ShaderRoot::from_env())?;
