@@ -340,18 +340,9 @@ pub struct RenderArgs {
     /// Output size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Camera position x,y,z (default: a view that frames the scene).
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub eye: Option<DVec3>,
-    /// Point the camera looks at, x,y,z.
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub target: Option<DVec3>,
-    /// Vertical field of view in degrees (perspective).
-    #[arg(long, value_name = "DEG")]
-    pub fov: Option<f32>,
-    /// Near-plane distance.
-    #[arg(long)]
-    pub near: Option<f32>,
+    /// The camera.
+    #[command(flatten)]
+    pub camera: CameraArgs,
     /// A view of the world, `eye=X,Y,Z;target=X,Y,Z;fov=DEG;size=WxH` (repeatable; every key
     /// but eye and target optional, size defaults to `--size`): all views are rendered each
     /// frame over one copy of the scene, each with its own culling history. `--out F.png`
@@ -503,6 +494,42 @@ pub struct RenderArgs {
     pub shader_dir: Option<PathBuf>,
 }
 
+/// Where the camera is and how it sees, over the scene's default view.
+#[derive(Args, Debug, Clone)]
+pub struct CameraArgs {
+    /// Camera position x,y,z (default: the scene's camera, or a view that frames the scene).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub eye: Option<DVec3>,
+    /// Point the camera looks at, x,y,z.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub target: Option<DVec3>,
+    /// Vertical field of view in degrees (perspective).
+    #[arg(long, value_name = "DEG")]
+    pub fov: Option<f32>,
+    /// Near-plane distance.
+    #[arg(long)]
+    pub near: Option<f32>,
+}
+
+impl CameraArgs {
+    /// `camera` with the flags given applied.
+    pub fn apply(&self, mut camera: cullgraph::scene::Camera) -> cullgraph::scene::Camera {
+        if let Some(eye) = self.eye {
+            camera.eye = eye;
+        }
+        if let Some(target) = self.target {
+            camera.target = target;
+        }
+        if let Some(fov_y_deg) = self.fov {
+            camera.projection = cullgraph::scene::Projection::Perspective { fov_y_deg };
+        }
+        if let Some(near) = self.near {
+            camera.near = near;
+        }
+        camera
+    }
+}
+
 /// `cullgraph view` flags.
 #[derive(Args, Debug, Clone)]
 pub struct ViewArgs {
@@ -512,18 +539,9 @@ pub struct ViewArgs {
     /// Window size in pixels, WIDTHxHEIGHT (the frame follows the window when it is resized).
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Camera position x,y,z (default: the scene's camera, or a view that frames the scene).
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub eye: Option<DVec3>,
-    /// Point the camera looks at, x,y,z.
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub target: Option<DVec3>,
-    /// Vertical field of view in degrees.
-    #[arg(long, value_name = "DEG")]
-    pub fov: Option<f32>,
-    /// Near-plane distance.
-    #[arg(long)]
-    pub near: Option<f32>,
+    /// The camera to start at.
+    #[command(flatten)]
+    pub camera: CameraArgs,
     /// Player spawn points, lines of `MAP x,y,z x,y,z` (eye, target); default:
     /// `nexuiz_spawns.txt` beside a scene file, when there is one. C jumps to the next.
     #[arg(long, value_name = "FILE")]

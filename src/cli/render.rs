@@ -440,20 +440,8 @@ fn write_file(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
 }
 
 fn camera_from_args(args: &RenderArgs, default: Camera, scene: &cullgraph::scene::Scene) -> Result<Camera> {
-    let mut camera = default;
-    if let Some(eye) = args.eye {
-        camera.eye = eye;
-    }
-    if let Some(target) = args.target {
-        camera.target = target;
-    }
-    if let Some(fov) = args.fov {
-        camera.projection = Projection::Perspective { fov_y_deg: fov };
-    }
-    if let Some(near) = args.near {
-        camera.near = near;
-    }
-    apply_lens(args, &mut camera, args.fov, scene)?;
+    let mut camera = args.camera.apply(default);
+    apply_lens(args, &mut camera, args.camera.fov, scene)?;
     camera.validate().map_err(|e| Error::Invalid(format!("camera: {e}")))?;
     Ok(camera)
 }

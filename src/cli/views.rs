@@ -86,13 +86,13 @@ pub fn view_camera(args: &RenderArgs, scene: &Scene, view: &ViewArg) -> Result<C
     let mut camera = scene.default_camera(w as f32 / h as f32);
     camera.eye = view.eye + args.world_offset.unwrap_or_default();
     camera.target = view.target + args.world_offset.unwrap_or_default();
-    if let Some(fov) = view.fov.or(args.fov) {
+    if let Some(fov) = view.fov.or(args.camera.fov) {
         camera.projection = Projection::Perspective { fov_y_deg: fov };
     }
-    if let Some(near) = args.near {
+    if let Some(near) = args.camera.near {
         camera.near = near;
     }
-    super::render::apply_lens(args, &mut camera, view.fov.or(args.fov), scene)?;
+    super::render::apply_lens(args, &mut camera, view.fov.or(args.camera.fov), scene)?;
     camera.validate().map_err(|e| cullgraph::Error::Invalid(format!("--view {}: camera: {e}", view_label(view))))?;
     Ok(camera)
 }

@@ -19,7 +19,7 @@ use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler,
 use cullgraph::render::{RenderSettings, Renderer};
 use cullgraph::scene::procedural::traffic::Traffic;
 use cullgraph::scene::world::World;
-use cullgraph::scene::{Camera, Projection};
+use cullgraph::scene::Camera;
 use cullgraph::stats::FrameStats;
 use cullgraph::{Error, Result};
 use fly::FlyCamera;
@@ -350,8 +350,7 @@ impl Viewer {
         let screenshot = std::mem::take(&mut self.screenshot_wanted) || (last && self.args.screenshot.is_some());
         let panels = self.panels();
         let panel_refs: Vec<&TextPanel> = panels.iter().collect();
-        let mut camera = self.fly.camera();
-        camera.projection = self.projection(camera.projection);
+        let camera = self.fly.camera();
         let presented = self.presenter.present(&mut self.renderer, &camera, &panel_refs, screenshot);
         let presented = match presented {
             Ok(p) => p,
@@ -395,14 +394,6 @@ impl Viewer {
             self.update_title();
         }
         Ok(!last)
-    }
-
-    /// The projection of the start camera, with `--fov` (kept across spawn points).
-    fn projection(&self, projection: Projection) -> Projection {
-        match (self.args.fov, projection) {
-            (Some(fov_y_deg), Projection::Perspective { .. }) => Projection::Perspective { fov_y_deg },
-            _ => projection,
-        }
     }
 
     fn window_event(&mut self, event: WindowEvent) {
@@ -778,19 +769,7 @@ impl Viewer {
 /// The camera the viewer starts at: `--eye`/`--target`/`--fov`/`--near` over the scene's
 /// default view.
 fn start_camera(args: &ViewArgs, scene: &cullgraph::scene::Scene, aspect: f32) -> Result<Camera> {
-    let mut camera = scene.default_camera(aspect);
-    if let Some(eye) = args.eye {
-        camera.eye = eye;
-    }
-    if let Some(target) = args.target {
-        camera.target = target;
-    }
-    if let Some(fov_y_deg) = args.fov {
-        camera.projection = Projection::Perspective { fov_y_deg };
-    }
-    if let Some(near) = args.near {
-        camera.near = near;
-    }
+    let camera = args.camera.apply(scene.default_camera(aspect));
     camera.validate().map_err(|e| Error::Invalid(format!("camera: {e}")))?;
     Ok(camera)
 }
