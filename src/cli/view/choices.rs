@@ -35,8 +35,8 @@ pub struct GraphChoice {
     before_good: State,
     /// The culling-stat overlay over the graph.
     pub overlay: bool,
-    /// The MSAA sample count set through the graph's `msaa` param, if any (forgotten when the
-    /// graph changes).
+    /// The MSAA sample count set through the graph's `msaa` param, if any (forgotten when
+    /// another graph is chosen).
     pub msaa: Option<u32>,
     /// A graph was accepted and has not presented a frame yet.
     pub reloaded_untried: bool,
@@ -85,6 +85,8 @@ impl GraphChoice {
     pub fn step(&mut self, delta: isize) {
         let n = self.list.len() as isize;
         self.now.index = (self.now.index as isize + delta).rem_euclid(n) as usize;
+        // A sample count belongs to the graph M set it on.
+        self.msaa = None;
     }
 
     /// The overlay's next view.
@@ -97,8 +99,8 @@ impl GraphChoice {
         OVERLAY_VIEWS[self.now.view]
     }
 
-    /// The graph chosen now, re-read from its file, with `params` (`--param`) and, with the
-    /// overlay, the overlay pass over it.
+    /// The graph chosen now, re-read from its file, with `params` (`--param`), the sample
+    /// count M chose and, with the overlay, the overlay pass over it.
     pub fn spec(&mut self, params: &[(String, String)]) -> Result<GraphSpec> {
         self.now.overlay = self.overlay;
         let entry = &self.list[self.now.index];
@@ -107,6 +109,9 @@ impl GraphChoice {
             Entry::File(path) => GraphSpec::from_file(path)?,
         };
         let mut overrides = params.to_vec();
+        if let Some(samples) = self.msaa {
+            overrides.push(("msaa".into(), samples.to_string()));
+        }
         let spec = if self.overlay {
             let extends = match entry {
                 Entry::Builtin(name) => name.clone(),
@@ -129,9 +134,6 @@ impl GraphChoice {
 
     /// The renderer runs the graph chosen now.
     pub fn accepted(&mut self) {
-        if self.now.index != self.good.index {
-            self.msaa = None;
-        }
         self.before_good = self.good;
         self.good = self.now;
         self.reloaded_untried = true;

@@ -180,6 +180,8 @@ struct Viewer {
     spawn: usize,
     graphs: GraphChoice,
     shadows: bool,
+    /// The sample count before M rebuilt the graph, until the new one presented a frame.
+    msaa_untried: Option<Option<u32>>,
     frozen: Option<freeze::Frozen>,
     script: Option<Script>,
     help: bool,
@@ -273,6 +275,7 @@ impl Viewer {
             spawn: 0,
             graphs,
             shadows,
+            msaa_untried: None,
             frozen: None,
             script,
             help: false,
@@ -362,6 +365,12 @@ impl Viewer {
                 self.show_error(&format!("{e}\n(back to the last good graph)"));
                 return Ok(true);
             }
+            Err(e) if self.msaa_untried.is_some() => {
+                self.renderer.revert_reload()?;
+                self.graphs.msaa = self.msaa_untried.take().flatten();
+                self.show_error(&format!("{e}\n(back to the last good sample count)"));
+                return Ok(true);
+            }
             Err(e) => return Err(e),
         };
         if let Some(frame) = presented.completed {
@@ -374,6 +383,7 @@ impl Viewer {
             return Ok(true);
         }
         self.graphs.reloaded_untried = false;
+        self.msaa_untried = None;
         self.presented += 1;
         let now = Instant::now();
         if let Some(previous) = self.last_present {
@@ -588,6 +598,7 @@ impl Viewer {
         let value = next.to_string();
         match self.renderer.set_graph_params(&self.shaders, &[("msaa", &value)]) {
             Ok(_) => {
+                self.msaa_untried = Some(self.graphs.msaa);
                 self.graphs.msaa = Some(next);
                 self.show_info(&format!("MSAA {next}x"));
             }
