@@ -35,7 +35,7 @@ struct Case {
 };
 struct Pyramid { uvec2 base; uint offset; uint pad; };
 struct Result {
-    uint frustum; uint status; uvec4 rect; float depth; uint level; uint occ_coarse; uint occ_finer;
+    uint frustum; uint status; uvec4 rect; float depth; uint level; uint occ_coarse; uint occ_finer; uint covers;
 };
 
 layout(scalar, set = 0, binding = 0) readonly buffer Cases { Case cases[]; };
@@ -68,13 +68,15 @@ void main() {
     Result r;
     uvec4 rect;
     float depth;
+    bool covers;
     if (c.kind == 0u) {
         r.frustum = cull_sphere_in_frustum(view, c.a, c.radius) ? 1u : 0u;
-        r.status = cull_project_sphere(view, c.a, c.radius, rect, depth);
+        r.status = cull_project_sphere(view, c.a, c.radius, rect, depth, covers);
     } else {
         r.frustum = cull_aabb_in_frustum(view, c.a, c.b) ? 1u : 0u;
-        r.status = cull_project_aabb(view, c.a, c.b, rect, depth);
+        r.status = cull_project_aabb(view, c.a, c.b, rect, depth, covers);
     }
+    r.covers = (r.status == CULL_ON_SCREEN && covers) ? 1u : 0u;
     r.rect = rect;
     r.depth = depth;
     r.level = 0u;
@@ -117,6 +119,7 @@ struct GpuResult {
     level: u32,
     occ_coarse: u32,
     occ_finer: u32,
+    covers: u32,
 }
 
 #[repr(C)]
@@ -355,6 +358,8 @@ fn gpu_and_cpu_make_the_same_decisions() {
     let (mut identical, mut tolerated, mut failures) = (0usize, vec![], vec![]);
     let mut statuses = [0usize; 3];
     let (mut culled_coarse, mut culled_finer) = (0usize, 0usize);
+    // On-screen bounds that cover no sample position (the small-object test culls them).
+    let mut uncovered = 0usize;
     let (mut depth_diffs, mut max_ulps, mut rect_diffs) = (0usize, 0u32, 0usize);
     for (i, (case, got)) in cases.iter().zip(results).enumerate() {
         let view = &case.view;
@@ -368,8 +373,10 @@ fn gpu_and_cpu_make_the_same_decisions() {
         match proj {
             ScreenBounds::CrossesNear => want.status = 0,
             ScreenBounds::OffScreen => want.status = 1,
-            ScreenBounds::OnScreen { rect, nearest_depth } => {
+            ScreenBounds::OnScreen { rect, nearest_depth, covers_sample } => {
                 want.status = 2;
+                want.covers = covers_sample as u32;
+                uncovered += !covers_sample as usize;
                 want.rect = [rect.x0, rect.y0, rect.x1, rect.y1];
                 want.depth = nearest_depth;
                 want.level = cm::hiz_level(rect);
@@ -409,6 +416,7 @@ fn gpu_and_cpu_make_the_same_decisions() {
             && got.status == 2
             && got.occ_coarse == want.occ_coarse
             && got.occ_finer == want.occ_finer
+            && got.covers == want.covers
             && (got.level == want.level || got.rect != want.rect);
         let ex = exact(case);
         let ok = same_decisions
@@ -436,7 +444,7 @@ fn gpu_and_cpu_make_the_same_decisions() {
     }
     println!(
         "{n} cases on {}: {identical} identical, {} tolerated, {} mismatched; crosses near {}, off screen {}, on screen {}; \
-         occluded: coarse {culled_coarse}, finer {culled_finer}",
+         occluded: coarse {culled_coarse}, finer {culled_finer}; covering no sample {uncovered}",
         gpu.caps().name,
         tolerated.len(),
         failures.len(),
@@ -454,6 +462,7 @@ fn gpu_and_cpu_make_the_same_decisions() {
     // The cases must exercise every outcome.
     assert!(statuses.iter().all(|&s| s > n / 50), "{statuses:?}");
     assert!(culled_coarse > n / 100 && culled_finer > culled_coarse, "{culled_coarse} {culled_finer}");
+    assert!(uncovered > n / 1000, "{uncovered} small bounds");
 }
 
 /// The headers compile on their own, in a shader that uses only the projection (no `hiz_load`).

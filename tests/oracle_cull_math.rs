@@ -406,7 +406,7 @@ fn check(
             }
             "off_screen"
         }
-        ScreenBounds::OnScreen { rect, nearest_depth } => {
+        ScreenBounds::OnScreen { rect, nearest_depth, .. } => {
             let (w, h) = (truth.view.viewport.x, truth.view.viewport.y);
             prop_assert!(rect.x0 <= rect.x1 && rect.y0 <= rect.y1 && rect.x1 < w && rect.y1 < h, "{rect:?}");
             let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));

@@ -98,7 +98,7 @@ fn tally(c: &mut Culled, pyramid: &HiZPyramid, inside: bool, proj: ScreenBounds,
             assert!(!visible, "visible instance {id} projected off screen ({what})");
             c.off_screen += 1;
         }
-        ScreenBounds::OnScreen { rect, nearest_depth } => {
+        ScreenBounds::OnScreen { rect, nearest_depth, .. } => {
             let coarse = is_occluded(pyramid, rect, nearest_depth, HizVariant::Coarse);
             let finer = is_occluded(pyramid, rect, nearest_depth, HizVariant::Finer);
             assert!(!visible || !coarse, "visible instance {id} occluded ({what}, coarse, {rect:?} {nearest_depth})");

@@ -37,6 +37,12 @@
 #define CULL_MAX_COORD 1152921504606846976.0
 #define CULL_BIG 1.0e30
 
+// Small-object test: the rectangle is widened by this many pixels more (vertex snapping to a
+// 4-bit sub-pixel grid moves an edge by 1/32 pixel; the vertex shader's own rounding stays below
+// 1/16 while M / d_lo <= CULL_SMALL_CONDITION), and only bounds this well conditioned are tested.
+#define CULL_SAMPLE_MARGIN 0.125
+#define CULL_SMALL_CONDITION 4.0
+
 // cull_project_* results.
 #define CULL_CROSSES_NEAR 0u
 #define CULL_OFF_SCREEN 1u
@@ -189,15 +195,49 @@ vec2 cull_tangents(float a, float d, float r, float czr2) {
     return vec2(lo, hi);
 }
 
-// NDC extents (widened) -> inclusive pixel rectangle; false when off screen.
-bool cull_pixel_rect(CullView view, vec2 lo, vec2 hi, out uvec4 rect) {
+// The sample positions of Vulkan's standard 1, 2, 4 and 8-sample patterns together, in
+// sixteenths of a pixel from its top-left corner (the 1-sample centre, then 2x, 4x, 8x).
+const uvec2 CULL_SAMPLES[15] = uvec2[15](
+    uvec2(8u, 8u), uvec2(12u, 12u), uvec2(4u, 4u), uvec2(6u, 2u), uvec2(14u, 6u), uvec2(2u, 10u), uvec2(10u, 14u),
+    uvec2(9u, 5u), uvec2(7u, 11u), uvec2(13u, 9u), uvec2(5u, 3u), uvec2(3u, 13u), uvec2(1u, 7u), uvec2(11u, 15u),
+    uvec2(15u, 1u));
+
+// Whether the pixel-space box [x_lo, x_hi] x [y_lo, y_hi] (inclusive) holds a sample position
+// of any standard pattern; boxes 2 pixels or more across always do.
+bool cull_box_covers_sample(float x_lo, float x_hi, float y_lo, float y_hi) {
+    if (!(x_hi - x_lo < 2.0) || !(y_hi - y_lo < 2.0)) return true;
+    precise float px0 = floor(x_lo);
+    precise float py0 = floor(y_lo);
+    for (float py = py0; py <= y_hi; py += 1.0) {
+        for (float px = px0; px <= x_hi; px += 1.0) {
+            for (uint i = 0u; i < 15u; ++i) {
+                precise float x = px + float(CULL_SAMPLES[i].x) * 0.0625;
+                precise float y = py + float(CULL_SAMPLES[i].y) * 0.0625;
+                if (x >= x_lo && x <= x_hi && y >= y_lo && y <= y_hi) return true;
+            }
+        }
+    }
+    return false;
+}
+
+// NDC extents (widened) -> inclusive pixel rectangle; false when off screen. `covers_sample`:
+// whether the extents, widened by CULL_SAMPLE_MARGIN pixels, may hold a sample position (always
+// when `testable` is false).
+bool cull_pixel_rect(CullView view, vec2 lo, vec2 hi, bool testable, out uvec4 rect, out bool covers_sample) {
     precise float w = float(view.viewport.x);
     precise float h = float(view.viewport.y);
     precise float pe = max(w, h) * CULL_PIXEL_EPS;
-    precise float x_lo = floor((clamp(lo.x, -2.0, 2.0) + 1.0) * (0.5 * w) - pe);
-    precise float x_hi = floor((clamp(hi.x, -2.0, 2.0) + 1.0) * (0.5 * w) + pe);
-    precise float y_lo = floor((clamp(lo.y, -2.0, 2.0) + 1.0) * (0.5 * h) - pe);
-    precise float y_hi = floor((clamp(hi.y, -2.0, 2.0) + 1.0) * (0.5 * h) + pe);
+    precise float fx_lo = (clamp(lo.x, -2.0, 2.0) + 1.0) * (0.5 * w) - pe;
+    precise float fx_hi = (clamp(hi.x, -2.0, 2.0) + 1.0) * (0.5 * w) + pe;
+    precise float fy_lo = (clamp(lo.y, -2.0, 2.0) + 1.0) * (0.5 * h) - pe;
+    precise float fy_hi = (clamp(hi.y, -2.0, 2.0) + 1.0) * (0.5 * h) + pe;
+    covers_sample = !testable ||
+        cull_box_covers_sample(fx_lo - CULL_SAMPLE_MARGIN, fx_hi + CULL_SAMPLE_MARGIN, fy_lo - CULL_SAMPLE_MARGIN,
+                               fy_hi + CULL_SAMPLE_MARGIN);
+    precise float x_lo = floor(fx_lo);
+    precise float x_hi = floor(fx_hi);
+    precise float y_lo = floor(fy_lo);
+    precise float y_hi = floor(fy_hi);
     rect = uvec4(0u);
     if (x_hi < 0.0 || y_hi < 0.0 || x_lo >= w || y_lo >= h) return false;
     rect = uvec4(uint(max(x_lo, 0.0)), uint(max(y_lo, 0.0)), uint(min(x_hi, w - 1.0)), uint(min(y_hi, h - 1.0)));
@@ -205,7 +245,9 @@ bool cull_pixel_rect(CullView view, vec2 lo, vec2 hi, out uvec4 rect) {
 }
 
 // Extents t = (lo, hi) in x and u in y (y up) with outward allowances et, eu = (lo, hi).
-uint cull_finish(CullView view, vec2 t, vec2 et, vec2 u, vec2 eu, float d_lo, out uvec4 rect, out float nearest_depth) {
+// `testable`: the bound is conditioned well enough for the small-object test.
+uint cull_finish(CullView view, vec2 t, vec2 et, vec2 u, vec2 eu, float d_lo, bool testable, out uvec4 rect,
+                 out float nearest_depth, out bool covers_sample) {
     precise float sx = view.scale.x;
     precise float sy = view.scale.y;
     precise float cx = view.offset.x;
@@ -225,14 +267,18 @@ uint cull_finish(CullView view, vec2 t, vec2 et, vec2 u, vec2 eu, float d_lo, ou
         depth = view.near / d_lo;
     }
     nearest_depth = depth;
-    return cull_pixel_rect(view, lo, hi, rect) ? CULL_ON_SCREEN : CULL_OFF_SCREEN;
+    return cull_pixel_rect(view, lo, hi, testable, rect, covers_sample) ? CULL_ON_SCREEN : CULL_OFF_SCREEN;
 }
 
 // Screen rectangle and nearest reversed-Z depth of an eye-relative sphere. Returns
 // CULL_CROSSES_NEAR (visible, not projected), CULL_OFF_SCREEN or CULL_ON_SCREEN.
-uint cull_project_sphere(CullView view, vec3 center, float radius, out uvec4 rect, out float nearest_depth) {
+// `covers_sample` (CULL_ON_SCREEN only): false when the bound covers no sample position of any
+// standard pattern, so that nothing inside it can make a fragment.
+uint cull_project_sphere(CullView view, vec3 center, float radius, out uvec4 rect, out float nearest_depth,
+                         out bool covers_sample) {
     rect = uvec4(0u);
     nearest_depth = 1.0;
+    covers_sample = true;
     if (!cull_finite3(center) || !cull_finite1(radius) || radius < 0.0) return CULL_CROSSES_NEAR;
     precise vec3 c = cull_to_view(view.rotation, center);
     precise float d = -c.z;
@@ -241,8 +287,9 @@ uint cull_project_sphere(CullView view, vec3 center, float radius, out uvec4 rec
     precise float d_lo = (d - radius) - margin;
     if (!(d_lo >= view.near)) return CULL_CROSSES_NEAR;
     if (view.orthographic != 0u) {
+        bool testable = m * view.scale.y <= 2.0 * CULL_SMALL_CONDITION;
         return cull_finish(view, vec2(c.x - radius, c.x + radius), vec2(margin), vec2(c.y - radius, c.y + radius),
-                           vec2(margin), d_lo, rect, nearest_depth);
+                           vec2(margin), d_lo, testable, rect, nearest_depth, covers_sample);
     }
     if (m > d_lo * CULL_MAX_CONDITION) return CULL_CROSSES_NEAR;
     precise float q = margin / d_lo;
@@ -251,13 +298,20 @@ uint cull_project_sphere(CullView view, vec3 center, float radius, out uvec4 rec
     precise vec2 ty = cull_tangents(c.y, d, radius, czr2);
     precise vec2 ex = vec2(q * (1.0 + abs(tx.x)), q * (1.0 + abs(tx.y)));
     precise vec2 ey = vec2(q * (1.0 + abs(ty.x)), q * (1.0 + abs(ty.y)));
-    return cull_finish(view, tx, ex, ty, ey, d_lo, rect, nearest_depth);
+    return cull_finish(view, tx, ex, ty, ey, d_lo, m <= d_lo * CULL_SMALL_CONDITION, rect, nearest_depth, covers_sample);
+}
+
+uint cull_project_sphere(CullView view, vec3 center, float radius, out uvec4 rect, out float nearest_depth) {
+    bool covers_sample;
+    return cull_project_sphere(view, center, radius, rect, nearest_depth, covers_sample);
 }
 
 // Screen rectangle and nearest reversed-Z depth of an eye-relative axis-aligned box (8 corners).
-uint cull_project_aabb(CullView view, vec3 bmin, vec3 bmax, out uvec4 rect, out float nearest_depth) {
+uint cull_project_aabb(CullView view, vec3 bmin, vec3 bmax, out uvec4 rect, out float nearest_depth,
+                       out bool covers_sample) {
     rect = uvec4(0u);
     nearest_depth = 1.0;
+    covers_sample = true;
     if (!cull_finite3(bmin) || !cull_finite3(bmax)) return CULL_CROSSES_NEAR;
     precise float m = (max(abs(bmin.x), abs(bmax.x)) + max(abs(bmin.y), abs(bmax.y))) + max(abs(bmin.z), abs(bmax.z));
     precise float margin = CULL_REL_EPS * m;
@@ -278,7 +332,8 @@ uint cull_project_aabb(CullView view, vec3 bmin, vec3 bmax, out uvec4 rect, out 
             t = vec2(min(t.x, corners[i].x), max(t.y, corners[i].x));
             u = vec2(min(u.x, corners[i].y), max(u.y, corners[i].y));
         }
-        return cull_finish(view, t, vec2(margin), u, vec2(margin), d_lo, rect, nearest_depth);
+        bool testable = m * view.scale.y <= 2.0 * CULL_SMALL_CONDITION;
+        return cull_finish(view, t, vec2(margin), u, vec2(margin), d_lo, testable, rect, nearest_depth, covers_sample);
     }
     if (m > d_lo * CULL_MAX_CONDITION) return CULL_CROSSES_NEAR;
     for (uint i = 0u; i < 8u; ++i) {
@@ -291,7 +346,12 @@ uint cull_project_aabb(CullView view, vec3 bmin, vec3 bmax, out uvec4 rect, out 
     precise float q = margin / d_lo;
     precise vec2 et = vec2(q * (1.0 + abs(t.x)), q * (1.0 + abs(t.y)));
     precise vec2 eu = vec2(q * (1.0 + abs(u.x)), q * (1.0 + abs(u.y)));
-    return cull_finish(view, t, et, u, eu, d_lo, rect, nearest_depth);
+    return cull_finish(view, t, et, u, eu, d_lo, m <= d_lo * CULL_SMALL_CONDITION, rect, nearest_depth, covers_sample);
+}
+
+uint cull_project_aabb(CullView view, vec3 bmin, vec3 bmax, out uvec4 rect, out float nearest_depth) {
+    bool covers_sample;
+    return cull_project_aabb(view, bmin, bmax, rect, nearest_depth, covers_sample);
 }
 
 // ceil(log2(n)) for n >= 1 (0 for n <= 1).

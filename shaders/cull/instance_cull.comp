@@ -166,22 +166,31 @@ bool in_frustum(CullView view, vec3 c, float radius, vec3 half_extent) {
 #endif
 }
 
-#ifdef HAS_HIZ
-bool occluded(CullRecord r, float radius, vec3 half_extent) {
-#ifdef HIZ_PREV_VIEW
-    CullView view = frame.prev_cull_view;
-    vec3 c = rel_eye(r.center_hi, record_center_lo(r), frame.prev_eye_hi.xyz, frame.prev_eye_lo.xyz);
-#else
-    CullView view = frame.cull_view;
-    vec3 c = rel_eye(r.center_hi, record_center_lo(r), frame.eye_hi.xyz, frame.eye_lo.xyz);
-#endif
-    uvec4 rect;
-    float nearest;
+// The bound's screen rectangle in `view` (see cull_project_*); `covers`: whether it may cover a
+// sample position.
+uint project_bound(CullView view, vec3 c, float radius, vec3 half_extent, out uvec4 rect, out float nearest,
+                   out bool covers) {
 #ifdef BOUND_SPHERE
-    uint status = cull_project_sphere(view, c, radius, rect, nearest);
+    return cull_project_sphere(view, c, radius, rect, nearest, covers);
 #else
-    uint status = cull_project_aabb(view, c - half_extent, c + half_extent, rect, nearest);
+    return cull_project_aabb(view, c - half_extent, c + half_extent, rect, nearest, covers);
 #endif
+}
+
+#ifdef SMALL_OBJECTS
+// Whether the bound is surely 4 pixels or more across on screen, so that it covers a sample
+// position without being projected: its inscribed sphere (radius `inner`, centre at distance
+// |c|) spans at least 2 * inner / |c| in tangent, and the projected rectangle contains that.
+bool surely_large(CullView view, vec3 c, float inner) {
+    float pixels = 0.5 * min(view.scale.x * float(view.viewport.x), view.scale.y * float(view.viewport.y));
+    float across = view.orthographic != 0u ? 2.0 * inner : 2.0 * inner / length(c);
+    return across * pixels >= 4.0;
+}
+#endif
+
+#ifdef HAS_HIZ
+// The Hi-Z test of a projected rectangle (`status` as cull_project_* returned it).
+bool occluded_at(uint status, uvec4 rect, float nearest, CullView view) {
     // Crossing the near plane, or off screen in the view the pyramid was made with: visible.
     if (status != CULL_ON_SCREEN) return false;
 #ifdef HIZ_FINER
@@ -190,6 +199,19 @@ bool occluded(CullRecord r, float radius, vec3 half_extent) {
     return cull_hiz_occluded(rect, nearest, view.viewport, false);
 #endif
 }
+
+#ifdef HIZ_PREV_VIEW
+// Against last frame's pyramid, in last frame's view.
+bool occluded_prev(CullRecord r, float radius, vec3 half_extent) {
+    CullView view = frame.prev_cull_view;
+    vec3 c = rel_eye(r.center_hi, record_center_lo(r), frame.prev_eye_hi.xyz, frame.prev_eye_lo.xyz);
+    uvec4 rect;
+    float nearest;
+    bool covers;
+    uint status = project_bound(view, c, radius, half_extent, rect, nearest, covers);
+    return occluded_at(status, rect, nearest, view);
+}
+#endif
 #endif
 
 #if defined(PHASE_OCCLUDERS) || defined(PHASE_REST)
@@ -232,8 +254,37 @@ Decision decide(CullRecord r, bool evaluated, bool was_visible) {
     bool huge = (r.group_flags & CULL_HUGE) != 0u;
     bool inside = huge || in_frustum(frame.cull_view, c, radius, half_extent);
     bool hidden = false;
+#if defined(HAS_HIZ) && !defined(PHASE_OCCLUDERS) && !defined(HIZ_PREV_VIEW)
+    // One projection in this frame's view serves the small-object and the Hi-Z tests.
+    if (inside && !huge) {
+        uvec4 rect;
+        float nearest;
+        bool covers;
+        uint status = project_bound(frame.cull_view, c, radius, half_extent, rect, nearest, covers);
+#ifdef SMALL_OBJECTS
+        // A bound that covers no sample position makes no fragment: outside for every purpose.
+        inside = status != CULL_ON_SCREEN || covers;
+#endif
+        hidden = inside && occluded_at(status, rect, nearest, frame.cull_view);
+    }
+#else
+#ifdef SMALL_OBJECTS
+#ifdef BOUND_SPHERE
+    float inner = radius;
+#else
+    float inner = min(half_extent.x, min(half_extent.y, half_extent.z));
+#endif
+    if (inside && !huge && !surely_large(frame.cull_view, c, inner)) {
+        uvec4 rect;
+        float nearest;
+        bool covers;
+        uint status = project_bound(frame.cull_view, c, radius, half_extent, rect, nearest, covers);
+        inside = status != CULL_ON_SCREEN || covers;
+    }
+#endif
 #if defined(HAS_HIZ) && !defined(PHASE_OCCLUDERS)
-    if (inside && !huge) hidden = occluded(r, radius, half_extent);
+    if (inside && !huge) hidden = occluded_prev(r, radius, half_extent);
+#endif
 #endif
     d.frustum_culled = !inside;
     d.occlusion_culled = inside && hidden;

@@ -172,7 +172,11 @@ pub fn run(
         };
         for graph in &bench.graphs {
             progress(&format!("city with {n} instances: {graph}"));
-            let spec = GraphSpec::builtin(graph)?;
+            // A name of the shipped graphs, or a RON file (a variant to compare with them).
+            let spec = match graph.ends_with(".ron") {
+                true => GraphSpec::from_file(std::path::Path::new(graph))?,
+                false => GraphSpec::builtin(graph)?,
+            };
             let settings = RenderSettings::new(bench.width, bench.height);
             let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
             renderer.set_step_timing(bench.step_times);

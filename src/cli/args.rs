@@ -149,7 +149,7 @@ pub struct BenchArgs {
     /// City sizes to measure (instances), comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [10_000usize, 100_000, 1_000_000], value_parser = clap::value_parser!(u64).range(1..=MAX_INSTANCES as u64).map(|n| n as usize))]
     pub instances: Vec<usize>,
-    /// Built-in graphs to compare, comma-separated.
+    /// Graphs to compare, comma-separated: names of the built-in ones, or RON files (`.ron`).
     #[arg(long, value_delimiter = ',', default_values_t = ["no_cull".to_string(), "frustum".into(), "two_phase".into(), "occluder_prepass".into(), "one_phase".into()])]
     pub graphs: Vec<String>,
     /// Output size, WIDTHxHEIGHT.

@@ -49,6 +49,39 @@ pub const REL_EPS: f32 = 1.0 / 524_288.0; // 2^-19
 /// (`1/64` pixel at 4096, `1/16` at 16384).
 pub const PIXEL_EPS: f32 = 1.0 / 262_144.0; // 2^-18
 
+/// Pixels the small-object test widens a rectangle by beyond [`PIXEL_EPS`]: a rasterizer snaps
+/// vertices to a sub-pixel grid of at least 4 bits (Vulkan's minimum), which moves an edge by up
+/// to 1/32 pixel, and the vertex shader's own rounding of a bound with `M / d_lo` ≤
+/// [`SMALL_CONDITION`] moves it by less than 1/16 pixel at 16384 pixels (`8ε·(M/d_lo)·(1 + |t|)`
+/// in tangent, times `W/2·s`); 1/8 covers both.
+pub const SAMPLE_MARGIN: f32 = 0.125;
+
+/// Largest `M / d_lo` (perspective), or `M·s_y / 2` (orthographic: `M` over half the view's
+/// height), for which the small-object test is made; a bound conditioned worse is taken to cover
+/// a sample. Small objects are far from the eye compared with their size, where this is about 2.
+pub const SMALL_CONDITION: f32 = 4.0;
+
+/// The sample positions of Vulkan's standard 1, 2, 4 and 8-sample patterns together, in
+/// sixteenths of a pixel from its top-left corner: a bound holding none of them in any pixel
+/// makes no fragment at any of those sample counts. GLSL: `CULL_SAMPLES`.
+pub const STANDARD_SAMPLES: [(u8, u8); 15] = [
+    (8, 8),
+    (12, 12),
+    (4, 4),
+    (6, 2),
+    (14, 6),
+    (2, 10),
+    (10, 14),
+    (9, 5),
+    (7, 11),
+    (13, 9),
+    (5, 3),
+    (3, 13),
+    (1, 7),
+    (11, 15),
+    (15, 1),
+];
+
 /// Largest accepted `M / d_lo` (2¹⁵) for a perspective projection: beyond it the bound's nearest
 /// point is so close to the eye compared with its size that it is treated as crossing the near
 /// plane (visible, not projected). This keeps `REL_EPS · M / d_lo ≤ 2⁻⁴`, where the first-order
@@ -186,6 +219,11 @@ pub enum ScreenBounds {
         /// Largest reversed-Z depth any point of the bound can have (its nearest point), rounded
         /// up by the error allowance.
         nearest_depth: f32,
+        /// False when the bound, widened by [`SAMPLE_MARGIN`], holds no sample position of the
+        /// standard 1, 2, 4 or 8-sample patterns: nothing inside it can make a fragment, so
+        /// culling it changes no image. True when it may, or when the bound is conditioned too
+        /// badly to tell ([`SMALL_CONDITION`]).
+        covers_sample: bool,
     },
 }
 
@@ -352,28 +390,79 @@ fn tangents(a: f32, d: f32, r: f32, czr2: f32) -> (f32, f32) {
 /// pixels are touched.
 ///
 /// GLSL: `bool cull_pixel_rect(CullView view, vec2 lo, vec2 hi, out uvec4 rect)`.
-fn pixel_rect(view: &CullView, lo: Vec2, hi: Vec2) -> Option<PixelRect> {
+/// With the rectangle, whether the extents widened by [`SAMPLE_MARGIN`] may hold a sample
+/// position ([`box_covers_sample`]; always when `testable` is false).
+///
+/// GLSL: `bool cull_pixel_rect(CullView view, vec2 lo, vec2 hi, bool testable, out uvec4 rect,
+/// out bool covers_sample)`.
+fn pixel_rect(view: &CullView, lo: Vec2, hi: Vec2, testable: bool) -> Option<(PixelRect, bool)> {
     let w = view.viewport.x as f32;
     let h = view.viewport.y as f32;
     let pe = w.max(h) * PIXEL_EPS;
-    let x_lo = ((lo.x.clamp(-2.0, 2.0) + 1.0) * (0.5 * w) - pe).floor();
-    let x_hi = ((hi.x.clamp(-2.0, 2.0) + 1.0) * (0.5 * w) + pe).floor();
-    let y_lo = ((lo.y.clamp(-2.0, 2.0) + 1.0) * (0.5 * h) - pe).floor();
-    let y_hi = ((hi.y.clamp(-2.0, 2.0) + 1.0) * (0.5 * h) + pe).floor();
+    let fx_lo = (lo.x.clamp(-2.0, 2.0) + 1.0) * (0.5 * w) - pe;
+    let fx_hi = (hi.x.clamp(-2.0, 2.0) + 1.0) * (0.5 * w) + pe;
+    let fy_lo = (lo.y.clamp(-2.0, 2.0) + 1.0) * (0.5 * h) - pe;
+    let fy_hi = (hi.y.clamp(-2.0, 2.0) + 1.0) * (0.5 * h) + pe;
+    let covers_sample = !testable
+        || box_covers_sample(
+            fx_lo - SAMPLE_MARGIN,
+            fx_hi + SAMPLE_MARGIN,
+            fy_lo - SAMPLE_MARGIN,
+            fy_hi + SAMPLE_MARGIN,
+        );
+    let (x_lo, x_hi, y_lo, y_hi) = (fx_lo.floor(), fx_hi.floor(), fy_lo.floor(), fy_hi.floor());
     if x_hi < 0.0 || y_hi < 0.0 || x_lo >= w || y_lo >= h {
         return None;
     }
-    Some(PixelRect {
+    let rect = PixelRect {
         x0: x_lo.max(0.0) as u32,
         y0: y_lo.max(0.0) as u32,
         x1: x_hi.min(w - 1.0) as u32,
         y1: y_hi.min(h - 1.0) as u32,
-    })
+    };
+    Some((rect, covers_sample))
+}
+
+/// Whether the pixel-space box `[x_lo, x_hi] × [y_lo, y_hi]` (inclusive; y down, pixel `i`
+/// spanning `[i, i + 1)`) holds a sample position of any standard pattern
+/// ([`STANDARD_SAMPLES`]). A box 2 pixels or more across, or with NaN, always does.
+///
+/// GLSL: `bool cull_box_covers_sample(float x_lo, float x_hi, float y_lo, float y_hi)`.
+pub fn box_covers_sample(x_lo: f32, x_hi: f32, y_lo: f32, y_hi: f32) -> bool {
+    // NaN extents compare as not narrow: covered.
+    let narrow = |a: f32, b: f32| (b - a).partial_cmp(&2.0) == Some(std::cmp::Ordering::Less);
+    if !narrow(x_lo, x_hi) || !narrow(y_lo, y_hi) {
+        return true;
+    }
+    let mut py = y_lo.floor();
+    while py <= y_hi {
+        let mut px = x_lo.floor();
+        while px <= x_hi {
+            for &(sx, sy) in &STANDARD_SAMPLES {
+                let x = px + sx as f32 * 0.0625;
+                let y = py + sy as f32 * 0.0625;
+                if x >= x_lo && x <= x_hi && y >= y_lo && y <= y_hi {
+                    return true;
+                }
+            }
+            px += 1.0;
+        }
+        py += 1.0;
+    }
+    false
 }
 
 /// Finishes a projection from view-space extents: `t` = x extent `(lo, hi)`, `u` = y extent
 /// (y up), each with its outward allowance `e`, and the lowered nearest distance `d_lo`.
-fn finish(view: &CullView, t: (f32, f32, f32, f32), u: (f32, f32, f32, f32), d_lo: f32) -> ScreenBounds {
+/// `testable`: the bound is conditioned well enough for the small-object test
+/// ([`SMALL_CONDITION`]).
+fn finish(
+    view: &CullView,
+    t: (f32, f32, f32, f32),
+    u: (f32, f32, f32, f32),
+    d_lo: f32,
+    testable: bool,
+) -> ScreenBounds {
     let (sx, sy) = (view.scale.x, view.scale.y);
     let (cx, cy) = (view.offset.x, view.offset.y);
     let (ox, oy) = (REL_EPS * cx.abs(), REL_EPS * cy.abs());
@@ -391,8 +480,8 @@ fn finish(view: &CullView, t: (f32, f32, f32, f32), u: (f32, f32, f32, f32), d_l
     } else {
         view.near / d_lo
     };
-    match pixel_rect(view, lo, hi) {
-        Some(rect) => ScreenBounds::OnScreen { rect, nearest_depth },
+    match pixel_rect(view, lo, hi, testable) {
+        Some((rect, covers_sample)) => ScreenBounds::OnScreen { rect, nearest_depth, covers_sample },
         None => ScreenBounds::OffScreen,
     }
 }
@@ -439,7 +528,8 @@ pub fn project_sphere(view: &CullView, center: Vec3, radius: f32) -> ScreenBound
     if view.orthographic {
         let t = (c.x - radius, c.x + radius, margin, margin);
         let u = (c.y - radius, c.y + radius, margin, margin);
-        return finish(view, t, u, d_lo);
+        let testable = m * view.scale.y <= 2.0 * SMALL_CONDITION;
+        return finish(view, t, u, d_lo, testable);
     }
     if m > d_lo * MAX_CONDITION {
         return ScreenBounds::CrossesNear;
@@ -450,7 +540,7 @@ pub fn project_sphere(view: &CullView, center: Vec3, radius: f32) -> ScreenBound
     let (ty_lo, ty_hi) = tangents(c.y, d, radius, czr2);
     let t = (tx_lo, tx_hi, q * (1.0 + tx_lo.abs()), q * (1.0 + tx_hi.abs()));
     let u = (ty_lo, ty_hi, q * (1.0 + ty_lo.abs()), q * (1.0 + ty_hi.abs()));
-    finish(view, t, u, d_lo)
+    finish(view, t, u, d_lo, m <= d_lo * SMALL_CONDITION)
 }
 
 /// Screen rectangle and nearest depth of an axis-aligned box with eye-relative corners `min`,
@@ -496,7 +586,8 @@ pub fn project_aabb(view: &CullView, min: Vec3, max: Vec3) -> ScreenBounds {
             (t_lo, t_hi) = (t_lo.min(v.x), t_hi.max(v.x));
             (u_lo, u_hi) = (u_lo.min(v.y), u_hi.max(v.y));
         }
-        return finish(view, (t_lo, t_hi, margin, margin), (u_lo, u_hi, margin, margin), d_lo);
+        let testable = m * view.scale.y <= 2.0 * SMALL_CONDITION;
+        return finish(view, (t_lo, t_hi, margin, margin), (u_lo, u_hi, margin, margin), d_lo, testable);
     }
     if m > d_lo * MAX_CONDITION {
         return ScreenBounds::CrossesNear;
@@ -510,7 +601,7 @@ pub fn project_aabb(view: &CullView, min: Vec3, max: Vec3) -> ScreenBounds {
     let q = margin / d_lo;
     let t = (t_lo, t_hi, q * (1.0 + t_lo.abs()), q * (1.0 + t_hi.abs()));
     let u = (u_lo, u_hi, q * (1.0 + u_lo.abs()), q * (1.0 + u_hi.abs()));
-    finish(view, t, u, d_lo)
+    finish(view, t, u, d_lo, m <= d_lo * SMALL_CONDITION)
 }
 
 /// `⌈log₂ n⌉` for `n ≥ 1` (0 for `n ≤ 1`). GLSL: `cull_ceil_log2` (`findMSB(n − 1) + 1`).
@@ -553,6 +644,52 @@ pub fn hiz_level(rect: PixelRect) -> u32 {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn a_box_covers_a_sample_only_when_one_of_the_standard_positions_lies_in_it() {
+        // The pixel centre, the 1-sample position.
+        assert!(box_covers_sample(0.45, 0.55, 0.45, 0.55));
+        // Between every position of pixel (0, 0): the nearest ones are 1/16 from the corner.
+        assert!(!box_covers_sample(0.0, 0.05, 0.0, 0.05));
+        assert!(!box_covers_sample(10.0, 10.05, 7.0, 7.05));
+        // The 8-sample position (1/16, 7/16) on its edge counts (inclusive).
+        assert!(box_covers_sample(0.0, 0.0625, 0.4375, 0.5));
+        // Starting in the pixel to the left, pixel 0's positions still count.
+        assert!(box_covers_sample(-0.1, 0.07, 0.4, 0.45));
+        // The 8-sample pattern has positions 1/16 from the corners: a box around a corner
+        // between four pixels covers one.
+        assert!(box_covers_sample(31.9, 32.1, 31.9, 32.1));
+        // Two pixels or more across, or NaN: assumed covered.
+        assert!(box_covers_sample(0.0, 2.0, 0.0, 0.01));
+        assert!(box_covers_sample(f32::NAN, 0.1, 0.0, 0.1));
+        // Every standard position is in the set: a box around any of them covers it.
+        for &(x, y) in &STANDARD_SAMPLES {
+            let (x, y) = (3.0 + x as f32 / 16.0, 5.0 + y as f32 / 16.0);
+            assert!(box_covers_sample(x - 0.01, x + 0.01, y - 0.01, y + 0.01), "({x}, {y})");
+        }
+    }
+
+    #[test]
+    fn a_distant_speck_covers_no_sample_and_a_near_one_is_not_tested() {
+        let view = CullView::perspective(Mat3::IDENTITY, 60f32.to_radians(), 1.0, 0.1, UVec2::new(64, 64));
+        // A 1 mm box 100 m ahead (a two-thousandth of a pixel) at pixel coordinates (x, y).
+        let pixel = 2.0 * 100.0 * (30f32.to_radians()).tan() / 64.0;
+        let speck = |x: f32, y: f32| {
+            let at = Vec3::new((x - 32.0) * pixel, (32.0 - y) * pixel, -100.0);
+            project_aabb(&view, at - Vec3::splat(5e-4), at + Vec3::splat(5e-4))
+        };
+        let covers = |b: ScreenBounds| match b {
+            ScreenBounds::OnScreen { covers_sample, .. } => covers_sample,
+            other => panic!("{other:?}"),
+        };
+        // At (32.3, 32.5) every standard position is more than 1/8 pixel away along x or y.
+        assert!(!covers(speck(32.3, 32.5)));
+        // On pixel (32, 32)'s centre, or within 1/8 pixel of it: covered.
+        assert!(covers(speck(32.5, 32.5)));
+        assert!(covers(speck(32.38, 32.5)));
+        // A large bound is always taken as covering.
+        assert!(covers(project_aabb(&view, Vec3::new(-1.0, -1.0, -11.0), Vec3::new(1.0, 1.0, -9.0))));
+    }
     use super::*;
 
     fn front_view(w: u32, h: u32) -> CullView {
@@ -572,7 +709,7 @@ mod tests {
     fn centered_sphere_projects_symmetrically() {
         let view = front_view(100, 100);
         match project_sphere(&view, Vec3::new(0.0, 0.0, -10.0), 1.0) {
-            ScreenBounds::OnScreen { rect, nearest_depth } => {
+            ScreenBounds::OnScreen { rect, nearest_depth, .. } => {
                 // tan of the half angle: 1/sqrt(99); 100 px span 2 units of tan at fov 90.
                 let half = 50.0 / 99f32.sqrt();
                 assert_eq!(rect.x0, (50.0 - half).floor() as u32);

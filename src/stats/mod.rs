@@ -17,7 +17,8 @@ pub struct FrameStats {
     pub frame: u64,
     /// Instances in the scene (all tested, when culling runs).
     pub instances: u32,
-    /// Instances outside the frustum.
+    /// Instances outside the frustum, or inside it with a screen bound that covers no sample
+    /// position (small-object culling: they could make no fragment).
     pub frustum_culled: u32,
     /// Instances inside the frustum but occluded.
     pub occlusion_culled: u32,

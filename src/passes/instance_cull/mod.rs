@@ -133,6 +133,8 @@ pub(crate) struct CullSettings {
     pub phase: Phase,
     /// Test the frustum.
     pub frustum: bool,
+    /// Cull bounds that cover no sample position (with the frustum test).
+    pub small_objects: bool,
     /// The bound tested.
     pub bound: Bound,
     /// The occlusion footprint.
@@ -155,6 +157,7 @@ impl CullSettings {
         Ok(Self {
             phase: pass.choice("phase")?,
             frustum: pass.flag("frustum")?,
+            small_objects: pass.flag("small_objects")?,
             bound: pass.choice("bound")?,
             hiz_test: pass.choice("hiz_test")?,
             hiz_view: pass.choice("hiz_view")?,
@@ -243,6 +246,8 @@ impl InstanceCullPass {
         let mut defines: Vec<(&str, &str)> = vec![(settings.phase.define(), "1")];
         let flags = [
             (!settings.frustum, "NO_FRUSTUM"),
+            // The sample positions tested are Vulkan's standard ones.
+            (settings.frustum && settings.small_objects && standard_sample_locations(ctx), "SMALL_OBJECTS"),
             (settings.bound == Bound::Sphere, "BOUND_SPHERE"),
             (settings.hiz_test == HizTest::Finer, "HIZ_FINER"),
             (settings.hiz_view == HizView::Previous, "HIZ_PREV_VIEW"),
@@ -355,6 +360,14 @@ const SUPERBLOCK_WORDS: u64 = 8;
 
 /// Blocks of `CULL_BLOCK` slots (test workgroups): at least one, so that an empty scene still
 /// writes an empty draw list.
+/// Whether the device rasterizes at Vulkan's standard sample positions, the ones the
+/// small-object test knows.
+fn standard_sample_locations(ctx: &GpuContext) -> bool {
+    // SAFETY: valid handles.
+    let properties = unsafe { ctx.instance().get_physical_device_properties(ctx.physical_device()) };
+    properties.limits.standard_sample_locations == vk::TRUE
+}
+
 fn blocks_of(slots: u32) -> u32 {
     slots.div_ceil(CULL_BLOCK).max(1)
 }
@@ -563,6 +576,7 @@ impl PassKind for InstanceCullKind {
             settings: vec![
                 SettingDecl::choice::<Phase>("phase", "which instances the pass draws: all survivors; last frame's visible ones (early); newly visible ones (late); chosen occluders; all but the occluders"),
                 SettingDecl::flag("frustum", true, "test against the view frustum (false: keep everything, the no-cull baseline)"),
+                SettingDecl::flag("small_objects", false, "with the frustum test: also cull an instance whose screen bound covers no sample position of the standard 1, 2, 4 and 8-sample patterns, which could make no fragment (the image does not change; counted as frustum-culled). Off by default: it pays where many instances are specks, and costs the city's late cull a fifth (docs/culling.md)"),
                 SettingDecl::choice::<Bound>("bound", "world bound tested: axis-aligned box or sphere"),
                 SettingDecl::choice::<HizTest>("hiz_test", "occlusion footprint: at most 2x2 texels, or up to 3x3 one level finer (culls more)"),
                 SettingDecl::choice::<HizView>("hiz_view", "project with this frame's camera, or last frame's (a test against last frame's pyramid)"),
