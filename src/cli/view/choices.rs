@@ -119,8 +119,17 @@ impl GraphChoice {
             };
             let overlay = GraphSpec::builtin("overlay")?;
             let name = format!("{}+overlay", base_name(entry));
-            let text = overlay.text.replacen("extends: \"default\"", &format!("extends: {extends:?}"), 1).replacen(
-                "name: \"overlay\"",
+            // The shipped overlay graph is the default graph plus its pass: the same text over
+            // another base. Refuse plainly should that graph ever be written otherwise.
+            let (base_key, name_key) = ("extends: \"default\"", "name: \"overlay\"");
+            if !overlay.text.contains(base_key) || !overlay.text.contains(name_key) {
+                return Err(cullgraph::Error::Invalid(format!(
+                    "{} no longer reads `{base_key}` and `{name_key}`: the viewer cannot compose the overlay over another graph",
+                    overlay.file
+                )));
+            }
+            let text = overlay.text.replacen(base_key, &format!("extends: {extends:?}"), 1).replacen(
+                name_key,
                 &format!("name: {name:?}"),
                 1,
             );
@@ -175,6 +184,12 @@ mod tests {
         let spec = choice.spec(&[("exposure".into(), "1.5".into())]).unwrap();
         assert!(spec.text.contains("extends: \"default\"") && spec.text.contains("name: \"default+overlay\""));
         assert_eq!(spec.overrides[0], ("overlay_view".to_string(), "hiz".to_string()));
+        // Over another graph: the same pass, extending that one.
+        let frustum = choice.list.iter().position(|e| *e == Entry::Builtin("frustum".into())).unwrap();
+        choice.now.index = frustum;
+        let spec = choice.spec(&[]).unwrap();
+        assert!(spec.text.contains("extends: \"frustum\"") && spec.text.contains("name: \"frustum+overlay\""));
+        choice.now.index = choice.good.index;
         // A choice the renderer refused goes back to the last good one.
         choice.step(1);
         choice.revert();
