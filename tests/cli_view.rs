@@ -42,6 +42,23 @@ impl Xvfb {
     }
 }
 
+impl Xvfb {
+    /// `view` of the 2,000-instance city at `size` for `frames` frames, playing `script` (when
+    /// not empty) and writing the last frame to `shot`; `extra` flags after those.
+    fn run_city(&self, size: &str, frames: u32, script: &str, shot: &Path, extra: &[&str]) -> (i32, String, String) {
+        let script_file = shot.with_extension("script.txt");
+        std::fs::write(&script_file, script).unwrap();
+        let frames = frames.to_string();
+        let mut args = vec!["--instances", "2000", "--size", size, "--frames", &frames];
+        args.extend(["--screenshot", shot.to_str().unwrap()]);
+        if !script.is_empty() {
+            args.extend(["--script", script_file.to_str().unwrap()]);
+        }
+        args.extend_from_slice(extra);
+        self.view(&args, 180)
+    }
+}
+
 impl Drop for Xvfb {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -93,10 +110,7 @@ fn frames_are_presented_and_the_last_equals_the_headless_render() {
     let x = Xvfb::start();
     let tmp = tempfile::tempdir().unwrap();
     let shot = tmp.path().join("shot.png");
-    let (code, out, err) = x.view(
-        &["--instances", "2000", "--size", "160x96", "--frames", "6", "--screenshot", shot.to_str().unwrap()],
-        120,
-    );
+    let (code, out, err) = x.run_city("160x96", 6, "", &shot, &[]);
     assert_eq!(code, 0, "{out}\n{err}");
     assert!(out.contains("view: 6 frames presented at 160x96"), "{out}");
     let reference = tmp.path().join("render.png");
@@ -109,23 +123,8 @@ fn frames_are_presented_and_the_last_equals_the_headless_render() {
 fn a_scripted_resize_changes_the_window_and_the_frame_follows() {
     let x = Xvfb::start();
     let tmp = tempfile::tempdir().unwrap();
-    let (shot, script) = (tmp.path().join("shot.png"), tmp.path().join("resize.txt"));
-    std::fs::write(&script, "2 resize 120x72\n").unwrap();
-    let (code, out, err) = x.view(
-        &[
-            "--instances",
-            "2000",
-            "--size",
-            "160x96",
-            "--frames",
-            "8",
-            "--script",
-            script.to_str().unwrap(),
-            "--screenshot",
-            shot.to_str().unwrap(),
-        ],
-        120,
-    );
+    let shot = tmp.path().join("shot.png");
+    let (code, out, err) = x.run_city("160x96", 8, "2 resize 120x72\n", &shot, &[]);
     assert_eq!(code, 0, "{out}\n{err}");
     assert!(out.contains("presented at 120x72"), "{out}");
     let reference = tmp.path().join("render.png");
@@ -138,29 +137,11 @@ fn a_scripted_resize_changes_the_window_and_the_frame_follows() {
 fn scripted_keys_and_mouse_move_the_camera_where_expected() {
     let x = Xvfb::start();
     let tmp = tempfile::tempdir().unwrap();
-    let (shot, script) = (tmp.path().join("shot.png"), tmp.path().join("fly.txt"));
+    let shot = tmp.path().join("shot.png");
     // Forward for 30 frames (half a second), then a quarter turn to the right by the mouse.
     let turn = std::f64::consts::FRAC_PI_2 / 0.003;
-    std::fs::write(&script, format!("# fly\n0 key W down\n30 key W up\n31 look {turn} 0\n")).unwrap();
-    let (code, out, err) = x.view(
-        &[
-            "--instances",
-            "2000",
-            "--size",
-            "128x80",
-            "--eye",
-            "0,20,120",
-            "--target",
-            "0,20,0",
-            "--frames",
-            "34",
-            "--script",
-            script.to_str().unwrap(),
-            "--screenshot",
-            shot.to_str().unwrap(),
-        ],
-        180,
-    );
+    let script = format!("# fly\n0 key W down\n30 key W up\n31 look {turn} 0\n");
+    let (code, out, err) = x.run_city("128x80", 34, &script, &shot, &["--eye", "0,20,120", "--target", "0,20,0"]);
     assert_eq!(code, 0, "{out}\n{err}");
     let (eye, target, speed) = final_camera(&out);
     let moved = speed * 30.0 / 60.0;
@@ -182,28 +163,10 @@ fn scripted_keys_and_mouse_move_the_camera_where_expected() {
 fn the_keys_switch_overlay_graphs_shadows_traffic_and_frozen_culling_without_a_validation_message() {
     let x = Xvfb::start();
     let tmp = tempfile::tempdir().unwrap();
-    let (shot, script) = (tmp.path().join("shot.png"), tmp.path().join("keys.txt"));
-    std::fs::write(
-        &script,
-        "1 press H\n2 press O\n3 press V\n4 press V\n5 press L\n6 press G\n7 key Shift down\n7 press G\n7 key Shift up\n\
-         8 press O\n9 press F\n10 key S down\n13 key S up\n14 press F\n15 press T\n17 press C\n18 wheel 2\n19 press P\n20 press H\n",
-    )
-    .unwrap();
-    let (code, out, err) = x.view(
-        &[
-            "--instances",
-            "2000",
-            "--size",
-            "128x80",
-            "--frames",
-            "22",
-            "--script",
-            script.to_str().unwrap(),
-            "--screenshot",
-            shot.to_str().unwrap(),
-        ],
-        180,
-    );
+    let shot = tmp.path().join("shot.png");
+    let script = "1 press H\n2 press O\n3 press V\n4 press V\n5 press L\n6 press G\n7 key Shift down\n7 press G\n7 key Shift up\n\
+         8 press O\n9 press F\n10 key S down\n13 key S up\n14 press F\n15 press T\n17 press C\n18 wheel 2\n19 press P\n20 press H\n";
+    let (code, out, err) = x.run_city("128x80", 22, script, &shot, &[]);
     assert_eq!(code, 0, "{out}\n{err}");
     assert!(!err.contains("error:"), "{err}");
     let frozen = out.lines().find(|l| l.starts_with("culling frozen: the ")).unwrap_or_else(|| panic!("{out}"));
