@@ -134,3 +134,32 @@ fn every_library_shader_compiles() {
     }
     assert!(compiled >= 3);
 }
+
+#[test]
+fn a_hosts_extra_extensions_are_enabled_once_and_missing_ones_are_named() {
+    use cullgraph::gpu::{ContextOptions, GpuContext};
+    use std::ffi::CString;
+    let device = std::env::var("CULLGRAPH_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let options = |instance: Vec<CString>, device_extensions: Vec<CString>| ContextOptions {
+        device: device.parse().unwrap(),
+        validation: true,
+        app_name: "cullgraph-test".into(),
+        instance_extensions: instance,
+        device_extensions,
+    };
+    // Names cullgraph enables itself (debug utils with validation, push descriptors), and
+    // the swapchain a window needs: each enabled once, and no validation message.
+    let ctx = GpuContext::new(&options(
+        vec![CString::from(ash::ext::debug_utils::NAME), CString::from(ash::khr::surface::NAME)],
+        vec![CString::from(ash::khr::push_descriptor::NAME), CString::from(ash::khr::swapchain::NAME)],
+    ))
+    .unwrap();
+    assert_eq!(ctx.validation_log().count(), 0, "{:?}", ctx.validation_log().messages());
+    drop(ctx);
+    let missing = GpuContext::new(&options(vec![], vec![CString::new("VK_NOPE_not_an_extension").unwrap()]));
+    let e = missing.err().expect("refused").to_string();
+    assert!(e.contains("VK_NOPE_not_an_extension"), "{e}");
+    let missing = GpuContext::new(&options(vec![CString::new("VK_NOPE_instance").unwrap()], vec![]));
+    let e = missing.err().expect("refused").to_string();
+    assert!(e.contains("VK_NOPE_instance"), "{e}");
+}

@@ -514,6 +514,7 @@ fn create_instance(
         return Err(GpuError::Loader(format!("the Vulkan loader lacks instance extension(s) {}", missing.join(", "))));
     }
     ext_names.extend(options.instance_extensions.iter().map(|e| e.as_ptr()));
+    let ext_names = without_repeats(ext_names);
     // Synchronization validation is off by default in the layer; the Debian layer (1.3.239) only
     // understands VkValidationFeaturesEXT, not VK_EXT_layer_settings.
     let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
@@ -595,6 +596,7 @@ fn create_device(
     if has_interlock {
         ext_names.push(interlock_ext.as_ptr());
     }
+    let ext_names = without_repeats(ext_names);
     let mut interlock =
         vk::PhysicalDeviceFragmentShaderInterlockFeaturesEXT::default().fragment_shader_sample_interlock(true);
     let mut features2 = required.chain();
@@ -607,6 +609,20 @@ fn create_device(
     }
     // SAFETY: every pointer in `info` lives on this stack frame.
     unsafe { instance.create_device(chosen.handle, &info, None) }.vk("vkCreateDevice")
+}
+
+/// The extension names with repeats dropped: a host may ask for one that cullgraph enables too,
+/// and Vulkan takes each name once.
+fn without_repeats(names: Vec<*const c_char>) -> Vec<*const c_char> {
+    let mut out: Vec<*const c_char> = Vec::with_capacity(names.len());
+    for name in names {
+        // SAFETY: every pointer is a NUL-terminated name (static, or the caller's options) that
+        // outlives the create call it is gathered for.
+        if !out.iter().any(|&seen| unsafe { CStr::from_ptr(seen) == CStr::from_ptr(name) }) {
+            out.push(name);
+        }
+    }
+    out
 }
 
 /// Whether the device supports `fragmentShaderSampleInterlock`.
