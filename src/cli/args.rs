@@ -394,9 +394,6 @@ pub struct RenderArgs {
     /// (R = G = B = depth). `builtin:post` has it.
     #[arg(long, value_name = "FILE.exr")]
     pub depth_out: Option<PathBuf>,
-    /// Vulkan device by name substring or index (see `cullgraph devices`); env CULLGRAPH_DEVICE.
-    #[arg(long, value_name = "NAME|INDEX")]
-    pub device: Option<String>,
     /// Render graph to run: a RON file, or `builtin:NAME` for one shipped in `graph/`
     /// (default, no_cull, frustum, ...). Default: `graph/default.ron`.
     #[arg(long, value_name = "FILE.ron|builtin:NAME")]
@@ -485,13 +482,57 @@ pub struct RenderArgs {
     /// With --watch: stop after this many seconds (at most a day).
     #[arg(long, value_name = "SECONDS", requires = "watch", value_parser = parse_seconds, allow_hyphen_values = true)]
     pub watch_for: Option<f64>,
-    /// Enable the Khronos validation layer with synchronization validation.
+    /// Device, validation and shaders.
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+/// Which device renders, whether the validation layer watches, and where shaders come from.
+#[derive(Args, Debug, Clone)]
+pub struct GpuArgs {
+    /// Vulkan device by name substring or index (see `cullgraph devices`); env CULLGRAPH_DEVICE.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub device: Option<String>,
+    /// Enable the Khronos validation layer with synchronization validation (exit status 1 if
+    /// it reported anything).
     #[arg(long)]
     pub validation: bool,
-    /// Read shaders from this directory instead of the copies built into the binary
-    /// (env CULLGRAPH_SHADER_DIR).
+    /// Read shaders from this directory (reloaded when they change, with `--watch` and in
+    /// `view`) instead of the copies built into the binary (env CULLGRAPH_SHADER_DIR).
     #[arg(long, value_name = "DIR")]
     pub shader_dir: Option<PathBuf>,
+}
+
+impl GpuArgs {
+    /// Refuses a `--shader-dir` that is not a readable directory, before anything is made.
+    pub fn check(&self) -> cullgraph::Result<()> {
+        match &self.shader_dir {
+            Some(dir) => super::paths::input_dir("--shader-dir", dir),
+            None => Ok(()),
+        }
+    }
+
+    /// Context options for this device and validation (`CULLGRAPH_VALIDATION=1` turns it on
+    /// too), named `app_name`.
+    pub fn context_options(&self, app_name: &str) -> cullgraph::gpu::ContextOptions {
+        use cullgraph::gpu::{ContextOptions, DeviceSelector};
+        ContextOptions {
+            device: DeviceSelector::or_from_env(self.device.as_deref().map(|d| d.parse().unwrap_or_default())),
+            validation: self.validation || ContextOptions::default().validation,
+            app_name: app_name.into(),
+            ..Default::default()
+        }
+    }
+
+    /// The shader compiler: from `--shader-dir`, else as `CULLGRAPH_SHADER_DIR` says.
+    pub fn shaders(&self) -> cullgraph::Result<cullgraph::gpu::ShaderCompiler> {
+        use cullgraph::gpu::ShaderRoot;
+        let root = match &self.shader_dir {
+            Some(dir) => ShaderRoot::Directory(dir.clone()),
+            None => ShaderRoot::from_env(),
+        };
+        Ok(cullgraph::gpu::ShaderCompiler::new(root)?)
+    }
 }
 
 /// Where the camera is and how it sees, over the scene's default view.
@@ -579,17 +620,9 @@ pub struct ViewArgs {
     /// `FRAME look DX DY`, `FRAME wheel N`, `FRAME resize WxH` (frames advance 1/60 s each).
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
-    /// Vulkan device by name substring or index; env CULLGRAPH_DEVICE.
-    #[arg(long, value_name = "NAME|INDEX")]
-    pub device: Option<String>,
-    /// Enable the Khronos validation layer with synchronization validation (exit status 1 if
-    /// it reported anything).
-    #[arg(long)]
-    pub validation: bool,
-    /// Read shaders from this directory (and reload them when they change) instead of the
-    /// copies built into the binary (env CULLGRAPH_SHADER_DIR).
-    #[arg(long, value_name = "DIR")]
-    pub shader_dir: Option<PathBuf>,
+    /// Device, validation and shaders.
+    #[command(flatten)]
+    pub gpu: GpuArgs,
 }
 
 /// Parses `WIDTHxHEIGHT`.

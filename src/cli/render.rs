@@ -6,7 +6,7 @@ use super::memory::{Need, Room, Use};
 use super::paths;
 use super::views;
 use super::watch::FileWatch;
-use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
+use cullgraph::gpu::{GpuContext, ShaderCompiler};
 use cullgraph::oracle::reference::{image_reference_error, reference_render_size};
 use cullgraph::oracle::Verify;
 use cullgraph::render::output::save_png;
@@ -28,16 +28,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if let Some(stats) = &args.stats {
         paths::output_file("--stats", stats)?;
     }
-    if let Some(dir) = &args.shader_dir {
-        paths::input_dir("--shader-dir", dir)?;
-    }
+    args.gpu.check()?;
     let spec = graph_spec(args)?;
-    let ctx = GpuContext::new(&ContextOptions {
-        device: DeviceSelector::or_from_env(args.device.as_deref().map(|d| d.parse().unwrap_or_default())),
-        validation: args.validation || ContextOptions::default().validation,
-        app_name: "cullgraph".into(),
-        ..Default::default()
-    })?;
+    let ctx = GpuContext::new(&args.gpu.context_options("cullgraph"))?;
     let usage = if args.animate { Use::Animate } else { Use::Render };
     let room = Room::with_device(&ctx);
     let scene_need = args.scene.check_memory(&room, usage)?;
@@ -70,11 +63,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let view_cameras =
         args.views.iter().map(|v| views::view_camera(args, &scene, v)).collect::<Result<Vec<Camera>>>()?;
-    let root = match &args.shader_dir {
-        Some(dir) => ShaderRoot::Directory(dir.clone()),
-        None => ShaderRoot::from_env(),
-    };
-    let shaders = ShaderCompiler::new(root)?;
+    let shaders = args.gpu.shaders()?;
     if let Some(n) = args.reference {
         // Refuse a reference the device cannot render before rendering anything.
         reference_render_size(&ctx, (width, height), n)?;

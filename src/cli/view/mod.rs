@@ -15,7 +15,7 @@ use super::args::ViewArgs;
 use super::paths;
 use super::watch::FileWatch;
 use choices::GraphChoice;
-use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
+use cullgraph::gpu::{ContextOptions, GpuContext, ShaderCompiler};
 use cullgraph::render::{RenderSettings, Renderer};
 use cullgraph::scene::procedural::traffic::Traffic;
 use cullgraph::scene::world::World;
@@ -51,9 +51,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     if let Some(shot) = &args.screenshot {
         paths::output_file("--screenshot", shot)?;
     }
-    if let Some(dir) = &args.shader_dir {
-        paths::input_dir("--shader-dir", dir)?;
-    }
+    args.gpu.check()?;
     let script = args.script.as_deref().map(Script::load).transpose()?;
     GraphChoice::new(args.graph.as_deref())?.spec(&args.params)?;
     let _: cullgraph::scene::SceneSource = args.scene.scene.parse()?;
@@ -219,11 +217,9 @@ impl Viewer {
             .map(|&p| unsafe { CStr::from_ptr(p) }.to_owned())
             .collect();
         let ctx = GpuContext::new(&ContextOptions {
-            device: DeviceSelector::or_from_env(args.device.as_deref().map(|d| d.parse().unwrap_or_default())),
-            validation: args.validation || ContextOptions::default().validation,
-            app_name: "cullgraph view".into(),
             instance_extensions,
             device_extensions: vec![CString::from(ash::khr::swapchain::NAME)],
+            ..args.gpu.context_options("cullgraph view")
         })?;
         let size = window.inner_size();
         let (width, height) = (size.width.max(1), size.height.max(1));
@@ -245,11 +241,7 @@ impl Viewer {
         }
         let instances = scene.instances.len();
         let (world, _) = World::new(scene)?;
-        let root = match &args.shader_dir {
-            Some(dir) => ShaderRoot::Directory(dir.clone()),
-            None => ShaderRoot::from_env(),
-        };
-        let shaders = ShaderCompiler::new(root)?;
+        let shaders = args.gpu.shaders()?;
         let mut graphs = GraphChoice::new(args.graph.as_deref())?;
         graphs.overlay = args.overlay;
         let spec = graphs.spec(&args.params)?;

@@ -210,7 +210,10 @@ impl Presenter {
         screenshot: bool,
     ) -> Result<Presented> {
         let mut out = Presented::default();
-        let device = self.ctx.device().clone();
+        // A handle on the context (an Arc), so that the device outlives the borrows of `self`
+        // below without copying its function table every frame.
+        let ctx = self.ctx.clone();
+        let device = ctx.device();
         let at = self.next;
         // SAFETY: the fence belongs to this device.
         unsafe { device.wait_for_fences(&[self.slots[at].fence], true, u64::MAX) }.vk("vkWaitForFences")?;
@@ -266,10 +269,10 @@ impl Presenter {
             vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1);
         let transfer_dst = Access::TRANSFER_WRITE;
         let undefined = Access { stage: vk::PipelineStageFlags2::ALL_TRANSFER, ..Access::NONE };
-        cmd_barriers(&device, slot.cmd, &[], &[image_barrier_raw(target, range, undefined, transfer_dst)]);
+        cmd_barriers(device, slot.cmd, &[], &[image_barrier_raw(target, range, undefined, transfer_dst)]);
         match (&recorded, renderer.output()) {
             (Ok(_), Some((output, state))) => {
-                cmd_barriers(&device, slot.cmd, &[], &[image_barrier(output, state, Access::TRANSFER_READ)]);
+                cmd_barriers(device, slot.cmd, &[], &[image_barrier(output, state, Access::TRANSFER_READ)]);
                 let src = output.extent();
                 let blit = vk::ImageBlit::default()
                     .src_subresource(color_layers())
@@ -290,7 +293,7 @@ impl Presenter {
                     )
                 };
                 // Back to the state the renderer last left it in, for its next frame's barriers.
-                cmd_barriers(&device, slot.cmd, &[], &[image_barrier(output, Access::TRANSFER_READ, state)]);
+                cmd_barriers(device, slot.cmd, &[], &[image_barrier(output, Access::TRANSFER_READ, state)]);
             }
             _ => {
                 let clear = vk::ClearColorValue { float32: [0.05, 0.05, 0.07, 1.0] };
@@ -335,7 +338,7 @@ impl Presenter {
                 offset += bytes.len() as u64;
             }
             // The panels are copied over the blit: a write after a write.
-            cmd_barriers(&device, slot.cmd, &[], &[image_barrier_raw(target, range, transfer_dst, transfer_dst)]);
+            cmd_barriers(device, slot.cmd, &[], &[image_barrier_raw(target, range, transfer_dst, transfer_dst)]);
             if !regions.is_empty() {
                 // SAFETY: the image is in TRANSFER_DST layout; the regions lie inside it and
                 // inside the staging buffer.
@@ -357,7 +360,7 @@ impl Presenter {
         };
         let shot = screenshot.then(|| record_readback(&self.ctx, self.extent, slot.cmd, target, range)).transpose()?;
         let last = if shot.is_some() { Access::TRANSFER_READ } else { transfer_dst };
-        cmd_barriers(&device, slot.cmd, &[], &[image_barrier_raw(target, range, last, present_src)]);
+        cmd_barriers(device, slot.cmd, &[], &[image_barrier_raw(target, range, last, present_src)]);
         // SAFETY: the command buffer is recording.
         unsafe { device.end_command_buffer(slot.cmd) }.vk("vkEndCommandBuffer")?;
         // SAFETY: the fence is signalled and no submission uses it (waited on above).
