@@ -269,7 +269,10 @@ fn absurd_parameters_are_refused_by_name() {
         }
     }
     let e = procedural::generate("x", &LoadOptions::default()).unwrap_err().to_string();
-    assert_eq!(e, "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field, builtin:crowd");
+    assert_eq!(
+        e,
+        "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field, builtin:crowd, builtin:dense"
+    );
 }
 
 #[test]

@@ -76,6 +76,9 @@ pub struct MeshData {
     pub morph_targets: Vec<MorphTarget>,
     /// Default weights of the morph targets (glTF mesh `weights`); missing ones are 0.
     pub morph_weights: Vec<f32>,
+    /// Never simplified: the mesh gets no levels of detail and is drawn whole at any distance
+    /// (a prop whose silhouette matters).
+    pub no_lod: bool,
 }
 
 impl MeshData {

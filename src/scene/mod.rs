@@ -13,6 +13,7 @@ pub mod deform;
 pub mod error;
 pub mod gltf_import;
 pub mod light_faces;
+pub mod lod;
 pub mod merge;
 pub mod mesh;
 pub mod pool_ranges;
@@ -31,6 +32,7 @@ pub use camera::Camera;
 pub use camera_path::CameraPath;
 pub use deform::{MeshDeform, MorphTarget};
 pub use error::SceneError;
+pub use lod::{LodLevel, MAX_LOD_LEVELS};
 pub use mesh::{decode_octahedral, encode_octahedral, encode_tangent, MeshData, MeshParts, Vertex};
 pub use projection::{Projection, ProjectionParts};
 pub use source::SceneSource;
@@ -90,6 +92,10 @@ pub struct Mesh {
     /// How the mesh deforms (skin influences, morph targets); `None` for a rigid mesh. Its
     /// `bounds` and `sphere` are those of the rest shape.
     pub deform: Option<std::sync::Arc<deform::MeshDeform>>,
+    /// Simplified levels of detail, coarser and coarser ([`lod`]); empty for a mesh that is
+    /// always drawn whole (small, deformed, registered on a live world, or
+    /// [`MeshData::no_lod`]).
+    pub lods: Vec<LodLevel>,
 }
 
 /// Surface parameters of the shading model (glTF metallic-roughness): factors, each multiplied
@@ -317,9 +323,40 @@ impl Scene {
     /// Appends a mesh to the pools; validates indices and normals and computes bounds.
     ///
     /// `place` names the mesh in errors (e.g. `mesh 'wall' primitive 0 (accessor 3)`).
+    ///
+    /// The mesh gets its chain of levels of detail ([`lod`]) unless it is deformed or
+    /// [`MeshData::no_lod`] says not to.
     pub fn add_mesh(&mut self, name: &str, data: &MeshData, place: &str) -> Result<u32, SceneError> {
         let at = MeshPlace { vertex: self.vertices.len(), index: self.indices.len(), slot: None };
-        self.put_mesh(name, data, place, at)
+        let mesh = self.put_mesh(name, data, place, at)?;
+        if !data.no_lod {
+            self.add_lod_chain(mesh, place)?;
+        }
+        Ok(mesh)
+    }
+
+    /// Builds mesh `mesh`'s levels of detail and appends their indices to the index pool.
+    fn add_lod_chain(&mut self, mesh: u32, place: &str) -> Result<(), SceneError> {
+        let m = &self.meshes[mesh as usize];
+        if m.deform.is_some() {
+            return Ok(());
+        }
+        let vertices = &self.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
+        let indices = &self.indices[m.first_index as usize..(m.first_index + m.index_count) as usize];
+        let chain = lod::build_chain(vertices, indices);
+        let more: usize = chain.iter().map(|(i, _)| i.len()).sum();
+        self.indices
+            .try_reserve(more)
+            .map_err(|_| SceneError::invalid(place, format!("cannot allocate memory for {more} more indices")))?;
+        let mut lods = Vec::with_capacity(chain.len());
+        for (indices, error) in chain {
+            let first_index =
+                u32::try_from(self.indices.len()).map_err(|_| SceneError::too_large(place, "index pool"))?;
+            lods.push(LodLevel { first_index, index_count: indices.len() as u32, error });
+            self.indices.extend_from_slice(&indices);
+        }
+        self.meshes[mesh as usize].lods = lods;
+        Ok(())
     }
 
     /// Writes a mesh's vertices and indices at `at` in the pools (growing them where it runs
@@ -357,6 +394,7 @@ impl Scene {
             bounds,
             sphere,
             deform,
+            lods: Vec::new(),
         };
         // Pools of millions of entries: a failed allocation is this mesh's error, not an abort.
         let no_memory =

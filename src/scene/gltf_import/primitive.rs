@@ -122,6 +122,7 @@ pub(super) fn convert(primitive: &Primitive<'_>, buffers: &[Vec<u8>], place: &st
         weights,
         morph_targets,
         morph_weights: Vec::new(),
+        no_lod: false,
     };
     // Normals that contradict the faces (all +Y on walls, say) would light the mesh as if it
     // were flat; recompute them from the faces and say so.

@@ -5,6 +5,8 @@
 //! - `builtin:field`: many distinct mesh kinds scattered with random rotations and scales,
 //!   mirrored ones included ([`field`]).
 //! - `builtin:crowd`: skinned stalks swaying through a clip, for posed instances ([`crowd`]).
+//! - `builtin:dense`: sculpted props of 50 000 to 100 000 triangles each, for levels of
+//!   detail ([`dense`]).
 //!
 //! [`traffic`] drives vehicles through a world made from the city.
 //!
@@ -13,6 +15,7 @@
 
 pub mod city;
 pub mod crowd;
+pub mod dense;
 pub mod field;
 pub mod lights;
 pub mod shapes;
@@ -24,7 +27,7 @@ use super::{Instance, Material, Scene};
 use glam::Vec3;
 
 /// Names of the built-in scenes.
-pub const AVAILABLE: &[&str] = &["builtin:city", "builtin:field", "builtin:crowd"];
+pub const AVAILABLE: &[&str] = &["builtin:city", "builtin:field", "builtin:crowd", "builtin:dense"];
 /// Largest accepted `instances` option: the most a scene may hold.
 pub const MAX_INSTANCES: usize = super::validate::MAX_INSTANCES;
 /// Largest accepted `kinds` option.
@@ -38,6 +41,7 @@ pub fn generate(name: &str, options: &LoadOptions) -> Result<Scene, SceneError> 
         "city" => city::generate(options),
         "field" => field::generate(options),
         "crowd" => crowd::generate(options),
+        "dense" => dense::generate(options),
         other => Err(SceneError::Builtin(format!(
             "unknown built-in scene 'builtin:{other}'; available: {}",
             AVAILABLE.join(", ")
@@ -84,7 +88,10 @@ mod tests {
     #[test]
     fn unknown_names_list_the_available_scenes() {
         let e = generate("x", &LoadOptions::default()).unwrap_err().to_string();
-        assert_eq!(e, "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field, builtin:crowd");
+        assert_eq!(
+            e,
+            "unknown built-in scene 'builtin:x'; available: builtin:city, builtin:field, builtin:crowd, builtin:dense"
+        );
         let e = generate("builtin:nope", &LoadOptions::default()).unwrap_err().to_string();
         assert!(e.contains("'builtin:nope'"), "{e}");
     }
