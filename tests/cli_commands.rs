@@ -109,7 +109,35 @@ fn bench_writes_speed_against_error_as_json_markdown_and_plots() {
 
     let (code, _, err) = run(&["bench", "--suites", "culling,speed", "--out", out]);
     assert_eq!(code, 1);
-    assert!(err.contains("unknown suite 'speed' (known: culling, hiz, msaa, dynamic, views, shadows)"), "{err}");
+    assert!(err.contains("unknown suite 'speed' (known: culling, hiz, msaa, dynamic, views, shadows, lod)"), "{err}");
+}
+
+#[test]
+fn bench_lod_reports_speed_against_error_per_threshold() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().to_str().unwrap();
+    let args =
+        ["bench", "--suites", "lod", "--lod-scenes", "builtin:dense@6", "--lod-thresholds", "2", "--size", "48x27"];
+    let (code, _, err) =
+        run(&[&args[..], &["--warmup", "0", "--frames", "1", "--reference", "2", "--out", out]].concat());
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("bench.json")).unwrap()).unwrap();
+    let rows = json["lod"]["rows"].as_array().unwrap();
+    // Threshold 0 is measured first, as the full detail the others are compared with.
+    let thresholds: Vec<f64> = rows.iter().map(|r| r["threshold"].as_f64().unwrap()).collect();
+    assert_eq!(thresholds, [0.0, 2.0]);
+    let triangles: Vec<u64> = rows.iter().map(|r| r["triangles"].as_u64().unwrap()).collect();
+    assert!(triangles[1] * 3 <= triangles[0], "{triangles:?}");
+    assert_eq!(rows[0]["flip_vs_full"].as_f64(), Some(0.0));
+    // Full detail supersampled is the reference itself.
+    assert_eq!(rows[0]["flip_vs_full_supersampled"].as_f64(), Some(0.0));
+    assert!(rows.iter().all(|r| r["flip_vs_reference"].as_f64().is_some_and(|f| f > 0.0 && f < 1.0)));
+    let svg = std::fs::read_to_string(tmp.path().join("lod.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("builtin:dense@6"));
+    let (code, _, err) = run(&["bench", "--suites", "lod", "--lod-scenes", "builtin:dense@x", "--out", out]);
+    assert_eq!(code, 1);
+    assert!(err.contains("--lod-scenes: 'x' in 'builtin:dense@x' is not an instance count"), "{err}");
 }
 
 #[test]

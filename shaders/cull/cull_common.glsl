@@ -45,10 +45,29 @@ struct DrawGroup {
     uint index_count;
     uint first_index;
     int vertex_offset;
-    uint pad0;
-    uint pad1;
-    uint pad2;
+    uint lod_first;       // the group's first level past the full mesh in the level table
+    uint lod_count;       // its levels past the full mesh (0: always drawn whole)
+    uint pad;
 };
+
+// One level of detail past the full mesh (GpuLodLevel in src/passes/shared/cull_data.rs).
+struct LodLevel {
+    uint first_index;
+    uint index_count;
+    float relative_error; // object-space error / the mesh's cull radius (times an instance's cull radius: world units)
+    uint pad;
+};
+
+// Levels of detail (LOD): the test step chooses a level for each slot it draws or finds visible
+// and stores it in three bit planes; each list is compacted level after level (level-major,
+// then slot order), so each (level, group) pair's survivors are one slice and get one command.
+// A group's counts are at [level * group_count + group]. Without LOD there is one level.
+#ifdef LOD
+#define LOD_LEVELS 8u
+#else
+#define LOD_LEVELS 1u
+#endif
+#define LOD_PLANES 3u
 
 struct DrawCommand {     // VkDrawIndexedIndirectCommand
     uint index_count;
@@ -68,7 +87,7 @@ struct CullStats {
     uint triangles_lo;      // triangles drawn, low 32 bits
     uint triangles_hi;      // high 32 bits
     uint survivors;         // instances whose visibility bit this pass set (late phase)
-    uint pad[8];
+    uint level_instances[8];// instances drawn at each level of detail (all at 0 without LOD)
 };
 
 #define FLAG_OCCLUDER 1u
@@ -94,12 +113,18 @@ bool record_empty(CullRecord r) { return ((r.group_flags >> 24) & FLAG_EMPTY_SLO
 #define SCRATCH_PLACE_RUN 1
 #define SCRATCH_HEADER 8u
 // Words of one superblock record, and their meaning (atomic sums over its blocks).
-#define SUPER_WORDS 8u
 #define SUPER_SURVIVORS 0u      // instances drawn by this pass
 #define SUPER_TESTED 1u         // instances evaluated
 #define SUPER_FRUSTUM 2u        // of those, outside the frustum
 #define SUPER_OCCLUSION 3u      // inside the frustum, behind the Hi-Z
 #define SUPER_VISIBLE 4u        // visibility bits set (late phase)
+#ifdef LOD
+// Then, per list (0: drawn, 1: visible), its slots at each level.
+#define SUPER_WORDS 24u
+#define SUPER_LEVEL(list, level) (8u + (list) * LOD_LEVELS + (level))
+#else
+#define SUPER_WORDS 8u
+#endif
 uint scratch_super(uint superblocks, uint run, uint s) {
     return SCRATCH_HEADER + ((run & 1u) * superblocks + s) * SUPER_WORDS;
 }
@@ -111,5 +136,13 @@ uint scratch_visible_block(uint superblocks, uint slot_count, uint b) {
     uint blocks = max(1u, (slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
     return scratch_block(superblocks, blocks + b);
 }
+#ifdef LOD
+// After the visible counts (LOD): per list (0: drawn, 1: visible), block and level, the block's
+// slots of that list at that level.
+uint scratch_level_block(uint superblocks, uint slot_count, uint list, uint b, uint level) {
+    uint blocks = max(1u, (slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
+    return scratch_block(superblocks, 2u * blocks + (list * blocks + b) * LOD_LEVELS + level);
+}
+#endif
 
 #endif

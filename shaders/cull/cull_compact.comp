@@ -41,6 +41,10 @@ layout(set = 0, binding = 6, scalar) writeonly buffer Commands { DrawCommand com
 layout(set = 0, binding = 7) writeonly buffer DrawCount { uint draw_count[FACE_CULL_REGIONS]; };
 layout(set = 0, binding = 8, scalar) writeonly buffer Stats { CullStats stats; };
 
+#ifdef LOD
+layout(set = 0, binding = 14, scalar) readonly buffer LodLevels { LodLevel lod_levels[]; };
+layout(set = 0, binding = 15) readonly buffer LevelBits { uint level_bits[]; };
+#endif
 #ifdef VISIBLE_OUT
 layout(set = 0, binding = 9) readonly buffer VisNow { uint vis_now[]; };
 layout(set = 0, binding = 10) writeonly buffer VisibleIds { uint visible_ids[]; };
@@ -70,6 +74,11 @@ shared uint sh_before[2];
 // Writing the commands.
 shared uvec4 sh_scan[THREADS];
 shared uint sh_totals[8];
+// Per list (0: drawn, 1: visible) and level, its slots this run (LOD); whether any list has
+// slots at a level.
+shared uint sh_level_totals[2][LOD_LEVELS];
+shared uint sh_level_used[LOD_LEVELS];
+
 
 // Bits of `sh_words[which]` below bit `k` of the block (0..CULL_BLOCK).
 uint local_before(uint which, uint k) {
@@ -81,6 +90,75 @@ uint local_before(uint which, uint k) {
 }
 
 bool bit_set(uint which, uint k) { return ((sh_words[which][k >> 5u] >> (k & 31u)) & 1u) != 0u; }
+
+#ifdef LOD
+// The block's level bit planes, and per list and level the slots placed before the block.
+shared uint sh_planes[LOD_PLANES][CULL_WORDS_PER_BLOCK];
+shared uint sh_level_before[2][LOD_LEVELS];
+
+// Word `w` of the block's slots at `level`.
+uint level_mask(uint w, uint level) {
+    uint mask = ~0u;
+    for (uint p = 0u; p < LOD_PLANES; ++p) mask &= ((level >> p) & 1u) != 0u ? sh_planes[p][w] : ~sh_planes[p][w];
+    return mask;
+}
+
+uint level_of(uint k) {
+    uint level = 0u;
+    for (uint p = 0u; p < LOD_PLANES; ++p) level |= ((sh_planes[p][k >> 5u] >> (k & 31u)) & 1u) << p;
+    return level;
+}
+
+// Bits of `sh_words[which]` at `level` below bit `k` of the block.
+uint local_before_at(uint which, uint k, uint level) {
+    uint count = 0u;
+    for (uint w = 0u; w < (k >> 5u); ++w) count += bitCount(sh_words[which][w] & level_mask(w, level));
+    uint bit = k & 31u;
+    if (bit != 0u) count += bitCount(sh_words[which][k >> 5u] & level_mask(k >> 5u, level) & ((1u << bit) - 1u));
+    return count;
+}
+
+// Per list and level, the slots before block `block`, in the level-major order: all slots of
+// lower levels, then this level's in slot order. Called in uniform control flow, after `barrier`.
+void sum_levels_before(uint block, uint run) {
+    uint lane = gl_LocalInvocationIndex;
+    uint super_index = block / CULL_SUPERBLOCK;
+    // [list][level]: this level's slots before the block; the level's slots in all blocks.
+    uint before[2][LOD_LEVELS], total[2][LOD_LEVELS];
+    for (uint list = 0u; list < 2u; ++list) {
+        for (uint l = 0u; l < LOD_LEVELS; ++l) {
+            before[list][l] = 0u;
+            total[list][l] = 0u;
+        }
+    }
+    for (uint s = lane; s < pc.superblocks; s += THREADS) {
+        uint at = scratch_super(pc.superblocks, run, s);
+        for (uint list = 0u; list < 2u; ++list) {
+            for (uint l = 0u; l < LOD_LEVELS; ++l) {
+                uint n = scratch[at + SUPER_LEVEL(list, l)];
+                total[list][l] += n;
+                if (s < super_index) before[list][l] += n;
+            }
+        }
+    }
+    for (uint k = super_index * CULL_SUPERBLOCK + lane; k < block; k += THREADS) {
+        for (uint list = 0u; list < 2u; ++list) {
+            for (uint l = 0u; l < LOD_LEVELS; ++l) {
+                before[list][l] += scratch[scratch_level_block(pc.superblocks, pc.slot_count, list, k, l)];
+            }
+        }
+    }
+    // Each level starts after every slot of the levels below it.
+    for (uint list = 0u; list < 2u; ++list) {
+        uint lower = 0u;
+        for (uint l = 0u; l < LOD_LEVELS; ++l) {
+            uint sum = subgroupAdd(before[list][l] + lower);
+            lower += total[list][l];
+            if (subgroupElect() && sum != 0u) atomicAdd(sh_level_before[list][l], sum);
+        }
+    }
+}
+#endif
 
 // Places block `block`'s survivors (and with VISIBLE_OUT its visible slots). Called in uniform
 // control flow.
@@ -104,6 +182,27 @@ void place_block(uint block, uint run) {
 #endif
     }
     if (lane < 2u) sh_before[lane] = 0u;
+#ifdef LOD
+    if (lane < LOD_PLANES * CULL_WORDS_PER_BLOCK) {
+        uint p = lane / CULL_WORDS_PER_BLOCK, w = lane % CULL_WORDS_PER_BLOCK;
+        uint blocks = max(1u, (pc.slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
+        sh_planes[p][w] = level_bits[p * blocks * CULL_WORDS_PER_BLOCK + block * CULL_WORDS_PER_BLOCK + w];
+    }
+    if (lane < 2u * LOD_LEVELS) sh_level_before[lane / LOD_LEVELS][lane % LOD_LEVELS] = 0u;
+    barrier();
+    sum_levels_before(block, run);
+    barrier();
+    uint slot = block * CULL_BLOCK + lane;
+    uint level = level_of(lane);
+    if (bit_set(0u, lane)) {
+        draw_ids[sh_level_before[0][level] + local_before_at(0u, lane, level)] = slot_instances[slot];
+    }
+#ifdef VISIBLE_OUT
+    if (bit_set(1u, lane)) {
+        visible_ids[sh_level_before[1][level] + local_before_at(1u, lane, level)] = slot_instances[slot];
+    }
+#endif
+#else
     uint super_index = block / CULL_SUPERBLOCK;
     uvec2 sum = uvec2(0u);
     for (uint s = lane; s < super_index; s += THREADS) {
@@ -132,6 +231,7 @@ void place_block(uint block, uint run) {
 #ifdef VISIBLE_OUT
     if (bit_set(1u, lane)) visible_ids[sh_before[1] + local_before(1u, lane)] = slot_instances[slot];
 #endif
+#endif
 }
 
 // Scan of one value per invocation in invocation order (four sums at once); returns the
@@ -159,8 +259,8 @@ uvec4 workgroup_exclusive_scan(uvec4 value, out uvec4 total) {
 #define TOTAL_VISIBLE 3
 #define TOTAL_TRIANGLES 5   // three words: triangle count bits 0-23, 24-47, 48-63
 
-// A group's count in `group_counts` (survivors at g, visible slots at `group_count + g`),
-// zeroed for the next run.
+// A group's count in `group_counts` (survivors of group g at level l at
+// `l * group_count + g`, then the visible slots the same way), zeroed for the next run.
 uint take_group_count(uint at) {
     uint count = group_counts[at];
     if (count != 0u) group_counts[at] = 0u;
@@ -194,53 +294,68 @@ uint command_index(ListTotals t, uint r, uint packed_before) {
     return pc.region_first[r] + t.written[r] + region_counts(packed_before)[r];
 }
 
-// A group's command for `count` instances from `first_instance` on; adds its triangles to `t`.
-DrawCommand group_command(DrawGroup group, uint count, uint first_instance, inout ListTotals t) {
+// A group's command at level `level` for `count` instances from `first_instance` on; adds its
+// triangles to `t`.
+DrawCommand group_command(DrawGroup group, uint level, uint count, uint first_instance, inout ListTotals t) {
     DrawCommand cmd;
     cmd.index_count = group.index_count;
-    cmd.instance_count = count;
     cmd.first_index = group.first_index;
+#ifdef LOD
+    if (level != 0u) {
+        LodLevel l = lod_levels[group.lod_first + level - 1u];
+        cmd.index_count = l.index_count;
+        cmd.first_index = l.first_index;
+    }
+#endif
+    cmd.instance_count = count;
     cmd.vertex_offset = group.vertex_offset;
     cmd.first_instance = first_instance;
-    t.triangles += uint64_t(group.index_count / 3u) * uint64_t(count);
+    t.triangles += uint64_t(cmd.index_count / 3u) * uint64_t(count);
     return cmd;
 }
 
-// One command per non-empty group, in group order, for this run's survivors (`commands`) and,
-// with VISIBLE_OUT, for the visible list (`list_commands`), from one scan of both counts; every
-// count back to zero. Called in uniform control flow.
+// One command per non-empty group and level, level after level and in group order within a
+// level, for this run's survivors (`commands`) and, with VISIBLE_OUT, for the visible list
+// (`list_commands`), from one scan of both counts; every count back to zero. Levels that no
+// slot took (`sh_level_used`) are skipped. Called in uniform control flow.
 void write_group_commands(out ListTotals drawn, out ListTotals listed) {
     uint lane = gl_LocalInvocationIndex;
     drawn = ListTotals(0u, uvec4(0u), 0ul);
     listed = ListTotals(0u, uvec4(0u), 0ul);
-    for (uint chunk = 0u; chunk < pc.group_count; chunk += CHUNK_GROUPS) {
-        uint g = chunk + lane;
-        uint count = 0u, visible = 0u;
-        DrawGroup group;
-        if (lane < CHUNK_GROUPS && g < pc.group_count) {
-            count = take_group_count(g);
-#ifdef VISIBLE_OUT
-            visible = take_group_count(pc.group_count + g);
+    for (uint level = 0u; level < LOD_LEVELS; ++level) {
+#ifdef LOD
+        if (sh_level_used[level] == 0u) continue;
 #endif
-            if (count != 0u || visible != 0u) group = groups[g];
-        }
-        uint r = region_of(g);
-        uvec4 total;
-        uvec4 before = workgroup_exclusive_scan(
-            uvec4(count, count != 0u ? region_term(r) : 0u, visible, visible != 0u ? region_term(r) : 0u), total);
-        if (count != 0u) {
-            commands[command_index(drawn, r, before.y)] = group_command(group, count, drawn.placed + before.x, drawn);
-        }
+        for (uint chunk = 0u; chunk < pc.group_count; chunk += CHUNK_GROUPS) {
+            uint g = chunk + lane;
+            uint count = 0u, visible = 0u;
+            DrawGroup group;
+            if (lane < CHUNK_GROUPS && g < pc.group_count) {
+                count = take_group_count(level * pc.group_count + g);
 #ifdef VISIBLE_OUT
-        if (visible != 0u) {
-            list_commands[command_index(listed, r, before.w)] =
-                group_command(group, visible, listed.placed + before.z, listed);
-        }
+                visible = take_group_count((LOD_LEVELS + level) * pc.group_count + g);
 #endif
-        drawn.placed += total.x;
-        drawn.written += region_counts(total.y);
-        listed.placed += total.z;
-        listed.written += region_counts(total.w);
+                if (count != 0u || visible != 0u) group = groups[g];
+            }
+            uint r = region_of(g);
+            uvec4 total;
+            uvec4 before = workgroup_exclusive_scan(
+                uvec4(count, count != 0u ? region_term(r) : 0u, visible, visible != 0u ? region_term(r) : 0u), total);
+            if (count != 0u) {
+                commands[command_index(drawn, r, before.y)] =
+                    group_command(group, level, count, drawn.placed + before.x, drawn);
+            }
+#ifdef VISIBLE_OUT
+            if (visible != 0u) {
+                list_commands[command_index(listed, r, before.w)] =
+                    group_command(group, level, visible, listed.placed + before.z, listed);
+            }
+#endif
+            drawn.placed += total.x;
+            drawn.written += region_counts(total.y);
+            listed.placed += total.z;
+            listed.written += region_counts(total.w);
+        }
     }
 }
 
@@ -259,7 +374,7 @@ uint64_t workgroup_triangles(uint64_t triangles) {
 }
 
 CullStats stats_record(uint tested, uint frustum, uint occlusion, uint drawn, uint draws, uint64_t triangles,
-                       uint survivors) {
+                       uint survivors, uint list) {
     CullStats s;
     s.tested = tested;
     s.frustum_culled = frustum;
@@ -269,7 +384,12 @@ CullStats stats_record(uint tested, uint frustum, uint occlusion, uint drawn, ui
     s.triangles_lo = uint(triangles);
     s.triangles_hi = uint(triangles >> 32);
     s.survivors = survivors;
-    for (uint i = 0u; i < 8u; ++i) s.pad[i] = 0u;
+    for (uint i = 0u; i < 8u; ++i) s.level_instances[i] = 0u;
+#ifdef LOD
+    for (uint i = 0u; i < LOD_LEVELS; ++i) s.level_instances[i] = sh_level_totals[list][i];
+#else
+    s.level_instances[0] = drawn;
+#endif
     return s;
 }
 
@@ -286,6 +406,31 @@ void write_commands() {
         counters += uvec4(scratch[at + SUPER_TESTED], scratch[at + SUPER_FRUSTUM], scratch[at + SUPER_OCCLUSION],
                           scratch[at + SUPER_VISIBLE]);
     }
+#ifdef LOD
+    if (lane < 2u * LOD_LEVELS) sh_level_totals[lane / LOD_LEVELS][lane % LOD_LEVELS] = 0u;
+    barrier();
+    uint level_sums[2][LOD_LEVELS];
+    for (uint list = 0u; list < 2u; ++list) {
+        for (uint l = 0u; l < LOD_LEVELS; ++l) level_sums[list][l] = 0u;
+    }
+    for (uint s = lane; s < pc.superblocks; s += THREADS) {
+        uint at = scratch_super(pc.superblocks, run, s);
+        for (uint list = 0u; list < 2u; ++list) {
+            for (uint l = 0u; l < LOD_LEVELS; ++l) level_sums[list][l] += scratch[at + SUPER_LEVEL(list, l)];
+        }
+    }
+    for (uint list = 0u; list < 2u; ++list) {
+        for (uint l = 0u; l < LOD_LEVELS; ++l) {
+            uint sum = subgroupAdd(level_sums[list][l]);
+            if (subgroupElect() && sum != 0u) atomicAdd(sh_level_totals[list][l], sum);
+        }
+    }
+    barrier();
+    if (lane < LOD_LEVELS) sh_level_used[lane] = sh_level_totals[0][lane] | sh_level_totals[1][lane];
+    // Read before the next run's half is zeroed below (the halves alternate, so not this one),
+    // and before write_group_commands reads sh_level_used.
+    barrier();
+#endif
     // The next run's half back to zero (its last readers finished in the previous run).
     uint next = scratch_super(pc.superblocks, run + 1u, 0u);
     for (uint i = lane; i < pc.superblocks * SUPER_WORDS; i += THREADS) scratch[next + i] = 0u;
@@ -300,7 +445,7 @@ void write_commands() {
     if (lane == 0u) {
         for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) draw_count[r] = drawn.written[r];
         stats = stats_record(sh_totals[TOTAL_TESTED], sh_totals[TOTAL_FRUSTUM], sh_totals[TOTAL_OCCLUSION], drawn.placed,
-                             commands_of(drawn), triangles, sh_totals[TOTAL_VISIBLE]);
+                             commands_of(drawn), triangles, sh_totals[TOTAL_VISIBLE], 0u);
         // Nothing reads this word in this dispatch: the next run's test step does.
         scratch[SCRATCH_TEST_RUN] = run + 1u;
     }
@@ -313,7 +458,7 @@ void write_commands() {
     uint64_t list_triangles = workgroup_triangles(listed.triangles);
     if (lane == 0u) {
         for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) list_count[r] = listed.written[r];
-        list_stats = stats_record(0u, 0u, 0u, listed.placed, commands_of(listed), list_triangles, 0u);
+        list_stats = stats_record(0u, 0u, 0u, listed.placed, commands_of(listed), list_triangles, 0u, 1u);
     }
 #endif
 }

@@ -34,7 +34,7 @@ void main() {
         s.triangles_lo = 0u;
         s.triangles_hi = 0u;
         s.survivors = 0u;
-        for (uint i = 0u; i < 8u; ++i) s.pad[i] = 0u;
+        for (uint i = 0u; i < 8u; ++i) s.level_instances[i] = 0u;
         stats = s;
     }
     if (g >= pc.group_count) return;

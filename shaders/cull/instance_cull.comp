@@ -97,6 +97,11 @@ layout(set = 0, binding = 8) writeonly buffer Vis { uint vis_now[]; };
 layout(set = 0, binding = 9) uniform sampler2D hiz_tex;
 float hiz_load(uint level, uvec2 texel) { return texelFetch(hiz_tex, ivec2(texel), int(hiz_stored_mip(level))).r; }
 #endif
+#ifdef LOD
+layout(set = 0, binding = 12, scalar) readonly buffer LodLevels { LodLevel lod_levels[]; };
+// Each slot's level of detail as LOD_PLANES bit planes of ceil(slots / 256) * 8 words each.
+layout(set = 0, binding = 13) writeonly buffer LevelBits { uint level_bits[]; };
+#endif
 
 #endif
 
@@ -108,6 +113,7 @@ layout(push_constant) uniform Push {
     float occluder_size;       // smallest projected radius / view height
     uint occluder_triangles;   // meshes this cheap are candidates unflagged (0: flagged only)
     uint view_count;           // MULTI_VIEW: views in the table
+    float lod_threshold;       // LOD: the largest error a level may show, in pixels
 } pc;
 
 #ifdef MULTI_VIEW
@@ -124,6 +130,11 @@ shared uvec2 mv_pop[MAX_CULL_VIEWS][CULL_WORDS_PER_BLOCK];
 shared uint sh_draw[CULL_WORDS_PER_BLOCK];
 shared uint sh_vis[CULL_WORDS_PER_BLOCK];
 shared uint sh_counts[4];
+#ifdef LOD
+shared uint sh_planes[LOD_PLANES][CULL_WORDS_PER_BLOCK];
+// Per list (0: drawn, 1: visible) and level, the block's slots.
+shared uint sh_level_counts[2][LOD_LEVELS];
+#endif
 
 // ORs `bits` into the shared word `arr[word]`: one atomic per subgroup when the subgroup's
 // invocations share the word, one per invocation with bits otherwise (correct for any subgroup
@@ -228,6 +239,37 @@ bool is_occluder(CullRecord r, vec3 c, float radius) {
 }
 #endif
 
+#ifdef LOD
+// The most pixels that one world unit of displacement anywhere in the bound's visible part can
+// move on screen. Perspective: a displacement e at view depth z moves the projection by at most
+// |(e.x + t.x e.z, e.y + t.y e.z)| * pixels / z, where t is the projected point's tangent
+// (x/z, y/z), whose size the frustum bounds; the matrix [1 0 t.x; 0 1 t.y] stretches by at most
+// sqrt(1 + t.x^2 + t.y^2). Depth is at least the bound's nearest depth, and at least the near
+// plane for any point that is drawn.
+float lod_pixels_per_unit(CullView view, vec3 c, float radius) {
+    float pixels = 0.5 * max(view.scale.x * float(view.viewport.x), view.scale.y * float(view.viewport.y));
+    if (view.orthographic != 0u) return pixels;
+    float depth = -cull_to_view(view.rotation, c).z - radius;
+    vec2 t = (vec2(1.0) + abs(view.offset)) / view.scale;
+    return pixels * sqrt(1.0 + dot(t, t)) / max(depth, view.near);
+}
+
+// The coarsest level of `group`'s mesh whose error, projected conservatively, stays within the
+// threshold (0: the full mesh). Levels' errors never decrease along the chain.
+uint choose_level(CullView view, vec3 c, float radius, uint group) {
+    DrawGroup g = groups[group];
+    if (g.lod_count == 0u) return 0u;
+    float per_error = radius * lod_pixels_per_unit(view, c, radius);
+    uint level = 0u;
+    for (uint l = 0u; l < min(g.lod_count, LOD_LEVELS - 1u); ++l) {
+        // Not finite (a huge bound): false, so the full mesh.
+        if (!(lod_levels[g.lod_first + l].relative_error * per_error <= pc.lod_threshold)) break;
+        level = l + 1u;
+    }
+    return level;
+}
+#endif
+
 // What the pass decided for one slot.
 struct Decision {
     bool evaluated;
@@ -236,6 +278,7 @@ struct Decision {
     bool draw;
     bool visible_now;
     uint group;
+    uint level;           // LOD: the level of detail it is drawn (or listed) at
 };
 
 Decision decide(CullRecord r, bool evaluated, bool was_visible) {
@@ -246,6 +289,7 @@ Decision decide(CullRecord r, bool evaluated, bool was_visible) {
     d.draw = false;
     d.visible_now = false;
     d.group = 0u;
+    d.level = 0u;
     if (!evaluated) return d;
     d.group = record_group(r);
     float radius = record_radius(r);
@@ -299,8 +343,18 @@ Decision decide(CullRecord r, bool evaluated, bool was_visible) {
 #else
     d.draw = visible;
 #endif
+#ifdef LOD
+    if (d.draw || d.visible_now) d.level = choose_level(frame.cull_view, c, radius, d.group);
+#endif
     return d;
 }
+
+#ifndef ATOMIC_APPEND
+// Where a group's count at a level is in group_counts, for list 0 (drawn) or 1 (visible).
+uint group_count_at(uint list, uint group, uint level) {
+    return (list * LOD_LEVELS + level) * pc.group_count + group;
+}
+#endif
 
 // Decides and records one block of slots for the one view (MULTI_VIEW: cull_views).
 void cull_block(uint lane, uint block, uint slot) {
@@ -309,6 +363,10 @@ void cull_block(uint lane, uint block, uint slot) {
         sh_vis[lane] = 0u;
     }
     if (lane < 4u) sh_counts[lane] = 0u;
+#ifdef LOD
+    if (lane < LOD_PLANES * CULL_WORDS_PER_BLOCK) sh_planes[lane / CULL_WORDS_PER_BLOCK][lane % CULL_WORDS_PER_BLOCK] = 0u;
+    if (lane < 2u * LOD_LEVELS) sh_level_counts[lane / LOD_LEVELS][lane % LOD_LEVELS] = 0u;
+#endif
 #ifndef ATOMIC_APPEND
     uint run = scratch[SCRATCH_TEST_RUN];
 #endif
@@ -339,10 +397,17 @@ void cull_block(uint lane, uint block, uint slot) {
     uint bit = 1u << (lane & 31u);
 #ifndef ATOMIC_APPEND
     OR_INTO_SHARED(sh_draw, word, d.draw ? bit : 0u)
-    if (d.draw) count_group_survivor(d.group, 0u);
+    if (d.draw) count_group_survivor(group_count_at(0u, d.group, d.level), 0u);
 #endif
 #ifdef VISIBLE_OUT
-    if (d.visible_now) count_group_survivor(d.group, pc.group_count);
+    if (d.visible_now) count_group_survivor(group_count_at(1u, d.group, d.level), 0u);
+#endif
+#ifdef LOD
+    for (uint p = 0u; p < LOD_PLANES; ++p) {
+        OR_INTO_SHARED(sh_planes[p], word, ((d.level >> p) & 1u) != 0u ? bit : 0u)
+    }
+    if (d.draw) atomicAdd(sh_level_counts[0][d.level], 1u);
+    if (d.visible_now) atomicAdd(sh_level_counts[1][d.level], 1u);
 #endif
 #ifdef WRITE_VIS
     OR_INTO_SHARED(sh_vis, word, d.visible_now ? bit : 0u)
@@ -381,6 +446,20 @@ void cull_block(uint lane, uint block, uint slot) {
     }
 #else
     if (lane < CULL_WORDS_PER_BLOCK) draw_bits[block * CULL_WORDS_PER_BLOCK + lane] = sh_draw[lane];
+#ifdef LOD
+    uint blocks = max(1u, (pc.slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
+    if (lane < LOD_PLANES * CULL_WORDS_PER_BLOCK) {
+        uint p = lane / CULL_WORDS_PER_BLOCK, w = lane % CULL_WORDS_PER_BLOCK;
+        level_bits[p * blocks * CULL_WORDS_PER_BLOCK + block * CULL_WORDS_PER_BLOCK + w] = sh_planes[p][w];
+    }
+    if (lane < 2u * LOD_LEVELS) {
+        uint list = lane / LOD_LEVELS, level = lane % LOD_LEVELS;
+        uint n = sh_level_counts[list][level];
+        scratch[scratch_level_block(pc.superblocks, pc.slot_count, list, block, level)] = n;
+        uint at = scratch_super(pc.superblocks, run, block / CULL_SUPERBLOCK);
+        if (n != 0u) atomicAdd(scratch[at + SUPER_LEVEL(list, level)], n);
+    }
+#endif
     if (lane == 0u) {
         uint count = 0u;
         for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) count += bitCount(sh_draw[w]);

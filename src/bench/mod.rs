@@ -11,6 +11,9 @@
 //! - [`msaa`](crate::bench::msaa): speed against error of every anti-aliasing method (GPU ms, G-buffer memory, mean
 //!   FLIP and PSNR against a supersampled reference), the compressed G-buffer against its
 //!   baselines.
+//! - [`lod`](crate::bench::lod): levels of detail, speed against error: triangles, frame and
+//!   per-pass time, and image error against full detail and a supersampled reference, at each
+//!   threshold.
 //! - [`plot`](crate::bench::plot): SVG plots of the culling and MSAA figures.
 //! - [`views`](crate::bench::views): many views over one world in one frame, what each view
 //!   costs beside the shared scene, and resizing a view; with [`multiview`](crate::bench::multiview),
@@ -19,6 +22,7 @@
 pub mod culling;
 pub mod dynamic;
 pub mod hiz;
+pub mod lod;
 pub mod msaa;
 pub mod multiview;
 pub mod peer;

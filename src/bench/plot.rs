@@ -1,7 +1,8 @@
 //! The benchmarks' plots, as SVG text (`plotters`): culling time against scene size, and each
-//! MSAA method's frame time against its image error.
+//! MSAA method's frame time against its image error, and levels of detail likewise.
 
 use super::culling::CullingReport;
+use super::lod::LodReport;
 use super::msaa::MsaaReport;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -196,6 +197,68 @@ pub fn msaa_svg(report: &MsaaReport) -> crate::Result<Option<String>> {
                 .background_style(WHITE.mix(0.8))
                 .border_style(BLACK)
                 .draw()
+                .map_err(plot_error)?;
+        }
+        root.present().map_err(plot_error)?;
+    }
+    Ok(Some(svg))
+}
+
+/// Each scene's frame time against its image error at each level-of-detail threshold (error
+/// against the supersampled reference, or against full detail without one), the thresholds in
+/// order joined by a line: the points below and left of the others are the ones worth taking.
+pub fn lod_svg(report: &LodReport) -> crate::Result<Option<String>> {
+    let with_reference = report.rows.iter().any(|r| r.flip_vs_reference.is_some());
+    let error = |r: &super::lod::LodFigure| if with_reference { r.flip_vs_reference } else { r.flip_vs_full };
+    if report.rows.iter().all(|r| error(r).is_none()) {
+        return Ok(None);
+    }
+    let mut scenes: Vec<&str> = Vec::new();
+    for r in &report.rows {
+        if !scenes.contains(&r.scene.as_str()) {
+            scenes.push(&r.scene);
+        }
+    }
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (560 * scenes.len() as u32, 460)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error)?;
+        for (panel, scene) in root.split_evenly((1, scenes.len())).iter().zip(&scenes) {
+            let points: Vec<(f64, f64, f64)> = report
+                .rows
+                .iter()
+                .filter(|r| r.scene == *scene)
+                .filter_map(|r| error(r).map(|e| (r.frame_ms, e, r.threshold)))
+                .collect();
+            let x_range = log_range(points.iter().map(|p| p.0));
+            let flip_max = points.iter().map(|p| p.1).fold(0.0f64, f64::max).max(1e-4) * 1.15;
+            let mut chart = ChartBuilder::on(panel)
+                .caption(format!("{scene}: frame time against error"), ("sans-serif", 16))
+                .margin(12)
+                .x_label_area_size(36)
+                .y_label_area_size(64)
+                .build_cartesian_2d(x_range.log_scale(), 0.0..flip_max)
+                .map_err(plot_error)?;
+            let against = match report.reference_samples {
+                Some(n) if with_reference => format!("{n} spp reference"),
+                _ => "full detail".into(),
+            };
+            chart
+                .configure_mesh()
+                .x_desc("GPU ms per frame")
+                .x_label_formatter(&label)
+                .y_label_formatter(&label)
+                .y_desc(format!("mean FLIP against {against}"))
+                .draw()
+                .map_err(plot_error)?;
+            let color = PALETTE[0];
+            chart.draw_series(LineSeries::new(points.iter().map(|p| (p.0, p.1)), color)).map_err(plot_error)?;
+            chart
+                .draw_series(points.iter().map(|&(x, y, threshold)| {
+                    EmptyElement::at((x, y))
+                        + Circle::new((0, 0), 4, color.filled())
+                        + Text::new(format!("{} px", label(&threshold)), (6, -12), ("sans-serif", 11).into_font())
+                }))
                 .map_err(plot_error)?;
         }
         root.present().map_err(plot_error)?;

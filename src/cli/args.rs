@@ -31,7 +31,7 @@ pub enum Command {
     /// List the Vulkan devices the loader sees (index: name (type, API version)).
     Devices,
     /// Measure culling and Hi-Z speed with timestamp queries; write bench.json and bench.md.
-    Bench(BenchArgs),
+    Bench(Box<BenchArgs>),
     /// Check a render graph (RON), print its compiled plan, or export it as graphviz.
     Graph(GraphArgs),
     /// Fuzz the graph loader and compiler or the glTF importer for a while and report the
@@ -199,8 +199,16 @@ pub struct BenchArgs {
     /// Shadows suite: texels per side of each cascade's map.
     #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub shadow_resolution: u32,
-    /// MSAA and shadows suites: the reference's supersampling per axis (4: 16 samples per
-    /// pixel; 0: no image error).
+    /// Levels-of-detail suite: scenes, comma-separated (`builtin:NAME` or glTF files), each
+    /// optionally with `@INSTANCES`.
+    #[arg(long, value_delimiter = ',', default_values_t = ["builtin:dense".to_string(), "builtin:city".into()])]
+    pub lod_scenes: Vec<String>,
+    /// Levels-of-detail suite: thresholds in pixels, comma-separated (0 is always measured: the
+    /// full detail every other is compared with).
+    #[arg(long, value_delimiter = ',', default_values_t = cullgraph::bench::lod::DEFAULT_THRESHOLDS.to_vec(), value_parser = parse_lod_threshold)]
+    pub lod_thresholds: Vec<f64>,
+    /// MSAA, shadows and levels-of-detail suites: the reference's supersampling per axis (4: 16
+    /// samples per pixel; 0: no image error against a reference).
     #[arg(long, default_value_t = 4, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=64))]
     pub reference: u32,
     /// Masked materials keep all or none of a pixel's samples (a plain alpha test) instead of
@@ -475,6 +483,11 @@ pub struct RenderArgs {
     /// Shorthand for `--param debug_view=VIEW`: none, normals, albedo, depth, samples (distinct surfaces per pixel, MSAA graphs) or cascades (the lit image tinted by the shadow cascade of each pixel: red, green, blue, yellow from the nearest).
     #[arg(long, value_name = "VIEW")]
     pub debug_view: Option<String>,
+    /// Levels of detail: each drawn instance takes the coarsest level of its mesh whose error,
+    /// projected conservatively, is at most PX pixels (0: full meshes, the default). Shorthand
+    /// for `--param lod_threshold=PX` (the shipped culling graphs have it).
+    #[arg(long, value_name = "PX", value_parser = parse_lod_threshold, allow_hyphen_values = true)]
+    pub lod_threshold: Option<f64>,
     /// Keep rendering; recompile when the graph file or a shader changes (on error the last
     /// good graph keeps running and the error is printed). Stop with Ctrl-C.
     #[arg(long)]
@@ -645,6 +658,15 @@ pub fn parse_seconds(s: &str) -> Result<f64, String> {
         return Err(format!("{s} seconds is not between 0 and {MAX_SECONDS} (a day)"));
     }
     Ok(seconds)
+}
+
+/// Parses a level-of-detail threshold in pixels: a finite number from 0 to the kind's largest.
+fn parse_lod_threshold(s: &str) -> Result<f64, String> {
+    let most = cullgraph::passes::instance_cull::MAX_LOD_THRESHOLD;
+    match s.trim().parse::<f64>() {
+        Ok(px) if (0.0..=most).contains(&px) => Ok(px),
+        _ => Err(format!("'{s}' is not a threshold in pixels from 0 to {most}")),
+    }
 }
 
 /// Parses an MSAA sample count the bench measures: 2, 4 or 8.

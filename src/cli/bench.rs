@@ -2,7 +2,7 @@
 
 use super::args::BenchArgs;
 use super::memory::{Need, Room, SceneSize, Use};
-use cullgraph::bench::{culling, dynamic, hiz, msaa, plot, shadows, views};
+use cullgraph::bench::{culling, dynamic, hiz, lod, msaa, plot, shadows, views};
 use cullgraph::gpu::{ContextOptions, DeviceSelector, GpuContext, ShaderCompiler, ShaderRoot};
 use cullgraph::scene::SceneSource;
 use cullgraph::{Error, Result};
@@ -12,7 +12,7 @@ use cullgraph::{Error, Result};
 const DEFAULT_MOVED: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
 
 /// The suites `--suites` takes.
-const SUITES: &[&str] = &["culling", "hiz", "msaa", "dynamic", "views", "shadows"];
+const SUITES: &[&str] = &["culling", "hiz", "msaa", "dynamic", "views", "shadows", "lod"];
 
 /// Runs the command.
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -47,6 +47,29 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 }
             };
             Ok((name, source))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let lod_scenes = args
+        .lod_scenes
+        .iter()
+        .map(|s| -> Result<(String, SceneSource, Option<usize>)> {
+            // NAME or NAME@INSTANCES.
+            let (scene, instances) = match s.rsplit_once('@') {
+                Some((scene, n)) => (
+                    scene,
+                    Some(n.parse::<usize>().map_err(|_| {
+                        Error::Invalid(format!("--lod-scenes: '{n}' in '{s}' is not an instance count"))
+                    })?),
+                ),
+                None => (s.as_str(), None),
+            };
+            let source: SceneSource = scene.parse()?;
+            if let SceneSource::File(path) = &source {
+                if !path.is_file() {
+                    return Err(Error::Invalid(format!("--lod-scenes: no file '{}'", path.display())));
+                }
+            }
+            Ok((s.clone(), source, instances))
         })
         .collect::<Result<Vec<_>>>()?;
     let ctx = GpuContext::new(&ContextOptions {
@@ -184,6 +207,24 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         )?;
         finish_suite("msaa", serde_json::to_value(&report).unwrap_or_default(), report.markdown())?;
         plot("msaa.svg", plot::msaa_svg(&report))?;
+    }
+    if suite("lod") {
+        let report = lod::run(
+            &ctx,
+            &shaders,
+            &lod::LodBench {
+                scenes: lod_scenes,
+                thresholds: args.lod_thresholds.clone(),
+                width,
+                height,
+                warmup: args.warmup,
+                frames: args.frames,
+                reference: (args.reference > 0).then_some(args.reference),
+            },
+            &progress,
+        )?;
+        finish_suite("lod", serde_json::to_value(&report).unwrap_or_default(), report.markdown())?;
+        plot("lod.svg", plot::lod_svg(&report))?;
     }
     if suite("dynamic") {
         let bench = dynamic::DynamicBench {

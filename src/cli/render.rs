@@ -344,6 +344,9 @@ fn graph_spec(args: &RenderArgs) -> Result<GraphSpec> {
     if let Some(view) = &args.debug_view {
         overrides.push(("debug_view".into(), view.clone()));
     }
+    if let Some(px) = args.lod_threshold {
+        overrides.push(("lod_threshold".into(), format!("{px:?}")));
+    }
     Ok(spec.with_overrides(overrides))
 }
 

@@ -30,8 +30,8 @@ pub struct CullCounters {
     pub triangles_hi: u32,
     /// Instances whose visibility bit the pass set (late phase).
     pub survivors: u32,
-    /// Unused.
-    pub pad: [u32; 8],
+    /// Instances drawn at each level of detail (every drawn one at 0 without levels of detail).
+    pub level_instances: [u32; 8],
 }
 
 impl CullCounters {
@@ -58,6 +58,10 @@ pub struct CullPassStats {
     pub draws: u32,
     /// Triangles.
     pub triangles: u64,
+    /// Instances drawn at each level of detail, from the full mesh (0) on, up to the coarsest
+    /// level drawn (empty when nothing was drawn).
+    #[serde(default)]
+    pub level_instances: Vec<u32>,
 }
 
 impl CullPassStats {
@@ -71,6 +75,10 @@ impl CullPassStats {
             drawn: c.drawn,
             draws: c.draws,
             triangles: c.triangles(),
+            level_instances: {
+                let used = c.level_instances.iter().rposition(|&n| n != 0).map_or(0, |last| last + 1);
+                c.level_instances[..used].to_vec()
+            },
         }
     }
 }

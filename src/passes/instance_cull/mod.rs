@@ -51,6 +51,9 @@ pub use counters::{CullCounters, CullPassStats};
 /// The kind's name in RON.
 pub(crate) const KIND: &str = "instance_cull";
 
+/// The largest `lod_threshold`, in pixels: past it every level is as good as any other.
+pub const MAX_LOD_THRESHOLD: f64 = 1.0e6;
+
 /// The slot of the counters of the list the late phase writes for the next frame.
 pub(crate) const LIST_STATS_SLOT: &str = "list_stats";
 
@@ -149,6 +152,8 @@ pub(crate) struct CullSettings {
     pub occluder_size: f32,
     /// Occluder choice: meshes this cheap are candidates without the occluder flag (0: none).
     pub occluder_triangles: u32,
+    /// The largest error, in pixels, a level of detail may show (0: always the full mesh).
+    pub lod_threshold: f32,
 }
 
 impl CullSettings {
@@ -166,6 +171,23 @@ impl CullSettings {
             occluder_size: pass.real("occluder_size")? as f32,
             // The declared range keeps it within a u32.
             occluder_triangles: pass.int("occluder_triangles")?.clamp(0, u32::MAX as i64) as u32,
+            lod_threshold: pass.real("lod_threshold")? as f32,
+        })
+    }
+
+    /// Whether the pass chooses levels of detail.
+    pub fn lod(&self) -> bool {
+        self.lod_threshold > 0.0
+    }
+
+    /// Why these settings cannot choose levels of detail, if they cannot: the atomic append has
+    /// no order to place levels in.
+    pub fn lod_error(&self) -> Option<String> {
+        (self.lod() && self.compaction == Compaction::Atomic).then(|| {
+            format!(
+                "a level-of-detail threshold ({} px) needs ordered compaction; this pass has atomic compaction",
+                self.lod_threshold
+            )
         })
     }
 
@@ -192,6 +214,8 @@ struct Scratch {
     scan: Buffer,
     /// One bit per slot: drawn by this pass.
     draw_bits: Buffer,
+    /// With levels of detail: each slot's level, as three bit planes.
+    level_bits: Option<Buffer>,
     /// Survivors of each draw group, then visible slots of each (zero between runs).
     group_counts: Buffer,
     /// Whether the scan buffer still needs its first clear.
@@ -242,6 +266,9 @@ impl InstanceCullPass {
         if let Some(message) = settings.list_error().filter(|_| visible_out) {
             return Err(invalid(&message));
         }
+        if let Some(message) = settings.lod_error() {
+            return Err(invalid(&message));
+        }
         let atomic = settings.compaction == Compaction::Atomic;
         let mut defines: Vec<(&str, &str)> = vec![(settings.phase.define(), "1")];
         let flags = [
@@ -256,6 +283,7 @@ impl InstanceCullPass {
             (bound("visibility"), "WRITE_VIS"),
             (atomic, "ATOMIC_APPEND"),
             (visible_out, "VISIBLE_OUT"),
+            (settings.lod(), "LOD"),
         ];
         defines.extend(flags.iter().filter(|(on, _)| *on).map(|(_, name)| (*name, "1")));
         let name = |step: &str| format!("{} ({step})", pass.name);
@@ -266,11 +294,17 @@ impl InstanceCullPass {
         let (compact, init) = if atomic {
             (None, Some(compute("init", "cull/cull_init.comp", &[])?))
         } else {
-            let defines: &[(&str, &str)] = if visible_out { &[("VISIBLE_OUT", "1")] } else { &[] };
-            (Some(compute("compact", "cull/cull_compact.comp", defines)?), None)
+            let defines: Vec<(&str, &str)> = [(visible_out, "VISIBLE_OUT"), (settings.lod(), "LOD")]
+                .iter()
+                .filter(|(on, _)| *on)
+                .map(|(_, d)| (*d, "1"))
+                .collect();
+            (Some(compute("compact", "cull/cull_compact.comp", &defines)?), None)
         };
         let defines: Vec<(String, String)> = defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
-        let together = match ctx.caps().buffer_addresses && !atomic {
+        // Views culled together share one choice of level per instance, which this pass does
+        // not make: a pass choosing levels culls its view alone.
+        let together = match ctx.caps().buffer_addresses && !atomic && !settings.lod() {
             true => Some(views::Together::new(ctx, shaders, &pass.name, &defines)?),
             false => None,
         };
@@ -309,15 +343,27 @@ impl InstanceCullPass {
                 )
             };
             let superblocks = blocks.div_ceil(CULL_SUPERBLOCK as u64);
+            let lod = self.settings.lod();
+            // With levels of detail: more words per superblock record, a count per list, block
+            // and level after the block counts, and a group count per level.
+            let (superblock_words, level_block_words, levels) = match lod {
+                true => (SUPERBLOCK_WORDS_LOD, 2 * blocks * LOD_LEVELS, LOD_LEVELS),
+                false => (SUPERBLOCK_WORDS, 0, 1),
+            };
+            let bit_words = blocks * (CULL_BLOCK as u64 / 32);
             self.scratch = Some(Scratch {
                 slots,
                 groups,
                 scan: storage(
                     "cull scan state",
-                    (SCAN_HEADER_WORDS + 2 * superblocks * SUPERBLOCK_WORDS + 2 * blocks) * 4,
+                    (SCAN_HEADER_WORDS + 2 * superblocks * superblock_words + 2 * blocks + level_block_words) * 4,
                 )?,
-                draw_bits: storage("cull draw bits", blocks * (CULL_BLOCK as u64 / 32) * 4)?,
-                group_counts: storage("cull group counts", 2 * groups.max(1) as u64 * 4)?,
+                draw_bits: storage("cull draw bits", bit_words * 4)?,
+                level_bits: match lod {
+                    true => Some(storage("cull level bits", LOD_PLANES * bit_words * 4)?),
+                    false => None,
+                },
+                group_counts: storage("cull group counts", 2 * levels * groups.max(1) as u64 * 4)?,
                 fresh: true,
             });
         }
@@ -357,6 +403,12 @@ pub(crate) fn list_binding_error(bound: impl Fn(&str) -> bool) -> Option<(&'stat
 const SCAN_HEADER_WORDS: u64 = 8;
 /// Words of one superblock record (`SUPER_WORDS`).
 const SUPERBLOCK_WORDS: u64 = 8;
+/// Words of one superblock record with levels of detail (`SUPER_WORDS` with `LOD`).
+const SUPERBLOCK_WORDS_LOD: u64 = 24;
+/// Levels a pass choosing levels of detail counts (`LOD_LEVELS` with `LOD`).
+const LOD_LEVELS: u64 = crate::scene::MAX_LOD_LEVELS as u64;
+/// Bit planes of a slot's level (`LOD_PLANES`).
+const LOD_PLANES: u64 = 3;
 
 /// Blocks of `CULL_BLOCK` slots (test workgroups): at least one, so that an empty scene still
 /// writes an empty draw list.
@@ -456,6 +508,9 @@ impl PassNode for InstanceCullPass {
                 vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             ));
         }
+        if let Some(level_bits) = &scratch.level_bits {
+            test_binds.extend([Bind::Buffer(12, scene.lod_levels.handle()), Bind::Buffer(13, level_bits.handle())]);
+        }
         #[repr(C)]
         #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
         struct TestPush {
@@ -465,6 +520,8 @@ impl PassNode for InstanceCullPass {
             occluder_distance: f32,
             occluder_size: f32,
             occluder_triangles: u32,
+            view_count: u32,
+            lod_threshold: f32,
         }
         let push = TestPush {
             slot_count: slots,
@@ -473,6 +530,8 @@ impl PassNode for InstanceCullPass {
             occluder_distance: self.settings.occluder_distance,
             occluder_size: self.settings.occluder_size,
             occluder_triangles: self.settings.occluder_triangles,
+            view_count: 1,
+            lod_threshold: self.settings.lod_threshold,
         };
 
         if let Some(init) = &self.init {
@@ -537,6 +596,10 @@ impl PassNode for InstanceCullPass {
                 (13, rec.slots.buffer("list_stats")),
             ];
             compact_binds.extend(optional.iter().filter_map(|(b, buf)| buf.map(|buf| Bind::Buffer(*b, buf.handle()))));
+            if let Some(level_bits) = &scratch.level_bits {
+                compact_binds
+                    .extend([Bind::Buffer(14, scene.lod_levels.handle()), Bind::Buffer(15, level_bits.handle())]);
+            }
             compact.push_bindings(cmd, &compact_binds);
             let [first0, first1, first2, first3] = scene.regions.first;
             compact.push_constants(cmd, &[slots, groups, superblocks, first0, first1, first2, first3]);
@@ -584,6 +647,7 @@ impl PassKind for InstanceCullKind {
                 SettingDecl::real("occluder_distance", 200.0, (0.0, f64::MAX), "occluders phase: farthest distance of an occluder's bound"),
                 SettingDecl::real("occluder_size", 0.02, (0.0, f64::MAX), "occluders phase: smallest projected radius, as a fraction of the view height"),
                 SettingDecl::int("occluder_triangles", 1024, (0, u32::MAX as i64), "occluders phase: instances of meshes with at most this many triangles are candidates too, besides those flagged as occluders (0: flagged ones only)"),
+                SettingDecl::real("lod_threshold", 0.0, (0.0, MAX_LOD_THRESHOLD), "levels of detail: each instance it draws takes the coarsest level of its mesh whose error, projected conservatively from the nearest point of its bound, is at most this many pixels (0: always the full mesh, today's image bit for bit)"),
             ],
             slots_from_shader: false,
         }
@@ -603,10 +667,13 @@ impl PassKind for InstanceCullKind {
     fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
         let pass = check.pass;
         let mut out = Vec::new();
-        if let (Some(planned), Some(visible)) = (check.planned, check.binding("visible_ids")) {
+        if let Some(planned) = check.planned {
             match CullSettings::from_plan(planned) {
                 Ok(settings) => {
-                    out.extend(settings.list_error().map(|m| (visible.pos, format!("pass '{}': {m}", pass.name))))
+                    if let Some(visible) = check.binding("visible_ids") {
+                        out.extend(settings.list_error().map(|m| (visible.pos, format!("pass '{}': {m}", pass.name))));
+                    }
+                    out.extend(settings.lod_error().map(|m| (pass.pos, format!("pass '{}': {m}", pass.name))));
                 }
                 Err(e) => out.push((pass.pos, e.to_string())),
             }

@@ -240,7 +240,7 @@ impl InstanceCullPass {
                     ));
                 }
             }
-            let push: [u32; 7] = [
+            let push: [u32; 8] = [
                 slots,
                 superblocks,
                 groups,
@@ -248,6 +248,8 @@ impl InstanceCullPass {
                 settings.occluder_size.to_bits(),
                 settings.occluder_triangles,
                 n as u32,
+                // Views culled together never choose levels of detail.
+                0,
             ];
             contexts[0].step("test");
             together.test.bind(cmd);

@@ -97,8 +97,29 @@ pub struct GpuDrawGroup {
     pub first_index: u32,
     /// Vertex offset.
     pub vertex_offset: i32,
+    /// The group's first level of detail past the full mesh in [`CullData::lods`].
+    pub lod_first: u32,
+    /// Its levels past the full mesh (0: always drawn whole).
+    pub lod_count: u32,
     /// Padding.
-    pub pad: [u32; 3],
+    pub pad: u32,
+}
+
+/// One level of detail of a draw group's mesh past the full one (16 bytes; `LodLevel` in
+/// `cull_common.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLodLevel {
+    /// First index in the pool.
+    pub first_index: u32,
+    /// Indices per instance.
+    pub index_count: u32,
+    /// The level's object-space error over the radius of the mesh's cull sphere: times an
+    /// instance's cull radius (which is that radius times the instance's largest axis scale),
+    /// its error in world units.
+    pub relative_error: f32,
+    /// Padding.
+    pub pad: u32,
 }
 
 /// The local bounds of one draw group's mesh (32 bytes; `GroupBounds` in
@@ -125,7 +146,9 @@ impl GpuDrawGroup {
             index_count: command.index_count,
             first_index: command.first_index,
             vertex_offset: command.vertex_offset,
-            pad: [0; 3],
+            lod_first: 0,
+            lod_count: 0,
+            pad: 0,
         }
     }
 }
@@ -150,12 +173,16 @@ pub struct CullData {
     pub groups: Vec<GpuDrawGroup>,
     /// The local bounds of each group's mesh.
     pub bounds: Vec<GpuGroupBounds>,
+    /// The groups' levels of detail past the full mesh (at least one entry, so that the buffer
+    /// exists).
+    pub lods: Vec<GpuLodLevel>,
 }
 
 impl CullData {
     /// Bounds and groups of `scene`, slots in the order of `draws`.
     pub fn new(scene: &Scene, draws: &DrawList) -> Self {
         let mut group_of_slot = vec![0u32; draws.instance_ids.len()];
+        let mut lods = Vec::new();
         let groups: Vec<GpuDrawGroup> = draws
             .commands
             .iter()
@@ -164,9 +191,28 @@ impl CullData {
                 for slot in c.first_instance..c.first_instance + c.instance_count {
                     group_of_slot[slot as usize] = g as u32;
                 }
-                GpuDrawGroup::of(c)
+                let mut group = GpuDrawGroup::of(c);
+                let blended = draws.regions.region_of(g as u32) == super::face_cull::FaceCull::Blended as usize;
+                if c.instance_count > 0 && !blended {
+                    let mesh = &scene.meshes
+                        [scene.instances[draws.instance_ids[c.first_instance as usize] as usize].mesh as usize];
+                    let radius = local_radius(mesh);
+                    group.lod_first = lods.len() as u32;
+                    group.lod_count = mesh.lods.len() as u32;
+                    lods.extend(mesh.lods.iter().map(|l| GpuLodLevel {
+                        first_index: l.first_index,
+                        index_count: l.index_count,
+                        // Rounded up, so that the error read is never below the true one.
+                        relative_error: (l.error / radius) * (1.0 + f32::EPSILON * 4.0),
+                        pad: 0,
+                    }));
+                }
+                group
             })
             .collect();
+        if lods.is_empty() {
+            lods.push(GpuLodLevel::default());
+        }
         let records = draws
             .instance_ids
             .iter()
@@ -185,7 +231,7 @@ impl CullData {
                 GpuGroupBounds::of(&scene.meshes[inst.mesh as usize])
             })
             .collect();
-        Self { records, groups, bounds }
+        Self { records, groups, bounds, lods }
     }
 }
 

@@ -71,8 +71,9 @@ impl FaceCull {
 }
 
 /// The graphs' `meshes` variable: every mesh once, and once more for each further face cull its
-/// instances need, so that `meshes * 20` bytes hold any command list of `scene` (at least one
-/// command per mesh, as before face culls were grouped).
+/// instances need, each times its levels of detail ([`lod_commands`]), so that `meshes * 20`
+/// bytes hold any command list of `scene` (at least one command per mesh, as before face culls
+/// were grouped).
 pub fn command_capacity(scene: &Scene) -> usize {
     let meshes = scene.meshes.len();
     let mut used = vec![[false; FACE_CULL_REGIONS]; meshes];
@@ -81,7 +82,22 @@ pub fn command_capacity(scene: &Scene) -> usize {
             u[FaceCull::of(scene, instance) as usize] = true;
         }
     }
-    used.iter().map(|u| u.iter().filter(|&&b| b).count().max(1)).sum()
+    let commands = |m: usize, u: &[bool; FACE_CULL_REGIONS]| {
+        let used = (0..FACE_CULL_REGIONS).filter(|&r| u[r]).map(|r| lod_commands(&scene.meshes[m], r) as usize);
+        used.sum::<usize>().max(1)
+    };
+    used.iter().enumerate().map(|(m, u)| commands(m, u)).sum()
+}
+
+/// The commands a draw group of `mesh` in face-cull region `region` may need: one per level of
+/// detail (transparent instances are always drawn whole, so that their sort sees one command
+/// per group).
+pub fn lod_commands(mesh: &crate::scene::Mesh, region: usize) -> u32 {
+    if region == FaceCull::Blended as usize {
+        1
+    } else {
+        1 + mesh.lods.len() as u32
+    }
 }
 
 /// The graphs' `blended` variable: the instances of `scene` that are transparent.
@@ -106,6 +122,11 @@ impl DrawRegions {
             first[r] = first[r - 1] + len[r - 1];
         }
         Self { first, len }
+    }
+
+    /// The face-cull region that draw group `group` belongs to.
+    pub fn region_of(&self, group: u32) -> usize {
+        (1..FACE_CULL_REGIONS).filter(|&r| group >= self.first[r]).count()
     }
 
     /// Groups over all regions.

@@ -1,7 +1,7 @@
 //! The scene on the GPU: vertex/index pools, instances, materials, and the draw list that the
 //! indirect draws consume.
 
-use super::face_cull::{DrawRegions, FaceCull, FACE_CULL_REGIONS};
+use super::face_cull::{self, DrawRegions, FaceCull, FACE_CULL_REGIONS};
 use super::gpu_types::{DrawIndexedIndirect, GpuInstance, GpuMaterial};
 use super::textures::GpuTextures;
 use crate::gpu::{Buffer, GpuContext, UploadBatch};
@@ -45,6 +45,9 @@ pub struct GpuScene {
     /// [`super::cull_data::GpuGroupBounds`] per draw group (empty for a changing world's reserved groups): the local bounds that
     /// a changing world's moved instances get their cull bounds from.
     pub group_bounds: Arc<Buffer>,
+    /// [`super::cull_data::GpuLodLevel`]s of the draw groups' meshes: the levels of detail a
+    /// cull pass may choose (a changing world's meshes have none).
+    pub lod_levels: Arc<Buffer>,
     /// The scene's textures, in size-class arrays (shared with the next upload of a changing
     /// world whose textures did not change).
     pub textures: Arc<GpuTextures>,
@@ -115,16 +118,28 @@ impl DrawList {
         }
         let mut region_len = [0u32; FACE_CULL_REGIONS];
         let mut commands = Vec::new();
-        for (k, &count) in counts.iter().enumerate().filter(|(_, c)| **c > 0) {
-            let mesh = &scene.meshes[k % meshes];
-            region_len[k / meshes] += 1;
-            commands.push(DrawIndexedIndirect {
-                index_count: mesh.index_count,
-                instance_count: count,
-                first_index: mesh.first_index,
-                vertex_offset: mesh.vertex_offset as i32,
-                first_instance: starts[k],
-            });
+        for region in 0..FACE_CULL_REGIONS {
+            let mut spare = 0;
+            for k in region * meshes..(region + 1) * meshes {
+                let count = counts[k];
+                if count == 0 {
+                    continue;
+                }
+                let mesh = &scene.meshes[k % meshes];
+                spare += face_cull::lod_commands(mesh, region) - 1;
+                commands.push(DrawIndexedIndirect {
+                    index_count: mesh.index_count,
+                    instance_count: count,
+                    first_index: mesh.first_index,
+                    vertex_offset: mesh.vertex_offset as i32,
+                    first_instance: starts[k],
+                });
+            }
+            // Room for one command per level of each group: empty groups after the region's
+            // own, which a cull pass choosing levels of detail writes its commands into.
+            let end = commands.last().map_or(0, |c| c.first_instance + c.instance_count);
+            commands.extend((0..spare).map(|_| DrawIndexedIndirect { first_instance: end, ..Default::default() }));
+            region_len[region] = commands.len() as u32 - region_len.iter().sum::<u32>();
         }
         Self { instance_ids, commands, regions: DrawRegions::from_lengths(region_len) }
     }
@@ -175,6 +190,7 @@ impl GpuScene {
             &self.cull_records,
             &self.draw_groups,
             &self.group_bounds,
+            &self.lod_levels,
             &self.instance_triangles,
         ];
         let previous = self.prev_instances.as_ref().map_or(0, |b| b.size());
@@ -298,6 +314,7 @@ impl GpuScene {
             cull_records: make("cull records", none, bytemuck::cast_slice(&cull.records))?,
             draw_groups: make("draw groups", none, bytemuck::cast_slice(&cull.groups))?,
             group_bounds: make("group bounds", none, bytemuck::cast_slice(&cull.bounds))?,
+            lod_levels: make("levels of detail", none, bytemuck::cast_slice(&cull.lods))?,
             instance_triangles: make(
                 "instance triangle bases",
                 none,
@@ -366,6 +383,25 @@ mod tests {
         let ids = (0..meshes).map(|m| scene.add_mesh(&format!("m{m}"), &tri, "m").unwrap()).collect();
         scene.add_material(Default::default());
         (scene, ids)
+    }
+
+    #[test]
+    fn draw_lists_keep_room_for_a_command_per_level_of_each_group() {
+        let mut scene = Scene::default();
+        let sphere = crate::scene::lod::tests::sphere(64, 128);
+        let with = scene.add_mesh("with", &sphere, "with").unwrap();
+        let without = scene.add_mesh("without", &MeshData { no_lod: true, ..sphere }, "without").unwrap();
+        scene.add_material(Default::default());
+        for mesh in [with, without] {
+            scene.instances.push(Instance { transform: Default::default(), mesh, material: 0, flags: 0 });
+        }
+        let levels = scene.meshes[with as usize].lods.len();
+        assert!(levels > 0);
+        let draws = DrawList::all_instances(&scene);
+        // Both groups, then one empty command per level past the full mesh.
+        assert_eq!(draws.commands.len(), 2 + levels);
+        assert_eq!(draws.regions.groups() as usize, super::face_cull::command_capacity(&scene));
+        assert!(draws.commands[2..].iter().all(|c| c.instance_count == 0 && c.first_instance == 2));
     }
 
     /// Within a group, slots follow the Morton order of the instances' origins (a 4x4 grid

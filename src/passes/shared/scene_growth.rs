@@ -105,6 +105,7 @@ impl GpuScene {
             )?,
             draw_groups: self.draw_groups.clone(),
             group_bounds: self.group_bounds.clone(),
+            lod_levels: self.lod_levels.clone(),
             instance_triangles: fit(&self.instance_triangles, size_of(slots, 8), none)?,
             textures,
             instance_count: slots as u32,

@@ -1,0 +1,299 @@
+//! Levels of detail: speed against error. Each scene renders through two-phase culling at each
+//! level-of-detail threshold; a configuration reports the triangles drawn, the instances drawn at
+//! each level, its median GPU milliseconds (frame and per pass), and its mean FLIP and PSNR
+//! against the same frame at full detail (threshold 0) and against a supersampled reference.
+//!
+//! One sample per pixel aliases detail smaller than a pixel, and a coarser level aliases it
+//! differently: their difference is then mostly two patterns of aliasing, not the level's error.
+//! So the error of the levels themselves is also measured supersampled: the frame rendered at
+//! the reference's size with the threshold scaled alike (so that every instance takes the
+//! level it takes at the output size), box-filtered down, against the reference, which is full
+//! detail at that size.
+//! The instance cull pass's cost is reported per 10^6 instances, so that the cost of choosing
+//! levels can be read beside the triangles it saves.
+
+use super::{median, median_per_pass};
+use crate::gpu::{GpuContext, ShaderCompiler};
+use crate::oracle::image_error::{downsample_box_srgb, image_error};
+use crate::oracle::reference::{reference_render_size, render_reference};
+use crate::passes::instance_cull::CullPassStats;
+use crate::render::output::{rgba_from_bytes, RgbaImage};
+use crate::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
+use crate::scene::source::LoadOptions;
+use crate::scene::{Camera, Scene, SceneSource};
+use serde::{Deserialize, Serialize};
+
+/// The thresholds swept when none are given, in pixels.
+pub const DEFAULT_THRESHOLDS: &[f64] = &[0.0, 0.5, 1.0, 2.0, 4.0];
+
+/// The graph every configuration renders through (its `lod_threshold` parameter is swept).
+const GRAPH: &str = "two_phase";
+
+/// The pass whose time is reported per 10^6 instances.
+const CULL_PASS: &str = "cull_late";
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct LodBench {
+    /// Scenes, with the name they are reported under and their instance count (`None`: the
+    /// scene's default).
+    pub scenes: Vec<(String, SceneSource, Option<usize>)>,
+    /// Thresholds in pixels (0: full detail, the baseline every other is compared with).
+    pub thresholds: Vec<f64>,
+    /// Output width.
+    pub width: u32,
+    /// Output height.
+    pub height: u32,
+    /// Frames rendered before measuring.
+    pub warmup: u32,
+    /// Frames measured (medians are reported).
+    pub frames: u32,
+    /// Supersampling factor per axis of the reference (`None`: no error against a reference).
+    pub reference: Option<u32>,
+}
+
+/// GPU time of one pass.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PassTime {
+    /// Pass name.
+    pub pass: String,
+    /// Median milliseconds.
+    pub ms: f64,
+}
+
+/// One scene at one threshold.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct LodFigure {
+    /// Scene name.
+    pub scene: String,
+    /// Instances in the scene.
+    pub instances: u32,
+    /// Threshold, pixels.
+    pub threshold: f64,
+    /// Triangles drawn in the last measured frame.
+    pub triangles: u64,
+    /// Instances drawn at each level (over the frame's draw lists), from the full mesh on.
+    pub level_instances: Vec<u32>,
+    /// Median GPU milliseconds of the frame.
+    pub frame_ms: f64,
+    /// The instance cull pass's median milliseconds per 10^6 instances.
+    pub cull_ms_per_million: f64,
+    /// Every pass.
+    pub passes: Vec<PassTime>,
+    /// Mean FLIP against the same frame at full detail.
+    pub flip_vs_full: Option<f64>,
+    /// PSNR against the same frame at full detail, dB (`None` when identical).
+    pub psnr_vs_full_db: Option<f64>,
+    /// Mean FLIP against the supersampled reference.
+    pub flip_vs_reference: Option<f64>,
+    /// PSNR against the reference, dB.
+    pub psnr_vs_reference_db: Option<f64>,
+    /// Mean FLIP of the same levels supersampled like the reference, against it: the levels'
+    /// own error against full detail, without aliasing (0 at threshold 0).
+    pub flip_vs_full_supersampled: Option<f64>,
+}
+
+/// The whole run.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct LodReport {
+    /// Device name.
+    pub device: String,
+    /// Output width.
+    pub width: u32,
+    /// Output height.
+    pub height: u32,
+    /// Samples per pixel of the reference (N x N), if any.
+    pub reference_samples: Option<u32>,
+    /// One row per scene and threshold.
+    pub rows: Vec<LodFigure>,
+}
+
+/// Runs the sweep. `progress` hears which configuration starts.
+pub fn run(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    bench: &LodBench,
+    progress: &dyn Fn(&str),
+) -> crate::Result<LodReport> {
+    if let Some(n) = bench.reference {
+        reference_render_size(ctx, (bench.width, bench.height), n)?;
+    }
+    let most = crate::passes::instance_cull::MAX_LOD_THRESHOLD;
+    if let Some(bad) = bench.thresholds.iter().find(|t| !(0.0..=most).contains(*t)) {
+        return Err(crate::Error::Invalid(format!("level-of-detail threshold {bad}: from 0 to {most} pixels")));
+    }
+    // Threshold 0 first: the image every other is compared with.
+    let mut thresholds = vec![0.0];
+    thresholds.extend(bench.thresholds.iter().copied().filter(|&t| t > 0.0));
+    let mut rows = Vec::new();
+    for (name, source, instances) in &bench.scenes {
+        progress(&format!("{name}: loading"));
+        let scene = source.load(&LoadOptions { instances: *instances, ..Default::default() })?;
+        let camera = scene.default_camera(bench.width as f32 / bench.height as f32);
+        let mut measured = Vec::new();
+        for &threshold in &thresholds {
+            progress(&format!("{name}: threshold {threshold} px"));
+            measured.push(measure(ctx, shaders, bench, &scene, &camera, threshold)?);
+        }
+        let mut supersampled = Vec::new();
+        if let Some(n) = bench.reference {
+            for &threshold in &thresholds {
+                progress(&format!("{name}: threshold {threshold} px, {n}x{n} samples per pixel"));
+                supersampled.push(render_supersampled(ctx, shaders, bench, &scene, &camera, threshold, n)?);
+            }
+        }
+        let reference = match bench.reference {
+            Some(n) => {
+                progress(&format!("{name}: the reference, {n}x{n} samples per pixel"));
+                Some((n, render_reference(ctx, shaders, &scene, &camera, (bench.width, bench.height), n, &[])?))
+            }
+            None => None,
+        };
+        let full = measured[0].1.clone();
+        for (index, (mut figure, image)) in measured.into_iter().enumerate() {
+            let error = image_error(full.as_raw(), image.as_raw(), bench.width, bench.height, 1)?;
+            figure.flip_vs_full = Some(error.mean_flip);
+            figure.psnr_vs_full_db = Some(error.psnr_db).filter(|p| p.is_finite());
+            if let Some((n, reference)) = &reference {
+                let error = image_error(reference.as_raw(), image.as_raw(), bench.width, bench.height, n * n)?;
+                figure.flip_vs_reference = Some(error.mean_flip);
+                figure.psnr_vs_reference_db = Some(error.psnr_db).filter(|p| p.is_finite());
+                let error =
+                    image_error(reference.as_raw(), supersampled[index].as_raw(), bench.width, bench.height, n * n)?;
+                figure.flip_vs_full_supersampled = Some(error.mean_flip);
+            }
+            rows.push(LodFigure { scene: name.clone(), ..figure });
+        }
+    }
+    Ok(LodReport {
+        device: ctx.caps().name.clone(),
+        width: bench.width,
+        height: bench.height,
+        reference_samples: bench.reference.map(|n| n * n),
+        rows,
+    })
+}
+
+/// How long frames run before any is measured, at least (a GPU that idled lowers its clocks).
+const MIN_WARMUP: std::time::Duration = std::time::Duration::from_millis(500);
+
+/// Renders `scene` at `threshold`: the warm-up, then `bench.frames` measured back to back,
+/// then one more read back. The scene name and image errors are left for the caller.
+fn measure(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    bench: &LodBench,
+    scene: &Scene,
+    camera: &Camera,
+    threshold: f64,
+) -> crate::Result<(LodFigure, RgbaImage)> {
+    let spec = GraphSpec::builtin(GRAPH)?.with_overrides([("lod_threshold".to_string(), format!("{threshold:?}"))]);
+    let settings = RenderSettings::new(bench.width, bench.height);
+    let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
+    let mut pipeline = FramePipeline::new(ctx)?;
+    let started = std::time::Instant::now();
+    let mut warmup = 0u64;
+    while warmup < bench.warmup.max(2) as u64 || started.elapsed() < MIN_WARMUP {
+        pipeline.submit(&mut renderer, camera)?;
+        warmup += 1;
+    }
+    let mut measured = Vec::new();
+    for _ in 0..bench.frames.max(1) {
+        measured.extend(pipeline.submit(&mut renderer, camera)?);
+    }
+    measured.extend(pipeline.finish(&renderer)?);
+    drop(pipeline);
+    measured.retain(|s| s.frame >= warmup);
+    let timings: Vec<_> = measured.iter().map(|s| s.gpu_ms.clone()).collect();
+    let mut totals: Vec<f64> = measured.iter().map(|s| s.gpu_total_ms).collect();
+    let (last, image) = renderer.render_to_image(camera)?;
+    let passes: Vec<PassTime> = median_per_pass(&timings).into_iter().map(|(pass, ms)| PassTime { pass, ms }).collect();
+    let cull_ms = passes.iter().find(|p| p.pass == CULL_PASS).map_or(0.0, |p| p.ms);
+    let mut level_instances: Vec<u32> = Vec::new();
+    for pass in CullPassStats::of(&last) {
+        level_instances.resize(level_instances.len().max(pass.level_instances.len()), 0);
+        for (sum, n) in level_instances.iter_mut().zip(&pass.level_instances) {
+            *sum += n;
+        }
+    }
+    let figure = LodFigure {
+        scene: String::new(),
+        instances: last.instances,
+        threshold,
+        triangles: last.triangles,
+        level_instances,
+        frame_ms: median(&mut totals),
+        cull_ms_per_million: cull_ms * 1.0e6 / last.instances.max(1) as f64,
+        passes,
+        flip_vs_full: None,
+        psnr_vs_full_db: None,
+        flip_vs_reference: None,
+        psnr_vs_reference_db: None,
+        flip_vs_full_supersampled: None,
+    };
+    Ok((figure, image))
+}
+
+/// `scene` at `threshold` rendered as the reference is, at `n` times the output size per axis
+/// without jitter, the threshold scaled by `n` so that each instance takes the level it takes at
+/// the output size, and box-filtered down to the output size.
+#[allow(clippy::too_many_arguments)]
+fn render_supersampled(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    bench: &LodBench,
+    scene: &Scene,
+    camera: &Camera,
+    threshold: f64,
+    n: u32,
+) -> crate::Result<RgbaImage> {
+    let (big_w, big_h) = reference_render_size(ctx, (bench.width, bench.height), n)?;
+    let scaled = format!("{:?}", threshold * n as f64);
+    let spec = GraphSpec::builtin(GRAPH)?.with_overrides([("lod_threshold".to_string(), scaled)]);
+    let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), RenderSettings::new(big_w, big_h), &spec)?;
+    let unjittered = Camera { jitter: glam::Vec2::ZERO, ..camera.clone() };
+    // Two-phase culling: the frame after the first draws what the first found visible.
+    renderer.render(&unjittered)?;
+    let (_, big) = renderer.render_to_image(&unjittered)?;
+    drop(renderer);
+    rgba_from_bytes(bench.width, bench.height, downsample_box_srgb(big.as_raw(), bench.width, bench.height, n)?)
+}
+
+impl LodReport {
+    /// Every configuration's figures, with its triangles and frame time as shares of the same
+    /// scene at full detail.
+    pub fn markdown(&self) -> String {
+        let opt = |v: Option<f64>, digits: usize| v.map_or("-".to_string(), |v| format!("{v:.digits$}"));
+        let mut s = format!(
+            "## Levels of detail: speed against error ({}, {}x{}{}, graph {GRAPH})\n\n",
+            self.device,
+            self.width,
+            self.height,
+            self.reference_samples.map_or(String::new(), |n| format!(", reference {n} samples per pixel"))
+        );
+        s += "| scene | instances | threshold px | triangles | / full | instances per level | frame ms | / full | cull ms per 10^6 | FLIP vs full | PSNR vs full dB | FLIP vs full, supersampled | FLIP vs reference | PSNR vs reference dB |\n";
+        s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        for r in &self.rows {
+            let full = self.rows.iter().find(|f| f.scene == r.scene && f.threshold == 0.0);
+            let share = |a: f64, b: Option<f64>| b.filter(|b| *b > 0.0).map_or("-".into(), |b| format!("{:.3}", a / b));
+            s += &format!(
+                "| {} | {} | {} | {} | {} | {} | {:.3} | {} | {:.4} | {} | {} | {} | {} | {} |\n",
+                r.scene,
+                r.instances,
+                r.threshold,
+                r.triangles,
+                share(r.triangles as f64, full.map(|f| f.triangles as f64)),
+                r.level_instances.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(" / "),
+                r.frame_ms,
+                share(r.frame_ms, full.map(|f| f.frame_ms)),
+                r.cull_ms_per_million,
+                opt(r.flip_vs_full, 5),
+                opt(r.psnr_vs_full_db, 2),
+                opt(r.flip_vs_full_supersampled, 5),
+                opt(r.flip_vs_reference, 5),
+                opt(r.psnr_vs_reference_db, 2),
+            );
+        }
+        s
+    }
+}

@@ -1,0 +1,187 @@
+//! Levels of detail chosen on the GPU (lavapipe, validation on): the cull passes draw distant
+//! props of `builtin:dense` coarser, each level through the same indirect-count draws; every
+//! culling graph places the levels alike; the image stays close to full detail; an instance
+//! whose bound holds the camera is drawn whole; the choice depends on the eye-relative position
+//! only, so a world 10^7 units from the origin looks the same.
+
+mod common;
+
+use common::GpuTest;
+use cullgraph::oracle::Verify;
+use cullgraph::passes::instance_cull::CullPassStats;
+use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
+use cullgraph::scene::source::LoadOptions;
+use cullgraph::scene::{Camera, Instance, Scene, SceneSource, Transform};
+use cullgraph::stats::FrameStats;
+use glam::{DVec3, Mat3};
+
+const SIZE: (u32, u32) = (160, 90);
+
+fn dense(instances: usize) -> Scene {
+    SceneSource::Builtin("dense".into())
+        .load(&LoadOptions { instances: Some(instances), ..Default::default() })
+        .unwrap()
+}
+
+fn near_camera() -> Camera {
+    Camera { eye: DVec3::new(14.0, 5.0, 14.0), target: DVec3::new(0.0, 1.0, 0.0), ..Default::default() }
+}
+
+fn graph(name: &str, threshold: f64) -> GraphSpec {
+    GraphSpec::builtin(name).unwrap().with_overrides([("lod_threshold".into(), format!("{threshold:?}"))])
+}
+
+/// The last of `frames` frames of `camera` through `spec`: its stats and RGBA bytes; no frame
+/// missed a visible instance.
+fn render(gpu: &GpuTest, scene: &Scene, camera: &Camera, spec: &GraphSpec, frames: u32) -> (FrameStats, Vec<u8>) {
+    let shaders = gpu.shaders();
+    let settings = RenderSettings::new(SIZE.0, SIZE.1);
+    let mut renderer = Renderer::with_graph(gpu, &shaders, scene.clone(), settings, spec).unwrap();
+    renderer.enable_verification(&shaders).unwrap();
+    for _ in 1..frames {
+        assert_eq!(renderer.render(camera).unwrap().verify.unwrap().false_negatives, 0);
+    }
+    let (stats, image) = renderer.render_to_image(camera).unwrap();
+    assert_eq!(stats.verify.as_ref().unwrap().false_negatives, 0);
+    (stats, image.into_raw())
+}
+
+/// Instances drawn at each level over the frame's cull passes and lists.
+fn levels(stats: &FrameStats) -> Vec<u32> {
+    let mut sum = Vec::new();
+    for pass in CullPassStats::of(stats) {
+        sum.resize(sum.len().max(pass.level_instances.len()), 0);
+        for (s, n) in sum.iter_mut().zip(&pass.level_instances) {
+            *s += n;
+        }
+    }
+    sum
+}
+
+/// Mean and largest absolute channel difference (RGB) of two images.
+fn difference(a: &[u8], b: &[u8]) -> (f64, u8) {
+    let (mut sum, mut most, mut n) = (0u64, 0u8, 0u64);
+    for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+        for c in 0..3 {
+            let d = pa[c].abs_diff(pb[c]);
+            sum += d as u64;
+            most = most.max(d);
+            n += 1;
+        }
+    }
+    (sum as f64 / n as f64, most)
+}
+
+#[test]
+fn levels_cut_the_triangles_and_keep_the_image_close() {
+    let gpu = GpuTest::new();
+    let scene = dense(40);
+    let camera = near_camera();
+    let (full, full_image) = render(&gpu, &scene, &camera, &graph("frustum", 0.0), 1);
+    let (one, one_image) = render(&gpu, &scene, &camera, &graph("frustum", 1.0), 1);
+    let (four, four_image) = render(&gpu, &scene, &camera, &graph("frustum", 4.0), 1);
+    assert_eq!((one.drawn, four.drawn), (full.drawn, full.drawn), "levels change no culling decision");
+    assert_eq!(levels(&full), [full.drawn], "threshold 0 draws every instance whole");
+    for stats in [&one, &four] {
+        assert_eq!(levels(stats).iter().sum::<u32>(), stats.drawn, "{:?}", levels(stats));
+        assert!(levels(stats)[1..].iter().any(|&n| n > 0), "no coarser level drawn: {:?}", levels(stats));
+    }
+    // Close up, most props are a few hundred pixels tall: fewer triangles go than from afar.
+    assert!(one.triangles * 3 <= full.triangles * 2, "{} triangles at 1 px, {} whole", one.triangles, full.triangles);
+    assert!(four.triangles * 3 <= full.triangles, "{} triangles at 4 px, {} whole", four.triangles, full.triangles);
+    let (mean_one, _) = difference(&one_image, &full_image);
+    let (mean_four, _) = difference(&four_image, &full_image);
+    // A fraction of a step of 255 on average (a level's error counts its normals' drift too).
+    eprintln!("mean channel difference: {mean_one} at 1 px, {mean_four} at 4 px");
+    assert!(mean_one < 0.2, "mean channel difference {mean_one} at 1 px");
+    assert!(mean_one <= mean_four && mean_four < 0.6, "mean channel difference {mean_four} at 4 px");
+}
+
+#[test]
+fn every_culling_graph_places_the_levels_alike() {
+    let gpu = GpuTest::new();
+    let scene = dense(120);
+    let camera = near_camera();
+    let (frustum, image) = render(&gpu, &scene, &camera, &graph("frustum", 2.0), 1);
+    // Two-phase: the early draw is last frame's visible list at its levels.
+    for (name, frames) in [("two_phase", 3), ("one_phase", 3), ("occluder_prepass", 1)] {
+        let (stats, other) = render(&gpu, &scene, &camera, &graph(name, 2.0), frames);
+        assert!(other == image, "{name} drew another image than frustum culling at the same levels");
+        assert!(
+            stats.triangles <= frustum.triangles,
+            "{name}: {} triangles, frustum {}",
+            stats.triangles,
+            frustum.triangles
+        );
+    }
+}
+
+#[test]
+fn an_instance_whose_bound_holds_the_camera_is_drawn_whole() {
+    let gpu = GpuTest::new();
+    let mut scene = dense(4);
+    // Two rocks (kind 0): one around the camera, one 300 units ahead of it.
+    scene.instances.truncate(2);
+    let rock = scene.instances[1].mesh;
+    let at = |x: f64| Instance {
+        transform: Transform { linear: Mat3::IDENTITY, translation: DVec3::new(x, 0.0, 0.0) },
+        mesh: rock,
+        material: 0,
+        flags: 0,
+    };
+    scene.instances = vec![at(0.0), at(300.0)];
+    let camera = Camera { eye: DVec3::new(0.3, 0.2, 0.0), target: DVec3::new(300.0, 0.0, 0.0), ..Default::default() };
+    let (stats, _) = render(&gpu, &scene, &camera, &graph("frustum", 1.0), 1);
+    let levels = levels(&stats);
+    assert_eq!(stats.drawn, 2);
+    assert_eq!(levels[0], 1, "the rock around the camera is drawn whole: {levels:?}");
+    assert!(levels.len() > 1 && levels[1..].iter().sum::<u32>() == 1, "the far rock is drawn coarser: {levels:?}");
+}
+
+#[test]
+fn a_world_far_from_the_origin_chooses_the_same_levels() {
+    let gpu = GpuTest::new();
+    let scene = dense(40);
+    let camera = near_camera();
+    let (near, image) = render(&gpu, &scene, &camera, &graph("frustum", 1.0), 1);
+    let offset = DVec3::new(1.0e7, 0.0, -1.0e7);
+    let mut far_scene = scene.clone();
+    far_scene.translate(offset);
+    let far_camera = Camera { eye: camera.eye + offset, target: camera.target + offset, ..camera };
+    let (far, far_image) = render(&gpu, &far_scene, &far_camera, &graph("frustum", 1.0), 1);
+    assert_eq!(levels(&far), levels(&near));
+    assert_eq!(far.triangles, near.triangles);
+    let (mean, _) = difference(&far_image, &image);
+    assert!(mean < 0.05, "mean channel difference {mean} 10^7 units out");
+}
+
+#[test]
+fn the_command_line_takes_a_threshold_and_refuses_bad_ones() {
+    use common::cli::run;
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("x.png");
+    let stats = tmp.path().join("s.json");
+    let (out, stats_path) = (out.to_str().unwrap(), stats.to_str().unwrap());
+    let triangles = |threshold: &str| {
+        let args = ["render", "--scene", "builtin:dense", "--instances", "12", "--size", "96x54", "--frames", "2"];
+        let (code, _, err) =
+            run(&[&args[..], &["--lod-threshold", threshold, "--out", out, "--stats", stats_path]].concat());
+        assert_eq!(code, 0, "{err}");
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        json["frames"][1]["triangles"].as_u64().unwrap()
+    };
+    let (full, coarse) = (triangles("0"), triangles("2"));
+    assert!(coarse * 3 <= full, "{coarse} triangles at 2 px, {full} whole");
+    for bad in ["-1", "nan", "1e9", "x"] {
+        let (code, _, err) = run(&["render", "--lod-threshold", bad, "--out", out]);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains("is not a threshold in pixels from 0 to"), "{err}");
+    }
+    // Atomic compaction has no order to place levels in: refused at the pass.
+    let graph = tmp.path().join("atomic.ron");
+    let text = "Graph(name: \"atomic_lod\", extends: \"frustum\", edits: [\n    Set(pass: \"cull\", settings: {\"compaction\": \"atomic\", \"lod_threshold\": 1.0}),\n])\n";
+    std::fs::write(&graph, text).unwrap();
+    let (code, _, err) = run(&["graph", "check", graph.to_str().unwrap(), "--size", "64x48"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("pass 'cull'") && err.contains("needs ordered compaction"), "{err}");
+}
