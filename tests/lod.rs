@@ -185,3 +185,24 @@ fn the_command_line_takes_a_threshold_and_refuses_bad_ones() {
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("pass 'cull'") && err.contains("needs ordered compaction"), "{err}");
 }
+
+#[test]
+fn mirrored_instances_choose_the_levels_of_their_twins() {
+    let gpu = GpuTest::new();
+    let scene = dense(40);
+    let camera = near_camera();
+    // The scene and the camera mirrored across x = 0: every instance's determinant flips.
+    let mut mirrored = scene.clone();
+    let flip = Mat3::from_diagonal(glam::Vec3::new(-1.0, 1.0, 1.0));
+    for instance in &mut mirrored.instances {
+        instance.transform.linear = flip * instance.transform.linear;
+        instance.transform.translation.x = -instance.transform.translation.x;
+    }
+    let mirror = |p: DVec3| DVec3::new(-p.x, p.y, p.z);
+    let mirrored_camera = Camera { eye: mirror(camera.eye), target: mirror(camera.target), ..camera.clone() };
+    let (plain, _) = render(&gpu, &scene, &camera, &graph("frustum", 1.0), 1);
+    let (twin, _) = render(&gpu, &mirrored, &mirrored_camera, &graph("frustum", 1.0), 1);
+    assert_eq!(twin.drawn, plain.drawn);
+    assert_eq!(levels(&twin), levels(&plain));
+    assert_eq!(twin.triangles, plain.triangles);
+}

@@ -467,6 +467,38 @@ fn node_extras_flag_occluders_and_no_aa_down_the_hierarchy() {
 }
 
 #[test]
+fn mesh_extras_keep_a_mesh_whole() {
+    let dir = scratch("lod-extras");
+    // A 24 x 24 grid of quads (1152 triangles): enough for levels of detail.
+    let n = 25u16;
+    let positions: Vec<[f32; 3]> =
+        (0..n * n).map(|i| [(i % n) as f32, (i / n) as f32, ((i % n) as f32 * 0.7).sin() * 0.2]).collect();
+    let mut indices = Vec::new();
+    for y in 0..n - 1 {
+        for x in 0..n - 1 {
+            let a = y * n + x;
+            indices.extend([a, a + 1, a + n, a + 1, a + n + 1, a + n]);
+        }
+    }
+    let grid: Prim = (4, positions, indices);
+    let (mut doc, bin) = document(&[grid.clone(), grid], json!([{"children": [1, 2]}, {"mesh": 0}, {"mesh": 1}]));
+    doc["meshes"][1]["extras"] = json!({"cullgraph": {"lod": false}, "exporter": "kept out"});
+    let (scene, _) = load(&write(&dir, &doc, &bin)).unwrap();
+    assert!(!scene.meshes[0].lods.is_empty(), "a mesh gets its levels of detail");
+    assert!(scene.meshes[1].lods.is_empty(), "\"lod\": false keeps the mesh whole");
+
+    for (extras, message) in [
+        (json!({"cullgraph": {"LOD": false}}), "extras.cullgraph.LOD is unknown (known: lod)"),
+        (json!({"cullgraph": {"lod": "no"}}), "extras.cullgraph.lod must be true or false, not \"no\""),
+    ] {
+        doc["meshes"][1]["extras"] = extras;
+        let m = load_err(&write(&dir, &doc, &bin));
+        assert!(m.starts_with("scene.gltf: mesh 'm1'") && m.contains(message), "{m}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn broken_hierarchies_are_refused_without_recursion() {
     let dir = scratch("tree");
     // A node with two parents.

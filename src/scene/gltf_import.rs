@@ -238,6 +238,8 @@ impl MeshImport<'_> {
         report: &mut ImportReport,
     ) -> Result<Vec<DrawnPrimitive>, SceneError> {
         let label = mesh_label(mesh);
+        let no_lod =
+            flags::mesh_keeps_detail(mesh).map_err(|m| SceneError::invalid(&format!("{}: {label}", self.file), m))?;
         let base_name = mesh.name().map(str::to_string).unwrap_or_else(|| format!("mesh#{}", mesh.index()));
         let mut prims = Vec::new();
         for prim in mesh.primitives() {
@@ -250,6 +252,7 @@ impl MeshImport<'_> {
                         primitive::Converted::Skipped(why) => Err(why),
                         primitive::Converted::Mesh(mut data, mesh_place, notes) => {
                             report.notes.extend(notes);
+                            data.no_lod = no_lod;
                             if !data.morph_targets.is_empty() {
                                 data.morph_weights = mesh.weights().map(<[f32]>::to_vec).unwrap_or_default();
                             }

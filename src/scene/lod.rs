@@ -163,6 +163,24 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn degenerate_meshes_get_a_chain_or_none_without_failing() {
+        // Every vertex its own (an unindexed mesh): no edge can collapse, so no step pays.
+        let data = sphere(32, 64);
+        let soup: Vec<Vertex> = data.indices.iter().map(|&i| vertices(&data)[i as usize]).collect();
+        let sequential: Vec<u32> = (0..soup.len() as u32).collect();
+        assert!(build_chain(&soup, &sequential).is_empty());
+        // Zero-area triangles among good ones: levels as usual, every index in range.
+        let mut data = sphere(64, 128);
+        let n = data.indices.len();
+        for k in (0..n).step_by(30) {
+            data.indices[k + 1] = data.indices[k];
+        }
+        let chain = build_chain(&vertices(&data), &data.indices);
+        assert!(!chain.is_empty());
+        assert!(chain.iter().all(|(i, e)| i.iter().all(|&v| (v as usize) < data.positions.len()) && e.is_finite()));
+    }
+
+    #[test]
     fn small_meshes_get_no_chain() {
         let data = sphere(8, 16);
         assert!(build_chain(&vertices(&data), &data.indices).is_empty());
