@@ -239,7 +239,7 @@ impl MeshImport<'_> {
     ) -> Result<Vec<DrawnPrimitive>, SceneError> {
         let label = mesh_label(mesh);
         let no_lod =
-            flags::mesh_keeps_detail(mesh).map_err(|m| SceneError::invalid(&format!("{}: {label}", self.file), m))?;
+            flags::mesh_keeps_detail(mesh).map_err(|m| SceneError::invalid(format!("{}: {label}", self.file), m))?;
         let base_name = mesh.name().map(str::to_string).unwrap_or_else(|| format!("mesh#{}", mesh.index()));
         let mut prims = Vec::new();
         for prim in mesh.primitives() {
