@@ -143,6 +143,13 @@ uint scratch_level_block(uint superblocks, uint slot_count, uint list, uint b, u
     uint blocks = max(1u, (slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
     return scratch_block(superblocks, 2u * blocks + (list * blocks + b) * LOD_LEVELS + level);
 }
+// After those (LOD), written by `cull_levels.comp` each run: per superblock, list and level,
+// where the superblock's slots of that list at that level start in the level-major order (every
+// slot of lower levels, then this level's in the superblocks before).
+uint scratch_level_start(uint superblocks, uint slot_count, uint s, uint list, uint level) {
+    uint blocks = max(1u, (slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
+    return scratch_level_block(superblocks, slot_count, 0u, 2u * blocks, 0u) + (s * 2u + list) * LOD_LEVELS + level;
+}
 #endif
 
 #endif

@@ -118,43 +118,25 @@ uint local_before_at(uint which, uint k, uint level) {
     return count;
 }
 
-// Per list and level, the slots before block `block`, in the level-major order: all slots of
-// lower levels, then this level's in slot order. Called in uniform control flow, after `barrier`.
-void sum_levels_before(uint block, uint run) {
+// Per list and level, the slots before block `block` in the level-major order: where its
+// superblock's slots of that level start (`cull_levels.comp`), plus that level's slots in the
+// blocks before it in the superblock (one invocation per such block, at most 63). Called in
+// uniform control flow; `sh_level_before` is complete after the next barrier.
+void sum_levels_before(uint block) {
     uint lane = gl_LocalInvocationIndex;
     uint super_index = block / CULL_SUPERBLOCK;
-    // [list][level]: this level's slots before the block; the level's slots in all blocks.
-    uint before[2][LOD_LEVELS], total[2][LOD_LEVELS];
+    if (lane < 2u * LOD_LEVELS) {
+        uint list = lane / LOD_LEVELS, level = lane % LOD_LEVELS;
+        sh_level_before[list][level] = scratch[scratch_level_start(pc.superblocks, pc.slot_count, super_index, list, level)];
+    }
+    barrier();
+    uint k = super_index * CULL_SUPERBLOCK + lane;
+    bool before = k < block;
     for (uint list = 0u; list < 2u; ++list) {
-        for (uint l = 0u; l < LOD_LEVELS; ++l) {
-            before[list][l] = 0u;
-            total[list][l] = 0u;
-        }
-    }
-    for (uint s = lane; s < pc.superblocks; s += THREADS) {
-        uint at = scratch_super(pc.superblocks, run, s);
-        for (uint list = 0u; list < 2u; ++list) {
-            for (uint l = 0u; l < LOD_LEVELS; ++l) {
-                uint n = scratch[at + SUPER_LEVEL(list, l)];
-                total[list][l] += n;
-                if (s < super_index) before[list][l] += n;
-            }
-        }
-    }
-    for (uint k = super_index * CULL_SUPERBLOCK + lane; k < block; k += THREADS) {
-        for (uint list = 0u; list < 2u; ++list) {
-            for (uint l = 0u; l < LOD_LEVELS; ++l) {
-                before[list][l] += scratch[scratch_level_block(pc.superblocks, pc.slot_count, list, k, l)];
-            }
-        }
-    }
-    // Each level starts after every slot of the levels below it.
-    for (uint list = 0u; list < 2u; ++list) {
-        uint lower = 0u;
-        for (uint l = 0u; l < LOD_LEVELS; ++l) {
-            uint sum = subgroupAdd(before[list][l] + lower);
-            lower += total[list][l];
-            if (subgroupElect() && sum != 0u) atomicAdd(sh_level_before[list][l], sum);
+        for (uint level = 0u; level < LOD_LEVELS; ++level) {
+            uint n = before ? scratch[scratch_level_block(pc.superblocks, pc.slot_count, list, k, level)] : 0u;
+            n = subgroupAdd(n);
+            if (subgroupElect() && n != 0u) atomicAdd(sh_level_before[list][level], n);
         }
     }
 }
@@ -188,9 +170,7 @@ void place_block(uint block, uint run) {
         uint blocks = max(1u, (pc.slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
         sh_planes[p][w] = level_bits[p * blocks * CULL_WORDS_PER_BLOCK + block * CULL_WORDS_PER_BLOCK + w];
     }
-    if (lane < 2u * LOD_LEVELS) sh_level_before[lane / LOD_LEVELS][lane % LOD_LEVELS] = 0u;
-    barrier();
-    sum_levels_before(block, run);
+    sum_levels_before(block);
     barrier();
     uint slot = block * CULL_BLOCK + lane;
     uint level = level_of(lane);

@@ -227,6 +227,9 @@ pub(crate) struct InstanceCullPass {
     settings: CullSettings,
     test: Pipeline,
     compact: Option<Pipeline>,
+    /// With levels of detail: where each superblock's slots of each level start, between the
+    /// test and the compact steps.
+    levels: Option<Pipeline>,
     init: Option<Pipeline>,
     sampler: Sampler,
     scratch: Option<Scratch>,
@@ -301,6 +304,10 @@ impl InstanceCullPass {
                 .collect();
             (Some(compute("compact", "cull/cull_compact.comp", &defines)?), None)
         };
+        let levels = match settings.lod() {
+            true => Some(compute("levels", "cull/cull_levels.comp", &[])?),
+            false => None,
+        };
         let defines: Vec<(String, String)> = defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
         // Views culled together share one choice of level per instance, which this pass does
         // not make: a pass choosing levels culls its view alone.
@@ -312,6 +319,7 @@ impl InstanceCullPass {
             settings,
             test,
             compact,
+            levels,
             init,
             sampler: Sampler::nearest_clamp(ctx)?,
             scratch: None,
@@ -346,8 +354,9 @@ impl InstanceCullPass {
             let lod = self.settings.lod();
             // With levels of detail: more words per superblock record, a count per list, block
             // and level after the block counts, and a group count per level.
-            let (superblock_words, level_block_words, levels) = match lod {
-                true => (SUPERBLOCK_WORDS_LOD, 2 * blocks * LOD_LEVELS, LOD_LEVELS),
+            let (superblock_words, level_words, levels) = match lod {
+                // Counts per list, block and level, then starts per superblock, list and level.
+                true => (SUPERBLOCK_WORDS_LOD, 2 * (blocks + superblocks) * LOD_LEVELS, LOD_LEVELS),
                 false => (SUPERBLOCK_WORDS, 0, 1),
             };
             let bit_words = blocks * (CULL_BLOCK as u64 / 32);
@@ -356,7 +365,7 @@ impl InstanceCullPass {
                 groups,
                 scan: storage(
                     "cull scan state",
-                    (SCAN_HEADER_WORDS + 2 * superblocks * superblock_words + 2 * blocks + level_block_words) * 4,
+                    (SCAN_HEADER_WORDS + 2 * superblocks * superblock_words + 2 * blocks + level_words) * 4,
                 )?,
                 draw_bits: storage("cull draw bits", bit_words * 4)?,
                 level_bits: match lod {
@@ -571,6 +580,15 @@ impl PassNode for InstanceCullPass {
         // SAFETY: as above.
         unsafe { device.cmd_dispatch(cmd, blocks, 1, 1) };
         if self.compact.is_some() {
+            step_barrier(ctx, cmd);
+        }
+        if let Some(levels) = &self.levels {
+            rec.step("levels");
+            levels.bind(cmd);
+            levels.push_bindings(cmd, &[Bind::Buffer(0, scratch.scan.handle())]);
+            levels.push_constants(cmd, &[slots, superblocks]);
+            // SAFETY: as above.
+            unsafe { device.cmd_dispatch(cmd, 1, 1, 1) };
             step_barrier(ctx, cmd);
         }
 
