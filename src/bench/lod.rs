@@ -12,13 +12,13 @@
 //! The instance cull pass's cost is reported per 10^6 instances, so that the cost of choosing
 //! levels can be read beside the triangles it saves.
 
-use super::{median, median_per_pass};
+use super::{measure_frames, PassTime};
 use crate::gpu::{GpuContext, ShaderCompiler};
 use crate::oracle::image_error::{downsample_box_srgb, image_error};
 use crate::oracle::reference::{reference_render_size, render_reference};
 use crate::passes::instance_cull::CullPassStats;
 use crate::render::output::{rgba_from_bytes, RgbaImage};
-use crate::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
+use crate::render::{GraphSpec, RenderSettings, Renderer};
 use crate::scene::source::LoadOptions;
 use crate::scene::{Camera, Scene, SceneSource};
 use serde::{Deserialize, Serialize};
@@ -50,15 +50,6 @@ pub struct LodBench {
     pub frames: u32,
     /// Supersampling factor per axis of the reference (`None`: no error against a reference).
     pub reference: Option<u32>,
-}
-
-/// GPU time of one pass.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct PassTime {
-    /// Pass name.
-    pub pass: String,
-    /// Median milliseconds.
-    pub ms: f64,
 }
 
 /// One scene at one threshold.
@@ -174,11 +165,8 @@ pub fn run(
     })
 }
 
-/// How long frames run before any is measured, at least (a GPU that idled lowers its clocks).
-const MIN_WARMUP: std::time::Duration = std::time::Duration::from_millis(500);
-
-/// Renders `scene` at `threshold`: the warm-up, then `bench.frames` measured back to back,
-/// then one more read back. The scene name and image errors are left for the caller.
+/// Renders `scene` at `threshold`: the warm-up, then `bench.frames` measured back to back
+/// ([`measure_frames`]), then one more read back. The scene name and image errors are left for the caller.
 fn measure(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
@@ -190,24 +178,9 @@ fn measure(
     let spec = GraphSpec::builtin(GRAPH)?.with_overrides([("lod_threshold".to_string(), format!("{threshold:?}"))]);
     let settings = RenderSettings::new(bench.width, bench.height);
     let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
-    let mut pipeline = FramePipeline::new(ctx)?;
-    let started = std::time::Instant::now();
-    let mut warmup = 0u64;
-    while warmup < bench.warmup.max(2) as u64 || started.elapsed() < MIN_WARMUP {
-        pipeline.submit(&mut renderer, camera)?;
-        warmup += 1;
-    }
-    let mut measured = Vec::new();
-    for _ in 0..bench.frames.max(1) {
-        measured.extend(pipeline.submit(&mut renderer, camera)?);
-    }
-    measured.extend(pipeline.finish(&renderer)?);
-    drop(pipeline);
-    measured.retain(|s| s.frame >= warmup);
-    let timings: Vec<_> = measured.iter().map(|s| s.gpu_ms.clone()).collect();
-    let mut totals: Vec<f64> = measured.iter().map(|s| s.gpu_total_ms).collect();
+    // Two-phase culling: at least two frames, so that the early draw has a list.
+    let (_, passes, frame_ms) = measure_frames(ctx, &mut renderer, camera, bench.warmup.max(2), bench.frames)?;
     let (last, image) = renderer.render_to_image(camera)?;
-    let passes: Vec<PassTime> = median_per_pass(&timings).into_iter().map(|(pass, ms)| PassTime { pass, ms }).collect();
     let cull_ms = passes.iter().find(|p| p.pass == CULL_PASS).map_or(0.0, |p| p.ms);
     let mut level_instances: Vec<u32> = Vec::new();
     for pass in CullPassStats::of(&last) {
@@ -222,7 +195,7 @@ fn measure(
         threshold,
         triangles: last.triangles,
         level_instances,
-        frame_ms: median(&mut totals),
+        frame_ms,
         cull_ms_per_million: cull_ms * 1.0e6 / last.instances.max(1) as f64,
         passes,
         flip_vs_full: None,

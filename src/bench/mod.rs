@@ -30,7 +30,55 @@ pub mod plot;
 pub mod shadows;
 pub mod views;
 
-use crate::gpu::PassTiming;
+use crate::gpu::{GpuContext, PassTiming};
+use crate::render::{FramePipeline, Renderer};
+use crate::scene::Camera;
+use crate::stats::FrameStats;
+
+/// GPU time of one pass.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, PartialEq)]
+pub struct PassTime {
+    /// Pass name.
+    pub pass: String,
+    /// Median milliseconds.
+    pub ms: f64,
+}
+
+/// How long frames run before any is measured, at least: a GPU that idled (while the CPU loaded
+/// a scene or computed image errors) takes a few hundred milliseconds to raise its clocks again,
+/// and a frame count alone can end before that: frames measured at the lowered clocks run
+/// several times slower than the same frames warm.
+const MIN_WARMUP: std::time::Duration = std::time::Duration::from_millis(500);
+
+/// Renders `camera` with `renderer` as an application does, frames in flight: at least
+/// `warmup` frames and half a second, then `frames` (at least one) measured back to back.
+/// Returns the measured frames' stats and, per pass, their median milliseconds, with the
+/// median frame milliseconds.
+pub fn measure_frames(
+    ctx: &GpuContext,
+    renderer: &mut Renderer,
+    camera: &Camera,
+    warmup: u32,
+    frames: u32,
+) -> crate::Result<(Vec<FrameStats>, Vec<PassTime>, f64)> {
+    let mut pipeline = FramePipeline::new(ctx)?;
+    let started = std::time::Instant::now();
+    let mut warmed = 0u64;
+    while warmed < warmup as u64 || started.elapsed() < MIN_WARMUP {
+        pipeline.submit(renderer, camera)?;
+        warmed += 1;
+    }
+    let mut measured = Vec::new();
+    for _ in 0..frames.max(1) {
+        measured.extend(pipeline.submit(renderer, camera)?);
+    }
+    measured.extend(pipeline.finish(renderer)?);
+    measured.retain(|s| s.frame >= warmed);
+    let timings: Vec<_> = measured.iter().map(|s| s.gpu_ms.clone()).collect();
+    let passes = median_per_pass(&timings).into_iter().map(|(pass, ms)| PassTime { pass, ms }).collect();
+    let mut totals: Vec<f64> = measured.iter().map(|s| s.gpu_total_ms).collect();
+    Ok((measured, passes, median(&mut totals)))
+}
 
 /// The median of `values` (0 for none).
 pub fn median(values: &mut [f64]) -> f64 {

@@ -6,13 +6,14 @@
 //! The compressed methods are then set against the per-sample and Z-prepass baselines, as
 //! issue-style ratios (memory, lighting, frame, FLIP difference).
 
-use super::{median, median_per_pass};
+use super::measure_frames;
+pub use super::PassTime;
 use crate::gpu::{GpuContext, ShaderCompiler};
 use crate::oracle::image_error::image_error;
 use crate::oracle::reference::{reference_render_size, render_reference};
 use crate::passes::lighting_compressed::GbufferPassStats;
 use crate::render::output::RgbaImage;
-use crate::render::{FramePipeline, GraphSpec, RenderSettings, Renderer};
+use crate::render::{GraphSpec, RenderSettings, Renderer};
 use crate::scene::source::LoadOptions;
 use crate::scene::{Camera, Scene, SceneSource};
 use serde::{Deserialize, Serialize};
@@ -63,15 +64,6 @@ pub struct MsaaBench {
     pub frames: u32,
     /// Supersampling factor per axis of the reference (`None`: no image error).
     pub reference: Option<u32>,
-}
-
-/// GPU time of one pass.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct PassTime {
-    /// Pass name.
-    pub pass: String,
-    /// Median milliseconds.
-    pub ms: f64,
 }
 
 /// One method in one configuration.
@@ -203,15 +195,8 @@ pub fn run(
     })
 }
 
-/// How long frames run before any is measured, at least: a GPU that idled (while the CPU loaded
-/// a scene or computed image errors) takes a few hundred milliseconds to raise its clocks again,
-/// and a frame count alone can end before that: frames measured at the lowered clocks run
-/// several times slower than the same frames warm.
-const MIN_WARMUP: std::time::Duration = std::time::Duration::from_millis(500);
-
-/// Renders `method` at `samples` per pixel: at least `bench.warmup` frames and [`MIN_WARMUP`],
-/// then `bench.frames` measured back to back, as an application renders them, then one more read
-/// back. The figure's scene name, light count and image error are left for the caller.
+/// Renders `method` at `samples` per pixel: the warm-up, then `bench.frames` measured back to
+/// back, as an application renders them ([`measure_frames`]), then one more read back. The figure's scene name, light count and image error are left for the caller.
 fn measure(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
@@ -227,22 +212,7 @@ fn measure(
     }
     let settings = RenderSettings::new(bench.width, bench.height);
     let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
-    let mut pipeline = FramePipeline::new(ctx)?;
-    let started = std::time::Instant::now();
-    let mut warmup = 0u64;
-    while warmup < bench.warmup as u64 || started.elapsed() < MIN_WARMUP {
-        pipeline.submit(&mut renderer, camera)?;
-        warmup += 1;
-    }
-    let mut measured = Vec::new();
-    for _ in 0..bench.frames.max(1) {
-        measured.extend(pipeline.submit(&mut renderer, camera)?);
-    }
-    measured.extend(pipeline.finish(&renderer)?);
-    drop(pipeline);
-    measured.retain(|s| s.frame >= warmup);
-    let timings: Vec<_> = measured.iter().map(|s| s.gpu_ms.clone()).collect();
-    let mut totals: Vec<f64> = measured.iter().map(|s| s.gpu_total_ms).collect();
+    let (_, passes, frame_ms) = measure_frames(ctx, &mut renderer, camera, bench.warmup, bench.frames)?;
     let (last, image) = renderer.render_to_image(camera)?;
     let gbuffer_bytes = renderer
         .runtime()
@@ -251,7 +221,6 @@ fn measure(
         .filter(|r| GBUFFER_RESOURCES.contains(&r.name.as_str()))
         .map(|r| r.bytes)
         .sum();
-    let passes: Vec<PassTime> = median_per_pass(&timings).into_iter().map(|(pass, ms)| PassTime { pass, ms }).collect();
     let sum =
         |keep: &dyn Fn(&str) -> bool| passes.iter().filter(|p| keep(&p.pass)).map(|p| p.ms).fold(0.0, |a, b| a + b);
     let figure = MsaaFigure {
@@ -259,7 +228,7 @@ fn measure(
         lights: 0,
         samples,
         method: method.to_string(),
-        frame_ms: median(&mut totals),
+        frame_ms,
         geometry_ms: sum(&|p| ["draw_", "depth_", "gbuffer"].iter().any(|s| p.starts_with(s))),
         lighting_ms: sum(&|p| p == "lighting"),
         passes,
