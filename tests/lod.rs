@@ -266,3 +266,30 @@ fn levels_are_placed_alike_over_many_superblocks() {
     assert!(other == image, "two-phase culling drew another image than frustum culling at the same levels");
     assert!(late.triangles <= frustum.triangles);
 }
+
+#[test]
+fn the_threshold_changes_live_once_levels_are_chosen() {
+    use cullgraph::render::ParamsApplied;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let scene = dense(40);
+    let camera = near_camera();
+    let settings = RenderSettings::new(SIZE.0, SIZE.1);
+    let mut renderer = Renderer::with_graph(&gpu, &shaders, scene.clone(), settings, &graph("frustum", 0.0)).unwrap();
+    let (whole, whole_image) = renderer.render_to_image(&camera).unwrap();
+    // From none to some levels: the pass is made again with them.
+    assert_eq!(renderer.set_graph_params(&shaders, &[("lod_threshold", "1.0")]).unwrap(), ParamsApplied::Rebuilt);
+    let (one, _) = renderer.render_to_image(&camera).unwrap();
+    // Between thresholds, and back to 0, it takes them as they are.
+    assert_eq!(renderer.set_graph_params(&shaders, &[("lod_threshold", "4.0")]).unwrap(), ParamsApplied::Live);
+    let (four, four_image) = renderer.render_to_image(&camera).unwrap();
+    assert_eq!(renderer.set_graph_params(&shaders, &[("lod_threshold", "0.0")]).unwrap(), ParamsApplied::Live);
+    let (zero, zero_image) = renderer.render_to_image(&camera).unwrap();
+    assert!(four.triangles < one.triangles && one.triangles < whole.triangles);
+    // Each as a renderer loaded with that threshold draws it.
+    let (loaded, loaded_image) = render(&gpu, &scene, &camera, &graph("frustum", 4.0), 1);
+    assert_eq!(four.triangles, loaded.triangles);
+    assert!(four_image.into_raw() == loaded_image);
+    assert_eq!(zero.triangles, whole.triangles);
+    assert!(zero_image.into_raw() == whole_image.into_raw(), "threshold 0 set live draws every mesh whole");
+}

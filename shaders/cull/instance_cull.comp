@@ -258,7 +258,8 @@ float lod_pixels_per_unit(CullView view, vec3 c, float radius) {
 // threshold (0: the full mesh). Levels' errors never decrease along the chain.
 uint choose_level(CullView view, vec3 c, float radius, uint group) {
     DrawGroup g = groups[group];
-    if (g.lod_count == 0u) return 0u;
+    // Threshold 0 (set live on a pass built with levels): every mesh whole, as without levels.
+    if (g.lod_count == 0u || pc.lod_threshold <= 0.0) return 0u;
     float per_error = radius * lod_pixels_per_unit(view, c, radius);
     uint level = 0u;
     for (uint l = 0u; l < min(g.lod_count, LOD_LEVELS - 1u); ++l) {

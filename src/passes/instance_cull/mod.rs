@@ -351,7 +351,7 @@ impl InstanceCullPass {
                 )
             };
             let superblocks = blocks.div_ceil(CULL_SUPERBLOCK as u64);
-            let lod = self.settings.lod();
+            let lod = self.levels.is_some();
             // With levels of detail: more words per superblock record, a count per list, block
             // and level after the block counts, and a group count per level.
             let (superblock_words, level_words, levels) = match lod {
@@ -462,6 +462,20 @@ impl PassNode for InstanceCullPass {
 
     fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
         Some(self)
+    }
+
+    /// A pass that chooses levels of detail takes another threshold as it is (a push constant,
+    /// 0 drawing every mesh whole); one that chooses none is made again to choose them.
+    fn live_settings(&self) -> &'static [&'static str] {
+        match self.levels.is_some() {
+            true => &["lod_threshold"],
+            false => &[],
+        }
+    }
+
+    fn apply_settings(&mut self, pass: &PlannedPass) -> crate::Result<()> {
+        self.settings.lod_threshold = pass.real("lod_threshold")? as f32;
+        Ok(())
     }
 
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
