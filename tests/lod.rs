@@ -64,14 +64,7 @@ fn render_checked(
 
 /// Instances drawn at each level over the frame's cull passes and lists.
 fn levels(stats: &FrameStats) -> Vec<u32> {
-    let mut sum = Vec::new();
-    for pass in CullPassStats::of(stats) {
-        sum.resize(sum.len().max(pass.level_instances.len()), 0);
-        for (s, n) in sum.iter_mut().zip(&pass.level_instances) {
-            *s += n;
-        }
-    }
-    sum
+    CullPassStats::level_totals(stats)
 }
 
 /// Mean and largest absolute channel difference (RGB) of two images.

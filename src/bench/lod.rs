@@ -165,6 +165,18 @@ pub fn run(
     })
 }
 
+/// A renderer of `scene` through [`GRAPH`] at `threshold` and `size`.
+fn renderer_at(
+    ctx: &GpuContext,
+    shaders: &ShaderCompiler,
+    scene: &Scene,
+    threshold: f64,
+    (width, height): (u32, u32),
+) -> crate::Result<Renderer> {
+    let spec = GraphSpec::builtin(GRAPH)?.with_overrides([("lod_threshold".to_string(), format!("{threshold:?}"))]);
+    Renderer::with_graph(ctx, shaders, scene.clone(), RenderSettings::new(width, height), &spec)
+}
+
 /// Renders `scene` at `threshold`: the warm-up, then `bench.frames` measured back to back
 /// ([`measure_frames`]), then one more read back. The scene name and image errors are left for the caller.
 fn measure(
@@ -175,20 +187,12 @@ fn measure(
     camera: &Camera,
     threshold: f64,
 ) -> crate::Result<(LodFigure, RgbaImage)> {
-    let spec = GraphSpec::builtin(GRAPH)?.with_overrides([("lod_threshold".to_string(), format!("{threshold:?}"))]);
-    let settings = RenderSettings::new(bench.width, bench.height);
-    let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
+    let mut renderer = renderer_at(ctx, shaders, scene, threshold, (bench.width, bench.height))?;
     // Two-phase culling: at least two frames, so that the early draw has a list.
     let (_, passes, frame_ms) = measure_frames(ctx, &mut renderer, camera, bench.warmup.max(2), bench.frames)?;
     let (last, image) = renderer.render_to_image(camera)?;
     let cull_ms = passes.iter().find(|p| p.pass == CULL_PASS).map_or(0.0, |p| p.ms);
-    let mut level_instances: Vec<u32> = Vec::new();
-    for pass in CullPassStats::of(&last) {
-        level_instances.resize(level_instances.len().max(pass.level_instances.len()), 0);
-        for (sum, n) in level_instances.iter_mut().zip(&pass.level_instances) {
-            *sum += n;
-        }
-    }
+    let level_instances = CullPassStats::level_totals(&last);
     let figure = LodFigure {
         scene: String::new(),
         instances: last.instances,
@@ -220,10 +224,8 @@ fn render_supersampled(
     threshold: f64,
     n: u32,
 ) -> crate::Result<RgbaImage> {
-    let (big_w, big_h) = reference_render_size(ctx, (bench.width, bench.height), n)?;
-    let scaled = format!("{:?}", threshold * n as f64);
-    let spec = GraphSpec::builtin(GRAPH)?.with_overrides([("lod_threshold".to_string(), scaled)]);
-    let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), RenderSettings::new(big_w, big_h), &spec)?;
+    let size = reference_render_size(ctx, (bench.width, bench.height), n)?;
+    let mut renderer = renderer_at(ctx, shaders, scene, threshold * n as f64, size)?;
     let unjittered = Camera { jitter: glam::Vec2::ZERO, ..camera.clone() };
     // Two-phase culling: the frame after the first draws what the first found visible.
     renderer.render(&unjittered)?;

@@ -89,6 +89,19 @@ impl CullPassStats {
         frame.entries(GROUP)
     }
 
+    /// Instances drawn at each level of detail in `frame`, over its cull passes and draw lists,
+    /// from the full mesh (0) on, up to the coarsest level drawn.
+    pub fn level_totals(frame: &FrameStats) -> Vec<u32> {
+        let mut sum: Vec<u32> = Vec::new();
+        for pass in Self::of(frame) {
+            sum.resize(sum.len().max(pass.level_instances.len()), 0);
+            for (s, n) in sum.iter_mut().zip(&pass.level_instances) {
+                *s += n;
+            }
+        }
+        sum
+    }
+
     /// The entry of the frame's stats for `counters` of pass `pass` (`None` if they are not a
     /// whole record).
     pub(crate) fn entry(pass: &str, counters: &[u8]) -> Option<CounterEntry> {
