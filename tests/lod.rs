@@ -286,3 +286,86 @@ fn the_threshold_changes_live_once_levels_are_chosen() {
     assert_eq!(zero.triangles, whole.triangles);
     assert!(zero_image.into_raw() == whole_image.into_raw(), "threshold 0 set live draws every mesh whole");
 }
+
+/// A UV sphere of `rings` x `segments` quads (radius 1).
+fn sphere(rings: u32, segments: u32) -> cullgraph::scene::MeshData {
+    let mut positions = Vec::new();
+    for r in 0..=rings {
+        let theta = std::f32::consts::PI * r as f32 / rings as f32;
+        for s in 0..=segments {
+            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
+            positions.push(glam::Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()));
+        }
+    }
+    let row = segments + 1;
+    let mut indices = Vec::new();
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b) = (r * row + s, (r + 1) * row + s);
+            indices.extend([a, a + 1, b, a + 1, b + 1, b]);
+        }
+    }
+    cullgraph::scene::MeshData { normals: positions.clone(), positions, indices, ..Default::default() }
+}
+
+#[test]
+fn a_live_world_draws_its_meshes_at_levels_as_a_loaded_scene_does() {
+    use cullgraph::scene::merge::SceneMerge;
+    use cullgraph::scene::world::World;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let camera = near_camera();
+    let spec = graph("two_phase", 1.0);
+    let (mut world, _) = World::new(dense(40)).unwrap();
+    let settings = RenderSettings::new(SIZE.0, SIZE.1);
+    let mut renderer = Renderer::from_world(&gpu, &shaders, &world, settings, &spec).unwrap();
+    // The world's frame after `frames` frames, beside a renderer loaded with its live scene.
+    let compare = |world: &World, renderer: &mut Renderer, what: &str| {
+        let synced = renderer.sync(&shaders, world).unwrap();
+        for _ in 1..3 {
+            renderer.render(&camera).unwrap();
+        }
+        let (stats, image) = renderer.render_to_image(&camera).unwrap();
+        let (loaded, loaded_image) = render_checked(&gpu, &world.live_scene(), &camera, &spec, 3, false);
+        assert_eq!(levels(&stats), levels(&loaded), "{what}");
+        assert_eq!(stats.triangles, loaded.triangles, "{what}");
+        let (mean, _) = difference(&image.into_raw(), &loaded_image);
+        assert!(mean == 0.0, "{what}: mean channel difference {mean} from the loaded scene");
+        (stats, synced.relayout)
+    };
+    let (first, _) = compare(&world, &mut renderer, "the world as loaded");
+    assert!(levels(&first)[1..].iter().any(|&n| n > 0), "{:?}", levels(&first));
+    // A second copy of the props streamed in beside the first: their meshes come with chains.
+    let placement = Transform { linear: Mat3::IDENTITY, translation: DVec3::new(-12.0, 0.0, 6.0) };
+    let mut merge = SceneMerge::new(dense(40), placement).unwrap();
+    merge.add_all(&mut world).unwrap();
+    let (merged, relayout) = compare(&world, &mut renderer, "a scene merged in");
+    assert!(!relayout, "the merged meshes' levels fit the layout's room");
+    assert!(merged.drawn > first.drawn);
+    // A mesh registered by the engine gets its chain, and its pool space back when unregistered.
+    let ball = world.add_mesh("ball", &sphere(96, 192)).unwrap();
+    assert!(!world.scene().meshes[ball as usize].lods.is_empty());
+    let at = |x: f64, z: f64| Instance {
+        transform: Transform {
+            linear: Mat3::from_diagonal(glam::Vec3::splat(1.5)),
+            translation: DVec3::new(x, 2.0, z),
+        },
+        mesh: ball,
+        material: 0,
+        flags: 0,
+    };
+    let balls: Vec<_> = [(4.0, 4.0), (-30.0, -30.0)].iter().map(|&(x, z)| world.insert(at(x, z)).unwrap()).collect();
+    let (with_balls, _) = compare(&world, &mut renderer, "a registered mesh");
+    assert!(with_balls.drawn >= merged.drawn + 1);
+    let indices = world.scene().indices.len();
+    for handle in balls {
+        world.remove(handle).unwrap();
+    }
+    world.remove_mesh(ball).unwrap();
+    let again = world.add_mesh("ball again", &sphere(96, 192)).unwrap();
+    assert_eq!(world.scene().indices.len(), indices, "the new chain takes the old one's place");
+    world.insert(at(4.0, 4.0)).unwrap();
+    let _ = again;
+    compare(&world, &mut renderer, "a mesh registered in a freed place");
+    gpu.assert_clean();
+}

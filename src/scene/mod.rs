@@ -92,10 +92,18 @@ pub struct Mesh {
     /// How the mesh deforms (skin influences, morph targets); `None` for a rigid mesh. Its
     /// `bounds` and `sphere` are those of the rest shape.
     pub deform: Option<std::sync::Arc<deform::MeshDeform>>,
-    /// Simplified levels of detail, coarser and coarser ([`lod`]); empty for a mesh that is
-    /// always drawn whole (small, deformed, registered on a live world, or
-    /// [`MeshData::no_lod`]).
+    /// Simplified levels of detail, coarser and coarser ([`lod`]), their indices in the pool
+    /// right after the full mesh's ([`Mesh::index_span`]); empty for a mesh that is always
+    /// drawn whole (small, deformed, or [`MeshData::no_lod`]).
     pub lods: Vec<LodLevel>,
+}
+
+impl Mesh {
+    /// The indices the mesh holds in the pool: the full mesh's and then its levels of detail's,
+    /// one range from `first_index`.
+    pub fn index_span(&self) -> u32 {
+        self.index_count + self.lods.iter().map(|l| l.index_count).sum::<u32>()
+    }
 }
 
 /// Surface parameters of the shading model (glTF metallic-roughness): factors, each multiplied
@@ -337,23 +345,48 @@ impl Scene {
 
     /// Builds mesh `mesh`'s levels of detail and appends their indices to the index pool.
     fn add_lod_chain(&mut self, mesh: u32, place: &str) -> Result<(), SceneError> {
+        let chain = self.lod_chain_of(mesh);
+        let start = self.indices.len();
+        self.put_lod_chain(mesh, chain, start, place)
+    }
+
+    /// The chain of levels of detail that mesh `mesh` gets ([`lod::build_chain`]): none for a
+    /// deformed mesh.
+    pub(crate) fn lod_chain_of(&self, mesh: u32) -> Vec<(Vec<u32>, f32)> {
         let m = &self.meshes[mesh as usize];
         if m.deform.is_some() {
-            return Ok(());
+            return Vec::new();
         }
         let vertices = &self.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
         let indices = &self.indices[m.first_index as usize..(m.first_index + m.index_count) as usize];
-        let chain = lod::build_chain(vertices, indices);
+        lod::build_chain(vertices, indices)
+    }
+
+    /// Writes `chain` as mesh `mesh`'s levels of detail, their indices one after the other from
+    /// `start` in the index pool (growing it where they run past its end).
+    pub(crate) fn put_lod_chain(
+        &mut self,
+        mesh: u32,
+        chain: Vec<(Vec<u32>, f32)>,
+        start: usize,
+        place: &str,
+    ) -> Result<(), SceneError> {
         let more: usize = chain.iter().map(|(i, _)| i.len()).sum();
+        let end = start + more;
+        u32::try_from(end).map_err(|_| SceneError::too_large(place, "index pool"))?;
+        let grow = end.saturating_sub(self.indices.len());
         self.indices
-            .try_reserve(more)
-            .map_err(|_| SceneError::invalid(place, format!("cannot allocate memory for {more} more indices")))?;
+            .try_reserve(grow)
+            .map_err(|_| SceneError::invalid(place, format!("cannot allocate memory for {grow} more indices")))?;
+        if self.indices.len() < end {
+            self.indices.resize(end, 0);
+        }
         let mut lods = Vec::with_capacity(chain.len());
+        let mut at = start;
         for (indices, error) in chain {
-            let first_index =
-                u32::try_from(self.indices.len()).map_err(|_| SceneError::too_large(place, "index pool"))?;
-            lods.push(LodLevel { first_index, index_count: indices.len() as u32, error });
-            self.indices.extend_from_slice(&indices);
+            lods.push(LodLevel { first_index: at as u32, index_count: indices.len() as u32, error });
+            self.indices[at..at + indices.len()].copy_from_slice(&indices);
+            at += indices.len();
         }
         self.meshes[mesh as usize].lods = lods;
         Ok(())

@@ -615,7 +615,7 @@ impl World {
             self.scene.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize].to_vec();
         let indices = self.scene.indices[m.first_index as usize..(m.first_index + m.index_count) as usize].to_vec();
         let name = format!("{} (posed instance {index})", m.name);
-        self.place_mesh(&name, vertices.len(), indices.len(), |scene, place, at| {
+        self.place_mesh(&name, vertices.len(), indices.len(), Vec::new(), |scene, place, at| {
             scene.put_mesh_vertices(&name, &vertices, &indices, (m.bounds, m.sphere, None), place, at)
         })
     }
@@ -753,42 +753,67 @@ impl World {
 
     /// Registers a mesh and returns its index: its vertices and indices take the smallest free
     /// ranges of the pools that hold them (space unregistered meshes gave back) before the pools
-    /// grow, and it takes an unregistered mesh's index when there is one.
+    /// grow, and it takes an unregistered mesh's index when there is one. It gets its chain of
+    /// levels of detail as a mesh of a loaded scene does ([`Scene::add_mesh`]).
     pub fn add_mesh(&mut self, name: &str, data: &MeshData) -> Result<u32, WorldError> {
-        self.place_mesh(name, data.positions.len(), data.indices.len(), |scene, place, at| {
-            scene.put_mesh(name, data, place, at)
+        let (vertices, bounds, sphere, deform) = data.validate(&format!("mesh '{name}'"))?;
+        let chain = if data.no_lod || deform.is_some() {
+            Vec::new()
+        } else {
+            super::lod::build_chain(&vertices, &data.indices)
+        };
+        let deform = deform.map(std::sync::Arc::new);
+        self.place_mesh(name, vertices.len(), data.indices.len(), chain, |scene, place, at| {
+            scene.put_mesh_vertices(name, &vertices, &data.indices, (bounds, sphere, deform), place, at)
         })
     }
 
-    /// Registers mesh `mesh` of `source` (checked when `source` was loaded) as
-    /// [`World::add_mesh`] does.
+    /// Registers mesh `mesh` of `source` (checked when `source` was loaded), with its levels of
+    /// detail, as [`World::add_mesh`] does.
     pub(crate) fn add_mesh_of(&mut self, source: &Scene, mesh: u32) -> Result<u32, WorldError> {
         let m = &source.meshes[mesh as usize];
         let vertices = &source.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
         let indices = &source.indices[m.first_index as usize..(m.first_index + m.index_count) as usize];
-        self.place_mesh(&m.name, vertices.len(), indices.len(), |scene, place, at| {
+        let chain = m
+            .lods
+            .iter()
+            .map(|l| {
+                (source.indices[l.first_index as usize..(l.first_index + l.index_count) as usize].to_vec(), l.error)
+            })
+            .collect();
+        self.place_mesh(&m.name, vertices.len(), indices.len(), chain, |scene, place, at| {
             scene.put_mesh_vertices(&m.name, vertices, indices, (m.bounds, m.sphere, m.deform.clone()), place, at)
         })
     }
 
-    /// Finds room for a mesh of `vertices` and `indices` and registers it with `put`.
+    /// Finds room for a mesh of `vertices` and `indices` and its levels of detail `chain`, and
+    /// registers it with `put`; the levels' indices follow the mesh's in the pool.
     fn place_mesh(
         &mut self,
         name: &str,
         vertices: usize,
         indices: usize,
+        chain: Vec<(Vec<u32>, f32)>,
         put: impl FnOnce(&mut Scene, &str, super::MeshPlace) -> Result<u32, SceneError>,
     ) -> Result<u32, WorldError> {
         let place = format!("mesh '{name}'");
         let too_large = |pool| WorldError::from(SceneError::too_large(&place, pool));
+        let span = indices + chain.iter().map(|(i, _)| i.len()).sum::<usize>();
         let vertices = u32::try_from(vertices).map_err(|_| too_large("vertex pool"))?;
-        let indices = u32::try_from(indices).map_err(|_| too_large("index pool"))?;
+        let span = u32::try_from(span).map_err(|_| too_large("index pool"))?;
         let (mut vertex_ranges, mut index_ranges) = (self.vertex_ranges.clone(), self.index_ranges.clone());
         let vertex = vertex_ranges.take(vertices).ok_or_else(|| too_large("vertex pool"))?;
-        let index = index_ranges.take(indices).ok_or_else(|| too_large("index pool"))?;
+        let index = index_ranges.take(span).ok_or_else(|| too_large("index pool"))?;
         let slot = self.free_meshes.last().copied();
         let at = super::MeshPlace { vertex: vertex as usize, index: index as usize, slot };
         let mesh = put(&mut self.scene, &place, at)?;
+        if let Err(e) = self.scene.put_lod_chain(mesh, chain, at.index + indices, &place) {
+            // A mesh appended is taken back; one put in a free entry leaves it free.
+            if slot.is_none() {
+                self.scene.meshes.pop();
+            }
+            return Err(e.into());
+        }
         (self.vertex_ranges, self.index_ranges) = (vertex_ranges, index_ranges);
         if slot.is_some() {
             self.free_meshes.pop();
@@ -823,7 +848,7 @@ impl World {
         self.meshes_live[mesh as usize] = false;
         let m = &self.scene.meshes[mesh as usize];
         self.vertex_ranges.give_back(m.vertex_offset, m.vertex_count);
-        self.index_ranges.give_back(m.first_index, m.index_count);
+        self.index_ranges.give_back(m.first_index, m.index_span());
         self.free_meshes.push(mesh);
         self.record(Change::Mesh(mesh));
     }

@@ -138,7 +138,7 @@ pub struct GpuGroupBounds {
 }
 
 impl GpuDrawGroup {
-    /// The group that unculled draw command `command` draws.
+    /// The group that unculled draw command `command` draws (always whole: no levels).
     pub fn of(command: &DrawIndexedIndirect) -> Self {
         Self {
             first_slot: command.first_instance,
@@ -151,6 +151,55 @@ impl GpuDrawGroup {
             pad: 0,
         }
     }
+
+    /// The group of `command`, which draws mesh `mesh` of `scene` in face-cull region `region`:
+    /// with the mesh's levels of detail, except for transparent instances (always drawn whole,
+    /// [`super::face_cull::lod_commands`]).
+    pub fn with_levels(command: &DrawIndexedIndirect, scene: &crate::scene::Scene, mesh: u32, region: usize) -> Self {
+        let mut group = Self::of(command);
+        if region != super::face_cull::FaceCull::Blended as usize {
+            group.lod_first = mesh_levels(mesh);
+            group.lod_count = scene.meshes[mesh as usize].lods.len() as u32;
+        }
+        group
+    }
+}
+
+/// Entries of the level table each mesh owns: its levels past the full mesh, at most.
+pub const LEVELS_PER_MESH: u32 = crate::scene::MAX_LOD_LEVELS as u32 - 1;
+
+/// Where mesh `mesh`'s levels of detail start in the level table ([`CullData::lods`]): a fixed
+/// stride per mesh, so that a live world's registered meshes write theirs in place.
+pub fn mesh_levels(mesh: u32) -> u32 {
+    mesh * LEVELS_PER_MESH
+}
+
+/// The level-table entries of `mesh`'s levels of detail past the full mesh.
+pub fn gpu_levels(mesh: &crate::scene::Mesh) -> Vec<GpuLodLevel> {
+    let radius = local_radius(mesh);
+    mesh.lods
+        .iter()
+        .map(|l| GpuLodLevel {
+            first_index: l.first_index,
+            index_count: l.index_count,
+            // Rounded up, so that the error read is never below the true one.
+            relative_error: (l.error / radius) * (1.0 + f32::EPSILON * 4.0),
+            pad: 0,
+        })
+        .collect()
+}
+
+/// The level table of `scene`: [`LEVELS_PER_MESH`] entries per mesh (at least one entry, so
+/// that the buffer exists).
+pub fn level_table(scene: &crate::scene::Scene) -> Vec<GpuLodLevel> {
+    let mut table = vec![GpuLodLevel::default(); (scene.meshes.len() * LEVELS_PER_MESH as usize).max(1)];
+    for (m, mesh) in scene.meshes.iter().enumerate() {
+        let first = mesh_levels(m as u32) as usize;
+        for (entry, level) in table[first..].iter_mut().zip(gpu_levels(mesh)) {
+            *entry = level;
+        }
+    }
+    table
 }
 
 impl GpuGroupBounds {
@@ -173,8 +222,7 @@ pub struct CullData {
     pub groups: Vec<GpuDrawGroup>,
     /// The local bounds of each group's mesh.
     pub bounds: Vec<GpuGroupBounds>,
-    /// The groups' levels of detail past the full mesh (at least one entry, so that the buffer
-    /// exists).
+    /// The meshes' levels of detail past the full mesh ([`level_table`]).
     pub lods: Vec<GpuLodLevel>,
 }
 
@@ -182,7 +230,6 @@ impl CullData {
     /// Bounds and groups of `scene`, slots in the order of `draws`.
     pub fn new(scene: &Scene, draws: &DrawList) -> Self {
         let mut group_of_slot = vec![0u32; draws.instance_ids.len()];
-        let mut lods = Vec::new();
         let groups: Vec<GpuDrawGroup> = draws
             .commands
             .iter()
@@ -191,28 +238,14 @@ impl CullData {
                 for slot in c.first_instance..c.first_instance + c.instance_count {
                     group_of_slot[slot as usize] = g as u32;
                 }
-                let mut group = GpuDrawGroup::of(c);
-                let blended = draws.regions.region_of(g as u32) == super::face_cull::FaceCull::Blended as usize;
-                if c.instance_count > 0 && !blended {
-                    let mesh = &scene.meshes
-                        [scene.instances[draws.instance_ids[c.first_instance as usize] as usize].mesh as usize];
-                    let radius = local_radius(mesh);
-                    group.lod_first = lods.len() as u32;
-                    group.lod_count = mesh.lods.len() as u32;
-                    lods.extend(mesh.lods.iter().map(|l| GpuLodLevel {
-                        first_index: l.first_index,
-                        index_count: l.index_count,
-                        // Rounded up, so that the error read is never below the true one.
-                        relative_error: (l.error / radius) * (1.0 + f32::EPSILON * 4.0),
-                        pad: 0,
-                    }));
+                if c.instance_count == 0 {
+                    return GpuDrawGroup::of(c);
                 }
-                group
+                let mesh = scene.instances[draws.instance_ids[c.first_instance as usize] as usize].mesh;
+                GpuDrawGroup::with_levels(c, scene, mesh, draws.regions.region_of(g as u32))
             })
             .collect();
-        if lods.is_empty() {
-            lods.push(GpuLodLevel::default());
-        }
+        let lods = level_table(scene);
         let records = draws
             .instance_ids
             .iter()

@@ -8,7 +8,7 @@
 //! The caller then queues the changed parts (`write_*`), which land in the successor's buffers
 //! at the next recorded frame, after the frames before it are done with what they overwrite.
 
-use super::cull_data::{GpuDrawGroup, GpuGroupBounds};
+use super::cull_data::{gpu_levels, mesh_levels, GpuDrawGroup, GpuGroupBounds, GpuLodLevel, LEVELS_PER_MESH};
 use super::gpu_types::GpuMaterial;
 use super::scene_buffers::{drawn_triangles, max_mesh_triangles, GpuScene};
 use super::slot_layout::SlotLayout;
@@ -105,7 +105,11 @@ impl GpuScene {
             )?,
             draw_groups: self.draw_groups.clone(),
             group_bounds: self.group_bounds.clone(),
-            lod_levels: self.lod_levels.clone(),
+            lod_levels: fit(
+                &self.lod_levels,
+                size_of(scene.meshes.len() as u64 * LEVELS_PER_MESH as u64, std::mem::size_of::<GpuLodLevel>()),
+                none,
+            )?,
             instance_triangles: fit(&self.instance_triangles, size_of(slots, 8), none)?,
             textures,
             instance_count: slots as u32,
@@ -116,11 +120,14 @@ impl GpuScene {
         })
     }
 
-    /// Queues mesh `mesh` of `scene` (its vertices and indices) into the pools.
+    /// Queues mesh `mesh` of `scene` (its vertices, its indices and its levels of detail's)
+    /// into the pools, and its levels into the level table.
     pub fn write_mesh(&self, edits: &mut Edits, scene: &Scene, mesh: u32) {
         let m = &scene.meshes[mesh as usize];
         let vertices = m.vertex_offset..m.vertex_offset + m.vertex_count;
-        let indices = m.first_index..m.first_index + m.index_count;
+        let indices = m.first_index..m.first_index + m.index_span();
+        let levels = mesh_levels(mesh)..mesh_levels(mesh) + m.lods.len() as u32;
+        edits.write(&self.lod_levels, at::<GpuLodLevel>(&levels), bytemuck::cast_slice(&gpu_levels(m)));
         edits.write(
             &self.vertices,
             at::<crate::scene::Vertex>(&vertices),
@@ -144,7 +151,11 @@ impl GpuScene {
             at::<super::gpu_types::DrawIndexedIndirect>(&index),
             bytemuck::bytes_of(&command),
         );
-        edits.write(&self.draw_groups, at::<GpuDrawGroup>(&index), bytemuck::bytes_of(&GpuDrawGroup::of(&command)));
+        let record = match group.spare() {
+            true => GpuDrawGroup::of(&command),
+            false => GpuDrawGroup::with_levels(&command, scene, group.key.1, group.key.0),
+        };
+        edits.write(&self.draw_groups, at::<GpuDrawGroup>(&index), bytemuck::bytes_of(&record));
         if group.spare() {
             return;
         }

@@ -22,7 +22,7 @@
 //! region that has used them all is laid out anew ([`SlotLayout::new`]), with the culling
 //! history cleared.
 
-use super::face_cull::{FaceCull, FACE_CULL_REGIONS};
+use super::face_cull::{self, FaceCull, FACE_CULL_REGIONS};
 use super::scene_buffers::{spatial_keys, DrawList};
 use crate::passes::shared::face_cull::DrawRegions;
 use crate::passes::shared::gpu_types::DrawIndexedIndirect;
@@ -137,14 +137,47 @@ impl SlotLayout {
                 layout.occupied += ids.len() as u32;
                 groups += 1;
             }
-            for _ in 0..reserve_for(groups) {
+            let reserve = reserve_for(groups);
+            for _ in 0..reserve {
                 layout.reserve[region].push(layout.groups.len());
                 layout.groups.push(GroupRange::reserve(region));
                 layout.free.push(Vec::new());
             }
             layout.reserve[region].reverse();
+            // Room for a command per level of detail of each group: empty groups that no mesh
+            // takes, enough for the groups laid out and for reserved ones of the scene's
+            // most detailed chain.
+            let most = scene.meshes.iter().map(|m| face_cull::lod_commands(m, region) - 1).max().unwrap_or(0);
+            let levels = layout.level_commands(scene, region) - layout.used_groups(region);
+            for _ in 0..levels + reserve as u32 * most {
+                layout.groups.push(GroupRange::reserve(region));
+                layout.free.push(Vec::new());
+            }
         }
         layout
+    }
+
+    /// Groups of face-cull region `region` that hold slots.
+    fn used_groups(&self, region: usize) -> u32 {
+        self.groups.iter().filter(|g| g.key.0 == region && !g.spare()).count() as u32
+    }
+
+    /// The most commands a culled list may hold in face-cull region `region`: one per level of
+    /// detail of each group with slots ([`face_cull::lod_commands`]).
+    fn level_commands(&self, scene: &Scene, region: usize) -> u32 {
+        let groups = self.groups.iter().filter(|g| g.key.0 == region && !g.spare());
+        groups.map(|g| scene.meshes.get(g.key.1 as usize).map_or(1, |m| face_cull::lod_commands(m, region))).sum()
+    }
+
+    /// Whether every face-cull region has a command for each level of detail of each of its
+    /// groups with `scene`'s meshes (a region outgrown by new groups or by meshes registered
+    /// with longer chains must be laid out anew).
+    pub fn has_level_room(&self, scene: &Scene) -> bool {
+        let mut len = [0u32; FACE_CULL_REGIONS];
+        for g in &self.groups {
+            len[g.key.0] += 1;
+        }
+        (0..FACE_CULL_REGIONS).all(|r| self.level_commands(scene, r) <= len[r])
     }
 
     /// Appends a range of `capacity` empty slots as a new group of `key`; returns the group.

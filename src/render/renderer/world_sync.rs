@@ -701,6 +701,12 @@ impl Renderer {
         }
         let queued_before = mirror.queued_bytes();
         let mut edited_bytes = 0;
+        // A list must hold a command per level of detail of every group: new groups, or
+        // meshes registered with longer chains, may need more than the regions hold.
+        let level_room = |layout: &SlotLayout| layout.has_level_room(world.scene());
+        if (grew || !registered.meshes.is_empty()) && !level_room(&mirror.layout) {
+            return self.rebuild(shaders, world, start, Layout::Fresh, textures_changed);
+        }
         if grew || !registered.is_empty() {
             match self.grow_in_place(shaders, world, &registered, slots_before)? {
                 Some(bytes) => edited_bytes = bytes,
@@ -959,7 +965,7 @@ impl Renderer {
         for &m in &registered.meshes {
             let mesh = &source.meshes[m as usize];
             let vertices = mesh.vertex_offset as usize..(mesh.vertex_offset + mesh.vertex_count) as usize;
-            let indices = mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize;
+            let indices = mesh.first_index as usize..(mesh.first_index + mesh.index_span()) as usize;
             self.scene.vertices[vertices.clone()].copy_from_slice(&source.vertices[vertices]);
             self.scene.indices[indices.clone()].copy_from_slice(&source.indices[indices]);
         }
