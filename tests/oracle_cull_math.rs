@@ -612,6 +612,7 @@ fn instance_boxes_with_zero_and_negative_scale() {
                 sphere: Sphere { center: local.center(), radius: local.half_extent().length() },
                 deform: None,
                 lods: Vec::new(),
+                clusters: Vec::new(),
             });
             let instance = Instance { transform: Transform { linear, translation }, mesh: 0, material: 0, flags: 0 };
             let (wmin, wmax) = scene.instance_bounds(&instance);

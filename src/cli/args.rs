@@ -488,6 +488,12 @@ pub struct RenderArgs {
     /// for `--param lod_threshold=PX` (the shipped culling graphs have it).
     #[arg(long, value_name = "PX", value_parser = parse_lod_threshold, allow_hyphen_values = true)]
     pub lod_threshold: Option<f64>,
+    /// Cluster culling: before each draw of a culled list, a `cluster_cull` pass tests the
+    /// clusters of its instances (frustum, normal cone, Hi-Z) and the draw takes them cluster by
+    /// cluster; the image does not change. `on` runs the graph's cluster variant
+    /// (`two_phase_clusters` for the default, `frustum_clusters` for `--graph builtin:frustum`).
+    #[arg(long, action = clap::ArgAction::Set, value_parser = parse_on_off, default_value = "off", value_name = "on|off")]
+    pub clusters: bool,
     /// Keep rendering; recompile when the graph file or a shader changes (on error the last
     /// good graph keeps running and the error is printed). Stop with Ctrl-C.
     #[arg(long)]

@@ -332,6 +332,7 @@ impl VerifyTotals {
 fn graph_spec(args: &RenderArgs) -> Result<GraphSpec> {
     let overlay = args.overlay || args.overlay_view.is_some();
     let spec = match (&args.graph, args.no_cull) {
+        _ if args.clusters => clustered_graph(args.graph.as_deref(), args.no_cull || overlay)?,
         (Some(arg), _) => GraphSpec::from_arg(arg)?,
         (None, true) => GraphSpec::builtin("no_cull")?,
         (None, false) if overlay => GraphSpec::builtin("overlay")?,
@@ -348,6 +349,34 @@ fn graph_spec(args: &RenderArgs) -> Result<GraphSpec> {
         overrides.push(("lod_threshold".into(), format!("{px:?}")));
     }
     Ok(spec.with_overrides(overrides))
+}
+
+/// `--clusters on`: the cluster variant of the built-in graph `graph` names (`NAME_clusters`;
+/// the default graph's is `two_phase_clusters`). A graph file places its own `cluster_cull`
+/// passes.
+fn clustered_graph(graph: Option<&str>, other: bool) -> Result<GraphSpec> {
+    let refuse = |what: &str| {
+        Error::Invalid(format!(
+            "--clusters on: {what} has no cluster variant; the built-in two_phase and frustum graphs have one (or insert cluster_cull passes in a graph file, as graph/two_phase_clusters.ron does)"
+        ))
+    };
+    if other {
+        return Err(refuse("--no-cull or the overlay graph"));
+    }
+    let name = match graph {
+        None => "two_phase",
+        Some(arg) => match arg.strip_prefix("builtin:") {
+            Some("default") => "two_phase",
+            Some(name) => name,
+            None => return Err(refuse(&format!("graph file '{arg}'"))),
+        },
+    };
+    let variant = format!("{name}_clusters");
+    let kinds = cullgraph::passes::builtin_kinds();
+    if kinds.graph(&variant).is_none() {
+        return Err(refuse(&format!("builtin:{name}")));
+    }
+    GraphSpec::builtin(&variant)
 }
 
 /// `--watch`: render, then poll the graph file and shaders; rebuild on change, keeping the last

@@ -56,12 +56,20 @@ pub struct DrawSource<'a> {
     pub count: &'a Buffer,
     /// Instance ids, one slice per command.
     pub instance_ids: &'a Buffer,
+    /// A `cluster_cull` pass's cluster list (commands, counts), drawn after the list with the
+    /// same instance ids.
+    pub clusters: Option<(&'a Buffer, &'a Buffer)>,
 }
 
 impl<'a> DrawSource<'a> {
     /// Every instance of the scene.
     pub fn unculled(scene: &'a GpuScene) -> Self {
-        Self { commands: &scene.draw_commands, count: &scene.draw_count, instance_ids: &scene.draw_instance_ids }
+        Self {
+            commands: &scene.draw_commands,
+            count: &scene.draw_count,
+            instance_ids: &scene.draw_instance_ids,
+            clusters: None,
+        }
     }
 
     /// The list bound to the slots `names` (commands, count, instance ids), if all three are
@@ -80,7 +88,7 @@ impl<'a> DrawSource<'a> {
                 count.size()
             )));
         }
-        Ok(Some(Self { commands, count, instance_ids }))
+        Ok(Some(Self { commands, count, instance_ids, clusters: None }))
     }
 
     /// The lists a redraw pass draws: the first list (or every instance when none is bound),
@@ -271,6 +279,9 @@ pub fn record_geometry(
             binds.extend_from_slice(extra);
             pipeline.push_bindings(cmd, &binds);
             scene.regions.record(device, cmd, list.commands, list.count);
+            if let Some((commands, count)) = list.clusters {
+                crate::passes::cluster_cull::record_cluster_draws(ctx, cmd, commands, count);
+            }
         }
         device.cmd_end_rendering(cmd);
     }
@@ -483,7 +494,14 @@ impl PassNode for GbufferPass {
         let push: &[u8] = triangle_bits.as_ref().map_or(&[], |b| b.as_slice());
         let lists = match self.mode {
             GeometryMode::Equal => DrawSource::redraw_lists(slots, scene)?,
-            _ => vec![DrawSource::bound(slots, LIST_SLOTS)?.unwrap_or_else(|| DrawSource::unculled(scene))],
+            _ => {
+                let mut list = DrawSource::bound(slots, LIST_SLOTS)?.unwrap_or_else(|| DrawSource::unculled(scene));
+                if let (Some(commands), Some(count)) = (slots.buffer("cluster_commands"), slots.buffer("cluster_count"))
+                {
+                    list.clusters = Some((commands, count));
+                }
+                vec![list]
+            }
         };
         let previous =
             [Bind::Buffer(8, scene.previous_instances().handle()), Bind::Buffer(9, scene.prev_positions.handle())];
@@ -515,7 +533,7 @@ impl PassKind for GbufferKind {
             GeometryMode::Clear => PassKindInfo {
                 name: "gbuffer",
                 doc: "draws a draw list with vkCmdDrawIndexedIndirectCount into albedo, normal and reversed-Z depth (any sample count), or into depth alone when no color target is bound (an MSAA Z-prepass)",
-                reads: draw_list_slots(false),
+                reads: [draw_list_slots(false), crate::passes::cluster_cull::cluster_list_slots().to_vec()].concat(),
                 writes: vec![
                     ms(slot("albedo", Usage::ColorAttachment, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
                     ms(slot("normal", Usage::ColorAttachment, false, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
@@ -531,7 +549,7 @@ impl PassKind for GbufferKind {
             GeometryMode::Append => PassKindInfo {
                 name: "gbuffer_append",
                 doc: "like gbuffer, but draws on top of the existing targets (the late phase of two-phase culling)",
-                reads: draw_list_slots(true),
+                reads: [draw_list_slots(true), crate::passes::cluster_cull::cluster_list_slots().to_vec()].concat(),
                 writes: vec![
                     ms(slot("albedo", Usage::ColorAttachmentLoad, false, FormatRule::Exact(GBUFFER_ALBEDO_FORMAT), "albedo rgb, metallic a (omit albedo and normal for a depth-only pass)")),
                     ms(slot("normal", Usage::ColorAttachmentLoad, false, FormatRule::OneOf(GBUFFER_NORMAL_FORMATS), NORMAL_SLOT_DOC)),
@@ -561,7 +579,11 @@ impl PassKind for GbufferKind {
     }
 
     fn draw_list(&self) -> Option<DrawList> {
-        Some(DrawList { slots: LIST_SLOTS, order: DrawOrder::Regions })
+        Some(DrawList {
+            slots: LIST_SLOTS,
+            order: DrawOrder::Regions,
+            cluster_slots: Some(["cluster_commands", "cluster_count"]),
+        })
     }
 
     fn validate(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {

@@ -461,7 +461,7 @@ impl PassKind for GbufferCompressedKind {
     }
 
     fn draw_list(&self) -> Option<DrawList> {
-        Some(DrawList { slots: super::gbuffer::LIST_SLOTS, order: DrawOrder::Regions })
+        Some(DrawList { slots: super::gbuffer::LIST_SLOTS, order: DrawOrder::Regions, cluster_slots: None })
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

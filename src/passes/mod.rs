@@ -3,6 +3,7 @@
 //! interface as an engine's own kinds; [`builtin_kinds`] lists them, one line each.
 
 pub(crate) mod aa_edges;
+pub mod cluster_cull;
 pub(crate) mod compute;
 pub(crate) mod depth_resolve;
 pub(crate) mod fxaa;
@@ -32,6 +33,16 @@ pub const SHIPPED_GRAPHS: &[LibraryGraph] = &[
     LibraryGraph { name: "no_cull", file: "graph/no_cull.ron", text: include_str!("../../graph/no_cull.ron") },
     LibraryGraph { name: "frustum", file: "graph/frustum.ron", text: include_str!("../../graph/frustum.ron") },
     LibraryGraph { name: "two_phase", file: "graph/two_phase.ron", text: include_str!("../../graph/two_phase.ron") },
+    LibraryGraph {
+        name: "two_phase_clusters",
+        file: "graph/two_phase_clusters.ron",
+        text: include_str!("../../graph/two_phase_clusters.ron"),
+    },
+    LibraryGraph {
+        name: "frustum_clusters",
+        file: "graph/frustum_clusters.ron",
+        text: include_str!("../../graph/frustum_clusters.ron"),
+    },
     LibraryGraph { name: "shadow", file: "graph/shadow.ron", text: include_str!("../../graph/shadow.ron") },
     LibraryGraph {
         name: "shadow_no_cull",
@@ -108,6 +119,7 @@ pub fn register_builtin_kinds(kinds: &mut KindRegistry) -> crate::Result<()> {
     kinds.register(gbuffer::GbufferKind(GeometryMode::Append))?;
     kinds.register(hiz_build::HizBuildKind)?;
     kinds.register(instance_cull::InstanceCullKind)?;
+    kinds.register(cluster_cull::ClusterCullKind)?;
     kinds.register(overlay::OverlayKind)?;
     kinds.register(compute::ComputeKind)?;
     kinds.register(transparent_sort::TransparentSortKind)?;

@@ -62,6 +62,7 @@ impl PassNode for TransparentPass {
             commands: slots.required_buffer(LIST_SLOTS[0])?,
             count: slots.required_buffer(LIST_SLOTS[1])?,
             instance_ids: slots.required_buffer(LIST_SLOTS[2])?,
+            clusters: None,
         };
         let depth = slots.required_image("depth")?;
         let output = slots.required_image("output")?;
@@ -136,7 +137,7 @@ impl PassKind for TransparentKind {
     }
 
     fn draw_list(&self) -> Option<DrawList> {
-        Some(DrawList { slots: LIST_SLOTS, order: DrawOrder::Sorted })
+        Some(DrawList { slots: LIST_SLOTS, order: DrawOrder::Sorted, cluster_slots: None })
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

@@ -36,11 +36,17 @@ pub(crate) fn drawn(
         .collect()
 }
 
-/// The instances a draw pass's captured list (commands, counts, ids) drew; `None`: the pass
-/// binds no list and draws the scene's unculled one. A list in regions has its opaque regions
-/// drawn; a sorted list its first `count` commands.
+/// The instances a draw pass's captured list (commands, counts, ids, and a cluster list's
+/// commands and counts where bound) drew; `None`: the pass binds no list and draws the scene's
+/// unculled one. A list in regions has its opaque regions drawn; a sorted list its first
+/// `count` commands; a cluster list its regions' surviving clusters (an instance drawn by
+/// several clusters counts once).
 fn drawn_instances(scene: &GpuScene, lists: Option<Vec<Vec<u8>>>, order: DrawOrder) -> DrawnInstances {
-    let Some([commands, counts, ids]) = lists.and_then(|l| <[Vec<u8>; 3]>::try_from(l).ok()) else {
+    let Some(mut lists) = lists.filter(|l| l.len() == 3 || l.len() == 5) else {
+        return DrawnInstances::All;
+    };
+    let clusters = (lists.len() == 5).then(|| (lists.remove(3), lists.remove(3)));
+    let Ok([commands, counts, ids]) = <[Vec<u8>; 3]>::try_from(lists) else {
         return DrawnInstances::All;
     };
     // Whole elements only: a graph may size a buffer to any number of bytes.
@@ -56,6 +62,21 @@ fn drawn_instances(scene: &GpuScene, lists: Option<Vec<Vec<u8>>>, order: DrawOrd
         let start = c.first_instance as usize;
         let end = (start + c.instance_count as usize).min(ids.len());
         out.extend_from_slice(&ids[start.min(end)..end]);
+    }
+    if let Some((commands, counts)) = clusters {
+        let commands: Vec<DrawIndexedIndirect> = whole(&commands);
+        let counts: Vec<u32> = whole(&counts);
+        let capacity = commands.len() / crate::passes::cluster_cull::CLUSTER_REGIONS as usize;
+        let mut seen: std::collections::HashSet<u32> = out.iter().copied().collect();
+        for (r, &count) in counts.iter().take(crate::passes::cluster_cull::CLUSTER_REGIONS as usize).enumerate() {
+            for c in &commands[r * capacity..r * capacity + (count as usize).min(capacity)] {
+                if let Some(&id) = ids.get(c.first_instance as usize) {
+                    if seen.insert(id) {
+                        out.push(id);
+                    }
+                }
+            }
+        }
     }
     DrawnInstances::Some(out)
 }

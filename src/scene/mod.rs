@@ -9,6 +9,7 @@ pub mod bounds;
 pub mod camera;
 pub mod camera_path;
 pub mod cascades;
+pub mod clusters;
 pub mod deform;
 pub mod error;
 pub mod gltf_import;
@@ -96,6 +97,10 @@ pub struct Mesh {
     /// right after the full mesh's ([`Mesh::index_span`]); empty for a mesh that is always
     /// drawn whole (small, deformed, or [`MeshData::no_lod`]).
     pub lods: Vec<LodLevel>,
+    /// Per level of detail (the full mesh first, then each of `lods`), its clusters
+    /// ([`clusters`]), whose ranges cover the level's indices in order; empty (or shorter than
+    /// the levels) where a level is drawn whole: small, deformed, or registered on a live world.
+    pub clusters: Vec<Vec<clusters::Cluster>>,
 }
 
 impl Mesh {
@@ -340,7 +345,34 @@ impl Scene {
         if !data.no_lod {
             self.add_lod_chain(mesh, place)?;
         }
+        self.add_clusters(mesh);
         Ok(mesh)
+    }
+
+    /// Splits each level of mesh `mesh` (the full mesh and its levels of detail) large enough
+    /// into clusters, its indices rewritten in cluster order in place.
+    fn add_clusters(&mut self, mesh: u32) {
+        let m = &self.meshes[mesh as usize];
+        if m.deform.is_some() {
+            return;
+        }
+        let vertices = &self.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
+        let ranges: Vec<(u32, u32)> = std::iter::once((m.first_index, m.index_count))
+            .chain(m.lods.iter().map(|l| (l.first_index, l.index_count)))
+            .collect();
+        let mut levels = Vec::new();
+        for (first, count) in ranges {
+            let range = first as usize..(first + count) as usize;
+            let Some((ordered, mut clusters)) = clusters::build(vertices, &self.indices[range.clone()]) else {
+                break;
+            };
+            self.indices[range].copy_from_slice(&ordered);
+            for c in &mut clusters {
+                c.first_index += first;
+            }
+            levels.push(clusters);
+        }
+        self.meshes[mesh as usize].clusters = levels;
     }
 
     /// Builds mesh `mesh`'s levels of detail and appends their indices to the index pool.
@@ -428,6 +460,7 @@ impl Scene {
             sphere,
             deform,
             lods: Vec::new(),
+            clusters: Vec::new(),
         };
         // Pools of millions of entries: a failed allocation is this mesh's error, not an abort.
         let no_memory =

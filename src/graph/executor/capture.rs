@@ -13,9 +13,9 @@ use ash::vk;
 /// bytes (`None`: the pass leaves one of the slots unbound).
 pub type Captured = (usize, Option<Vec<Vec<u8>>>);
 
-/// One drawing pass's captured list: its index, its list's slots and a host copy per slot
-/// (`None`: it leaves a slot unbound).
-type PassCopies = (usize, [&'static str; 3], Option<Vec<Buffer>>);
+/// One drawing pass's captured list: its index, its list's slots (and its cluster list's, where
+/// bound) and a host copy per slot (`None`: it leaves a slot of the list unbound).
+type PassCopies = (usize, Vec<&'static str>, Option<Vec<Buffer>>);
 
 /// Host buffers for the draw list of each drawing pass, refreshed every recorded frame.
 pub struct SlotCapture {
@@ -28,8 +28,12 @@ impl SlotCapture {
         let mut copies = Vec::new();
         for (i, pass) in plan.passes.iter().enumerate() {
             let Some(list) = plan.kinds.get(&pass.kind).and_then(|k| k.kind.draw_list()) else { continue };
-            let slots = list.slots;
-            let bound: Vec<_> = slots.iter().filter_map(|s| pass.bindings.iter().find(|b| b.slot == *s)).collect();
+            let find = |s: &&str| pass.bindings.iter().find(|b| b.slot == *s);
+            let mut slots = list.slots.to_vec();
+            if let Some(cluster) = list.cluster_slots.filter(|c| c.iter().all(|s| find(s).is_some())) {
+                slots.extend(cluster);
+            }
+            let bound: Vec<_> = slots.iter().filter_map(find).collect();
             if bound.len() < slots.len() {
                 copies.push((i, slots, None));
                 continue;
@@ -49,7 +53,8 @@ impl SlotCapture {
                     },
                 )?)
             };
-            copies.push((i, slots, Some((0..slots.len()).map(host).collect::<crate::Result<Vec<_>>>()?)));
+            let hosts = (0..slots.len()).map(host).collect::<crate::Result<Vec<_>>>()?;
+            copies.push((i, slots, Some(hosts)));
         }
         Ok(Self { copies })
     }

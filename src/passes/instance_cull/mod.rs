@@ -423,7 +423,7 @@ const LOD_PLANES: u64 = 3;
 /// writes an empty draw list.
 /// Whether the device rasterizes at Vulkan's standard sample positions, the ones the
 /// small-object test knows.
-fn standard_sample_locations(ctx: &GpuContext) -> bool {
+pub(crate) fn standard_sample_locations(ctx: &GpuContext) -> bool {
     // SAFETY: valid handles.
     let properties = unsafe { ctx.instance().get_physical_device_properties(ctx.physical_device()) };
     properties.limits.standard_sample_locations == vk::TRUE

@@ -189,6 +189,82 @@ pub fn gpu_levels(mesh: &crate::scene::Mesh) -> Vec<GpuLodLevel> {
         .collect()
 }
 
+/// One cluster of a mesh level (64 bytes; `Cluster` in `shaders/cluster_cull/cluster_cull.comp`),
+/// in the mesh's local space.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCluster {
+    /// Bounding sphere centre.
+    pub center: [f32; 3],
+    /// Its radius.
+    pub radius: f32,
+    /// Apex of the normal cone.
+    pub cone_apex: [f32; 3],
+    /// The cone's cutoff ([`crate::scene::clusters::Cluster::cone_cutoff`]).
+    pub cone_cutoff: f32,
+    /// The cone's axis.
+    pub cone_axis: [f32; 3],
+    /// First index in the pool.
+    pub first_index: u32,
+    /// Number of indices.
+    pub index_count: u32,
+    /// Padding.
+    pub pad: [u32; 3],
+}
+
+/// Entries of the cluster-range table each mesh owns: one per level, the full mesh's first.
+pub const CLUSTER_RANGES_PER_MESH: u32 = crate::scene::MAX_LOD_LEVELS as u32;
+
+/// The cluster pass's view of a scene's clusters ([`cluster_tables`]).
+pub struct ClusterTables {
+    /// Every mesh's clusters, level after level.
+    pub clusters: Vec<GpuCluster>,
+    /// At `mesh * CLUSTER_RANGES_PER_MESH + level`, the level's first cluster and its count (0:
+    /// drawn whole).
+    pub ranges: Vec<[u32; 2]>,
+    /// The meshes with clusters as (vertex offset, mesh), by vertex offset: a draw command
+    /// names its mesh by its vertex offset, which no two meshes share.
+    pub meshes: Vec<[u32; 2]>,
+}
+
+/// The cluster tables of `scene` (each at least one entry, so that the buffers exist).
+pub fn cluster_tables(scene: &crate::scene::Scene) -> ClusterTables {
+    let mut clusters = Vec::new();
+    let mut ranges = vec![[0u32; 2]; (scene.meshes.len() * CLUSTER_RANGES_PER_MESH as usize).max(1)];
+    for (m, mesh) in scene.meshes.iter().enumerate() {
+        for (level, list) in mesh.clusters.iter().enumerate().take(CLUSTER_RANGES_PER_MESH as usize) {
+            ranges[m * CLUSTER_RANGES_PER_MESH as usize + level] = [clusters.len() as u32, list.len() as u32];
+            clusters.extend(list.iter().map(|c| GpuCluster {
+                center: c.center.to_array(),
+                radius: c.radius,
+                cone_apex: c.cone_apex.to_array(),
+                cone_cutoff: c.cone_cutoff,
+                cone_axis: c.cone_axis.to_array(),
+                first_index: c.first_index,
+                index_count: c.index_count,
+                pad: [0; 3],
+            }));
+        }
+    }
+    if clusters.is_empty() {
+        clusters.push(GpuCluster::default());
+    }
+    let mut meshes: Vec<[u32; 2]> = (0..scene.meshes.len() as u32)
+        .filter(|&m| !scene.meshes[m as usize].clusters.is_empty())
+        .map(|m| [scene.meshes[m as usize].vertex_offset, m])
+        .collect();
+    meshes.sort_unstable();
+    if meshes.is_empty() {
+        meshes.push([u32::MAX, u32::MAX]);
+    }
+    ClusterTables { clusters, ranges, meshes }
+}
+
+/// The most clusters one instance of `mesh` may draw: its richest level's.
+pub fn mesh_clusters(mesh: &crate::scene::Mesh) -> u32 {
+    mesh.clusters.iter().map(|l| l.len() as u32).max().unwrap_or(0)
+}
+
 /// The level table of `scene`: [`LEVELS_PER_MESH`] entries per mesh (at least one entry, so
 /// that the buffer exists).
 pub fn level_table(scene: &crate::scene::Scene) -> Vec<GpuLodLevel> {

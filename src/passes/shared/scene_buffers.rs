@@ -48,6 +48,14 @@ pub struct GpuScene {
     /// [`super::cull_data::GpuLodLevel`]s of the draw groups' meshes: the levels of detail a
     /// cull pass may choose (a changing world's meshes have none).
     pub lod_levels: Arc<Buffer>,
+    /// Every mesh's clusters ([`super::cull_data::GpuCluster`]), read by the cluster pass.
+    pub clusters: Arc<Buffer>,
+    /// Where each mesh level's clusters are ([`super::cull_data::ClusterTables::ranges`]).
+    pub cluster_ranges: Arc<Buffer>,
+    /// The meshes with clusters by vertex offset ([`super::cull_data::ClusterTables::meshes`]).
+    pub cluster_meshes: Arc<Buffer>,
+    /// Entries of `cluster_meshes`.
+    pub clustered_meshes: u32,
     /// The scene's textures, in size-class arrays (shared with the next upload of a changing
     /// world whose textures did not change).
     pub textures: Arc<GpuTextures>,
@@ -191,6 +199,9 @@ impl GpuScene {
             &self.draw_groups,
             &self.group_bounds,
             &self.lod_levels,
+            &self.clusters,
+            &self.cluster_ranges,
+            &self.cluster_meshes,
             &self.instance_triangles,
         ];
         let previous = self.prev_instances.as_ref().map_or(0, |b| b.size());
@@ -287,6 +298,7 @@ impl GpuScene {
         let materials: Vec<GpuMaterial> =
             scene.materials.iter().map(|m| GpuMaterial::new(m, textures.placements())).collect();
         let cull = super::cull_data::CullData::new(scene, &draws);
+        let cluster_tables = super::cull_data::cluster_tables(scene);
         let count = draws.regions.len;
         // Every scene buffer can be carried into a larger successor (a changing world's growth).
         let mut make = |name: &str, usage: vk::BufferUsageFlags, data: &[u8]| -> crate::Result<Arc<Buffer>> {
@@ -315,6 +327,10 @@ impl GpuScene {
             draw_groups: make("draw groups", none, bytemuck::cast_slice(&cull.groups))?,
             group_bounds: make("group bounds", none, bytemuck::cast_slice(&cull.bounds))?,
             lod_levels: make("levels of detail", none, bytemuck::cast_slice(&cull.lods))?,
+            clusters: make("clusters", none, bytemuck::cast_slice(&cluster_tables.clusters))?,
+            cluster_ranges: make("cluster ranges", none, bytemuck::cast_slice(&cluster_tables.ranges))?,
+            cluster_meshes: make("clustered meshes", none, bytemuck::cast_slice(&cluster_tables.meshes))?,
+            clustered_meshes: cluster_tables.meshes.iter().filter(|m| m[1] != u32::MAX).count() as u32,
             instance_triangles: make(
                 "instance triangle bases",
                 none,

@@ -8,7 +8,9 @@
 //! The caller then queues the changed parts (`write_*`), which land in the successor's buffers
 //! at the next recorded frame, after the frames before it are done with what they overwrite.
 
-use super::cull_data::{gpu_levels, mesh_levels, GpuDrawGroup, GpuGroupBounds, GpuLodLevel, LEVELS_PER_MESH};
+use super::cull_data::{
+    gpu_levels, mesh_levels, GpuDrawGroup, GpuGroupBounds, GpuLodLevel, CLUSTER_RANGES_PER_MESH, LEVELS_PER_MESH,
+};
 use super::gpu_types::GpuMaterial;
 use super::scene_buffers::{drawn_triangles, max_mesh_triangles, GpuScene};
 use super::slot_layout::SlotLayout;
@@ -105,6 +107,16 @@ impl GpuScene {
             )?,
             draw_groups: self.draw_groups.clone(),
             group_bounds: self.group_bounds.clone(),
+            // Meshes registered on a live world have no clusters: the tables of the meshes
+            // that do stay as they are (a mesh's ranges are zeroed when its index is reused).
+            clusters: self.clusters.clone(),
+            cluster_meshes: self.cluster_meshes.clone(),
+            clustered_meshes: self.clustered_meshes,
+            cluster_ranges: fit(
+                &self.cluster_ranges,
+                size_of(scene.meshes.len() as u64 * CLUSTER_RANGES_PER_MESH as u64, 8),
+                none,
+            )?,
             lod_levels: fit(
                 &self.lod_levels,
                 size_of(scene.meshes.len() as u64 * LEVELS_PER_MESH as u64, std::mem::size_of::<GpuLodLevel>()),
@@ -128,6 +140,11 @@ impl GpuScene {
         let indices = m.first_index..m.first_index + m.index_span();
         let levels = mesh_levels(mesh)..mesh_levels(mesh) + m.lods.len() as u32;
         edits.write(&self.lod_levels, at::<GpuLodLevel>(&levels), bytemuck::cast_slice(&gpu_levels(m)));
+        // A mesh registered on a live world is drawn whole: no clusters (and none of a mesh
+        // that had its index before).
+        let ranges = mesh * CLUSTER_RANGES_PER_MESH..(mesh + 1) * CLUSTER_RANGES_PER_MESH;
+        let none = vec![[0u32; 2]; CLUSTER_RANGES_PER_MESH as usize];
+        edits.write(&self.cluster_ranges, at::<[u32; 2]>(&ranges), bytemuck::cast_slice(&none));
         edits.write(
             &self.vertices,
             at::<crate::scene::Vertex>(&vertices),

@@ -1,0 +1,149 @@
+#version 460
+// Cluster cull, step 2 of 2: each workgroup takes tasks (one instance's chunk of CLUSTER_CHUNK
+// clusters of its level) and tests each cluster: outside the frustum, covering no sample
+// position (SMALL_OBJECTS), facing away from the eye (its normal cone, for one-sided materials
+// under rotation and uniform scale), or behind the Hi-Z (HAS_HIZ). Each survivor is appended to
+// its face-cull region of the cluster list as one command of its index range and its instance.
+// Every test is conservative, so the triangles dropped could make no fragment.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
+#define CULL_HIZ_MIN_LEVEL 1u
+
+#include "../common/scene.glsl"
+#include "../common/hiz.glsl"
+#include "../cull/cull_common.glsl"
+#include "cluster_common.glsl"
+
+layout(local_size_x = CLUSTER_CHUNK) in;
+
+layout(set = 0, binding = 0, scalar) readonly buffer Frame { FrameConstants frame; };
+layout(set = 0, binding = 1, scalar) readonly buffer Instances { GpuInstance instances[]; };
+layout(set = 0, binding = 2, scalar) readonly buffer InCommands { DrawCommand in_commands[]; };
+layout(set = 0, binding = 3) readonly buffer InIds { uint in_ids[]; };
+layout(set = 0, binding = 4, scalar) readonly buffer Clusters { Cluster clusters[]; };
+layout(set = 0, binding = 5) readonly buffer Scratch { uint scratch[]; };
+layout(set = 0, binding = 6, scalar) writeonly buffer ClusterCommands { DrawCommand cluster_commands[]; };
+layout(set = 0, binding = 7) buffer ClusterCount { uint cluster_count[FACE_CULL_REGIONS]; };
+layout(set = 0, binding = 8) buffer Stats { uint stats[STAT_WORDS]; };
+#ifdef HAS_HIZ
+layout(set = 0, binding = 9) uniform sampler2D hiz_tex;
+float hiz_load(uint level, uvec2 texel) { return texelFetch(hiz_tex, ivec2(texel), int(hiz_stored_mip(level))).r; }
+#endif
+
+layout(push_constant) uniform Push {
+    uint region_capacity;   // commands each region of the cluster list holds
+} pc;
+
+// Normal cones are tested with this much to spare, so a triangle seen nearly edge-on, which
+// the rasterizer's fixed-point facing test may still take as front-facing, is kept.
+#define CONE_MARGIN 1e-3
+
+// The clustered command whose tasks hold `task` (the last one starting at or before it).
+uint command_of(uint task, uint commands) {
+    uint lo = 0u, hi = commands;
+    while (hi - lo > 1u) {
+        uint mid = (lo + hi) / 2u;
+        if (scratch[SCRATCH_HEADER_WORDS + mid * 8u] <= task) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+// Whether the linear part `m` is a rotation (or mirror) times one scale: the normal cone then
+// maps to the world as the cluster's points do.
+bool uniform_scale(mat3 m) {
+    vec3 l = vec3(dot(m[0], m[0]), dot(m[1], m[1]), dot(m[2], m[2]));
+    float most = max(l.x, max(l.y, l.z));
+    vec3 off = abs(vec3(dot(m[0], m[1]), dot(m[1], m[2]), dot(m[2], m[0])));
+    return min(l.x, min(l.y, l.z)) >= most * (1.0 - 1e-4) && max(off.x, max(off.y, off.z)) <= most * 1e-4;
+}
+
+// 0: drawn; else the counter of the test that dropped it.
+uint test_cluster(Cluster cl, GpuInstance inst, bool one_sided) {
+    CullView view = frame.cull_view;
+    mat3 m = transpose(mat3(inst.row0.xyz, inst.row1.xyz, inst.row2.xyz));
+    float scale = sqrt(max(dot(m[0], m[0]), max(dot(m[1], m[1]), dot(m[2], m[2]))));
+    vec3 c = instance_rel_eye(inst, cl.center, frame.eye_hi.xyz, frame.eye_lo.xyz);
+    float radius = cl.radius * scale * (1.0 + 1e-5);
+    if (!cull_sphere_in_frustum(view, c, radius)) return STAT_FRUSTUM;
+    if (one_sided && cl.cone_cutoff < 1.0 && view.orthographic == 0u && uniform_scale(m)) {
+        // The eye is at the origin of eye-relative space.
+        vec3 apex = instance_rel_eye(inst, cl.cone_apex, frame.eye_hi.xyz, frame.eye_lo.xyz);
+        vec3 axis = normalize(m * cl.cone_axis);
+        // A NaN (the eye at the apex) compares false: kept.
+        if (dot(normalize(apex), axis) >= cl.cone_cutoff + CONE_MARGIN) return STAT_BACKFACING;
+    }
+    uvec4 rect;
+    float nearest;
+    bool covers;
+    uint status = cull_project_sphere(view, c, radius, rect, nearest, covers);
+    if (status == CULL_ON_SCREEN) {
+#ifdef SMALL_OBJECTS
+        if (!covers) return STAT_FRUSTUM;
+#endif
+#ifdef HAS_HIZ
+        if (cull_hiz_occluded(rect, nearest, view.viewport, false)) return STAT_OCCLUDED;
+#endif
+    }
+    return 0u;
+}
+
+void main() {
+    uint lane = gl_LocalInvocationID.x;
+    uint commands = scratch[SCRATCH_CLUSTERED];
+    uint tasks = scratch[SCRATCH_TASKS];
+    uvec4 counts = uvec4(0u);   // tested, drawn, triangles tested, triangles drawn
+    uvec3 dropped = uvec3(0u);  // frustum, back-facing, occluded
+    for (uint task = gl_WorkGroupID.x; task < tasks; task += gl_NumWorkGroups.x) {
+        uint k = command_of(task, commands);
+        uint at = SCRATCH_HEADER_WORDS + k * 8u;
+        uint local = task - scratch[at];
+        uint chunks = scratch[at + 1u];
+        uint cluster_count_here = scratch[at + 3u];
+        uint region = scratch[at + 5u];
+        DrawCommand c = in_commands[scratch[at + 4u]];
+        uint instance = local / chunks;
+        uint index = (local % chunks) * CLUSTER_CHUNK + lane;
+        bool valid = index < cluster_count_here;
+        uint verdict = 0u;
+        Cluster cl;
+        if (valid) {
+            cl = clusters[scratch[at + 2u] + index];
+            GpuInstance inst = instances[in_ids[c.first_instance + instance]];
+            // Region 2 draws double-sided materials: both faces, so no cone test.
+            verdict = test_cluster(cl, inst, region != 2u);
+        }
+        bool drawn = valid && verdict == 0u;
+        uint triangles = valid ? cl.index_count / 3u : 0u;
+        counts += uvec4(valid ? 1u : 0u, drawn ? 1u : 0u, triangles, drawn ? triangles : 0u);
+        dropped += uvec3(verdict == STAT_FRUSTUM, verdict == STAT_BACKFACING, verdict == STAT_OCCLUDED);
+        // One atomic per subgroup for its survivors (all of one region: a task is one command's).
+        uvec4 ballot = subgroupBallot(drawn);
+        uint n = subgroupBallotBitCount(ballot);
+        uint base = 0u;
+        if (subgroupElect() && n != 0u) base = atomicAdd(cluster_count[region], n);
+        base = subgroupBroadcastFirst(base);
+        if (drawn) {
+            uint slot = base + subgroupBallotExclusiveBitCount(ballot);
+            // The list holds a command per cluster of every instance; never written past.
+            if (slot < pc.region_capacity) {
+                cluster_commands[region * pc.region_capacity + slot] =
+                    DrawCommand(cl.index_count, 1u, cl.first_index, c.vertex_offset, c.first_instance + instance);
+            }
+        }
+    }
+    counts = subgroupAdd(counts);
+    dropped = subgroupAdd(dropped);
+    if (subgroupElect()) {
+        if (counts.x != 0u) {
+            atomicAdd(stats[STAT_TESTED], counts.x);
+            atomicAdd(stats[STAT_DRAWN], counts.y);
+            atomicAdd(stats[STAT_TRIANGLES_TESTED], counts.z);
+            atomicAdd(stats[STAT_TRIANGLES_DRAWN], counts.w);
+            atomicAdd(stats[STAT_FRUSTUM], dropped.x);
+            atomicAdd(stats[STAT_BACKFACING], dropped.y);
+            atomicAdd(stats[STAT_OCCLUDED], dropped.z);
+        }
+    }
+}

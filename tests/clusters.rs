@@ -1,0 +1,161 @@
+//! Cluster culling (lavapipe, validation on): a `cluster_cull` pass before each draw of a
+//! culled list draws the clustered instances cluster by cluster, dropping the clusters outside
+//! the frustum, facing away or behind the Hi-Z, and the image stays the one the list draws
+//! whole: at any level of detail, for mirrored and stretched instances, and under two-phase
+//! culling, whose late phase tests clusters against the pyramid.
+
+mod common;
+
+use common::GpuTest;
+use cullgraph::oracle::Verify;
+use cullgraph::passes::cluster_cull::{ClusterPassStats, GROUP};
+use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
+use cullgraph::scene::source::LoadOptions;
+use cullgraph::scene::{Camera, Instance, Scene, SceneSource, Transform};
+use glam::{DVec3, Mat3, Vec3};
+
+const SIZE: (u32, u32) = (160, 90);
+
+fn dense(instances: usize) -> Scene {
+    SceneSource::Builtin("dense".into())
+        .load(&LoadOptions { instances: Some(instances), ..Default::default() })
+        .unwrap()
+}
+
+fn near_camera() -> Camera {
+    Camera { eye: DVec3::new(14.0, 5.0, 14.0), target: DVec3::new(0.0, 1.0, 0.0), ..Default::default() }
+}
+
+fn graph(name: &str, threshold: f64) -> GraphSpec {
+    GraphSpec::builtin(name).unwrap().with_overrides([("lod_threshold".into(), format!("{threshold:?}"))])
+}
+
+/// The last frame of `cameras` (one frame each) through `spec`: its cluster passes' figures
+/// and its RGBA bytes; no frame missed a visible instance.
+fn render(gpu: &GpuTest, scene: &Scene, cameras: &[Camera], spec: &GraphSpec) -> (Vec<ClusterPassStats>, Vec<u8>) {
+    let shaders = gpu.shaders();
+    let settings = RenderSettings::new(SIZE.0, SIZE.1);
+    let mut renderer = Renderer::with_graph(gpu, &shaders, scene.clone(), settings, spec).unwrap();
+    renderer.enable_verification(&shaders).unwrap();
+    let missed = |stats: &cullgraph::stats::FrameStats| stats.verify.as_ref().map_or(0, |v| v.false_negatives);
+    let (last, before) = cameras.split_last().unwrap();
+    for camera in before {
+        assert_eq!(missed(&renderer.render(camera).unwrap()), 0);
+    }
+    let (stats, image) = renderer.render_to_image(last).unwrap();
+    assert_eq!(missed(&stats), 0);
+    gpu.assert_clean();
+    (stats.entries::<ClusterPassStats>(GROUP), image.into_raw())
+}
+
+/// Clusters tested, drawn and dropped as back-facing and occluded over a frame's passes, and
+/// triangles tested and drawn.
+fn totals(passes: &[ClusterPassStats]) -> (u32, u32, u32, u32, u64, u64) {
+    passes.iter().fold((0, 0, 0, 0, 0, 0), |t, p| {
+        (
+            t.0 + p.tested,
+            t.1 + p.drawn,
+            t.2 + p.backfacing,
+            t.3 + p.occlusion_culled,
+            t.4 + p.triangles_tested,
+            t.5 + p.triangles_drawn,
+        )
+    })
+}
+
+#[test]
+fn clusters_drop_triangles_and_keep_the_image() {
+    let gpu = GpuTest::new();
+    let scene = dense(40);
+    let cameras = vec![near_camera(); 3];
+    for threshold in [0.0, 2.0] {
+        for name in ["frustum", "two_phase"] {
+            let (none, whole) = render(&gpu, &scene, &cameras, &graph(name, threshold));
+            assert!(none.is_empty());
+            let clustered = format!("{name}_clusters");
+            let (passes, image) = render(&gpu, &scene, &cameras, &graph(&clustered, threshold));
+            assert!(image == whole, "{clustered} at {threshold} px drew another image than {name}");
+            let (tested, drawn, backfacing, _, triangles_tested, triangles_drawn) = totals(&passes);
+            eprintln!("{clustered} at {threshold} px: {drawn} of {tested} clusters, {triangles_drawn} of {triangles_tested} triangles");
+            assert!(tested > 100 && drawn < tested && backfacing > 0, "{passes:?}");
+            assert!(triangles_drawn * 10 < triangles_tested * 9, "{passes:?}");
+        }
+    }
+}
+
+#[test]
+fn mirrored_and_stretched_instances_keep_their_image() {
+    let gpu = GpuTest::new();
+    let scene = dense(40);
+    let mut odd = scene.clone();
+    for (k, instance) in odd.instances.iter_mut().enumerate() {
+        // Every other prop mirrored across x, every third stretched along y (no cone test).
+        if k % 2 == 1 {
+            instance.transform.linear *= Mat3::from_diagonal(Vec3::new(-1.0, 1.0, 1.0));
+        }
+        if k % 3 == 1 {
+            instance.transform.linear *= Mat3::from_diagonal(Vec3::new(1.0, 1.6, 1.0));
+        }
+    }
+    let cameras = vec![near_camera(); 3];
+    let (_, whole) = render(&gpu, &odd, &cameras, &graph("two_phase", 0.0));
+    let (passes, image) = render(&gpu, &odd, &cameras, &graph("two_phase_clusters", 0.0));
+    assert!(image == whole, "mirrored or stretched instances drew another image cluster by cluster");
+    let (tested, _, backfacing, ..) = totals(&passes);
+    assert!(backfacing > 0 && backfacing < tested, "{passes:?}");
+}
+
+#[test]
+fn the_late_phase_drops_clusters_behind_the_pyramid() {
+    let gpu = GpuTest::new();
+    let mut scene = dense(4);
+    let rock = scene.instances.iter().find(|i| scene.meshes[i.mesh as usize].name == "dense/rock").unwrap().mesh;
+    let wall = scene.add_mesh("wall", &common::cube_mesh(), "wall").unwrap();
+    let at = |mesh, scale: Vec3, translation: DVec3| Instance {
+        transform: Transform { linear: Mat3::from_diagonal(scale), translation },
+        mesh,
+        material: 0,
+        flags: 0,
+    };
+    let size = scene.meshes[rock as usize].sphere.radius;
+    // A wall 10 units ahead, and behind it a rock whose upper half shows over it.
+    scene.instances = vec![
+        at(wall, Vec3::new(0.4, 6.0, 40.0), DVec3::new(10.0, 0.0, 0.0)),
+        at(rock, Vec3::splat(4.0 / size), DVec3::new(22.0, 3.0, 0.0)),
+    ];
+    let eye = DVec3::new(0.0, 1.0, 0.0);
+    // The first frame looks down at the wall alone; the second turns to the rock, which only
+    // the late phase tests, against a pyramid of the wall the early phase drew.
+    let cameras = [
+        Camera { eye, target: DVec3::new(10.0, -9.0, 0.0), ..Default::default() },
+        Camera { eye, target: DVec3::new(22.0, 3.0, 0.0), ..Default::default() },
+    ];
+    let (_, whole) = render(&gpu, &scene, &cameras, &graph("two_phase", 0.0));
+    let (passes, image) = render(&gpu, &scene, &cameras, &graph("two_phase_clusters", 0.0));
+    assert!(image == whole, "the late phase drew another image cluster by cluster");
+    let late = passes.iter().find(|p| p.pass == "clusters_late").unwrap();
+    assert!(late.tested > 0 && late.occlusion_culled > 0 && late.drawn > 0, "{late:?}");
+}
+
+#[test]
+fn the_command_line_switches_clusters_on_and_off() {
+    use common::cli::run;
+    let tmp = tempfile::tempdir().unwrap();
+    let image = |clusters: &str| {
+        let out = tmp.path().join(format!("{clusters}.png"));
+        let stats = tmp.path().join(format!("{clusters}.json"));
+        let args = ["render", "--scene", "builtin:dense", "--instances", "12", "--size", "96x54", "--frames", "2"];
+        let (out_s, stats_s) = (out.to_str().unwrap(), stats.to_str().unwrap());
+        let (code, _, err) = run(&[&args[..], &["--clusters", clusters, "--out", out_s, "--stats", stats_s]].concat());
+        assert_eq!(code, 0, "{err}");
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        (std::fs::read(&out).unwrap(), json["frames"][1]["clusters"].as_array().map_or(0, |a| a.len()))
+    };
+    let (off, off_passes) = image("off");
+    let (on, on_passes) = image("on");
+    assert!(on == off, "--clusters on changed the image");
+    assert_eq!((off_passes, on_passes), (0, 2));
+    let (code, _, err) = run(&["render", "--clusters", "on", "--graph", "builtin:one_phase", "--out", "x.png"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("has no cluster variant"), "{err}");
+}
