@@ -124,11 +124,17 @@ fn bench_lod_reports_speed_against_error_per_threshold() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(tmp.path().join("bench.json")).unwrap()).unwrap();
     let rows = json["lod"]["rows"].as_array().unwrap();
-    // Threshold 0 is measured first, as the full detail the others are compared with.
-    let thresholds: Vec<f64> = rows.iter().map(|r| r["threshold"].as_f64().unwrap()).collect();
-    assert_eq!(thresholds, [0.0, 2.0]);
+    // Threshold 0 is measured first, as the full detail the others are compared with; each
+    // threshold without cluster culling, then with it.
+    let runs: Vec<(f64, bool)> =
+        rows.iter().map(|r| (r["threshold"].as_f64().unwrap(), r["clusters"].as_bool().unwrap())).collect();
+    assert_eq!(runs, [(0.0, false), (0.0, true), (2.0, false), (2.0, true)]);
     let triangles: Vec<u64> = rows.iter().map(|r| r["triangles"].as_u64().unwrap()).collect();
-    assert!(triangles[1] * 3 <= triangles[0], "{triangles:?}");
+    assert!(triangles[2] * 3 <= triangles[0], "{triangles:?}");
+    // Cluster culling draws fewer triangles for the same image, and reports its cost.
+    assert!(triangles[1] < triangles[0] && triangles[3] <= triangles[2], "{triangles:?}");
+    assert_eq!(rows[1]["flip_vs_full"].as_f64(), Some(0.0));
+    assert!(rows[1]["cluster_ms_per_million"].as_f64().is_some_and(|ms| ms > 0.0));
     assert_eq!(rows[0]["flip_vs_full"].as_f64(), Some(0.0));
     // Full detail supersampled is the reference itself.
     assert_eq!(rows[0]["flip_vs_full_supersampled"].as_f64(), Some(0.0));

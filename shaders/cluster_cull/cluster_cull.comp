@@ -1,6 +1,6 @@
 #version 460
-// Cluster cull, step 2 of 2: each workgroup takes tasks (one instance's chunk of CLUSTER_CHUNK
-// clusters of its level) and tests each cluster: outside the frustum, covering no sample
+// Cluster cull, step 2 of 2: each workgroup takes TASKS_PER_GROUP tasks at a time (a task: one
+// instance's chunk of CLUSTER_CHUNK clusters of its level) and tests each cluster: outside the frustum, covering no sample
 // position (SMALL_OBJECTS), facing away from the eye (its normal cone, for one-sided materials
 // under rotation and uniform scale), or behind the Hi-Z (HAS_HIZ). Each survivor is appended to
 // its face-cull region of the cluster list as one command of its index range and its instance.
@@ -8,7 +8,6 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
-#extension GL_KHR_shader_subgroup_ballot : require
 #define CULL_HIZ_MIN_LEVEL 1u
 
 #include "../common/scene.glsl"
@@ -16,7 +15,10 @@
 #include "../cull/cull_common.glsl"
 #include "cluster_common.glsl"
 
-layout(local_size_x = CLUSTER_CHUNK) in;
+// Tasks a workgroup tests together: its survivors are counted in shared memory and reserved
+// with one atomic per region, so few workgroups contend for the list's counts.
+#define TASKS_PER_GROUP 4u
+layout(local_size_x = CLUSTER_CHUNK * TASKS_PER_GROUP) in;
 
 layout(set = 0, binding = 0, scalar) readonly buffer Frame { FrameConstants frame; };
 layout(set = 0, binding = 1, scalar) readonly buffer Instances { GpuInstance instances[]; };
@@ -89,43 +91,59 @@ uint test_cluster(Cluster cl, GpuInstance inst, bool one_sided) {
     return 0u;
 }
 
+shared uint sh_region_count[FACE_CULL_REGIONS];
+shared uint sh_region_base[FACE_CULL_REGIONS];
+shared uint sh_stats[8];
+
 void main() {
-    uint lane = gl_LocalInvocationID.x;
+    uint lane = gl_LocalInvocationID.x % CLUSTER_CHUNK;
+    uint slot_in_group = gl_LocalInvocationID.x / CLUSTER_CHUNK;
     uint commands = scratch[SCRATCH_CLUSTERED];
     uint tasks = scratch[SCRATCH_TASKS];
+    if (gl_LocalInvocationID.x < 8u) sh_stats[gl_LocalInvocationID.x] = 0u;
     uvec4 counts = uvec4(0u);   // tested, drawn, triangles tested, triangles drawn
     uvec3 dropped = uvec3(0u);  // frustum, back-facing, occluded
-    for (uint task = gl_WorkGroupID.x; task < tasks; task += gl_NumWorkGroups.x) {
-        uint k = command_of(task, commands);
-        uint at = SCRATCH_HEADER_WORDS + k * 8u;
-        uint local = task - scratch[at];
-        uint chunks = scratch[at + 1u];
-        uint cluster_count_here = scratch[at + 3u];
-        uint region = scratch[at + 5u];
-        DrawCommand c = in_commands[scratch[at + 4u]];
-        uint instance = local / chunks;
-        uint index = (local % chunks) * CLUSTER_CHUNK + lane;
-        bool valid = index < cluster_count_here;
-        uint verdict = 0u;
+    uint rounds = (tasks + TASKS_PER_GROUP - 1u) / TASKS_PER_GROUP;
+    for (uint round = gl_WorkGroupID.x; round < rounds; round += gl_NumWorkGroups.x) {
+        if (gl_LocalInvocationID.x < FACE_CULL_REGIONS) sh_region_count[gl_LocalInvocationID.x] = 0u;
+        barrier();
+        uint task = round * TASKS_PER_GROUP + slot_in_group;
+        bool has_task = task < tasks;
+        bool drawn = false;
+        uint region = 0u;
+        uint local_slot = 0u;
+        DrawCommand c;
         Cluster cl;
-        if (valid) {
-            cl = clusters[scratch[at + 2u] + index];
-            GpuInstance inst = instances[in_ids[c.first_instance + instance]];
-            // Region 2 draws double-sided materials: both faces, so no cone test.
-            verdict = test_cluster(cl, inst, region != 2u);
+        uint instance = 0u;
+        if (has_task) {
+            uint k = command_of(task, commands);
+            uint at = SCRATCH_HEADER_WORDS + k * 8u;
+            uint local = task - scratch[at];
+            uint chunks = scratch[at + 1u];
+            region = scratch[at + 5u];
+            c = in_commands[scratch[at + 4u]];
+            instance = local / chunks;
+            uint index = (local % chunks) * CLUSTER_CHUNK + lane;
+            if (index < scratch[at + 3u]) {
+                cl = clusters[scratch[at + 2u] + index];
+                GpuInstance inst = instances[in_ids[c.first_instance + instance]];
+                // Region 2 draws double-sided materials: both faces, so no cone test.
+                uint verdict = test_cluster(cl, inst, region != 2u);
+                drawn = verdict == 0u;
+                uint triangles = cl.index_count / 3u;
+                counts += uvec4(1u, drawn ? 1u : 0u, triangles, drawn ? triangles : 0u);
+                dropped += uvec3(verdict == STAT_FRUSTUM, verdict == STAT_BACKFACING, verdict == STAT_OCCLUDED);
+                if (drawn) local_slot = atomicAdd(sh_region_count[region], 1u);
+            }
         }
-        bool drawn = valid && verdict == 0u;
-        uint triangles = valid ? cl.index_count / 3u : 0u;
-        counts += uvec4(valid ? 1u : 0u, drawn ? 1u : 0u, triangles, drawn ? triangles : 0u);
-        dropped += uvec3(verdict == STAT_FRUSTUM, verdict == STAT_BACKFACING, verdict == STAT_OCCLUDED);
-        // One atomic per subgroup for its survivors (all of one region: a task is one command's).
-        uvec4 ballot = subgroupBallot(drawn);
-        uint n = subgroupBallotBitCount(ballot);
-        uint base = 0u;
-        if (subgroupElect() && n != 0u) base = atomicAdd(cluster_count[region], n);
-        base = subgroupBroadcastFirst(base);
+        barrier();
+        if (gl_LocalInvocationID.x < FACE_CULL_REGIONS) {
+            uint n = sh_region_count[gl_LocalInvocationID.x];
+            sh_region_base[gl_LocalInvocationID.x] = n != 0u ? atomicAdd(cluster_count[gl_LocalInvocationID.x], n) : 0u;
+        }
+        barrier();
         if (drawn) {
-            uint slot = base + subgroupBallotExclusiveBitCount(ballot);
+            uint slot = sh_region_base[region] + local_slot;
             // The list holds a command per cluster of every instance; never written past.
             if (slot < pc.region_capacity) {
                 cluster_commands[region * pc.region_capacity + slot] =
@@ -133,17 +151,26 @@ void main() {
             }
         }
     }
+    // The counters: summed per subgroup, then per workgroup, then one atomic each.
     counts = subgroupAdd(counts);
     dropped = subgroupAdd(dropped);
-    if (subgroupElect()) {
-        if (counts.x != 0u) {
-            atomicAdd(stats[STAT_TESTED], counts.x);
-            atomicAdd(stats[STAT_DRAWN], counts.y);
-            atomicAdd(stats[STAT_TRIANGLES_TESTED], counts.z);
-            atomicAdd(stats[STAT_TRIANGLES_DRAWN], counts.w);
-            atomicAdd(stats[STAT_FRUSTUM], dropped.x);
-            atomicAdd(stats[STAT_BACKFACING], dropped.y);
-            atomicAdd(stats[STAT_OCCLUDED], dropped.z);
-        }
+    if (subgroupElect() && counts.x != 0u) {
+        atomicAdd(sh_stats[0], counts.x);
+        atomicAdd(sh_stats[1], counts.y);
+        atomicAdd(sh_stats[2], counts.z);
+        atomicAdd(sh_stats[3], counts.w);
+        atomicAdd(sh_stats[4], dropped.x);
+        atomicAdd(sh_stats[5], dropped.y);
+        atomicAdd(sh_stats[6], dropped.z);
+    }
+    barrier();
+    if (gl_LocalInvocationID.x == 0u && sh_stats[0] != 0u) {
+        atomicAdd(stats[STAT_TESTED], sh_stats[0]);
+        atomicAdd(stats[STAT_DRAWN], sh_stats[1]);
+        atomicAdd(stats[STAT_TRIANGLES_TESTED], sh_stats[2]);
+        atomicAdd(stats[STAT_TRIANGLES_DRAWN], sh_stats[3]);
+        atomicAdd(stats[STAT_FRUSTUM], sh_stats[4]);
+        atomicAdd(stats[STAT_BACKFACING], sh_stats[5]);
+        atomicAdd(stats[STAT_OCCLUDED], sh_stats[6]);
     }
 }

@@ -30,6 +30,7 @@ layout(push_constant) uniform Push {
     uvec4 region_first;   // first command of each face-cull region
     uvec4 region_len;     // commands each region holds
     uint max_groups;      // the test step's largest dispatch
+    uint tasks_per_group; // tasks its workgroups take at a time
     uint clustered_capacity; // clustered commands the scratch holds
     uint clustered_meshes;   // entries of cluster_meshes
 } pc;
@@ -137,7 +138,7 @@ void main() {
         clustered = min(clustered, pc.clustered_capacity);
         scratch[SCRATCH_CLUSTERED] = clustered;
         scratch[SCRATCH_TASKS] = tasks;
-        scratch[SCRATCH_DISPATCH + 0u] = min(tasks, pc.max_groups);
+        scratch[SCRATCH_DISPATCH + 0u] = min((tasks + pc.tasks_per_group - 1u) / pc.tasks_per_group, pc.max_groups);
         scratch[SCRATCH_DISPATCH + 1u] = 1u;
         scratch[SCRATCH_DISPATCH + 2u] = 1u;
     }

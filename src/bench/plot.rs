@@ -204,9 +204,13 @@ pub fn msaa_svg(report: &MsaaReport) -> crate::Result<Option<String>> {
     Ok(Some(svg))
 }
 
+/// One configuration of the LOD plot: frame ms, error, threshold.
+type Point = (f64, f64, f64);
+
 /// Each scene's frame time against its image error at each level-of-detail threshold (error
 /// against the supersampled reference, or against full detail without one), the thresholds in
-/// order joined by a line: the points below and left of the others are the ones worth taking.
+/// order joined by a line, one line without cluster culling and one with it: the points below
+/// and left of the others are the ones worth taking.
 pub fn lod_svg(report: &LodReport) -> crate::Result<Option<String>> {
     let with_reference = report.rows.iter().any(|r| r.flip_vs_reference.is_some());
     let error = |r: &super::lod::LodFigure| if with_reference { r.flip_vs_reference } else { r.flip_vs_full };
@@ -224,14 +228,19 @@ pub fn lod_svg(report: &LodReport) -> crate::Result<Option<String>> {
         let root = SVGBackend::with_string(&mut svg, (560 * scenes.len() as u32, 460)).into_drawing_area();
         root.fill(&WHITE).map_err(plot_error)?;
         for (panel, scene) in root.split_evenly((1, scenes.len())).iter().zip(&scenes) {
-            let points: Vec<(f64, f64, f64)> = report
-                .rows
-                .iter()
-                .filter(|r| r.scene == *scene)
-                .filter_map(|r| error(r).map(|e| (r.frame_ms, e, r.threshold)))
+            let rows = report.rows.iter().filter(|r| r.scene == *scene);
+            // One curve without cluster culling and one with it, where the run has both.
+            let series: Vec<(bool, Vec<Point>)> = [false, true]
+                .into_iter()
+                .map(|on| {
+                    let points = rows.clone().filter(|r| r.clusters == on);
+                    (on, points.filter_map(|r| error(r).map(|e| (r.frame_ms, e, r.threshold))).collect())
+                })
+                .filter(|(_, points): &(bool, Vec<_>)| !points.is_empty())
                 .collect();
-            let x_range = log_range(points.iter().map(|p| p.0));
-            let flip_max = points.iter().map(|p| p.1).fold(0.0f64, f64::max).max(1e-4) * 1.15;
+            let all = || series.iter().flat_map(|(_, p)| p.iter());
+            let x_range = log_range(all().map(|p| p.0));
+            let flip_max = all().map(|p| p.1).fold(0.0f64, f64::max).max(1e-4) * 1.15;
             let mut chart = ChartBuilder::on(panel)
                 .caption(format!("{scene}: frame time against error"), ("sans-serif", 16))
                 .margin(12)
@@ -251,14 +260,27 @@ pub fn lod_svg(report: &LodReport) -> crate::Result<Option<String>> {
                 .y_desc(format!("mean FLIP against {against}"))
                 .draw()
                 .map_err(plot_error)?;
-            let color = PALETTE[0];
-            chart.draw_series(LineSeries::new(points.iter().map(|p| (p.0, p.1)), color)).map_err(plot_error)?;
+            for (on, points) in &series {
+                let color = PALETTE[*on as usize];
+                let name = if *on { "cluster culling" } else { "instances only" };
+                chart
+                    .draw_series(LineSeries::new(points.iter().map(|p| (p.0, p.1)), color))
+                    .map_err(plot_error)?
+                    .label(name)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
+                chart
+                    .draw_series(points.iter().map(|&(x, y, threshold)| {
+                        EmptyElement::at((x, y))
+                            + Circle::new((0, 0), 4, color.filled())
+                            + Text::new(format!("{} px", label(&threshold)), (6, -12), ("sans-serif", 11).into_font())
+                    }))
+                    .map_err(plot_error)?;
+            }
             chart
-                .draw_series(points.iter().map(|&(x, y, threshold)| {
-                    EmptyElement::at((x, y))
-                        + Circle::new((0, 0), 4, color.filled())
-                        + Text::new(format!("{} px", label(&threshold)), (6, -12), ("sans-serif", 11).into_font())
-                }))
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
                 .map_err(plot_error)?;
         }
         root.present().map_err(plot_error)?;

@@ -207,6 +207,9 @@ pub struct BenchArgs {
     /// full detail every other is compared with).
     #[arg(long, value_delimiter = ',', default_values_t = cullgraph::bench::lod::DEFAULT_THRESHOLDS.to_vec(), value_parser = parse_lod_threshold)]
     pub lod_thresholds: Vec<f64>,
+    /// The LOD suite: cluster culling off, on, or both (each threshold runs with each).
+    #[arg(long, value_delimiter = ',', default_values = ["off", "on"], value_parser = parse_on_off, value_name = "off,on")]
+    pub lod_clusters: Vec<bool>,
     /// MSAA, shadows and levels-of-detail suites: the reference's supersampling per axis (4: 16
     /// samples per pixel; 0: no image error against a reference).
     #[arg(long, default_value_t = 4, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=64))]

@@ -215,6 +215,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             &lod::LodBench {
                 scenes: lod_scenes,
                 thresholds: args.lod_thresholds.clone(),
+                clusters: args.lod_clusters.clone(),
                 width,
                 height,
                 warmup: args.warmup,

@@ -76,8 +76,11 @@ const SCRATCH_BYTES: &str = "32 + meshes * 32";
 const SCRATCH_HEADER_WORDS: u64 = 8;
 /// Byte offset of the test step's dispatch size in the scratch.
 const DISPATCH_OFFSET: u64 = 16;
-/// The test step's largest dispatch: its workgroups loop over the tasks beyond.
-const MAX_TEST_GROUPS: u32 = 65_535;
+/// The test step's largest dispatch (of 4 tasks a workgroup): its workgroups loop over the
+/// tasks beyond, so the counters see one atomic per workgroup, not one per task.
+const MAX_TEST_GROUPS: u32 = 4096;
+/// Tasks one test workgroup takes at a time (`TASKS_PER_GROUP` in `cluster_cull.comp`).
+const TASKS_PER_GROUP: u32 = 4;
 
 /// One cluster pass's counters as the GPU writes them (48 bytes; `STAT_*` in
 /// `cluster_common.glsl`).
@@ -156,6 +159,7 @@ struct PreparePush {
     region_first: [u32; FACE_CULL_REGIONS],
     region_len: [u32; FACE_CULL_REGIONS],
     max_groups: u32,
+    tasks_per_group: u32,
     clustered_capacity: u32,
     clustered_meshes: u32,
 }
@@ -189,6 +193,7 @@ impl PassNode for ClusterCullPass {
             region_first: scene.regions.first,
             region_len: scene.regions.len,
             max_groups: MAX_TEST_GROUPS,
+            tasks_per_group: TASKS_PER_GROUP,
             clustered_capacity: clustered_capacity as u32,
             clustered_meshes: scene.clustered_meshes,
         };
@@ -206,6 +211,10 @@ impl PassNode for ClusterCullPass {
         ];
         rec.step("prepare");
         self.prepare.dispatch_over(cmd, &binds, bytemuck::bytes_of(&push), vk::Extent2D { width: 1, height: 1 });
+        // Without clustered meshes the prepare step passed every command on whole: no test.
+        if scene.clustered_meshes == 0 {
+            return Ok(());
+        }
         cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ)], &[]);
         let copy = vk::BufferCopy { src_offset: DISPATCH_OFFSET, dst_offset: 0, size: 12 };
         // SAFETY: cmd recording; both buffers hold the 12 bytes copied.
