@@ -303,18 +303,30 @@ struct VerifyTotals {
     visible: u64,
     missed: u64,
     extra: u64,
+    /// Cluster culling, checked cluster by cluster: visible cluster-frames and those missed.
+    clusters_visible: u64,
+    clusters_missed: u64,
+    clusters_checked: bool,
 }
 
 impl VerifyTotals {
     /// Prints the totals of the `frames` checked (named `what`); an error if anything visible
     /// was culled.
     fn report(self, what: &str) -> Result<()> {
-        let Self { frames, visible, missed, extra } = self;
+        let Self { frames, visible, missed, extra, .. } = self;
         println!(
             "verify: {frames} {what}, {visible} visible instance-frames, {missed} false negatives, {extra} false positives"
         );
+        if self.clusters_checked {
+            let (visible, missed) = (self.clusters_visible, self.clusters_missed);
+            println!("verify: clusters: {visible} visible cluster-frames, {missed} false negatives");
+        }
         if missed > 0 {
             return Err(Error::Invalid(format!("culling removed {missed} visible instance-frame(s)")));
+        }
+        if self.clusters_missed > 0 {
+            let missed = self.clusters_missed;
+            return Err(Error::Invalid(format!("cluster culling removed {missed} visible cluster-frame(s)")));
         }
         Ok(())
     }
@@ -324,6 +336,11 @@ impl VerifyTotals {
         self.visible += v.visible as u64;
         self.missed += v.false_negatives as u64;
         self.extra += v.false_positives as u64;
+        if let Some(c) = &v.clusters {
+            self.clusters_checked = true;
+            self.clusters_visible += c.visible as u64;
+            self.clusters_missed += c.false_negatives as u64;
+        }
     }
 }
 

@@ -4,13 +4,13 @@
 //! sample sees, and what the frame's drawing passes drew is compared with it
 //! ([`crate::stats::FrameStats::verify`]: false negatives, false positives).
 
-use super::visibility::VisibilityOracle;
+use super::visibility::{VisibilityOracle, VisibleIds};
 use crate::error::Result;
 use crate::gpu::ShaderCompiler;
 use crate::graph::CompiledGraph;
 use crate::render::{DrawnInstances, FrameObserver, Renderer, ViewId};
 use crate::scene::FLAG_EMPTY_SLOT;
-use crate::stats::{FrameStats, VerifyStats};
+use crate::stats::{ClusterVerifyStats, FrameStats, VerifyStats};
 use ash::vk;
 use std::collections::BTreeSet;
 
@@ -78,7 +78,10 @@ impl FrameObserver for Verification {
     fn completed(&mut self, renderer: &Renderer, view: ViewId, frame: u64, stats: &mut FrameStats) -> Result<()> {
         let constants = renderer.view_frame_constants_of(view, frame)?;
         let oracle = self.oracle_of(renderer, view)?;
-        let visible = oracle.render(renderer.context(), renderer.gpu_scene(), constants)?.visible;
+        let seen = oracle.render(renderer.context(), renderer.gpu_scene(), constants)?;
+        let clusters = renderer.drawn_clusters_in_view(view)?.unwrap_or_default();
+        let cluster_check = (!clusters.is_empty()).then(|| check_clusters(renderer.scene(), &seen, &clusters));
+        let visible = seen.visible;
         let lists = renderer.drawn_in_view(view)?.unwrap_or_default();
         let drawn: BTreeSet<u32> = if lists.contains(&DrawnInstances::All) {
             (0..renderer.gpu_scene().instance_count).collect()
@@ -103,9 +106,43 @@ impl FrameObserver for Verification {
             false_negatives: missed.len() as u32,
             false_positives: drawn.difference(&visible).count() as u32,
             missed: missed.into_iter().take(16).collect(),
+            clusters: cluster_check,
         });
         self.exactly_visible = visible;
         Ok(())
+    }
+}
+
+/// Cluster culling's draws against the oracle's samples, for the instances drawn cluster by
+/// cluster at their full mesh (`drawn`: instance id and first index of each cluster drawn).
+fn check_clusters(scene: &crate::scene::Scene, seen: &VisibleIds, drawn: &[(u32, u32)]) -> ClusterVerifyStats {
+    // The level-0 clusters of `instance`'s mesh, if any.
+    let clusters_of = |instance: u32| {
+        let mesh = scene.meshes.get(scene.instances.get(instance as usize)?.mesh as usize)?;
+        mesh.clusters.first().map(|c| (mesh, c.as_slice()))
+    };
+    let mut drawn_set: BTreeSet<(u32, usize)> = BTreeSet::new();
+    for &(instance, first_index) in drawn {
+        let Some((_, clusters)) = clusters_of(instance) else { continue };
+        if let Ok(c) = clusters.binary_search_by_key(&first_index, |c| c.first_index) {
+            drawn_set.insert((instance, c));
+        }
+    }
+    let checked: BTreeSet<u32> = drawn_set.iter().map(|&(i, _)| i).collect();
+    let mut visible: BTreeSet<(u32, usize)> = BTreeSet::new();
+    for (&id, &triangle) in seen.ids.iter().zip(&seen.triangles) {
+        let Some(instance) = id.checked_sub(1).filter(|i| checked.contains(i)) else { continue };
+        let Some((mesh, clusters)) = clusters_of(instance) else { continue };
+        let index = mesh.first_index + 3 * triangle;
+        let c = clusters.partition_point(|c| c.first_index <= index).saturating_sub(1);
+        visible.insert((instance, c));
+    }
+    ClusterVerifyStats {
+        instances: checked.len() as u32,
+        visible: visible.len() as u32,
+        drawn: drawn_set.len() as u32,
+        false_negatives: visible.difference(&drawn_set).count() as u32,
+        false_positives: drawn_set.difference(&visible).count() as u32,
     }
 }
 

@@ -3,6 +3,9 @@
 //! pass. The instances whose id survives at some sample are the visible set; culling must draw
 //! all of them (no false negatives), and what it draws beyond them are false positives.
 //!
+//! Each sample also keeps the triangle of the instance's full mesh that covers it, so that what
+//! cluster culling drew can be checked cluster by cluster.
+//!
 //! Transparent (alphaMode BLEND) instances hide nothing: they are drawn after the opaque ones,
 //! through the `transparent` pass's own fragment shader with its depth test against the opaque
 //! depth, and marked seen wherever a fragment passes.
@@ -39,6 +42,9 @@ pub struct VisibleIds {
     pub samples: u32,
     /// `(y * width + x) * samples + s` -> instance id + 1 (0: nothing).
     pub ids: Vec<u32>,
+    /// At the same index, the triangle of that instance's full mesh (its index in the mesh;
+    /// meaningless where `ids` holds 0).
+    pub triangles: Vec<u32>,
     /// Instances visible at one sample or more.
     pub visible: BTreeSet<u32>,
 }
@@ -50,8 +56,10 @@ pub struct VisibilityOracle {
     readback: Pipeline,
     sampler: Sampler,
     ids: Image,
+    triangles: Image,
     depth: Image,
     out: Buffer,
+    triangles_out: Buffer,
     extent: vk::Extent2D,
     samples: vk::SampleCountFlags,
 }
@@ -77,7 +85,7 @@ impl VisibilityOracle {
                 fragment: Some(&fragment),
                 vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
                 vertex_attributes: &ID_VERTEX_ATTRIBUTES,
-                color_formats: &[vk::Format::R32_UINT],
+                color_formats: &[vk::Format::R32_UINT, vk::Format::R32_UINT],
                 depth_format: vk::Format::D32_SFLOAT,
                 depth_compare: vk::CompareOp::GREATER,
                 depth_write: true,
@@ -106,29 +114,40 @@ impl VisibilityOracle {
             vk::Format::R32_UINT,
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
         )?;
+        let triangles = image(
+            "visibility triangles",
+            vk::Format::R32_UINT,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+        )?;
         let depth = image(
             "visibility depth",
             vk::Format::D32_SFLOAT,
             vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
         )?;
         let count = width as u64 * height as u64 * samples.as_raw() as u64;
-        let out = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: "visibility ids readback",
-                size: count * 4,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER,
-                location: MemoryLocation::GpuToCpu,
-            },
-        )?;
+        let readback_buffer = |name| {
+            Buffer::new(
+                ctx,
+                &BufferDesc {
+                    name,
+                    size: count * 4,
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                    location: MemoryLocation::GpuToCpu,
+                },
+            )
+        };
+        let out = readback_buffer("visibility ids readback")?;
+        let triangles_out = readback_buffer("visibility triangles readback")?;
         Ok(Self {
             draw,
             transparent,
             readback,
             sampler: Sampler::nearest_clamp(ctx)?,
             ids,
+            triangles,
             depth,
             out,
+            triangles_out,
             extent,
             samples,
         })
@@ -202,15 +221,19 @@ impl VisibilityOracle {
         ctx.submit_and_wait(|cmd| {
             let to_draw = [
                 image_barrier(&self.ids, Access::NONE, Access::COLOR_ATTACHMENT),
+                image_barrier(&self.triangles, Access::NONE, Access::COLOR_ATTACHMENT),
                 image_barrier(&self.depth, Access::NONE, Access::DEPTH_ATTACHMENT),
             ];
             cmd_barriers(device, cmd, &[], &to_draw);
-            let color = [vk::RenderingAttachmentInfo::default()
-                .image_view(self.ids.view())
-                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
-                .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } })];
+            let target = |image: &Image| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(image.view())
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } })
+            };
+            let color = [target(&self.ids), target(&self.triangles)];
             let depth = vk::RenderingAttachmentInfo::default()
                 .image_view(self.depth.view())
                 .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -247,16 +270,23 @@ impl VisibilityOracle {
                 self.mark_transparent(ctx, cmd, scene, constants, &seen, area);
             }
             let sampled = Access { access: vk::AccessFlags2::SHADER_SAMPLED_READ, ..Access::COMPUTE_READ };
-            cmd_barriers(device, cmd, &[], &[image_barrier(&self.ids, Access::COLOR_ATTACHMENT, sampled)]);
+            let to_read = [
+                image_barrier(&self.ids, Access::COLOR_ATTACHMENT, sampled),
+                image_barrier(&self.triangles, Access::COLOR_ATTACHMENT, sampled),
+            ];
+            cmd_barriers(device, cmd, &[], &to_read);
             let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-            let binds =
-                [Bind::Sampled(0, self.ids.view(), self.sampler.handle(), read), Bind::Buffer(1, self.out.handle())];
             let push = [self.extent.width, self.extent.height, self.samples.as_raw()];
-            self.readback.dispatch_over(cmd, &binds, bytemuck::cast_slice(&push), self.extent);
+            for (image, out) in [(&self.ids, &self.out), (&self.triangles, &self.triangles_out)] {
+                let binds =
+                    [Bind::Sampled(0, image.view(), self.sampler.handle(), read), Bind::Buffer(1, out.handle())];
+                self.readback.dispatch_over(cmd, &binds, bytemuck::cast_slice(&push), self.extent);
+            }
             cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::HOST_READ)], &[]);
             crate::gpu::GpuResult::Ok(())
         })?;
         let ids: Vec<u32> = bytemuck::cast_slice(self.out.read_bytes()?).to_vec();
+        let triangles: Vec<u32> = bytemuck::cast_slice(self.triangles_out.read_bytes()?).to_vec();
         let mut visible: BTreeSet<u32> = ids.iter().filter(|&&id| id != 0).map(|&id| id - 1).collect();
         if transparent_groups > 0 {
             let seen: &[u32] = bytemuck::cast_slice(seen.read_bytes()?);
@@ -267,6 +297,7 @@ impl VisibilityOracle {
             height: self.extent.height,
             samples: self.samples.as_raw(),
             ids,
+            triangles,
             visible,
         })
     }

@@ -85,3 +85,29 @@ fn drawn_instances(scene: &GpuScene, lists: Option<Vec<Vec<u8>>>, order: DrawOrd
 fn whole<T: bytemuck::Pod>(bytes: &[u8]) -> Vec<T> {
     bytes.chunks_exact(std::mem::size_of::<T>()).map(bytemuck::pod_read_unaligned).collect()
 }
+
+/// The clusters the capturing passes drew through cluster lists (`cluster_cull`'s), as
+/// (instance id, first index of the cluster's range), in pass order.
+pub(crate) fn drawn_clusters(captured: &[crate::graph::Captured]) -> Vec<(u32, u32)> {
+    let regions = crate::passes::cluster_cull::CLUSTER_REGIONS as usize;
+    let mut out = Vec::new();
+    for (_, lists) in captured {
+        let Some([_, _, ids, commands, counts]) =
+            lists.as_ref().and_then(|l| <&[Vec<u8>; 5]>::try_from(l.as_slice()).ok())
+        else {
+            continue;
+        };
+        let ids: Vec<u32> = whole(ids);
+        let commands: Vec<DrawIndexedIndirect> = whole(commands);
+        let counts: Vec<u32> = whole(counts);
+        let capacity = commands.len() / regions;
+        for (r, &count) in counts.iter().take(regions).enumerate() {
+            for c in &commands[r * capacity..r * capacity + (count as usize).min(capacity)] {
+                if let Some(&id) = ids.get(c.first_instance as usize) {
+                    out.push((id, c.first_index));
+                }
+            }
+        }
+    }
+    out
+}

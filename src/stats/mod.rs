@@ -153,6 +153,27 @@ pub struct VerifyStats {
     pub false_positives: u32,
     /// The first few false negatives (instance ids), for debugging.
     pub missed: Vec<u32>,
+    /// Cluster culling checked cluster by cluster, where the frame drew instances through
+    /// cluster lists at their full mesh.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clusters: Option<ClusterVerifyStats>,
+}
+
+/// How a frame's cluster culling compares with exact visibility, over the instances it drew
+/// cluster by cluster at their full mesh (the level the oracle draws): a cluster is visible
+/// when a triangle of it is seen at some sample.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ClusterVerifyStats {
+    /// Instances checked.
+    pub instances: u32,
+    /// Their clusters visible at some sample.
+    pub visible: u32,
+    /// Their clusters drawn.
+    pub drawn: u32,
+    /// Visible but not drawn. Must be 0.
+    pub false_negatives: u32,
+    /// Drawn but not visible.
+    pub false_positives: u32,
 }
 
 /// A whole run of `cullgraph render`, as written to `--stats`.

@@ -164,6 +164,14 @@ impl Renderer {
         Ok(Some(crate::render::drawn::drawn(state.plan(), &self.gpu_scene, captured)))
     }
 
+    /// The clusters `view`'s last completed frame drew through cluster lists, as (instance id,
+    /// first index of the cluster's range); `None` unless draw lists are captured.
+    pub(crate) fn drawn_clusters_in_view(&self, view: ViewId) -> Result<Option<Vec<(u32, u32)>>> {
+        let state = self.view_state(view)?;
+        let Some(captured) = state.graphs.runtime.captured()? else { return Ok(None) };
+        Ok(Some(crate::render::drawn::drawn_clusters(&captured)))
+    }
+
     /// `view`'s constants as frame `frame` was given them, once it has completed.
     pub fn view_frame_constants_of(&self, view: ViewId, frame: u64) -> Result<&Buffer> {
         Ok(&self.view_state(view)?.inputs.slot(frame).constants)
