@@ -86,7 +86,7 @@ fn clusters_drop_triangles_and_keep_the_image() {
     let scene = dense(40);
     let cameras = vec![near_camera(); 3];
     for threshold in [0.0, 2.0] {
-        for name in ["frustum", "two_phase"] {
+        for name in ["frustum", "two_phase", "occluder_prepass"] {
             let (none, whole) = render(&gpu, &scene, &cameras, &graph(name, threshold));
             assert!(none.is_empty());
             let clustered = format!("{name}_clusters");

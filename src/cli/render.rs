@@ -203,6 +203,16 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         last.gpu_total_ms,
         args.out.display()
     );
+    let clusters =
+        last.entries::<cullgraph::passes::cluster_cull::ClusterPassStats>(cullgraph::passes::cluster_cull::GROUP);
+    if !clusters.is_empty() {
+        let (tested, drawn) = clusters.iter().fold((0u64, 0u64), |t, c| (t.0 + c.tested as u64, t.1 + c.drawn as u64));
+        let dropped = cullgraph::passes::cluster_cull::ClusterPassStats::triangles_dropped(&last);
+        println!(
+            "clusters: {drawn} of {tested} drawn, {} triangles after cluster culling",
+            last.triangles.saturating_sub(dropped)
+        );
+    }
     if let Some(r) = &stats.reference {
         println!(
             "reference ({} samples per pixel): mean FLIP {:.4}, PSNR {:.2} dB",
@@ -374,7 +384,7 @@ fn graph_spec(args: &RenderArgs) -> Result<GraphSpec> {
 fn clustered_graph(graph: Option<&str>, other: bool) -> Result<GraphSpec> {
     let refuse = |what: &str| {
         Error::Invalid(format!(
-            "--clusters on: {what} has no cluster variant; the built-in two_phase and frustum graphs have one (or insert cluster_cull passes in a graph file, as graph/two_phase_clusters.ron does)"
+            "--clusters on: {what} has no cluster variant; the built-in two_phase, frustum and occluder_prepass graphs have one (or insert cluster_cull passes in a graph file, as graph/two_phase_clusters.ron does)"
         ))
     };
     if other {

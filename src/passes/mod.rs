@@ -55,6 +55,11 @@ pub const SHIPPED_GRAPHS: &[LibraryGraph] = &[
         file: "graph/occluder_prepass.ron",
         text: include_str!("../../graph/occluder_prepass.ron"),
     },
+    LibraryGraph {
+        name: "occluder_prepass_clusters",
+        file: "graph/occluder_prepass_clusters.ron",
+        text: include_str!("../../graph/occluder_prepass_clusters.ron"),
+    },
     LibraryGraph { name: "overlay", file: "graph/overlay.ron", text: include_str!("../../graph/overlay.ron") },
     LibraryGraph {
         name: "msaa_compressed",

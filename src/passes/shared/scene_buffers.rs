@@ -153,6 +153,21 @@ impl DrawList {
     }
 }
 
+/// Refuses a scene with a mesh whose indices (relative to its vertex offset) reach past
+/// `max_index`, the device's `maxDrawIndexedIndexValue` (at least 2^24 - 1; 2^32 - 1 where the
+/// device draws the full 32-bit range, as NVIDIA's and lavapipe do): naming the mesh.
+pub(crate) fn check_index_range(scene: &Scene, max_index: u32) -> crate::Result<()> {
+    match scene.meshes.iter().find(|m| m.vertex_count > 0 && m.vertex_count - 1 > max_index) {
+        Some(m) => Err(crate::Error::Invalid(format!(
+            "mesh '{}' has {} vertices; this device draws meshes of at most {} (maxDrawIndexedIndexValue {max_index}): split it",
+            m.name,
+            m.vertex_count,
+            max_index as u64 + 1
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Morton code (21 bits per axis) of each instance's origin within the box of all origins.
 pub(crate) fn spatial_keys(scene: &Scene) -> Vec<u64> {
     let origins = || scene.instances.iter().map(|i| i.transform.translation).filter(|t| t.is_finite());
@@ -289,6 +304,7 @@ impl GpuScene {
         room: bool,
     ) -> crate::Result<Self> {
         profiling::scope!("cullgraph::upload_scene");
+        check_index_range(scene, ctx.caps().limits.max_draw_indexed_index_value)?;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let instances: Vec<GpuInstance> = scene.instances.iter().map(GpuInstance::new).collect();
         let textures = match textures {
@@ -384,6 +400,23 @@ pub(crate) fn instance_triangle_bases(scene: &Scene) -> Vec<[u32; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn meshes_past_the_devices_index_range_are_refused_by_name() {
+        let mut scene = Scene::default();
+        let tri = crate::scene::MeshData {
+            positions: vec![glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
+            indices: vec![0, 1, 2],
+            ..Default::default()
+        };
+        scene.add_mesh("small", &tri, "small").unwrap();
+        scene.add_mesh("huge", &tri, "huge").unwrap();
+        // As if the second had 2^24 + 1 vertices, on a device limited to 2^24 - 1.
+        scene.meshes[1].vertex_count = (1 << 24) + 1;
+        assert!(check_index_range(&scene, u32::MAX).is_ok());
+        let err = check_index_range(&scene, (1 << 24) - 1).unwrap_err().to_string();
+        assert!(err.contains("mesh 'huge' has 16777217 vertices") && err.contains("at most 16777216"), "{err}");
+    }
     use crate::scene::{Instance, MeshData, Transform};
     use glam::{DVec3, Vec3};
 

@@ -66,6 +66,7 @@ impl GpuScene {
             edits.carry(old.clone(), &new, old.size());
             Ok(new)
         };
+        super::scene_buffers::check_index_range(scene, ctx.caps().limits.max_draw_indexed_index_value)?;
         let slots = scene.instances.len() as u64;
         let size_of = |n: u64, one: usize| n * one as u64;
         let none = vk::BufferUsageFlags::empty();
