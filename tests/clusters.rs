@@ -223,3 +223,27 @@ fn moving_instances_keep_their_image_cluster_by_cluster() {
     assert!(dropped > 0);
     gpu.assert_clean();
 }
+
+#[test]
+fn a_camera_inside_a_prop_or_far_from_the_origin_sees_the_same_image() {
+    let gpu = GpuTest::new();
+    let scene = dense(40);
+    // Inside the bound of a rock, a unit from its centre, looking out through its surface and
+    // at the props beyond; and the whole scene 10^7 units out.
+    let rock = scene.instances.iter().find(|i| scene.meshes[i.mesh as usize].name == "dense/rock").unwrap();
+    let centre = rock.transform.translation;
+    let inside =
+        Camera { eye: centre + DVec3::new(0.4, 0.6, 0.3), target: DVec3::new(0.0, 1.0, 0.0), ..Default::default() };
+    let offset = DVec3::new(1.0e7, 0.0, -1.0e7);
+    let mut far = scene.clone();
+    far.translate(offset);
+    let near = near_camera();
+    let far_camera = Camera { eye: near.eye + offset, target: near.target + offset, ..near.clone() };
+    for (what, scene, camera) in [("inside a rock", &scene, inside), ("10^7 units out", &far, far_camera)] {
+        let cameras = vec![camera; 3];
+        let (_, whole) = render(&gpu, scene, &cameras, &graph("two_phase", 0.0));
+        let (passes, image) = render(&gpu, scene, &cameras, &graph("two_phase_clusters", 0.0));
+        assert!(image == whole, "{what}: another image cluster by cluster");
+        assert!(totals(&passes).0 > 0, "{what}: {passes:?}");
+    }
+}

@@ -28,9 +28,10 @@ use super::slots::{slot, DRAW_COMMANDS, DRAW_COUNTS, HIZ_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler};
 use crate::graph::executor::PassContext;
+use crate::graph::plan::Version;
 use crate::graph::{
-    CounterEntry, Counters, Creates, FormatRule, Growth, NodeSetup, PassKind, PassKindInfo, PassNode, Quantity,
-    SlotDecl, Stages, Usage,
+    CounterEntry, Counters, Creates, FormatRule, Growth, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos,
+    Quantity, SlotDecl, Stages, Usage,
 };
 use crate::passes::gbuffer::LIST_SLOTS;
 use crate::passes::shared::face_cull::{FaceCull, FACE_CULL_REGIONS};
@@ -298,6 +299,22 @@ impl PassKind for ClusterCullKind {
 
     fn quantities(&self) -> Vec<Quantity> {
         vec![CLUSTERS]
+    }
+
+    fn validate(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        // The clusters are projected with this frame's camera: last frame's pyramid would need
+        // last frame's (and could drop what became visible since).
+        match check.binding("hiz").filter(|b| b.version == Version::Previous) {
+            Some(b) => vec![(
+                b.pos,
+                format!(
+                    "pass '{}' ({KIND}): `hiz` must be this frame's pyramid, not '{}.prev' (clusters are tested with this frame's camera)",
+                    check.pass.name,
+                    check.resource_name(b)
+                ),
+            )],
+            None => Vec::new(),
+        }
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
