@@ -279,9 +279,11 @@ impl PassKind for ClusterCullKind {
             name: KIND,
             doc: "tests the clusters of the instances a culled list draws (frustum, sample coverage, normal cone, Hi-Z) and writes the list again with those instances drawn cluster by cluster, one command per surviving cluster",
             reads: vec![
-                read(LIST_SLOTS[0], "the culled list's commands").content(DRAW_COMMANDS),
+                // As large as instance_cull makes them: the pass reads every command its counts
+                // name, and the ids its commands name.
+                read(LIST_SLOTS[0], "the culled list's commands").at_least("meshes * 20").content(DRAW_COMMANDS),
                 read(LIST_SLOTS[1], "their number per face-cull region").at_least("16").content(DRAW_COUNTS),
-                read(LIST_SLOTS[2], "its instance ids (the geometry pass draws both lists with them)"),
+                read(LIST_SLOTS[2], "its instance ids (the geometry pass draws both lists with them)").at_least("instances * 4"),
                 slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid to test the clusters against (none: frustum, coverage and cones only)"),
             ],
             writes: vec![
