@@ -6,30 +6,16 @@
 
 mod common;
 
+use common::dense::{dense, graph, near_camera};
 use common::GpuTest;
 use cullgraph::oracle::Verify;
 use cullgraph::passes::cluster_cull::{ClusterPassStats, GROUP};
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
-use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::{Camera, Instance, Scene, SceneSource, Transform};
+use cullgraph::scene::{Camera, Instance, Scene, Transform};
 use cullgraph::stats::ClusterVerifyStats;
 use glam::{DVec3, Mat3, Vec3};
 
 const SIZE: (u32, u32) = (160, 90);
-
-fn dense(instances: usize) -> Scene {
-    SceneSource::Builtin("dense".into())
-        .load(&LoadOptions { instances: Some(instances), ..Default::default() })
-        .unwrap()
-}
-
-fn near_camera() -> Camera {
-    Camera { eye: DVec3::new(14.0, 5.0, 14.0), target: DVec3::new(0.0, 1.0, 0.0), ..Default::default() }
-}
-
-fn graph(name: &str, threshold: f64) -> GraphSpec {
-    GraphSpec::builtin(name).unwrap().with_overrides([("lod_threshold".into(), format!("{threshold:?}"))])
-}
 
 /// The last frame of `cameras` (one frame each) through `spec`: its cluster passes' figures
 /// and its RGBA bytes; no frame missed a visible instance, nor a visible cluster of an

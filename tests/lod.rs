@@ -6,30 +6,16 @@
 
 mod common;
 
+use common::dense::{dense, graph, near_camera};
 use common::GpuTest;
 use cullgraph::oracle::Verify;
 use cullgraph::passes::instance_cull::CullPassStats;
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
-use cullgraph::scene::source::LoadOptions;
-use cullgraph::scene::{Camera, Instance, Scene, SceneSource, Transform};
+use cullgraph::scene::{Camera, Instance, Scene, Transform};
 use cullgraph::stats::FrameStats;
 use glam::{DVec3, Mat3};
 
 const SIZE: (u32, u32) = (160, 90);
-
-fn dense(instances: usize) -> Scene {
-    SceneSource::Builtin("dense".into())
-        .load(&LoadOptions { instances: Some(instances), ..Default::default() })
-        .unwrap()
-}
-
-fn near_camera() -> Camera {
-    Camera { eye: DVec3::new(14.0, 5.0, 14.0), target: DVec3::new(0.0, 1.0, 0.0), ..Default::default() }
-}
-
-fn graph(name: &str, threshold: f64) -> GraphSpec {
-    GraphSpec::builtin(name).unwrap().with_overrides([("lod_threshold".into(), format!("{threshold:?}"))])
-}
 
 /// The last of `frames` frames of `camera` through `spec`: its stats and RGBA bytes; no frame
 /// missed a visible instance.

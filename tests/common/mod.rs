@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod cli;
+pub mod dense;
 
 use cullgraph::gpu::{Buffer, BufferDesc, ContextOptions, GpuContext, MemoryLocation, ShaderCompiler, ShaderRoot};
 use std::ops::Deref;
