@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::dense::{dense, graph, near_camera};
+use common::dense::{dense, graph, near_camera, sphere};
 use common::GpuTest;
 use cullgraph::oracle::Verify;
 use cullgraph::passes::cluster_cull::{ClusterPassStats, GROUP};
@@ -232,4 +232,62 @@ fn a_camera_inside_a_prop_or_far_from_the_origin_sees_the_same_image() {
         assert!(image == whole, "{what}: another image cluster by cluster");
         assert!(totals(&passes).0 > 0, "{what}: {passes:?}");
     }
+}
+
+#[test]
+fn meshes_registered_on_a_live_world_are_culled_cluster_by_cluster() {
+    use cullgraph::scene::merge::SceneMerge;
+    use cullgraph::scene::world::World;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let camera = near_camera();
+    let (mut world, _) = World::new(dense(4)).unwrap();
+    let settings = RenderSettings::new(SIZE.0, SIZE.1);
+    let mut plain = Renderer::from_world(&gpu, &shaders, &world, settings.clone(), &graph("two_phase", 0.0)).unwrap();
+    let mut clustered =
+        Renderer::from_world(&gpu, &shaders, &world, settings, &graph("two_phase_clusters", 0.0)).unwrap();
+    clustered.enable_verification(&shaders).unwrap();
+    // Each step changes the world; both renderers follow it and draw the same image, the
+    // clustered one checked cluster by cluster.
+    let mut step = |world: &World, what: &str| {
+        plain.sync(&shaders, world).unwrap();
+        clustered.sync(&shaders, world).unwrap();
+        for _ in 0..2 {
+            plain.render(&camera).unwrap();
+            clustered.render(&camera).unwrap();
+        }
+        let (_, whole) = plain.render_to_image(&camera).unwrap();
+        let (stats, image) = clustered.render_to_image(&camera).unwrap();
+        assert!(image.into_raw() == whole.into_raw(), "{what}: another image cluster by cluster");
+        let verify = stats.verify.unwrap();
+        let check = verify.clusters.clone().unwrap_or_default();
+        assert_eq!((verify.false_negatives, check.false_negatives), (0, 0), "{what}: {verify:?}");
+        check
+    };
+    step(&world, "the world as loaded");
+    // Props streamed in beside the first: their meshes come with clusters.
+    let placement = Transform { linear: Mat3::IDENTITY, translation: DVec3::new(-6.0, 0.0, 4.0) };
+    SceneMerge::new(dense(24), placement).unwrap().add_all(&mut world).unwrap();
+    let merged = step(&world, "a scene merged in");
+    assert!(merged.instances > 4, "{merged:?}");
+    // A mesh the engine registers gets clusters; unregistered, its pool space and index go
+    // to the next one, whose clusters replace its own.
+    let ball = world.add_mesh("ball", &sphere(64, 128)).unwrap();
+    assert!(!world.scene().meshes[ball as usize].clusters.is_empty());
+    let at = |mesh| Instance {
+        transform: Transform { linear: Mat3::from_diagonal(Vec3::splat(2.0)), translation: DVec3::new(6.0, 2.0, 6.0) },
+        mesh,
+        material: 0,
+        flags: 0,
+    };
+    let handle = world.insert(at(ball)).unwrap();
+    let with_ball = step(&world, "a registered mesh");
+    assert!(with_ball.instances > merged.instances, "{with_ball:?}");
+    world.remove(handle).unwrap();
+    world.remove_mesh(ball).unwrap();
+    step(&world, "a mesh unregistered");
+    let again = world.add_mesh("ball again", &sphere(48, 160)).unwrap();
+    world.insert(at(again)).unwrap();
+    step(&world, "another mesh in its place");
+    gpu.assert_clean();
 }

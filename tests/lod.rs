@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::dense::{dense, graph, near_camera};
+use common::dense::{dense, graph, near_camera, sphere};
 use common::GpuTest;
 use cullgraph::oracle::Verify;
 use cullgraph::passes::instance_cull::CullPassStats;
@@ -271,27 +271,6 @@ fn the_threshold_changes_live_once_levels_are_chosen() {
     assert!(four_image.into_raw() == loaded_image);
     assert_eq!(zero.triangles, whole.triangles);
     assert!(zero_image.into_raw() == whole_image.into_raw(), "threshold 0 set live draws every mesh whole");
-}
-
-/// A UV sphere of `rings` x `segments` quads (radius 1).
-fn sphere(rings: u32, segments: u32) -> cullgraph::scene::MeshData {
-    let mut positions = Vec::new();
-    for r in 0..=rings {
-        let theta = std::f32::consts::PI * r as f32 / rings as f32;
-        for s in 0..=segments {
-            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
-            positions.push(glam::Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()));
-        }
-    }
-    let row = segments + 1;
-    let mut indices = Vec::new();
-    for r in 0..rings {
-        for s in 0..segments {
-            let (a, b) = (r * row + s, (r + 1) * row + s);
-            indices.extend([a, a + 1, b, a + 1, b + 1, b]);
-        }
-    }
-    cullgraph::scene::MeshData { normals: positions.clone(), positions, indices, ..Default::default() }
 }
 
 #[test]

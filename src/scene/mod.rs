@@ -350,8 +350,9 @@ impl Scene {
     }
 
     /// Splits each level of mesh `mesh` (the full mesh and its levels of detail) large enough
-    /// into clusters, its indices rewritten in cluster order in place.
-    fn add_clusters(&mut self, mesh: u32) {
+    /// into clusters, its indices rewritten in cluster order in place (none for a deformed
+    /// mesh).
+    pub(crate) fn add_clusters(&mut self, mesh: u32) {
         let m = &self.meshes[mesh as usize];
         if m.deform.is_some() {
             return;

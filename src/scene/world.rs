@@ -754,7 +754,7 @@ impl World {
     /// Registers a mesh and returns its index: its vertices and indices take the smallest free
     /// ranges of the pools that hold them (space unregistered meshes gave back) before the pools
     /// grow, and it takes an unregistered mesh's index when there is one. It gets its chain of
-    /// levels of detail as a mesh of a loaded scene does ([`Scene::add_mesh`]).
+    /// levels of detail and its clusters as a mesh of a loaded scene does ([`Scene::add_mesh`]).
     pub fn add_mesh(&mut self, name: &str, data: &MeshData) -> Result<u32, WorldError> {
         let (vertices, bounds, sphere, deform) = data.validate(&format!("mesh '{name}'"))?;
         let chain = if data.no_lod || deform.is_some() {
@@ -763,13 +763,15 @@ impl World {
             super::lod::build_chain(&vertices, &data.indices)
         };
         let deform = deform.map(std::sync::Arc::new);
-        self.place_mesh(name, vertices.len(), data.indices.len(), chain, |scene, place, at| {
+        let mesh = self.place_mesh(name, vertices.len(), data.indices.len(), chain, |scene, place, at| {
             scene.put_mesh_vertices(name, &vertices, &data.indices, (bounds, sphere, deform), place, at)
-        })
+        })?;
+        self.scene.add_clusters(mesh);
+        Ok(mesh)
     }
 
     /// Registers mesh `mesh` of `source` (checked when `source` was loaded), with its levels of
-    /// detail, as [`World::add_mesh`] does.
+    /// detail and clusters, as [`World::add_mesh`] does.
     pub(crate) fn add_mesh_of(&mut self, source: &Scene, mesh: u32) -> Result<u32, WorldError> {
         let m = &source.meshes[mesh as usize];
         let vertices = &source.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
@@ -781,9 +783,11 @@ impl World {
                 (source.indices[l.first_index as usize..(l.first_index + l.index_count) as usize].to_vec(), l.error)
             })
             .collect();
-        self.place_mesh(&m.name, vertices.len(), indices.len(), chain, |scene, place, at| {
+        let mesh = self.place_mesh(&m.name, vertices.len(), indices.len(), chain, |scene, place, at| {
             scene.put_mesh_vertices(&m.name, vertices, indices, (m.bounds, m.sphere, m.deform.clone()), place, at)
-        })
+        })?;
+        self.scene.add_clusters(mesh);
+        Ok(mesh)
     }
 
     /// Finds room for a mesh of `vertices` and `indices` and its levels of detail `chain`, and
@@ -846,6 +850,8 @@ impl World {
     fn free_mesh(&mut self, mesh: u32) {
         self.joint_boxes.remove(&mesh);
         self.meshes_live[mesh as usize] = false;
+        // Its pool ranges go to other meshes: no cluster may name them any more.
+        self.scene.meshes[mesh as usize].clusters.clear();
         let m = &self.scene.meshes[mesh as usize];
         self.vertex_ranges.give_back(m.vertex_offset, m.vertex_count);
         self.index_ranges.give_back(m.first_index, m.index_span());

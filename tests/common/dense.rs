@@ -21,3 +21,24 @@ pub fn near_camera() -> Camera {
 pub fn graph(name: &str, threshold: f64) -> GraphSpec {
     GraphSpec::builtin(name).unwrap().with_overrides([("lod_threshold".into(), format!("{threshold:?}"))])
 }
+
+/// A UV sphere of `rings` x `segments` quads (radius 1): a mesh to register at run time.
+pub fn sphere(rings: u32, segments: u32) -> cullgraph::scene::MeshData {
+    let mut positions = Vec::new();
+    for r in 0..=rings {
+        let theta = std::f32::consts::PI * r as f32 / rings as f32;
+        for s in 0..=segments {
+            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
+            positions.push(glam::Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()));
+        }
+    }
+    let row = segments + 1;
+    let mut indices = Vec::new();
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b) = (r * row + s, (r + 1) * row + s);
+            indices.extend([a, a + 1, b, a + 1, b + 1, b]);
+        }
+    }
+    cullgraph::scene::MeshData { normals: positions.clone(), positions, indices, ..Default::default() }
+}

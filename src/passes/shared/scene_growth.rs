@@ -9,7 +9,7 @@
 //! at the next recorded frame, after the frames before it are done with what they overwrite.
 
 use super::cull_data::{
-    gpu_levels, mesh_levels, GpuDrawGroup, GpuGroupBounds, GpuLodLevel, CLUSTER_RANGES_PER_MESH, LEVELS_PER_MESH,
+    cluster_tables, gpu_levels, mesh_levels, GpuCluster, GpuDrawGroup, GpuGroupBounds, GpuLodLevel, LEVELS_PER_MESH,
 };
 use super::gpu_types::GpuMaterial;
 use super::scene_buffers::{drawn_triangles, max_mesh_triangles, GpuScene};
@@ -67,6 +67,7 @@ impl GpuScene {
             Ok(new)
         };
         super::scene_buffers::check_index_range(scene, ctx.caps().limits.max_draw_indexed_index_value)?;
+        let tables = cluster_tables(scene);
         let slots = scene.instances.len() as u64;
         let size_of = |n: u64, one: usize| n * one as u64;
         let none = vk::BufferUsageFlags::empty();
@@ -108,16 +109,16 @@ impl GpuScene {
             )?,
             draw_groups: self.draw_groups.clone(),
             group_bounds: self.group_bounds.clone(),
-            // Meshes registered on a live world have no clusters: the tables of the meshes
-            // that do stay as they are (a mesh's ranges are zeroed when its index is reused).
-            clusters: self.clusters.clone(),
-            cluster_meshes: self.cluster_meshes.clone(),
-            clustered_meshes: self.clustered_meshes,
-            cluster_ranges: fit(
-                &self.cluster_ranges,
-                size_of(scene.meshes.len() as u64 * CLUSTER_RANGES_PER_MESH as u64, 8),
+            // Room for the cluster tables of every mesh registered so far; they are written
+            // whole when meshes are registered (`write_cluster_tables`).
+            clusters: fit(
+                &self.clusters,
+                size_of(tables.clusters.len() as u64, std::mem::size_of::<GpuCluster>()),
                 none,
             )?,
+            cluster_meshes: fit(&self.cluster_meshes, size_of(tables.meshes.len() as u64, 8), none)?,
+            clustered_meshes: tables.meshes.iter().filter(|m| m[1] != u32::MAX).count() as u32,
+            cluster_ranges: fit(&self.cluster_ranges, size_of(tables.ranges.len() as u64, 8), none)?,
             lod_levels: fit(
                 &self.lod_levels,
                 size_of(scene.meshes.len() as u64 * LEVELS_PER_MESH as u64, std::mem::size_of::<GpuLodLevel>()),
@@ -141,11 +142,6 @@ impl GpuScene {
         let indices = m.first_index..m.first_index + m.index_span();
         let levels = mesh_levels(mesh)..mesh_levels(mesh) + m.lods.len() as u32;
         edits.write(&self.lod_levels, at::<GpuLodLevel>(&levels), bytemuck::cast_slice(&gpu_levels(m)));
-        // A mesh registered on a live world is drawn whole: no clusters (and none of a mesh
-        // that had its index before).
-        let ranges = mesh * CLUSTER_RANGES_PER_MESH..(mesh + 1) * CLUSTER_RANGES_PER_MESH;
-        let none = vec![[0u32; 2]; CLUSTER_RANGES_PER_MESH as usize];
-        edits.write(&self.cluster_ranges, at::<[u32; 2]>(&ranges), bytemuck::cast_slice(&none));
         edits.write(
             &self.vertices,
             at::<crate::scene::Vertex>(&vertices),
@@ -156,6 +152,16 @@ impl GpuScene {
             at::<u32>(&indices),
             bytemuck::cast_slice(&scene.indices[indices.start as usize..indices.end as usize]),
         );
+    }
+
+    /// Queues the cluster tables of `scene` whole ([`cluster_tables`]): after meshes were
+    /// registered, each with its clusters, or their indices given to others. A few bytes per
+    /// cluster of every mesh, written only when meshes change.
+    pub fn write_cluster_tables(&self, edits: &mut Edits, scene: &Scene) {
+        let tables = cluster_tables(scene);
+        edits.write(&self.clusters, 0, bytemuck::cast_slice(&tables.clusters));
+        edits.write(&self.cluster_ranges, 0, bytemuck::cast_slice(&tables.ranges));
+        edits.write(&self.cluster_meshes, 0, bytemuck::cast_slice(&tables.meshes));
     }
 
     /// Queues draw group `g` of `layout` (its command, its culling entry and local bounds, and

@@ -1006,6 +1006,9 @@ impl Renderer {
         for &m in &registered.meshes {
             next.write_mesh(&mut batch.edits, &self.scene, m);
         }
+        if !registered.meshes.is_empty() {
+            next.write_cluster_tables(&mut batch.edits, &self.scene);
+        }
         let mirror = self.world.as_mut().expect("a world renderer");
         let layout = &mirror.layout;
         for (g, group) in layout.groups.iter().enumerate() {
