@@ -35,6 +35,7 @@ use crate::graph::{
 };
 use crate::passes::gbuffer::LIST_SLOTS;
 use crate::passes::shared::face_cull::{FaceCull, FACE_CULL_REGIONS};
+use crate::passes::shared::gpu_types::DrawIndexedIndirect;
 use crate::passes::shared::SceneCounts;
 use crate::passes::shared::SceneInputs;
 use ash::vk;
@@ -234,7 +235,7 @@ impl PassNode for ClusterCullPass {
             ],
             &[],
         );
-        let region_capacity = (cluster_commands.size() / COMMAND_BYTES / CLUSTER_REGIONS).min(u32::MAX as u64) as u32;
+        let capacity = region_capacity(cluster_commands);
         let mut binds = vec![
             Bind::Buffer(0, inputs.constants().handle()),
             Bind::Buffer(1, scene.instances.handle()),
@@ -252,7 +253,7 @@ impl PassNode for ClusterCullPass {
         rec.step("test");
         self.test.bind(cmd);
         self.test.push_bindings(cmd, &binds);
-        self.test.push_constant_bytes(cmd, bytemuck::bytes_of(&region_capacity));
+        self.test.push_constant_bytes(cmd, bytemuck::bytes_of(&capacity));
         // SAFETY: cmd recording with the test pipeline bound; the dispatch size was written above.
         unsafe { device.cmd_dispatch_indirect(cmd, self.dispatch.handle(), 0) };
         Ok(())
@@ -384,6 +385,25 @@ pub fn record_cluster_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, commands: 
             );
         }
     }
+}
+
+/// The clusters a cluster list drew, from host copies of its commands and counts and of its
+/// list's instance ids: (instance id, first index of the cluster's range) each, region after
+/// region.
+pub(crate) fn clusters_drawn(ids: &[u32], commands: &[u8], counts: &[u8]) -> Vec<(u32, u32)> {
+    let stride = std::mem::size_of::<DrawIndexedIndirect>();
+    let commands: Vec<DrawIndexedIndirect> = commands.chunks_exact(stride).map(bytemuck::pod_read_unaligned).collect();
+    let counts: Vec<u32> = counts.chunks_exact(4).map(bytemuck::pod_read_unaligned).collect();
+    let capacity = commands.len() / CLUSTER_REGIONS as usize;
+    let mut out = Vec::new();
+    for (r, &count) in counts.iter().take(CLUSTER_REGIONS as usize).enumerate() {
+        for c in &commands[r * capacity..r * capacity + (count as usize).min(capacity)] {
+            if let Some(&id) = ids.get(c.first_instance as usize) {
+                out.push((id, c.first_index));
+            }
+        }
+    }
+    out
 }
 
 /// The slot declarations a geometry pass adds to draw a cluster list.

@@ -64,19 +64,9 @@ fn drawn_instances(scene: &GpuScene, lists: Option<Vec<Vec<u8>>>, order: DrawOrd
         out.extend_from_slice(&ids[start.min(end)..end]);
     }
     if let Some((commands, counts)) = clusters {
-        let commands: Vec<DrawIndexedIndirect> = whole(&commands);
-        let counts: Vec<u32> = whole(&counts);
-        let capacity = commands.len() / crate::passes::cluster_cull::CLUSTER_REGIONS as usize;
         let mut seen: std::collections::HashSet<u32> = out.iter().copied().collect();
-        for (r, &count) in counts.iter().take(crate::passes::cluster_cull::CLUSTER_REGIONS as usize).enumerate() {
-            for c in &commands[r * capacity..r * capacity + (count as usize).min(capacity)] {
-                if let Some(&id) = ids.get(c.first_instance as usize) {
-                    if seen.insert(id) {
-                        out.push(id);
-                    }
-                }
-            }
-        }
+        let drawn = crate::passes::cluster_cull::clusters_drawn(&ids, &commands, &counts);
+        out.extend(drawn.into_iter().map(|(id, _)| id).filter(|&id| seen.insert(id)));
     }
     DrawnInstances::Some(out)
 }
@@ -89,24 +79,12 @@ fn whole<T: bytemuck::Pod>(bytes: &[u8]) -> Vec<T> {
 /// The clusters the capturing passes drew through cluster lists (`cluster_cull`'s), as
 /// (instance id, first index of the cluster's range), in pass order.
 pub(crate) fn drawn_clusters(captured: &[crate::graph::Captured]) -> Vec<(u32, u32)> {
-    let regions = crate::passes::cluster_cull::CLUSTER_REGIONS as usize;
     let mut out = Vec::new();
     for (_, lists) in captured {
-        let Some([_, _, ids, commands, counts]) =
+        if let Some([_, _, ids, commands, counts]) =
             lists.as_ref().and_then(|l| <&[Vec<u8>; 5]>::try_from(l.as_slice()).ok())
-        else {
-            continue;
-        };
-        let ids: Vec<u32> = whole(ids);
-        let commands: Vec<DrawIndexedIndirect> = whole(commands);
-        let counts: Vec<u32> = whole(counts);
-        let capacity = commands.len() / regions;
-        for (r, &count) in counts.iter().take(regions).enumerate() {
-            for c in &commands[r * capacity..r * capacity + (count as usize).min(capacity)] {
-                if let Some(&id) = ids.get(c.first_instance as usize) {
-                    out.push((id, c.first_index));
-                }
-            }
+        {
+            out.extend(crate::passes::cluster_cull::clusters_drawn(&whole(ids), commands, counts));
         }
     }
     out
