@@ -227,6 +227,13 @@ pub struct ClusterTables {
     pub meshes: Vec<[u32; 2]>,
 }
 
+impl ClusterTables {
+    /// Meshes with clusters (the entries of `meshes` but the placeholder of a scene without).
+    pub fn clustered_meshes(&self) -> u32 {
+        self.meshes.iter().filter(|m| m[1] != u32::MAX).count() as u32
+    }
+}
+
 /// The cluster tables of `scene` (each at least one entry, so that the buffers exist).
 pub fn cluster_tables(scene: &crate::scene::Scene) -> ClusterTables {
     let mut clusters = Vec::new();

@@ -346,7 +346,7 @@ impl GpuScene {
             clusters: make("clusters", none, bytemuck::cast_slice(&cluster_tables.clusters))?,
             cluster_ranges: make("cluster ranges", none, bytemuck::cast_slice(&cluster_tables.ranges))?,
             cluster_meshes: make("clustered meshes", none, bytemuck::cast_slice(&cluster_tables.meshes))?,
-            clustered_meshes: cluster_tables.meshes.iter().filter(|m| m[1] != u32::MAX).count() as u32,
+            clustered_meshes: cluster_tables.clustered_meshes(),
             instance_triangles: make(
                 "instance triangle bases",
                 none,

@@ -9,7 +9,7 @@
 //! at the next recorded frame, after the frames before it are done with what they overwrite.
 
 use super::cull_data::{
-    cluster_tables, gpu_levels, mesh_levels, GpuCluster, GpuDrawGroup, GpuGroupBounds, GpuLodLevel, LEVELS_PER_MESH,
+    cluster_tables, gpu_levels, mesh_levels, GpuDrawGroup, GpuGroupBounds, GpuLodLevel, LEVELS_PER_MESH,
 };
 use super::gpu_types::GpuMaterial;
 use super::scene_buffers::{drawn_triangles, max_mesh_triangles, GpuScene};
@@ -44,12 +44,15 @@ impl GpuScene {
     /// The scene that `scene` (a changing world's scene in slot order, laid out in the same
     /// groups as this one) needs: this scene's buffers where they hold it, and larger ones
     /// where they do not, this one's contents carried over by `edits`. Its textures are
-    /// `textures`. What changed is still to be written (`write_*`).
+    /// `textures`. `meshes_changed`: meshes were registered or unregistered, so the cluster
+    /// tables are made again and queued whole (otherwise they are this scene's). What else
+    /// changed is still to be written (`write_*`).
     pub fn grown(
         &self,
         ctx: &GpuContext,
         scene: &Scene,
         textures: Arc<GpuTextures>,
+        meshes_changed: bool,
         edits: &mut Edits,
     ) -> crate::Result<Self> {
         let mut fit = |old: &Arc<Buffer>, needed: u64, extra: vk::BufferUsageFlags| -> crate::Result<Arc<Buffer>> {
@@ -67,7 +70,7 @@ impl GpuScene {
             Ok(new)
         };
         super::scene_buffers::check_index_range(scene, ctx.caps().limits.max_draw_indexed_index_value)?;
-        let tables = cluster_tables(scene);
+        let tables = meshes_changed.then(|| cluster_tables(scene));
         let slots = scene.instances.len() as u64;
         let size_of = |n: u64, one: usize| n * one as u64;
         let none = vk::BufferUsageFlags::empty();
@@ -81,7 +84,7 @@ impl GpuScene {
             Some(data) => Some(fit(data, size_of(slots, 4 * self.user_words as usize), none)?),
             None => None,
         };
-        Ok(Self {
+        let next = Self {
             user_data,
             user_words: self.user_words,
             vertices: fit(
@@ -109,16 +112,20 @@ impl GpuScene {
             )?,
             draw_groups: self.draw_groups.clone(),
             group_bounds: self.group_bounds.clone(),
-            // Room for the cluster tables of every mesh registered so far; they are written
-            // whole when meshes are registered (`write_cluster_tables`).
-            clusters: fit(
-                &self.clusters,
-                size_of(tables.clusters.len() as u64, std::mem::size_of::<GpuCluster>()),
-                none,
-            )?,
-            cluster_meshes: fit(&self.cluster_meshes, size_of(tables.meshes.len() as u64, 8), none)?,
-            clustered_meshes: tables.meshes.iter().filter(|m| m[1] != u32::MAX).count() as u32,
-            cluster_ranges: fit(&self.cluster_ranges, size_of(tables.ranges.len() as u64, 8), none)?,
+            // The cluster tables change only with the meshes (written whole below).
+            clusters: match &tables {
+                Some(t) => fit(&self.clusters, std::mem::size_of_val(t.clusters.as_slice()) as u64, none)?,
+                None => self.clusters.clone(),
+            },
+            cluster_ranges: match &tables {
+                Some(t) => fit(&self.cluster_ranges, std::mem::size_of_val(t.ranges.as_slice()) as u64, none)?,
+                None => self.cluster_ranges.clone(),
+            },
+            cluster_meshes: match &tables {
+                Some(t) => fit(&self.cluster_meshes, std::mem::size_of_val(t.meshes.as_slice()) as u64, none)?,
+                None => self.cluster_meshes.clone(),
+            },
+            clustered_meshes: tables.as_ref().map_or(self.clustered_meshes, |t| t.clustered_meshes()),
             lod_levels: fit(
                 &self.lod_levels,
                 size_of(scene.meshes.len() as u64 * LEVELS_PER_MESH as u64, std::mem::size_of::<GpuLodLevel>()),
@@ -131,7 +138,13 @@ impl GpuScene {
             max_mesh_triangles: max_mesh_triangles(scene),
             emission_or_occlusion: scene.materials.iter().any(|m| m.has_emission_or_occlusion()),
             alpha_masks: scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. })),
-        })
+        };
+        if let Some(t) = tables {
+            edits.write(&next.clusters, 0, bytemuck::cast_slice(&t.clusters));
+            edits.write(&next.cluster_ranges, 0, bytemuck::cast_slice(&t.ranges));
+            edits.write(&next.cluster_meshes, 0, bytemuck::cast_slice(&t.meshes));
+        }
+        Ok(next)
     }
 
     /// Queues mesh `mesh` of `scene` (its vertices, its indices and its levels of detail's)
@@ -152,16 +165,6 @@ impl GpuScene {
             at::<u32>(&indices),
             bytemuck::cast_slice(&scene.indices[indices.start as usize..indices.end as usize]),
         );
-    }
-
-    /// Queues the cluster tables of `scene` whole ([`cluster_tables`]): after meshes were
-    /// registered, each with its clusters, or their indices given to others. A few bytes per
-    /// cluster of every mesh, written only when meshes change.
-    pub fn write_cluster_tables(&self, edits: &mut Edits, scene: &Scene) {
-        let tables = cluster_tables(scene);
-        edits.write(&self.clusters, 0, bytemuck::cast_slice(&tables.clusters));
-        edits.write(&self.cluster_ranges, 0, bytemuck::cast_slice(&tables.ranges));
-        edits.write(&self.cluster_meshes, 0, bytemuck::cast_slice(&tables.meshes));
     }
 
     /// Queues draw group `g` of `layout` (its command, its culling entry and local bounds, and

@@ -1002,12 +1002,10 @@ impl Renderer {
             return Ok(None);
         };
         let placements_moved = !textures.same_placements(&self.gpu_scene.textures);
-        let next = self.gpu_scene.grown(&self.ctx, &self.scene, textures, &mut batch.edits)?;
+        let meshes_changed = !registered.meshes.is_empty();
+        let next = self.gpu_scene.grown(&self.ctx, &self.scene, textures, meshes_changed, &mut batch.edits)?;
         for &m in &registered.meshes {
             next.write_mesh(&mut batch.edits, &self.scene, m);
-        }
-        if !registered.meshes.is_empty() {
-            next.write_cluster_tables(&mut batch.edits, &self.scene);
         }
         let mirror = self.world.as_mut().expect("a world renderer");
         let layout = &mirror.layout;
