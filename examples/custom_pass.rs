@@ -78,7 +78,7 @@ impl InstanceBoundsPass {
             &GraphicsDesc {
                 vertex: &vertex,
                 fragment: Some(&fragment),
-                vertex_stride: 0,
+                vertex_strides: &[],
                 vertex_attributes: &[],
                 color_formats: &[format],
                 depth_format: vk::Format::UNDEFINED,

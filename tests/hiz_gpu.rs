@@ -169,7 +169,7 @@ impl Tools {
             let desc = |vertex, fragment, compare| GraphicsDesc {
                 vertex,
                 fragment,
-                vertex_stride: 0,
+                vertex_strides: &[],
                 vertex_attributes: &[],
                 color_formats: &[],
                 depth_format: vk::Format::D32_SFLOAT,

@@ -7,6 +7,7 @@ mod common;
 
 use common::{boxes_scene, GpuTest};
 use cullgraph::oracle::Verify;
+use cullgraph::passes::shared::vertex_streams::{SurfaceVertex, VertexStreams};
 use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::deform::MorphTarget;
 use cullgraph::scene::world::{InstanceHandle, World};
@@ -94,8 +95,7 @@ fn posed_copies_are_deformed_on_the_gpu_as_the_cpu_reference_deforms_them() {
         let rest = &scene.vertices[source.vertex_offset as usize..][..source.vertex_count as usize];
         let (positions, normals) =
             source.deform.as_ref().unwrap().deform_vertices(rest, &pose.joints, &pose.morph_weights).unwrap();
-        let bytes = cullgraph::gpu::transfer::read_buffer(&gpu, &r.gpu_scene().vertices).unwrap();
-        let pool: &[Vertex] = bytemuck::cast_slice(&bytes[..bytes.len() / 32 * 32]);
+        let pool = read_pool(&gpu, &r.gpu_scene().vertices, scene.vertices.len());
         let own = &scene.meshes[pose.mesh as usize];
         let gpu_vertices = &pool[own.vertex_offset as usize..][..own.vertex_count as usize];
         for (i, v) in gpu_vertices.iter().enumerate() {
@@ -111,6 +111,18 @@ fn posed_copies_are_deformed_on_the_gpu_as_the_cpu_reference_deforms_them() {
         assert!(shared.iter().zip(rest).all(|(a, b)| a == b), "the rest mesh is not deformed");
     }
     gpu.assert_clean();
+}
+
+/// The first `n` vertices of the GPU's pool, read back from its three streams.
+fn read_pool(gpu: &GpuTest, streams: &VertexStreams, n: usize) -> Vec<Vertex> {
+    let read = |b: &cullgraph::gpu::Buffer| cullgraph::gpu::transfer::read_buffer(gpu, b).unwrap();
+    let (p, nrm, s) = (read(&streams.positions), read(&streams.normals), read(&streams.surface));
+    let positions: &[[f32; 3]] = bytemuck::cast_slice(&p[..n * 12]);
+    let normals: &[[i16; 2]] = bytemuck::cast_slice(&nrm[..n * 4]);
+    let surface: &[SurfaceVertex] = bytemuck::cast_slice(&s[..n * 16]);
+    (0..n)
+        .map(|i| Vertex { position: positions[i], normal: normals[i], uv: surface[i].uv, tangent: surface[i].tangent })
+        .collect()
 }
 
 #[test]

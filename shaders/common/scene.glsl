@@ -14,11 +14,11 @@ struct GpuInstance {
     uint material_flags;  // material index (low 24 bits) | flags << 24
 };
 
-// A vertex of the shared pool (src/scene/mesh.rs Vertex, 32 bytes), for passes that read the
-// pool as a buffer rather than through vertex input.
-struct PoolVertex {
-    vec3 position;
-    uint normal_oct;   // two snorm16
+// A vertex's texture coordinates and tangent in the pool's surface stream
+// (src/passes/shared/vertex_streams.rs SurfaceVertex), for passes that read the pool as buffers
+// rather than through vertex input; its position and octahedral normal (two snorm16) are in
+// streams of their own.
+struct SurfaceVertex {
     vec2 uv;
     uint tangent_xy;   // snorm16 x, y
     uint tangent_zw;   // snorm16 z, handedness sign

@@ -97,6 +97,10 @@ float wrap_coord(float x, uint mode, float size) {
 // Texture `t` of a material at texture coordinates `uv` with screen derivatives `duv_dx`,
 // `duv_dy`; white where the material has no such texture.
 vec4 sample_material(MaterialTexture t, bool srgb, vec2 uv, vec2 duv_dx, vec2 duv_dy) {
+#ifdef NO_TEXTURES
+    // No material of the scene has a texture (GpuScene::textured): none of this is compiled.
+    return vec4(1.0);
+#endif
     if (t.placement == NO_TEXTURE) return vec4(1.0);
     mat2 linear = mat2(t.row0.x, t.row1.x, t.row0.y, t.row1.y);
     vec2 st = linear * uv + vec2(t.row0.z, t.row1.z);

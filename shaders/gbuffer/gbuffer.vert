@@ -4,10 +4,17 @@
 #include "../common/scene.glsl"
 #include "../common/octahedral.glsl"
 
+// The pool's streams (src/passes/shared/vertex_streams.rs): a pass fetches only what it reads.
+// NO_NORMALS (depth-only passes) and NO_SURFACE (no texture is sampled) leave a stream out; the
+// outputs it would feed get constants that nothing downstream reads.
 layout(location = 0) in vec3 in_position;
+#ifndef NO_NORMALS
 layout(location = 1) in vec2 in_normal_oct;
+#endif
+#ifndef NO_SURFACE
 layout(location = 2) in vec2 in_uv;
 layout(location = 3) in vec4 in_tangent;
+#endif
 
 layout(set = 0, binding = 0, scalar) readonly buffer Instances { GpuInstance instances[]; };
 layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
@@ -48,13 +55,22 @@ void main() {
     out_clip = frame.view_proj_unjittered * vec4(rel, 1.0);
     out_prev_clip = frame.prev_view_proj_unjittered * vec4(prev_rel, 1.0);
 #endif
+#ifdef NO_NORMALS
+    out_normal = vec3(0.0, 0.0, 1.0);
+#else
     out_normal = instance_normal(inst, oct_decode(in_normal_oct));
+#endif
     out_material = instance_material(inst);
     bool mirrored = instance_is_mirrored(inst);
     out_mirrored = mirrored ? 1u : 0u;
     out_flags = instance_flags(inst);
+#ifdef NO_SURFACE
+    out_uv = vec2(0.0);
+    out_tangent = vec4(1.0, 0.0, 0.0, 1.0);
+#else
     out_uv = in_uv;
     mat3 m = transpose(mat3(inst.row0.xyz, inst.row1.xyz, inst.row2.xyz));
     // A mirrored instance flips the bitangent along with the winding.
     out_tangent = vec4(m * in_tangent.xyz, (in_tangent.w < 0.0) != mirrored ? -1.0 : 1.0);
+#endif
 }

@@ -37,7 +37,9 @@ layout(set = 0, binding = 4, rgba8) uniform writeonly image2D out_color;
 #endif
 layout(set = 0, binding = 5, scalar) readonly buffer Instances { GpuInstance instances[]; };
 layout(set = 0, binding = 6, scalar) readonly buffer Materials { GpuMaterial materials[]; };
-layout(set = 0, binding = 7, scalar) readonly buffer Vertices { PoolVertex vertices[]; };
+layout(set = 0, binding = 7, scalar) readonly buffer PoolPositions { vec3 positions[]; };
+layout(set = 0, binding = 10) readonly buffer PoolNormals { uint normals[]; };
+layout(set = 0, binding = 11, scalar) readonly buffer PoolSurface { SurfaceVertex surface[]; };
 layout(set = 0, binding = 8) readonly buffer Indices { uint indices[]; };
 layout(set = 0, binding = 9) readonly buffer TriangleBases { uvec2 triangle_bases[]; };
 
@@ -106,9 +108,10 @@ Surface rebuild(uint id, uint prim, vec2 center, float depth) {
     mat3 m3 = transpose(mat3(inst.row0.xyz, inst.row1.xyz, inst.row2.xyz));
     bool mirrored = instance_is_mirrored(inst);
     for (uint k = 0u; k < 3u; ++k) {
-        PoolVertex v = vertices[indices[base.x + 3u * prim + k] + base.y];
-        p[k] = instance_rel_eye(inst, v.position, frame.eye_hi.xyz, frame.eye_lo.xyz);
-        n[k] = instance_normal(inst, oct_decode(unpackSnorm2x16(v.normal_oct)));
+        uint vertex = indices[base.x + 3u * prim + k] + base.y;
+        SurfaceVertex v = surface[vertex];
+        p[k] = instance_rel_eye(inst, positions[vertex], frame.eye_hi.xyz, frame.eye_lo.xyz);
+        n[k] = instance_normal(inst, oct_decode(unpackSnorm2x16(normals[vertex])));
         t[k] = v.uv;
         vec4 local = vec4(unpackSnorm2x16(v.tangent_xy), unpackSnorm2x16(v.tangent_zw));
         tangent[k] = vec4(m3 * local.xyz, (local.w < 0.0) != mirrored ? -1.0 : 1.0);

@@ -27,11 +27,9 @@ struct Entry {
     vec4 half_extent;
 };
 
-// A pool vertex as src/scene/mesh.rs lays it out (32 bytes).
-struct PoolVertex {
-    float px, py, pz;
-    uint normal;      // octahedral, snorm16 x2
-    float u, v;
+// A pool vertex's surface stream (src/passes/shared/vertex_streams.rs SurfaceVertex).
+struct SurfaceVertex {
+    vec2 uv;
     uint tangent_xy;  // snorm16 x2
     uint tangent_zw;  // snorm16 x2 (w: handedness)
 };
@@ -44,7 +42,10 @@ struct GroupBounds {
 layout(set = 0, binding = 0, scalar) readonly buffer Entries { Entry entries[]; };
 layout(set = 0, binding = 1, scalar) readonly buffer Params { float params[]; };
 layout(set = 0, binding = 2, scalar) readonly buffer DeformData { uint deform_data[]; };
-layout(set = 0, binding = 3, scalar) buffer Vertices { PoolVertex vertices[]; };
+// The pool's streams (positions, octahedral normals as snorm16 x2, surface).
+layout(set = 0, binding = 3, scalar) buffer PoolPositions { vec3 positions[]; };
+layout(set = 0, binding = 6, scalar) buffer PoolNormals { uint normals[]; };
+layout(set = 0, binding = 7, scalar) buffer PoolSurface { SurfaceVertex surface[]; };
 layout(set = 0, binding = 4, scalar) writeonly buffer Bounds { GroupBounds group_bounds[]; };
 // The positions the previous frame drew (motion vectors): the copy's position before this
 // frame's deformation. An entry with group REFRESH only sets them to the current positions (a
@@ -72,13 +73,13 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i == 0u && entry.group != REFRESH) group_bounds[entry.group] = GroupBounds(entry.center_radius, entry.half_extent);
     if (i >= entry.vertex_count) return;
-    PoolVertex before = vertices[entry.dst_vertex + i];
-    prev_positions[entry.dst_vertex + i] = vec3(before.px, before.py, before.pz);
+    prev_positions[entry.dst_vertex + i] = positions[entry.dst_vertex + i];
     if (entry.group == REFRESH) return;
 
-    PoolVertex src = vertices[entry.src_vertex + i];
-    vec3 p = vec3(src.px, src.py, src.pz);
-    vec3 n = oct_decode(max(unpackSnorm2x16(src.normal), vec2(-1.0)));
+    uint s = entry.src_vertex + i;
+    SurfaceVertex src = surface[s];
+    vec3 p = positions[s];
+    vec3 n = oct_decode(max(unpackSnorm2x16(normals[s]), vec2(-1.0)));
     vec4 t = vec4(unpackSnorm2x16(src.tangent_xy), unpackSnorm2x16(src.tangent_zw));
 
     uint skin_words = entry.joint_count > 0u ? 6u * entry.vertex_count : 0u;
@@ -107,13 +108,9 @@ void main() {
     n = length(n) > 0.0 ? normalize(n) : vec3(0.0, 1.0, 0.0);
     t.xyz = length(t.xyz) > 0.0 ? normalize(t.xyz) : vec3(1.0, 0.0, 0.0);
 
-    PoolVertex dst = src;
-    dst.px = p.x;
-    dst.py = p.y;
-    dst.pz = p.z;
-    dst.normal = packSnorm2x16(oct_encode(n));
-    dst.tangent_xy = packSnorm2x16(t.xy);
-    dst.tangent_zw = packSnorm2x16(vec2(t.z, t.w < 0.0 ? -1.0 : 1.0));
-    vertices[entry.dst_vertex + i] = dst;
+    uint d = entry.dst_vertex + i;
+    positions[d] = p;
+    normals[d] = packSnorm2x16(oct_encode(n));
+    surface[d] = SurfaceVertex(src.uv, packSnorm2x16(t.xy), packSnorm2x16(vec2(t.z, t.w < 0.0 ? -1.0 : 1.0)));
     if (pc.still != 0u) prev_positions[entry.dst_vertex + i] = p;
 }

@@ -32,7 +32,7 @@ pub use features::{RequiredFeatures, OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE
 pub use gpu_allocator::MemoryLocation;
 pub use image::{HostImage, Image, ImageDesc};
 pub use memory::MemoryBlock;
-pub use pipeline::{cmd_set_full_viewport, Bind, GraphicsDesc, Pipeline, StencilRule};
+pub use pipeline::{cmd_set_full_viewport, Bind, GraphicsDesc, Pipeline, StencilRule, VertexAttribute};
 pub use sampler::Sampler;
 pub use shader::{ShaderCompiler, ShaderError, ShaderRoot, Spirv};
 pub use texture_array::TextureArray;

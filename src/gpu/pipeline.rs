@@ -41,6 +41,20 @@ pub fn cmd_set_full_viewport(device: &ash::Device, cmd: vk::CommandBuffer, exten
     }
 }
 
+/// One vertex attribute of a graphics pipeline: the shader's input `location`, read from vertex
+/// buffer `binding` at `offset` bytes into each vertex's element as `format`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VertexAttribute {
+    /// The vertex shader's input location.
+    pub location: u32,
+    /// The vertex buffer binding it is read from.
+    pub binding: u32,
+    /// Its format.
+    pub format: vk::Format,
+    /// Its byte offset in the binding's element.
+    pub offset: u32,
+}
+
 /// Fixed-function state of a graphics pipeline (dynamic rendering; viewport, scissor and cull
 /// mode are dynamic state, counter-clockwise is the front face).
 #[derive(Clone, Debug)]
@@ -49,10 +63,11 @@ pub struct GraphicsDesc<'a> {
     pub vertex: &'a Spirv,
     /// Fragment shader, if any (depth-only passes have none).
     pub fragment: Option<&'a Spirv>,
-    /// Vertex buffer stride in bytes (0: no vertex buffer).
-    pub vertex_stride: u32,
-    /// (location, format, offset) of each vertex attribute.
-    pub vertex_attributes: &'a [(u32, vk::Format, u32)],
+    /// Stride in bytes of each vertex buffer binding, by binding number; the pipeline declares
+    /// the bindings its attributes use (none: no vertex buffer).
+    pub vertex_strides: &'a [u32],
+    /// The vertex attributes the vertex shader reads.
+    pub vertex_attributes: &'a [VertexAttribute],
     /// Formats of the color attachments.
     pub color_formats: &'a [vk::Format],
     /// Depth attachment format (`UNDEFINED` for none).
@@ -238,28 +253,32 @@ impl Pipeline {
                     .name(c"main"),
             );
         }
-        let bindings = [vk::VertexInputBindingDescription::default()
-            .binding(0)
-            .stride(desc.vertex_stride)
-            .input_rate(vk::VertexInputRate::VERTEX)];
+        let mut used: Vec<u32> = desc.vertex_attributes.iter().map(|a| a.binding).collect();
+        used.sort_unstable();
+        used.dedup();
+        let bindings: Vec<_> = used
+            .iter()
+            .map(|&binding| {
+                vk::VertexInputBindingDescription::default()
+                    .binding(binding)
+                    .stride(desc.vertex_strides.get(binding as usize).copied().unwrap_or(0))
+                    .input_rate(vk::VertexInputRate::VERTEX)
+            })
+            .collect();
         let attributes: Vec<_> = desc
             .vertex_attributes
             .iter()
-            .map(|&(location, format, offset)| {
+            .map(|a| {
                 vk::VertexInputAttributeDescription::default()
-                    .location(location)
-                    .binding(0)
-                    .format(format)
-                    .offset(offset)
+                    .location(a.location)
+                    .binding(a.binding)
+                    .format(a.format)
+                    .offset(a.offset)
             })
             .collect();
-        let vertex_input = if desc.vertex_stride > 0 {
-            vk::PipelineVertexInputStateCreateInfo::default()
-                .vertex_binding_descriptions(&bindings)
-                .vertex_attribute_descriptions(&attributes)
-        } else {
-            vk::PipelineVertexInputStateCreateInfo::default()
-        };
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&bindings)
+            .vertex_attribute_descriptions(&attributes);
         let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
         let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
         let raster = vk::PipelineRasterizationStateCreateInfo::default()
@@ -512,7 +531,7 @@ fn graphics_key(name: &str, desc: &GraphicsDesc<'_>) -> PipelineKey {
     let mut shaders = vec![desc.vertex.clone()];
     shaders.extend(desc.fragment.cloned());
     let mut state = vec![
-        desc.vertex_stride as i64,
+        desc.vertex_strides.len() as i64,
         desc.depth_format.as_raw() as i64,
         desc.depth_compare.as_raw() as i64,
         desc.depth_write as i64,
@@ -524,8 +543,9 @@ fn graphics_key(name: &str, desc: &GraphicsDesc<'_>) -> PipelineKey {
         desc.color_formats.len() as i64,
     ];
     state.extend(desc.color_formats.iter().map(|f| f.as_raw() as i64));
-    for &(location, format, offset) in desc.vertex_attributes {
-        state.extend([location as i64, format.as_raw() as i64, offset as i64]);
+    state.extend(desc.vertex_strides.iter().map(|&s| s as i64));
+    for a in desc.vertex_attributes {
+        state.extend([a.location as i64, a.binding as i64, a.format.as_raw() as i64, a.offset as i64]);
     }
     PipelineKey::Graphics { name: name.into(), shaders, state }
 }

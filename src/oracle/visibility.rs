@@ -14,7 +14,7 @@ use crate::gpu::barrier::{cmd_barriers, image_barrier, memory_barrier};
 use crate::gpu::cmd_set_full_viewport;
 use crate::gpu::{
     Access, Bind, Buffer, BufferDesc, GpuContext, GraphicsDesc, Image, ImageDesc, MemoryLocation, Pipeline, Sampler,
-    ShaderCompiler,
+    ShaderCompiler, VertexAttribute,
 };
 use crate::passes::shared::face_cull::FaceCull;
 use crate::passes::shared::gpu_types::DrawIndexedIndirect;
@@ -22,14 +22,14 @@ use crate::passes::shared::scene_buffers::GpuScene;
 use crate::passes::shared::transparent_draw::{
     record_transparent, transparent_pipeline, TransparentDraws, TransparentShading,
 };
+use crate::passes::shared::vertex_streams::{POSITION_ATTRIBUTE, UV_ATTRIBUTE, VERTEX_STRIDES};
 use ash::vk;
 use std::collections::BTreeSet;
 
 /// The vertex attributes `oracle/id.vert` reads, at the geometry passes' locations and offsets:
 /// the position and the UV (for the alpha test). The normal and tangent are not fetched, which
 /// the validation layer would otherwise report as attributes no shader consumes.
-const ID_VERTEX_ATTRIBUTES: [(u32, vk::Format, u32); 2] =
-    [crate::passes::gbuffer::VERTEX_ATTRIBUTES[0], crate::passes::gbuffer::VERTEX_ATTRIBUTES[2]];
+const ID_VERTEX_ATTRIBUTES: [VertexAttribute; 2] = [POSITION_ATTRIBUTE, UV_ATTRIBUTE];
 
 /// Instance ids per sample of one frame, and the set of instances seen at some sample.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -83,7 +83,7 @@ impl VisibilityOracle {
             &GraphicsDesc {
                 vertex: &vertex,
                 fragment: Some(&fragment),
-                vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
+                vertex_strides: &VERTEX_STRIDES,
                 vertex_attributes: &ID_VERTEX_ATTRIBUTES,
                 color_formats: &[vk::Format::R32_UINT, vk::Format::R32_UINT],
                 depth_format: vk::Format::D32_SFLOAT,
@@ -260,7 +260,7 @@ impl VisibilityOracle {
                 ];
                 binds.extend_from_slice(scene.textures.bindings());
                 self.draw.push_bindings(cmd, &binds);
-                device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
+                scene.vertices.bind(device, cmd);
                 device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
                 // The same faces as the frame's draws: one-sided materials lose their back faces.
                 scene.regions.record(device, cmd, &scene.draw_commands, &scene.draw_count);

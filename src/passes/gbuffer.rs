@@ -40,6 +40,7 @@ use crate::graph::{
 use crate::passes::shared::face_cull::DRAW_COUNT_BYTES;
 use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use crate::passes::shared::scene_buffers::GpuScene;
+use crate::passes::shared::vertex_streams::{VertexFetch, VERTEX_STRIDES};
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 
@@ -145,14 +146,13 @@ pub fn bound_samples(plan: &CompiledGraph, pass: &PlannedPass, slot: &str) -> u3
     bound_image(plan, pass, slot).map_or(1, |(_, s)| s.as_raw().max(1))
 }
 
-pub use super::shared::VERTEX_ATTRIBUTES;
-
 /// A geometry pipeline's compiled shaders and fixed state: `gbuffer.vert` (whose invariant
 /// position every geometry pass shares, so depth EQUAL against another pass's depth holds
 /// exactly) and a fragment shader, its color formats and depth. `equal`: depth EQUAL without
 /// writes and, where the format has stencil, stencil first-fragment-wins.
 pub struct GeometryShaders {
     vertex: Spirv,
+    fetch: VertexFetch,
     fragment: Option<Spirv>,
     color_formats: Vec<vk::Format>,
     depth: (vk::Format, vk::SampleCountFlags),
@@ -168,20 +168,24 @@ impl GeometryShaders {
         depth: (vk::Format, vk::SampleCountFlags),
         equal: bool,
     ) -> crate::Result<Self> {
-        Self::compile_with_vertex(shaders, &[], fragment, color_formats, depth, equal)
+        Self::compile_with_vertex(shaders, &[], VertexFetch::ALL, fragment, color_formats, depth, equal)
     }
 
     /// As [`GeometryShaders::compile`], with `gbuffer.vert`'s defines (`MOTION`: the clip
-    /// positions motion vectors are made from; its `gl_Position` is the same either way).
+    /// positions motion vectors are made from; its `gl_Position` is the same either way) and
+    /// fetching only the vertex streams of `fetch`.
     pub fn compile_with_vertex(
         shaders: &ShaderCompiler,
         vertex_defines: &[(&str, &str)],
+        fetch: VertexFetch,
         fragment: Option<(&str, &[(&str, &str)])>,
         color_formats: &[vk::Format],
         depth: (vk::Format, vk::SampleCountFlags),
         equal: bool,
     ) -> crate::Result<Self> {
-        let vertex = shaders.compile("gbuffer/gbuffer.vert", vertex_defines)?;
+        let mut all_vertex_defines = vertex_defines.to_vec();
+        all_vertex_defines.extend(fetch.defines());
+        let vertex = shaders.compile("gbuffer/gbuffer.vert", &all_vertex_defines)?;
         // Masked materials keep a share of the samples (shaders/common/material_surface.glsl).
         let samples = depth.1.as_raw().max(1).to_string();
         let fragment = fragment
@@ -191,7 +195,7 @@ impl GeometryShaders {
                 shaders.compile(path, &all)
             })
             .transpose()?;
-        Ok(Self { vertex, fragment, color_formats: color_formats.to_vec(), depth, equal })
+        Ok(Self { vertex, fetch, fragment, color_formats: color_formats.to_vec(), depth, equal })
     }
 
     /// Creates the pipeline.
@@ -203,8 +207,8 @@ impl GeometryShaders {
             &GraphicsDesc {
                 vertex: &self.vertex,
                 fragment: self.fragment.as_ref(),
-                vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-                vertex_attributes: &VERTEX_ATTRIBUTES,
+                vertex_strides: &VERTEX_STRIDES,
+                vertex_attributes: &self.fetch.attributes(),
                 color_formats: &self.color_formats,
                 depth_format: depth.0,
                 depth_compare: if equal { vk::CompareOp::EQUAL } else { vk::CompareOp::GREATER },
@@ -266,7 +270,7 @@ pub fn record_geometry(
         cmd_set_full_viewport(device, cmd, extent);
         pipeline.bind(cmd);
         pipeline.push_constant_bytes(cmd, push);
-        device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
+        scene.vertices.bind(device, cmd);
         device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
         for list in lists {
             let mut binds = vec![
@@ -302,7 +306,8 @@ pub enum GeometryMode {
 }
 
 /// The pipelines of one geometry pass, by what the scene has: a third target for emission and
-/// occlusion (`extras`), and alpha-masked materials (`masked`).
+/// occlusion (`extras`), alpha-masked materials (`masked`), and textures (`textured`: only
+/// then are texture coordinates and tangents fetched, see [`VertexFetch`]).
 ///
 /// Without masked materials the fragment shaders have no `discard`, so the depth test runs
 /// before shading: on the H100 this takes a
@@ -311,21 +316,25 @@ pub enum GeometryMode {
 /// `emissive_occlusion` target is left out: a third color export costs a fifth of the frame on
 /// GPUs that export pixels slowly, for nothing.
 struct GeometryPipelines {
-    /// `[extras][masked]`, created when first picked; the `extras` row only where the target
-    /// is bound.
-    variants: [[Option<LazyPipeline>; 2]; 2],
+    /// `[extras][masked][textured]`, created when first picked; the `extras` row only where
+    /// the target is bound.
+    variants: [[[Option<LazyPipeline>; 2]; 2]; 2],
 }
 
 impl GeometryPipelines {
-    /// The pipeline for a scene with (or without) emission or occlusion and masked materials.
-    fn pick(&mut self, ctx: &GpuContext, extras: bool, masked: bool) -> crate::Result<&Pipeline> {
+    /// The pipeline for a scene with (or without) emission or occlusion, masked materials and
+    /// textures.
+    fn pick(&mut self, ctx: &GpuContext, extras: bool, masked: bool, textured: bool) -> crate::Result<&Pipeline> {
         let row = if self.writes_extras(extras) { 1 } else { 0 };
-        self.variants[row][masked as usize].as_mut().expect("every variant of a row is made").get(ctx)
+        self.variants[row][masked as usize][textured as usize]
+            .as_mut()
+            .expect("every variant of a row is made")
+            .get(ctx)
     }
 
     /// Whether the pass draws the emissive/occlusion target for such a scene.
     fn writes_extras(&self, extras: bool) -> bool {
-        extras && self.variants[1][0].is_some()
+        extras && self.variants[1][0][0].is_some()
     }
 }
 
@@ -385,7 +394,7 @@ impl GbufferPass {
         let equal = mode == GeometryMode::Equal;
         let surface_colors: Vec<vk::Format> =
             ["albedo", "normal"].iter().filter_map(|s| bound_image(plan, pass, s).map(|(f, _)| f)).collect();
-        let make = |extras: bool, masked: bool| -> crate::Result<LazyPipeline> {
+        let make = |extras: bool, masked: bool, textured: bool| -> crate::Result<LazyPipeline> {
             let no_masks: &[(&str, &str)] = if masked { &[] } else { &[("NO_ALPHA_MASK", "1")] };
             let (path, mut defines, formats): (&str, Vec<(&str, &str)>, &[vk::Format]) = match ids {
                 Some((format, _)) => ("gbuffer/visibility.frag", visibility_defines(Some(format)).to_vec(), &[]),
@@ -401,6 +410,9 @@ impl GbufferPass {
                 defines.push(("EMISSIVE_OCCLUSION", "1"));
             }
             defines.extend_from_slice(no_masks);
+            if !textured {
+                defines.push(("NO_TEXTURES", "1"));
+            }
             // Motion vectors come after the targets this variant writes.
             let motion_location = formats.len().to_string();
             let mut vertex_defines: Vec<(&str, &str)> = Vec::new();
@@ -415,15 +427,32 @@ impl GbufferPass {
                 defines.extend([("OBJECT_ID", "1"), ("OBJECT_ID_LOCATION", object_id_location.as_str())]);
             }
             let fragment = Some((path, defines.as_slice()));
-            let compiled =
-                GeometryShaders::compile_with_vertex(shaders, &vertex_defines, fragment, &formats, depth, equal)?;
+            // Shading reads normals; only a texture reads the surface stream, and without color
+            // targets only a masked material's alpha texture does.
+            let fetch = match colors.is_empty() {
+                false => VertexFetch { normals: true, surface: textured },
+                true => VertexFetch { normals: false, surface: textured && masked },
+            };
+            let compiled = GeometryShaders::compile_with_vertex(
+                shaders,
+                &vertex_defines,
+                fetch,
+                fragment,
+                &formats,
+                depth,
+                equal,
+            )?;
             Ok(LazyPipeline::geometry(&pass.name, compiled))
         };
-        let row = |extras: bool| -> crate::Result<[Option<LazyPipeline>; 2]> {
-            Ok([Some(make(extras, false)?), Some(make(extras, true)?)])
+        let row = |extras: bool| -> crate::Result<[[Option<LazyPipeline>; 2]; 2]> {
+            let masked = |masked: bool| -> crate::Result<[Option<LazyPipeline>; 2]> {
+                Ok([Some(make(extras, masked, false)?), Some(make(extras, masked, true)?)])
+            };
+            Ok([masked(false)?, masked(true)?])
         };
+        let none = || [[None, None], [None, None]];
         let pipelines =
-            GeometryPipelines { variants: [row(false)?, if emissive_occlusion { row(true)? } else { [None, None] }] };
+            GeometryPipelines { variants: [row(false)?, if emissive_occlusion { row(true)? } else { none() }] };
         Ok(Self {
             name: pass.name.clone(),
             pipelines,
@@ -467,7 +496,7 @@ impl PassNode for GbufferPass {
         let inputs = SceneInputs::of(rec)?;
         let scene = &inputs.scene;
         let extras = self.pipelines.writes_extras(scene.emission_or_occlusion);
-        let pipeline = self.pipelines.pick(rec.ctx, scene.emission_or_occlusion, scene.alpha_masks)?;
+        let pipeline = self.pipelines.pick(rec.ctx, scene.emission_or_occlusion, scene.alpha_masks, scene.textured)?;
         // Motion vectors and object ids are cleared to 0 by the first pass whatever
         // `clear_colors` says: the background has no fragment to write its 0.
         let motion_load = match self.mode {

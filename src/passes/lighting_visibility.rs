@@ -84,9 +84,11 @@ impl PassNode for LightingVisibilityPass {
             Bind::StorageImage(4, output.view()),
             Bind::Buffer(5, scene.instances.handle()),
             Bind::Buffer(6, scene.materials.handle()),
-            Bind::Buffer(7, scene.vertices.handle()),
+            Bind::Buffer(7, scene.vertices.positions.handle()),
             Bind::Buffer(8, scene.indices.handle()),
             Bind::Buffer(9, scene.instance_triangles.handle()),
+            Bind::Buffer(10, scene.vertices.normals.handle()),
+            Bind::Buffer(11, scene.vertices.surface.handle()),
         ];
         binds.extend_from_slice(scene.textures.bindings());
         let triangle_bits = if self.packed_ids { packed_id_bits(&self.name, scene)? } else { 0 };

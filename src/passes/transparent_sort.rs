@@ -95,6 +95,12 @@ impl PassNode for TransparentSortPass {
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let inputs = SceneInputs::of(rec)?;
         let scene = &inputs.scene;
+        let region = FaceCull::Blended as usize;
+        if scene.regions.len[region] == 0 {
+            // Nothing transparent in the scene: no dispatch, and the `transparent` pass draws
+            // nothing either (it does not read the list then).
+            return Ok(());
+        }
         let slots = &rec.slots;
         let source = DrawSource::bound(slots, SOURCE_SLOTS)?.unwrap_or_else(|| DrawSource::unculled(scene));
         let second = DrawSource::bound(slots, SECOND_SLOTS)?;
@@ -103,7 +109,6 @@ impl PassNode for TransparentSortPass {
         let ids = slots.required_buffer(LIST_SLOTS[2])?;
         let scratch = slots.required_buffer("scratch")?;
         let (capacity, keys) = capacity(commands.size(), ids.size(), scratch.size());
-        let region = FaceCull::Blended as usize;
 
         let push = SortPush {
             first_command: scene.regions.first[region],
@@ -167,7 +172,7 @@ impl PassKind for TransparentSortKind {
         };
         PassKindInfo {
             name: KIND,
-            doc: "the transparent (alphaMode BLEND) instances a culled list kept, sorted back to front, as one draw command each",
+            doc: "the transparent (alphaMode BLEND) instances a culled list kept, sorted back to front, as one draw command each (a scene with nothing transparent costs no dispatch; its list is then left unwritten, and the transparent pass draws nothing)",
             reads: source.into_iter().chain(second).collect(),
             writes: vec![
                 write("draw_commands", SORTED_COMMANDS_BYTES, "one VkDrawIndexedIndirectCommand per transparent instance, farthest first").required().content(DRAW_COMMANDS),

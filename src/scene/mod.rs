@@ -166,6 +166,11 @@ impl Material {
             || (self.texture(TextureSlot::Occlusion).is_some() && self.occlusion_strength > 0.0)
     }
 
+    /// Whether the material samples any texture (and so reads texture coordinates).
+    pub fn samples_textures(&self) -> bool {
+        self.textures.iter().any(Option::is_some)
+    }
+
     /// The texture of `slot`, if any.
     pub fn texture(&self, slot: TextureSlot) -> Option<&TextureRef> {
         self.textures[slot as usize].as_ref()

@@ -13,6 +13,7 @@ use crate::gpu::{
     ShaderCompiler, StencilRule,
 };
 use crate::passes::shared::gpu_types::split_hi_lo;
+use crate::passes::shared::vertex_streams::{VertexFetch, VERTEX_STRIDES};
 use crate::passes::shared::GpuScene;
 use crate::scene::Camera;
 use ash::vk;
@@ -103,9 +104,9 @@ impl StereoDraws {
             let desc = GraphicsDesc {
                 vertex: &vertex,
                 fragment: Some(&fragment),
-                vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
+                vertex_strides: &VERTEX_STRIDES,
                 // Position and normal: what the shaders read of a vertex.
-                vertex_attributes: &crate::passes::shared::VERTEX_ATTRIBUTES[..2],
+                vertex_attributes: &VertexFetch { normals: true, surface: false }.attributes(),
                 color_formats: &[COLOR_FORMAT],
                 depth_format: DEPTH_FORMAT,
                 depth_compare: vk::CompareOp::GREATER,
@@ -205,7 +206,7 @@ impl StereoDraws {
             cmd_set_full_viewport(device, cmd, self.extent);
             pipeline.bind(cmd);
             pipeline.push_constants(cmd, &eye);
-            device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
+            scene.vertices.bind(device, cmd);
             device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
             pipeline.push_bindings(
                 cmd,

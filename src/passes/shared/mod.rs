@@ -16,6 +16,7 @@ pub(crate) mod shadow_variants;
 pub mod slot_layout;
 pub mod textures;
 pub(crate) mod transparent_draw;
+pub mod vertex_streams;
 
 use crate::gpu::{Buffer, BufferDesc, GpuContext, MemoryLocation};
 use crate::graph::{FrameInputs, Growth, KindRegistry, PassContext, Quantity, FRAMES_IN_FLIGHT};
@@ -24,15 +25,6 @@ use ash::vk;
 use gpu_types::{FrameConstants, GpuPointLight};
 pub use scene_buffers::GpuScene;
 use std::sync::Arc;
-
-/// The pool's vertex layout ([`crate::scene::Vertex`]) as `gbuffer.vert` reads it: position,
-/// octahedral normal, texture coordinates, tangent.
-pub const VERTEX_ATTRIBUTES: [(u32, vk::Format, u32); 4] = [
-    (0, vk::Format::R32G32B32_SFLOAT, 0),
-    (1, vk::Format::R16G16_SNORM, 12),
-    (2, vk::Format::R32G32_SFLOAT, 16),
-    (3, vk::Format::R16G16B16A16_SNORM, 24),
-];
 
 /// Host-visible data of one frame in flight.
 pub(crate) struct FrameSlot {

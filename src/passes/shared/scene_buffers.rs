@@ -4,6 +4,7 @@
 use super::face_cull::{self, DrawRegions, FaceCull, FACE_CULL_REGIONS};
 use super::gpu_types::{DrawIndexedIndirect, GpuInstance, GpuMaterial};
 use super::textures::GpuTextures;
+use super::vertex_streams::VertexStreams;
 use crate::gpu::{Buffer, GpuContext, UploadBatch};
 use crate::scene::Scene;
 use ash::vk;
@@ -11,8 +12,8 @@ use std::sync::Arc;
 
 /// Scene buffers on the device.
 pub struct GpuScene {
-    /// Shared vertex pool ([`crate::scene::Vertex`]).
-    pub vertices: Arc<Buffer>,
+    /// Shared vertex pool ([`crate::scene::Vertex`]), in streams by what passes read.
+    pub vertices: VertexStreams,
     /// Shared index pool (u32).
     pub indices: Arc<Buffer>,
     /// [`GpuInstance`] per scene instance, in scene order.
@@ -80,6 +81,9 @@ pub struct GpuScene {
     /// Whether some material is alpha-masked: without, the geometry passes take pipelines
     /// without the alpha test, whose depth test runs before shading.
     pub alpha_masks: bool,
+    /// Whether some material samples a texture: without, no pass fetches texture coordinates
+    /// and tangents ([`super::vertex_streams`]).
+    pub textured: bool,
 }
 
 /// The unculled draw list: instances grouped by face cull, then by mesh, preserving instance
@@ -202,7 +206,6 @@ impl GpuScene {
     /// Device bytes of the scene's buffers and textures: what every view of a renderer shares.
     pub fn bytes(&self) -> u64 {
         let buffers = [
-            &self.vertices,
             &self.prev_positions,
             &self.indices,
             &self.instances,
@@ -220,7 +223,7 @@ impl GpuScene {
             &self.instance_triangles,
         ];
         let previous = self.prev_instances.as_ref().map_or(0, |b| b.size());
-        buffers.iter().map(|b| b.size()).sum::<u64>() + previous + self.textures.bytes()
+        buffers.iter().map(|b| b.size()).sum::<u64>() + self.vertices.bytes() + previous + self.textures.bytes()
     }
 
     /// The instance records of the world's previous frame ([`GpuScene::prev_instances`]), or the
@@ -316,6 +319,7 @@ impl GpuScene {
         let cull = super::cull_data::CullData::new(scene, &draws);
         let cluster_tables = super::cull_data::cluster_tables(scene);
         let count = draws.regions.len;
+        let (positions, normals, surface) = super::vertex_streams::split(&scene.vertices);
         // Every scene buffer can be carried into a larger successor (a changing world's growth).
         let mut make = |name: &str, usage: vk::BufferUsageFlags, data: &[u8]| -> crate::Result<Arc<Buffer>> {
             let size = if room { super::scene_growth::with_room(data.len() as u64) } else { 0 };
@@ -324,8 +328,16 @@ impl GpuScene {
         };
         let none = vk::BufferUsageFlags::empty();
         Ok(Self {
-            vertices: make("vertices", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&scene.vertices))?,
-            prev_positions: make("previous positions", none, bytemuck::cast_slice(&positions(&scene.vertices)))?,
+            vertices: VertexStreams {
+                positions: make(
+                    "vertex positions",
+                    vk::BufferUsageFlags::VERTEX_BUFFER,
+                    bytemuck::cast_slice(&positions),
+                )?,
+                normals: make("vertex normals", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&normals))?,
+                surface: make("vertex surface", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&surface))?,
+            },
+            prev_positions: make("previous positions", none, bytemuck::cast_slice(&positions))?,
             indices: make("indices", vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&scene.indices))?,
             // A changing world copies them to its previous instances (motion vectors).
             instances: make("instances", none, bytemuck::cast_slice(&instances))?,
@@ -361,13 +373,9 @@ impl GpuScene {
             max_mesh_triangles: max_mesh_triangles(scene),
             emission_or_occlusion: scene.materials.iter().any(|m| m.has_emission_or_occlusion()),
             alpha_masks: scene.materials.iter().any(|m| matches!(m.alpha_mode, crate::scene::AlphaMode::Mask { .. })),
+            textured: scene.materials.iter().any(|m| m.samples_textures()),
         })
     }
-}
-
-/// The positions of `vertices`, as [`GpuScene::prev_positions`] holds them.
-pub(crate) fn positions(vertices: &[crate::scene::Vertex]) -> Vec<[f32; 3]> {
-    vertices.iter().map(|v| v.position).collect()
 }
 
 /// Triangles of the largest mesh of `scene`.

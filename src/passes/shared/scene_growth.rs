@@ -15,6 +15,7 @@ use super::gpu_types::GpuMaterial;
 use super::scene_buffers::{drawn_triangles, max_mesh_triangles, GpuScene};
 use super::slot_layout::SlotLayout;
 use super::textures::GpuTextures;
+use super::vertex_streams::{SurfaceVertex, VertexStreams, VERTEX_STRIDES};
 use crate::gpu::{Buffer, BufferDesc, Edits, GpuContext, MemoryLocation};
 use crate::scene::{AlphaMode, Scene};
 use ash::vk;
@@ -87,11 +88,15 @@ impl GpuScene {
         let next = Self {
             user_data,
             user_words: self.user_words,
-            vertices: fit(
-                &self.vertices,
-                std::mem::size_of_val(scene.vertices.as_slice()) as u64,
-                vk::BufferUsageFlags::VERTEX_BUFFER,
-            )?,
+            vertices: {
+                let n = scene.vertices.len() as u64;
+                let mut stream = |old, stride: u32| fit(old, n * stride as u64, vk::BufferUsageFlags::VERTEX_BUFFER);
+                VertexStreams {
+                    positions: stream(&self.vertices.positions, VERTEX_STRIDES[0])?,
+                    normals: stream(&self.vertices.normals, VERTEX_STRIDES[1])?,
+                    surface: stream(&self.vertices.surface, VERTEX_STRIDES[2])?,
+                }
+            },
             indices: fit(&self.indices, size_of(scene.indices.len() as u64, 4), vk::BufferUsageFlags::INDEX_BUFFER)?,
             prev_positions: fit(&self.prev_positions, size_of(scene.vertices.len() as u64, 12), none)?,
             instances,
@@ -138,6 +143,7 @@ impl GpuScene {
             max_mesh_triangles: max_mesh_triangles(scene),
             emission_or_occlusion: scene.materials.iter().any(|m| m.has_emission_or_occlusion()),
             alpha_masks: scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. })),
+            textured: scene.materials.iter().any(|m| m.samples_textures()),
         };
         if let Some(t) = tables {
             edits.write(&next.clusters, 0, bytemuck::cast_slice(&t.clusters));
@@ -155,11 +161,11 @@ impl GpuScene {
         let indices = m.first_index..m.first_index + m.index_span();
         let levels = mesh_levels(mesh)..mesh_levels(mesh) + m.lods.len() as u32;
         edits.write(&self.lod_levels, at::<GpuLodLevel>(&levels), bytemuck::cast_slice(&gpu_levels(m)));
-        edits.write(
-            &self.vertices,
-            at::<crate::scene::Vertex>(&vertices),
-            bytemuck::cast_slice(&scene.vertices[vertices.start as usize..vertices.end as usize]),
-        );
+        let (positions, normals, surface) =
+            super::vertex_streams::split(&scene.vertices[vertices.start as usize..vertices.end as usize]);
+        edits.write(&self.vertices.positions, at::<[f32; 3]>(&vertices), bytemuck::cast_slice(&positions));
+        edits.write(&self.vertices.normals, at::<[i16; 2]>(&vertices), bytemuck::cast_slice(&normals));
+        edits.write(&self.vertices.surface, at::<SurfaceVertex>(&vertices), bytemuck::cast_slice(&surface));
         edits.write(
             &self.indices,
             at::<u32>(&indices),

@@ -5,7 +5,7 @@
 
 use super::gpu_types::DrawIndexedIndirect;
 use super::scene_buffers::GpuScene;
-use super::VERTEX_ATTRIBUTES;
+use super::vertex_streams::{VertexFetch, VERTEX_STRIDES};
 use crate::gpu::{
     cmd_set_full_viewport, Bind, Buffer, GpuContext, GraphicsDesc, Pipeline, ShaderCompiler, StencilRule,
 };
@@ -49,8 +49,8 @@ pub fn transparent_pipeline(
         &GraphicsDesc {
             vertex: &vertex,
             fragment: Some(&fragment),
-            vertex_stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
-            vertex_attributes: &VERTEX_ATTRIBUTES,
+            vertex_strides: &VERTEX_STRIDES,
+            vertex_attributes: &VertexFetch::ALL.attributes(),
             color_formats: if blend { &[LIT_OUTPUT_FORMAT] } else { &[] },
             depth_format: vk::Format::UNDEFINED,
             depth_compare: vk::CompareOp::ALWAYS,
@@ -107,7 +107,7 @@ pub fn record_transparent(
         pipeline.push_constant_bytes(cmd, push);
         pipeline.push_bindings(cmd, binds);
         device.cmd_set_cull_mode(cmd, vk::CullModeFlags::NONE);
-        device.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.handle()], &[0]);
+        scene.vertices.bind(device, cmd);
         device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
         device.cmd_draw_indexed_indirect_count(
             cmd,

@@ -237,9 +237,11 @@ impl Deformer {
                 Bind::Buffer(0, entries),
                 Bind::Buffer(1, params),
                 Bind::Buffer(2, data.handle()),
-                Bind::Buffer(3, scene.vertices.handle()),
+                Bind::Buffer(3, scene.vertices.positions.handle()),
                 Bind::Buffer(4, scene.group_bounds.handle()),
                 Bind::Buffer(5, scene.prev_positions.handle()),
+                Bind::Buffer(6, scene.vertices.normals.handle()),
+                Bind::Buffer(7, scene.vertices.surface.handle()),
             ],
         );
         // A row of workgroups per instance, in as many dispatches as the device's rows allow.
