@@ -107,9 +107,36 @@ fn shipped_graphs_load_and_compile() {
     assert_eq!(pass.shader.as_deref(), Some(root.join("graph/examples/tint.comp").as_path()));
 }
 
+/// `g` compiled for a scene with emission or occlusion (the `emissive_occlusion` target exists).
+fn compile_with_emission(g: &ValidatedGraph) -> CompiledGraph {
+    let quantities = cullgraph::graph::Quantities::new().with("emission_or_occlusion", 1);
+    graph::compile(g, &FrameInputs::with_quantities(1280, 720, quantities)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn a_scene_without_emission_or_occlusion_gets_no_emissive_occlusion_target() {
+    let g = default_graph();
+    let (with, without) = (compile_with_emission(&g), compile(&g));
+    let bound = |c: &CompiledGraph| {
+        c.passes
+            .iter()
+            .flat_map(|p| &p.bindings)
+            .filter(|b| c.resources[b.resource].name == "emissive_occlusion")
+            .count()
+    };
+    // Written by the G-buffer, read by the lighting; in neither without it.
+    assert_eq!((bound(&with), bound(&without)), (2, 0));
+    let target = |c: &CompiledGraph| c.resources.iter().find(|r| r.name == "emissive_occlusion").unwrap().lifetime;
+    assert!(target(&with).is_some());
+    assert_eq!(target(&without), None, "a resource no pass uses is not created");
+    // The rest of the frame is the same.
+    assert_eq!(order(&with), order(&without));
+    assert_eq!(with.passes[0].barriers.len(), without.passes[0].barriers.len() + 1);
+}
+
 #[test]
 fn default_graph_barrier_plan_is_exactly_this() {
-    let c = compile(&default_graph());
+    let c = compile_with_emission(&default_graph());
     let id = |n: &str| c.resources.iter().position(|r| r.name == n).expect("resource");
     let depth_write = Access {
         stage: vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,

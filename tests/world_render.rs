@@ -389,3 +389,33 @@ fn moved_instances_get_bounds_that_contain_them() {
     }
     gpu.assert_clean();
 }
+
+/// The city's graphs leave out the emissive/occlusion target for a scene without emission or
+/// occlusion: a material that brings emission to a live world brings the target back (the
+/// graph is compiled again), and the box glows as in a renderer made afresh.
+#[test]
+fn an_emissive_material_on_a_live_world_brings_its_target_and_glows() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (mut world, handles, _) = living_boxes();
+    let camera = boxes_camera();
+    let mut live = renderer(&gpu, &world, "two_phase", false);
+    let before = live.render_to_image(&camera).unwrap().1;
+    let glow = Material {
+        name: "glow".into(),
+        albedo: Vec3::splat(0.05),
+        emissive: Vec3::new(0.0, 3.0, 0.0),
+        ..Default::default()
+    };
+    let m = world.add_material(glow).unwrap();
+    world.set_materials(&handles.iter().map(|&h| (h, m)).collect::<Vec<_>>()).unwrap();
+    live.sync(&shaders, &world).unwrap();
+    let after = live.render_to_image(&camera).unwrap().1;
+    let fresh = renderer(&gpu, &world, "two_phase", false).render_to_image(&camera).unwrap().1;
+    assert!(differing_pixels(&after, &fresh) <= DEPTH_TIE_PIXELS);
+    // Nothing in the scene was green before; the boxes glow green (their albedo is near black).
+    let green = |image: &RgbaImage| image.pixels().filter(|p| p.0[1] as i32 > p.0[0] as i32 + 100).count();
+    assert_eq!(green(&before), 0);
+    assert!(green(&after) > 100, "{} green pixels", green(&after));
+    gpu.assert_clean();
+}

@@ -287,6 +287,10 @@ pub enum ResourceDecl {
         /// Keep last frame's contents readable as `name.prev`.
         #[serde(default)]
         history: bool,
+        /// An expression: the image exists only where it is not 0 (a scene quantity, say), and
+        /// the passes' optional slots bound to it are left unbound otherwise.
+        #[serde(default)]
+        when: Option<NumLit>,
     },
     /// A buffer.
     Buffer {
@@ -295,6 +299,9 @@ pub enum ResourceDecl {
         /// Keep last frame's contents readable as `name.prev`.
         #[serde(default)]
         history: bool,
+        /// As an image's `when`.
+        #[serde(default)]
+        when: Option<NumLit>,
     },
     /// A resource the host provides every frame.
     Imported(ImportedDecl),

@@ -182,6 +182,8 @@ pub struct Resource {
     pub imported: bool,
     /// The pass whose kind created it for one of its slots (`None`: declared in the file).
     pub owner: Option<Owner>,
+    /// `when`: it exists only for frames where this is not 0 (`None`: always).
+    pub when: Option<LocatedExpr>,
 }
 
 /// The pass whose kind created a resource, and for which slot.

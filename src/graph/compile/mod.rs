@@ -74,6 +74,16 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
     let frame_vars = resolve::frame_variables(frame, &quantities);
     let vars = resolve::variables(&params, frame, &quantities);
     let mut errors = resolve::Errors { files: &graph.files, list: Vec::new() };
+    // A resource absent in this frame takes its bindings with it (validation let only optional
+    // slots bind it): the frame is compiled as if the graph never bound it.
+    let present = resolve::present(graph, &vars, &mut errors);
+    let trimmed;
+    let graph = if present.iter().all(|&p| p) {
+        graph
+    } else {
+        trimmed = without_absent(graph, &present);
+        &trimmed
+    };
     let param_values: HashMap<&str, &ParamValue> = params.iter().map(|p| (p.name.as_str(), &p.value)).collect();
     // Settings first: what a kind creates may be sized by its pass's settings.
     let mut settings: Vec<_> = (0..graph.passes.len())
@@ -234,4 +244,13 @@ pub fn compile(graph: &ValidatedGraph, frame: &FrameInputs) -> Result<CompiledGr
         memory,
         kinds: graph.kinds.clone(),
     })
+}
+
+/// `graph` without the bindings of the resources that `present` says are absent.
+fn without_absent(graph: &ValidatedGraph, present: &[bool]) -> ValidatedGraph {
+    let mut trimmed = graph.clone();
+    for pass in &mut trimmed.passes {
+        pass.bindings.retain(|b| present[b.resource]);
+    }
+    trimmed
 }

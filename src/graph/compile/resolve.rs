@@ -32,6 +32,23 @@ pub const MAX_GROUPS: u64 = 65535;
 /// 32x32); more work belongs in more threads per workgroup or in several passes.
 pub const MAX_DISPATCH_GROUPS: u64 = 1 << 22;
 
+/// Which resources exist in this frame: those without `when`, and those whose `when` is not 0
+/// (one that cannot be evaluated is reported and counts as present).
+pub fn present(graph: &ValidatedGraph, vars: &BTreeMap<String, Num>, errors: &mut Errors<'_>) -> Vec<bool> {
+    let nonzero =
+        |n: Num| if n.as_f64().is_finite() { Ok(n.as_f64() != 0.0) } else { Err(format!("is not finite ({n})")) };
+    graph
+        .resources
+        .iter()
+        .map(|r| match &r.when {
+            Some(when) => {
+                errors.value(when, vars, &format!("condition of resource '{}'", r.name), nonzero).unwrap_or(true)
+            }
+            None => true,
+        })
+        .collect()
+}
+
 /// Evaluates `e`; an error carries its position.
 pub fn eval(e: &LocatedExpr, vars: &BTreeMap<String, Num>) -> Result<Num, (Pos, String)> {
     e.expr.eval(vars).map_err(|err| (e.pos_at(err.offset), err.message))

@@ -78,6 +78,7 @@ impl Validator<'_> {
                     history: creates.history,
                     imported: false,
                     owner: Some(owner),
+                    when: None,
                 });
                 samples.push(1);
                 if written.is_none() {

@@ -10,6 +10,7 @@
 //! usage and sample count, sample counts within a pass).
 
 mod compute;
+mod conditional;
 mod created;
 mod dataflow;
 mod images;
@@ -108,6 +109,7 @@ pub fn load_in(
         limits: env.limits(),
     };
     dataflow::check(&mut v, &graph, &parsed);
+    conditional::check(&mut v, &graph);
     images::check(&mut v, &graph, &samples);
     for pass in &graph.passes {
         let Some(kind) = kinds.get(&pass.kind) else { continue };

@@ -25,9 +25,11 @@ impl Validator<'_> {
             if name.is_empty() || !name.chars().all(|c| c.is_alphanumeric() || c == '_' || c == '-') {
                 self.err(pos, format!("resource name '{name}' may only contain letters, digits, '_' and '-'"));
             }
-            let (imported, history) = match decl {
-                ResourceDecl::Image { history, .. } | ResourceDecl::Buffer { size: _, history } => (false, *history),
-                ResourceDecl::Imported(_) => (true, false),
+            let (imported, history, when) = match decl {
+                ResourceDecl::Image { history, when, .. } | ResourceDecl::Buffer { history, when, .. } => {
+                    (false, *history, when.as_ref())
+                }
+                ResourceDecl::Imported(_) => (true, false, None),
             };
             let mut base = vec![Seg::Field("resources"), Seg::Value(i)];
             if imported {
@@ -47,7 +49,11 @@ impl Validator<'_> {
                 }
                 (None, _) => continue,
             };
-            out.push(Resource { name: name.clone(), pos, desc, history, imported, owner: None });
+            let when = when.and_then(|w| {
+                let path = [base.as_slice(), &[Seg::Field("when")]].concat();
+                self.num(w, &path, &format!("condition of resource '{name}'"), scope, Vars::Frame)
+            });
+            out.push(Resource { name: name.clone(), pos, desc, history, imported, owner: None, when });
             samples_out.push(samples);
         }
         (out, samples_out)

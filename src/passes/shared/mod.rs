@@ -213,8 +213,8 @@ const fn scene_quantity(
 }
 
 /// The quantities of every scene, which the built-in kinds' sizes use: `instances`, `meshes`
-/// (draw groups), `lights`, `materials` and `triangles`.
-pub fn scene_quantities() -> [Quantity; 5] {
+/// (draw groups), `lights`, `materials`, `triangles` and `emission_or_occlusion`.
+pub fn scene_quantities() -> [Quantity; 6] {
     [
         scene_quantity(
             "instances",
@@ -251,6 +251,12 @@ pub fn scene_quantities() -> [Quantity; 5] {
             "triangles over all instances",
             |s| Some(scene_buffers::drawn_triangles(SceneCounts::downcast(s)?.scene)),
             Growth::Grows,
+        ),
+        scene_quantity(
+            "emission_or_occlusion",
+            "1 where some material emits light or has an occlusion texture, else 0 (a G-buffer's emissive_occlusion target exists only then)",
+            |s| Some(SceneCounts::downcast(s)?.scene.materials.iter().any(|m| m.has_emission_or_occlusion()) as u64),
+            Growth::Exact,
         ),
     ]
 }
