@@ -69,6 +69,17 @@ pub struct GraphFigure {
     pub false_positives: Option<u32>,
     /// Share of the invisible instances it culled.
     pub invisible_culled: Option<f64>,
+    /// Device bytes of the scene's buffers per instance ([`crate::passes::shared::GpuScene::bytes`]).
+    #[serde(default)]
+    pub gpu_scene_bytes_per_instance: f64,
+    /// Device bytes of the graph's resources (targets, pyramid, culling history and lists),
+    /// before transients share memory.
+    #[serde(default)]
+    pub gpu_graph_bytes: u64,
+    /// Host memory the renderer kept per instance: the growth of the process's resident memory
+    /// over making it (`None` where the system does not say).
+    #[serde(default)]
+    pub host_renderer_bytes_per_instance: Option<f64>,
 }
 
 /// One scene size.
@@ -80,6 +91,10 @@ pub struct SceneFigure {
     pub naive_peer_ms: f64,
     /// Its survivors.
     pub naive_peer_survivors: u32,
+    /// Host memory per instance of the generated scene: the growth of the process's resident
+    /// memory over making it (`None` where the system does not say).
+    #[serde(default)]
+    pub host_scene_bytes_per_instance: Option<f64>,
     /// Each graph.
     pub graphs: Vec<GraphFigure>,
 }
@@ -159,8 +174,14 @@ pub fn run(
     let aspect = bench.width as f32 / bench.height as f32;
     for &n in &bench.instances {
         progress(&format!("city with {n} instances"));
+        let resident_before = super::resident_bytes();
         let scene =
             SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(n), ..Default::default() })?;
+        let per_instance = |before: Option<u64>| {
+            let grown = super::resident_bytes()?.checked_sub(before?)?;
+            Some(grown as f64 / n.max(1) as f64)
+        };
+        let host_scene_bytes_per_instance = per_instance(resident_before);
         let camera = scene.default_camera(aspect);
         let (naive_ms, naive_survivors) = naive_frustum_ms(ctx, shaders, &scene, &camera, aspect, 15)?;
         let groups = scene.meshes.len() as u64;
@@ -168,6 +189,7 @@ pub fn run(
             instances: n,
             naive_peer_ms: naive_ms,
             naive_peer_survivors: naive_survivors,
+            host_scene_bytes_per_instance,
             graphs: Vec::new(),
         };
         for graph in &bench.graphs {
@@ -178,7 +200,10 @@ pub fn run(
                 false => GraphSpec::builtin(graph)?,
             };
             let settings = RenderSettings::new(bench.width, bench.height);
+            // The renderer's own copy of the scene is counted: it takes `scene` by value.
+            let resident_before = super::resident_bytes();
             let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
+            let host_renderer_bytes_per_instance = per_instance(resident_before);
             renderer.set_step_timing(bench.step_times);
             for _ in 0..bench.warmup {
                 renderer.render(&camera)?;
@@ -233,6 +258,9 @@ pub fn run(
                 false_negatives: None,
                 false_positives: None,
                 invisible_culled: None,
+                gpu_scene_bytes_per_instance: renderer.gpu_scene().bytes() as f64 / n.max(1) as f64,
+                gpu_graph_bytes: renderer.runtime().resource_bytes().iter().map(|b| b.bytes).sum(),
+                host_renderer_bytes_per_instance,
             };
             if bench.verify {
                 renderer.enable_verification(shaders)?;
@@ -282,6 +310,21 @@ impl CullingReport {
                     opt(g.visible),
                     opt(g.false_negatives),
                     g.invisible_culled.map_or("-".into(), |x| format!("{:.4}", x)),
+                ));
+            }
+        }
+        s.push_str("\n| instances | graph | GPU scene bytes per instance | GPU graph MB | host bytes per instance: scene, renderer |\n|---|---|---|---|---|\n");
+        for scene in &self.scenes {
+            let host = |b: Option<f64>| b.map_or("-".to_string(), |b| format!("{b:.0}"));
+            for g in &scene.graphs {
+                s.push_str(&format!(
+                    "| {} | {} | {:.1} | {:.1} | {}, {} |\n",
+                    scene.instances,
+                    g.graph,
+                    g.gpu_scene_bytes_per_instance,
+                    g.gpu_graph_bytes as f64 / 1e6,
+                    host(scene.host_scene_bytes_per_instance),
+                    host(g.host_renderer_bytes_per_instance),
                 ));
             }
         }

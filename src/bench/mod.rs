@@ -111,6 +111,15 @@ pub fn median_per_pass(frames: &[Vec<PassTiming>]) -> Vec<(String, f64)> {
         .collect()
 }
 
+/// The process's resident memory in bytes (Linux: `VmRSS` of `/proc/self/status`; `None`
+/// elsewhere), for host memory per instance.
+pub fn resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
