@@ -133,6 +133,13 @@ fn moving_instances_have_their_motion_and_stopped_ones_none() {
     assert!(left.x < -1.0 && left.y > 0.5, "came from the left and from below (y down): {left}");
     assert_eq!(moved.pixel(SIZE.0 / 2 + 12, SIZE.1 / 2), [0.0, 0.0], "the right quad stood still");
 
+    // It moves on at the next frame: its motion is that frame's step alone.
+    let before = at;
+    at[0] += DVec3::new(0.04, -0.03, 0.0);
+    world.set_transform(handles[0], common::scaled_at(at[0], SIDE)).unwrap();
+    let again = frame(&world, &mut r);
+    assert!(check(&again, &camera, &camera, &at, &before) > 100, "the quads cover pixels");
+
     // Nothing moves: no pixel has motion, although no update touched the left quad.
     let stopped = frame(&world, &mut r);
     assert!(stopped.data.iter().all(|&v| v == 0.0), "the quad that stopped has no motion");

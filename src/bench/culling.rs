@@ -80,6 +80,9 @@ pub struct GraphFigure {
     /// over making it (`None` where the system does not say).
     #[serde(default)]
     pub host_renderer_bytes_per_instance: Option<f64>,
+    /// Median CPU milliseconds of recording a frame (the scene unchanged).
+    #[serde(default)]
+    pub cpu_record_ms: f64,
 }
 
 /// One scene size.
@@ -210,11 +213,13 @@ pub fn run(
             }
             let mut timings = Vec::new();
             let mut totals = Vec::new();
+            let mut records = Vec::new();
             let mut last = None;
             for _ in 0..bench.frames {
                 let stats = renderer.render(&camera)?;
                 timings.push(stats.gpu_ms.clone());
                 totals.push(stats.gpu_total_ms);
+                records.push(stats.cpu_record_ms);
                 last = Some(stats);
             }
             let last = last.unwrap_or_default();
@@ -261,6 +266,7 @@ pub fn run(
                 gpu_scene_bytes_per_instance: renderer.gpu_scene().bytes() as f64 / n.max(1) as f64,
                 gpu_graph_bytes: renderer.runtime().resource_bytes().iter().map(|b| b.bytes).sum(),
                 host_renderer_bytes_per_instance,
+                cpu_record_ms: median(&mut records),
             };
             if bench.verify {
                 renderer.enable_verification(shaders)?;
@@ -313,18 +319,19 @@ impl CullingReport {
                 ));
             }
         }
-        s.push_str("\n| instances | graph | GPU scene bytes per instance | GPU graph MB | host bytes per instance: scene, renderer |\n|---|---|---|---|---|\n");
+        s.push_str("\n| instances | graph | GPU scene bytes per instance | GPU graph MB | host bytes per instance: scene, renderer | record CPU ms |\n|---|---|---|---|---|---|\n");
         for scene in &self.scenes {
             let host = |b: Option<f64>| b.map_or("-".to_string(), |b| format!("{b:.0}"));
             for g in &scene.graphs {
                 s.push_str(&format!(
-                    "| {} | {} | {:.1} | {:.1} | {}, {} |\n",
+                    "| {} | {} | {:.1} | {:.1} | {}, {} | {:.3} |\n",
                     scene.instances,
                     g.graph,
                     g.gpu_scene_bytes_per_instance,
                     g.gpu_graph_bytes as f64 / 1e6,
                     host(scene.host_scene_bytes_per_instance),
                     host(g.host_renderer_bytes_per_instance),
+                    g.cpu_record_ms,
                 ));
             }
         }

@@ -13,13 +13,12 @@
 //! move.)
 //!
 //! Motion vectors need each instance's transform of the previous frame: the scene keeps a
-//! second copy of the instance records ([`GpuScene::prev_instances`]). At a frame that
-//! scatters updates, or that follows one that did, the whole current table is copied there
-//! before the scatter writes the new records, so that every slot's previous record is the one
-//! it had last frame: an instance moved last frame but not this one gets previous = current
-//! (no stale motion), which copying only this frame's moved slots would miss. The copy moves
-//! 64 bytes a slot (a million slots: 64 MB, some tens of microseconds on an H100) and only
-//! while something moves. The world's previous frame is the renderer's previous frame: a view
+//! second copy of the instance records ([`GpuScene::prev_instances`]). Before the scatter
+//! writes the new records, the slots it updates and the slots the last frame updated get
+//! their current record as previous (`shaders/world/keep_previous.comp`): every slot's previous
+//! record is then the one it had last frame, and an instance moved last frame but not this one
+//! gets previous = current (no stale motion). Every other slot's previous record already equals
+//! its record, so the cost follows what moves, not the slots. The world's previous frame is the renderer's previous frame: a view
 //! that skipped frames sees its camera's motion since its own last frame, but the instances'
 //! motion since the world's last frame. A scene made anew (a rebuild, below) starts with
 //! previous = current: its instances show no motion at that frame.
@@ -99,9 +98,9 @@ pub(super) struct WorldMirror {
     /// [`GpuScene::user_words`] words; per slot where its entry starts (`u32::MAX`: none).
     user: Vec<u32>,
     user_of_slot: Vec<u32>,
-    /// Per frame in flight, the host-visible buffers its moves, whole records and user data
-    /// are read from.
-    segments: Vec<[Option<Buffer>; 3]>,
+    /// Per frame in flight, the host-visible buffers its moves, whole records, user data and
+    /// the slots whose previous records it keeps are read from.
+    segments: Vec<[Option<Buffer>; 4]>,
     /// The scatter of moves and of whole records.
     scatter: [Pipeline; 2],
     /// The scatter of user data (`None`: the world has none).
@@ -112,9 +111,11 @@ pub(super) struct WorldMirror {
     recent: std::collections::VecDeque<(u64, UpdateStats)>,
     /// Per frame in flight, a timer of the scatter and the frame it timed.
     timers: Vec<(GpuTimer, Option<u64>)>,
-    /// Whether the last recorded frame scattered updates: this frame then copies the current
-    /// records to the previous ones even if it scatters none (previous = current again).
-    moved_last: bool,
+    /// The slots the last recorded frame updated: this frame copies their records to the
+    /// previous ones even if it scatters none (previous = current again).
+    last_slots: Vec<u32>,
+    /// Copies listed slots' records to the previous ones.
+    keep_previous: Pipeline,
     /// Whether the scene's previous records are still to be filled (a new scene).
     refresh_previous: bool,
     /// Words of user data per instance ([`World::user_words`]).
@@ -221,11 +222,16 @@ impl WorldMirror {
             self.user_of_slot[entry[0] as usize] = u32::MAX;
         }
         self.user.clear();
-        for slot in self.moves.iter().map(|u| u.slot).chain(self.whole.iter().map(|u| u.slot)) {
+        for slot in Self::updated_slots(&self.moves, &self.whole) {
             self.update_of_slot[slot as usize] = u32::MAX;
         }
         self.moves.clear();
         self.whole.clear();
+    }
+
+    /// The slots whose records the queued updates replace.
+    fn updated_slots<'a>(moves: &'a [MoveUpdate], whole: &'a [SlotUpdate]) -> impl Iterator<Item = u32> + 'a {
+        moves.iter().map(|u| u.slot).chain(whole.iter().map(|u| u.slot))
     }
 
     /// Bytes queued.
@@ -260,8 +266,12 @@ impl WorldMirror {
         let scatters = !self.moves.is_empty() || !self.whole.is_empty();
         let deforms = self.deformer.as_ref().is_some_and(|d| d.pending());
         let uploads = uploads.filter(|b| !b.is_empty());
-        let copies_previous = scatters || self.moved_last || self.refresh_previous;
-        if !copies_previous && self.user.is_empty() && !deforms && uploads.is_none() {
+        let previous = scene.prev_instances.as_ref();
+        // A new scene copies every record; otherwise the slots updated now and last frame.
+        let copies_all = previous.is_some() && self.refresh_previous;
+        let keeps_previous = previous.is_some() && !copies_all && (scatters || !self.last_slots.is_empty());
+        let computes = keeps_previous || scatters || !self.user.is_empty() || deforms;
+        if !copies_all && !computes && uploads.is_none() {
             return Ok(());
         }
         let device = ctx.device();
@@ -275,11 +285,11 @@ impl WorldMirror {
         if let Some(batch) = uploads {
             batch.record(ctx, cmd);
         }
-        if !copies_previous && self.user.is_empty() && !deforms {
+        if !copies_all && !computes {
             timer.end(cmd);
             return Ok(());
         }
-        if let Some(previous) = &scene.prev_instances {
+        if let Some(previous) = previous.filter(|_| copies_all) {
             // Last frame's records become the previous ones before the scatter replaces them.
             let transfer = Access {
                 stage: ash::vk::PipelineStageFlags2::COPY,
@@ -296,7 +306,7 @@ impl WorldMirror {
             unsafe { device.cmd_copy_buffer(cmd, scene.instances.handle(), previous.handle(), &[region]) };
             cmd_barriers(device, cmd, &[memory_barrier(transfer, all)], &[]);
         }
-        if !scatters && self.user.is_empty() && !deforms {
+        if !computes {
             timer.end(cmd);
             return Ok(());
         }
@@ -307,6 +317,26 @@ impl WorldMirror {
             layout: ash::vk::ImageLayout::UNDEFINED,
         };
         cmd_barriers(device, cmd, &[memory_barrier(all, compute_rw)], &[]);
+        if let Some(previous) = previous.filter(|_| keeps_previous) {
+            // A slot in both lists is written twice with the same record.
+            let now = Self::updated_slots(&self.moves, &self.whole);
+            let slots: Vec<u32> = self.last_slots.iter().copied().chain(now).collect();
+            let name = format!("previous record slots {k}");
+            let segment = fill_segment(ctx, &mut self.segments[k][3], &name, bytemuck::cast_slice(&slots))?;
+            self.keep_previous.bind(cmd);
+            self.keep_previous.push_bindings(
+                cmd,
+                &[
+                    Bind::Buffer(0, segment.handle()),
+                    Bind::Buffer(1, scene.instances.handle()),
+                    Bind::Buffer(2, previous.handle()),
+                ],
+            );
+            self.keep_previous.push_constants(cmd, &[slots.len() as u32]);
+            // SAFETY: cmd recording with the keep_previous pipeline bound.
+            unsafe { device.cmd_dispatch(cmd, (slots.len() as u32).div_ceil(64), 1, 1) };
+            cmd_barriers(device, cmd, &[memory_barrier(compute_rw, compute_rw)], &[]);
+        }
         if let Some(deformer) = self.deformer.as_mut().filter(|_| deforms) {
             // The poses' bounds into their groups before the scatters derive cull records.
             deformer.record(ctx, cmd, k, scene)?;
@@ -357,7 +387,8 @@ impl WorldMirror {
     /// The frame `frame` was recorded: the queued updates are in it, and the syncs before it
     /// are its figures.
     pub(super) fn recorded(&mut self, frame: u64) {
-        self.moved_last = !self.moves.is_empty() || !self.whole.is_empty();
+        self.last_slots.clear();
+        self.last_slots.extend(Self::updated_slots(&self.moves, &self.whole));
         self.refresh_previous = false;
         self.clear_updates();
         if let Some(stats) = self.pending.take() {
@@ -395,7 +426,7 @@ pub(super) fn fill_segment<'a>(
     bytes: &[u8],
 ) -> Result<&'a Buffer> {
     let current = segment.as_ref().map_or(0, |b| b.size());
-    if current < bytes.len() as u64 {
+    if segment.is_none() || current < bytes.len() as u64 {
         let desc = BufferDesc {
             name,
             size: (bytes.len() as u64).max(current * 2).max(64 << 10),
@@ -514,7 +545,7 @@ impl Renderer {
             update_of_slot: Vec::new(),
             user: Vec::new(),
             user_of_slot: Vec::new(),
-            segments: (0..FRAMES_IN_FLIGHT).map(|_| [None, None, None]).collect(),
+            segments: (0..FRAMES_IN_FLIGHT).map(|_| [None, None, None, None]).collect(),
             scatter: [
                 Pipeline::compute(
                     ctx,
@@ -523,6 +554,11 @@ impl Renderer {
                 )?,
                 Pipeline::compute(ctx, "world scatter", &shaders.compile("world/scatter.comp", &[])?)?,
             ],
+            keep_previous: Pipeline::compute(
+                ctx,
+                "world previous records",
+                &shaders.compile("world/keep_previous.comp", &[])?,
+            )?,
             scatter_user: match world.user_words() {
                 0 => None,
                 _ => Some(Pipeline::compute(
@@ -536,7 +572,7 @@ impl Renderer {
             timers: (0..FRAMES_IN_FLIGHT)
                 .map(|_| GpuTimer::new(ctx, 1).map(|t| (t, None)))
                 .collect::<std::result::Result<_, _>>()?,
-            moved_last: false,
+            last_slots: Vec::new(),
             refresh_previous: true,
             user_words: world.user_words(),
             deformer: None,
@@ -821,7 +857,7 @@ impl Renderer {
         mirror.clear_updates();
         // The new scene's previous records are its current ones (no motion at its first frame).
         mirror.refresh_previous = true;
-        mirror.moved_last = false;
+        mirror.last_slots.clear();
         mirror.layout = layout;
         mirror.handles = world_handles(world);
         mirror.version = world.version();
