@@ -54,6 +54,14 @@ use crate::stats::UpdateStats;
 use std::sync::Arc;
 use std::time::Instant;
 
+/// Previous records are copied whole when the slots to list exceed this share of the table
+/// (1 / `COPY_ALL_SHARE`): a listed slot costs a scattered read and write of its record and its
+/// slot number, the whole copy 128 linear bytes a slot.
+const COPY_ALL_SHARE: usize = 4;
+/// Below this many listed slots they are copied one by one whatever the share: either way
+/// costs next to nothing, and small worlds (the tests') take the path large ones take.
+const COPY_ALL_MIN_LISTED: usize = 1024;
+
 /// A moved instance's new transform, as `shaders/world/scatter.comp` (`MOVES`) reads it: 64
 /// bytes in four 16-byte words (the slot last, so that each word is one vector load), the cull
 /// bound being derived on the GPU.
@@ -267,8 +275,12 @@ impl WorldMirror {
         let deforms = self.deformer.as_ref().is_some_and(|d| d.pending());
         let uploads = uploads.filter(|b| !b.is_empty());
         let previous = scene.prev_instances.as_ref();
-        // A new scene copies every record; otherwise the slots updated now and last frame.
-        let copies_all = previous.is_some() && self.refresh_previous;
+        // A new scene copies every record; so does a frame whose listed slots are a large share
+        // of the table, where one linear copy is faster than scattered ones (`COPY_ALL_SHARE`).
+        // Otherwise the slots updated now and last frame are copied.
+        let listed = self.last_slots.len() + self.moves.len() + self.whole.len();
+        let most_listed = (scene.instance_count as usize / COPY_ALL_SHARE).max(COPY_ALL_MIN_LISTED);
+        let copies_all = previous.is_some() && (self.refresh_previous || listed > most_listed);
         let keeps_previous = previous.is_some() && !copies_all && (scatters || !self.last_slots.is_empty());
         let computes = keeps_previous || scatters || !self.user.is_empty() || deforms;
         if !copies_all && !computes && uploads.is_none() {
