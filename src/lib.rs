@@ -60,6 +60,7 @@ pub mod gpu;
 pub mod graph;
 #[cfg(feature = "verify")]
 pub mod oracle;
+pub(crate) mod parallel;
 pub mod passes;
 pub mod prelude;
 pub mod render;

@@ -12,16 +12,20 @@ use std::path::Path;
 /// The library's modules (a file or a folder of `src/`), each with every module it may use.
 const MAY_USE: &[(&str, &[&str])] = &[
     ("files.rs", &[]),
-    ("gpu", &["files.rs"]),
-    ("graph", &["files.rs", "gpu"]),
-    ("scene", &["files.rs", "gpu"]),
-    ("cull", &["files.rs", "gpu", "scene"]),
-    ("stats", &["files.rs", "gpu", "graph"]),
-    ("passes", &["files.rs", "gpu", "graph", "cull", "scene", "stats"]),
-    ("render", &["files.rs", "gpu", "graph", "cull", "scene", "stats", "passes"]),
-    ("oracle", &["files.rs", "gpu", "graph", "cull", "scene", "stats", "passes", "render"]),
-    ("bench", &["files.rs", "gpu", "graph", "cull", "scene", "stats", "passes", "render", "oracle"]),
-    ("cli", &["files.rs", "gpu", "graph", "cull", "scene", "stats", "passes", "render", "oracle", "bench"]),
+    ("parallel.rs", &[]),
+    ("gpu", &["files.rs", "parallel.rs"]),
+    ("graph", &["files.rs", "parallel.rs", "gpu"]),
+    ("scene", &["files.rs", "parallel.rs", "gpu"]),
+    ("cull", &["files.rs", "parallel.rs", "gpu", "scene"]),
+    ("stats", &["files.rs", "parallel.rs", "gpu", "graph"]),
+    ("passes", &["files.rs", "parallel.rs", "gpu", "graph", "cull", "scene", "stats"]),
+    ("render", &["files.rs", "parallel.rs", "gpu", "graph", "cull", "scene", "stats", "passes"]),
+    ("oracle", &["files.rs", "parallel.rs", "gpu", "graph", "cull", "scene", "stats", "passes", "render"]),
+    ("bench", &["files.rs", "parallel.rs", "gpu", "graph", "cull", "scene", "stats", "passes", "render", "oracle"]),
+    (
+        "cli",
+        &["files.rs", "parallel.rs", "gpu", "graph", "cull", "scene", "stats", "passes", "render", "oracle", "bench"],
+    ),
 ];
 
 /// The modules `module` must not use: every other one.

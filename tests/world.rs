@@ -61,6 +61,53 @@ fn removed_handles_are_stale_and_their_index_is_reused_with_a_new_generation() {
     assert_eq!(w.instance_slots(), 3);
 }
 
+/// Bulk moves read the engine's own layout (here positions apart from rotations), are checked on
+/// several threads when the list is long, name the first bad handle in list order whichever
+/// thread finds it, and move nothing then.
+#[test]
+fn bulk_moves_read_any_layout_and_refuse_the_first_bad_handle_in_order() {
+    let n = 200_000;
+    let (mut w, h) = world(n);
+    let xs: Vec<f64> = (0..n).map(|i| i as f64 * 3.0).collect();
+    let turn = Mat3::from_rotation_y(0.5);
+    let version = w.version();
+    let removed = h[n - 10];
+    w.remove(removed).unwrap();
+    let version_removed = w.version();
+    // A stale handle late in the list and a NaN earlier, in another thread's share: the NaN is
+    // reported.
+    let mut handles = h.clone();
+    handles.swap(n - 10, n - 1);
+    let bad_at = 150_000;
+    let transform_of = |i: usize| Transform {
+        linear: turn,
+        translation: DVec3::new(if i == bad_at { f64::NAN } else { xs[i] }, 1.0, 0.0),
+    };
+    let e = w.set_transforms_by(&handles, transform_of).unwrap_err();
+    assert!(e.to_string().starts_with(&format!("{}: translation", handles[bad_at])), "{e}");
+    assert_eq!(w.version(), version_removed, "nothing was recorded");
+    assert_eq!(w.instance(h[bad_at - 1]).unwrap().transform, at((bad_at - 1) as f64 * 2.0), "nothing moved");
+    // Without the NaN the stale handle is refused, by name.
+    let e = w.set_transforms_by(&handles, |i| Transform { linear: turn, translation: DVec3::new(xs[i], 1.0, 0.0) });
+    assert_eq!(e.unwrap_err(), WorldError::Stale { handle: removed.to_string() });
+    // Without it, everything moves, each listed once in the journal.
+    let live: Vec<InstanceHandle> = h.iter().copied().filter(|&x| x != removed).collect();
+    w.set_transforms_by(&live, |i| Transform {
+        linear: turn,
+        translation: DVec3::new(live[i].index() as f64 * 3.0, 1.0, 0.0),
+    })
+    .unwrap();
+    for &handle in [live[0], live[n / 2], live[n - 2]].iter() {
+        let t = w.instance(handle).unwrap().transform;
+        assert_eq!((t.linear, t.translation), (turn, DVec3::new(handle.index() as f64 * 3.0, 1.0, 0.0)));
+    }
+    assert_eq!(w.version(), version_removed + live.len() as u64);
+    assert!(version < version_removed);
+    // A handle listed twice takes its last transform.
+    w.set_transforms_by(&[live[3], live[3]], |i| at(100.0 + i as f64)).unwrap();
+    assert_eq!(w.instance(live[3]).unwrap().transform, at(101.0));
+}
+
 #[test]
 fn bad_values_name_the_handle_and_change_nothing() {
     let (mut w, h) = world(2);

@@ -36,6 +36,7 @@ fn another_worlds_handles_are_refused_by_every_method() {
     foreign(a.remove(h).unwrap_err(), &a, &b);
     foreign(a.set_transform(h, t).unwrap_err(), &a, &b);
     foreign(a.set_transforms(&[(ha[1], t), (h, t)]).unwrap_err(), &a, &b);
+    foreign(a.set_transforms_by(&[ha[1], h], |_| t).unwrap_err(), &a, &b);
     let instance = *b.instance(h).unwrap();
     foreign(a.set_instances(&[(h, instance)]).unwrap_err(), &a, &b);
     foreign(a.set_meshes(&[(h, 0)]).unwrap_err(), &a, &b);
@@ -144,6 +145,7 @@ fn the_readme_world_example_compiles_against_the_prelude() {
         let (mut world, handles) = World::new(scene)?; // a handle per instance
         let mut renderer = Renderer::from_world(&ctx, &shaders, &world, settings, &spec)?;
         world.set_transforms(&[(handles[3], moved), (handles[7], turned)])?; // f64 translations
+        world.set_transforms_by(&handles[4..6], |i| [moved, turned][i])?; // read from the engine's layout
         let car = world.insert(Instance { transform, mesh, material, flags: 0 })?;
         world.remove(handles[9])?; // its handle goes stale
         let mesh = world.add_mesh("truck", &mesh_data)?; // meshes and materials at run time

@@ -419,3 +419,46 @@ fn an_emissive_material_on_a_live_world_brings_its_target_and_glows() {
     assert!(green(&after) > 100, "{} green pixels", green(&after));
     gpu.assert_clean();
 }
+
+/// A long bulk move (checked on several threads) reaches every moved slot's record on the GPU,
+/// with the world's last transform of each, and the culling stays exact.
+#[test]
+fn a_long_bulk_move_reaches_every_slot() {
+    use cullgraph::passes::shared::gpu_types::GpuInstance;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut scene = boxes_scene();
+    let first = scene.instances[1];
+    let n = 80_000;
+    scene.instances.extend((0..n).map(|i| Instance { transform: small_box(i), ..first }));
+    let (mut world, handles) = World::new(scene).unwrap();
+    let mut live = renderer(&gpu, &world, "two_phase", true);
+    let camera = boxes_camera();
+    live.render(&camera).unwrap();
+    // Every small box moves twice before one sync: the second move counts.
+    let boxes = &handles[handles.len() - n..];
+    let shifted = |i: usize, by: DVec3| Transform { translation: small_box(i).translation + by, ..small_box(i) };
+    world.set_transforms_by(boxes, |i| shifted(i, DVec3::Y)).unwrap();
+    world.set_transforms_by(boxes, |i| shifted(i, DVec3::new(0.5, 0.2, 0.0))).unwrap();
+    live.sync(&shaders, &world).unwrap();
+    let (stats, image) = live.render_to_image(&camera).unwrap();
+    assert_eq!(stats.verify.expect("verified").false_negatives, 0);
+    let bytes = cullgraph::gpu::transfer::read_buffer(&gpu, &live.gpu_scene().instances).unwrap();
+    let records: &[GpuInstance] = bytemuck::cast_slice(&bytes[..live.scene().instances.len() * 64]);
+    for (i, &h) in boxes.iter().enumerate() {
+        let slot = live.slot_of(h.index()).expect("placed");
+        let expected = GpuInstance::new(world.instance(h).unwrap());
+        assert_eq!(records[slot as usize], expected, "box {i} in slot {slot}");
+    }
+    let fresh = renderer(&gpu, &world, "two_phase", false).render_to_image(&camera).unwrap().1;
+    assert!(differing_pixels(&image, &fresh) <= DEPTH_TIE_PIXELS);
+    gpu.assert_clean();
+}
+
+/// Small box `i` of a grid behind the boxes scene.
+fn small_box(i: usize) -> Transform {
+    Transform {
+        linear: Mat3::from_diagonal(Vec3::splat(0.05)),
+        translation: DVec3::new(-4.0 + 0.03 * (i % 256) as f64, 0.1, -4.0 - 0.03 * (i / 256) as f64),
+    }
+}

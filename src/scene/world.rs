@@ -714,8 +714,12 @@ impl World {
     }
 
     /// Moves instances: `(handle, transform)` each. (Only the transforms need checking: the
-    /// rest of each instance was checked when it was set.)
+    /// rest of each instance was checked when it was set.) Checked all first, applied all or
+    /// none; see [`World::set_transforms_by`].
     pub fn set_transforms(&mut self, changes: &[(InstanceHandle, Transform)]) -> Result<(), WorldError> {
+        if changes.len() >= 2 * crate::parallel::MIN_ITEMS_PER_THREAD {
+            return self.move_many(changes.len(), |i| changes[i].0, |i| changes[i].1);
+        }
         for (handle, transform) in changes {
             self.check_instance(*handle)?;
             if let Some(message) = transform_error(transform) {
@@ -726,6 +730,50 @@ impl World {
         self.journal.extend(changes.iter().map(|(handle, transform)| {
             instances[handle.index as usize].transform = *transform;
             Change::Transform(handle.index)
+        }));
+        self.bound_journal();
+        Ok(())
+    }
+
+    /// Moves instances in bulk, reading each transform where the engine keeps it: `handles[i]`
+    /// moves to `transform_of(i)` (called once or twice per item, from several threads). Every
+    /// handle and transform is checked first, a long list on several threads; an error names
+    /// the first bad handle in list order, and then nothing has moved. A handle listed twice
+    /// takes its last transform.
+    pub fn set_transforms_by(
+        &mut self,
+        handles: &[InstanceHandle],
+        transform_of: impl Fn(usize) -> Transform + Sync,
+    ) -> Result<(), WorldError> {
+        self.move_many(handles.len(), |i| handles[i], transform_of)
+    }
+
+    /// Checks and applies `n` moves: item `i` moves `handle_of(i)` to `transform_of(i)`.
+    fn move_many(
+        &mut self,
+        n: usize,
+        handle_of: impl Fn(usize) -> InstanceHandle + Sync,
+        transform_of: impl Fn(usize) -> Transform + Sync,
+    ) -> Result<(), WorldError> {
+        let world = &*self;
+        let check = |i: usize| -> Result<(), WorldError> {
+            let handle = handle_of(i);
+            world.check_instance(handle)?;
+            match transform_error(&transform_of(i)) {
+                Some(message) => Err(WorldError::Invalid { handle: handle.to_string(), message }),
+                None => Ok(()),
+            }
+        };
+        if n < 2 * crate::parallel::MIN_ITEMS_PER_THREAD {
+            (0..n).try_for_each(check)?;
+        } else if let Some(e) = crate::parallel::first(n, |i| check(i).err()) {
+            return Err(e);
+        }
+        let instances = &mut self.scene.instances;
+        self.journal.extend((0..n).map(|i| {
+            let index = handle_of(i).index;
+            instances[index as usize].transform = transform_of(i);
+            Change::Transform(index)
         }));
         self.bound_journal();
         Ok(())
