@@ -77,7 +77,8 @@ fn whole<T: bytemuck::Pod>(bytes: &[u8]) -> Vec<T> {
 }
 
 /// The clusters the capturing passes drew through cluster lists (`cluster_cull`'s), as
-/// (instance id, first index of the cluster's range), in pass order.
+/// (instance id, first index of the cluster's range), in pass order (what verification checks).
+#[cfg(feature = "verify")]
 pub(crate) fn drawn_clusters(captured: &[crate::graph::Captured]) -> Vec<(u32, u32)> {
     let mut out = Vec::new();
     for (_, lists) in captured {

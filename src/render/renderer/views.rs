@@ -166,6 +166,7 @@ impl Renderer {
 
     /// The clusters `view`'s last completed frame drew through cluster lists, as (instance id,
     /// first index of the cluster's range); `None` unless draw lists are captured.
+    #[cfg(feature = "verify")]
     pub(crate) fn drawn_clusters_in_view(&self, view: ViewId) -> Result<Option<Vec<(u32, u32)>>> {
         let state = self.view_state(view)?;
         let Some(captured) = state.graphs.runtime.captured()? else { return Ok(None) };
