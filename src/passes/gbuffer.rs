@@ -160,21 +160,10 @@ pub struct GeometryShaders {
 }
 
 impl GeometryShaders {
-    /// Compiles the shaders (the fragment shader `fragment` with its defines, if any).
+    /// Compiles `gbuffer.vert` with its defines (`MOTION`: the clip positions motion vectors
+    /// are made from; its `gl_Position` is the same either way), fetching only the vertex
+    /// streams of `fetch`, and the fragment shader `fragment` with its defines, if any.
     pub fn compile(
-        shaders: &ShaderCompiler,
-        fragment: Option<(&str, &[(&str, &str)])>,
-        color_formats: &[vk::Format],
-        depth: (vk::Format, vk::SampleCountFlags),
-        equal: bool,
-    ) -> crate::Result<Self> {
-        Self::compile_with_vertex(shaders, &[], VertexFetch::ALL, fragment, color_formats, depth, equal)
-    }
-
-    /// As [`GeometryShaders::compile`], with `gbuffer.vert`'s defines (`MOTION`: the clip
-    /// positions motion vectors are made from; its `gl_Position` is the same either way) and
-    /// fetching only the vertex streams of `fetch`.
-    pub fn compile_with_vertex(
         shaders: &ShaderCompiler,
         vertex_defines: &[(&str, &str)],
         fetch: VertexFetch,
@@ -433,15 +422,7 @@ impl GbufferPass {
                 false => VertexFetch { normals: true, surface: textured },
                 true => VertexFetch { normals: false, surface: textured && masked },
             };
-            let compiled = GeometryShaders::compile_with_vertex(
-                shaders,
-                &vertex_defines,
-                fetch,
-                fragment,
-                &formats,
-                depth,
-                equal,
-            )?;
+            let compiled = GeometryShaders::compile(shaders, &vertex_defines, fetch, fragment, &formats, depth, equal)?;
             Ok(LazyPipeline::geometry(&pass.name, compiled))
         };
         let row = |extras: bool| -> crate::Result<[[Option<LazyPipeline>; 2]; 2]> {

@@ -31,6 +31,7 @@ use crate::graph::{
 };
 use crate::passes::lighting_compressed::pool::POOL_SETTING;
 use crate::passes::shared::lazy_pipeline::LazyPipeline;
+use crate::passes::shared::vertex_streams::VertexFetch;
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 
@@ -267,11 +268,12 @@ fn claims_in_draw_order(ctx: &GpuContext, pass: &PlannedPass) -> Result<bool, St
 
 /// The `gbuffer_compressed` pass.
 pub struct GbufferCompressedPass {
-    /// The geometry pass, for scenes with emission or occlusion (created when first used).
-    draw: LazyPipeline,
-    /// The same without them (occlusion 1, no emission): the texture reads and the emissive
-    /// encoding cost the pass time on every fragment, for nothing where no material has them.
-    draw_plain: LazyPipeline,
+    /// The geometry pass by `[extras][textured]` (created when first used): `extras` for scenes
+    /// with emission or occlusion (without, occlusion is 1 and emission none: the texture reads
+    /// and the emissive encoding cost the pass time on every fragment, for nothing where no
+    /// material has them); `textured` for scenes where a material samples a texture (without,
+    /// no texture coordinates or tangents are fetched and no sampling is compiled).
+    draws: [[LazyPipeline; 2]; 2],
     clear: Pipeline,
     /// Samples are claimed in `sample_claim` (no stencil).
     claim: bool,
@@ -310,20 +312,27 @@ impl GbufferCompressedPass {
         if bound("aa_mask") {
             defines.push(("AA_MASK", "1"));
         }
-        let fragment = Some(("gbuffer/gbuffer_compressed.frag", defines.as_slice()));
-        let draw = LazyPipeline::geometry(&pass.name, GeometryShaders::compile(shaders, fragment, &[], depth, true)?);
-        defines.push(("NO_EMISSION_OCCLUSION", "1"));
-        let fragment = Some(("gbuffer/gbuffer_compressed.frag", defines.as_slice()));
-        let draw_plain =
-            LazyPipeline::geometry(&pass.name, GeometryShaders::compile(shaders, fragment, &[], depth, true)?);
+        let draw = |extras: bool, textured: bool| -> crate::Result<LazyPipeline> {
+            let mut defines = defines.clone();
+            if !extras {
+                defines.push(("NO_EMISSION_OCCLUSION", "1"));
+            }
+            if !textured {
+                defines.push(("NO_TEXTURES", "1"));
+            }
+            let fragment = Some(("gbuffer/gbuffer_compressed.frag", defines.as_slice()));
+            let fetch = VertexFetch { normals: true, surface: textured };
+            let compiled = GeometryShaders::compile(shaders, &[], fetch, fragment, &[], depth, true)?;
+            Ok(LazyPipeline::geometry(&pass.name, compiled))
+        };
+        let draws = [[draw(false, false)?, draw(false, true)?], [draw(true, false)?, draw(true, true)?]];
         let clear = Pipeline::compute(
             ctx,
             &format!("{} clear", pass.name),
             &shaders.compile("gbuffer/gbuffer_compressed_clear.comp", &buffers)?,
         )?;
         Ok(Self {
-            draw,
-            draw_plain,
+            draws,
             clear,
             claim: owner == SampleOwner::Claim,
             aa: SelectiveAa::from_plan(pass)?,
@@ -391,7 +400,7 @@ impl PassNode for GbufferCompressedPass {
                 vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             ));
         }
-        let draw = if scene.emission_or_occlusion { &mut self.draw } else { &mut self.draw_plain };
+        let draw = &mut self.draws[scene.emission_or_occlusion as usize][scene.textured as usize];
         record_geometry(
             rec.ctx,
             rec.cmd,
