@@ -494,7 +494,8 @@ pub struct RenderArgs {
     /// Cluster culling: before each draw of a culled list, a `cluster_cull` pass tests the
     /// clusters of its instances (frustum, normal cone, Hi-Z) and the draw takes them cluster by
     /// cluster; the image does not change. `on` runs the graph's cluster variant
-    /// (`two_phase_clusters` for the default, `frustum_clusters` and `occluder_prepass_clusters` for those built-in graphs).
+    /// (`two_phase_clusters` for the default, `frustum_clusters` and `occluder_prepass_clusters`
+    /// for those built-in graphs).
     #[arg(long, action = clap::ArgAction::Set, value_parser = parse_on_off, default_value = "off", value_name = "on|off")]
     pub clusters: bool,
     /// Keep rendering; recompile when the graph file or a shader changes (on error the last

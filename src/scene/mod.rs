@@ -497,6 +497,22 @@ impl Scene {
         }
     }
 
+    /// Whether some material emits light or has an occlusion texture
+    /// ([`Material::has_emission_or_occlusion`]).
+    pub fn has_emission_or_occlusion(&self) -> bool {
+        self.materials.iter().any(Material::has_emission_or_occlusion)
+    }
+
+    /// Whether some material is alpha-masked.
+    pub fn has_alpha_masks(&self) -> bool {
+        self.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }))
+    }
+
+    /// Whether some material samples a texture ([`Material::samples_textures`]).
+    pub fn samples_textures(&self) -> bool {
+        self.materials.iter().any(Material::samples_textures)
+    }
+
     /// Appends a material and returns its index.
     pub fn add_material(&mut self, material: Material) -> u32 {
         self.materials.push(material);

@@ -255,7 +255,7 @@ pub fn scene_quantities() -> [Quantity; 6] {
         scene_quantity(
             "emission_or_occlusion",
             "1 where some material emits light or has an occlusion texture, else 0 (a G-buffer's emissive_occlusion target exists only then)",
-            |s| Some(SceneCounts::downcast(s)?.scene.materials.iter().any(|m| m.has_emission_or_occlusion()) as u64),
+            |s| Some(SceneCounts::downcast(s)?.scene.has_emission_or_occlusion() as u64),
             Growth::Exact,
         ),
     ]

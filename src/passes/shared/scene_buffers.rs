@@ -371,9 +371,9 @@ impl GpuScene {
             instance_count: scene.instances.len() as u32,
             triangles: drawn_triangles(scene),
             max_mesh_triangles: max_mesh_triangles(scene),
-            emission_or_occlusion: scene.materials.iter().any(|m| m.has_emission_or_occlusion()),
-            alpha_masks: scene.materials.iter().any(|m| matches!(m.alpha_mode, crate::scene::AlphaMode::Mask { .. })),
-            textured: scene.materials.iter().any(|m| m.samples_textures()),
+            emission_or_occlusion: scene.has_emission_or_occlusion(),
+            alpha_masks: scene.has_alpha_masks(),
+            textured: scene.samples_textures(),
         })
     }
 }

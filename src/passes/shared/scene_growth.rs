@@ -17,7 +17,7 @@ use super::slot_layout::SlotLayout;
 use super::textures::GpuTextures;
 use super::vertex_streams::{SurfaceVertex, VertexStreams, VERTEX_STRIDES};
 use crate::gpu::{Buffer, BufferDesc, Edits, GpuContext, MemoryLocation};
-use crate::scene::{AlphaMode, Scene};
+use crate::scene::Scene;
 use ash::vk;
 use std::ops::Range;
 use std::sync::Arc;
@@ -141,9 +141,9 @@ impl GpuScene {
             instance_count: slots as u32,
             triangles: drawn_triangles(scene),
             max_mesh_triangles: max_mesh_triangles(scene),
-            emission_or_occlusion: scene.materials.iter().any(|m| m.has_emission_or_occlusion()),
-            alpha_masks: scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. })),
-            textured: scene.materials.iter().any(|m| m.samples_textures()),
+            emission_or_occlusion: scene.has_emission_or_occlusion(),
+            alpha_masks: scene.has_alpha_masks(),
+            textured: scene.samples_textures(),
         };
         if let Some(t) = tables {
             edits.write(&next.clusters, 0, bytemuck::cast_slice(&t.clusters));

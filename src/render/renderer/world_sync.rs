@@ -18,10 +18,11 @@
 //! their current record as previous (`shaders/world/keep_previous.comp`): every slot's previous
 //! record is then the one it had last frame, and an instance moved last frame but not this one
 //! gets previous = current (no stale motion). Every other slot's previous record already equals
-//! its record, so the cost follows what moves, not the slots. The world's previous frame is the renderer's previous frame: a view
-//! that skipped frames sees its camera's motion since its own last frame, but the instances'
-//! motion since the world's last frame. A scene made anew (a rebuild, below) starts with
-//! previous = current: its instances show no motion at that frame.
+//! its record, so the cost follows what moves, not the slots (a frame listing more than a
+//! quarter of them copies the table whole). The world's previous frame is the renderer's
+//! previous frame: a view that skipped frames sees its camera's motion since its own last frame,
+//! but the instances' motion since the world's last frame. A scene made anew (a rebuild, below)
+//! starts with previous = current: its instances show no motion at that frame.
 //!
 //! A group without a free slot, or an instance of a group the layout lacks, grows the layout
 //! at its end ([`SlotLayout::grow`]). That, a registered mesh, material or texture, or more
