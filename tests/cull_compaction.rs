@@ -187,3 +187,42 @@ fn early_phase_from_last_frames_list_matches_the_tested_early_phase() {
 fn triangles_of(scene: &cullgraph::scene::Scene, id: u32) -> u64 {
     scene.meshes[scene.instances[id as usize].mesh as usize].index_count as u64 / 3
 }
+
+/// A cull laid out in rows of workgroups (as on devices whose `maxComputeWorkGroupCount[0]` is
+/// 65535, which one workgroup per 256 instances reaches at 2^24 instances) draws the same lists,
+/// counts and image as in one row. The width is forced down so that a small city takes rows.
+#[test]
+fn culls_laid_out_in_rows_of_workgroups_equal_one_row() {
+    let gpu = GpuTest::new();
+    let (w, h) = (64, 48);
+    let scene = SceneSource::Builtin("city".into())
+        .load(&LoadOptions { instances: Some(20_003), ..Default::default() })
+        .unwrap();
+    let base = scene.default_camera(w as f32 / h as f32);
+    let run = |width: u32| {
+        cullgraph::gpu::line_dispatch::set_width_for_tests(width);
+        let spec = GraphSpec::builtin("two_phase").unwrap();
+        let mut renderer =
+            Renderer::with_graph(&gpu, &gpu.shaders(), scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
+        renderer.enable_verification(&gpu.shaders()).unwrap();
+        let mut frames = Vec::new();
+        for frame in 0..3 {
+            let camera = CameraPath::Orbit.camera_at(&base, frame * 10);
+            let (stats, image) = renderer.render_to_image(&camera).unwrap();
+            assert_eq!(stats.verify.as_ref().map(|v| v.false_negatives), Some(0), "width {width}, frame {frame}");
+            let counts: Vec<_> =
+                CullPassStats::of(&stats).iter().map(|c| (c.tested, c.frustum_culled, c.drawn)).collect();
+            frames.push((draw_lists(&renderer), counts, image.into_raw()));
+        }
+        cullgraph::gpu::line_dispatch::set_width_for_tests(0);
+        frames
+    };
+    // 79 blocks: rows of 7 (and the compact step's 80 workgroups, rows of 7 with one left over).
+    let rows = run(7);
+    let one_row = run(0);
+    for (frame, (a, b)) in rows.iter().zip(&one_row).enumerate() {
+        assert_eq!(a.0, b.0, "frame {frame}: draw lists");
+        assert_eq!(a.1, b.1, "frame {frame}: counters");
+        assert!(a.2 == b.2, "frame {frame}: images differ");
+    }
+}

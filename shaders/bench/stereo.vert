@@ -18,7 +18,8 @@ struct Eye {
     vec4 eye_lo;      // xyz
 };
 
-layout(set = 0, binding = 0, scalar) readonly buffer Instances { GpuInstance instances[]; };
+#define INSTANCES_BINDING 0
+#include "../common/instance_ranges.glsl"
 layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
 layout(set = 0, binding = 2, scalar) readonly buffer Eyes { Eye eyes[2]; };
 
@@ -35,7 +36,7 @@ void main() {
     uint e = pc.eye;
 #endif
     uint id = draw_instance_ids[gl_InstanceIndex];
-    GpuInstance inst = instances[id];
+    GpuInstance inst = instance_record(id);
     vec3 rel = instance_rel_eye(inst, in_position, eyes[e].eye_hi.xyz, eyes[e].eye_lo.xyz);
     gl_Position = eyes[e].view_proj * vec4(rel, 1.0);
     out_normal = instance_normal(inst, oct_decode(in_normal_oct));

@@ -21,7 +21,8 @@
 layout(local_size_x = CLUSTER_CHUNK * TASKS_PER_GROUP) in;
 
 layout(set = 0, binding = 0, scalar) readonly buffer Frame { FrameConstants frame; };
-layout(set = 0, binding = 1, scalar) readonly buffer Instances { GpuInstance instances[]; };
+#define INSTANCES_BINDING 1
+#include "../common/instance_ranges.glsl"
 layout(set = 0, binding = 2, scalar) readonly buffer InCommands { DrawCommand in_commands[]; };
 layout(set = 0, binding = 3) readonly buffer InIds { uint in_ids[]; };
 layout(set = 0, binding = 4, scalar) readonly buffer Clusters { Cluster clusters[]; };
@@ -126,7 +127,7 @@ void main() {
             uint index = (local % chunks) * CLUSTER_CHUNK + lane;
             if (index < scratch[at + 3u]) {
                 cl = clusters[scratch[at + 2u] + index];
-                GpuInstance inst = instances[in_ids[c.first_instance + instance]];
+                GpuInstance inst = instance_record(in_ids[c.first_instance + instance]);
                 // Region 2 draws double-sided materials: both faces, so no cone test.
                 uint verdict = test_cluster(cl, inst, region != 2u);
                 drawn = verdict == 0u;

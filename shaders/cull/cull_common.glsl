@@ -15,6 +15,9 @@
 #define CULL_BLOCK 256u
 #define CULL_WORDS_PER_BLOCK (CULL_BLOCK / 32u)
 
+// Blocks of a pass over `slot_count` slots (at least one, which handles an empty scene).
+uint cull_blocks(uint slot_count) { return max(1u, slot_count / CULL_BLOCK + (slot_count % CULL_BLOCK != 0u ? 1u : 0u)); }
+
 // World bound of one slot, 32 bytes. The small quantities are half floats, rounded outward
 // on the CPU and widened by their own rounding error (src/passes/shared/cull_data.rs), so the bound
 // read here always contains the exact one.
@@ -133,21 +136,21 @@ uint scratch_block(uint superblocks, uint b) { return SCRATCH_HEADER + 2u * supe
 // from which the compact step places the visible instances that the next frame's early phase
 // draws.
 uint scratch_visible_block(uint superblocks, uint slot_count, uint b) {
-    uint blocks = max(1u, (slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
+    uint blocks = cull_blocks(slot_count);
     return scratch_block(superblocks, blocks + b);
 }
 #ifdef LOD
 // After the visible counts (LOD): per list (0: drawn, 1: visible), block and level, the block's
 // slots of that list at that level.
 uint scratch_level_block(uint superblocks, uint slot_count, uint list, uint b, uint level) {
-    uint blocks = max(1u, (slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
+    uint blocks = cull_blocks(slot_count);
     return scratch_block(superblocks, 2u * blocks + (list * blocks + b) * LOD_LEVELS + level);
 }
 // After those (LOD), written by `cull_levels.comp` each run: per superblock, list and level,
 // where the superblock's slots of that list at that level start in the level-major order (every
 // slot of lower levels, then this level's in the superblocks before).
 uint scratch_level_start(uint superblocks, uint slot_count, uint s, uint list, uint level) {
-    uint blocks = max(1u, (slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
+    uint blocks = cull_blocks(slot_count);
     return scratch_level_block(superblocks, slot_count, 0u, 2u * blocks, 0u) + (s * 2u + list) * LOD_LEVELS + level;
 }
 #endif

@@ -19,6 +19,7 @@
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #include "cull_common.glsl"
+#include "../common/line_dispatch.glsl"
 
 #define THREADS 256u
 layout(local_size_x = 256) in;
@@ -167,7 +168,7 @@ void place_block(uint block, uint run) {
 #ifdef LOD
     if (lane < LOD_PLANES * CULL_WORDS_PER_BLOCK) {
         uint p = lane / CULL_WORDS_PER_BLOCK, w = lane % CULL_WORDS_PER_BLOCK;
-        uint blocks = max(1u, (pc.slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
+        uint blocks = cull_blocks(pc.slot_count);
         sh_planes[p][w] = level_bits[p * blocks * CULL_WORDS_PER_BLOCK + block * CULL_WORDS_PER_BLOCK + w];
     }
     sum_levels_before(block);
@@ -474,18 +475,22 @@ void place_block_of_views(uint block) {
 #endif
 
 void main() {
+    uint w = line_workgroup();
 #ifdef MULTI_VIEW
-    if (gl_WorkGroupID.x < pc.view_count) {
-        select_view_buffers(view_table[gl_WorkGroupID.x], gl_WorkGroupID.x);
+    if (w < pc.view_count) {
+        select_view_buffers(view_table[w], w);
         write_commands();
         return;
     }
-    place_block_of_views(gl_WorkGroupID.x - pc.view_count);
+    // Past the last block of the line (the whole workgroup, before any barrier).
+    if (w - pc.view_count >= cull_blocks(pc.slot_count)) return;
+    place_block_of_views(w - pc.view_count);
 #else
-    if (gl_WorkGroupID.x == 0u) {
+    if (w == 0u) {
         write_commands();
         return;
     }
-    place_block(gl_WorkGroupID.x - 1u, scratch[SCRATCH_PLACE_RUN]);
+    if (w - 1u >= cull_blocks(pc.slot_count)) return;
+    place_block(w - 1u, scratch[SCRATCH_PLACE_RUN]);
 #endif
 }

@@ -26,6 +26,7 @@
 #include "../common/scene.glsl"
 #include "../common/hiz.glsl"
 #include "cull_common.glsl"
+#include "../common/line_dispatch.glsl"
 
 layout(local_size_x = 256) in;
 
@@ -448,7 +449,7 @@ void cull_block(uint lane, uint block, uint slot) {
 #else
     if (lane < CULL_WORDS_PER_BLOCK) draw_bits[block * CULL_WORDS_PER_BLOCK + lane] = sh_draw[lane];
 #ifdef LOD
-    uint blocks = max(1u, (pc.slot_count + CULL_BLOCK - 1u) / CULL_BLOCK);
+    uint blocks = cull_blocks(pc.slot_count);
     if (lane < LOD_PLANES * CULL_WORDS_PER_BLOCK) {
         uint p = lane / CULL_WORDS_PER_BLOCK, w = lane % CULL_WORDS_PER_BLOCK;
         level_bits[p * blocks * CULL_WORDS_PER_BLOCK + block * CULL_WORDS_PER_BLOCK + w] = sh_planes[p][w];
@@ -615,7 +616,9 @@ void cull_views(uint lane, uint block, uint slot) {
 
 void main() {
     uint lane = gl_LocalInvocationIndex;
-    uint block = gl_WorkGroupID.x;
+    uint block = line_workgroup();
+    // Past the last block of the line (the whole workgroup, before any barrier).
+    if (block >= cull_blocks(pc.slot_count)) return;
     uint slot = block * CULL_BLOCK + lane;
 #ifdef MULTI_VIEW
     cull_views(lane, block, slot);

@@ -16,7 +16,7 @@ layout(location = 2) in vec2 in_uv;
 layout(location = 3) in vec4 in_tangent;
 #endif
 
-layout(set = 0, binding = 0, scalar) readonly buffer Instances { GpuInstance instances[]; };
+#define INSTANCES_BINDING 0
 layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
 layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
 
@@ -32,7 +32,7 @@ layout(location = 6) out vec4 out_tangent;         // world tangent, w: bitangen
 
 #ifdef MOTION
 // Motion vectors: the instance's record of the world's previous frame.
-layout(set = 0, binding = 8, scalar) readonly buffer PrevInstances { GpuInstance prev_instances[]; };
+#define PREV_INSTANCES_BINDING 8
 // Each pool vertex's position last frame (a posed instance's copy moves with its pose).
 layout(set = 0, binding = 9, scalar) readonly buffer PrevPositions { vec3 prev_positions[]; };
 // Unjittered clip positions now and last frame: the fragment divides each by its w (the
@@ -40,17 +40,18 @@ layout(set = 0, binding = 9, scalar) readonly buffer PrevPositions { vec3 prev_p
 layout(location = 7) out vec4 out_clip;
 layout(location = 8) out vec4 out_prev_clip;
 #endif
+#include "../common/instance_ranges.glsl"
 
 void main() {
     uint id = draw_instance_ids[gl_InstanceIndex];
-    GpuInstance inst = instances[id];
+    GpuInstance inst = instance_record(id);
     out_instance = id;
     vec3 rel = instance_rel_eye(inst, in_position, frame.eye_hi.xyz, frame.eye_lo.xyz);
     gl_Position = frame.view_proj * vec4(rel, 1.0);
 #ifdef MOTION
     // Last frame's position relative to last frame's eye, through last frame's unjittered
     // matrix: neither frame's jitter shows as motion.
-    vec3 prev_rel = instance_rel_eye(prev_instances[id], prev_positions[gl_VertexIndex], frame.prev_eye_hi.xyz,
+    vec3 prev_rel = instance_rel_eye(prev_instance_record(id), prev_positions[gl_VertexIndex], frame.prev_eye_hi.xyz,
                                      frame.prev_eye_lo.xyz);
     out_clip = frame.view_proj_unjittered * vec4(rel, 1.0);
     out_prev_clip = frame.prev_view_proj_unjittered * vec4(prev_rel, 1.0);

@@ -35,7 +35,8 @@ layout(set = 0, binding = 4, rgba16f) uniform writeonly image2D out_color;
 #else
 layout(set = 0, binding = 4, rgba8) uniform writeonly image2D out_color;
 #endif
-layout(set = 0, binding = 5, scalar) readonly buffer Instances { GpuInstance instances[]; };
+#define INSTANCES_BINDING 5
+#include "../common/instance_ranges.glsl"
 layout(set = 0, binding = 6, scalar) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 7, scalar) readonly buffer PoolPositions { vec3 positions[]; };
 layout(set = 0, binding = 10) readonly buffer PoolNormals { uint normals[]; };
@@ -99,7 +100,7 @@ bool plane_hit(vec2 pixel, vec3 p0, vec3 e1, vec3 e2, out vec2 uv) {
 
 // The surface of triangle `prim` of instance `id` seen through `center`, at `depth`.
 Surface rebuild(uint id, uint prim, vec2 center, float depth) {
-    GpuInstance inst = instances[id];
+    GpuInstance inst = instance_record(id);
     uvec2 base = triangle_bases[id];
     vec3 p[3];
     vec3 n[3];

@@ -6,7 +6,8 @@
 layout(location = 0) in vec3 in_position;
 layout(location = 2) in vec2 in_uv;
 
-layout(set = 0, binding = 0, scalar) readonly buffer Instances { GpuInstance instances[]; };
+#define INSTANCES_BINDING 0
+#include "../common/instance_ranges.glsl"
 layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
 layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
 
@@ -18,7 +19,7 @@ layout(location = 2) out vec2 out_uv;
 
 void main() {
     uint id = draw_instance_ids[gl_InstanceIndex];
-    GpuInstance inst = instances[id];
+    GpuInstance inst = instance_record(id);
     vec3 rel = instance_rel_eye(inst, in_position, frame.eye_hi.xyz, frame.eye_lo.xyz);
     gl_Position = frame.view_proj * vec4(rel, 1.0);
     out_instance = id;

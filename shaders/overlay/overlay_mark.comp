@@ -9,6 +9,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "../common/scene.glsl"
 #include "../cull/cull_common.glsl"
+#include "../common/line_dispatch.glsl"
 
 layout(local_size_x = 256) in;
 
@@ -25,7 +26,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 void main() {
-    uint slot = gl_GlobalInvocationID.x;
+    uint slot = line_invocation();
     if (slot >= pc.slot_count) return;
     if (((visible[slot >> 5] >> (slot & 31u)) & 1u) != 0u) return;
     CullRecord r = records[slot];

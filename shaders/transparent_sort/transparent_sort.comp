@@ -14,7 +14,8 @@
 layout(local_size_x = THREADS) in;
 
 layout(set = 0, binding = 0, scalar) readonly buffer Frame { FrameConstants frame; };
-layout(set = 0, binding = 1, scalar) readonly buffer Instances { GpuInstance instances[]; };
+#define INSTANCES_BINDING 1
+#include "../common/instance_ranges.glsl"
 layout(set = 0, binding = 2, scalar) readonly buffer ListCommands { DrawCommand list_commands[]; };
 layout(set = 0, binding = 3, scalar) readonly buffer ListCount { uint list_count[]; };
 layout(set = 0, binding = 4, scalar) readonly buffer ListIds { uint list_ids[]; };
@@ -80,7 +81,7 @@ void main() {
             for (uint i = tid; i < take; i += THREADS) {
                 uint at = dc.first_instance + i;
                 uint id = list == 0u ? list_ids[at] : second_ids[at];
-                vec3 rel = instance_rel_eye(instances[id], vec3(0.0), frame.eye_hi.xyz, frame.eye_lo.xyz);
+                vec3 rel = instance_rel_eye(instance_record(id), vec3(0.0), frame.eye_hi.xyz, frame.eye_lo.xyz);
                 // Farthest first: the complement of a non-negative float's bits sorts descending.
                 pairs[n + i] = uvec2(~floatBitsToUint(dot(rel, rel)), n + i);
                 pairs[pc.keys + n + i] = uvec2(id, c + list * pc.region_commands);

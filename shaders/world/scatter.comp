@@ -12,6 +12,7 @@
 // flagged CULL_HUGE (never culled).
 #extension GL_EXT_scalar_block_layout : require
 #include "../cull/cull_common.glsl"
+#include "../common/line_dispatch.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -42,7 +43,9 @@ struct GroupBounds {
 
 // Instance records are 64 bytes and cull records 32: whole 16-byte words are written, so that
 // a thread's scattered writes take a few vector stores rather than a store per word.
-layout(set = 0, binding = 1) buffer Instances { uvec4 instance_vec[]; };
+#define INSTANCE_WORDS_BINDING 1
+#include "../common/scene.glsl"
+#include "../common/instance_ranges.glsl"
 layout(set = 0, binding = 2) buffer Records { uvec4 record_vec[]; };
 layout(set = 0, binding = 3, scalar) readonly buffer Bounds { GroupBounds group_bounds[]; };
 
@@ -58,29 +61,27 @@ uint half_up(float x) {
 const float HALF_MAX = 65504.0;
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = line_invocation();
     if (i >= pc.count) return;
     vec4 rows[3];
     vec3 lo_t;
 #ifdef MOVES
     uvec4 w[4] = updates[i].words;
     uint slot = w[3].w;
-    uint base = slot * 4u;
     for (uint r = 0u; r < 3u; ++r) {
         rows[r] = uintBitsToFloat(w[r]);
-        instance_vec[base + r] = w[r];
+        set_instance_word(slot, r, w[r]);
     }
     lo_t = uintBitsToFloat(w[3].xyz);
-    uint material_flags = instance_vec[base + 3u].w;
-    instance_vec[base + 3u] = uvec4(w[3].xyz, material_flags);
+    uint material_flags = instance_word(slot, 3u).w;
+    set_instance_word(slot, 3u, uvec4(w[3].xyz, material_flags));
     // A move keeps the slot's draw group and flags.
     uint group = record_vec[slot * 2u].w & 0xFFFFFFu;
 #else
     uint slot = updates[i].slot;
-    uint base = slot * 4u;
     uint words[16] = updates[i].instance;
     for (uint r = 0u; r < 4u; ++r) {
-        instance_vec[base + r] = uvec4(words[r * 4u], words[r * 4u + 1u], words[r * 4u + 2u], words[r * 4u + 3u]);
+        set_instance_word(slot, r, uvec4(words[r * 4u], words[r * 4u + 1u], words[r * 4u + 2u], words[r * 4u + 3u]));
     }
     for (uint r = 0u; r < 3u; ++r) {
         rows[r] = uintBitsToFloat(uvec4(words[r * 4u], words[r * 4u + 1u], words[r * 4u + 2u], words[r * 4u + 3u]));

@@ -2,6 +2,9 @@
 // A changing world's user data updates (src/render/renderer/world_sync.rs): each thread writes
 // one slot's words. An entry is the slot, then its WORDS words; the list holds each slot once,
 // so no two threads write the same words.
+#extension GL_GOOGLE_include_directive : require
+#include "../common/line_dispatch.glsl"
+
 layout(local_size_x = 64) in;
 
 layout(std430, binding = 0) readonly buffer Updates { uint updates[]; };
@@ -13,7 +16,7 @@ layout(push_constant) uniform Push {
 };
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = line_invocation();
     if (i >= count) {
         return;
     }

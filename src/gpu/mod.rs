@@ -10,6 +10,7 @@ pub mod edits;
 pub mod error;
 pub mod features;
 pub mod image;
+pub mod line_dispatch;
 pub mod memory;
 pub mod pipeline;
 pub mod reflect;

@@ -14,6 +14,8 @@ use std::sync::{Arc, Mutex, Weak};
 pub enum Bind {
     /// A storage or uniform buffer (whole range).
     Buffer(u32, vk::Buffer),
+    /// A range of a storage or uniform buffer: binding, buffer, offset, bytes.
+    BufferRange(u32, vk::Buffer, u64, u64),
     /// A storage image view in `GENERAL` layout.
     StorageImage(u32, vk::ImageView),
     /// A sampled image with its sampler, in the given layout.
@@ -407,7 +409,11 @@ impl Pipeline {
             .copied()
             .filter(|b| {
                 let n = match *b {
-                    Bind::Buffer(n, _) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) | Bind::SampledAt(n, ..) => n,
+                    Bind::Buffer(n, _)
+                    | Bind::BufferRange(n, ..)
+                    | Bind::StorageImage(n, _)
+                    | Bind::Sampled(n, ..)
+                    | Bind::SampledAt(n, ..) => n,
                 };
                 self.0.interface.bindings.contains_key(&n)
             })
@@ -428,11 +434,13 @@ impl Pipeline {
         let mut groups: Vec<Group> = Vec::with_capacity(binds.len());
         for b in binds {
             let (binding, element) = match *b {
-                Bind::Buffer(n, _) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) => (n, 0),
+                Bind::Buffer(n, _) | Bind::BufferRange(n, ..) | Bind::StorageImage(n, _) | Bind::Sampled(n, ..) => {
+                    (n, 0)
+                }
                 Bind::SampledAt(n, element, ..) => (n, element),
             };
             let image = match *b {
-                Bind::Buffer(..) => None,
+                Bind::Buffer(..) | Bind::BufferRange(..) => None,
                 Bind::StorageImage(_, view) => {
                     Some(vk::DescriptorImageInfo::default().image_view(view).image_layout(vk::ImageLayout::GENERAL))
                 }
@@ -450,13 +458,16 @@ impl Pipeline {
                 }
             }
             let fallback = match b {
-                Bind::Buffer(..) => vk::DescriptorType::STORAGE_BUFFER,
+                Bind::Buffer(..) | Bind::BufferRange(..) => vk::DescriptorType::STORAGE_BUFFER,
                 Bind::StorageImage(..) => vk::DescriptorType::STORAGE_IMAGE,
                 Bind::Sampled(..) | Bind::SampledAt(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             };
             let buffers = match *b {
                 Bind::Buffer(_, buffer) => {
                     vec![vk::DescriptorBufferInfo::default().buffer(buffer).range(vk::WHOLE_SIZE)]
+                }
+                Bind::BufferRange(_, buffer, offset, range) => {
+                    vec![vk::DescriptorBufferInfo::default().buffer(buffer).offset(offset).range(range)]
                 }
                 _ => Vec::new(),
             };

@@ -181,13 +181,13 @@ impl VisibilityOracle {
         );
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let mut binds = vec![
-            Bind::Buffer(0, scene.instances.handle()),
             Bind::Buffer(1, scene.draw_instance_ids.handle()),
             Bind::Buffer(2, constants.handle()),
             Bind::Buffer(3, scene.materials.handle()),
             Bind::Sampled(5, self.depth.sampled_view(), self.sampler.handle(), read),
             Bind::Buffer(6, seen.handle()),
         ];
+        binds.extend(scene.instance_binds(0));
         binds.extend_from_slice(scene.textures.bindings());
         let blended = FaceCull::Blended as usize;
         let draws = TransparentDraws {
@@ -253,11 +253,11 @@ impl VisibilityOracle {
                 cmd_set_full_viewport(device, cmd, self.extent);
                 self.draw.bind(cmd);
                 let mut binds = vec![
-                    Bind::Buffer(0, scene.instances.handle()),
                     Bind::Buffer(1, scene.draw_instance_ids.handle()),
                     Bind::Buffer(2, constants.handle()),
                     Bind::Buffer(3, scene.materials.handle()),
                 ];
+                binds.extend(scene.instance_binds(0));
                 binds.extend_from_slice(scene.textures.bindings());
                 self.draw.push_bindings(cmd, &binds);
                 scene.vertices.bind(device, cmd);

@@ -238,7 +238,6 @@ impl PassNode for ClusterCullPass {
         let capacity = region_capacity(cluster_commands);
         let mut binds = vec![
             Bind::Buffer(0, inputs.constants().handle()),
-            Bind::Buffer(1, scene.instances.handle()),
             Bind::Buffer(2, commands.handle()),
             Bind::Buffer(3, ids.handle()),
             Bind::Buffer(4, scene.clusters.handle()),
@@ -247,6 +246,7 @@ impl PassNode for ClusterCullPass {
             Bind::Buffer(7, cluster_count.handle()),
             Bind::Buffer(8, stats.handle()),
         ];
+        binds.extend(scene.instance_binds(1));
         if let Some(hiz) = slots.image("hiz") {
             binds.push(Bind::Sampled(9, hiz.view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL));
         }

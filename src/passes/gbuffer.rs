@@ -263,11 +263,11 @@ pub fn record_geometry(
         device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
         for list in lists {
             let mut binds = vec![
-                Bind::Buffer(0, scene.instances.handle()),
                 Bind::Buffer(1, list.instance_ids.handle()),
                 Bind::Buffer(2, frame.handle()),
                 Bind::Buffer(3, scene.materials.handle()),
             ];
+            binds.extend(scene.instance_binds(0));
             binds.extend_from_slice(scene.textures.bindings());
             binds.extend_from_slice(extra);
             pipeline.push_bindings(cmd, &binds);
@@ -513,8 +513,8 @@ impl PassNode for GbufferPass {
                 vec![list]
             }
         };
-        let previous =
-            [Bind::Buffer(8, scene.previous_instances().handle()), Bind::Buffer(9, scene.prev_positions.handle())];
+        let mut previous = scene.previous_instance_binds(8).to_vec();
+        previous.push(Bind::Buffer(9, scene.prev_positions.handle()));
         let extra: &[Bind] = if self.motion { &previous } else { &[] };
         record_geometry(
             rec.ctx,

@@ -82,7 +82,6 @@ impl PassNode for LightingVisibilityPass {
             Bind::Buffer(2, inputs.constants().handle()),
             Bind::Buffer(3, inputs.lights().handle()),
             Bind::StorageImage(4, output.view()),
-            Bind::Buffer(5, scene.instances.handle()),
             Bind::Buffer(6, scene.materials.handle()),
             Bind::Buffer(7, scene.vertices.positions.handle()),
             Bind::Buffer(8, scene.indices.handle()),
@@ -90,6 +89,7 @@ impl PassNode for LightingVisibilityPass {
             Bind::Buffer(10, scene.vertices.normals.handle()),
             Bind::Buffer(11, scene.vertices.surface.handle()),
         ];
+        binds.extend(scene.instance_binds(5));
         binds.extend_from_slice(scene.textures.bindings());
         let triangle_bits = if self.packed_ids { packed_id_bits(&self.name, scene)? } else { 0 };
         let push = [bytemuck::bytes_of(&self.settings), &triangle_bits.to_ne_bytes()].concat();

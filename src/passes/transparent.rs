@@ -72,13 +72,13 @@ impl PassNode for TransparentPass {
             .load_op(vk::AttachmentLoadOp::LOAD)
             .store_op(vk::AttachmentStoreOp::STORE)];
         let mut binds = vec![
-            Bind::Buffer(0, scene.instances.handle()),
             Bind::Buffer(1, list.instance_ids.handle()),
             Bind::Buffer(2, inputs.constants().handle()),
             Bind::Buffer(3, scene.materials.handle()),
             Bind::Buffer(4, inputs.lights().handle()),
             Bind::Sampled(5, depth.sampled_view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
         ];
+        binds.extend(scene.instance_binds(0));
         binds.extend(inputs.shadow_maps().binds());
         binds.extend_from_slice(scene.textures.bindings());
         let stride = std::mem::size_of::<DrawIndexedIndirect>() as u64;

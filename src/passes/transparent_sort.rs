@@ -119,9 +119,8 @@ impl PassNode for TransparentSortPass {
             lists: if second.is_some() { 2 } else { 1 },
         };
         let second = second.as_ref().unwrap_or(&source);
-        let binds = [
+        let mut binds = vec![
             Bind::Buffer(0, inputs.constants().handle()),
-            Bind::Buffer(1, scene.instances.handle()),
             Bind::Buffer(2, source.commands.handle()),
             Bind::Buffer(3, source.count.handle()),
             Bind::Buffer(4, source.instance_ids.handle()),
@@ -133,6 +132,7 @@ impl PassNode for TransparentSortPass {
             Bind::Buffer(10, second.count.handle()),
             Bind::Buffer(11, second.instance_ids.handle()),
         ];
+        binds.extend(scene.instance_binds(1));
         // One workgroup: the sort synchronizes its steps with workgroup barriers.
         self.pipeline.dispatch_over(rec.cmd, &binds, bytemuck::bytes_of(&push), vk::Extent2D { width: 1, height: 1 });
         Ok(())

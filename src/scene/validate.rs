@@ -7,8 +7,10 @@ use super::{Instance, Scene};
 
 /// Material indices the GPU instance record can hold (24 bits).
 pub const MAX_MATERIALS: usize = 1 << 24;
-/// The most instances a scene may hold: what the cull pass's prefix sums count (24 bits).
-pub const MAX_INSTANCES: usize = (1 << 24) - 1;
+/// The most instances a scene may hold: draws find an instance through `gl_InstanceIndex`, a
+/// signed 32-bit integer. A device may allow fewer: one storage buffer binding must hold the
+/// instance records ([`crate::passes::shared::scene_buffers::most_instances`]).
+pub const MAX_INSTANCES: usize = (1 << 31) - 1;
 /// The most vertices of a scene's vertex pool: 2 GiB of 32-byte vertices, so that the pool
 /// stays one storage buffer within every target device's `maxStorageBufferRange`.
 pub const MAX_VERTICES: usize = 1 << 26;

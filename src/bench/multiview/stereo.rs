@@ -208,14 +208,9 @@ impl StereoDraws {
             pipeline.push_constants(cmd, &eye);
             scene.vertices.bind(device, cmd);
             device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
-            pipeline.push_bindings(
-                cmd,
-                &[
-                    Bind::Buffer(0, scene.instances.handle()),
-                    Bind::Buffer(1, list.instance_ids.handle()),
-                    Bind::Buffer(2, self.eyes.handle()),
-                ],
-            );
+            let mut binds = vec![Bind::Buffer(1, list.instance_ids.handle()), Bind::Buffer(2, self.eyes.handle())];
+            binds.extend(scene.instance_binds(0));
+            pipeline.push_bindings(cmd, &binds);
             list.record(device, cmd);
             device.cmd_end_rendering(cmd);
         }

@@ -44,6 +44,7 @@ use crate::graph::{
     Choice, CounterEntry, Counters, Creates, FormatRule, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos,
     SettingDecl, Stages, Usage,
 };
+use crate::passes::shared::instance_ranges::most_instances;
 use crate::passes::shared::SceneInputs;
 use ash::vk;
 pub use counters::{CullCounters, CullPassStats};
@@ -483,10 +484,11 @@ impl PassNode for InstanceCullPass {
         let scene = &frame.scene;
         let slots = scene.instance_count;
         let groups = scene.regions.groups();
-        if slots as usize > crate::passes::shared::cull_data::MAX_CULL_SLOTS {
+        let most = most_instances(ctx.caps().limits.max_storage_buffer_range as u64);
+        if slots as u64 > most {
             return Err(crate::Error::Invalid(format!(
-                "instance_cull handles at most {} instances per pass; the scene has {slots}",
-                crate::passes::shared::cull_data::MAX_CULL_SLOTS
+                "instance_cull culls at most {most} instances on this device (its cull records are bound whole, \
+                 maxStorageBufferRange); the scene has {slots}"
             )));
         }
         let need = |slot: &str| rec.slots.required_buffer(slot);
@@ -592,7 +594,7 @@ impl PassNode for InstanceCullPass {
         self.test.push_bindings(cmd, &test_binds);
         self.test.push_constants(cmd, &push);
         // SAFETY: as above.
-        unsafe { device.cmd_dispatch(cmd, blocks, 1, 1) };
+        unsafe { crate::gpu::line_dispatch::cmd_dispatch_line(device, cmd, &ctx.caps().limits, blocks) };
         if self.compact.is_some() {
             step_barrier(ctx, cmd);
         }
@@ -637,7 +639,7 @@ impl PassNode for InstanceCullPass {
             compact.push_constants(cmd, &[slots, groups, superblocks, first0, first1, first2, first3]);
             // Workgroup 0 writes the commands, workgroup 1 + b places block b.
             // SAFETY: as above.
-            unsafe { device.cmd_dispatch(cmd, blocks + 1, 1, 1) };
+            unsafe { crate::gpu::line_dispatch::cmd_dispatch_line(device, cmd, &ctx.caps().limits, blocks + 1) };
         }
         Ok(())
     }
@@ -711,11 +713,16 @@ impl PassKind for InstanceCullKind {
             }
         }
         let instances = check.quantities.and_then(|q| q.get("instances")).unwrap_or(0);
-        let most = crate::passes::shared::cull_data::MAX_CULL_SLOTS as u64;
-        if instances > most {
-            let message =
-                format!("pass '{}' ({KIND}) culls at most {most} instances; the scene has {instances}", pass.name);
-            out.push((pass.pos, message));
+        if let Some(limits) = check.limits {
+            let most = most_instances(limits.max_storage_buffer_range);
+            if instances > most {
+                let message = format!(
+                    "pass '{}' ({KIND}) culls at most {most} instances on {} (its cull records are bound whole, \
+                     maxStorageBufferRange); the scene has {instances}",
+                    pass.name, limits.device
+                );
+                out.push((pass.pos, message));
+            }
         }
         if check.limits.is_some_and(|l| !l.has("subgroup_compute")) {
             let message = format!(

@@ -256,7 +256,7 @@ impl InstanceCullPass {
             together.test.push_bindings(cmd, &test_binds);
             together.test.push_constants(cmd, &push);
             // SAFETY: cmd recording with the pipeline bound.
-            unsafe { device.cmd_dispatch(cmd, blocks, 1, 1) };
+            unsafe { crate::gpu::line_dispatch::cmd_dispatch_line(device, cmd, &ctx.caps().limits, blocks) };
             step_barrier(ctx, cmd);
             contexts[0].step("compact");
             together.compact.bind(cmd);
@@ -275,7 +275,7 @@ impl InstanceCullPass {
             // Workgroup v < n writes view v's commands, workgroup n + b places block b of every
             // view with survivors there.
             // SAFETY: as above.
-            unsafe { device.cmd_dispatch(cmd, n as u32 + blocks, 1, 1) };
+            unsafe { crate::gpu::line_dispatch::cmd_dispatch_line(device, cmd, &ctx.caps().limits, n as u32 + blocks) };
         }
         Ok(())
     }

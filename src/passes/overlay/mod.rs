@@ -330,7 +330,14 @@ impl PassNode for OverlayPass {
             );
             mark.push_constants(cmd, &[scene.instance_count, extent.width, extent.height]);
             // SAFETY: cmd recording with the pipeline bound and every binding pushed.
-            unsafe { device.cmd_dispatch(cmd, scene.instance_count.div_ceil(256).max(1), 1, 1) };
+            unsafe {
+                crate::gpu::line_dispatch::cmd_dispatch_line(
+                    &device,
+                    cmd,
+                    &ctx.caps().limits,
+                    scene.instance_count.div_ceil(256),
+                )
+            };
             cmd_barriers(&device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::COMPUTE_WRITE)], &[]);
             scan.bind(cmd);
             scan.push_bindings(cmd, &[Bind::Buffer(0, coverage)]);

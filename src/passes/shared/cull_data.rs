@@ -36,9 +36,6 @@ pub struct GpuCullRecord {
 /// Set on a record whose bound does not fit half floats: the GPU keeps it without testing.
 pub const CULL_HUGE: u32 = 0x8000_0000;
 
-/// The most slots a cull pass handles (its prefix sums count survivors in 24 bits).
-pub const MAX_CULL_SLOTS: usize = (1 << 24) - 1;
-
 impl GpuCullRecord {
     /// Packs a bound: world center (hi + lo), radius, half extents.
     pub fn new(hi: Vec3, lo: Vec3, radius: f32, half: Vec3, group: u32, flags: u32) -> Self {

@@ -9,6 +9,7 @@
 pub mod cull_data;
 pub mod face_cull;
 pub mod gpu_types;
+pub mod instance_ranges;
 pub(crate) mod lazy_pipeline;
 pub mod scene_buffers;
 pub mod scene_growth;

@@ -3,9 +3,10 @@
 
 use super::face_cull::{self, DrawRegions, FaceCull, FACE_CULL_REGIONS};
 use super::gpu_types::{DrawIndexedIndirect, GpuInstance, GpuMaterial};
+use super::instance_ranges;
 use super::textures::GpuTextures;
 use super::vertex_streams::VertexStreams;
-use crate::gpu::{Buffer, GpuContext, UploadBatch};
+use crate::gpu::{Bind, Buffer, GpuContext, UploadBatch};
 use crate::scene::Scene;
 use ash::vk;
 use std::sync::Arc;
@@ -232,6 +233,17 @@ impl GpuScene {
         self.prev_instances.as_deref().unwrap_or(&self.instances)
     }
 
+    /// The binds of the instance records for a shader that names their first range `binding`
+    /// (`shaders/common/instance_ranges.glsl`).
+    pub fn instance_binds(&self, binding: u32) -> [Bind; instance_ranges::RANGES as usize] {
+        instance_ranges::binds(&self.instances, binding, instance_ranges::INSTANCE_RANGE_BINDING)
+    }
+
+    /// As [`GpuScene::instance_binds`], the previous records ([`GpuScene::previous_instances`]).
+    pub fn previous_instance_binds(&self, binding: u32) -> [Bind; instance_ranges::RANGES as usize] {
+        instance_ranges::binds(self.previous_instances(), binding, instance_ranges::PREV_INSTANCE_RANGE_BINDING)
+    }
+
     /// Makes [`GpuScene::prev_instances`], a buffer the size of [`GpuScene::instances`] with
     /// undefined contents: its owner copies the current records into it before any frame reads
     /// it (a changing world's renderer does at its next frame).
@@ -308,6 +320,7 @@ impl GpuScene {
     ) -> crate::Result<Self> {
         profiling::scope!("cullgraph::upload_scene");
         check_index_range(scene, ctx.caps().limits.max_draw_indexed_index_value)?;
+        super::instance_ranges::check_instance_count(scene.instances.len() as u64, &ctx.caps().limits)?;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let instances: Vec<GpuInstance> = scene.instances.iter().map(GpuInstance::new).collect();
         let textures = match textures {

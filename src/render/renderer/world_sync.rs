@@ -46,6 +46,7 @@ use crate::gpu::{
 };
 use crate::graph::{FrameInputs, Growth, KindRegistry, Quantities, FRAMES_IN_FLIGHT};
 use crate::passes::shared::gpu_types::GpuInstance;
+use crate::passes::shared::instance_ranges;
 use crate::passes::shared::slot_layout::{group_key, SlotLayout};
 use crate::passes::shared::{GpuScene, LaidOutScene, SceneInputs};
 use crate::render::{GraphSpec, RenderSettings, ViewId};
@@ -337,17 +338,20 @@ impl WorldMirror {
             let name = format!("previous record slots {k}");
             let segment = fill_segment(ctx, &mut self.segments[k][3], &name, bytemuck::cast_slice(&slots))?;
             self.keep_previous.bind(cmd);
-            self.keep_previous.push_bindings(
-                cmd,
-                &[
-                    Bind::Buffer(0, segment.handle()),
-                    Bind::Buffer(1, scene.instances.handle()),
-                    Bind::Buffer(2, previous.handle()),
-                ],
-            );
+            let mut binds = vec![Bind::Buffer(0, segment.handle())];
+            binds.extend(scene.instance_binds(1));
+            binds.extend(instance_ranges::binds(previous, 2, instance_ranges::PREV_INSTANCE_RANGE_BINDING));
+            self.keep_previous.push_bindings(cmd, &binds);
             self.keep_previous.push_constants(cmd, &[slots.len() as u32]);
             // SAFETY: cmd recording with the keep_previous pipeline bound.
-            unsafe { device.cmd_dispatch(cmd, (slots.len() as u32).div_ceil(64), 1, 1) };
+            unsafe {
+                crate::gpu::line_dispatch::cmd_dispatch_line(
+                    device,
+                    cmd,
+                    &ctx.caps().limits,
+                    (slots.len() as u32).div_ceil(64),
+                )
+            };
             cmd_barriers(device, cmd, &[memory_barrier(compute_rw, compute_rw)], &[]);
         }
         if let Some(deformer) = self.deformer.as_mut().filter(|_| deforms) {
@@ -363,7 +367,9 @@ impl WorldMirror {
             pipeline.push_bindings(cmd, &[Bind::Buffer(0, segment.handle()), Bind::Buffer(1, user_data.handle())]);
             pipeline.push_constants(cmd, &[count, self.user_words]);
             // SAFETY: cmd recording with the user data scatter bound.
-            unsafe { device.cmd_dispatch(cmd, count.div_ceil(64), 1, 1) };
+            unsafe {
+                crate::gpu::line_dispatch::cmd_dispatch_line(device, cmd, &ctx.caps().limits, count.div_ceil(64))
+            };
         }
         // Whole records first: a move queued for the same slot was folded into its record.
         let lists: [(&[u8], usize); 2] = [
@@ -377,18 +383,23 @@ impl WorldMirror {
             let segment = fill_segment(ctx, &mut self.segments[k][list], &format!("world updates {k}.{list}"), bytes)?;
             let pipeline = &self.scatter[list];
             pipeline.bind(cmd);
-            pipeline.push_bindings(
-                cmd,
-                &[
-                    Bind::Buffer(0, segment.handle()),
-                    Bind::Buffer(1, scene.instances.handle()),
-                    Bind::Buffer(2, scene.cull_records.handle()),
-                    Bind::Buffer(3, scene.group_bounds.handle()),
-                ],
-            );
+            let mut binds = vec![
+                Bind::Buffer(0, segment.handle()),
+                Bind::Buffer(2, scene.cull_records.handle()),
+                Bind::Buffer(3, scene.group_bounds.handle()),
+            ];
+            binds.extend(scene.instance_binds(1));
+            pipeline.push_bindings(cmd, &binds);
             pipeline.push_constants(cmd, &[count as u32]);
             // SAFETY: cmd recording with the scatter pipeline bound.
-            unsafe { device.cmd_dispatch(cmd, (count as u32).div_ceil(64), 1, 1) };
+            unsafe {
+                crate::gpu::line_dispatch::cmd_dispatch_line(
+                    device,
+                    cmd,
+                    &ctx.caps().limits,
+                    (count as u32).div_ceil(64),
+                )
+            };
             // The two lists touch different slots, but the barrier keeps the tools sure of it.
             cmd_barriers(device, cmd, &[memory_barrier(compute_rw, compute_rw)], &[]);
         }
