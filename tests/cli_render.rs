@@ -39,8 +39,8 @@ fn bad_flags_and_files_are_reported_clearly() {
 /// A scene larger than the machine or the device holds is refused before it is generated, with
 /// the memory it needs and the flag that asked for it: here under an 8 GB address-space limit,
 /// like a smaller machine (lavapipe also offers only a 2 GiB heap, which 16 million instances
-/// exceed anywhere). Beyond 2^24 - 1 instances, what instance ids can hold, the flag itself is
-/// refused.
+/// exceed anywhere). Beyond 2^31 - 1 instances, what a draw's instance index can hold, the flag
+/// itself is refused.
 #[test]
 fn scene_sizes_beyond_memory_are_refused_with_the_memory_they_need() {
     let tmp = tempfile::tempdir().unwrap();
@@ -71,9 +71,9 @@ fn scene_sizes_beyond_memory_are_refused_with_the_memory_they_need() {
     assert!(err.contains("error: --size 1024x1024 with --reference 16 needs about "), "{err}");
     assert!(!out.exists());
     // Beyond the documented maximum, the flag's parser refuses at once.
-    let (code, _, err) = run(&["render", "--instances", "16777216", "--out", out.to_str().unwrap()]);
+    let (code, _, err) = run(&["render", "--instances", "2147483648", "--out", out.to_str().unwrap()]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("'--instances <N>'") && err.contains("1..=16777215"), "{err}");
+    assert!(err.contains("'--instances <N>'") && err.contains("1..=2147483647"), "{err}");
 }
 
 /// Durations are finite and at most a day: anything else is refused naming the flag, instead of

@@ -125,18 +125,18 @@ fn special_buffer(dir: &Path, name: &str, fifo: bool) -> Option<Hostile> {
     Some(Hostile { path, error })
 }
 
-/// 20,000 nodes placing a mesh of 1,000 primitives: 2x10^7 instances from a small file.
+/// 22,000 nodes placing a mesh of 100,000 primitives: 2.2x10^9 instances from a 4 MB file.
 fn many_instances(dir: &Path) -> Hostile {
     let mut doc = embedded_triangle();
-    doc["meshes"][0] = json!({"name": "many", "primitives": vec![json!({"attributes": {"POSITION": 0}}); 1000]});
-    doc["nodes"] = json!(vec![json!({"mesh": 0}); 20_000]);
-    doc["scenes"][0]["nodes"] = json!((0..20_000).collect::<Vec<u32>>());
+    doc["meshes"][0] = json!({"name": "many", "primitives": vec![json!({"attributes": {"POSITION": 0}}); 100_000]});
+    doc["nodes"] = json!(vec![json!({"mesh": 0}); 22_000]);
+    doc["scenes"][0]["nodes"] = json!((0..22_000).collect::<Vec<u32>>());
     let path = write(dir, "instances.gltf", &doc);
-    let last = MAX_INSTANCES / 1000; // the node that takes the scene past the limit
+    let last = MAX_INSTANCES / 100_000; // the node that takes the scene past the limit
     let error = format!(
-        "instances.gltf: node #{last}: the 1000 primitives of its mesh 'many' (#0) take the scene past {MAX_INSTANCES} \
-         instances, the most a scene may hold ({} placed before it)",
-        last * 1000
+        "instances.gltf: node #{last}: the 100000 primitives of its mesh 'many' (#0) take the scene past \
+         {MAX_INSTANCES} instances, the most a scene may hold ({} placed before it)",
+        last * 100_000
     );
     Hostile { path, error }
 }

@@ -250,7 +250,7 @@ fn field_supports_many_kinds() {
 fn absurd_parameters_are_refused_by_name() {
     let cases: [(&str, LoadOptions, &str); 10] = [
         ("city", options(Some(0), None, 1), "instances = 0"),
-        ("city", options(Some(procedural::MAX_INSTANCES + 1), None, 1), "instances = 16777216"),
+        ("city", options(Some(procedural::MAX_INSTANCES + 1), None, 1), "instances = 2147483648"),
         ("field", options(Some(0), None, 1), "instances = 0"),
         ("field", options(None, Some(0), 1), "kinds = 0"),
         ("field", options(None, Some(100_001), 1), "kinds = 100001"),

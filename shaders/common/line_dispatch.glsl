@@ -5,7 +5,9 @@
 
 uint line_workgroup() { return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x; }
 
-// One invocation per item in a line of workgroups of gl_WorkGroupSize.x invocations.
-uint line_invocation() { return line_workgroup() * gl_WorkGroupSize.x + gl_LocalInvocationIndex; }
+// One invocation per item in a line of workgroups of gl_WorkGroupSize.x invocations. A macro,
+// so that gl_WorkGroupSize is read where it is used: in a function defined before the shader's
+// local_size declaration, it would still be (1, 1, 1).
+#define line_invocation() (line_workgroup() * gl_WorkGroupSize.x + gl_LocalInvocationIndex)
 
 #endif
