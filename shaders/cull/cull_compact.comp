@@ -1,7 +1,8 @@
 #version 460
 // Instance cull, step 2 of 2. Workgroup 0 writes the commands; every other workgroup places the
-// survivors of one block. Both read only what the test step finished writing, so neither waits
-// for the other (Vulkan does not promise that a waiting workgroup lets another make progress).
+// survivors of its share of the blocks (MULTI_VIEW: of one block, every view's). All read only
+// what the test step finished writing, so none waits for another (Vulkan does not promise that
+// a waiting workgroup lets another make progress).
 //
 // Survivors are compacted in slot order: a survivor's position is the number of survivors in
 // slots before it (superblock counts before its superblock + block counts before its block in
@@ -65,6 +66,8 @@ layout(push_constant) uniform Push {
     uint region_first[FACE_CULL_REGIONS];  // first group of each face cull's region
 #ifdef MULTI_VIEW
     uint view_count;
+#else
+    uint placers;                          // workgroups that place blocks (all but workgroup 0)
 #endif
 } pc;
 
@@ -444,6 +447,46 @@ void write_commands() {
 #endif
 }
 
+#ifndef MULTI_VIEW
+// The blocks of this placer's batch that have something to place, and how many.
+shared uint sh_batch[THREADS];
+shared uint sh_batch_count;
+
+// Places the blocks of placer `placer` (one of pc.placers): blocks placer, placer + placers,
+// placer + 2 placers..., THREADS at a time. Each invocation reads one block's counts, so a batch
+// costs one memory round trip however few of its blocks hold survivors (most blocks of a large
+// scene hold none), and only those are placed; the interleaving spreads the blocks that do
+// over the placers. Fewer workgroups than blocks, since a workgroup per block costs more to
+// launch than most blocks cost to read.
+void place_blocks(uint placer) {
+    uint lane = gl_LocalInvocationIndex;
+    uint blocks = cull_blocks(pc.slot_count);
+    uint run = scratch[SCRATCH_PLACE_RUN];
+    uint mine = placer < blocks ? (blocks - placer + pc.placers - 1u) / pc.placers : 0u;
+    for (uint first = 0u; first < mine; first += THREADS) {
+        if (lane == 0u) sh_batch_count = 0u;
+        barrier();
+        uint block = placer + (first + lane) * pc.placers;
+        if (first + lane < mine) {
+            uint work = scratch[scratch_block(pc.superblocks, block)];
+#ifdef VISIBLE_OUT
+            work |= scratch[scratch_visible_block(pc.superblocks, pc.slot_count, block)];
+#endif
+            if (work != 0u) sh_batch[atomicAdd(sh_batch_count, 1u)] = block;
+        }
+        barrier();
+        uint count = sh_batch_count;
+        for (uint i = 0u; i < count; ++i) {
+            place_block(sh_batch[i], run);
+            // The next block reuses the shared words.
+            barrier();
+        }
+        // Every invocation has read the count before the next batch zeroes it.
+        barrier();
+    }
+}
+#endif
+
 #ifdef MULTI_VIEW
 // Which views have survivors or visible slots in the block.
 shared uint sh_views_with_work;
@@ -490,7 +533,8 @@ void main() {
         write_commands();
         return;
     }
-    if (w - 1u >= cull_blocks(pc.slot_count)) return;
-    place_block(w - 1u, scratch[SCRATCH_PLACE_RUN]);
+    // Past the last placer of the line (the whole workgroup, before any barrier).
+    if (w - 1u >= pc.placers) return;
+    place_blocks(w - 1u);
 #endif
 }

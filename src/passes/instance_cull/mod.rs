@@ -434,6 +434,12 @@ fn blocks_of(slots: u32) -> u32 {
     slots.div_ceil(CULL_BLOCK).max(1)
 }
 
+/// Workgroups that place the survivors of a single view's blocks (`place_blocks` in
+/// `cull_compact.comp`), each every `COMPACT_PLACERS`-th block: enough to spread the blocks that
+/// hold survivors, few enough that the launch does not cost more than reading the blocks'
+/// counts (a workgroup per block took 0.26 ms at 10^8 instances on an H200).
+const COMPACT_PLACERS: u32 = 2048;
+
 /// Blocks per superblock (`CULL_SUPERBLOCK` in `cull_common.glsl`).
 pub(crate) const CULL_SUPERBLOCK: u32 = 64;
 
@@ -636,10 +642,12 @@ impl PassNode for InstanceCullPass {
             }
             compact.push_bindings(cmd, &compact_binds);
             let [first0, first1, first2, first3] = scene.regions.first;
-            compact.push_constants(cmd, &[slots, groups, superblocks, first0, first1, first2, first3]);
-            // Workgroup 0 writes the commands, workgroup 1 + b places block b.
+            let placers = blocks.min(COMPACT_PLACERS);
+            compact.push_constants(cmd, &[slots, groups, superblocks, first0, first1, first2, first3, placers]);
+            // Workgroup 0 writes the commands, workgroup 1 + p places every placers-th block from
+            // block p on.
             // SAFETY: as above.
-            unsafe { crate::gpu::line_dispatch::cmd_dispatch_line(device, cmd, &ctx.caps().limits, blocks + 1) };
+            unsafe { crate::gpu::line_dispatch::cmd_dispatch_line(device, cmd, &ctx.caps().limits, placers + 1) };
         }
         Ok(())
     }
