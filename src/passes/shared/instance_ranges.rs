@@ -75,4 +75,13 @@ mod tests {
         // The Vulkan minimum: the records in one binding.
         assert_eq!(most_instances(1 << 27), (1 << 27) / 64);
     }
+
+    #[test]
+    fn more_instances_than_the_bindings_address_are_refused_naming_the_limit() {
+        let limits = vk::PhysicalDeviceLimits { max_storage_buffer_range: 1 << 27, ..Default::default() };
+        assert!(check_instance_count(2_097_152, &limits).is_ok());
+        let err = check_instance_count(2_097_153, &limits).unwrap_err().to_string();
+        assert!(err.contains("2097153 instances") && err.contains("at most 2097152"), "{err}");
+        assert!(err.contains("maxStorageBufferRange"), "{err}");
+    }
 }

@@ -71,6 +71,7 @@ impl GpuScene {
             Ok(new)
         };
         super::scene_buffers::check_index_range(scene, ctx.caps().limits.max_draw_indexed_index_value)?;
+        super::instance_ranges::check_instance_count(scene.instances.len() as u64, &ctx.caps().limits)?;
         let tables = meshes_changed.then(|| cluster_tables(scene));
         let slots = scene.instances.len() as u64;
         let size_of = |n: u64, one: usize| n * one as u64;
