@@ -25,16 +25,19 @@ const RECORD_BYTES: u64 = size_of::<GpuInstance>() as u64;
 const RANGE_BYTES: u64 = RANGE_RECORDS * RECORD_BYTES;
 
 /// The binds of `records` (instance records, or previous ones) for a shader that names range 0
-/// `binding` and range 1 `range_binding`. A range past the buffer's end repeats the first
-/// (never read: no instance id reaches it).
-pub fn binds(records: &Buffer, binding: u32, range_binding: u32) -> [Bind; RANGES as usize] {
+/// `binding` and range 1 `range_binding`, each at most `max_range` bytes (the device's
+/// `maxStorageBufferRange`; a buffer with room to grow may be larger, but no record past
+/// [`most_instances`] is read). A range past the buffer's end repeats the first (never read:
+/// no instance id reaches it).
+pub fn binds(records: &Buffer, binding: u32, range_binding: u32, max_range: u64) -> [Bind; RANGES as usize] {
     let size = records.size();
+    let widest = RANGE_BYTES.min(max_range);
     std::array::from_fn(|k| {
         let number = if k == 0 { binding } else { range_binding };
         let offset = k as u64 * RANGE_BYTES;
         match offset < size {
-            true => Bind::BufferRange(number, records.handle(), offset, (size - offset).min(RANGE_BYTES)),
-            false => Bind::BufferRange(number, records.handle(), 0, size.min(RANGE_BYTES)),
+            true => Bind::BufferRange(number, records.handle(), offset, (size - offset).min(widest)),
+            false => Bind::BufferRange(number, records.handle(), 0, size.min(widest)),
         }
     })
 }

@@ -72,6 +72,9 @@ pub struct GpuScene {
     pub user_words: u32,
     /// Number of instances.
     pub instance_count: u32,
+    /// The device's `maxStorageBufferRange`: the instance records' ranges are bound no wider,
+    /// though their buffers may be, with room to grow ([`GpuScene::instance_binds`]).
+    pub binding_range: u64,
     /// Triangles over all instances.
     pub triangles: u64,
     /// Triangles of the largest mesh (how many bits a triangle id needs).
@@ -236,12 +239,13 @@ impl GpuScene {
     /// The binds of the instance records for a shader that names their first range `binding`
     /// (`shaders/common/instance_ranges.glsl`).
     pub fn instance_binds(&self, binding: u32) -> [Bind; instance_ranges::RANGES as usize] {
-        instance_ranges::binds(&self.instances, binding, instance_ranges::INSTANCE_RANGE_BINDING)
+        instance_ranges::binds(&self.instances, binding, instance_ranges::INSTANCE_RANGE_BINDING, self.binding_range)
     }
 
     /// As [`GpuScene::instance_binds`], the previous records ([`GpuScene::previous_instances`]).
     pub fn previous_instance_binds(&self, binding: u32) -> [Bind; instance_ranges::RANGES as usize] {
-        instance_ranges::binds(self.previous_instances(), binding, instance_ranges::PREV_INSTANCE_RANGE_BINDING)
+        let previous = self.previous_instances();
+        instance_ranges::binds(previous, binding, instance_ranges::PREV_INSTANCE_RANGE_BINDING, self.binding_range)
     }
 
     /// Makes [`GpuScene::prev_instances`], a buffer the size of [`GpuScene::instances`] with
@@ -382,6 +386,7 @@ impl GpuScene {
             user_data: None,
             user_words: 0,
             instance_count: scene.instances.len() as u32,
+            binding_range: ctx.caps().limits.max_storage_buffer_range as u64,
             triangles: drawn_triangles(scene),
             max_mesh_triangles: max_mesh_triangles(scene),
             emission_or_occlusion: scene.has_emission_or_occlusion(),

@@ -140,6 +140,7 @@ impl GpuScene {
             instance_triangles: fit(&self.instance_triangles, size_of(slots, 8), none)?,
             textures,
             instance_count: slots as u32,
+            binding_range: self.binding_range,
             triangles: drawn_triangles(scene),
             max_mesh_triangles: max_mesh_triangles(scene),
             emission_or_occlusion: scene.has_emission_or_occlusion(),

@@ -340,7 +340,8 @@ impl WorldMirror {
             self.keep_previous.bind(cmd);
             let mut binds = vec![Bind::Buffer(0, segment.handle())];
             binds.extend(scene.instance_binds(1));
-            binds.extend(instance_ranges::binds(previous, 2, instance_ranges::PREV_INSTANCE_RANGE_BINDING));
+            let range = scene.binding_range;
+            binds.extend(instance_ranges::binds(previous, 2, instance_ranges::PREV_INSTANCE_RANGE_BINDING, range));
             self.keep_previous.push_bindings(cmd, &binds);
             self.keep_previous.push_constants(cmd, &[slots.len() as u32]);
             // SAFETY: cmd recording with the keep_previous pipeline bound.
