@@ -456,6 +456,44 @@ fn a_long_bulk_move_reaches_every_slot() {
     }
     let fresh = renderer(&gpu, &world, "two_phase", false).render_to_image(&camera).unwrap().1;
     assert!(differing_pixels(&image, &fresh) <= DEPTH_TIE_PIXELS);
+
+    // Three syncs before one frame, on the threads that own the slots' queue entries: the
+    // first queues whole records (other materials), the second moves every box (those
+    // records take the moves) and some twice in one list, the third moves a range again
+    // (superseding queued moves) and one it then removes. Every slot ends with its last state.
+    // The journal is trimmed to what the renderer applied, as an engine does: one that
+    // outgrew its limit would lay the world out anew.
+    let sync = |live: &mut Renderer, world: &mut World| {
+        let update = live.sync(&shaders, world).unwrap();
+        assert!(!update.relayout);
+        world.trim_journal(live.synced_version().unwrap());
+        update.bytes_uploaded
+    };
+    world.trim_journal(live.synced_version().unwrap());
+    let by = |k: f64| DVec3::new(0.0, 0.1 * k, 0.05 * k);
+    let red = world.instance(handles[2]).unwrap().material;
+    let repainted: Vec<_> = boxes[100..110].iter().map(|&h| (h, red)).collect();
+    world.set_materials(&repainted).unwrap();
+    let _ = sync(&mut live, &mut world);
+    let twice: Vec<InstanceHandle> = boxes.iter().chain(&boxes[..5000]).copied().collect();
+    world.set_transforms_by(&twice, |i| if i < n { shifted(i, by(2.0)) } else { shifted(i - n, by(3.0)) }).unwrap();
+    let _ = sync(&mut live, &mut world);
+    world.set_transforms_by(&boxes[20_000..60_000], |i| shifted(i + 20_000, by(4.0))).unwrap();
+    world.remove(boxes[30_000]).unwrap();
+    // The moves replace queued ones: only the removed box's slot is queued anew.
+    assert!(sync(&mut live, &mut world) < 100);
+    let (stats, image) = live.render_to_image(&camera).unwrap();
+    assert_eq!(stats.verify.expect("verified").false_negatives, 0);
+    let bytes = cullgraph::gpu::transfer::read_buffer(&gpu, &live.gpu_scene().instances).unwrap();
+    let records: &[GpuInstance] = bytemuck::cast_slice(&bytes[..live.scene().instances.len() * 64]);
+    assert_eq!(live.slot_of(boxes[30_000].index()), None);
+    for (i, &h) in boxes.iter().enumerate().filter(|&(i, _)| i != 30_000) {
+        let slot = live.slot_of(h.index()).expect("placed");
+        let expected = GpuInstance::new(world.instance(h).unwrap());
+        assert_eq!(records[slot as usize], expected, "box {i} in slot {slot}, second round");
+    }
+    let fresh = renderer(&gpu, &world, "two_phase", false).render_to_image(&camera).unwrap().1;
+    assert!(differing_pixels(&image, &fresh) <= DEPTH_TIE_PIXELS);
     gpu.assert_clean();
     cullgraph::gpu::line_dispatch::set_width_for_tests(0);
 }

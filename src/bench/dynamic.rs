@@ -4,7 +4,8 @@
 //! added earlier are removed), against the same city standing still.
 //!
 //! Reported per moved count: the frame's GPU time, the GPU time of the update's copies, the CPU
-//! time of the world's changes and of the renderer's sync, the bytes uploaded, the late cull's
+//! time of the world's moves, of its inserts and removes and of the renderer's sync (with the
+//! threads they may spread over), the bytes uploaded, the late cull's
 //! GPU time, and as references measured in the same run: a host-to-device copy of the same
 //! bytes, rebuilding the renderer instead (CPU time and its first frame), and re-uploading every
 //! slot's instance record and cull bound.
@@ -53,8 +54,10 @@ pub struct DynamicRow {
     pub update_gpu_ms: f64,
     /// Median GPU milliseconds of the late cull pass.
     pub cull_ms: f64,
-    /// Median CPU milliseconds of the world's changes (`set_transforms`, inserts, removes).
+    /// Median CPU milliseconds of the world's moves (`World::set_transforms`).
     pub world_cpu_ms: f64,
+    /// Median CPU milliseconds of the world's inserts and removes.
+    pub churn_cpu_ms: f64,
     /// Median CPU milliseconds of `Renderer::sync`.
     pub sync_cpu_ms: f64,
     /// Median bytes uploaded per frame.
@@ -70,6 +73,8 @@ pub struct DynamicRow {
 pub struct DynamicReport {
     /// Device.
     pub device: String,
+    /// Worker threads the world's bulk moves and the sync may spread over.
+    pub threads: usize,
     /// City size.
     pub instances: usize,
     /// GPU slots of the laid-out city.
@@ -142,6 +147,7 @@ pub fn run(
     let mut renderer = Renderer::from_world(ctx, shaders, &world, settings.clone(), &spec)?;
     let mut report = DynamicReport {
         device: ctx.caps().name.clone(),
+        threads: crate::parallel::threads(),
         instances: bench.instances,
         slots: renderer.scene().instances.len() as u32,
         ..Default::default()
@@ -168,6 +174,7 @@ pub fn run(
             .map(|&h| world.instance(h).map(|i| (h, i.transform)))
             .collect::<std::result::Result<_, _>>()?;
         let mut world_ms = Vec::new();
+        let mut churn_ms = Vec::new();
         let mut sync_ms = Vec::new();
         let measured = frames(ctx, &mut renderer, &camera, bench.warmup, bench.frames, |renderer| {
             for (_, t) in &mut changes {
@@ -175,6 +182,8 @@ pub fn run(
             }
             let start = Instant::now();
             world.set_transforms(&changes)?;
+            world_ms.push(start.elapsed().as_secs_f64() * 1e3);
+            let start = Instant::now();
             for _ in 0..churn {
                 let mut copy = *world.instance(handles[rng.random_range(1..handles.len())])?;
                 copy.transform.translation.z += 1.0;
@@ -183,7 +192,7 @@ pub fn run(
             while added.len() > 4 * churn {
                 world.remove(added.pop_front().expect("not empty"))?;
             }
-            world_ms.push(start.elapsed().as_secs_f64() * 1e3);
+            churn_ms.push(start.elapsed().as_secs_f64() * 1e3);
             let update = renderer.sync(shaders, &world)?;
             world.trim_journal(renderer.synced_version().unwrap_or(0));
             sync_ms.push(update.cpu_ms);
@@ -199,6 +208,7 @@ pub fn run(
             update_gpu_ms: median(&mut updates.iter().map(|u| u.gpu_ms).collect::<Vec<_>>()),
             cull_ms: median(&mut measured.iter().map(cull_ms).collect::<Vec<_>>()),
             world_cpu_ms: median(&mut world_ms[world_ms.len().saturating_sub(measured.len())..].to_vec()),
+            churn_cpu_ms: median(&mut churn_ms[churn_ms.len().saturating_sub(measured.len())..].to_vec()),
             sync_cpu_ms: median(&mut sync_ms[sync_ms.len().saturating_sub(measured.len())..].to_vec()),
             bytes,
             host_copy_ms: host_copy_ms(ctx, bytes, 9)?,
@@ -245,25 +255,29 @@ impl DynamicReport {
             "# Dynamic world\n\nDevice: {}. builtin:city, {} instances in {} slots, two_phase. Standing still: frame {:.3} ms, late cull {:.3} ms.\n\n",
             self.device, self.instances, self.slots, self.static_frame_ms, self.static_cull_ms
         );
-        s.push_str("| moved / frame | churn | frame ms | update GPU ms | host copy of the same bytes ms | update / copy | bytes | bytes per moved | late cull ms | cull / still | world CPU ms | sync CPU ms | sync ns per change | relayouts |\n");
-        s.push_str("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+        s.push_str(&format!("CPU: the world's moves and the sync spread over up to {} threads.\n\n", self.threads));
+        s.push_str("| moved / frame | churn | frame ms | update GPU ms | host copy of the same bytes ms | update / copy | bytes per moved | late cull ms | cull / still | world moves CPU ms | churn CPU ms | sync CPU ms | world ns per move | sync ns per change | world + sync ns per moved | relayouts |\n");
+        s.push_str("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
         for r in &self.rows {
             let changes = (r.moved + 2 * r.churn).max(1) as f64;
+            let moved = r.moved.max(1) as f64;
             s.push_str(&format!(
-                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {} | {:.1} | {:.3} | {:.2} | {:.3} | {:.3} | {:.0} | {} |\n",
+                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.1} | {:.3} | {:.2} | {:.3} | {:.3} | {:.3} | {:.1} | {:.1} | {:.1} | {} |\n",
                 r.moved,
                 r.churn,
                 r.frame_ms,
                 r.update_gpu_ms,
                 r.host_copy_ms,
                 r.update_gpu_ms / r.host_copy_ms.max(1e-9),
-                r.bytes,
-                r.bytes as f64 / r.moved.max(1) as f64,
+                r.bytes as f64 / moved,
                 r.cull_ms,
                 r.cull_ms / self.static_cull_ms.max(1e-9),
                 r.world_cpu_ms,
+                r.churn_cpu_ms,
                 r.sync_cpu_ms,
+                r.world_cpu_ms * 1e6 / moved,
                 r.sync_cpu_ms * 1e6 / changes,
+                (r.world_cpu_ms + r.sync_cpu_ms) * 1e6 / moved,
                 r.relayouts
             ));
         }

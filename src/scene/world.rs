@@ -198,6 +198,15 @@ impl Slots {
         self.alive.get(i).copied().unwrap_or(false) && self.generations[i] == generation
     }
 
+    /// Asks for the memory [`Slots::check`] of `index` reads ([`crate::parallel::prefetch`]).
+    fn prefetch(&self, index: u32) {
+        if let (Some(alive), Some(generation)) = (self.alive.get(index as usize), self.generations.get(index as usize))
+        {
+            crate::parallel::prefetch(alive);
+            crate::parallel::prefetch(generation);
+        }
+    }
+
     /// The index the next insert takes, and its generation.
     fn next(&self) -> (u32, u32) {
         match self.free.last() {
@@ -717,9 +726,7 @@ impl World {
     /// rest of each instance was checked when it was set.) Checked all first, applied all or
     /// none; see [`World::set_transforms_by`].
     pub fn set_transforms(&mut self, changes: &[(InstanceHandle, Transform)]) -> Result<(), WorldError> {
-        // A short list takes the plain loop below: the same checks through `move_many`'s
-        // closures cost about twice as much per move.
-        if changes.len() >= 2 * crate::parallel::MIN_ITEMS_PER_THREAD {
+        if crate::parallel::worth_routing(changes.len()) {
             return self.move_many(changes.len(), |i| changes[i].0, |i| changes[i].1);
         }
         for (handle, transform) in changes {
@@ -747,35 +754,51 @@ impl World {
         handles: &[InstanceHandle],
         transform_of: impl Fn(usize) -> Transform + Sync,
     ) -> Result<(), WorldError> {
+        if !crate::parallel::worth_routing(handles.len()) {
+            let changes: Vec<_> = handles.iter().enumerate().map(|(i, &h)| (h, transform_of(i))).collect();
+            return self.set_transforms(&changes);
+        }
         self.move_many(handles.len(), |i| handles[i], transform_of)
     }
 
-    /// Checks and applies `n` moves: item `i` moves `handle_of(i)` to `transform_of(i)`.
+    /// Checks and applies `n` moves on several threads: item `i` moves `handle_of(i)` to
+    /// `transform_of(i)`. The check also writes the journal's entries and routes each move to
+    /// the thread that owns its instance's part of the table (`crate::parallel`), which then
+    /// applies its moves in list order.
     fn move_many(
         &mut self,
         n: usize,
         handle_of: impl Fn(usize) -> InstanceHandle + Sync,
         transform_of: impl Fn(usize) -> Transform + Sync,
     ) -> Result<(), WorldError> {
+        let base = self.journal.len();
+        let mut journal = std::mem::take(&mut self.journal);
+        journal.resize(base + n, Change::Sun);
+        let owners = crate::parallel::Owners::new(self.scene.instances.len(), n);
         let world = &*self;
-        let check = |i: usize| -> Result<(), WorldError> {
+        let ahead = |i: usize| world.instances.prefetch(handle_of(i).index);
+        let routed = crate::parallel::route(&mut journal[base..], &owners, ahead, |i, entry| {
             let handle = handle_of(i);
             world.check_instance(handle)?;
-            match transform_error(&transform_of(i)) {
-                Some(message) => Err(WorldError::Invalid { handle: handle.to_string(), message }),
-                None => Ok(()),
+            if let Some(message) = transform_error(&transform_of(i)) {
+                return Err(WorldError::Invalid { handle: handle.to_string(), message });
+            }
+            *entry = Change::Transform(handle.index);
+            Ok(Some(handle.index as usize))
+        });
+        let routed = match routed {
+            Ok(routed) => routed,
+            Err(e) => {
+                journal.truncate(base);
+                self.journal = journal;
+                return Err(e);
             }
         };
-        // A short list stays on this thread (`parallel::chunks`).
-        if let Some(e) = crate::parallel::first(n, |i| check(i).err()) {
-            return Err(e);
-        }
-        let instances = &mut self.scene.instances;
-        self.journal.extend((0..n).map(|i| {
-            let index = handle_of(i).index;
-            instances[index as usize].transform = transform_of(i);
-            Change::Transform(index)
-        }));
+        self.journal = journal;
+        crate::parallel::apply_routed(&mut self.scene.instances, &owners, &routed, |instance, i| {
+            instance.transform = transform_of(i);
+            None::<()>
+        });
         self.bound_journal();
         Ok(())
     }

@@ -227,6 +227,14 @@ impl SlotLayout {
         self.instance_slot.get(instance as usize).copied().flatten()
     }
 
+    /// Asks for the memory [`SlotLayout::slot_of`] of `instance` reads
+    /// ([`crate::parallel::prefetch`]).
+    pub(crate) fn prefetch(&self, instance: u32) {
+        if let Some(entry) = self.instance_slot.get(instance as usize) {
+            crate::parallel::prefetch(entry);
+        }
+    }
+
     /// The world instance in `slot`, if any.
     pub fn instance_in(&self, slot: u32) -> Option<u32> {
         self.slot_instance.get(slot as usize).copied().flatten()

@@ -88,6 +88,9 @@ struct SlotUpdate {
 /// Marks an [`WorldMirror::update_of_slot`] entry as an index into the whole-record list.
 const WHOLE: u32 = 1 << 31;
 
+/// The slot of a queued move taken out of the queue before it is uploaded.
+const DROPPED: u32 = u32::MAX;
+
 /// What a renderer keeps of the world it mirrors.
 pub(super) struct WorldMirror {
     /// The id of the world it mirrors ([`World::id`]): another world is refused.
@@ -180,6 +183,103 @@ impl WorldMirror {
             }
             i => self.moves[i as usize] = update,
         }
+    }
+
+    /// Queues moves of the instances `movers`, in order, with each instance's transform as
+    /// `world` has it now; instances without a slot (removed) are skipped. A long list is queued
+    /// on several threads: each move is written to the queue in list order, then the threads
+    /// that own the slots' entries of [`Self::update_of_slot`] take them (`crate::parallel`), so
+    /// that a slot's last move wins; the moves it supersedes, and those folded into a whole
+    /// record queued for their slot, are then taken out of the queue.
+    fn queue_moves(&mut self, movers: &[u32], world: &World) {
+        // The renderer's own copy of the slot keeps its old transform: a random write per move
+        // into a table of every slot would cost more than the rest of the move (see
+        // `Renderer::scene`).
+        let instances = &world.scene().instances;
+        let transform_words = |i: u32| GpuInstance::transform_words(&instances[i as usize].transform);
+        if !crate::parallel::worth_routing(movers.len()) {
+            self.moves.reserve(movers.len());
+            for &i in movers {
+                let Some(slot) = self.layout.slot_of(i) else { continue };
+                let (rows, translation_lo) = transform_words(i);
+                self.queue_move(slot, rows, translation_lo);
+            }
+            return;
+        }
+        let slots = self.layout.slots() as usize;
+        if self.update_of_slot.len() < slots {
+            self.update_of_slot.resize(slots, u32::MAX);
+        }
+        let base = self.moves.len();
+        self.moves.reserve(movers.len());
+        let owners = crate::parallel::Owners::new(slots, movers.len());
+        let layout = &self.layout;
+        // The moves are written straight into the queue's spare room (filling it first would
+        // cost as much as writing them).
+        let room = &mut self.moves.spare_capacity_mut()[..movers.len()];
+        let ahead = |k: usize| {
+            let i = movers[k];
+            layout.prefetch(i);
+            if let Some(instance) = instances.get(i as usize) {
+                crate::parallel::prefetch(instance);
+            }
+        };
+        let routed = crate::parallel::route(room, &owners, ahead, |k, update| {
+            let i = movers[k];
+            let Some(slot) = layout.slot_of(i) else {
+                update.write(MoveUpdate { rows: [[0.0; 4]; 3], translation_lo: [0.0; 3], slot: DROPPED });
+                return Ok::<_, std::convert::Infallible>(None);
+            };
+            let (rows, translation_lo) = transform_words(i);
+            update.write(MoveUpdate { rows, translation_lo, slot });
+            Ok(Some(slot as usize))
+        });
+        let Ok(routed) = routed;
+        // SAFETY: the room holds `movers.len()` elements, and `route` visited each of them
+        // once; every visit wrote its element.
+        unsafe { self.moves.set_len(base + movers.len()) };
+        // Per move that leaves the queue: where it is, and the whole record it folds into
+        // (`u32::MAX`: none, a later move of its slot superseded it).
+        let leaving = crate::parallel::apply_routed(&mut self.update_of_slot, &owners, &routed, |entry, k| {
+            let queued = (base + k) as u32;
+            match *entry {
+                u32::MAX => {
+                    *entry = queued;
+                    None
+                }
+                whole if whole & WHOLE != 0 => Some((queued, whole & !WHOLE)),
+                superseded => {
+                    *entry = queued;
+                    Some((superseded, u32::MAX))
+                }
+            }
+        });
+        if leaving.is_empty() && routed.unrouted() == 0 {
+            return;
+        }
+        // A slot's moves are in list order in `leaving`: its last folds into the record last.
+        for &(at, whole) in &leaving {
+            let update = &mut self.moves[at as usize];
+            if let Some(record) = self.whole.get_mut(whole as usize) {
+                record.instance.rows = update.rows;
+                record.instance.translation_lo = update.translation_lo;
+            }
+            update.slot = DROPPED;
+        }
+        let mut start = leaving.iter().map(|&(at, _)| at as usize).min().unwrap_or(base);
+        if routed.unrouted() > 0 {
+            start = start.min(base);
+        }
+        let mut kept = start;
+        for at in start..self.moves.len() {
+            let update = self.moves[at];
+            if update.slot != DROPPED {
+                self.moves[kept] = update;
+                self.update_of_slot[update.slot as usize] = kept as u32;
+                kept += 1;
+            }
+        }
+        self.moves.truncate(kept);
     }
 
     /// Queues `slot`'s whole new record (replacing any update queued before).
@@ -677,13 +777,13 @@ impl Renderer {
         let mut instances = Vec::new();
         let mut registered = Registered::default();
         let mut lights = false;
-        let mut moves = 0usize;
+        let mut movers = Vec::new();
         let mut user_changed = Vec::new();
         let mut posed = Vec::new();
         for change in changes {
             match *change {
                 Change::Instance(i) => instances.push(i),
-                Change::Transform(_) => moves += 1,
+                Change::Transform(i) => movers.push(i),
                 Change::Light(_) => lights = true,
                 Change::Sun => self.scene.sun = world.scene().sun,
                 Change::Mesh(m) => registered.meshes.push(m),
@@ -797,22 +897,10 @@ impl Renderer {
             }
             self.scene.instances[slot as usize] = contents;
         }
-        if moves > 0 {
-            mirror.moves.reserve(moves);
-            // A move of an instance that was also inserted, removed or changed since the last
-            // sync is applied after the general path has given it its slot (or none); the
-            // world's transform is the latest either way.
-            for change in changes {
-                let Change::Transform(i) = *change else { continue };
-                let Some(slot) = mirror.layout.slot_of(i) else { continue };
-                // The renderer's own copy of the slot keeps its old transform: a random write
-                // per move into a table of every slot would cost more than the rest of the
-                // move (see `Renderer::scene`).
-                let (rows, translation_lo) =
-                    GpuInstance::transform_words(&world.scene().instances[i as usize].transform);
-                mirror.queue_move(slot, rows, translation_lo);
-            }
-        }
+        // A move of an instance that was also inserted, removed or changed since the last sync
+        // is applied after the general path has given it its slot (or none); the world's
+        // transform is the latest either way.
+        mirror.queue_moves(&movers, world);
         for &i in &user_changed {
             if let Some(slot) = mirror.layout.slot_of(i) {
                 mirror.queue_user_data(slot, world.user_data_at(i));
@@ -826,7 +914,7 @@ impl Renderer {
         let mirror = self.world.as_mut().expect("a world renderer");
         mirror.version = world.version();
         let stats = UpdateStats {
-            instances_changed: (instances.len() + moves + user_changed.len() + posed.len()) as u64,
+            instances_changed: (instances.len() + movers.len() + user_changed.len() + posed.len()) as u64,
             bytes_uploaded: mirror.queued_bytes() - queued_before + edited_bytes,
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
             gpu_ms: 0.0,
