@@ -7,7 +7,7 @@
 mod common;
 
 use common::GpuTest;
-use cullgraph::render::{GraphSpec, OutputF32, RenderSettings, Renderer};
+use cullgraph::render::{GraphSpec, OutputF32, RenderSettings, Renderer, ViewId};
 use cullgraph::scene::world::World;
 use cullgraph::scene::{Camera, Instance, Material, Scene};
 use glam::{DVec3, Vec2, Vec4};
@@ -294,5 +294,46 @@ fn a_rebuilt_scene_starts_without_motion() {
     world.set_transform(handles[0], common::scaled_at(at[0], SIDE)).unwrap();
     let (moved, _) = frame(&world, &mut r);
     assert!(check(&moved, &camera, &camera, &at, &before) > 100, "the quads cover pixels");
+    gpu.assert_clean();
+}
+
+/// A world renderer keeps the previous frame's instance records only while a view's graph
+/// writes motion vectors: none for a graph without them; a view added with them gets them, made
+/// from the records before the frame's moves, so that its first frame already shows the moves
+/// since the last frame; removing it drops them again.
+#[test]
+fn previous_records_are_kept_only_while_a_view_writes_motion() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let mut at = [DVec3::new(-0.6, 0.0, 0.0), DVec3::new(0.6, 0.0, 0.0)];
+    let (mut world, handles) = World::new(two_quads(at)).unwrap();
+    let settings = RenderSettings::new(SIZE.0, SIZE.1);
+    let spec = GraphSpec::builtin("two_phase").unwrap();
+    let mut r = Renderer::from_world(&gpu, &shaders, &world, settings.clone(), &spec).unwrap();
+    let camera = common::camera_on_z();
+    r.render(&camera).unwrap();
+    assert!(r.gpu_scene().prev_instances.is_none(), "no view writes motion");
+
+    let view = r.add_view(&shaders, settings, &post()).unwrap();
+    let before = at;
+    let frame = |world: &World, r: &mut Renderer| -> OutputF32 {
+        r.sync(&shaders, world).unwrap();
+        r.render_views(&[(ViewId::MAIN, &camera), (view, &camera)]).unwrap();
+        r.read_view_output_f32(view, "motion").unwrap()
+    };
+    at[0].x += 0.1;
+    world.set_transform(handles[0], common::scaled_at(at[0], SIDE)).unwrap();
+    let first = frame(&world, &mut r);
+    assert!(r.gpu_scene().prev_instances.is_some(), "a view writes motion");
+    assert!(check(&first, &camera, &camera, &at, &before) > 100, "the quads cover pixels");
+    let before = at;
+    at[0].x += 0.1;
+    world.set_transform(handles[0], common::scaled_at(at[0], SIDE)).unwrap();
+    let moved = frame(&world, &mut r);
+    assert!(check(&moved, &camera, &camera, &at, &before) > 100, "the quads cover pixels");
+
+    r.remove_view(view).unwrap();
+    r.render(&camera).unwrap();
+    assert!(r.gpu_scene().prev_instances.is_none(), "no view writes motion any more");
     gpu.assert_clean();
 }

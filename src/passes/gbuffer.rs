@@ -464,6 +464,10 @@ const MOTION_TARGETS: &str =
     "motion vectors are written beside albedo and normal: bind both with motion (not ids, nor a depth-only pass)";
 
 impl PassNode for GbufferPass {
+    fn reads_previous_instances(&self) -> bool {
+        self.motion
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let slots = &rec.slots;
         let depth = slots.required_image("depth")?;

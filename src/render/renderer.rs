@@ -412,6 +412,8 @@ impl Renderer {
             frame_view.camera.validate().map_err(|e| frame_view.view.error(Error::Invalid(format!("camera: {e}"))))?;
             order.push(at);
         }
+        // Before the views' frame data is written: it may give every view new scene inputs.
+        self.fit_previous_records()?;
         let frame = self.frame_index;
         let cameras: Vec<(ViewId, &Camera)> = views.iter().map(|fv| (fv.view, fv.camera)).collect();
         let (cascades, shadow_data) = self.plan_shadow_frame(cmd, &cameras)?;

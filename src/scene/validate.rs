@@ -9,7 +9,7 @@ use super::{Instance, Scene};
 pub const MAX_MATERIALS: usize = 1 << 24;
 /// The most instances a scene may hold: draws find an instance through `gl_InstanceIndex`, a
 /// signed 32-bit integer. A device may allow fewer: one storage buffer binding must hold the
-/// instance records ([`crate::passes::shared::scene_buffers::most_instances`]).
+/// instance records ([`crate::passes::shared::instance_ranges::most_instances`]).
 pub const MAX_INSTANCES: usize = (1 << 31) - 1;
 /// The most vertices of a scene's vertex pool: 2 GiB of 32-byte vertices, so that the pool
 /// stays one storage buffer within every target device's `maxStorageBufferRange`.

@@ -386,6 +386,12 @@ impl GraphRuntime {
         Ok(())
     }
 
+    /// Whether a pass reads the previous frame's instance records
+    /// ([`PassNode::reads_previous_instances`]).
+    pub fn reads_previous_instances(&self) -> bool {
+        self.nodes.iter().any(|node| node.reads_previous_instances())
+    }
+
     /// The first pass that samples the renderer's shadow maps
     /// ([`PassNode::samples_shadow_maps`]), if any.
     pub fn first_pass_sampling_shadows(&self) -> Option<usize> {

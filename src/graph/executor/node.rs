@@ -161,6 +161,15 @@ pub trait PassNode: Send {
         None
     }
 
+    /// Whether the pass reads the instance records of the world's previous frame
+    /// ([`crate::passes::shared::GpuScene::previous_instance_binds`], for motion vectors): a
+    /// renderer of a changing world keeps them, one more record per slot and a copy of each
+    /// moved one per frame, only while some view's pass does. Without them a pass is given the
+    /// current records (no motion). `false` (the default): it does not.
+    fn reads_previous_instances(&self) -> bool {
+        false
+    }
+
     /// Whether the pass samples the renderer's shadow maps (the sun's and the lights', bound
     /// from the frame's shared data, not the graph): a renderer then records the shadow views'
     /// drawing before it. `false` (the default): it does not.

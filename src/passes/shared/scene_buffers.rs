@@ -11,7 +11,8 @@ use crate::scene::Scene;
 use ash::vk;
 use std::sync::Arc;
 
-/// Scene buffers on the device.
+/// Scene buffers on the device (a clone shares them).
+#[derive(Clone)]
 pub struct GpuScene {
     /// Shared vertex pool ([`crate::scene::Vertex`]), in streams by what passes read.
     pub vertices: VertexStreams,

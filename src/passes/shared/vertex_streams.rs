@@ -86,6 +86,7 @@ impl VertexFetch {
 
 /// The pool's streams on the device, each indexed as the pool is (a mesh's vertex offset is the
 /// same in all three).
+#[derive(Clone)]
 pub struct VertexStreams {
     /// `vec3` positions.
     pub positions: Arc<Buffer>,

@@ -12,8 +12,9 @@
 //! cost the copy engine about a microsecond each on an H100, thousands of times the bytes they
 //! move.)
 //!
-//! Motion vectors need each instance's transform of the previous frame: the scene keeps a
-//! second copy of the instance records ([`GpuScene::prev_instances`]). Before the scatter
+//! Motion vectors need each instance's transform of the previous frame: while some view's
+//! graph writes them ([`Renderer::fit_previous_records`]) the scene keeps a second copy of the
+//! instance records ([`GpuScene::prev_instances`]). Before the scatter
 //! writes the new records, the slots it updates and the slots the last frame updated get
 //! their current record as previous (`shaders/world/keep_previous.comp`): every slot's previous
 //! record is then the one it had last frame, and an instance moved last frame but not this one
@@ -654,7 +655,9 @@ impl Renderer {
         let runtime = build_runtime(ctx, shaders, &compiled, spec)?;
         let mut uploads = UploadBatch::default();
         let mut gpu_scene = GpuScene::upload_with_room(ctx, &scene, layout.draw_list(&scene), &mut uploads, None)?;
-        gpu_scene.add_previous_instances(ctx)?;
+        if runtime.reads_previous_instances() {
+            gpu_scene.add_previous_instances(ctx)?;
+        }
         gpu_scene.add_user_data(ctx, &mut uploads, world.user_words(), &slot_user_data(world, &layout))?;
         let gpu_scene = Arc::new(gpu_scene);
         let light_capacity = with_room(scene.lights.len() as u64) as usize;
@@ -924,6 +927,27 @@ impl Renderer {
         Ok(stats)
     }
 
+    /// Keeps the world's previous instance records while some view's graph reads them (motion
+    /// vectors, [`crate::graph::PassNode::reads_previous_instances`]) and only then: a view
+    /// added, resized or given other settings may start or stop reading them. Made anew, they
+    /// are filled with the current records at the next frame (no motion at that frame).
+    pub(super) fn fit_previous_records(&mut self) -> Result<()> {
+        let Some(mirror) = &mut self.world else { return Ok(()) };
+        let wanted = self.views.iter().any(|view| view.graphs.runtime.reads_previous_instances());
+        if wanted == self.gpu_scene.prev_instances.is_some() {
+            return Ok(());
+        }
+        let mut scene = (*self.gpu_scene).clone();
+        if wanted {
+            scene.add_previous_instances(&self.ctx)?;
+            mirror.refresh_previous = true;
+        } else {
+            scene.prev_instances = None;
+        }
+        let unchanged = self.views.iter().map(|_| None).collect();
+        self.install_scene(Arc::new(scene), self.light_capacity, unchanged, Layout::Kept)
+    }
+
     /// Makes the scene's buffers anew from `world`: with the slots laid out anew
     /// ([`Layout::Fresh`], culling history cleared) or as the mirror's layout has them
     /// ([`Layout::Kept`], history kept: every slot and group holds what it held). The graph is
@@ -958,7 +982,13 @@ impl Renderer {
         let textures = reuse.then(|| self.gpu_scene.textures.clone());
         let mut gpu_scene =
             GpuScene::upload_with_room(&self.ctx, &scene, layout.draw_list(&scene), &mut uploads, textures)?;
-        gpu_scene.add_previous_instances(&self.ctx)?;
+        let reads_previous = self.views.iter().zip(&recompiled).any(|(view, new)| match new {
+            Some((runtime, _)) => runtime.reads_previous_instances(),
+            None => view.graphs.runtime.reads_previous_instances(),
+        });
+        if reads_previous {
+            gpu_scene.add_previous_instances(&self.ctx)?;
+        }
         let user_data = slot_user_data(world, &layout);
         gpu_scene.add_user_data(&self.ctx, &mut uploads, world.user_words(), &user_data)?;
         let light_capacity = with_room(scene.lights.len() as u64).max(self.light_capacity as u64) as usize;
