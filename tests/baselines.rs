@@ -64,7 +64,7 @@ fn error_with(
 ) -> ImageError {
     let spec =
         GraphSpec::builtin(graph).unwrap().with_overrides(params.iter().map(|(k, v)| (k.to_string(), v.to_string())));
-    let e = reference_error(gpu, &gpu.shaders(), scene, camera, &spec, SIZE, n).unwrap();
+    let e = reference_error(gpu, gpu.shaders(), scene, camera, &spec, SIZE, n).unwrap();
     eprintln!(
         "{} through {graph} {params:?}, {n}x{n} reference: mean FLIP {:.4}, PSNR {:.2} dB",
         scene.name, e.mean_flip, e.psnr_db
@@ -142,7 +142,7 @@ fn fxaa_touches_only_edge_pixels_and_takes_its_settings() {
     let shaders = gpu.shaders();
     let render = |spec: GraphSpec| {
         let settings = RenderSettings::new(SIZE.0, SIZE.1);
-        let mut r = Renderer::with_graph(&gpu, &shaders, boxes_scene(), settings, &spec).unwrap();
+        let mut r = Renderer::with_graph(&gpu, shaders, boxes_scene(), settings, &spec).unwrap();
         r.render_to_image(&boxes_camera()).unwrap().1
     };
     let plain = render(GraphSpec::builtin("two_phase").unwrap());
@@ -161,7 +161,7 @@ fn fxaa_touches_only_edge_pixels_and_takes_its_settings() {
     // A preset FXAA does not have is a load error, not a panic.
     let bad = GraphSpec::builtin("fxaa").unwrap().with_overrides([("fxaa_preset".to_string(), "13".to_string())]);
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let err = Renderer::with_graph(&gpu, &shaders, boxes_scene(), settings, &bad).err().expect("preset 13 refused");
+    let err = Renderer::with_graph(&gpu, shaders, boxes_scene(), settings, &bad).err().expect("preset 13 refused");
     assert!(err.to_string().contains("13"), "{err}");
 }
 
@@ -172,10 +172,10 @@ fn impossible_references_are_clear_errors() {
     let (scene, camera) = (boxes_scene(), boxes_camera());
     let max = gpu.caps().limits.max_image_dimension2_d;
     let wide = (max / 2 + 1, 4);
-    let err = reference_error(&gpu, &gpu.shaders(), &scene, &camera, &spec, wide, 2).unwrap_err().to_string();
+    let err = reference_error(&gpu, gpu.shaders(), &scene, &camera, &spec, wide, 2).unwrap_err().to_string();
     assert!(err.contains("maxImageDimension2D"), "{err}");
-    let err = reference_error(&gpu, &gpu.shaders(), &scene, &camera, &spec, (8, 8), 0).unwrap_err().to_string();
+    let err = reference_error(&gpu, gpu.shaders(), &scene, &camera, &spec, (8, 8), 0).unwrap_err().to_string();
     assert!(err.contains("not 0"), "{err}");
-    let err = reference_error(&gpu, &gpu.shaders(), &scene, &camera, &spec, (8, 8), u32::MAX).unwrap_err().to_string();
+    let err = reference_error(&gpu, gpu.shaders(), &scene, &camera, &spec, (8, 8), u32::MAX).unwrap_err().to_string();
     assert!(err.contains("maxImageDimension2D"), "{err}");
 }

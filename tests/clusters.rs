@@ -34,8 +34,8 @@ fn render_checked(
 ) -> (Vec<ClusterPassStats>, Vec<u8>, Option<ClusterVerifyStats>) {
     let shaders = gpu.shaders();
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let mut renderer = Renderer::with_graph(gpu, &shaders, scene.clone(), settings, spec).unwrap();
-    renderer.enable_verification(&shaders).unwrap();
+    let mut renderer = Renderer::with_graph(gpu, shaders, scene.clone(), settings, spec).unwrap();
+    renderer.enable_verification(shaders).unwrap();
     let missed = |stats: &cullgraph::stats::FrameStats| {
         let v = stats.verify.as_ref().unwrap();
         v.false_negatives + v.clusters.as_ref().map_or(0, |c| c.false_negatives)
@@ -180,9 +180,9 @@ fn moving_instances_keep_their_image_cluster_by_cluster() {
     // frame: every prop turns and drifts, so its clusters face the eye anew.
     let (mut world, handles) = World::new(scene.clone()).unwrap();
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let mut plain = Renderer::from_world(&gpu, &shaders, &world, settings.clone(), &graph("two_phase", 0.0)).unwrap();
+    let mut plain = Renderer::from_world(&gpu, shaders, &world, settings.clone(), &graph("two_phase", 0.0)).unwrap();
     let mut clustered =
-        Renderer::from_world(&gpu, &shaders, &world, settings, &graph("two_phase_clusters", 0.0)).unwrap();
+        Renderer::from_world(&gpu, shaders, &world, settings, &graph("two_phase_clusters", 0.0)).unwrap();
     let mut dropped = 0;
     for frame in 0..4 {
         let angle = 0.35 * frame as f32;
@@ -198,8 +198,8 @@ fn moving_instances_keep_their_image_cluster_by_cluster() {
             })
             .collect();
         world.set_transforms(&changes).unwrap();
-        plain.sync(&shaders, &world).unwrap();
-        clustered.sync(&shaders, &world).unwrap();
+        plain.sync(shaders, &world).unwrap();
+        clustered.sync(shaders, &world).unwrap();
         let (_, whole) = plain.render_to_image(&camera).unwrap();
         let (stats, image) = clustered.render_to_image(&camera).unwrap();
         assert!(image.into_raw() == whole.into_raw(), "frame {frame}: moved instances drew another image");
@@ -243,15 +243,15 @@ fn meshes_registered_on_a_live_world_are_culled_cluster_by_cluster() {
     let camera = near_camera();
     let (mut world, _) = World::new(dense(4)).unwrap();
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let mut plain = Renderer::from_world(&gpu, &shaders, &world, settings.clone(), &graph("two_phase", 0.0)).unwrap();
+    let mut plain = Renderer::from_world(&gpu, shaders, &world, settings.clone(), &graph("two_phase", 0.0)).unwrap();
     let mut clustered =
-        Renderer::from_world(&gpu, &shaders, &world, settings, &graph("two_phase_clusters", 0.0)).unwrap();
-    clustered.enable_verification(&shaders).unwrap();
+        Renderer::from_world(&gpu, shaders, &world, settings, &graph("two_phase_clusters", 0.0)).unwrap();
+    clustered.enable_verification(shaders).unwrap();
     // Each step changes the world; both renderers follow it and draw the same image, the
     // clustered one checked cluster by cluster.
     let mut step = |world: &World, what: &str| {
-        plain.sync(&shaders, world).unwrap();
-        clustered.sync(&shaders, world).unwrap();
+        plain.sync(shaders, world).unwrap();
+        clustered.sync(shaders, world).unwrap();
         for _ in 0..2 {
             plain.render(&camera).unwrap();
             clustered.render(&camera).unwrap();

@@ -77,8 +77,8 @@ fn frustum_lists_equal_the_cpu_reference_exactly() {
         let base = scene.default_camera(w as f32 / h as f32);
         let spec = GraphSpec::builtin("frustum").unwrap();
         let mut renderer =
-            Renderer::with_graph(&gpu, &gpu.shaders(), scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
-        renderer.enable_verification(&gpu.shaders()).unwrap();
+            Renderer::with_graph(&gpu, gpu.shaders(), scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
+        renderer.enable_verification(gpu.shaders()).unwrap();
         // From everything in view to a narrow slice: dense and sparse survivors.
         let mut cameras: Vec<Camera> = (0..6).map(|f| CameraPath::Orbit.camera_at(&base, f * 5)).collect();
         let mut close = base.clone();
@@ -146,8 +146,8 @@ fn early_phase_from_last_frames_list_matches_the_tested_early_phase() {
         base.eye = base.target + (base.eye - base.target) * 0.3;
         let renderer_for = |spec: &GraphSpec| {
             let mut r =
-                Renderer::with_graph(&gpu, &gpu.shaders(), scene.clone(), RenderSettings::new(w, h), spec).unwrap();
-            r.enable_verification(&gpu.shaders()).unwrap();
+                Renderer::with_graph(&gpu, gpu.shaders(), scene.clone(), RenderSettings::new(w, h), spec).unwrap();
+            r.enable_verification(gpu.shaders()).unwrap();
             r
         };
         let mut from_list = renderer_for(&GraphSpec::builtin("two_phase").unwrap());
@@ -203,8 +203,8 @@ fn culls_laid_out_in_rows_of_workgroups_equal_one_row() {
         cullgraph::gpu::line_dispatch::set_width_for_tests(width);
         let spec = GraphSpec::builtin("two_phase").unwrap();
         let mut renderer =
-            Renderer::with_graph(&gpu, &gpu.shaders(), scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
-        renderer.enable_verification(&gpu.shaders()).unwrap();
+            Renderer::with_graph(&gpu, gpu.shaders(), scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
+        renderer.enable_verification(gpu.shaders()).unwrap();
         let mut frames = Vec::new();
         for frame in 0..3 {
             let camera = CameraPath::Orbit.camera_at(&base, frame * 10);

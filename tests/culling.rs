@@ -117,8 +117,23 @@ fn check(
 ) -> Vec<FrameStats> {
     let graphs = EXACT_GRAPHS.map(|g| graph(g, &[]));
     let (_, stats) =
-        check_graphs(gpu, &gpu.shaders(), Shot { scene, camera, size, frames, path }, &graph("no_cull", &[]), &graphs);
+        check_graphs(gpu, gpu.shaders(), Shot { scene, camera, size, frames, path }, &graph("no_cull", &[]), &graphs);
     stats.into_iter().map(|s| s.last().unwrap().clone()).collect()
+}
+
+/// Renderers of `scene` through no culling and every exact graph, kept for a test's duration so
+/// that the renderers each `check` makes find their pipelines alive and share them (a device
+/// keeps a pipeline while a renderer uses it): on lavapipe, creating pipelines is most of a
+/// small check's time.
+fn keep_pipelines(gpu: &GpuTest, scene: &Scene) -> Vec<Renderer> {
+    let shaders = gpu.shaders();
+    let mut kept: Vec<Renderer> = std::iter::once("no_cull")
+        .chain(EXACT_GRAPHS)
+        .map(|g| Renderer::with_graph(gpu, shaders, scene.clone(), RenderSettings::new(8, 8), &graph(g, &[])).unwrap())
+        .collect();
+    // The verified renderers' oracle pipelines too.
+    kept[1].enable_verification(shaders).unwrap();
+    kept
 }
 
 /// A small scene: a wall in front of boxes, boxes beside it, one box behind the eye.
@@ -190,7 +205,7 @@ fn occlusion_test_variants_keep_every_visible_instance_under_motion() {
         let start = Instant::now();
         let (scene, camera) = (wall_scene(), wall_camera());
         let shot = Shot { scene: &scene, camera: &camera, size: (48, 36), frames: 5, path };
-        let (_, stats) = check_graphs(&gpu, &shaders, shot, &graph("no_cull", &[]), &graphs);
+        let (_, stats) = check_graphs(&gpu, shaders, shot, &graph("no_cull", &[]), &graphs);
         for (spec, stats) in graphs.iter().zip(&stats) {
             // Each variant did cull by occlusion along the way (the boxes behind the wall), so
             // its test was exercised, not just skipped.
@@ -231,8 +246,8 @@ fn one_phase_counts_exactly_the_instances_it_pops_in_late() {
         let start = Instant::now();
         let render = |spec: &GraphSpec| {
             let settings = RenderSettings::new(size.0, size.1);
-            let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), settings, spec).unwrap();
-            r.enable_verification(&shaders).unwrap();
+            let mut r = Renderer::with_graph(&gpu, shaders, scene.clone(), settings, spec).unwrap();
+            r.enable_verification(shaders).unwrap();
             r
         };
         let mut reference = render(&graph("no_cull", &[]));
@@ -299,7 +314,7 @@ fn msaa_graphs_cull_over_the_msaa_depth_without_losing_a_sample() {
             let reference = without_culling(&spec);
             let camera = wall_camera();
             let shot = Shot { scene: &scene, camera: &camera, size: (40, 30), frames: 5, path };
-            let (unculled, stats) = check_graphs(&gpu, &shaders, shot, &reference, std::slice::from_ref(&spec));
+            let (unculled, stats) = check_graphs(&gpu, shaders, shot, &reference, std::slice::from_ref(&spec));
             // The reference really culls nothing (its cull pass's counters), and the graph culls
             // by occlusion.
             for (f, s) in unculled.iter().enumerate() {
@@ -317,6 +332,7 @@ fn msaa_graphs_cull_over_the_msaa_depth_without_losing_a_sample() {
 fn near_plane_inside_bound_and_behind_the_eye() {
     let gpu = GpuTest::new();
     let scene = wall_scene();
+    let _kept = keep_pipelines(&gpu, &scene);
     // Eye inside the wall's bound, facing along it; the near plane cuts the wall.
     let inside = Camera {
         eye: DVec3::new(0.0, 3.0, -4.0),
@@ -368,6 +384,7 @@ fn sub_pixel_and_screen_filling_objects() {
             flags: 0,
         });
     }
+    let _kept = keep_pipelines(&gpu, &scene);
     check(&gpu, &scene, &wall_camera(), (48, 36), 2, CameraPath::Still);
     let mut inside_huge = scene.clone();
     inside_huge.instances.push(Instance {
@@ -436,8 +453,8 @@ fn back_faces_of_one_sided_materials_are_not_drawn() {
     let camera = Camera { eye: DVec3::ZERO, target: DVec3::NEG_Z, ..Default::default() };
     let render = |scene: &Scene| {
         let spec = GraphSpec::builtin("no_cull").unwrap();
-        let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
-        r.enable_verification(&shaders).unwrap();
+        let mut r = Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
+        r.enable_verification(shaders).unwrap();
         let (_, image) = r.render_to_image(&camera).unwrap();
         (image, r.exactly_visible().clone())
     };
@@ -461,7 +478,7 @@ fn nan_transforms_are_refused_at_upload() {
     let gpu = GpuTest::new();
     let mut scene = wall_scene();
     scene.instances[3].transform.translation.y = f64::NAN;
-    let err = Renderer::new(&gpu, &gpu.shaders(), scene, RenderSettings::new(8, 8))
+    let err = Renderer::new(&gpu, gpu.shaders(), scene, RenderSettings::new(8, 8))
         .err()
         .expect("NaN must be refused")
         .to_string();
@@ -471,6 +488,7 @@ fn nan_transforms_are_refused_at_upload() {
 #[test]
 fn tiny_odd_and_large_outputs() {
     let gpu = GpuTest::new();
+    let _kept = keep_pipelines(&gpu, &wall_scene());
     for size in [(1, 1), (3, 3), (7, 2)] {
         check(&gpu, &wall_scene(), &wall_camera(), size, 2, CameraPath::Still);
     }
@@ -482,6 +500,7 @@ fn tiny_odd_and_large_outputs() {
 fn extreme_fields_of_view_and_orthographic() {
     let gpu = GpuTest::new();
     let scene = wall_scene();
+    let _kept = keep_pipelines(&gpu, &scene);
     // Down to the extremes a user can type: no visible instance is lost, the image is the unculled one.
     for fov in [1.0f32, 170.0, 1e-30, 1e-6, 179.999] {
         let camera = Camera { projection: Projection::Perspective { fov_y_deg: fov }, ..wall_camera() };
@@ -519,6 +538,7 @@ fn the_city_under_every_camera_path() {
     let scene =
         SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(3000), ..Default::default() }).unwrap();
     let camera = scene.default_camera(64.0 / 40.0);
+    let _kept = keep_pipelines(&gpu, &scene);
     for path in [CameraPath::Orbit, CameraPath::Dolly, CameraPath::Shake] {
         let stats = check(&gpu, &scene, &camera, (64, 40), 4, path);
         assert!(stats[1].occlusion_culled > 500, "{path:?}: street view hides most of the city: {:?}", stats[1]);
@@ -539,7 +559,7 @@ fn the_occluder_prepass_chooses_cheap_meshes_where_the_scene_flags_none() {
     let camera = scene.default_camera(64.0 / 40.0);
     let graphs = [graph("occluder_prepass", &[]), graph("occluder_prepass", &[("occluder_triangles", "0")])];
     let shot = Shot { scene: &scene, camera: &camera, size: (64, 40), frames: 3, path: CameraPath::Orbit };
-    let (_, stats) = check_graphs(&gpu, &gpu.shaders(), shot, &graph("no_cull", &[]), &graphs);
+    let (_, stats) = check_graphs(&gpu, gpu.shaders(), shot, &graph("no_cull", &[]), &graphs);
     let occluders = |s: &FrameStats| CullPassStats::of(s).iter().find(|p| p.pass == "cull_occluders").unwrap().drawn;
     for (cheap, flagged_only) in stats[0].iter().zip(&stats[1]) {
         assert!(occluders(cheap) > 0 && cheap.occlusion_culled > 300, "cheap meshes: {cheap:?}");
@@ -684,6 +704,24 @@ fn random_scenes_and_cameras_never_lose_a_visible_instance() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
     let start = Instant::now();
+    // Every graph a case may take, kept for the test's duration: the cases' renderers share
+    // their pipelines.
+    let mut specs = vec![graph("no_cull", &[])];
+    for bound in ["box", "sphere"] {
+        specs.push(graph("frustum", &[("bound", bound)]));
+        for hiz_test in ["coarse", "finer"] {
+            for hiz_method in ["single", "per_mip"] {
+                let occlusion = [("bound", bound), ("hiz_test", hiz_test), ("hiz_method", hiz_method)];
+                specs.extend(["two_phase", "occluder_prepass"].map(|g| graph(g, &occlusion)));
+            }
+        }
+    }
+    let settings = RenderSettings::new(8, 8);
+    let mut kept: Vec<Renderer> = specs
+        .iter()
+        .map(|spec| Renderer::with_graph(&gpu, shaders, wall_scene(), settings.clone(), spec).unwrap())
+        .collect();
+    kept[1].enable_verification(shaders).unwrap();
     let (cases, prepass_cases, occluding_cases) = (Cell::new(0), Cell::new(0), Cell::new(0));
     let count = std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(48);
     let config = ProptestConfig { cases: count, failure_persistence: None, ..ProptestConfig::default() };
@@ -694,7 +732,7 @@ fn random_scenes_and_cameras_never_lose_a_visible_instance() {
         let other = graph(other, if other == "frustum" { &occlusion[..1] } else { &occlusion });
         let graphs = [graph("two_phase", &occlusion), other];
         let shot = Shot { scene: &scene, camera: &camera, size, frames: 2, path };
-        let (_, stats) = check_graphs(&gpu, &shaders, shot, &graph("no_cull", &[]), &graphs);
+        let (_, stats) = check_graphs(&gpu, shaders, shot, &graph("no_cull", &[]), &graphs);
         let messages = gpu.validation_log().messages();
         prop_assert!(messages.len() == before, "validation messages:\n{}", messages[before..].join("\n"));
         cases.set(cases.get() + 1);

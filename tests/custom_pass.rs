@@ -73,7 +73,7 @@ fn rect_of(camera: &Camera, (center, half): (DVec3, Vec3)) -> (i64, i64, i64, i6
 fn render(gpu: &GpuTest, spec: &GraphSpec) -> RgbaImage {
     let (scene, _) = scene();
     let mut renderer =
-        Renderer::with_graph(gpu, &gpu.shaders(), scene, RenderSettings::new(SIZE.0, SIZE.1), spec).unwrap();
+        Renderer::with_graph(gpu, gpu.shaders(), scene, RenderSettings::new(SIZE.0, SIZE.1), spec).unwrap();
     renderer.render(&camera()).unwrap();
     renderer.render_to_image(&camera()).unwrap().1
 }
@@ -132,7 +132,7 @@ fn a_graph_using_an_unregistered_kind_is_refused_at_its_position() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/graph/examples/instance_bounds.ron");
     let spec = GraphSpec::from_file(path.as_ref()).unwrap();
     let (scene, _) = scene();
-    let err = Renderer::with_graph(&gpu, &gpu.shaders(), scene, RenderSettings::new(SIZE.0, SIZE.1), &spec)
+    let err = Renderer::with_graph(&gpu, gpu.shaders(), scene, RenderSettings::new(SIZE.0, SIZE.1), &spec)
         .err()
         .expect("instance_bounds is not a built-in kind")
         .to_string();

@@ -148,7 +148,7 @@ fn renders_into_the_hosts_command_buffer_on_the_hosts_device() {
     // Reference: the same frame through a context cullgraph owns.
     let reference = {
         let gpu = GpuTest::new();
-        let mut r = Renderer::new(&gpu, &gpu.shaders(), boxes_scene(), RenderSettings::new(w, h)).unwrap();
+        let mut r = Renderer::new(&gpu, gpu.shaders(), boxes_scene(), RenderSettings::new(w, h)).unwrap();
         r.render_to_image(&boxes_camera()).unwrap().1
     };
 
@@ -216,7 +216,7 @@ fn lights_into_a_host_image(discard_failed: bool) {
     let (w, h) = (80, 48);
     let reference = {
         let gpu = GpuTest::new();
-        let mut r = Renderer::new(&gpu, &gpu.shaders(), boxes_scene(), RenderSettings::new(w, h)).unwrap();
+        let mut r = Renderer::new(&gpu, gpu.shaders(), boxes_scene(), RenderSettings::new(w, h)).unwrap();
         r.render_to_image(&boxes_camera()).unwrap().1
     };
     let host = Host::new();
@@ -604,7 +604,7 @@ void main() {
     )
     .unwrap();
     let spec = GraphSpec::from_file(&tmp.path().join("tint.ron")).unwrap();
-    let mut renderer = Renderer::with_graph(ctx, &shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
+    let mut renderer = Renderer::with_graph(ctx, shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
     let host_buffer = |name, location| {
         Buffer::new(ctx, &BufferDesc { name, size: 16, usage: vk::BufferUsageFlags::STORAGE_BUFFER, location }).unwrap()
     };
@@ -630,7 +630,7 @@ void main() {
     let pixels = u32::from_le_bytes(probe.read_bytes().unwrap()[..4].try_into().unwrap());
     assert_eq!(pixels, w * h, "the pass counted every pixel into the host's buffer");
     // Against the untinted frame: red halved, green gone, blue kept (8-bit rounding aside).
-    let plain = Renderer::new(ctx, &shaders, boxes_scene(), RenderSettings::new(w, h))
+    let plain = Renderer::new(ctx, shaders, boxes_scene(), RenderSettings::new(w, h))
         .unwrap()
         .render_to_image(&boxes_camera())
         .unwrap()
@@ -655,12 +655,12 @@ fn a_moved_object_shows_in_the_hosts_next_frame() {
     let (reference_before, reference_after) = {
         let gpu = GpuTest::new();
         let (mut world, handles) = World::new(boxes_scene()).unwrap();
-        let mut r = Renderer::from_world(&gpu, &gpu.shaders(), &world, RenderSettings::new(w, h), &spec).unwrap();
+        let mut r = Renderer::from_world(&gpu, gpu.shaders(), &world, RenderSettings::new(w, h), &spec).unwrap();
         let before = r.render_to_image(&boxes_camera()).unwrap().1;
         world.set_transform(handles[1], moved).unwrap();
         let (fresh_world, _) = World::new(world.scene().clone()).unwrap();
         let mut fresh =
-            Renderer::from_world(&gpu, &gpu.shaders(), &fresh_world, RenderSettings::new(w, h), &spec).unwrap();
+            Renderer::from_world(&gpu, gpu.shaders(), &fresh_world, RenderSettings::new(w, h), &spec).unwrap();
         (before, fresh.render_to_image(&boxes_camera()).unwrap().1)
     };
     assert_ne!(reference_before, reference_after, "the move shows");

@@ -27,15 +27,15 @@ fn a_graph_from_text_renders_and_its_errors_name_its_place() {
     let (scene, camera) = common::city_view(300, (32, 24));
     let text = r#"Graph(name: "brighter", extends: "two_phase", params: {"exposure": 1.6})"#;
     let spec = GraphSpec::from_text("brighter.ron", text);
-    let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(32, 24), &spec).unwrap();
+    let mut r = Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(32, 24), &spec).unwrap();
     let image = r.render_to_rgba8(&camera).unwrap().1;
     let loaded = GraphSpec::default_graph().with_overrides([("exposure".to_string(), "1.6".to_string())]);
-    let mut same = Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(32, 24), &loaded).unwrap();
+    let mut same = Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(32, 24), &loaded).unwrap();
     assert!(image == same.render_to_rgba8(&camera).unwrap().1);
 
     let bad =
         GraphSpec::from_text("variant.ron", "Graph(name: \"v\",\n  extends: \"two_phase\", passes: [Pass(name: 1)])");
-    let e = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(32, 24), &bad).err().unwrap().to_string();
+    let e = Renderer::with_graph(&gpu, shaders, scene, RenderSettings::new(32, 24), &bad).err().unwrap().to_string();
     assert!(e.contains("variant.ron:2:"), "{e}");
     gpu.assert_clean();
 }
@@ -49,7 +49,7 @@ fn the_visible_set_reads_back_as_world_handles() {
     let (world, handles) = World::new(scene).unwrap();
     for (graph, all) in [("no_cull", true), ("default", false)] {
         let spec = GraphSpec::builtin(graph).unwrap();
-        let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(48, 32), &spec).unwrap();
+        let mut r = Renderer::from_world(&gpu, shaders, &world, RenderSettings::new(48, 32), &spec).unwrap();
         assert_eq!(r.drawn_handles(ViewId::MAIN).unwrap(), None, "nothing captured yet");
         r.capture_draw_lists(true).unwrap();
         r.render(&camera).unwrap();
@@ -67,7 +67,7 @@ fn the_visible_set_reads_back_as_world_handles() {
         }
         assert!(drawn.iter().all(|h| world.instance(*h).is_ok()), "{graph}: live handles of this world");
     }
-    let plain = Renderer::new(&gpu, &shaders, world.live_scene(), RenderSettings::new(48, 32)).unwrap();
+    let plain = Renderer::new(&gpu, shaders, world.live_scene(), RenderSettings::new(48, 32)).unwrap();
     assert!(plain.drawn_handles(ViewId::MAIN).unwrap_err().to_string().contains("made from a scene"));
     gpu.assert_clean();
 }

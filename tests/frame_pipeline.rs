@@ -27,8 +27,7 @@ fn pipelined_frames_report_late_and_exactly_what_waited_frames_report() {
     let (scene, base) = city_view(3000, (w, h));
     let frames = 8u32;
     let spec = GraphSpec::builtin("two_phase").unwrap();
-    let new_renderer =
-        || Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
+    let new_renderer = || Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
 
     let mut waited = new_renderer();
     let expected: Vec<FrameStats> =
@@ -65,7 +64,7 @@ fn pipelined_frames_wait_on_and_signal_the_hosts_timeline_semaphore() {
     let shaders = gpu.shaders();
     let (w, h) = (64, 36);
     let (scene, camera) = city_view(500, (w, h));
-    let mut renderer = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(w, h)).unwrap();
+    let mut renderer = Renderer::new(&gpu, shaders, scene, RenderSettings::new(w, h)).unwrap();
     let device = gpu.device();
     let mut timeline = vk::SemaphoreTypeCreateInfo::default().semaphore_type(vk::SemaphoreType::TIMELINE);
     let semaphore =

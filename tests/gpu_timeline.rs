@@ -22,7 +22,7 @@ fn gpu_timings_place_each_pass_on_the_frames_timeline() {
     for (graph, expected_steps) in graphs {
         let (scene, camera) = city_view(500, (w, h));
         let spec = GraphSpec::builtin(graph).unwrap();
-        let mut renderer = Renderer::with_graph(&gpu, &gpu.shaders(), scene, RenderSettings::new(w, h), &spec).unwrap();
+        let mut renderer = Renderer::with_graph(&gpu, gpu.shaders(), scene, RenderSettings::new(w, h), &spec).unwrap();
         renderer.set_step_timing(true);
         let stats = (0..3).map(|_| renderer.render(&camera).unwrap()).last().unwrap();
         gpu.assert_clean();

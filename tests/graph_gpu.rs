@@ -19,7 +19,7 @@ fn compute_chain_with_aliased_transients_and_history_gives_exact_results() {
     let gpu = GpuTest::new();
     let mut renderer = Renderer::with_graph(
         &gpu,
-        &gpu.shaders(),
+        gpu.shaders(),
         boxes_scene(),
         RenderSettings::new(8, 8),
         &spec("tests/graphs/gpu/chain.ron"),
@@ -55,13 +55,13 @@ fn compute_chain_with_aliased_transients_and_history_gives_exact_results() {
 fn user_compute_pass_tints_the_lit_image() {
     let gpu = GpuTest::new();
     let settings = RenderSettings::new(64, 48);
-    let lit = Renderer::new(&gpu, &gpu.shaders(), boxes_scene(), settings.clone())
+    let lit = Renderer::new(&gpu, gpu.shaders(), boxes_scene(), settings.clone())
         .unwrap()
         .render_to_image(&boxes_camera())
         .unwrap()
         .1;
     let mut tint =
-        Renderer::with_graph(&gpu, &gpu.shaders(), boxes_scene(), settings, &spec("graph/examples/tint.ron")).unwrap();
+        Renderer::with_graph(&gpu, gpu.shaders(), boxes_scene(), settings, &spec("graph/examples/tint.ron")).unwrap();
     let tinted = tint.render_to_image(&boxes_camera()).unwrap().1;
     for (a, b) in lit.pixels().zip(tinted.pixels()) {
         for (c, scale) in [(0, 1.0f32), (1, 0.85), (2, 0.7)] {
@@ -75,13 +75,13 @@ fn user_compute_pass_tints_the_lit_image() {
 fn history_image_converges_on_a_still_camera() {
     let gpu = GpuTest::new();
     let settings = RenderSettings::new(32, 24);
-    let lit = Renderer::new(&gpu, &gpu.shaders(), boxes_scene(), settings.clone())
+    let lit = Renderer::new(&gpu, gpu.shaders(), boxes_scene(), settings.clone())
         .unwrap()
         .render_to_image(&boxes_camera())
         .unwrap()
         .1;
     let mut blend =
-        Renderer::with_graph(&gpu, &gpu.shaders(), boxes_scene(), settings, &spec("graph/examples/history.ron"))
+        Renderer::with_graph(&gpu, gpu.shaders(), boxes_scene(), settings, &spec("graph/examples/history.ron"))
             .unwrap();
     let mean_gap = |img: &cullgraph::render::output::RgbaImage| {
         lit.pixels().zip(img.pixels()).map(|(a, b)| a[0].abs_diff(b[0]) as f64).sum::<f64>() / (32.0 * 24.0)
@@ -100,21 +100,21 @@ fn history_image_converges_on_a_still_camera() {
 fn a_broken_reload_keeps_the_last_good_graph_running() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
-    let mut renderer = Renderer::new(&gpu, &shaders, boxes_scene(), RenderSettings::new(48, 32)).unwrap();
+    let mut renderer = Renderer::new(&gpu, shaders, boxes_scene(), RenderSettings::new(48, 32)).unwrap();
     let before = renderer.render_to_image(&boxes_camera()).unwrap().1;
 
     let mut broken = GraphSpec::builtin("two_phase").unwrap();
     broken.text = broken
         .text
         .replace("\"emissive_occlusion\", \"depth\": \"depth\"}", "\"emissive_occlusion\", \"depth\": \"dept\"}");
-    let err = renderer.reload_graph(&shaders, &broken).unwrap_err().to_string();
+    let err = renderer.reload_graph(shaders, &broken).unwrap_err().to_string();
     assert!(err.starts_with("graph/two_phase.ron:") && err.contains("'dept'"), "{err}");
     let still = renderer.render_to_image(&boxes_camera()).unwrap().1;
     assert!(before.as_raw() == still.as_raw(), "the old graph must keep rendering the same frame");
 
     // A good edit takes effect: brighter exposure, brighter image.
     let brighter = GraphSpec::default_graph().with_overrides([("exposure".to_string(), "2.0".to_string())]);
-    renderer.reload_graph(&shaders, &brighter).unwrap();
+    renderer.reload_graph(shaders, &brighter).unwrap();
     let after = renderer.render_to_image(&boxes_camera()).unwrap().1;
     let sum = |img: &cullgraph::render::output::RgbaImage| {
         img.pixels().map(|p| p[0] as u64 + p[1] as u64 + p[2] as u64).sum::<u64>()
@@ -128,7 +128,7 @@ fn buffers_too_small_for_their_slots_are_refused_at_the_binding_when_the_graph_i
     let shaders = gpu.shaders();
     let scene = boxes_scene();
     let refused = |spec: &GraphSpec| {
-        Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(48, 32), spec)
+        Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(48, 32), spec)
             .err()
             .expect("refused before any frame")
             .to_string()
@@ -186,12 +186,12 @@ fn a_reload_that_fails_at_its_first_frame_reverts_to_the_graph_it_replaced() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
     let settings = RenderSettings::new(48, 32);
-    let mut renderer = Renderer::new(&gpu, &shaders, boxes_scene(), settings).unwrap();
+    let mut renderer = Renderer::new(&gpu, shaders, boxes_scene(), settings).unwrap();
     let before = renderer.render_to_image(&boxes_camera()).unwrap().1;
     // Loads and compiles, but its frames need an image the host has not given.
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let needs_host = GraphSpec::from_file(&root.join("graph/examples/host_target.ron")).unwrap();
-    renderer.reload_graph(&shaders, &needs_host).unwrap();
+    renderer.reload_graph(shaders, &needs_host).unwrap();
     let err = renderer.render(&boxes_camera()).unwrap_err().to_string();
     // At the declaration of what is missing.
     let missing = "graph/examples/host_target.ron:14:9: resource 'color': is imported, but the host provided nothing";
@@ -202,7 +202,7 @@ fn a_reload_that_fails_at_its_first_frame_reverts_to_the_graph_it_replaced() {
     assert_eq!(before.as_raw(), after.as_raw(), "the reverted graph renders as before");
     // Only a reload that recorded nothing can be reverted, once.
     assert!(renderer.revert_reload().is_err());
-    renderer.reload_graph(&shaders, &GraphSpec::default_graph()).unwrap();
+    renderer.reload_graph(shaders, &GraphSpec::default_graph()).unwrap();
     renderer.render(&boxes_camera()).unwrap();
     assert!(renderer.revert_reload().is_err(), "the new graph has recorded a frame");
 }
@@ -231,7 +231,7 @@ fn a_cull_pass_placed_twice_renders_without_a_hazard() {
 )"#
     .into();
     spec.file = "twice.ron".into();
-    let mut renderer = Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(48, 32), &spec).unwrap();
+    let mut renderer = Renderer::with_graph(&gpu, shaders, boxes_scene(), RenderSettings::new(48, 32), &spec).unwrap();
     let names: Vec<&str> = renderer.plan().passes.iter().map(|p| p.name.as_str()).collect();
     assert_eq!(names.last(), Some(&"cull_again"), "{names:?}");
     for _ in 0..3 {
@@ -272,14 +272,14 @@ fn shared_memory_up_to_the_device_limit_runs_and_beyond_it_is_refused_at_the_sha
     };
     let words = limit / 4;
     let mut renderer =
-        Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(16, 8), &write(words)).unwrap();
+        Renderer::with_graph(&gpu, shaders, boxes_scene(), RenderSettings::new(16, 8), &write(words)).unwrap();
     let image = renderer.render_to_image(&boxes_camera()).unwrap().1;
     for (x, y, pixel) in image.enumerate_pixels() {
         let i = x % 8 + 8 * (y % 8);
         assert_eq!(pixel[0] as u32, (words - 1 - i) % 256, "pixel {x},{y}");
     }
 
-    let err = Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(16, 8), &write(words + 4))
+    let err = Renderer::with_graph(&gpu, shaders, boxes_scene(), RenderSettings::new(16, 8), &write(words + 4))
         .err()
         .expect("refused when loaded")
         .to_string();

@@ -110,7 +110,7 @@ struct FillPush {
 
 /// Pipelines shared by the cases of one test: depth fill and depth copy.
 struct Tools {
-    shaders: ShaderCompiler,
+    shaders: &'static ShaderCompiler,
     /// Per sample count: full-screen pattern, random triangles.
     fills: HashMap<u32, [Pipeline; 2]>,
     /// Depth copy, single-sample and multisampled.
@@ -524,7 +524,7 @@ fn hiz_build_in_a_graph_reduces_the_gbuffer_depth() {
             settings: Vec::new(),
         };
         let mut renderer =
-            Renderer::with_graph(gpu, &tools.shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
+            Renderer::with_graph(gpu, tools.shaders, boxes_scene(), RenderSettings::new(w, h), &spec).unwrap();
         let first = boxes_camera();
         let mut camera = first.clone();
         camera.eye.x -= 0.7;

@@ -15,7 +15,7 @@ const SIZE: (u32, u32) = (64, 48);
 
 fn image(gpu: &GpuTest, scene: Scene) -> Vec<u8> {
     let shaders = gpu.shaders();
-    let mut r = Renderer::new(gpu, &shaders, scene, RenderSettings::new(SIZE.0, SIZE.1)).unwrap();
+    let mut r = Renderer::new(gpu, shaders, scene, RenderSettings::new(SIZE.0, SIZE.1)).unwrap();
     r.render_to_rgba8(&boxes_camera()).unwrap().1
 }
 
@@ -59,14 +59,14 @@ fn the_world_sets_the_sun_and_refuses_a_bad_one() {
     let shaders = gpu.shaders();
     let (mut world, _) = World::new(boxes_scene()).unwrap();
     let mut r =
-        Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &GraphSpec::default_graph())
+        Renderer::from_world(&gpu, shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &GraphSpec::default_graph())
             .unwrap();
     let before = r.render_to_rgba8(&boxes_camera()).unwrap().1;
 
     let sun = DirectionalLight { direction: Vec3::new(0.6, -0.3, -0.74).normalize(), color: Vec3::new(4.0, 1.0, 0.5) };
     world.set_sun(sun).unwrap();
     assert_eq!(world.sun(), sun);
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     let after = r.render_to_rgba8(&boxes_camera()).unwrap().1;
     assert!(after != before, "the new sun shades the next frame");
     let mut expected = boxes_scene();

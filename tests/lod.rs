@@ -35,9 +35,9 @@ fn render_checked(
 ) -> (FrameStats, Vec<u8>) {
     let shaders = gpu.shaders();
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let mut renderer = Renderer::with_graph(gpu, &shaders, scene.clone(), settings, spec).unwrap();
+    let mut renderer = Renderer::with_graph(gpu, shaders, scene.clone(), settings, spec).unwrap();
     if verify {
-        renderer.enable_verification(&shaders).unwrap();
+        renderer.enable_verification(shaders).unwrap();
     }
     let missed = |stats: &FrameStats| stats.verify.as_ref().map_or(0, |v| v.false_negatives);
     for _ in 1..frames {
@@ -215,7 +215,7 @@ fn levels_are_placed_alike_over_many_superblocks() {
     let drawn = |name: &str, threshold: f64, frames: u32| {
         let settings = RenderSettings::new(SIZE.0, SIZE.1);
         let mut renderer =
-            Renderer::with_graph(&gpu, &shaders, scene.clone(), settings, &graph(name, threshold)).unwrap();
+            Renderer::with_graph(&gpu, shaders, scene.clone(), settings, &graph(name, threshold)).unwrap();
         renderer.capture_draw_lists(true).unwrap();
         for _ in 1..frames {
             renderer.render(&camera).unwrap();
@@ -254,15 +254,15 @@ fn the_threshold_changes_live_once_levels_are_chosen() {
     let scene = dense(40);
     let camera = near_camera();
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let mut renderer = Renderer::with_graph(&gpu, &shaders, scene.clone(), settings, &graph("frustum", 0.0)).unwrap();
+    let mut renderer = Renderer::with_graph(&gpu, shaders, scene.clone(), settings, &graph("frustum", 0.0)).unwrap();
     let (whole, whole_image) = renderer.render_to_image(&camera).unwrap();
     // From none to some levels: the pass is made again with them.
-    assert_eq!(renderer.set_graph_params(&shaders, &[("lod_threshold", "1.0")]).unwrap(), ParamsApplied::Rebuilt);
+    assert_eq!(renderer.set_graph_params(shaders, &[("lod_threshold", "1.0")]).unwrap(), ParamsApplied::Rebuilt);
     let (one, _) = renderer.render_to_image(&camera).unwrap();
     // Between thresholds, and back to 0, it takes them as they are.
-    assert_eq!(renderer.set_graph_params(&shaders, &[("lod_threshold", "4.0")]).unwrap(), ParamsApplied::Live);
+    assert_eq!(renderer.set_graph_params(shaders, &[("lod_threshold", "4.0")]).unwrap(), ParamsApplied::Live);
     let (four, four_image) = renderer.render_to_image(&camera).unwrap();
-    assert_eq!(renderer.set_graph_params(&shaders, &[("lod_threshold", "0.0")]).unwrap(), ParamsApplied::Live);
+    assert_eq!(renderer.set_graph_params(shaders, &[("lod_threshold", "0.0")]).unwrap(), ParamsApplied::Live);
     let (zero, zero_image) = renderer.render_to_image(&camera).unwrap();
     assert!(four.triangles < one.triangles && one.triangles < whole.triangles);
     // Each as a renderer loaded with that threshold draws it.
@@ -283,10 +283,10 @@ fn a_live_world_draws_its_meshes_at_levels_as_a_loaded_scene_does() {
     let spec = graph("two_phase", 1.0);
     let (mut world, _) = World::new(dense(40)).unwrap();
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let mut renderer = Renderer::from_world(&gpu, &shaders, &world, settings, &spec).unwrap();
+    let mut renderer = Renderer::from_world(&gpu, shaders, &world, settings, &spec).unwrap();
     // The world's frame after `frames` frames, beside a renderer loaded with its live scene.
     let compare = |world: &World, renderer: &mut Renderer, what: &str| {
-        let synced = renderer.sync(&shaders, world).unwrap();
+        let synced = renderer.sync(shaders, world).unwrap();
         for _ in 1..3 {
             renderer.render(&camera).unwrap();
         }

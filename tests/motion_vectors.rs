@@ -111,10 +111,10 @@ fn moving_instances_have_their_motion_and_stopped_ones_none() {
     let mut at = [DVec3::new(-0.6, 0.0, 0.0), DVec3::new(0.6, 0.0, 0.0)];
     let (mut world, handles) = World::new(two_quads(at)).unwrap();
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, settings, &post()).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, settings, &post()).unwrap();
     let camera = common::camera_on_z();
     let frame = |world: &World, r: &mut Renderer| -> OutputF32 {
-        r.sync(&shaders, world).unwrap();
+        r.sync(shaders, world).unwrap();
         r.render(&camera).unwrap();
         r.read_output_f32("motion").unwrap()
     };
@@ -164,7 +164,7 @@ fn a_moving_camera_gives_still_geometry_its_motion() {
     let shaders = gpu.shaders();
     let at = [DVec3::new(-0.6, 0.0, 0.0), DVec3::new(0.6, 0.0, 0.0)];
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let mut r = Renderer::with_graph(&gpu, &shaders, two_quads(at), settings, &post()).unwrap();
+    let mut r = Renderer::with_graph(&gpu, shaders, two_quads(at), settings, &post()).unwrap();
     let first = common::camera_on_z();
     r.render(&first).unwrap();
     let still = r.read_output_f32("motion").unwrap();
@@ -190,7 +190,7 @@ fn a_jittering_still_camera_gives_no_motion() {
     let shaders = gpu.shaders();
     let at = [DVec3::new(-0.6, 0.0, 0.0), DVec3::new(0.6, 0.0, 0.0)];
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let mut r = Renderer::with_graph(&gpu, &shaders, two_quads(at), settings, &post()).unwrap();
+    let mut r = Renderer::with_graph(&gpu, shaders, two_quads(at), settings, &post()).unwrap();
     let camera = common::camera_on_z();
     for frame in 0..4 {
         let jittered = Camera { jitter: cullgraph::scene::projection::halton_jitter(frame + 1), ..camera.clone() };
@@ -244,8 +244,7 @@ fn the_command_line_writes_motion_as_openexr() {
 
     let gpu = GpuTest::new();
     let (scene, camera) = common::city_view(300, SIZE);
-    let mut r =
-        Renderer::with_graph(&gpu, &gpu.shaders(), scene, RenderSettings::new(SIZE.0, SIZE.1), &post()).unwrap();
+    let mut r = Renderer::with_graph(&gpu, gpu.shaders(), scene, RenderSettings::new(SIZE.0, SIZE.1), &post()).unwrap();
     for frame in 0..2 {
         r.render(&cullgraph::scene::CameraPath::Orbit.camera_at(&camera, frame)).unwrap();
     }
@@ -268,10 +267,10 @@ fn a_rebuilt_scene_starts_without_motion() {
     let mut at = [DVec3::new(-0.6, 0.0, 0.0), DVec3::new(0.6, 0.0, 0.0)];
     let (mut world, handles) = World::new(two_quads(at)).unwrap();
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, settings, &post()).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, settings, &post()).unwrap();
     let camera = common::camera_on_z();
     let frame = |world: &World, r: &mut Renderer| -> (OutputF32, bool) {
-        let stats = r.sync(&shaders, world).unwrap();
+        let stats = r.sync(shaders, world).unwrap();
         r.render(&camera).unwrap();
         (r.read_output_f32("motion").unwrap(), stats.relayout)
     };
@@ -309,15 +308,15 @@ fn previous_records_are_kept_only_while_a_view_writes_motion() {
     let (mut world, handles) = World::new(two_quads(at)).unwrap();
     let settings = RenderSettings::new(SIZE.0, SIZE.1);
     let spec = GraphSpec::builtin("two_phase").unwrap();
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, settings.clone(), &spec).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, settings.clone(), &spec).unwrap();
     let camera = common::camera_on_z();
     r.render(&camera).unwrap();
     assert!(r.gpu_scene().prev_instances.is_none(), "no view writes motion");
 
-    let view = r.add_view(&shaders, settings, &post()).unwrap();
+    let view = r.add_view(shaders, settings, &post()).unwrap();
     let before = at;
     let frame = |world: &World, r: &mut Renderer| -> OutputF32 {
-        r.sync(&shaders, world).unwrap();
+        r.sync(shaders, world).unwrap();
         r.render_views(&[(ViewId::MAIN, &camera), (view, &camera)]).unwrap();
         r.read_view_output_f32(view, "motion").unwrap()
     };

@@ -84,7 +84,7 @@ fn render(
     frames: usize,
 ) -> (RgbaImage, Vec<FrameStats>) {
     let mut renderer =
-        Renderer::with_graph(gpu, &gpu.shaders(), scene.clone(), RenderSettings::new(size.0, size.1), spec).unwrap();
+        Renderer::with_graph(gpu, gpu.shaders(), scene.clone(), RenderSettings::new(size.0, size.1), spec).unwrap();
     let mut image = None;
     let mut stats = Vec::new();
     for _ in 0..frames {
@@ -333,7 +333,7 @@ fn claimed_samples_give_the_stencils_image_except_at_coplanar_ties() {
         );
     } else {
         let settings = RenderSettings::new(size.0, size.1);
-        let error = Renderer::with_graph(&gpu, &gpu.shaders(), scene.clone(), settings, &draw_order).err().unwrap();
+        let error = Renderer::with_graph(&gpu, gpu.shaders(), scene.clone(), settings, &draw_order).err().unwrap();
         let message = error.to_string();
         assert!(
             message.contains("VK_EXT_fragment_shader_interlock") && message.contains("fragmentShaderSampleInterlock"),
@@ -621,7 +621,7 @@ fn compressed_gbuffer_takes_less_memory_than_the_per_sample_gbuffer() {
             .map(|&graph| {
                 let settings = RenderSettings::new(96, 64);
                 let renderer =
-                    Renderer::with_graph(&gpu, &gpu.shaders(), scene.clone(), settings, &spec(graph, &[])).unwrap();
+                    Renderer::with_graph(&gpu, gpu.shaders(), scene.clone(), settings, &spec(graph, &[])).unwrap();
                 let all = renderer.runtime().resource_bytes();
                 (graph, all.iter().map(|r| (r.name.clone(), r.bytes)).collect())
             })
@@ -876,14 +876,14 @@ fn packed_visibility_ids_shade_like_two_words_and_refuse_what_does_not_fit() {
     let camera = Camera { eye: DVec3::new(0.0, 0.0, 0.0), target: DVec3::new(0.0, 0.0, -1.0), ..Default::default() };
     let settings = RenderSettings::new(8, 8);
     // Refused when the graph is compiled for the scene, at the passes that write the ids.
-    let refused = Renderer::with_graph(&gpu, &gpu.shaders(), big.clone(), settings.clone(), &packed)
+    let refused = Renderer::with_graph(&gpu, gpu.shaders(), big.clone(), settings.clone(), &packed)
         .err()
         .expect("packed ids refused")
         .to_string();
     assert!(refused.starts_with("graph/visibility_buffer.ron:18:"), "{refused}");
     assert!(refused.contains("pass 'draw_early'") && refused.contains("19 + 15"), "{refused}");
     assert!(refused.contains("pass 'draw_late'"), "{refused}");
-    let mut renderer = Renderer::with_graph(&gpu, &gpu.shaders(), big, settings, &two_words).unwrap();
+    let mut renderer = Renderer::with_graph(&gpu, gpu.shaders(), big, settings, &two_words).unwrap();
     renderer.render(&camera).unwrap();
 }
 
@@ -977,7 +977,7 @@ fn a_buffer_beyond_the_devices_binding_range_is_refused_at_its_declaration() {
     }
     let scene = boxes_scene();
     let settings = RenderSettings::new(3840, 2160);
-    let error = Renderer::with_graph(&gpu, &gpu.shaders(), scene, settings, &spec).err().expect("refused").to_string();
+    let error = Renderer::with_graph(&gpu, gpu.shaders(), scene, settings, &spec).err().expect("refused").to_string();
     let expected = format!(
         ":{line}:9: buffer 'gbuffer' is 199065616 bytes, but pass 'gbuffer' binds it as \"gbuffer\" and {} lets one \
          binding address at most {limit} bytes (maxStorageBufferRange)",

@@ -40,7 +40,7 @@ fn each_layer_of_the_multiview_pass_is_that_eyes_own_pass() {
         ..Default::default()
     };
     let eyes = multiview::eye_cameras(&head, SIZE.0, SIZE.1);
-    let (renderer, drawn) = multiview::drawn_by_eyes(&ctx, &shaders, scene, &eyes, SIZE, 2).unwrap();
+    let (renderer, drawn) = multiview::drawn_by_eyes(&ctx, shaders, scene, &eyes, SIZE, 2).unwrap();
     let union: BTreeSet<u32> = drawn[0].union(&drawn[1]).copied().collect();
     // Each eye culls on its own: the eyes' lists differ, and the union is more than either.
     assert!(!drawn[0].is_empty() && !drawn[1].is_empty());
@@ -53,7 +53,7 @@ fn each_layer_of_the_multiview_pass_is_that_eyes_own_pass() {
         (left.instances, right.instances, both.instances),
         (drawn[0].len() as u32, drawn[1].len() as u32, union.len() as u32)
     );
-    let draws = StereoDraws::new(&ctx, &shaders, &eyes, SIZE.0, SIZE.1).unwrap();
+    let draws = StereoDraws::new(&ctx, shaders, &eyes, SIZE.0, SIZE.1).unwrap();
     let scene = renderer.gpu_scene();
     let images = |lists: [&EyeList; 2]| {
         ctx.submit_and_wait(|cmd| {

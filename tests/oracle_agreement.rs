@@ -30,8 +30,8 @@ fn the_id_render_and_the_ray_cast_see_the_same_instances_in_the_city() {
     {
         let spec = GraphSpec::builtin(graph).unwrap().with_overrides(params.to_vec());
         let mut renderer =
-            Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
-        renderer.enable_verification(&shaders).unwrap();
+            Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
+        renderer.enable_verification(shaders).unwrap();
         for f in 0..6 {
             let camera = CameraPath::Orbit.camera_at(&base, f * 3);
             renderer.render(&camera).unwrap();

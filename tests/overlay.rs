@@ -30,7 +30,7 @@ fn render(
     frames: u32,
 ) -> (FrameStats, RgbaImage, Renderer) {
     let shaders = gpu.shaders();
-    let mut r = Renderer::with_graph(gpu, &shaders, scene.clone(), RenderSettings::new(size.0, size.1), spec).unwrap();
+    let mut r = Renderer::with_graph(gpu, shaders, scene.clone(), RenderSettings::new(size.0, size.1), spec).unwrap();
     let mut last = None;
     for _ in 0..frames {
         last = Some(r.render_to_image(camera).unwrap());

@@ -15,7 +15,7 @@ fn each_pixel_names_the_instance_it_shows() {
     let (world, handles) = World::new(boxes_scene()).unwrap();
     // The albedo debug view shows each pixel's material: the picked instance's must match it.
     let spec = GraphSpec::builtin("post").unwrap().with_overrides([("debug_view".to_string(), "albedo".to_string())]);
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(w, h), &spec).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, RenderSettings::new(w, h), &spec).unwrap();
     r.render(&boxes_camera()).unwrap();
     let (_, image) = r.render_to_rgba8(&boxes_camera()).unwrap();
     let depth = r.read_output_f32("depth").unwrap();
@@ -41,7 +41,7 @@ fn each_pixel_names_the_instance_it_shows() {
     assert_eq!(seen.len(), handles.len(), "every box and the ground are in view");
     let e = r.pick(ViewId::MAIN, w, 0).unwrap_err().to_string();
     assert!(e.contains("pixel (64, 0) is outside the 64x48 output"), "{e}");
-    let mut plain = Renderer::new(&gpu, &shaders, boxes_scene(), RenderSettings::new(w, h)).unwrap();
+    let mut plain = Renderer::new(&gpu, shaders, boxes_scene(), RenderSettings::new(w, h)).unwrap();
     plain.render(&boxes_camera()).unwrap();
     assert!(plain.pick(ViewId::MAIN, 0, 0).unwrap_err().to_string().contains("has no output 'object_id'"));
     gpu.assert_clean();

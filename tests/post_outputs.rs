@@ -31,7 +31,7 @@ fn tone_mapping_as_a_pass_keeps_the_shipped_images_within_one_level() {
     for base in ["default", "msaa_per_sample", "msaa_compressed", "visibility_buffer"] {
         let render = |spec: &GraphSpec| {
             let settings = RenderSettings::new(SIZE.0, SIZE.1);
-            let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), settings, spec).unwrap();
+            let mut r = Renderer::with_graph(&gpu, shaders, scene.clone(), settings, spec).unwrap();
             r.render_to_rgba8(&camera).unwrap();
             r.render_to_rgba8(&camera).unwrap().1
         };
@@ -78,7 +78,7 @@ fn depth_and_hdr_outputs_read_back_as_f32() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
     let spec = GraphSpec::builtin("post").unwrap();
-    let mut r = Renderer::with_graph(&gpu, &shaders, lit_quad(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    let mut r = Renderer::with_graph(&gpu, shaders, lit_quad(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
     let color = r.render_to_rgba8(&common::camera_on_z()).unwrap().1;
     let depth = r.read_output_f32("depth").unwrap();
     let hdr = r.read_output_f32("hdr").unwrap();
@@ -117,7 +117,7 @@ fn msaa_depth_resolves_to_the_nearest_sample() {
     let shaders = gpu.shaders();
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("graph/examples/msaa_post.ron");
     let spec = GraphSpec::from_file(&path).unwrap();
-    let mut r = Renderer::with_graph(&gpu, &shaders, lit_quad(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    let mut r = Renderer::with_graph(&gpu, shaders, lit_quad(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
     r.render(&common::camera_on_z()).unwrap();
     let depth = r.read_output_f32("depth_resolved").unwrap();
     let quad = 0.1f32 / 3.0;
@@ -128,7 +128,7 @@ fn msaa_depth_resolves_to_the_nearest_sample() {
     let covered = depth.data.iter().filter(|&&d| d > 0.0).count();
     let mut single = Renderer::with_graph(
         &gpu,
-        &shaders,
+        shaders,
         lit_quad(),
         RenderSettings::new(SIZE.0, SIZE.1),
         &GraphSpec::builtin("post").unwrap(),
@@ -171,7 +171,7 @@ fn the_command_line_writes_hdr_and_depth_as_openexr() {
     let gpu = GpuTest::new();
     let (scene, camera) = common::city_view(300, (64, 48));
     let spec = GraphSpec::builtin("post").unwrap();
-    let mut r = Renderer::with_graph(&gpu, &gpu.shaders(), scene, RenderSettings::new(64, 48), &spec).unwrap();
+    let mut r = Renderer::with_graph(&gpu, gpu.shaders(), scene, RenderSettings::new(64, 48), &spec).unwrap();
     r.render(&camera).unwrap();
     let (lib_hdr, lib_depth) = (r.read_output_f32("hdr").unwrap(), r.read_output_f32("depth").unwrap());
     assert_eq!(hdr.as_raw(), &lib_hdr.data, "the EXR holds the HDR output");

@@ -51,7 +51,7 @@ fn cpu_scopes_reach_the_profiler_with_one_per_pass() {
     let (w, h) = (64, 36);
     let (scene, camera) = city_view(500, (w, h));
     let spec = GraphSpec::builtin("two_phase").unwrap();
-    let mut renderer = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(w, h), &spec).unwrap();
+    let mut renderer = Renderer::with_graph(&gpu, shaders, scene, RenderSettings::new(w, h), &spec).unwrap();
     puffin::GlobalProfiler::lock().new_frame();
     for _ in 0..2 {
         renderer.render(&camera).unwrap();

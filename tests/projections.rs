@@ -121,9 +121,9 @@ fn render(
 ) -> Vec<(RgbaImage, FrameStats)> {
     let shaders = gpu.shaders();
     let spec = GraphSpec::builtin(graph).unwrap();
-    let mut r = Renderer::with_graph(gpu, &shaders, scene.clone(), RenderSettings::new(size.0, size.1), &spec).unwrap();
+    let mut r = Renderer::with_graph(gpu, shaders, scene.clone(), RenderSettings::new(size.0, size.1), &spec).unwrap();
     if verify {
-        r.enable_verification(&shaders).unwrap();
+        r.enable_verification(shaders).unwrap();
     }
     cameras
         .iter()

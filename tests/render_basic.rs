@@ -9,7 +9,7 @@ use cullgraph::render::{RenderSettings, Renderer};
 fn boxes_render_with_the_expected_colors() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
-    let mut renderer = Renderer::new(&gpu, &shaders, boxes_scene(), RenderSettings::new(96, 64)).unwrap();
+    let mut renderer = Renderer::new(&gpu, shaders, boxes_scene(), RenderSettings::new(96, 64)).unwrap();
     let (stats, image) = renderer.render_to_image(&boxes_camera()).unwrap();
     assert_eq!((stats.instances, stats.draws), (4, 1));
     image.save(std::env::temp_dir().join("cullgraph_boxes.png")).unwrap();
@@ -45,8 +45,7 @@ fn uncleared_gbuffer_colors_never_reach_the_image() {
             if let Some(samples) = msaa {
                 spec = spec.with_overrides([("msaa".to_string(), samples.to_string())]);
             }
-            let mut r =
-                Renderer::with_graph(&gpu, &shaders, boxes_scene(), RenderSettings::new(48, 32), &spec).unwrap();
+            let mut r = Renderer::with_graph(&gpu, shaders, boxes_scene(), RenderSettings::new(48, 32), &spec).unwrap();
             // The orbit moves geometry over texels that were background and back.
             (0..4).map(|f| r.render_to_image(&CameraPath::Orbit.camera_at(&boxes_camera(), f * 2)).unwrap().1).collect()
         };

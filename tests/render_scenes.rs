@@ -17,7 +17,7 @@ fn render(
     camera: Option<cullgraph::scene::Camera>,
 ) -> RgbaImage {
     let camera = camera.unwrap_or_else(|| scene.default_camera(settings.width as f32 / settings.height as f32));
-    let mut renderer = Renderer::new(gpu, &gpu.shaders(), scene, settings).unwrap();
+    let mut renderer = Renderer::new(gpu, gpu.shaders(), scene, settings).unwrap();
     renderer.render_to_image(&camera).unwrap().1
 }
 
@@ -65,13 +65,13 @@ fn monastery_draws_all_81_meshes_and_covers_the_view() {
     let source = if path.exists() { path } else { std::path::PathBuf::from("/work/shared/assets/monastery.glb") };
     let scene = SceneSource::File(source).load(&LoadOptions::default()).unwrap();
     let camera = scene.default_camera(96.0 / 54.0);
-    let mut renderer = Renderer::new(&gpu, &gpu.shaders(), scene.clone(), RenderSettings::new(96, 54)).unwrap();
+    let mut renderer = Renderer::new(&gpu, gpu.shaders(), scene.clone(), RenderSettings::new(96, 54)).unwrap();
     let (stats, _) = renderer.render_to_image(&camera).unwrap();
     assert_eq!((stats.instances, stats.draws, stats.triangles), (81, 81, 124_789));
     // The albedo view paints the uniform 0.64 grey of every monastery material: count it.
     let spec = GraphSpec::default_graph().with_overrides([("debug_view".to_string(), "albedo".to_string())]);
     let mut albedo_renderer =
-        Renderer::with_graph(&gpu, &gpu.shaders(), scene, RenderSettings::new(96, 54), &spec).unwrap();
+        Renderer::with_graph(&gpu, gpu.shaders(), scene, RenderSettings::new(96, 54), &spec).unwrap();
     let albedo = albedo_renderer.render_to_image(&camera).unwrap().1;
     let grey = albedo.pixels().filter(|p| p[0] == p[1] && p[1] == p[2] && p[0].abs_diff(163) <= 1).count();
     let share = grey as f64 / (96.0 * 54.0);
@@ -84,7 +84,7 @@ fn frames_are_deterministic() {
     let scene =
         SceneSource::Builtin("field".into()).load(&LoadOptions { instances: Some(500), ..Default::default() }).unwrap();
     let camera = scene.default_camera(80.0 / 60.0);
-    let mut renderer = Renderer::new(&gpu, &gpu.shaders(), scene, RenderSettings::new(80, 60)).unwrap();
+    let mut renderer = Renderer::new(&gpu, gpu.shaders(), scene, RenderSettings::new(80, 60)).unwrap();
     let a = renderer.render_to_image(&camera).unwrap().1;
     let b = renderer.render_to_image(&camera).unwrap().1;
     assert!(a.as_raw() == b.as_raw(), "two renders of the same frame differ");

@@ -79,8 +79,8 @@ fn render(
     let shaders = gpu.shaders();
     let spec = GraphSpec::builtin(graph).unwrap();
     let mut renderer =
-        Renderer::with_graph(gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
-    renderer.set_shadows(&shaders, settings).unwrap();
+        Renderer::with_graph(gpu, shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    renderer.set_shadows(shaders, settings).unwrap();
     renderer.render_to_image(camera).unwrap();
     let (stats, image) = renderer.render_to_image(camera).unwrap();
     (image, stats.frustum_culled)
@@ -237,8 +237,8 @@ fn moving_casters_and_moving_lights_give_the_image_of_unculled_casters() {
     let size = RenderSettings::new(SIZE.0, SIZE.1);
     let make = |graph: &str, culling: bool| {
         let spec = GraphSpec::builtin(graph).unwrap();
-        let mut r = Renderer::from_world(&gpu, &shaders, &world, size.clone(), &spec).unwrap();
-        r.set_shadows(&shaders, Some(shadows(culling))).unwrap();
+        let mut r = Renderer::from_world(&gpu, shaders, &world, size.clone(), &spec).unwrap();
+        r.set_shadows(shaders, Some(shadows(culling))).unwrap();
         r
     };
     let (mut culled, mut unculled) = (make("default", true), make("no_cull", false));
@@ -269,8 +269,8 @@ fn moving_casters_and_moving_lights_give_the_image_of_unculled_casters() {
             let turn = Vec3::new(0.3 * (t as f32 - 3.0), -1.0, -1.5).normalize();
             world.set_sun(DirectionalLight { direction: turn, ..world.scene().sun }).unwrap();
         }
-        culled.sync(&shaders, &world).unwrap();
-        unculled.sync(&shaders, &world).unwrap();
+        culled.sync(shaders, &world).unwrap();
+        unculled.sync(shaders, &world).unwrap();
         let (_, a) = culled.render_to_image(&camera).unwrap();
         let (_, b) = unculled.render_to_image(&camera).unwrap();
         assert!(a.as_raw() == b.as_raw(), "frame {frame}: caster culling changed the image");
@@ -284,8 +284,8 @@ fn bad_shadow_settings_are_refused_and_change_nothing() {
     let shaders = gpu.shaders();
     let (scene, _) = stage(Vec3::new(0.0, -1.0, -1.5));
     let spec = GraphSpec::builtin("default").unwrap();
-    let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
-    r.set_shadows(&shaders, Some(shadows(true))).unwrap();
+    let mut r = Renderer::with_graph(&gpu, shaders, scene, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    r.set_shadows(shaders, Some(shadows(true))).unwrap();
     for (bad, says) in [
         (ShadowSettings { cascades: 0, ..shadows(true) }, "0 cascades"),
         (ShadowSettings { cascades: 5, ..shadows(true) }, "5 cascades"),
@@ -294,14 +294,14 @@ fn bad_shadow_settings_are_refused_and_change_nothing() {
         (ShadowSettings { distance: Some(f32::NAN), ..shadows(true) }, "distance NaN"),
         (ShadowSettings { lambda: 2.0, ..shadows(true) }, "lambda 2"),
     ] {
-        let e = r.set_shadows(&shaders, Some(bad)).unwrap_err().to_string();
+        let e = r.set_shadows(shaders, Some(bad)).unwrap_err().to_string();
         assert!(e.contains(says), "{e}");
         assert_eq!(r.shadows(), Some(&shadows(true)));
     }
     let memory = r.shadow_map_bytes();
     assert!(memory >= 4 * 512 * 512 * 4, "{memory}");
     r.render(&camera()).unwrap();
-    r.set_shadows(&shaders, None).unwrap();
+    r.set_shadows(shaders, None).unwrap();
     assert_eq!(r.shadow_map_bytes(), 0);
     r.render(&camera()).unwrap();
     gpu.assert_clean();
@@ -315,8 +315,8 @@ fn maps_are_drawn_again_only_when_their_camera_the_sun_or_the_world_changed() {
     add_box(&mut scene, cube, DVec3::new(0.0, 9.0, 16.0), 3.0);
     let (mut world, handles) = World::new(scene).unwrap();
     let spec = GraphSpec::default_graph();
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
-    r.set_shadows(&shaders, Some(shadows(true))).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    r.set_shadows(shaders, Some(shadows(true))).unwrap();
     let drew = |r: &mut Renderer, camera: &Camera| -> (Vec<u32>, Vec<u8>) {
         let (stats, image) = r.render_to_rgba8(camera).unwrap();
         (stats.shadow_cascades.iter().map(|c| c.index).collect(), image)
@@ -343,10 +343,10 @@ fn maps_are_drawn_again_only_when_their_camera_the_sun_or_the_world_changed() {
             Transform { linear: Mat3::from_diagonal(Vec3::splat(3.0)), translation: DVec3::new(1.0, 9.0, 16.0) },
         )
         .unwrap();
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     assert_eq!(drew(&mut r, &stepped).0, [0, 1, 2, 3]);
     world.set_sun(DirectionalLight { direction: Vec3::new(0.1, -1.0, -1.5).normalize(), ..world.scene().sun }).unwrap();
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     assert_eq!(drew(&mut r, &stepped).0, [0, 1, 2, 3]);
     // Kept off, every map is drawn every frame.
     r.set_shadow_maps_kept(false);
@@ -411,8 +411,8 @@ fn only_the_budget_of_lights_casts_shadows_and_a_larger_budget_is_refused() {
     assert!((luma(&budget_one, at) - luma(&lit, at)).abs() < 2.0, "past the budget, the light casts no shadow");
     assert!(luma(&budget_two, at) < luma(&lit, at) - 5.0, "within it, it does");
     let spec = GraphSpec::default_graph();
-    let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
-    let e = r.set_shadows(&shaders, Some(ShadowSettings { local_lights: 5, ..shadows(true) })).unwrap_err();
+    let mut r = Renderer::with_graph(&gpu, shaders, scene, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    let e = r.set_shadows(shaders, Some(ShadowSettings { local_lights: 5, ..shadows(true) })).unwrap_err();
     assert!(e.to_string().contains("5 shadowed spot and point lights; at most 4"), "{e}");
     gpu.assert_clean();
 }

@@ -65,9 +65,9 @@ fn bend(angle: f32) -> Vec<Mat4> {
 fn renderer(gpu: &GpuTest, world: &World, graph: &str, verify: bool) -> Renderer {
     let shaders = gpu.shaders();
     let spec = GraphSpec::builtin(graph).unwrap();
-    let mut r = Renderer::from_world(gpu, &shaders, world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    let mut r = Renderer::from_world(gpu, shaders, world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
     if verify {
-        r.enable_verification(&shaders).unwrap();
+        r.enable_verification(shaders).unwrap();
     }
     r
 }
@@ -86,7 +86,7 @@ fn posed_copies_are_deformed_on_the_gpu_as_the_cpu_reference_deforms_them() {
     r.render(&camera()).unwrap();
     for (angle, lift) in [(0.8f32, 0.5f32), (-1.3, 1.0), (0.0, 0.0)] {
         world.set_pose(right, &bend(angle), &[lift]).unwrap();
-        r.sync(&shaders, &world).unwrap();
+        r.sync(shaders, &world).unwrap();
         r.render(&camera()).unwrap();
         let pose = world.pose(right).unwrap().expect("posed").clone();
         assert_eq!((pose.source, world.instance(right).unwrap().mesh), (bar, pose.mesh), "the instance draws its copy");
@@ -143,10 +143,10 @@ fn culling_stays_exact_while_a_posed_bar_swings_in_and_out_of_view() {
     for frame in 0..12 {
         let angle = 1.6 * (frame as f32 * 0.6).sin().abs();
         world.set_pose(right, &bend(angle), &[(frame % 3) as f32 * 0.5]).unwrap();
-        culled.sync(&shaders, &world).unwrap();
-        unculled.sync(&shaders, &world).unwrap();
+        culled.sync(shaders, &world).unwrap();
+        unculled.sync(shaders, &world).unwrap();
         for (k, other) in others.iter_mut().enumerate() {
-            other.sync(&shaders, &world).unwrap();
+            other.sync(shaders, &world).unwrap();
             let verify = other.render(&camera).unwrap().verify.expect("verified");
             assert_eq!(verify.false_negatives, 0, "graph {k}, frame {frame}: missed {:?}", verify.missed);
         }
@@ -216,7 +216,7 @@ fn motion_vectors_follow_the_pose() {
     let camera = Camera { eye: DVec3::new(2.0, 2.0, 4.0), target: DVec3::new(2.0, 1.5, -1.0), ..Default::default() };
     let mut r = renderer(&gpu, &world, "post", false);
     let frame = |world: &World, r: &mut Renderer| {
-        r.sync(&shaders, world).unwrap();
+        r.sync(shaders, world).unwrap();
         r.render(&camera).unwrap();
         let motion = r.read_output_f32("motion").unwrap();
         motion.data.chunks_exact(2).filter(|m| m[0].abs() + m[1].abs() > 0.25).count()
@@ -254,7 +254,7 @@ fn a_loaded_files_animation_plays_in_a_live_world() {
         for p in &poses {
             world.set_pose(added.instances[p.instance as usize], &p.joints, &p.morph_weights).unwrap();
         }
-        r.sync(&shaders, &world).unwrap();
+        r.sync(shaders, &world).unwrap();
         let (stats, image) = r.render_to_image(&camera()).unwrap();
         assert_eq!(stats.verify.expect("verified").false_negatives, 0, "frame {frame}");
         images.push(image);

@@ -32,8 +32,8 @@ fn city_from_afar() -> (Scene, Camera) {
 /// on; the last image, the instances drawn in the last frame, and the false negatives of all.
 fn render(gpu: &GpuTest, scene: &Scene, camera: &Camera, spec: &GraphSpec, frames: u32) -> (Vec<u8>, u32, u32) {
     let shaders = gpu.shaders();
-    let mut renderer = Renderer::with_graph(gpu, &shaders, scene.clone(), RenderSettings::new(96, 54), spec).unwrap();
-    renderer.enable_verification(&shaders).unwrap();
+    let mut renderer = Renderer::with_graph(gpu, shaders, scene.clone(), RenderSettings::new(96, 54), spec).unwrap();
+    renderer.enable_verification(shaders).unwrap();
     let mut missed = 0;
     for _ in 1..frames {
         missed += renderer.render(camera).unwrap().verify.unwrap().false_negatives;

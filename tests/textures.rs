@@ -17,9 +17,9 @@ const SIZE: (u32, u32) = (160, 120);
 fn render(gpu: &GpuTest, scene: &Scene, graph: &str, verify: bool) -> (cullgraph::stats::FrameStats, RgbaImage) {
     let shaders = gpu.shaders();
     let spec = GraphSpec::builtin(graph).unwrap();
-    let mut r = Renderer::with_graph(gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    let mut r = Renderer::with_graph(gpu, shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
     if verify {
-        r.enable_verification(&shaders).unwrap();
+        r.enable_verification(shaders).unwrap();
     }
     // Two frames: the second has last frame's culling history.
     r.render_to_image(&common::camera_on_z()).unwrap();
@@ -293,9 +293,9 @@ fn the_real_levels_render_textured_from_a_spawn_and_culling_stays_exact() {
         let render = |graph: &str, verify: bool| {
             let spec = GraphSpec::builtin(graph).unwrap();
             let settings = RenderSettings::new(SIZE.0, SIZE.1);
-            let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), settings, &spec).unwrap();
+            let mut r = Renderer::with_graph(&gpu, shaders, scene.clone(), settings, &spec).unwrap();
             if verify {
-                r.enable_verification(&shaders).unwrap();
+                r.enable_verification(shaders).unwrap();
             }
             r.render_to_image(&camera).unwrap();
             r.render_to_image(&camera).unwrap()
@@ -360,7 +360,7 @@ fn textured_materials_register_on_a_live_world() {
     scene.instances.push(Instance { transform: common::scaled_at(DVec3::ZERO, 2.0), mesh, material: white, flags: 0 });
     let (mut world, handles) = World::new(scene).unwrap();
     let spec = GraphSpec::builtin("two_phase").unwrap();
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
     let centre = |image: &RgbaImage| common::rgb(image, SIZE.0 / 2, SIZE.1 / 2);
     let before = centre(&r.render_to_image(&common::camera_on_z()).unwrap().1);
     assert!(before.iter().all(|&c| c > 100), "white first: {before:?}");
@@ -381,7 +381,7 @@ fn textured_materials_register_on_a_live_world() {
     material.textures[0] = Some(TextureRef::new(blue));
     let m = world.add_material(material).unwrap();
     world.set_materials(&[(handles[0], m)]).unwrap();
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     let after = centre(&r.render_to_image(&common::camera_on_z()).unwrap().1);
     assert_eq!(dominant(after), 2, "blue now: {after:?}");
     gpu.assert_clean();
@@ -401,7 +401,7 @@ fn every_msaa_method_shades_the_same_textures() {
     let render = |graph: &str, scene: &Scene| {
         let spec = GraphSpec::builtin(graph).unwrap();
         let mut r =
-            Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+            Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
         r.render_to_image(&camera).unwrap().1
     };
     let flip = |a: &RgbaImage, b: &RgbaImage| {
@@ -434,7 +434,7 @@ fn the_real_levels_match_their_reference_images() {
         let (eye, target) = spawn(map);
         let camera = Camera { eye, target, ..Default::default() };
         let spec = GraphSpec::builtin("default").unwrap();
-        let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(320, 180), &spec).unwrap();
+        let mut r = Renderer::with_graph(&gpu, shaders, scene, RenderSettings::new(320, 180), &spec).unwrap();
         let image = r.render_to_image(&camera).unwrap().1;
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/reference/nexuiz_{map}.png"));
         if std::env::var_os("CULLGRAPH_UPDATE_REFERENCE").is_some() {
@@ -460,8 +460,8 @@ fn msaa_methods_give_masked_edges_partial_coverage_and_stay_exact() {
     let render = |graph: &str| {
         let spec = GraphSpec::builtin(graph).unwrap();
         let mut r =
-            Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
-        r.enable_verification(&shaders).unwrap();
+            Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+        r.enable_verification(shaders).unwrap();
         r.render_to_image(&common::camera_on_z()).unwrap();
         r.render_to_image(&common::camera_on_z()).unwrap()
     };
@@ -496,7 +496,7 @@ fn the_texture_transform_conformance_model_shows_its_check_marks() {
     let scene = cullgraph::scene::gltf_import::load(path, &Default::default()).unwrap();
     let camera = Camera { eye: DVec3::new(0.0, 0.0, 4.5), target: DVec3::ZERO, ..Default::default() };
     let spec = GraphSpec::builtin("default").unwrap();
-    let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(320, 240), &spec).unwrap();
+    let mut r = Renderer::with_graph(&gpu, shaders, scene, RenderSettings::new(320, 240), &spec).unwrap();
     let image = r.render_to_image(&camera).unwrap().1;
     let [green, blue, teal]: [[u8; 3]; 3] = [(97, 88), (160, 88), (222, 88)].map(|(x, y)| common::rgb(&image, x, y));
     let over = |a: u8, b: u8| a as i32 - b as i32 > 80;
@@ -518,7 +518,7 @@ fn the_box_textured_conformance_model_shows_its_texture() {
     let camera = Camera { eye: DVec3::new(1.5, 1.2, 2.0), target: DVec3::ZERO, ..Default::default() };
     let spec = GraphSpec::builtin("default").unwrap();
     let colours = |scene: Scene| {
-        let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+        let mut r = Renderer::with_graph(&gpu, shaders, scene, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
         let image = r.render_to_image(&camera).unwrap().1;
         image.pixels().map(|p| p.0).collect::<std::collections::HashSet<[u8; 4]>>().len()
     };
@@ -544,8 +544,8 @@ fn the_clear_coat_conformance_model_shows_emissive_labels_and_its_blended_coatin
     let camera = Camera { eye: DVec3::new(0.0, 0.0, 12.0), target: DVec3::ZERO, ..Default::default() };
     let spec = GraphSpec::builtin("default").unwrap();
     let bright = |scene: Scene| {
-        let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(320, 240), &spec).unwrap();
-        r.enable_verification(&shaders).unwrap();
+        let mut r = Renderer::with_graph(&gpu, shaders, scene, RenderSettings::new(320, 240), &spec).unwrap();
+        r.enable_verification(shaders).unwrap();
         r.render_to_image(&camera).unwrap();
         let (stats, image) = r.render_to_image(&camera).unwrap();
         let verify = stats.verify.expect("verified");
@@ -616,7 +616,7 @@ fn every_method_shades_occlusion_and_emissive_textures() {
     ] {
         let spec = GraphSpec::builtin(graph).unwrap();
         let mut r =
-            Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+            Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
         let image = r.render_to_image(&common::camera_on_z()).unwrap().1;
         let (shadow, lit) =
             (common::rgb(&image, (cx - side) as u32, top), common::rgb(&image, (cx + side) as u32, top));
@@ -697,7 +697,7 @@ fn double_sided_back_faces_are_lit_with_the_flipped_normal() {
     for graph in ["default", "msaa_compressed", "visibility_buffer"] {
         let spec = GraphSpec::builtin(graph).unwrap();
         let mut r =
-            Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+            Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
         let image = r.render_to_image(&common::camera_on_z()).unwrap().1;
         let (front, back) = (common::rgb(&image, cx - 25, cy), common::rgb(&image, cx + 25, cy));
         assert!(front[0] > 100, "{graph}: the front face is lit: {front:?}");
@@ -721,8 +721,8 @@ fn a_world_that_gains_a_masked_material_cuts_its_holes_at_the_next_frame() {
     scene.materials[fence].alpha_mode = AlphaMode::Opaque;
     let (mut world, handles) = World::new(scene).unwrap();
     let spec = GraphSpec::builtin("two_phase").unwrap();
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
-    r.enable_verification(&shaders).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    r.enable_verification(shaders).unwrap();
     let reds = |r: &mut Renderer| {
         r.render_to_image(&common::camera_on_z()).unwrap();
         let (stats, image) = r.render_to_image(&common::camera_on_z()).unwrap();
@@ -737,7 +737,7 @@ fn a_world_that_gains_a_masked_material_cuts_its_holes_at_the_next_frame() {
     assert_eq!(reds(&mut r), 0, "the opaque fence hides the box");
     let masked = world.add_material(masked).unwrap();
     world.set_materials(&[(handles[0], masked)]).unwrap();
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     assert!(reds(&mut r) >= 6, "the box shows through the gaps");
     gpu.assert_clean();
 }
@@ -770,7 +770,7 @@ fn textures_beyond_a_full_size_class_show_the_placeholder() {
     }
     let (w, h) = (64, 48);
     let spec = GraphSpec::builtin("default").unwrap();
-    let mut r = Renderer::with_graph(&gpu, &shaders, scene, RenderSettings::new(w, h), &spec).unwrap();
+    let mut r = Renderer::with_graph(&gpu, shaders, scene, RenderSettings::new(w, h), &spec).unwrap();
     assert_eq!(r.gpu_scene().textures.placeholder_textures(), [layers as u32 - 1, layers as u32]);
     let image = r.render_to_image(&common::camera_on_z()).unwrap().1;
     let (left, right) = (w / 2 - 12, w / 2 + 12);

@@ -37,8 +37,8 @@ fn glass(name: &str, albedo: Vec3, alpha: f32) -> Material {
 fn render(gpu: &GpuTest, scene: &Scene, graph: &str) -> (FrameStats, RgbaImage) {
     let shaders = gpu.shaders();
     let spec = GraphSpec::builtin(graph).unwrap();
-    let mut r = Renderer::with_graph(gpu, &shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
-    r.enable_verification(&shaders).unwrap();
+    let mut r = Renderer::with_graph(gpu, shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    r.enable_verification(shaders).unwrap();
     r.render_to_image(&common::camera_on_z()).unwrap();
     r.render_to_image(&common::camera_on_z()).unwrap()
 }
@@ -180,8 +180,8 @@ fn a_live_world_makes_an_instance_transparent_and_emissive() {
     scene.instances[1].material = opaque_blue;
     let (mut world, handles) = World::new(scene).unwrap();
     let spec = GraphSpec::builtin("default").unwrap();
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
-    r.enable_verification(&shaders).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    r.enable_verification(shaders).unwrap();
     let (cx, cy) = (SIZE.0 / 2, SIZE.1 / 2);
     let frame = |r: &mut Renderer| {
         r.render_to_image(&common::camera_on_z()).unwrap();
@@ -197,7 +197,7 @@ fn a_live_world_makes_an_instance_transparent_and_emissive() {
 
     let glass = world.add_material(glass("blue glass", Vec3::new(0.05, 0.05, 0.9), 0.5)).unwrap();
     world.set_materials(&[(handles[1], glass)]).unwrap();
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     let (visible, through) = frame(&mut r);
     assert_eq!(visible, 2);
     assert!(through[0] > opaque[0] + 40, "red comes through: {through:?} (opaque {opaque:?})");
@@ -210,7 +210,7 @@ fn a_live_world_makes_an_instance_transparent_and_emissive() {
     };
     let lamp = world.add_material(lamp).unwrap();
     world.set_materials(&[(handles[1], lamp)]).unwrap();
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     let (visible, glow) = frame(&mut r);
     assert_eq!(visible, 2);
     assert!(glow[0] > 200 && glow[1] > 200 && glow[2] < 120, "the lamp glows yellow: {glow:?}");

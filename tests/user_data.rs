@@ -60,15 +60,14 @@ fn shaders_read_each_instances_words_wherever_its_slot_goes() {
     let tints = [white, green, red, blue];
     let changes: Vec<_> = handles.iter().zip(&tints).map(|(h, t)| (*h, std::slice::from_ref(t))).collect();
     world.set_user_data(&changes).unwrap();
-    let mut r =
-        Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &tint_spec()).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, RenderSettings::new(SIZE.0, SIZE.1), &tint_spec()).unwrap();
     r.render(&boxes_camera()).unwrap();
     let seen = check_tints(&mut r, &world);
     assert!(tints.iter().all(|t| seen.get(t).is_some_and(|&n| n > 10)), "every tint shows: {seen:?}");
 
     // New words for one instance (the red box turns blue): only they are uploaded.
     world.set_user_data(&[(handles[2], &[blue][..])]).unwrap();
-    let stats = r.sync(&shaders, &world).unwrap();
+    let stats = r.sync(shaders, &world).unwrap();
     assert_eq!(stats.bytes_uploaded, 8, "one slot and its word");
     let seen = check_tints(&mut r, &world);
     assert!(!seen.contains_key(&red), "the red tint is gone: {seen:?}");
@@ -82,7 +81,7 @@ fn shaders_read_each_instances_words_wherever_its_slot_goes() {
     world.set_user_data(&[(new, &[yellow][..])]).unwrap();
     let before = r.slot_of(handles[2].index()).unwrap();
     world.set_meshes(&[(handles[2], cube)]).unwrap();
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     assert_ne!(r.slot_of(handles[2].index()), Some(before), "the blue box moved to another slot");
     let seen = check_tints(&mut r, &world);
     assert!(seen.get(&yellow).is_some_and(|&n| n > 10), "the new instance shows its tint: {seen:?}");

@@ -32,11 +32,11 @@ fn views_rendered_together_match_each_camera_rendered_alone() {
     let shaders = gpu.shaders();
     let (scene, overview) = city_view(1500, (64, 48));
     let street = street_camera(&scene);
-    let mut together = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
-    let second = together.add_view(&shaders, RenderSettings::new(40, 30), &GraphSpec::default_graph()).unwrap();
-    together.enable_verification(&shaders).unwrap();
-    let mut alone_main = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
-    let mut alone_second = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(40, 30)).unwrap();
+    let mut together = Renderer::new(&gpu, shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
+    let second = together.add_view(shaders, RenderSettings::new(40, 30), &GraphSpec::default_graph()).unwrap();
+    together.enable_verification(shaders).unwrap();
+    let mut alone_main = Renderer::new(&gpu, shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
+    let mut alone_second = Renderer::new(&gpu, shaders, scene, RenderSettings::new(40, 30)).unwrap();
     // The cameras move a little each frame, so that each view's history matters.
     let orbit = cullgraph::scene::CameraPath::Orbit;
     for frame in 0..4 {
@@ -65,9 +65,9 @@ fn a_view_skipped_for_some_frames_keeps_its_history_and_the_others_are_untouched
     let shaders = gpu.shaders();
     let (scene, overview) = city_view(1500, (64, 48));
     let street = street_camera(&scene);
-    let mut r = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
-    let mut alone = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(64, 48)).unwrap();
-    let side = r.add_view(&shaders, RenderSettings::new(64, 48), &GraphSpec::default_graph()).unwrap();
+    let mut r = Renderer::new(&gpu, shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
+    let mut alone = Renderer::new(&gpu, shaders, scene, RenderSettings::new(64, 48)).unwrap();
+    let side = r.add_view(shaders, RenderSettings::new(64, 48), &GraphSpec::default_graph()).unwrap();
     for frame in 0..5 {
         // The side view renders only every other frame; the main view every frame.
         let frames: Vec<(ViewId, &Camera)> = if frame % 2 == 0 {
@@ -93,18 +93,18 @@ fn a_resized_view_renders_what_a_view_made_at_that_size_renders() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
     let (scene, camera) = city_view(800, (64, 48));
-    let mut r = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
-    r.enable_verification(&shaders).unwrap();
-    let other = r.add_view(&shaders, RenderSettings::new(32, 24), &GraphSpec::default_graph()).unwrap();
-    let mut other_alone = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(32, 24)).unwrap();
+    let mut r = Renderer::new(&gpu, shaders, scene.clone(), RenderSettings::new(64, 48)).unwrap();
+    r.enable_verification(shaders).unwrap();
+    let other = r.add_view(shaders, RenderSettings::new(32, 24), &GraphSpec::default_graph()).unwrap();
+    let mut other_alone = Renderer::new(&gpu, shaders, scene.clone(), RenderSettings::new(32, 24)).unwrap();
     let street = street_camera(&scene);
     r.render_views(&[(ViewId::MAIN, &camera), (other, &street)]).unwrap();
     other_alone.render(&street).unwrap();
     let pipelines = gpu.pipelines_made();
     // Up, down, odd, one pixel, and back: each right after the resize, then a frame later.
     for (w, h) in [(64, 48), (96, 72), (33, 17), (1, 1), (7, 1), (64, 48)] {
-        r.resize(&shaders, w, h).unwrap();
-        let mut fresh = Renderer::new(&gpu, &shaders, scene.clone(), RenderSettings::new(w, h)).unwrap();
+        r.resize(shaders, w, h).unwrap();
+        let mut fresh = Renderer::new(&gpu, shaders, scene.clone(), RenderSettings::new(w, h)).unwrap();
         for _ in 0..2 {
             let frames = r.render_views_to_rgba8(&[(ViewId::MAIN, &camera), (other, &street)]).unwrap();
             let (_, expected) = fresh.render_to_rgba8(&camera).unwrap();
@@ -127,13 +127,13 @@ fn bad_view_input_is_an_error_naming_the_view() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
     let (scene, camera) = city_view(200, (32, 24));
-    let mut r = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(32, 24)).unwrap();
+    let mut r = Renderer::new(&gpu, shaders, scene, RenderSettings::new(32, 24)).unwrap();
     let spec = GraphSpec::default_graph();
-    let err = r.add_view(&shaders, RenderSettings::new(0, 24), &spec).unwrap_err().to_string();
+    let err = r.add_view(shaders, RenderSettings::new(0, 24), &spec).unwrap_err().to_string();
     assert!(err.contains("view 1") && err.contains("0x24"), "{err}");
-    let view = r.add_view(&shaders, RenderSettings::new(16, 16), &spec).unwrap();
+    let view = r.add_view(shaders, RenderSettings::new(16, 16), &spec).unwrap();
     assert_eq!(view.to_string(), "view 1", "a refused view takes no id");
-    let err = r.resize_view(&shaders, view, 16, 0).unwrap_err().to_string();
+    let err = r.resize_view(shaders, view, 16, 0).unwrap_err().to_string();
     assert!(err.contains("view 1") && err.contains("16x0"), "{err}");
     let err = r.render_views(&[(view, &camera), (view, &camera)]).unwrap_err().to_string();
     assert!(err.contains("view 1") && err.contains("twice"), "{err}");
@@ -141,13 +141,13 @@ fn bad_view_input_is_an_error_naming_the_view() {
     let err = r.render_views(&[(ViewId::MAIN, &camera), (view, &nan)]).unwrap_err().to_string();
     assert!(err.contains("view 1") && err.contains("not finite"), "{err}");
     r.remove_view(view).unwrap();
-    let next = r.add_view(&shaders, RenderSettings::new(16, 16), &spec).unwrap();
+    let next = r.add_view(shaders, RenderSettings::new(16, 16), &spec).unwrap();
     assert_eq!(next.to_string(), "view 2", "ids are never given twice");
     r.remove_view(next).unwrap();
     for err in [
         r.render_views(&[(view, &camera)]).unwrap_err().to_string(),
         r.remove_view(view).unwrap_err().to_string(),
-        r.resize_view(&shaders, view, 8, 8).unwrap_err().to_string(),
+        r.resize_view(shaders, view, 8, 8).unwrap_err().to_string(),
     ] {
         assert!(err.contains("view 1") && err.contains("removed"), "{err}");
     }
@@ -156,9 +156,9 @@ fn bad_view_input_is_an_error_naming_the_view() {
     // Up to the limit, then refused; the views that exist still render.
     let mut views = Vec::new();
     while r.views().count() < MAX_VIEWS {
-        views.push(r.add_view(&shaders, RenderSettings::new(2, 2), &spec).unwrap());
+        views.push(r.add_view(shaders, RenderSettings::new(2, 2), &spec).unwrap());
     }
-    let err = r.add_view(&shaders, RenderSettings::new(2, 2), &spec).unwrap_err().to_string();
+    let err = r.add_view(shaders, RenderSettings::new(2, 2), &spec).unwrap_err().to_string();
     assert!(err.contains(&format!("at most {MAX_VIEWS} views")), "{err}");
     let frames: Vec<(ViewId, &Camera)> = views.iter().map(|&v| (v, &camera)).collect();
     assert_eq!(r.render_views(&frames).unwrap().len(), MAX_VIEWS - 1);
@@ -170,10 +170,10 @@ fn a_second_view_shares_the_scene() {
     let gpu = GpuTest::new();
     let shaders = gpu.shaders();
     let (scene, camera) = city_view(400, (32, 24));
-    let mut r = Renderer::new(&gpu, &shaders, scene, RenderSettings::new(32, 24)).unwrap();
+    let mut r = Renderer::new(&gpu, shaders, scene, RenderSettings::new(32, 24)).unwrap();
     r.render(&camera).unwrap();
     let instances = r.gpu_scene().instances.handle();
-    let view = r.add_view(&shaders, RenderSettings::new(32, 24), &GraphSpec::default_graph()).unwrap();
+    let view = r.add_view(shaders, RenderSettings::new(32, 24), &GraphSpec::default_graph()).unwrap();
     // Same size and graph: the second view costs what the first costs besides the scene.
     assert_eq!(r.view_runtime(view).unwrap().memory(), r.runtime().memory());
     r.render_views(&[(ViewId::MAIN, &camera), (view, &camera)]).unwrap();
@@ -197,16 +197,16 @@ fn views_of_a_growing_world_each_match_their_camera_alone() {
         (RenderSettings::new(32, 32), "one_phase", Camera { eye: DVec3::new(0.5, 6.0, 1.0), ..boxes_camera() }),
     ];
     let spec = |g: &str| GraphSpec::builtin(g).unwrap();
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, views[0].0.clone(), &spec(views[0].1)).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, views[0].0.clone(), &spec(views[0].1)).unwrap();
     let mut ids = vec![ViewId::MAIN];
     for (settings, graph, _) in &views[1..] {
-        ids.push(r.add_view(&shaders, settings.clone(), &spec(graph)).unwrap());
+        ids.push(r.add_view(shaders, settings.clone(), &spec(graph)).unwrap());
     }
-    r.enable_verification(&shaders).unwrap();
+    r.enable_verification(shaders).unwrap();
     let mut alone: Vec<Renderer> = views
         .iter()
         .map(|(settings, graph, _)| {
-            Renderer::from_world(&gpu, &shaders, &world, settings.clone(), &spec(graph)).unwrap()
+            Renderer::from_world(&gpu, shaders, &world, settings.clone(), &spec(graph)).unwrap()
         })
         .collect();
     for round in 0..5 {
@@ -217,11 +217,11 @@ fn views_of_a_growing_world_each_match_their_camera_alone() {
             };
             world.insert(Instance { transform: t, mesh: 0, material: 2, flags: 0 }).unwrap();
         }
-        r.sync(&shaders, &world).unwrap();
+        r.sync(shaders, &world).unwrap();
         let frame: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(views.iter().map(|v| &v.2)).collect();
         let together = r.render_views_to_rgba8(&frame).unwrap();
         for (v, ((stats, image), renderer)) in together.iter().zip(&mut alone).enumerate() {
-            renderer.sync(&shaders, &world).unwrap();
+            renderer.sync(shaders, &world).unwrap();
             let (expected_stats, expected) = renderer.render_to_rgba8(&views[v].2).unwrap();
             assert!(*image == expected, "round {round}, view {v}: the image differs from its camera alone");
             assert_eq!(counts(stats), counts(&expected_stats), "round {round}, view {v}");
@@ -248,13 +248,12 @@ fn views_culled_together_match_views_culled_one_at_a_time() {
             (0..views).map(|i| orbit.camera_at(if i % 2 == 0 { &overview } else { &street }, i as u32 * 7)).collect();
         let mut renderers = Vec::new();
         for together in [true, false] {
-            let mut r =
-                Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(16, 12), &spec).unwrap();
+            let mut r = Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(16, 12), &spec).unwrap();
             let mut ids = vec![ViewId::MAIN];
             for i in 1..cameras.len() {
                 // Sizes differ, so that each view's pyramid has its own size.
                 let size = RenderSettings::new(12 + i as u32, 10 + (i as u32 % 3));
-                ids.push(r.add_view(&shaders, size, &spec).unwrap());
+                ids.push(r.add_view(shaders, size, &spec).unwrap());
             }
             r.set_views_culled_together(together);
             renderers.push((r, ids));
@@ -320,10 +319,10 @@ fn tile_views_culled_together_cull_exactly_what_each_culls_alone() {
     let spec = GraphSpec::builtin("frustum").unwrap();
     let mut renderers = Vec::new();
     for together in [true, false] {
-        let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(16, 16), &spec).unwrap();
+        let mut r = Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(16, 16), &spec).unwrap();
         let mut ids = vec![ViewId::MAIN];
         for _ in 1..cameras.len() {
-            ids.push(r.add_view(&shaders, RenderSettings::new(16, 16), &spec).unwrap());
+            ids.push(r.add_view(shaders, RenderSettings::new(16, 16), &spec).unwrap());
         }
         r.set_views_culled_together(together);
         renderers.push((r, ids));
@@ -382,9 +381,9 @@ fn views_culled_together_count_each_group_of_a_scene_ending_mid_word() {
     let mut images = Vec::new();
     for together in [true, false] {
         let spec = GraphSpec::default_graph();
-        let mut r = Renderer::with_graph(&gpu, &shaders, scene.clone(), RenderSettings::new(96, 64), &spec).unwrap();
+        let mut r = Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(96, 64), &spec).unwrap();
         r.set_views_culled_together(together);
-        let second = r.add_view(&shaders, RenderSettings::new(64, 64), &spec).unwrap();
+        let second = r.add_view(shaders, RenderSettings::new(64, 64), &spec).unwrap();
         let frames = [(ViewId::MAIN, &common::boxes_camera()), (second, &above)];
         r.render_views_to_rgba8(&frames).unwrap();
         let out = r.render_views_to_rgba8(&frames).unwrap();

@@ -61,7 +61,7 @@ fn a_thousand_add_remove_cycles_keep_the_pools_bounded_and_the_image_right() {
         world.insert(Instance { transform, mesh, material: 1, flags: 0 }).unwrap();
     }
     let size = RenderSettings::new(64, 48);
-    let mut churned = Renderer::from_world(&gpu, &shaders, &world, size.clone(), &GraphSpec::default_graph()).unwrap();
+    let mut churned = Renderer::from_world(&gpu, shaders, &world, size.clone(), &GraphSpec::default_graph()).unwrap();
     let image = churned.render_to_rgba8(&boxes_camera()).unwrap().1;
     let mut fresh_scene = boxes_scene();
     for (k, &(_, copies)) in live.iter().enumerate() {
@@ -72,7 +72,7 @@ fn a_thousand_add_remove_cycles_keep_the_pools_bounded_and_the_image_right() {
         };
         fresh_scene.instances.push(Instance { transform, mesh, material: 1, flags: 0 });
     }
-    let mut fresh = Renderer::new(&gpu, &shaders, fresh_scene, size).unwrap();
+    let mut fresh = Renderer::new(&gpu, shaders, fresh_scene, size).unwrap();
     assert!(image == fresh.render_to_rgba8(&boxes_camera()).unwrap().1, "the reused pool space draws the new meshes");
     gpu.assert_clean();
 }

@@ -60,16 +60,16 @@ fn a_renderer_refuses_another_world_and_keeps_drawing_its_own() {
     let (mut b, hb) = World::new(boxes_scene()).unwrap();
     b.remove(hb[1]).unwrap();
     let mut r =
-        Renderer::from_world(&gpu, &shaders, &a, RenderSettings::new(64, 48), &GraphSpec::default_graph()).unwrap();
+        Renderer::from_world(&gpu, shaders, &a, RenderSettings::new(64, 48), &GraphSpec::default_graph()).unwrap();
     let before = r.render_to_rgba8(&boxes_camera()).unwrap().1;
-    let e = r.sync(&shaders, &b).unwrap_err();
+    let e = r.sync(shaders, &b).unwrap_err();
     assert!(
         matches!(e, cullgraph::Error::World(WorldError::ForeignWorld { renders, given }) if renders == a.id() && given == b.id()),
         "{e}"
     );
     assert!(e.to_string().contains(&format!("this renderer renders world {}; world {} was given", a.id(), b.id())));
     assert!(r.render_to_rgba8(&boxes_camera()).unwrap().1 == before, "nothing of the other world was applied");
-    r.sync(&shaders, &a).unwrap();
+    r.sync(shaders, &a).unwrap();
     gpu.assert_clean();
 }
 
@@ -103,7 +103,7 @@ fn a_clone_is_another_world_that_a_renderer_of_the_original_refuses() {
     let shaders = gpu.shaders();
     let (mut a, ha) = World::new(boxes_scene()).unwrap();
     let mut r =
-        Renderer::from_world(&gpu, &shaders, &a, RenderSettings::new(64, 48), &GraphSpec::default_graph()).unwrap();
+        Renderer::from_world(&gpu, shaders, &a, RenderSettings::new(64, 48), &GraphSpec::default_graph()).unwrap();
     let before = r.render_to_rgba8(&boxes_camera()).unwrap().1;
     let mut copy = a.clone();
     assert_ne!(copy.id(), a.id());
@@ -118,10 +118,10 @@ fn a_clone_is_another_world_that_a_renderer_of_the_original_refuses() {
     )
     .unwrap();
     assert_eq!(copy.version(), a.version());
-    let e = r.sync(&shaders, &copy).unwrap_err();
+    let e = r.sync(shaders, &copy).unwrap_err();
     assert!(matches!(e, cullgraph::Error::World(WorldError::ForeignWorld { .. })), "{e}");
     assert!(r.render_to_rgba8(&boxes_camera()).unwrap().1 == before, "nothing of the clone was applied");
-    r.sync(&shaders, &a).unwrap();
+    r.sync(shaders, &a).unwrap();
     assert!(a.is_live(1), "the original keeps the instance the clone removed");
     gpu.assert_clean();
 }

@@ -20,9 +20,9 @@ const SIZE: (u32, u32) = (64, 48);
 fn renderer(gpu: &GpuTest, world: &World, graph: &str, verify: bool) -> Renderer {
     let spec = GraphSpec::builtin(graph).unwrap();
     let shaders = gpu.shaders();
-    let mut r = Renderer::from_world(gpu, &shaders, world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+    let mut r = Renderer::from_world(gpu, shaders, world, RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
     if verify {
-        r.enable_verification(&shaders).unwrap();
+        r.enable_verification(shaders).unwrap();
     }
     r
 }
@@ -55,7 +55,7 @@ fn a_moved_inserted_and_removed_box_shows_where_it_is_at_the_next_frame() {
     // Moved out of the way: its old place shows what is behind it, its new place shows red.
     let moved = Transform { linear: Mat3::IDENTITY, translation: DVec3::new(-1.5, 0.5, -3.0) };
     world.set_transform(red_cube, moved).unwrap();
-    let stats = r.sync(&shaders, &world).unwrap();
+    let stats = r.sync(shaders, &world).unwrap();
     assert_eq!((stats.instances_changed, stats.relayout, stats.bytes_uploaded), (1, false, 64));
     let (frame_stats, after) = r.render_to_image(&camera).unwrap();
     let update = frame_stats.update.expect("the frame reports the update it applied");
@@ -67,12 +67,12 @@ fn a_moved_inserted_and_removed_box_shows_where_it_is_at_the_next_frame() {
 
     // Removed: the image is the scene without it; inserted back where it was: the first image.
     world.remove(red_cube).unwrap();
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     let gone = r.render_to_image(&camera).unwrap().1;
     assert_ne!(pixel(&gone, new.0, new.1), p);
     let back = Instance { transform: boxes_scene().instances[1].transform, mesh: 0, material: 1, flags: 0 };
     world.insert(back).unwrap();
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     // Two frames: the first keeps the removed cube's slot empty (its quarantine); either way
     // the image is the first one.
     for _ in 0..2 {
@@ -197,8 +197,8 @@ fn run(gpu: &GpuTest, ops: &[Op]) -> Vec<RgbaImage> {
         for op in pair {
             apply(&mut world, &mut handles, op, meshes);
         }
-        culled.sync(&shaders, &world).unwrap();
-        unculled.sync(&shaders, &world).unwrap();
+        culled.sync(shaders, &world).unwrap();
+        unculled.sync(shaders, &world).unwrap();
         let angle = frame as f64 * 0.7;
         let camera = Camera {
             eye: DVec3::new(7.0 * angle.cos(), 3.0, 7.0 * angle.sin()),
@@ -273,14 +273,14 @@ fn growing_past_the_room_keeps_every_slot_and_the_culling_history() {
             .filter(|i| !inserted.iter().any(|h| h.index() == *i))
             .map(|i| culled.slot_of(i))
             .collect();
-        let stats = culled.sync(&shaders, &world).unwrap();
+        let stats = culled.sync(shaders, &world).unwrap();
         assert!(!stats.relayout, "round {round}: growth is not a new layout");
         let after: Vec<_> = (0..world.instance_slots() as u32)
             .filter(|i| !inserted.iter().any(|h| h.index() == *i))
             .map(|i| culled.slot_of(i))
             .collect();
         assert_eq!(kept, after, "round {round}: every instance keeps its slot");
-        unculled.sync(&shaders, &world).unwrap();
+        unculled.sync(shaders, &world).unwrap();
         let (s, image) = culled.render_to_image(&camera).unwrap();
         assert_eq!(s.verify.as_ref().unwrap().false_negatives, 0, "round {round}");
         assert!(image == unculled.render_to_image(&camera).unwrap().1, "round {round}");
@@ -329,7 +329,7 @@ fn a_reused_slot_inherits_no_visibility() {
         flags: 0,
     };
     let new = world.insert(hidden).unwrap();
-    r.sync(&shaders, &world).unwrap();
+    r.sync(shaders, &world).unwrap();
     assert_ne!(r.slot_of(new.index()), Some(old_slot), "the freed slot waits a frame");
     let s = r.render(&camera).unwrap().verify.unwrap();
     assert_eq!((s.false_negatives, s.false_positives), (0, 0), "nothing hidden is drawn: {s:?}");
@@ -362,7 +362,7 @@ fn moved_instances_get_bounds_that_contain_them() {
     ];
     let changes: Vec<_> = moves.iter().map(|(h, l, t)| (*h, Transform { linear: *l, translation: *t })).collect();
     world.set_transforms(&changes).unwrap();
-    let update = r.sync(&shaders, &world).unwrap();
+    let update = r.sync(shaders, &world).unwrap();
     assert_eq!(update.bytes_uploaded, 3 * 64, "moves upload 64 bytes each");
     r.render(&boxes_camera()).unwrap();
     let bytes = cullgraph::gpu::transfer::read_buffer(&gpu, &r.gpu_scene().cull_records).unwrap();
@@ -409,7 +409,7 @@ fn an_emissive_material_on_a_live_world_brings_its_target_and_glows() {
     };
     let m = world.add_material(glow).unwrap();
     world.set_materials(&handles.iter().map(|&h| (h, m)).collect::<Vec<_>>()).unwrap();
-    live.sync(&shaders, &world).unwrap();
+    live.sync(shaders, &world).unwrap();
     let after = live.render_to_image(&camera).unwrap().1;
     let fresh = renderer(&gpu, &world, "two_phase", false).render_to_image(&camera).unwrap().1;
     assert!(differing_pixels(&after, &fresh) <= DEPTH_TIE_PIXELS);
@@ -444,7 +444,7 @@ fn a_long_bulk_move_reaches_every_slot() {
     let shifted = |i: usize, by: DVec3| Transform { translation: small_box(i).translation + by, ..small_box(i) };
     world.set_transforms_by(boxes, |i| shifted(i, DVec3::Y)).unwrap();
     world.set_transforms_by(boxes, |i| shifted(i, DVec3::new(0.5, 0.2, 0.0))).unwrap();
-    live.sync(&shaders, &world).unwrap();
+    live.sync(shaders, &world).unwrap();
     let (stats, image) = live.render_to_image(&camera).unwrap();
     assert_eq!(stats.verify.expect("verified").false_negatives, 0);
     let bytes = cullgraph::gpu::transfer::read_buffer(&gpu, &live.gpu_scene().instances).unwrap();
@@ -464,7 +464,7 @@ fn a_long_bulk_move_reaches_every_slot() {
     // The journal is trimmed to what the renderer applied, as an engine does: one that
     // outgrew its limit would lay the world out anew.
     let sync = |live: &mut Renderer, world: &mut World| {
-        let update = live.sync(&shaders, world).unwrap();
+        let update = live.sync(shaders, world).unwrap();
         assert!(!update.relayout);
         world.trim_journal(live.synced_version().unwrap());
         update.bytes_uploaded

@@ -24,7 +24,7 @@ fn a_city_streamed_in_pieces_draws_what_the_whole_world_draws() {
     let shaders = gpu.shaders();
     let (mut world, _) = World::new(boxes_scene()).unwrap();
     let size = RenderSettings::new(64, 48);
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, size.clone(), &GraphSpec::default_graph()).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, size.clone(), &GraphSpec::default_graph()).unwrap();
     let camera = boxes_camera();
     r.render(&camera).unwrap();
 
@@ -47,13 +47,13 @@ fn a_city_streamed_in_pieces_draws_what_the_whole_world_draws() {
         assert_eq!(added.lights.len(), if k == 0 { 2 } else { 0 }, "the lights come with the first piece");
         meshes += added.meshes;
         instances += added.instances.len();
-        r.sync(&shaders, &world).unwrap();
+        r.sync(shaders, &world).unwrap();
         r.render(&camera).unwrap();
     }
     assert_eq!(meshes, used_meshes, "each mesh registered once");
     assert_eq!(instances, 600);
     let streamed = r.render_to_rgba8(&camera).unwrap().1;
-    let mut whole = Renderer::new(&gpu, &shaders, world.live_scene(), size).unwrap();
+    let mut whole = Renderer::new(&gpu, shaders, world.live_scene(), size).unwrap();
     assert!(
         streamed == whole.render_to_rgba8(&camera).unwrap().1,
         "the streamed world draws what the whole world draws"
@@ -153,14 +153,14 @@ fn registrations_upload_only_what_they_add() {
     let (mut world, _) = World::new(boxes_and_far_cubes(3000)).unwrap();
     let size = RenderSettings::new(96, 72);
     let spec = GraphSpec::default_graph();
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, size.clone(), &spec).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, size.clone(), &spec).unwrap();
     let camera = boxes_camera();
     let mut last = r.render_to_rgba8(&camera).unwrap().1;
     let mut compare = |world: &World, r: &mut Renderer, what: &str| {
-        let stats = r.sync(&shaders, world).unwrap();
+        let stats = r.sync(shaders, world).unwrap();
         assert!(!stats.relayout, "{what}: the layout is kept");
         let got = r.render_to_rgba8(&camera).unwrap().1;
-        let mut fresh = Renderer::from_world(&gpu, &shaders, world, size.clone(), &spec).unwrap();
+        let mut fresh = Renderer::from_world(&gpu, shaders, world, size.clone(), &spec).unwrap();
         let want = fresh.render_to_rgba8(&camera).unwrap().1;
         let differ = got.chunks_exact(4).zip(want.chunks_exact(4)).filter(|(a, b)| a != b).count();
         assert_eq!(differ, 0, "{what}: pixels differ from a renderer made afresh");
@@ -251,7 +251,7 @@ fn growing_while_frames_are_in_flight_keeps_what_they_use() {
     // the passes resize their own memory rather than the graph being made anew.
     let (mut world, _) = World::new(boxes_and_far_cubes(2000)).unwrap();
     let spec = GraphSpec::default_graph();
-    let mut r = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(64, 48), &spec).unwrap();
+    let mut r = Renderer::from_world(&gpu, shaders, &world, RenderSettings::new(64, 48), &spec).unwrap();
     let camera = boxes_camera();
     let mut pipeline = FramePipeline::new(&gpu).unwrap();
     let cube = world.add_mesh("small cube", &common::cube_mesh()).unwrap();
@@ -261,13 +261,13 @@ fn growing_while_frames_are_in_flight_keeps_what_they_use() {
             let transform = Transform { linear: Mat3::from_diagonal(glam::Vec3::splat(0.05)), translation: at };
             world.insert(Instance { transform, mesh: cube, material: 1, flags: 0 }).unwrap();
         }
-        let stats = r.sync(&shaders, &world).unwrap();
+        let stats = r.sync(shaders, &world).unwrap();
         assert!(!stats.relayout, "round {round}: grown in place");
         pipeline.submit(&mut r, &camera).unwrap();
     }
     pipeline.finish(&r).unwrap();
     let streamed = r.render_to_rgba8(&camera).unwrap().1;
-    let mut fresh = Renderer::from_world(&gpu, &shaders, &world, RenderSettings::new(64, 48), &spec).unwrap();
+    let mut fresh = Renderer::from_world(&gpu, shaders, &world, RenderSettings::new(64, 48), &spec).unwrap();
     assert!(streamed == fresh.render_to_rgba8(&camera).unwrap().1, "the grown world draws what a fresh one draws");
     gpu.assert_clean();
 }

@@ -31,9 +31,14 @@ impl GpuTest {
         Self { ctx: Some(ctx), log }
     }
 
-    /// A shader compiler over the repository's `shaders/` directory.
-    pub fn shaders(&self) -> ShaderCompiler {
-        ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap()
+    /// The shader compiler over the repository's `shaders/` directory, one for the whole test
+    /// binary: its cache then holds every shader once, where a compiler per renderer compiled
+    /// them again (on lavapipe most of a small test's time).
+    pub fn shaders(&self) -> &'static ShaderCompiler {
+        static SHADERS: std::sync::OnceLock<ShaderCompiler> = std::sync::OnceLock::new();
+        SHADERS.get_or_init(|| {
+            ShaderCompiler::new(ShaderRoot::Directory(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders").into())).unwrap()
+        })
     }
 
     /// Fails now if any validation message arrived so far.
