@@ -103,9 +103,16 @@ fn bulk_moves_read_any_layout_and_refuse_the_first_bad_handle_in_order() {
     }
     assert_eq!(w.version(), version_removed + live.len() as u64);
     assert!(version < version_removed);
-    // A handle listed twice takes its last transform.
+    // A handle listed twice takes its last transform, in a short list and in a long one (whose
+    // moves are applied on several threads).
     w.set_transforms_by(&[live[3], live[3]], |i| at(100.0 + i as f64)).unwrap();
     assert_eq!(w.instance(live[3]).unwrap().transform, at(101.0));
+    let twice: Vec<InstanceHandle> = live.iter().chain(&live[..5000]).copied().collect();
+    let before = w.version();
+    w.set_transforms_by(&twice, |i| at(i as f64)).unwrap();
+    assert_eq!(w.version(), before + twice.len() as u64, "every listed move is in the journal");
+    assert_eq!(w.instance(live[10]).unwrap().transform, at((live.len() + 10) as f64), "the later move");
+    assert_eq!(w.instance(live[7000]).unwrap().transform, at(7000.0), "listed once");
 }
 
 #[test]

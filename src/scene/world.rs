@@ -446,12 +446,7 @@ impl World {
     }
 
     fn check_instance(&self, handle: InstanceHandle) -> Result<(), WorldError> {
-        self.check_owner(handle.world, || handle.to_string())?;
-        if self.instances.check(handle.index, handle.generation) {
-            Ok(())
-        } else {
-            Err(WorldError::Stale { handle: handle.to_string() })
-        }
+        check_instance_in(&self.instances, &self.id, handle)
     }
 
     fn check_light(&self, handle: LightHandle) -> Result<(), WorldError> {
@@ -464,11 +459,7 @@ impl World {
     }
 
     fn check_owner(&self, owner: u32, handle: impl FnOnce() -> String) -> Result<(), WorldError> {
-        if owner == self.id.0 {
-            Ok(())
-        } else {
-            Err(WorldError::ForeignHandle { handle: handle(), owner, world: self.id.0 })
-        }
+        check_owner_in(&self.id, owner, handle)
     }
 
     /// An error when `mesh` is not registered, naming `who` (formatted only then).
@@ -772,29 +763,25 @@ impl World {
         transform_of: impl Fn(usize) -> Transform + Sync,
     ) -> Result<(), WorldError> {
         let base = self.journal.len();
-        let mut journal = std::mem::take(&mut self.journal);
-        journal.resize(base + n, Change::Sun);
+        self.journal.reserve(n);
         let owners = crate::parallel::Owners::new(self.scene.instances.len(), n);
-        let world = &*self;
-        let ahead = |i: usize| world.instances.prefetch(handle_of(i).index);
-        let routed = crate::parallel::route(&mut journal[base..], &owners, ahead, |i, entry| {
+        let (slots, id) = (&self.instances, &self.id);
+        let ahead = |i: usize| slots.prefetch(handle_of(i).index);
+        // The entries are written straight into the journal's spare room, and count only once
+        // every move passed.
+        let room = &mut self.journal.spare_capacity_mut()[..n];
+        let routed = crate::parallel::route(room, &owners, ahead, |i, entry| {
             let handle = handle_of(i);
-            world.check_instance(handle)?;
+            check_instance_in(slots, id, handle)?;
             if let Some(message) = transform_error(&transform_of(i)) {
                 return Err(WorldError::Invalid { handle: handle.to_string(), message });
             }
-            *entry = Change::Transform(handle.index);
+            entry.write(Change::Transform(handle.index));
             Ok(Some(handle.index as usize))
-        });
-        let routed = match routed {
-            Ok(routed) => routed,
-            Err(e) => {
-                journal.truncate(base);
-                self.journal = journal;
-                return Err(e);
-            }
-        };
-        self.journal = journal;
+        })?;
+        // SAFETY: the room holds `n` entries, and `route` visited each of them once without a
+        // refusal; every visit wrote its entry.
+        unsafe { self.journal.set_len(base + n) };
         crate::parallel::apply_routed(&mut self.scene.instances, &owners, &routed, |instance, i| {
             instance.transform = transform_of(i);
             None::<()>
@@ -1141,6 +1128,25 @@ fn put<T>(items: &mut Vec<T>, index: u32, value: T) {
 }
 
 /// Why a transform is refused: not finite, or its translation beyond the world's range.
+/// Why a handle of world `owner` (displayed by `handle`) is refused by the world `id`.
+fn check_owner_in(id: &Id, owner: u32, handle: impl FnOnce() -> String) -> Result<(), WorldError> {
+    if owner == id.0 {
+        Ok(())
+    } else {
+        Err(WorldError::ForeignHandle { handle: handle(), owner, world: id.0 })
+    }
+}
+
+/// Why `handle` names no live instance of the world `id` whose instance table is `slots`.
+fn check_instance_in(slots: &Slots, id: &Id, handle: InstanceHandle) -> Result<(), WorldError> {
+    check_owner_in(id, handle.world, || handle.to_string())?;
+    if slots.check(handle.index, handle.generation) {
+        Ok(())
+    } else {
+        Err(WorldError::Stale { handle: handle.to_string() })
+    }
+}
+
 fn transform_error(t: &Transform) -> Option<String> {
     if !t.linear.is_finite() {
         return Some(format!("transform {:?} is not finite", t.linear));

@@ -780,7 +780,7 @@ impl Renderer {
         let mut instances = Vec::new();
         let mut registered = Registered::default();
         let mut lights = false;
-        let mut movers = Vec::new();
+        let mut movers = Vec::with_capacity(changes.len());
         let mut user_changed = Vec::new();
         let mut posed = Vec::new();
         for change in changes {
