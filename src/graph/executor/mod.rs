@@ -184,6 +184,8 @@ pub struct GraphRuntime {
     step_timing: bool,
     /// Whether a pass reads the newest completed frame's times.
     reads_timings: bool,
+    /// Whether a pass reads the previous frame's instance records (asked of every frame).
+    reads_previous_instances: bool,
     /// Bindings of counters slots, and per frame in flight a host buffer they are copied into
     /// (read a few frames later, never waited on).
     counter_sources: Vec<CounterSource>,
@@ -228,6 +230,7 @@ impl GraphRuntime {
             .collect::<Result<Vec<_>, _>>()?;
         let counter_sources = counter_sources(&plan);
         let reads_timings = plan.passes.iter().any(|p| plan.kinds.get(&p.kind).is_some_and(|k| k.kind.reads_timings()));
+        let reads_previous_instances = nodes.iter().any(|node| node.reads_previous_instances());
         let ring_bytes = counter_sources.last().map_or(16, |s| s.offset + s.bytes.next_multiple_of(16));
         let counter_ring = (0..FRAMES_IN_FLIGHT)
             .map(|i| {
@@ -251,6 +254,7 @@ impl GraphRuntime {
             timers,
             step_timing: false,
             reads_timings,
+            reads_previous_instances,
             counter_sources,
             counter_ring,
             capture: None,
@@ -389,7 +393,7 @@ impl GraphRuntime {
     /// Whether a pass reads the previous frame's instance records
     /// ([`PassNode::reads_previous_instances`]).
     pub fn reads_previous_instances(&self) -> bool {
-        self.nodes.iter().any(|node| node.reads_previous_instances())
+        self.reads_previous_instances
     }
 
     /// The first pass that samples the renderer's shadow maps
