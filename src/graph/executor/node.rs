@@ -165,7 +165,8 @@ pub trait PassNode: Send {
     /// ([`crate::passes::shared::GpuScene::previous_instance_binds`], for motion vectors): a
     /// renderer of a changing world keeps them, one more record per slot and a copy of each
     /// moved one per frame, only while some view's pass does. Without them a pass is given the
-    /// current records (no motion). `false` (the default): it does not.
+    /// current records (no motion). Asked once, when the graph runtime is made: the answer holds
+    /// for the node's life. `false` (the default): it does not.
     fn reads_previous_instances(&self) -> bool {
         false
     }
