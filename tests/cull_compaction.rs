@@ -122,6 +122,48 @@ fn frustum_lists_equal_the_cpu_reference_exactly() {
     let _ = Vec3::ZERO;
 }
 
+/// Masked, double-sided and mirrored instances each take a region of their own in every list
+/// (back, front and none for opaque materials, the same for masked ones): the lists still equal
+/// the CPU reference exactly, region after region, over more draw groups than one scan chunk
+/// of the compaction holds (255), so that regions start and end inside chunks.
+#[test]
+fn masked_materials_have_regions_of_their_own_in_exact_lists() {
+    use cullgraph::passes::shared::face_cull::FaceCull;
+    let gpu = GpuTest::new();
+    let (w, h) = (64, 48);
+    let options = LoadOptions { instances: Some(40_003), kinds: Some(300), ..Default::default() };
+    let mut scene = SceneSource::Builtin("field".into()).load(&options).unwrap();
+    for (i, material) in scene.materials.iter_mut().enumerate() {
+        if i % 3 == 1 {
+            material.alpha_mode = cullgraph::scene::AlphaMode::Mask { cutoff: 0.5 };
+        }
+        material.double_sided = i % 4 == 0;
+    }
+    let draws = DrawList::all_instances(&scene);
+    let regions = draws.regions;
+    for region in FaceCull::ALL.into_iter().filter(|&r| r != FaceCull::Blended) {
+        assert!(regions.len[region as usize] > 0, "the scene has {region:?} groups");
+    }
+    assert!(regions.groups() > 2 * 255, "several scan chunks");
+    let spec = GraphSpec::builtin("frustum").unwrap();
+    let mut renderer =
+        Renderer::with_graph(&gpu, gpu.shaders(), scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
+    renderer.enable_verification(gpu.shaders()).unwrap();
+    let base = scene.default_camera(w as f32 / h as f32);
+    let mut close = base.clone();
+    close.eye = base.target + (base.eye - base.target) * 0.2;
+    for (i, camera) in [base.clone(), close, CameraPath::Orbit.camera_at(&base, 20)].iter().enumerate() {
+        let stats = renderer.render(camera).unwrap();
+        let want = expected(&scene, camera, w, h);
+        let got = drawn(&renderer);
+        assert_eq!(got.len(), want.len(), "camera {i}: survivor count");
+        assert!(got == want, "camera {i}: lists differ at {:?}", got.iter().zip(&want).position(|(a, b)| a != b));
+        let masked_drawn = want.iter().filter(|&&id| FaceCull::of(&scene, &scene.instances[id as usize]).is_masked());
+        assert!(masked_drawn.count() > 0, "camera {i}: masked instances in view");
+        assert_eq!(stats.verify.as_ref().map(|v| v.false_negatives), Some(0), "camera {i}");
+    }
+}
+
 /// Ids of the instances whose bound the frustum graph keeps for `camera` (the CPU reference).
 fn in_frustum(scene: &cullgraph::scene::Scene, camera: &Camera, w: u32, h: u32) -> std::collections::HashSet<u32> {
     expected(scene, camera, w, h).into_iter().collect()

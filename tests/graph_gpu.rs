@@ -153,7 +153,7 @@ fn buffers_too_small_for_their_slots_are_refused_at_the_binding_when_the_graph_i
     let err = refused(&old);
     assert!(
         err.contains(&format!("two_phase.ron:{}", binding_pos(&old.text, "late_count", 1)))
-            && err.contains("pass 'cull_late' writes \"draw_count\": 'late_count' holds 4 bytes; the slot takes 16"),
+            && err.contains("pass 'cull_late' writes \"draw_count\": 'late_count' holds 4 bytes; the slot takes 28"),
         "{err}"
     );
     // The draw that reads it is refused at its own binding too.

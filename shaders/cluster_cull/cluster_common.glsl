@@ -21,6 +21,10 @@ struct Cluster {
 // [chunk * CLUSTER_CHUNK, +CLUSTER_CHUNK).
 #define CLUSTER_CHUNK 64u
 
+// Regions of the cluster list: the opaque face culls (back, front, none). Masked instances are
+// drawn whole (src/passes/cluster_cull.rs).
+#define CLUSTER_REGIONS 3u
+
 // One command of the input list whose level has clusters (written by the prepare step in
 // command order): its tasks start at `first_task`, each instance taking `chunks` of them.
 struct ClusteredCommand {

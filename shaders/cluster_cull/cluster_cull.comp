@@ -28,7 +28,7 @@ layout(set = 0, binding = 3) readonly buffer InIds { uint in_ids[]; };
 layout(set = 0, binding = 4, scalar) readonly buffer Clusters { Cluster clusters[]; };
 layout(set = 0, binding = 5) readonly buffer Scratch { uint scratch[]; };
 layout(set = 0, binding = 6, scalar) writeonly buffer ClusterCommands { DrawCommand cluster_commands[]; };
-layout(set = 0, binding = 7) buffer ClusterCount { uint cluster_count[FACE_CULL_REGIONS]; };
+layout(set = 0, binding = 7) buffer ClusterCount { uint cluster_count[CLUSTER_REGIONS]; };
 layout(set = 0, binding = 8) buffer Stats { uint stats[STAT_WORDS]; };
 #ifdef HAS_HIZ
 layout(set = 0, binding = 9) uniform sampler2D hiz_tex;
@@ -92,8 +92,8 @@ uint test_cluster(Cluster cl, GpuInstance inst, bool one_sided) {
     return 0u;
 }
 
-shared uint sh_region_count[FACE_CULL_REGIONS];
-shared uint sh_region_base[FACE_CULL_REGIONS];
+shared uint sh_region_count[CLUSTER_REGIONS];
+shared uint sh_region_base[CLUSTER_REGIONS];
 shared uint sh_stats[8];
 
 void main() {
@@ -106,7 +106,7 @@ void main() {
     uvec3 dropped = uvec3(0u);  // frustum, back-facing, occluded
     uint rounds = (tasks + TASKS_PER_GROUP - 1u) / TASKS_PER_GROUP;
     for (uint round = gl_WorkGroupID.x; round < rounds; round += gl_NumWorkGroups.x) {
-        if (gl_LocalInvocationID.x < FACE_CULL_REGIONS) sh_region_count[gl_LocalInvocationID.x] = 0u;
+        if (gl_LocalInvocationID.x < CLUSTER_REGIONS) sh_region_count[gl_LocalInvocationID.x] = 0u;
         barrier();
         uint task = round * TASKS_PER_GROUP + slot_in_group;
         bool has_task = task < tasks;
@@ -138,7 +138,7 @@ void main() {
             }
         }
         barrier();
-        if (gl_LocalInvocationID.x < FACE_CULL_REGIONS) {
+        if (gl_LocalInvocationID.x < CLUSTER_REGIONS) {
             uint n = sh_region_count[gl_LocalInvocationID.x];
             sh_region_base[gl_LocalInvocationID.x] = n != 0u ? atomicAdd(cluster_count[gl_LocalInvocationID.x], n) : 0u;
         }

@@ -1,8 +1,9 @@
 #version 460
-// Cluster cull, step 1 of 2, in one workgroup: walks the opaque regions of the input list in
-// command order. A command whose level has clusters is emptied in the pass-through list (its
-// instances are drawn cluster by cluster instead) and gets a range of test tasks, one per
-// instance and chunk of CLUSTER_CHUNK clusters; any other is passed on whole. Writes the test
+// Cluster cull, step 1 of 2, in one workgroup: walks the drawn regions of the input list in
+// command order. A command of an opaque region whose level has clusters is emptied in the
+// pass-through list (its instances are drawn cluster by cluster instead) and gets a range of
+// test tasks, one per instance and chunk of CLUSTER_CHUNK clusters; any other, masked regions'
+// included, is passed on whole. Writes the test
 // step's dispatch size and zeroes its counts.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
@@ -23,12 +24,12 @@ layout(set = 0, binding = 6) readonly buffer ClusterRanges { uvec2 cluster_range
 layout(set = 0, binding = 7, scalar) writeonly buffer PassCommands { DrawCommand pass_commands[]; };
 layout(set = 0, binding = 8) writeonly buffer PassCount { uint pass_count[FACE_CULL_REGIONS]; };
 layout(set = 0, binding = 9) buffer Scratch { uint scratch[]; };
-layout(set = 0, binding = 10) writeonly buffer ClusterCount { uint cluster_count[FACE_CULL_REGIONS]; };
+layout(set = 0, binding = 10) writeonly buffer ClusterCount { uint cluster_count[CLUSTER_REGIONS]; };
 layout(set = 0, binding = 11) buffer Stats { uint stats[STAT_WORDS]; };
 
 layout(push_constant) uniform Push {
-    uvec4 region_first;   // first command of each face-cull region
-    uvec4 region_len;     // commands each region holds
+    uint region_first[FACE_CULL_REGIONS];   // first command of each region
+    uint region_len[FACE_CULL_REGIONS];     // commands each region holds
     uint max_groups;      // the test step's largest dispatch
     uint tasks_per_group; // tasks its workgroups take at a time
     uint clustered_capacity; // clustered commands the scratch holds
@@ -73,7 +74,7 @@ void main() {
         uint count = r + 1u < FACE_CULL_REGIONS ? min(in_count[r], pc.region_len[r]) : 0u;
         if (lane == 0u) {
             pass_count[r] = count;
-            cluster_count[r] = 0u;
+            if (r < CLUSTER_REGIONS) cluster_count[r] = 0u;
         }
         for (uint base = 0u; base < count; base += THREADS) {
             uint i = pc.region_first[r] + base + lane;
@@ -84,7 +85,9 @@ void main() {
                 c = in_commands[i];
                 range = clusters_of(c);
             }
-            bool split = valid && range.y != 0u;
+            // The cluster list has the opaque regions only (its draws take the pipelines that
+            // never discard).
+            bool split = valid && range.y != 0u && r < CLUSTER_REGIONS;
             uint chunks = (range.y + CLUSTER_CHUNK - 1u) / CLUSTER_CHUNK;
             uint my_tasks = split ? c.instance_count * chunks : 0u;
             // Exclusive prefix over the workgroup of (tasks, clustered commands).

@@ -33,9 +33,12 @@ struct CullRecord {
 // Set when a bound does not fit half floats (larger than 65504): always visible.
 #define CULL_HUGE 0x80000000u
 
-// Face-cull regions of a command list, each with its own draw count (src/passes/shared/face_cull.rs):
-// back, front, none, and the transparent instances' region, which the geometry passes skip.
-#define FACE_CULL_REGIONS 4u
+// Regions of a command list, each with its own draw count (src/passes/shared/face_cull.rs): back,
+// front and none for opaque materials, the same for alpha-masked ones, and the transparent
+// instances' region, which the geometry passes skip.
+#define FACE_CULL_REGIONS 7u
+// The double-sided regions (opaque and masked): both faces drawn.
+bool region_is_double_sided(uint region) { return region == 2u || region == 5u; }
 
 vec3 record_center_lo(CullRecord r) { return vec3(unpackHalf2x16(r.lo_xy), unpackHalf2x16(r.lo_z_radius).x); }
 float record_radius(CullRecord r) { return unpackHalf2x16(r.lo_z_radius).y; }

@@ -253,29 +253,53 @@ uint take_group_count(uint at) {
 
 // What one draw list's commands add up to.
 struct ListTotals {
-    uint placed;         // instances
-    uvec4 written;       // commands, per face-cull region
-    uint64_t triangles;  // this invocation's share
+    uint placed;                        // instances
+    uint written[FACE_CULL_REGIONS];    // commands, per region
+    uint64_t triangles;                 // this invocation's share
 };
 
-// The face-cull region of group `g`.
+ListTotals no_totals() {
+    ListTotals t;
+    t.placed = 0u;
+    for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) t.written[r] = 0u;
+    t.triangles = 0ul;
+    return t;
+}
+
+// The region of group `g`.
 uint region_of(uint g) {
     uint r = 0u;
     for (uint i = 1u; i < FACE_CULL_REGIONS; ++i) r += g >= pc.region_first[i] ? 1u : 0u;
     return r;
 }
 
-// Groups per chunk of the command scan: one fewer than the threads, so that a chunk writes at
-// most 255 commands per region and each region's count fits a byte of the packed scan term.
+// One past the last group of region `r`.
+uint region_end(uint r) { return r + 1u < FACE_CULL_REGIONS ? pc.region_first[r + 1u] : pc.group_count; }
+
+// Groups per chunk of the command scan: one fewer than the threads, so that the scan's last
+// lane (which holds no group) reads as the chunk's total.
 #define CHUNK_GROUPS (THREADS - 1u)
 
-// One command in region `r`, as a scan term: four 8-bit counters in one word.
-uint region_term(uint r) { return 1u << (8u * r); }
-uvec4 region_counts(uint packed) { return (uvec4(packed) >> uvec4(0u, 8u, 16u, 24u)) & 0xFFu; }
+// The lane of group `g` in the chunk from group `chunk` on, clamped to the chunk.
+uint chunk_lane(uint g, uint chunk) { return clamp(g, chunk, chunk + CHUNK_GROUPS) - chunk; }
 
-// Where the next command of region `r` goes, given the commands before it in this chunk.
-uint command_index(ListTotals t, uint r, uint packed_before) {
-    return pc.region_first[r] + t.written[r] + region_counts(packed_before)[r];
+// Component `c` of the scan before lane `lane` (the inclusive scan is still in `sh_scan`).
+uint scanned_before(uint lane, uint c) { return lane == 0u ? 0u : sh_scan[lane - 1u][c]; }
+
+// Where the next command of region `r` goes, given the chunk's commands before it (scan
+// component `c`). Groups are sorted by region, so a region's groups in the chunk are one run
+// of lanes: its commands before this one are the chunk's commands before it less those before
+// the run.
+uint command_index(ListTotals t, uint r, uint chunk, uint c, uint before) {
+    return pc.region_first[r] + t.written[r] + before - scanned_before(chunk_lane(pc.region_first[r], chunk), c);
+}
+
+// Adds each region's commands in the chunk (scan component `c`) to `t`.
+void add_region_commands(inout ListTotals t, uint chunk, uint c) {
+    for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) {
+        t.written[r] += scanned_before(chunk_lane(region_end(r), chunk), c)
+            - scanned_before(chunk_lane(pc.region_first[r], chunk), c);
+    }
 }
 
 // A group's command at level `level` for `count` instances from `first_instance` on; adds its
@@ -304,8 +328,8 @@ DrawCommand group_command(DrawGroup group, uint level, uint count, uint first_in
 // slot took (`sh_level_used`) are skipped. Called in uniform control flow.
 void write_group_commands(out ListTotals drawn, out ListTotals listed) {
     uint lane = gl_LocalInvocationIndex;
-    drawn = ListTotals(0u, uvec4(0u), 0ul);
-    listed = ListTotals(0u, uvec4(0u), 0ul);
+    drawn = no_totals();
+    listed = no_totals();
     for (uint level = 0u; level < LOD_LEVELS; ++level) {
 #ifdef LOD
         if (sh_level_used[level] == 0u) continue;
@@ -324,21 +348,23 @@ void write_group_commands(out ListTotals drawn, out ListTotals listed) {
             uint r = region_of(g);
             uvec4 total;
             uvec4 before = workgroup_exclusive_scan(
-                uvec4(count, count != 0u ? region_term(r) : 0u, visible, visible != 0u ? region_term(r) : 0u), total);
+                uvec4(count, count != 0u ? 1u : 0u, visible, visible != 0u ? 1u : 0u), total);
             if (count != 0u) {
-                commands[command_index(drawn, r, before.y)] =
+                commands[command_index(drawn, r, chunk, 1u, before.y)] =
                     group_command(group, level, count, drawn.placed + before.x, drawn);
             }
 #ifdef VISIBLE_OUT
             if (visible != 0u) {
-                list_commands[command_index(listed, r, before.w)] =
+                list_commands[command_index(listed, r, chunk, 3u, before.w)] =
                     group_command(group, level, visible, listed.placed + before.z, listed);
             }
 #endif
             drawn.placed += total.x;
-            drawn.written += region_counts(total.y);
+            add_region_commands(drawn, chunk, 1u);
             listed.placed += total.z;
-            listed.written += region_counts(total.w);
+            add_region_commands(listed, chunk, 3u);
+            // Every invocation has read the scan before the next chunk's overwrites it.
+            barrier();
         }
     }
 }
@@ -377,7 +403,11 @@ CullStats stats_record(uint tested, uint frustum, uint occlusion, uint drawn, ui
     return s;
 }
 
-uint commands_of(ListTotals t) { return t.written.x + t.written.y + t.written.z + t.written.w; }
+uint commands_of(ListTotals t) {
+    uint n = 0u;
+    for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) n += t.written[r];
+    return n;
+}
 
 void write_commands() {
     uint lane = gl_LocalInvocationIndex;

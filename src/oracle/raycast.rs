@@ -181,9 +181,9 @@ impl RaycastOracle {
         let t = &self.tris[id];
         let toward = (t[1] - t[0]).cross(t[2] - t[0]).dot(direction);
         match self.tri_face_cull[id] {
-            FaceCull::Back => toward >= 0.0,
-            FaceCull::Front => toward <= 0.0,
-            FaceCull::None => false,
+            FaceCull::Back | FaceCull::MaskedBack => toward >= 0.0,
+            FaceCull::Front | FaceCull::MaskedFront => toward <= 0.0,
+            FaceCull::None | FaceCull::MaskedNone => false,
             // Transparent surfaces hide nothing; the rays pass through them.
             FaceCull::Blended => true,
         }

@@ -263,7 +263,7 @@ impl VisibilityOracle {
                 scene.vertices.bind(device, cmd);
                 device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
                 // The same faces as the frame's draws: one-sided materials lose their back faces.
-                scene.regions.record(device, cmd, &scene.draw_commands, &scene.draw_count);
+                scene.regions.record(device, cmd, &scene.draw_commands, &scene.draw_count, &FaceCull::DRAWN);
                 device.cmd_end_rendering(cmd);
             }
             if transparent_groups > 0 {

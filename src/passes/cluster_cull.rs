@@ -8,7 +8,8 @@
 //!   level has clusters emptied (instance count 0); the others are drawn whole as before;
 //! - `cluster_commands`/`cluster_count`: one command per surviving cluster (its index range,
 //!   one instance), in three regions of equal size for the opaque face culls (back, front,
-//!   none), each with its count.
+//!   none), each with its count. Instances of alpha-masked materials are drawn whole: their
+//!   clusters would need regions and pipelines of their own in the list.
 //!
 //! A geometry pass draws both (its `cluster_commands` and `cluster_count` slots) with the
 //! input list's instance ids. A cluster is dropped when its bounding sphere is outside the
@@ -24,7 +25,7 @@
 //! chunk of 64 clusters); `cluster_cull.comp`, dispatched indirectly, tests a task per
 //! workgroup and appends the survivors.
 
-use super::slots::{slot, DRAW_COMMANDS, DRAW_COUNTS, HIZ_FORMAT};
+use super::slots::{slot, COUNT_BYTES, DRAW_COMMANDS, DRAW_COUNTS, HIZ_FORMAT};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
 use crate::gpu::{Access, Bind, Buffer, BufferDesc, GpuContext, MemoryLocation, Pipeline, Sampler};
 use crate::graph::executor::PassContext;
@@ -54,8 +55,8 @@ const COMMAND_BYTES: u64 = 20;
 /// Regions of a cluster list: the opaque face culls.
 pub const CLUSTER_REGIONS: u64 = 3;
 
-/// The quantity `clusters`: the most clusters the opaque instances may draw (each instance's
-/// mesh's richest level's).
+/// The quantity `clusters`: the most clusters the opaque instances (neither masked nor
+/// transparent) may draw (each instance's mesh's richest level's).
 pub const CLUSTERS: Quantity = Quantity {
     name: "clusters",
     doc: "clusters the opaque instances may draw in all (each at its mesh's level with the most clusters; 0 without clustered meshes)",
@@ -64,7 +65,7 @@ pub const CLUSTERS: Quantity = Quantity {
         let scene = c.scene;
         let per_mesh: Vec<u64> =
             scene.meshes.iter().map(|m| crate::passes::shared::cull_data::mesh_clusters(m) as u64).collect();
-        let opaque = |i: &&crate::scene::Instance| FaceCull::of(scene, i) != FaceCull::Blended;
+        let opaque = |i: &&crate::scene::Instance| FaceCull::OPAQUE.contains(&FaceCull::of(scene, i));
         Some(scene.instances.iter().filter(opaque).map(|i| per_mesh.get(i.mesh as usize).copied().unwrap_or(0)).sum())
     },
     growth: Growth::Grows,
@@ -283,13 +284,13 @@ impl PassKind for ClusterCullKind {
                 // As large as instance_cull makes them: the pass reads every command its counts
                 // name, and the ids its commands name.
                 read(LIST_SLOTS[0], "the culled list's commands").at_least("meshes * 20").content(DRAW_COMMANDS),
-                read(LIST_SLOTS[1], "their number per face-cull region").at_least("16").content(DRAW_COUNTS),
+                read(LIST_SLOTS[1], "their number per region").at_least(COUNT_BYTES).content(DRAW_COUNTS),
                 read(LIST_SLOTS[2], "its instance ids (the geometry pass draws both lists with them)").at_least("instances * 4"),
                 slot("hiz", Usage::Sampled(Stages::Compute), false, FormatRule::Exact(HIZ_FORMAT), "Hi-Z pyramid to test the clusters against (none: frustum, coverage and cones only)"),
             ],
             writes: vec![
                 write("pass_commands", "the culled list's commands, those drawn cluster by cluster emptied").at_least("meshes * 20").content(DRAW_COMMANDS),
-                write("pass_count", "their number per face-cull region (the input's)").at_least("16").content(DRAW_COUNTS),
+                write("pass_count", "their number per region (the input's)").at_least(COUNT_BYTES).content(DRAW_COUNTS),
                 write("cluster_commands", "one command per surviving cluster, in three equal regions: back, front and no face culling").at_least(CLUSTER_COMMANDS_BYTES),
                 write("cluster_count", "the surviving clusters of each region").at_least("16"),
                 scratch("scratch", "the clustered commands and their test tasks (created when unbound)").at_least(SCRATCH_BYTES),

@@ -37,7 +37,7 @@ use crate::graph::{
     DrawList, DrawOrder, FormatRule, Growth, KindCheck, NodeSetup, PassKind, PassKindInfo, PassNode, Pos, Quantity,
     Usage,
 };
-use crate::passes::shared::face_cull::DRAW_COUNT_BYTES;
+use crate::passes::shared::face_cull::{FaceCull, DRAW_COUNT_BYTES};
 use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use crate::passes::shared::scene_buffers::GpuScene;
 use crate::passes::shared::vertex_streams::{VertexFetch, VERTEX_STRIDES};
@@ -217,14 +217,18 @@ impl GeometryShaders {
     }
 }
 
-/// Records `lists` with `pipeline` inside dynamic rendering over `colors` and `depth`.
-/// `extra` bindings (binding 4 and up) are pushed after the shared ones; `push` is the
-/// pipeline's push-constant block (empty for none).
+/// Which regions of each list a pipeline draws ([`FaceCull`]).
+pub type RegionDraw<'a> = (&'a Pipeline, &'a [FaceCull]);
+
+/// Records `lists` inside dynamic rendering over `colors` and `depth`: for each of `draws` in
+/// turn, its regions of every list with its pipeline (a list's cluster draws go with the
+/// opaque regions). `extra` bindings (binding 4 and up) are pushed after the shared ones;
+/// `push` is the pipelines' push-constant block (empty for none).
 #[allow(clippy::too_many_arguments)]
 pub fn record_geometry(
     ctx: &GpuContext,
     cmd: vk::CommandBuffer,
-    pipeline: &Pipeline,
+    draws: &[RegionDraw<'_>],
     scene: &GpuScene,
     lists: &[DrawSource<'_>],
     frame: &Buffer,
@@ -257,23 +261,25 @@ pub fn record_geometry(
     unsafe {
         device.cmd_begin_rendering(cmd, &rendering);
         cmd_set_full_viewport(device, cmd, extent);
-        pipeline.bind(cmd);
-        pipeline.push_constant_bytes(cmd, push);
         scene.vertices.bind(device, cmd);
         device.cmd_bind_index_buffer(cmd, scene.indices.handle(), 0, vk::IndexType::UINT32);
-        for list in lists {
-            let mut binds = vec![
-                Bind::Buffer(1, list.instance_ids.handle()),
-                Bind::Buffer(2, frame.handle()),
-                Bind::Buffer(3, scene.materials.handle()),
-            ];
-            binds.extend(scene.instance_binds(0));
-            binds.extend_from_slice(scene.textures.bindings());
-            binds.extend_from_slice(extra);
-            pipeline.push_bindings(cmd, &binds);
-            scene.regions.record(device, cmd, list.commands, list.count);
-            if let Some((commands, count)) = list.clusters {
-                crate::passes::cluster_cull::record_cluster_draws(ctx, cmd, commands, count);
+        for &(pipeline, regions) in draws {
+            pipeline.bind(cmd);
+            pipeline.push_constant_bytes(cmd, push);
+            for list in lists {
+                let mut binds = vec![
+                    Bind::Buffer(1, list.instance_ids.handle()),
+                    Bind::Buffer(2, frame.handle()),
+                    Bind::Buffer(3, scene.materials.handle()),
+                ];
+                binds.extend(scene.instance_binds(0));
+                binds.extend_from_slice(scene.textures.bindings());
+                binds.extend_from_slice(extra);
+                pipeline.push_bindings(cmd, &binds);
+                scene.regions.record(device, cmd, list.commands, list.count, regions);
+                if let Some((commands, count)) = list.clusters.filter(|_| regions.contains(&FaceCull::Back)) {
+                    crate::passes::cluster_cull::record_cluster_draws(ctx, cmd, commands, count);
+                }
             }
         }
         device.cmd_end_rendering(cmd);
@@ -298,10 +304,10 @@ pub enum GeometryMode {
 /// occlusion (`extras`), alpha-masked materials (`masked`), and textures (`textured`: only
 /// then are texture coordinates and tangents fetched, see [`VertexFetch`]).
 ///
-/// Without masked materials the fragment shaders have no `discard`, so the depth test runs
-/// before shading: on the H100 this takes a
-/// sixth off the textured single-sample G-buffer draw. A scene with masked materials takes the
-/// alpha-tested pipelines for all of its draws. Without emission or occlusion the
+/// Without an alpha test the fragment shaders have no `discard`, so the depth test runs
+/// before shading: on the H100 this takes a sixth off the textured single-sample G-buffer
+/// draw. So opaque materials always draw with those, and masked materials, from regions of
+/// their own ([`FaceCull::MASKED`]), with the alpha-tested pipelines. Without emission or occlusion the
 /// `emissive_occlusion` target is left out: a third color export costs a fifth of the frame on
 /// GPUs that export pixels slowly, for nothing.
 struct GeometryPipelines {
@@ -311,14 +317,24 @@ struct GeometryPipelines {
 }
 
 impl GeometryPipelines {
-    /// The pipeline for a scene with (or without) emission or occlusion, masked materials and
-    /// textures.
-    fn pick(&mut self, ctx: &GpuContext, extras: bool, masked: bool, textured: bool) -> crate::Result<&Pipeline> {
+    /// The pipelines for a scene with (or without) emission or occlusion and textures: the one
+    /// for opaque materials, and the alpha-tested one for masked materials if `masked`.
+    fn pick(
+        &mut self,
+        ctx: &GpuContext,
+        extras: bool,
+        masked: bool,
+        textured: bool,
+    ) -> crate::Result<(&Pipeline, Option<&Pipeline>)> {
         let row = if self.writes_extras(extras) { 1 } else { 0 };
-        self.variants[row][masked as usize][textured as usize]
-            .as_mut()
-            .expect("every variant of a row is made")
-            .get(ctx)
+        let [opaque, alpha_tested] = &mut self.variants[row];
+        let made = "every variant of a row is made";
+        let opaque = opaque[textured as usize].as_mut().expect(made).get(ctx)?;
+        let alpha_tested = match masked {
+            true => Some(alpha_tested[textured as usize].as_mut().expect(made).get(ctx)?),
+            false => None,
+        };
+        Ok((opaque, alpha_tested))
     }
 
     /// Whether the pass draws the emissive/occlusion target for such a scene.
@@ -481,7 +497,13 @@ impl PassNode for GbufferPass {
         let inputs = SceneInputs::of(rec)?;
         let scene = &inputs.scene;
         let extras = self.pipelines.writes_extras(scene.emission_or_occlusion);
-        let pipeline = self.pipelines.pick(rec.ctx, scene.emission_or_occlusion, scene.alpha_masks, scene.textured)?;
+        // Masked materials draw from regions of their own, after the opaque ones, with the
+        // pipeline that alpha-tests: the opaque draws keep the depth test ahead of the shader.
+        let masked = scene.alpha_masks && scene.regions.any(&FaceCull::MASKED);
+        let (opaque, alpha_tested) =
+            self.pipelines.pick(rec.ctx, scene.emission_or_occlusion, masked, scene.textured)?;
+        let mut draws: Vec<RegionDraw> = vec![(opaque, &FaceCull::OPAQUE)];
+        draws.extend(alpha_tested.map(|p| (p, &FaceCull::MASKED[..])));
         // Motion vectors and object ids are cleared to 0 by the first pass whatever
         // `clear_colors` says: the background has no fragment to write its 0.
         let motion_load = match self.mode {
@@ -523,7 +545,7 @@ impl PassNode for GbufferPass {
         record_geometry(
             rec.ctx,
             rec.cmd,
-            pipeline,
+            &draws,
             scene,
             &lists,
             inputs.constants(),

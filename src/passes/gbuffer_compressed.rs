@@ -30,6 +30,7 @@ use crate::graph::{
     SettingDecl, SettingDefault, Stages, Usage,
 };
 use crate::passes::lighting_compressed::pool::POOL_SETTING;
+use crate::passes::shared::face_cull::FaceCull;
 use crate::passes::shared::lazy_pipeline::LazyPipeline;
 use crate::passes::shared::vertex_streams::VertexFetch;
 use crate::passes::shared::SceneInputs;
@@ -401,10 +402,12 @@ impl PassNode for GbufferCompressedPass {
             ));
         }
         let draw = &mut self.draws[scene.emission_or_occlusion as usize][scene.textured as usize];
+        // Its depth test is EQUAL against a depth that already has the masks' holes: every
+        // region draws with the one pipeline, which never discards.
         record_geometry(
             rec.ctx,
             rec.cmd,
-            draw.get(rec.ctx)?,
+            &[(draw.get(rec.ctx)?, &FaceCull::DRAWN)],
             scene,
             &lists,
             inputs.constants(),

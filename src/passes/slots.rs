@@ -89,8 +89,9 @@ pub(crate) const INSTANCE_IDS: &str = "instance ids";
 
 /// A draw command per draw group (`VkDrawIndexedIndirectCommand`, 20 bytes).
 pub(crate) const COMMANDS_BYTES: &str = "meshes * 20";
-/// A draw count per face-cull region: back, front, none and transparent.
-pub(crate) const COUNT_BYTES: &str = "16";
+/// A draw count per region: back, front and none for opaque and for masked materials, then
+/// transparent ([`crate::passes::shared::face_cull::FaceCull`]).
+pub(crate) const COUNT_BYTES: &str = "28";
 /// An instance id per instance.
 pub(crate) const IDS_BYTES: &str = "instances * 4";
 /// A bit per instance, in 32-bit words.
@@ -101,7 +102,7 @@ pub(crate) const COUNTERS_BYTES: &str = "64";
 
 const _: () = {
     assert!(std::mem::size_of::<crate::passes::shared::gpu_types::DrawIndexedIndirect>() == 20);
-    assert!(crate::passes::shared::face_cull::DRAW_COUNT_BYTES == 16);
+    assert!(crate::passes::shared::face_cull::DRAW_COUNT_BYTES == 28);
 };
 
 pub(crate) const fn ms(s: SlotDecl) -> SlotDecl {

@@ -4,7 +4,7 @@
 
 use crate::error::Result;
 use crate::gpu::{Buffer, GpuContext, UploadBatch};
-use crate::passes::shared::face_cull::{DrawRegions, FACE_CULL_REGIONS};
+use crate::passes::shared::face_cull::{DrawRegions, FaceCull, FACE_CULL_REGIONS};
 use crate::passes::shared::gpu_types::DrawIndexedIndirect;
 use crate::passes::shared::scene_buffers::DrawList;
 use ash::vk;
@@ -77,7 +77,7 @@ impl EyeList {
 
     /// Records the list's draws (inside rendering, with a pipeline whose bindings are pushed).
     pub fn record(&self, device: &ash::Device, cmd: vk::CommandBuffer) {
-        self.regions.record(device, cmd, &self.commands, &self.count);
+        self.regions.record(device, cmd, &self.commands, &self.count, &FaceCull::DRAWN);
     }
 }
 
@@ -99,13 +99,13 @@ mod tests {
         let all = DrawList {
             instance_ids: vec![5, 1, 3, 0, 4, 2],
             commands: vec![command(0, 3, 0), command(3, 1, 6), command(4, 1, 0), command(5, 1, 12)],
-            regions: DrawRegions::from_lengths([2, 1, 0, 1]),
+            regions: DrawRegions::from_lengths([2, 1, 0, 0, 0, 0, 1]),
         };
         let keep: BTreeSet<u32> = [3, 5, 4, 2].into();
         let (commands, ids, regions) = subset(&all, &keep);
         assert_eq!(ids, [5, 3, 4, 2]);
         assert_eq!(commands, [command(0, 2, 0), command(2, 1, 0), command(3, 1, 12)]);
-        assert_eq!(regions, DrawRegions::from_lengths([1, 1, 0, 1]));
+        assert_eq!(regions, DrawRegions::from_lengths([1, 1, 0, 0, 0, 0, 1]));
         let (commands, ids, regions) = subset(&all, &BTreeSet::new());
         assert!(commands.is_empty() && ids.is_empty() && regions.groups() == 0);
     }

@@ -577,8 +577,9 @@ impl PassNode for InstanceCullPass {
                     Bind::Buffer(3, stats.handle()),
                 ],
             );
-            let [first0, first1, first2, first3] = scene.regions.first;
-            init.push_constants(cmd, &[groups, first0, first1, first2, first3]);
+            let mut push = vec![groups];
+            push.extend(scene.regions.first);
+            init.push_constant_bytes(cmd, bytemuck::cast_slice(&push));
             // SAFETY: cmd recording with the pipeline bound.
             unsafe { device.cmd_dispatch(cmd, groups.div_ceil(256).max(1), 1, 1) };
             step_barrier(ctx, cmd);
@@ -641,9 +642,11 @@ impl PassNode for InstanceCullPass {
                     .extend([Bind::Buffer(14, scene.lod_levels.handle()), Bind::Buffer(15, level_bits.handle())]);
             }
             compact.push_bindings(cmd, &compact_binds);
-            let [first0, first1, first2, first3] = scene.regions.first;
             let placers = blocks.min(COMPACT_PLACERS);
-            compact.push_constants(cmd, &[slots, groups, superblocks, first0, first1, first2, first3, placers]);
+            let mut push = vec![slots, groups, superblocks];
+            push.extend(scene.regions.first);
+            push.push(placers);
+            compact.push_constant_bytes(cmd, bytemuck::cast_slice(&push));
             // Workgroup 0 writes the commands, workgroup 1 + p places every placers-th block from
             // block p on.
             // SAFETY: as above.
@@ -669,7 +672,7 @@ impl PassKind for InstanceCullKind {
             ],
             writes: vec![
                 write("draw_commands", "one command per draw group").required().at_least(COMMANDS_BYTES).creates(Creates::buffer()).content(DRAW_COMMANDS),
-                write("draw_count", "number of commands of each face-cull region: back, front, none and transparent").required().at_least(COUNT_BYTES).creates(Creates::buffer()).content(DRAW_COUNTS),
+                write("draw_count", "number of commands of each region: back, front and none for opaque then for masked materials, then transparent").required().at_least(COUNT_BYTES).creates(Creates::buffer()).content(DRAW_COUNTS),
                 write("draw_instance_ids", "survivors, one slice per draw group").required().at_least(IDS_BYTES).creates(Creates::buffer()).content(INSTANCE_IDS),
                 write("visibility", "this frame's visibility bits (late phase; history: the next frame reads `.prev`)").at_least(INSTANCE_BITS).creates(list),
                 write("visible_ids", "late phase, with `visibility`: instance ids of this frame's visible slots, one slice per draw group: the next frame's early draw list, which that frame draws as it is with no cull pass (history; the draw binds `.prev`)").at_least(IDS_BYTES).creates(list).content(INSTANCE_IDS),

@@ -268,10 +268,10 @@ impl InstanceCullPass {
                     Bind::Buffer(14, table),
                 ],
             );
-            let [first0, first1, first2, first3] = scene.regions.first;
-            together
-                .compact
-                .push_constants(cmd, &[slots, groups, superblocks, first0, first1, first2, first3, n as u32]);
+            let mut push = vec![slots, groups, superblocks];
+            push.extend(scene.regions.first);
+            push.push(n as u32);
+            together.compact.push_constant_bytes(cmd, bytemuck::cast_slice(&push));
             // Workgroup v < n writes view v's commands, workgroup n + b places block b of every
             // view with survivors there.
             // SAFETY: as above.

@@ -228,7 +228,7 @@ pub fn scene_quantities() -> [Quantity; 6] {
         ),
         scene_quantity(
             "meshes",
-            "draw groups a draw list may hold: each mesh once, and once more for each further face cull its instances need (one-sided, mirrored, double-sided, transparent)",
+            "draw groups a draw list may hold: each mesh once, and once more for each further region its instances need (one-sided, mirrored, double-sided, for opaque and for masked materials; transparent)",
             |s| {
                 let c = SceneCounts::downcast(s)?;
                 Some(c.layout.map_or(face_cull::command_capacity(c.scene) as u64, |l| l.groups.len() as u64))

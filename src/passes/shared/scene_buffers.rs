@@ -83,8 +83,9 @@ pub struct GpuScene {
     /// Whether some material emits light or has an occlusion texture: without, the G-buffer
     /// passes leave their `emissive_occlusion` target unwritten and the lighting does not read it.
     pub emission_or_occlusion: bool,
-    /// Whether some material is alpha-masked: without, the geometry passes take pipelines
-    /// without the alpha test, whose depth test runs before shading.
+    /// Whether some material is alpha-masked: only then do the geometry passes create and bind
+    /// their alpha-tested pipelines, for the masked regions of their lists (the opaque regions
+    /// always draw with pipelines whose depth test runs before shading).
     pub alpha_masks: bool,
     /// Whether some material samples a texture: without, no pass fetches texture coordinates
     /// and tangents ([`super::vertex_streams`]).

@@ -1220,10 +1220,13 @@ impl Renderer {
 }
 
 /// Whether instances of material `a` and of material `b` fall into the same draw groups
-/// ([`crate::passes::shared::face_cull::FaceCull::of`]: blending, then sidedness).
+/// ([`crate::passes::shared::face_cull::FaceCull::of`]: blending, masking, then sidedness).
 fn groups_alike(a: &crate::scene::Material, b: &crate::scene::Material) -> bool {
     use crate::scene::AlphaMode;
-    (a.alpha_mode == AlphaMode::Blend) == (b.alpha_mode == AlphaMode::Blend) && a.double_sided == b.double_sided
+    let masked = |m: &crate::scene::Material| matches!(m.alpha_mode, AlphaMode::Mask { .. });
+    (a.alpha_mode == AlphaMode::Blend) == (b.alpha_mode == AlphaMode::Blend)
+        && masked(a) == masked(b)
+        && a.double_sided == b.double_sided
 }
 
 /// What a sync registered, changed or unregistered besides instances.
