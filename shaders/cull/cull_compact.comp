@@ -219,7 +219,8 @@ void place_block(uint block, uint run) {
 }
 
 // Scan of one value per invocation in invocation order (four sums at once); returns the
-// invocation's exclusive prefix, and the total over the workgroup in `total`.
+// invocation's exclusive prefix, and the total over the workgroup in `total`. `sh_scan` keeps
+// the inclusive scan for the caller, which waits (barrier) before the next scan.
 uvec4 workgroup_exclusive_scan(uvec4 value, out uvec4 total) {
     uint lane = gl_LocalInvocationIndex;
     sh_scan[lane] = value;
@@ -232,7 +233,6 @@ uvec4 workgroup_exclusive_scan(uvec4 value, out uvec4 total) {
     }
     uvec4 inclusive = sh_scan[lane];
     total = sh_scan[THREADS - 1u];
-    barrier();
     return inclusive - value;
 }
 
@@ -251,20 +251,15 @@ uint take_group_count(uint at) {
     return count;
 }
 
-// What one draw list's commands add up to.
+// What one draw list's commands add up to (their number per region: `sh_written`).
 struct ListTotals {
-    uint placed;                        // instances
-    uint written[FACE_CULL_REGIONS];    // commands, per region
-    uint64_t triangles;                 // this invocation's share
+    uint placed;         // instances
+    uint64_t triangles;  // this invocation's share
 };
 
-ListTotals no_totals() {
-    ListTotals t;
-    t.placed = 0u;
-    for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) t.written[r] = 0u;
-    t.triangles = 0ul;
-    return t;
-}
+// Per list (0: drawn, 1: visible) and region, the commands written so far. In shared memory,
+// not in each invocation's registers: the pipeline's placers would pay for those too.
+shared uint sh_written[2][FACE_CULL_REGIONS];
 
 // The region of group `g`.
 uint region_of(uint g) {
@@ -283,23 +278,16 @@ uint region_end(uint r) { return r + 1u < FACE_CULL_REGIONS ? pc.region_first[r 
 // The lane of group `g` in the chunk from group `chunk` on, clamped to the chunk.
 uint chunk_lane(uint g, uint chunk) { return clamp(g, chunk, chunk + CHUNK_GROUPS) - chunk; }
 
-// Component `c` of the scan before lane `lane` (the inclusive scan is still in `sh_scan`).
-uint scanned_before(uint lane, uint c) { return lane == 0u ? 0u : sh_scan[lane - 1u][c]; }
+// The scan before lane `lane` (the inclusive scan is still in `sh_scan`).
+uvec4 scanned_before(uint lane) { return lane == 0u ? uvec4(0u) : sh_scan[lane - 1u]; }
 
-// Where the next command of region `r` goes, given the chunk's commands before it (scan
-// component `c`). Groups are sorted by region, so a region's groups in the chunk are one run
-// of lanes: its commands before this one are the chunk's commands before it less those before
-// the run.
-uint command_index(ListTotals t, uint r, uint chunk, uint c, uint before) {
-    return pc.region_first[r] + t.written[r] + before - scanned_before(chunk_lane(pc.region_first[r], chunk), c);
-}
-
-// Adds each region's commands in the chunk (scan component `c`) to `t`.
-void add_region_commands(inout ListTotals t, uint chunk, uint c) {
-    for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) {
-        t.written[r] += scanned_before(chunk_lane(region_end(r), chunk), c)
-            - scanned_before(chunk_lane(pc.region_first[r], chunk), c);
-    }
+// Adds the chunk's commands in region `r` of list `list` to `sh_written`: the chunk's commands
+// before the region's end less those before its start (scan component y for the drawn list,
+// w for the visible one).
+void add_region_commands(uint list, uint r, uint chunk) {
+    uvec4 end = scanned_before(chunk_lane(region_end(r), chunk));
+    uvec4 start = scanned_before(chunk_lane(pc.region_first[r], chunk));
+    sh_written[list][r] += list == 0u ? end.y - start.y : end.w - start.w;
 }
 
 // A group's command at level `level` for `count` instances from `first_instance` on; adds its
@@ -328,8 +316,10 @@ DrawCommand group_command(DrawGroup group, uint level, uint count, uint first_in
 // slot took (`sh_level_used`) are skipped. Called in uniform control flow.
 void write_group_commands(out ListTotals drawn, out ListTotals listed) {
     uint lane = gl_LocalInvocationIndex;
-    drawn = no_totals();
-    listed = no_totals();
+    drawn = ListTotals(0u, 0ul);
+    listed = ListTotals(0u, 0ul);
+    if (lane < 2u * FACE_CULL_REGIONS) sh_written[lane / FACE_CULL_REGIONS][lane % FACE_CULL_REGIONS] = 0u;
+    barrier();
     for (uint level = 0u; level < LOD_LEVELS; ++level) {
 #ifdef LOD
         if (sh_level_used[level] == 0u) continue;
@@ -349,21 +339,27 @@ void write_group_commands(out ListTotals drawn, out ListTotals listed) {
             uvec4 total;
             uvec4 before = workgroup_exclusive_scan(
                 uvec4(count, count != 0u ? 1u : 0u, visible, visible != 0u ? 1u : 0u), total);
+            // Groups are sorted by region, so the region's groups in the chunk are one run of
+            // lanes: a command's place in its region is the chunk's commands before it less
+            // those before the run, after what earlier chunks wrote in the region.
+            uvec4 before_run = uvec4(0u);
+            if (count != 0u || visible != 0u) before_run = scanned_before(chunk_lane(pc.region_first[r], chunk));
             if (count != 0u) {
-                commands[command_index(drawn, r, chunk, 1u, before.y)] =
-                    group_command(group, level, count, drawn.placed + before.x, drawn);
+                uint at = pc.region_first[r] + sh_written[0][r] + before.y - before_run.y;
+                commands[at] = group_command(group, level, count, drawn.placed + before.x, drawn);
             }
 #ifdef VISIBLE_OUT
             if (visible != 0u) {
-                list_commands[command_index(listed, r, chunk, 3u, before.w)] =
-                    group_command(group, level, visible, listed.placed + before.z, listed);
+                uint at = pc.region_first[r] + sh_written[1][r] + before.w - before_run.w;
+                list_commands[at] = group_command(group, level, visible, listed.placed + before.z, listed);
             }
 #endif
             drawn.placed += total.x;
-            add_region_commands(drawn, chunk, 1u);
             listed.placed += total.z;
-            add_region_commands(listed, chunk, 3u);
-            // Every invocation has read the scan before the next chunk's overwrites it.
+            // Every invocation has read `sh_written` before it grows...
+            barrier();
+            if (lane < 2u * FACE_CULL_REGIONS) add_region_commands(lane / FACE_CULL_REGIONS, lane % FACE_CULL_REGIONS, chunk);
+            // ...and the scan, before the next chunk's overwrites it.
             barrier();
         }
     }
@@ -403,9 +399,10 @@ CullStats stats_record(uint tested, uint frustum, uint occlusion, uint drawn, ui
     return s;
 }
 
-uint commands_of(ListTotals t) {
+// The commands of list `list` (0: drawn, 1: visible), once `write_group_commands` returned.
+uint commands_of(uint list) {
     uint n = 0u;
-    for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) n += t.written[r];
+    for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) n += sh_written[list][r];
     return n;
 }
 
@@ -457,9 +454,9 @@ void write_commands() {
     }
     uint64_t triangles = workgroup_triangles(drawn.triangles);
     if (lane == 0u) {
-        for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) draw_count[r] = drawn.written[r];
+        for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) draw_count[r] = sh_written[0][r];
         stats = stats_record(sh_totals[TOTAL_TESTED], sh_totals[TOTAL_FRUSTUM], sh_totals[TOTAL_OCCLUSION], drawn.placed,
-                             commands_of(drawn), triangles, sh_totals[TOTAL_VISIBLE], 0u);
+                             commands_of(0u), triangles, sh_totals[TOTAL_VISIBLE], 0u);
         // Nothing reads this word in this dispatch: the next run's test step does.
         scratch[SCRATCH_TEST_RUN] = run + 1u;
     }
@@ -471,8 +468,8 @@ void write_commands() {
     barrier();
     uint64_t list_triangles = workgroup_triangles(listed.triangles);
     if (lane == 0u) {
-        for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) list_count[r] = listed.written[r];
-        list_stats = stats_record(0u, 0u, 0u, listed.placed, commands_of(listed), list_triangles, 0u, 1u);
+        for (uint r = 0u; r < FACE_CULL_REGIONS; ++r) list_count[r] = sh_written[1][r];
+        list_stats = stats_record(0u, 0u, 0u, listed.placed, commands_of(1u), list_triangles, 0u, 1u);
     }
 #endif
 }
