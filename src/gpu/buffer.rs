@@ -187,6 +187,17 @@ impl Buffer {
         }
     }
 
+    /// The memory of a host-visible buffer, to write in place.
+    pub fn mapped_mut(&mut self) -> GpuResult<&mut [u8]> {
+        let size = self.size as usize;
+        match self.allocation.as_mut().and_then(|a| a.mapped_slice_mut()) {
+            Some(slice) => Ok(&mut slice[..size]),
+            None => {
+                Err(GpuError::InvalidResource { name: self.name.clone(), reason: "buffer is not host-visible".into() })
+            }
+        }
+    }
+
     /// The contents of a host-visible buffer (after the GPU work writing it has completed).
     pub fn read_bytes(&self) -> GpuResult<&[u8]> {
         match self.allocation.as_ref().and_then(|a| a.mapped_slice()) {

@@ -77,6 +77,63 @@ impl UploadBatch {
         Ok(dst)
     }
 
+    /// As [`UploadBatch::buffer_with_room`], for `count` elements of `T` that `fill` writes
+    /// straight into the staging memory, so that no host copy of them is made first (a scene's
+    /// per-instance tables are as large as the scene). `fill(first, elements)` writes elements
+    /// `first..first + elements.len()`; many elements are filled on several threads.
+    #[allow(clippy::too_many_arguments)]
+    pub fn buffer_filled<T: bytemuck::Pod + Send>(
+        &mut self,
+        ctx: &GpuContext,
+        name: &str,
+        usage: vk::BufferUsageFlags,
+        count: usize,
+        size: u64,
+        fill: impl Fn(usize, &mut [T]) + Sync,
+    ) -> GpuResult<Buffer> {
+        let bytes = (count * std::mem::size_of::<T>()) as u64;
+        let dst = Buffer::new(
+            ctx,
+            &BufferDesc {
+                name,
+                size: size.max(bytes),
+                usage: usage | vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuOnly,
+            },
+        )?;
+        if bytes == 0 {
+            return Ok(dst);
+        }
+        let desc = BufferDesc {
+            name: &format!("{name} (staging)"),
+            size: bytes,
+            usage: vk::BufferUsageFlags::TRANSFER_SRC,
+            location: MemoryLocation::CpuToGpu,
+        };
+        let mut staging = Buffer::new(ctx, &desc)?;
+        let fill_all = |elements: &mut [T]| {
+            use rayon::prelude::*;
+            // Chunks of a few pages' worth each, so that threads write whole lines.
+            let chunk = (crate::parallel::MIN_ITEMS_PER_THREAD * 16).max(1);
+            if elements.len() <= chunk {
+                fill(0, elements);
+            } else {
+                elements.par_chunks_mut(chunk).enumerate().for_each(|(c, part)| fill(c * chunk, part));
+            }
+        };
+        match bytemuck::try_cast_slice_mut::<u8, T>(staging.mapped_mut()?) {
+            Ok(elements) => fill_all(elements),
+            // Mapped memory is aligned far beyond any element; should it not be, one host copy.
+            Err(_) => {
+                let mut elements = vec![T::zeroed(); count];
+                fill_all(&mut elements);
+                staging.write_bytes(0, bytemuck::cast_slice(&elements))?;
+            }
+        }
+        self.copies.push((staging, dst.handle(), bytes));
+        Ok(dst)
+    }
+
     /// Queues `data` into `image` (`range`: what it covers, left in `SHADER_READ_ONLY_OPTIMAL`
     /// for sampling), each region reading its part of `data`. The image must stay alive until
     /// the batch has executed.

@@ -309,6 +309,20 @@ pub struct CullData {
 impl CullData {
     /// Bounds and groups of `scene`, slots in the order of `draws`.
     pub fn new(scene: &Scene, draws: &DrawList) -> Self {
+        let (mut data, group_of_slot) = Self::without_records(scene, draws);
+        data.records = draws
+            .instance_ids
+            .iter()
+            .zip(group_of_slot.iter())
+            .map(|(&id, &group)| cull_record(scene, &scene.instances[id as usize], group))
+            .collect();
+        data
+    }
+
+    /// As [`CullData::new`] without the records (left empty), and the draw group of each slot,
+    /// from which [`cull_record`] makes them: for an upload that writes the records straight
+    /// into upload memory.
+    pub fn without_records(scene: &Scene, draws: &DrawList) -> (Self, Vec<u32>) {
         let mut group_of_slot = vec![0u32; draws.instance_ids.len()];
         let groups: Vec<GpuDrawGroup> = draws
             .commands
@@ -326,12 +340,6 @@ impl CullData {
             })
             .collect();
         let lods = level_table(scene);
-        let records = draws
-            .instance_ids
-            .iter()
-            .zip(group_of_slot.iter())
-            .map(|(&id, &group)| cull_record(scene, &scene.instances[id as usize], group))
-            .collect();
         let bounds = draws
             .commands
             .iter()
@@ -344,7 +352,7 @@ impl CullData {
                 GpuGroupBounds::of(&scene.meshes[inst.mesh as usize])
             })
             .collect();
-        Self { records, groups, bounds, lods }
+        (Self { records: Vec::new(), groups, bounds, lods }, group_of_slot)
     }
 }
 

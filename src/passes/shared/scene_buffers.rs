@@ -328,14 +328,59 @@ impl GpuScene {
         check_index_range(scene, ctx.caps().limits.max_draw_indexed_index_value)?;
         super::instance_ranges::check_instance_count(scene.instances.len() as u64, &ctx.caps().limits)?;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let instances: Vec<GpuInstance> = scene.instances.iter().map(GpuInstance::new).collect();
+        let usage = storage | vk::BufferUsageFlags::TRANSFER_SRC;
+        let room_for = |bytes: usize| if room { super::scene_growth::with_room(bytes as u64) } else { 0 };
+        // The per-instance tables are written straight into upload memory: a host copy of
+        // them would be as large as the scene. A changing world copies the instance records to
+        // its previous ones (motion vectors).
+        let n = scene.instances.len();
+        let instances = Arc::new(batch.buffer_filled(
+            ctx,
+            "instances",
+            usage,
+            n,
+            room_for(n * std::mem::size_of::<GpuInstance>()),
+            |first, out: &mut [GpuInstance]| {
+                for (record, instance) in out.iter_mut().zip(&scene.instances[first..]) {
+                    *record = GpuInstance::new(instance);
+                }
+            },
+        )?);
+        let (cull, group_of_slot) = super::cull_data::CullData::without_records(scene, &draws);
+        // Readable back, for checks of the bounds a changing world's updates derive.
+        let cull_records = Arc::new(batch.buffer_filled(
+            ctx,
+            "cull records",
+            usage,
+            draws.instance_ids.len(),
+            room_for(draws.instance_ids.len() * std::mem::size_of::<super::cull_data::GpuCullRecord>()),
+            |first, out: &mut [super::cull_data::GpuCullRecord]| {
+                let slots = draws.instance_ids[first..].iter().zip(&group_of_slot[first..]);
+                for (record, (&id, &group)) in out.iter_mut().zip(slots) {
+                    *record = super::cull_data::cull_record(scene, &scene.instances[id as usize], group);
+                }
+            },
+        )?);
+        drop(group_of_slot);
+        let instance_triangles = Arc::new(batch.buffer_filled(
+            ctx,
+            "instance triangle bases",
+            usage,
+            n,
+            room_for(n * 8),
+            |first, out: &mut [[u32; 2]]| {
+                for (bases, instance) in out.iter_mut().zip(&scene.instances[first..]) {
+                    let mesh = &scene.meshes[instance.mesh as usize];
+                    *bases = [mesh.first_index, mesh.vertex_offset];
+                }
+            },
+        )?);
         let textures = match textures {
             Some(textures) => textures,
             None => Arc::new(GpuTextures::upload(ctx, scene, batch)?),
         };
         let materials: Vec<GpuMaterial> =
             scene.materials.iter().map(|m| GpuMaterial::new(m, textures.placements())).collect();
-        let cull = super::cull_data::CullData::new(scene, &draws);
         let cluster_tables = super::cull_data::cluster_tables(scene);
         let count = draws.regions.len;
         let (positions, normals, surface) = super::vertex_streams::split(&scene.vertices);
@@ -358,8 +403,7 @@ impl GpuScene {
             },
             prev_positions: make("previous positions", none, bytemuck::cast_slice(&positions))?,
             indices: make("indices", vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&scene.indices))?,
-            // A changing world copies them to its previous instances (motion vectors).
-            instances: make("instances", none, bytemuck::cast_slice(&instances))?,
+            instances,
             prev_instances: None,
             materials: make("materials", none, bytemuck::cast_slice(&materials))?,
             draw_instance_ids: make("draw instance ids", none, bytemuck::cast_slice(&draws.instance_ids))?,
@@ -369,8 +413,7 @@ impl GpuScene {
                 bytemuck::cast_slice(&draws.commands),
             )?,
             draw_count: make("draw count", vk::BufferUsageFlags::INDIRECT_BUFFER, bytemuck::cast_slice(&count))?,
-            // Readable back, for checks of the bounds a changing world's updates derive.
-            cull_records: make("cull records", none, bytemuck::cast_slice(&cull.records))?,
+            cull_records,
             draw_groups: make("draw groups", none, bytemuck::cast_slice(&cull.groups))?,
             group_bounds: make("group bounds", none, bytemuck::cast_slice(&cull.bounds))?,
             lod_levels: make("levels of detail", none, bytemuck::cast_slice(&cull.lods))?,
@@ -378,11 +421,7 @@ impl GpuScene {
             cluster_ranges: make("cluster ranges", none, bytemuck::cast_slice(&cluster_tables.ranges))?,
             cluster_meshes: make("clustered meshes", none, bytemuck::cast_slice(&cluster_tables.meshes))?,
             clustered_meshes: cluster_tables.clustered_meshes(),
-            instance_triangles: make(
-                "instance triangle bases",
-                none,
-                bytemuck::cast_slice(&instance_triangle_bases(scene)),
-            )?,
+            instance_triangles,
             regions: draws.regions,
             textures,
             user_data: None,
@@ -411,18 +450,6 @@ pub(crate) fn drawn_triangles(scene: &Scene) -> u64 {
         .filter(|i| i.flags & crate::scene::FLAG_EMPTY_SLOT == 0)
         .map(|i| scene.meshes[i.mesh as usize].index_count as u64 / 3)
         .sum()
-}
-
-/// Per instance: `[first_index, vertex_offset]` of its mesh in the shared pools.
-pub(crate) fn instance_triangle_bases(scene: &Scene) -> Vec<[u32; 2]> {
-    scene
-        .instances
-        .iter()
-        .map(|inst| {
-            let mesh = &scene.meshes[inst.mesh as usize];
-            [mesh.first_index, mesh.vertex_offset]
-        })
-        .collect()
 }
 
 #[cfg(test)]
