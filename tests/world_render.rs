@@ -292,6 +292,57 @@ fn growing_past_the_room_keeps_every_slot_and_the_culling_history() {
     gpu.assert_clean();
 }
 
+/// Groups that grow in several regions, a lower region after a higher one, take slots after
+/// every other group's while their commands stay in their regions: the culled lists must still
+/// draw each instance with its own group's mesh (the tall boxes of the double-sided and masked
+/// regions against the cubes of the one-sided region), with no relayout, no false negative
+/// and the unculled image, through the early (last frame's list) and the late phase.
+#[test]
+fn groups_grown_in_several_regions_draw_their_own_instances() {
+    let gpu = GpuTest::new();
+    let (mut world, _) = World::new(boxes_scene()).unwrap();
+    let mut tall = cube_mesh();
+    for p in &mut tall.positions {
+        p.y *= 3.0;
+    }
+    let tall = world.add_mesh("tall box", &tall).unwrap();
+    let double_sided =
+        world.add_material(Material { albedo: Vec3::new(0.2, 0.9, 0.3), double_sided: true, ..Default::default() });
+    let masked = world.add_material(Material {
+        albedo: Vec3::new(0.9, 0.3, 0.8),
+        alpha_mode: cullgraph::scene::AlphaMode::Mask { cutoff: 0.5 },
+        ..Default::default()
+    });
+    let (double_sided, masked) = (double_sided.unwrap(), masked.unwrap());
+    let mut culled = renderer(&gpu, &world, "two_phase", true);
+    let mut unculled = renderer(&gpu, &world, "no_cull", false);
+    let shaders = gpu.shaders();
+    let camera = boxes_camera();
+    culled.render_to_image(&camera).unwrap();
+    // Rounds of each region in turn, each more than its groups' spare slots.
+    let kinds = [(tall, double_sided), (0, 2), (tall, masked), (0, 2), (tall, double_sided)];
+    for (round, &(mesh, material)) in kinds.iter().enumerate() {
+        for k in 0..8 {
+            let x = -3.0 + k as f64 * 0.8;
+            let z = -1.5 - round as f64 * 0.9;
+            let t = Transform { linear: Mat3::from_diagonal(Vec3::splat(0.3)), translation: DVec3::new(x, 0.15, z) };
+            world.insert(Instance { transform: t, mesh, material, flags: 0 }).unwrap();
+        }
+        let stats = culled.sync(shaders, &world).unwrap();
+        assert!(!stats.relayout, "round {round}: growth is not a new layout");
+        unculled.sync(shaders, &world).unwrap();
+        let want = unculled.render_to_image(&camera).unwrap().1;
+        // Twice: the second frame's early phase draws the first frame's list.
+        for frame in 0..2 {
+            let (s, image) = culled.render_to_image(&camera).unwrap();
+            assert_eq!(s.verify.as_ref().unwrap().false_negatives, 0, "round {round}, frame {frame}");
+            let differ = differing_pixels(&image, &want);
+            assert_eq!(differ, 0, "round {round}, frame {frame}: the culled image differs in {differ} pixels");
+        }
+    }
+    gpu.assert_clean();
+}
+
 /// An instance inserted right after another was removed does not take over its slot's
 /// visibility: the removed instance was visible, the new one is hidden behind a wall, and the
 /// early phase (last frame's visible slots) must not draw it.

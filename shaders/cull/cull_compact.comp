@@ -69,7 +69,14 @@ layout(push_constant) uniform Push {
 #else
     uint placers;                          // workgroups that place blocks (all but workgroup 0)
 #endif
+    uint groups_out_of_slot_order;         // 1: `group_order` is not the identity
 } pc;
+
+// The draw groups in the order of their slots (groups with slots first, by first slot). A
+// changing world's group that grew takes slots after every other group's, while its command
+// stays in its region: its survivors are then placed after groups that come later in group
+// order, and commands take their first instance from this order.
+layout(set = 0, binding = 16) readonly buffer GroupOrder { uint group_order[]; };
 
 // Placing a block: its draw bits [0] and visibility bits [1], and the survivors / visible slots
 // before it.
@@ -251,6 +258,12 @@ uint take_group_count(uint at) {
     return count;
 }
 
+// Where the first instance of group `g`'s command at `level` in list `list` (0: drawn, 1:
+// visible) is kept when groups are out of slot order: after the counts in `group_counts`.
+uint first_instance_at(uint list, uint level, uint g) {
+    return ((2u + list) * LOD_LEVELS + level) * pc.group_count + g;
+}
+
 // What one draw list's commands add up to (their number per region: `sh_written`).
 struct ListTotals {
     uint placed;         // instances
@@ -310,6 +323,43 @@ DrawCommand group_command(DrawGroup group, uint level, uint count, uint first_in
     return cmd;
 }
 
+// For groups out of slot order: each group's first instance in each list, level after level
+// and in slot order within a level (the order the placers put the instance ids in), into
+// `group_counts` at `first_instance_at`. The counts are read, not taken. Called in uniform
+// control flow.
+void first_instances_in_slot_order() {
+    uint lane = gl_LocalInvocationIndex;
+    uvec2 placed = uvec2(0u);
+    for (uint level = 0u; level < LOD_LEVELS; ++level) {
+#ifdef LOD
+        if (sh_level_used[level] == 0u) continue;
+#endif
+        for (uint chunk = 0u; chunk < pc.group_count; chunk += THREADS) {
+            uint i = chunk + lane;
+            uint g = i < pc.group_count ? group_order[i] : 0u;
+            uvec2 counts = uvec2(0u);
+            if (i < pc.group_count) {
+                counts.x = group_counts[level * pc.group_count + g];
+#ifdef VISIBLE_OUT
+                counts.y = group_counts[(LOD_LEVELS + level) * pc.group_count + g];
+#endif
+            }
+            uvec4 total;
+            uvec4 before = workgroup_exclusive_scan(uvec4(counts, 0u, 0u), total);
+            if (i < pc.group_count) {
+                group_counts[first_instance_at(0u, level, g)] = placed.x + before.x;
+                group_counts[first_instance_at(1u, level, g)] = placed.y + before.y;
+            }
+            placed += total.xy;
+            // The scan is read before the next chunk's overwrites it.
+            barrier();
+        }
+    }
+    // The first instances are read by other invocations of this workgroup.
+    memoryBarrierBuffer();
+    barrier();
+}
+
 // One command per non-empty group and level, level after level and in group order within a
 // level, for this run's survivors (`commands`) and, with VISIBLE_OUT, for the visible list
 // (`list_commands`), from one scan of both counts; every count back to zero. Levels that no
@@ -319,6 +369,8 @@ void write_group_commands(out ListTotals drawn, out ListTotals listed) {
     drawn = ListTotals(0u, 0ul);
     listed = ListTotals(0u, 0ul);
     if (lane < 2u * FACE_CULL_REGIONS) sh_written[lane / FACE_CULL_REGIONS][lane % FACE_CULL_REGIONS] = 0u;
+    bool out_of_order = pc.groups_out_of_slot_order != 0u;
+    if (out_of_order) first_instances_in_slot_order();
     barrier();
     for (uint level = 0u; level < LOD_LEVELS; ++level) {
 #ifdef LOD
@@ -346,12 +398,14 @@ void write_group_commands(out ListTotals drawn, out ListTotals listed) {
             if (count != 0u || visible != 0u) before_run = scanned_before(chunk_lane(pc.region_first[r], chunk));
             if (count != 0u) {
                 uint at = pc.region_first[r] + sh_written[0][r] + before.y - before_run.y;
-                commands[at] = group_command(group, level, count, drawn.placed + before.x, drawn);
+                uint first = out_of_order ? group_counts[first_instance_at(0u, level, g)] : drawn.placed + before.x;
+                commands[at] = group_command(group, level, count, first, drawn);
             }
 #ifdef VISIBLE_OUT
             if (visible != 0u) {
                 uint at = pc.region_first[r] + sh_written[1][r] + before.w - before_run.w;
-                list_commands[at] = group_command(group, level, visible, listed.placed + before.z, listed);
+                uint first = out_of_order ? group_counts[first_instance_at(1u, level, g)] : listed.placed + before.z;
+                list_commands[at] = group_command(group, level, visible, first, listed);
             }
 #endif
             drawn.placed += total.x;

@@ -373,7 +373,9 @@ impl InstanceCullPass {
                     true => Some(storage("cull level bits", LOD_PLANES * bit_words * 4)?),
                     false => None,
                 },
-                group_counts: storage("cull group counts", 2 * levels * groups.max(1) as u64 * 4)?,
+                // Per list and level each group's count, then (groups out of slot order) its
+                // first instance.
+                group_counts: storage("cull group counts", 4 * levels * groups.max(1) as u64 * 4)?,
                 fresh: true,
             });
         }
@@ -628,6 +630,7 @@ impl PassNode for InstanceCullPass {
                 Bind::Buffer(6, commands.handle()),
                 Bind::Buffer(7, draw_count.handle()),
                 Bind::Buffer(8, stats.handle()),
+                Bind::Buffer(16, scene.group_order.handle()),
             ];
             let optional = [
                 (9, rec.slots.buffer("visibility").filter(|_| rec.slots.buffer("visible_ids").is_some())),
@@ -645,7 +648,7 @@ impl PassNode for InstanceCullPass {
             let placers = blocks.min(COMPACT_PLACERS);
             let mut push = vec![slots, groups, superblocks];
             push.extend(scene.regions.first);
-            push.push(placers);
+            push.extend([placers, scene.groups_out_of_slot_order as u32]);
             compact.push_constant_bytes(cmd, bytemuck::cast_slice(&push));
             // Workgroup 0 writes the commands, workgroup 1 + p places every placers-th block from
             // block p on.

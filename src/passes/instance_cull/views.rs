@@ -266,11 +266,12 @@ impl InstanceCullPass {
                     Bind::Buffer(2, scene.draw_groups.handle()),
                     Bind::Buffer(3, scene.draw_instance_ids.handle()),
                     Bind::Buffer(14, table),
+                    Bind::Buffer(16, scene.group_order.handle()),
                 ],
             );
             let mut push = vec![slots, groups, superblocks];
             push.extend(scene.regions.first);
-            push.push(n as u32);
+            push.extend([n as u32, scene.groups_out_of_slot_order as u32]);
             together.compact.push_constant_bytes(cmd, bytemuck::cast_slice(&push));
             // Workgroup v < n writes view v's commands, workgroup n + b places block b of every
             // view with survivors there.

@@ -294,6 +294,23 @@ impl GpuGroupBounds {
     }
 }
 
+/// The draw groups given as (first slot, slots) in the order of their slots: the groups with
+/// slots by first slot, then the others (which draw nothing), each set in group order; and
+/// whether that order differs from the groups' own for the groups with slots. A changing
+/// world's group that grows takes slots after every other group's while its command stays in
+/// its region, so a world whose groups grew in several regions has them out of order.
+pub fn slot_order(groups: impl Iterator<Item = (u32, u32)>) -> (Vec<u32>, bool) {
+    let groups: Vec<(u32, u32)> = groups.collect();
+    let mut order: Vec<u32> = (0..groups.len() as u32).collect();
+    order.sort_by_key(|&g| {
+        let (first_slot, slots) = groups[g as usize];
+        (slots == 0, if slots == 0 { 0 } else { first_slot }, g)
+    });
+    let with_slots = order.iter().take_while(|&&g| groups[g as usize].1 != 0);
+    let in_order = with_slots.clone().zip(with_slots.skip(1)).all(|(a, b)| a < b);
+    (order, !in_order)
+}
+
 /// The culling view of the scene.
 pub struct CullData {
     /// One record per slot.
@@ -383,6 +400,16 @@ mod tests {
     use super::*;
     use crate::scene::{Instance, MeshData, Transform};
     use glam::{DVec3, Quat};
+
+    #[test]
+    fn groups_are_ordered_by_their_slots_with_empty_ones_last() {
+        // Laid out in order, with empty (reserved) groups between regions.
+        let (order, out) = slot_order([(0, 4), (4, 4), (0, 0), (8, 2), (0, 0)].into_iter());
+        assert_eq!((order, out), (vec![0, 1, 3, 2, 4], false));
+        // Group 1 grew after group 3: its slots come last.
+        let (order, out) = slot_order([(0, 4), (10, 4), (0, 0), (4, 6)].into_iter());
+        assert_eq!((order, out), (vec![0, 3, 1, 2], true));
+    }
 
     #[test]
     fn half_float_bounds_round_outward_and_flag_huge_ones() {

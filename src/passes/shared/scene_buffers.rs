@@ -45,6 +45,13 @@ pub struct GpuScene {
     pub cull_records: Arc<Buffer>,
     /// [`super::cull_data::GpuDrawGroup`] per draw group (empty for a changing world's reserved groups).
     pub draw_groups: Arc<Buffer>,
+    /// The draw groups in the order of their slots ([`super::cull_data::slot_order`]): the
+    /// order in which culled lists place their instance ids.
+    pub group_order: Arc<Buffer>,
+    /// Whether [`GpuScene::group_order`] differs from the groups' own order (a changing world
+    /// whose groups grew in several regions): culling then takes each command's first instance
+    /// from it.
+    pub groups_out_of_slot_order: bool,
     /// [`super::cull_data::GpuGroupBounds`] per draw group (empty for a changing world's reserved groups): the local bounds that
     /// a changing world's moved instances get their cull bounds from.
     pub group_bounds: Arc<Buffer>,
@@ -382,6 +389,8 @@ impl GpuScene {
         let materials: Vec<GpuMaterial> =
             scene.materials.iter().map(|m| GpuMaterial::new(m, textures.placements())).collect();
         let cluster_tables = super::cull_data::cluster_tables(scene);
+        let (group_order, out_of_order) =
+            super::cull_data::slot_order(cull.groups.iter().map(|g| (g.first_slot, g.slot_count)));
         let count = draws.regions.len;
         let (positions, normals, surface) = super::vertex_streams::split(&scene.vertices);
         // Every scene buffer can be carried into a larger successor (a changing world's growth).
@@ -415,6 +424,8 @@ impl GpuScene {
             draw_count: make("draw count", vk::BufferUsageFlags::INDIRECT_BUFFER, bytemuck::cast_slice(&count))?,
             cull_records,
             draw_groups: make("draw groups", none, bytemuck::cast_slice(&cull.groups))?,
+            group_order: make("draw group order", none, bytemuck::cast_slice(&group_order))?,
+            groups_out_of_slot_order: out_of_order,
             group_bounds: make("group bounds", none, bytemuck::cast_slice(&cull.bounds))?,
             lod_levels: make("levels of detail", none, bytemuck::cast_slice(&cull.lods))?,
             clusters: make("clusters", none, bytemuck::cast_slice(&cluster_tables.clusters))?,

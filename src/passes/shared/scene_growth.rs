@@ -117,6 +117,8 @@ impl GpuScene {
                 none,
             )?,
             draw_groups: self.draw_groups.clone(),
+            group_order: self.group_order.clone(),
+            groups_out_of_slot_order: self.groups_out_of_slot_order,
             group_bounds: self.group_bounds.clone(),
             // The cluster tables change only with the meshes (written whole below).
             clusters: match &tables {
@@ -199,6 +201,15 @@ impl GpuScene {
         let slots = group.first_slot..group.first_slot + group.capacity;
         let bases = vec![[mesh.first_index, mesh.vertex_offset]; group.capacity as usize];
         edits.write(&self.instance_triangles, at::<[u32; 2]>(&slots), bytemuck::cast_slice(&bases));
+    }
+
+    /// Queues the order of `layout`'s groups by slot ([`super::cull_data::slot_order`]), after
+    /// groups were opened.
+    pub fn write_group_order(&mut self, edits: &mut Edits, layout: &SlotLayout) {
+        let (order, out_of_order) =
+            super::cull_data::slot_order(layout.groups.iter().map(|g| (g.first_slot, g.capacity)));
+        edits.write(&self.group_order, 0, bytemuck::cast_slice(&order));
+        self.groups_out_of_slot_order = out_of_order;
     }
 
     /// Queues the draw-list entries of new slots `slots` (slot `s` draws record `s`).

@@ -1182,18 +1182,23 @@ impl Renderer {
         };
         let placements_moved = !textures.same_placements(&self.gpu_scene.textures);
         let meshes_changed = !registered.meshes.is_empty();
-        let next = self.gpu_scene.grown(&self.ctx, &self.scene, textures, meshes_changed, &mut batch.edits)?;
+        let mut next = self.gpu_scene.grown(&self.ctx, &self.scene, textures, meshes_changed, &mut batch.edits)?;
         for &m in &registered.meshes {
             next.write_mesh(&mut batch.edits, &self.scene, m);
         }
         let mirror = self.world.as_mut().expect("a world renderer");
         let layout = &mirror.layout;
+        let mut opened_any = false;
         for (g, group) in layout.groups.iter().enumerate() {
             let opened = !group.spare() && group.first_slot >= slots_before;
             let remeshed = !group.spare() && registered.meshes.binary_search(&group.key.1).is_ok();
             if opened || remeshed {
                 next.write_group(&mut batch.edits, &self.scene, layout, g);
             }
+            opened_any |= opened;
+        }
+        if opened_any {
+            next.write_group_order(&mut batch.edits, layout);
         }
         next.write_slot_ids(&mut batch.edits, slots_before..slots);
         let materials: Vec<u32> = if placements_moved {
