@@ -334,3 +334,40 @@ fn a_live_world_draws_its_meshes_at_levels_as_a_loaded_scene_does() {
     compare(&world, &mut renderer, "a mesh registered in a freed place");
     gpu.assert_clean();
 }
+
+/// Shadow casters take the level of detail their camera view takes (`ShadowSettings::
+/// lod_threshold`): the triangles the sun's cascade draws follow the camera view's pixels, not
+/// the map's (a larger view draws finer casters into the same map), and without a threshold
+/// every caster is whole at any size.
+#[test]
+fn shadow_casters_take_the_levels_of_their_camera_view() {
+    use cullgraph::render::ShadowSettings;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let scene = dense(16);
+    let camera = near_camera();
+    // The first frame's cascade: its early list is empty, so levels change no culling decision.
+    let cascade = |threshold: f64, (w, h): (u32, u32)| -> (u32, u64) {
+        let spec = GraphSpec::builtin("two_phase").unwrap();
+        let mut r = Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
+        let shadows = ShadowSettings {
+            cascades: 1,
+            resolution: 256,
+            local_lights: 0,
+            lod_threshold: threshold,
+            ..Default::default()
+        };
+        r.set_shadows(shaders, Some(shadows)).unwrap();
+        let stats = r.render(&camera).unwrap();
+        let drawn = &stats.shadow_cascades[0];
+        (drawn.drawn, drawn.triangles)
+    };
+    let (small, large) = ((64, 36), (256, 144));
+    let whole = cascade(0.0, small);
+    assert_eq!(cascade(0.0, large), whole, "every caster whole at any size");
+    let (coarse, fine) = (cascade(2.0, small), cascade(2.0, large));
+    assert_eq!((coarse.0, fine.0), (whole.0, whole.0), "levels change no culling decision");
+    assert!(coarse.1 < fine.1, "{} triangles for the small view, {} for the large one", coarse.1, fine.1);
+    assert!(fine.1 < whole.1, "{} triangles at 2 px, {} whole", fine.1, whole.1);
+    gpu.assert_clean();
+}

@@ -293,6 +293,8 @@ fn bad_shadow_settings_are_refused_and_change_nothing() {
         (ShadowSettings { resolution: 1 << 20, ..shadows(true) }, "size 1048576"),
         (ShadowSettings { distance: Some(f32::NAN), ..shadows(true) }, "distance NaN"),
         (ShadowSettings { lambda: 2.0, ..shadows(true) }, "lambda 2"),
+        (ShadowSettings { lod_threshold: -1.0, ..shadows(true) }, "level of detail threshold -1"),
+        (ShadowSettings { lod_threshold: f64::NAN, ..shadows(true) }, "level of detail threshold NaN"),
     ] {
         let e = r.set_shadows(shaders, Some(bad)).unwrap_err().to_string();
         assert!(e.contains(says), "{e}");

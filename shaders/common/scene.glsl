@@ -99,6 +99,11 @@ struct FrameConstants {
     vec4 jitter;                    // xy: this frame's jitter, zw: last frame's, in NDC units
     SunShadows sun_shadows;
     LocalShadows local_shadows;
+    // The view whose pixels levels of detail are chosen for (a shadow view: its camera view's;
+    // any other: `cull_view`), and this view's eye less that view's eye (xyz), which turns
+    // positions relative to this eye into positions relative to that one.
+    CullView lod_view;
+    vec4 lod_eye_offset;
 };
 
 // What the lighting pass shows (its `debug_view` setting).

@@ -346,7 +346,7 @@ Decision decide(CullRecord r, bool evaluated, bool was_visible) {
     d.draw = visible;
 #endif
 #ifdef LOD
-    if (d.draw || d.visible_now) d.level = choose_level(frame.cull_view, c, radius, d.group);
+    if (d.draw || d.visible_now) d.level = choose_level(frame.lod_view, c + frame.lod_eye_offset.xyz, radius, d.group);
 #endif
     return d;
 }

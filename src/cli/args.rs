@@ -488,7 +488,8 @@ pub struct RenderArgs {
     pub debug_view: Option<String>,
     /// Levels of detail: each drawn instance takes the coarsest level of its mesh whose error,
     /// projected conservatively, is at most PX pixels (0: full meshes, the default). Shorthand
-    /// for `--param lod_threshold=PX` (the shipped culling graphs have it).
+    /// for `--param lod_threshold=PX` (the shipped culling graphs have it); with `--shadows on`
+    /// the shadow casters take the camera's levels.
     #[arg(long, value_name = "PX", value_parser = parse_lod_threshold, allow_hyphen_values = true)]
     pub lod_threshold: Option<f64>,
     /// Cluster culling: before each draw of a culled list, a `cluster_cull` pass tests the

@@ -767,11 +767,13 @@ fn register_probe(
     Ok(())
 }
 
-/// The shadows `--shadows`, `--cascades` and `--no-caster-cull` ask for.
+/// The shadows `--shadows`, `--cascades` and `--no-caster-cull` ask for; `--lod-threshold`
+/// gives the casters the camera's levels of detail.
 pub fn shadow_settings(args: &RenderArgs) -> Option<cullgraph::render::ShadowSettings> {
     args.shadows.then(|| cullgraph::render::ShadowSettings {
         cascades: args.cascades,
         caster_culling: !args.no_caster_cull,
+        lod_threshold: args.lod_threshold.unwrap_or(0.0),
         ..Default::default()
     })
 }

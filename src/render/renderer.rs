@@ -418,12 +418,18 @@ impl Renderer {
         let cameras: Vec<(ViewId, &Camera)> = views.iter().map(|fv| (fv.view, fv.camera)).collect();
         let (cascades, shadow_data) = self.plan_shadow_frame(cmd, &cameras)?;
         for ((&at, frame_view), shadows) in order.iter().zip(views).zip(&shadow_data) {
-            self.views[at].write_frame_data(&self.scene, frame, frame_view.camera, shadows)?;
+            self.views[at].write_frame_data(&self.scene, frame, frame_view.camera, shadows, None)?;
         }
         let mut cascade_order = Vec::with_capacity(cascades.len());
         for cascade in &cascades {
             let at = self.view_index(cascade.view)?;
-            self.views[at].write_frame_data(&self.scene, frame, &cascade.camera, &Default::default())?;
+            // A caster takes the level of detail its camera view takes (a shadow graph choosing
+            // levels: `ShadowSettings::lod_threshold`).
+            let of = self.view_index(cascade.of)?;
+            let of_camera = views.iter().find(|v| v.view == cascade.of).map(|v| v.camera);
+            let (width, height) = (self.views[of].settings.width, self.views[of].settings.height);
+            let levels_for = of_camera.map(|c| (c, width, height));
+            self.views[at].write_frame_data(&self.scene, frame, &cascade.camera, &Default::default(), levels_for)?;
             cascade_order.push(at);
         }
         match &mut self.world {

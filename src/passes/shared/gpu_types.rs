@@ -320,6 +320,11 @@ pub struct FrameConstants {
     pub sun_shadows: GpuSunShadows,
     /// The spot and point lights' shadow maps as this view samples them.
     pub local_shadows: GpuLocalShadows,
+    /// The view whose pixels levels of detail are chosen for: a shadow view's camera view
+    /// ([`FrameConstants::choose_levels_for`]), any other view's own `cull_view`.
+    pub lod_view: GpuCullView,
+    /// xyz: this view's eye less [`FrameConstants::lod_view`]'s eye.
+    pub lod_eye_offset: [f32; 4],
 }
 
 /// The sun's shadow cascades of one view (see `SunShadows` in `shadows.glsl`).
@@ -367,7 +372,17 @@ impl FrameConstants {
             jitter: [jitter.x, jitter.y, prev_jitter.x, prev_jitter.y],
             sun_shadows: GpuSunShadows::default(),
             local_shadows: GpuLocalShadows::default(),
+            lod_view: GpuCullView::new(camera, width, height),
+            lod_eye_offset: [0.0; 4],
         }
+    }
+
+    /// Levels of detail chosen for `camera` on a `width` x `height` target (a shadow view's
+    /// camera view), where this view's eye is `eye`: each instance then takes the level that
+    /// view takes.
+    pub fn choose_levels_for(&mut self, eye: glam::DVec3, camera: &Camera, width: u32, height: u32) {
+        self.lod_view = GpuCullView::new(camera, width, height);
+        self.lod_eye_offset = (eye - camera.eye).as_vec3().extend(0.0).to_array();
     }
 }
 
@@ -451,6 +466,12 @@ mod tests {
         // The culling views carry each frame's jitter too (they test against pyramids of jittered depth).
         assert_eq!(k.cull_view.offset, [-k.jitter[0], k.jitter[1]]);
         assert_eq!(k.prev_cull_view.offset, [-k.jitter[2], k.jitter[3]]);
+        // A view chooses levels of detail for itself unless told otherwise.
+        assert_eq!((k.lod_view, k.lod_eye_offset), (k.cull_view, [0.0; 4]));
+        let mut shadow = k;
+        shadow.choose_levels_for(previous.eye + glam::DVec3::new(0.0, 50.0, -2.0), &previous, 320, 180);
+        assert_eq!(shadow.lod_view, GpuCullView::new(&previous, 320, 180));
+        assert_eq!(shadow.lod_eye_offset, [0.0, 50.0, -2.0, 0.0]);
     }
 
     #[test]
@@ -462,7 +483,7 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuCullView>(), 72);
         assert_eq!(
             std::mem::size_of::<FrameConstants>(),
-            2 * 64 + 6 * 16 + 2 * 72 + 2 * 16 + 2 * 64 + 16 + 288 + 24 * 64
+            2 * 64 + 6 * 16 + 2 * 72 + 2 * 16 + 2 * 64 + 16 + 288 + 24 * 64 + 72 + 16
         );
         assert_eq!(std::mem::size_of::<GpuSunShadows>(), 4 * 64 + 2 * 16);
         assert_eq!(std::mem::size_of::<DrawIndexedIndirect>(), 20);

@@ -114,9 +114,13 @@ impl View {
         frame: u64,
         camera: &Camera,
         shadows: &ViewShadowData,
+        levels_for: Option<(&Camera, u32, u32)>,
     ) -> Result<()> {
         let previous = self.previous_camera.as_ref().unwrap_or(camera);
         let mut constants = FrameConstants::new(scene, camera, previous, self.settings.width, self.settings.height);
+        if let Some((lod_camera, width, height)) = levels_for {
+            constants.choose_levels_for(camera.eye, lod_camera, width, height);
+        }
         constants.sun_shadows = shadows.sun;
         constants.local_shadows = shadows.local;
         let mut lights: Vec<GpuPointLight> = scene.lights.iter().map(|l| GpuPointLight::new(l, camera.eye)).collect();

@@ -66,11 +66,14 @@ impl MapSet {
     }
 }
 
-/// What a cascade's map depends on: its camera, the sun, and the world's version (any change of
-/// a world counts, which is conservative: a change the cascade cannot see redraws it too).
+/// What a cascade's map depends on: its camera, the sun, the world's version (any change of a
+/// world counts, which is conservative: a change the cascade cannot see redraws it too) and,
+/// where the casters take their camera view's levels of detail, that camera.
 #[derive(Clone, Debug, PartialEq)]
 pub(in crate::render::renderer) struct MapKey {
     pub camera: Camera,
+    /// The camera view whose levels of detail the casters take (`None`: every caster whole).
+    pub levels_for: Option<Camera>,
     pub sun: glam::Vec3,
     pub world_version: Option<u64>,
 }

@@ -50,6 +50,11 @@ pub struct ShadowSettings {
     pub local_lights: u32,
     /// Width and height of each spot or point light face's map in texels.
     pub local_resolution: u32,
+    /// Levels of detail of the casters, in pixels of the camera view (as the culling graphs'
+    /// `lod_threshold`): each caster takes the level its camera view takes at this threshold,
+    /// so a shadow is cast by the surface the camera sees, and as cheaply (0: every caster
+    /// whole). With `caster_culling` only (the cull pass chooses the levels).
+    pub lod_threshold: f64,
 }
 
 /// The most spot and point lights [`ShadowSettings::local_lights`] allows: each may be a cube
@@ -67,6 +72,7 @@ impl Default for ShadowSettings {
             caster_culling: true,
             local_lights: 2,
             local_resolution: 512,
+            lod_threshold: 0.0,
         }
     }
 }
@@ -133,7 +139,8 @@ impl Renderer {
     ///
     /// Errors: a cascade count outside 1 to 4, a resolution of 0 or beyond the device, a
     /// distance or reach that is not finite and positive, a lambda outside 0 to 1, more
-    /// shadowed lights than [`MAX_SHADOWED_LIGHTS`]; nothing changes then.
+    /// shadowed lights than [`MAX_SHADOWED_LIGHTS`], a level of detail threshold outside 0 to
+    /// [`crate::passes::instance_cull::MAX_LOD_THRESHOLD`]; nothing changes then.
     pub fn set_shadows(&mut self, shaders: &ShaderCompiler, settings: Option<ShadowSettings>) -> Result<()> {
         profiling::scope!("cullgraph::Renderer::set_shadows");
         let last_use = self.frame_index.saturating_sub(1);
@@ -246,7 +253,10 @@ impl Renderer {
     ) -> Result<(CameraShadows, Vec<View>)> {
         let name = if settings.caster_culling { "shadow" } else { "shadow_no_cull" };
         let kinds = self.view_state(camera)?.graphs.spec.kinds.clone();
-        let spec = GraphSpec::from_library(kinds, name)?;
+        let mut spec = GraphSpec::from_library(kinds, name)?;
+        if settings.caster_culling {
+            spec = spec.with_overrides([("lod_threshold".to_string(), format!("{:?}", settings.lod_threshold))]);
+        }
         let mut views = Vec::new();
         let sun =
             self.make_map_set(shaders, &spec, "sun shadow maps", settings.resolution, settings.cascades, &mut views)?;
@@ -314,6 +324,10 @@ fn check_settings(scene: &Scene, settings: &ShadowSettings) -> Result<(f32, f32)
     }
     if !(0.0..=1.0).contains(&settings.lambda) {
         return bad(format!("lambda {} is outside 0 to 1", settings.lambda));
+    }
+    let most = crate::passes::instance_cull::MAX_LOD_THRESHOLD;
+    if !(0.0..=most).contains(&settings.lod_threshold) {
+        return bad(format!("level of detail threshold {} is outside 0 to {most} pixels", settings.lod_threshold));
     }
     let diagonal = scene.world_bounds().map_or(100.0, |(lo, hi)| (hi - lo).length() as f32).max(1.0);
     let distance = settings.distance.unwrap_or(150f32.min(diagonal));
