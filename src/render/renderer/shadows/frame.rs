@@ -69,10 +69,7 @@ impl Renderer {
             shadows.local.make_ready(&self.ctx, cmd);
             made_ready.push(id);
             let mut view_data = ViewShadowData::default();
-            // Casters that take the camera's levels of detail change with the camera.
-            let levels_for = (settings.caster_culling && settings.lod_threshold > 0.0).then(|| (*camera).clone());
-            let key =
-                |shadow: &Camera| MapKey { camera: shadow.clone(), levels_for: levels_for.clone(), sun, world_version };
+            let key = |camera: &Camera| MapKey { camera: camera.clone(), sun, world_version };
             let view_settings = &self.views[at].settings;
             let aspect = view_settings.width as f32 / view_settings.height as f32;
             let fit = CascadeSettings {

@@ -66,14 +66,14 @@ impl MapSet {
     }
 }
 
-/// What a cascade's map depends on: its camera, the sun, the world's version (any change of a
-/// world counts, which is conservative: a change the cascade cannot see redraws it too) and,
-/// where the casters take their camera view's levels of detail, that camera.
+/// What a cascade's map depends on: its camera, the sun, and the world's version (any change of
+/// a world counts, which is conservative: a change the cascade cannot see redraws it too).
+/// Casters that take their camera view's levels of detail keep, in a kept map, the levels of
+/// the frame it was drawn in: drawing every light's faces again whenever the camera moves would
+/// cost more than the levels save.
 #[derive(Clone, Debug, PartialEq)]
 pub(in crate::render::renderer) struct MapKey {
     pub camera: Camera,
-    /// The camera view whose levels of detail the casters take (`None`: every caster whole).
-    pub levels_for: Option<Camera>,
     pub sun: glam::Vec3,
     pub world_version: Option<u64>,
 }
