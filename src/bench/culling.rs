@@ -80,6 +80,11 @@ pub struct GraphFigure {
     /// over making it (`None` where the system does not say).
     #[serde(default)]
     pub host_renderer_bytes_per_instance: Option<f64>,
+    /// The most host memory per instance that making the renderer took at once (its copy of
+    /// the scene and what uploading it needed): the peak of the process's resident memory over
+    /// making it, less the memory before (`None` where the system does not say).
+    #[serde(default)]
+    pub host_renderer_peak_bytes_per_instance: Option<f64>,
     /// Median CPU milliseconds of recording a frame (the scene unchanged).
     #[serde(default)]
     pub cpu_record_ms: f64,
@@ -205,8 +210,12 @@ pub fn run(
             let settings = RenderSettings::new(bench.width, bench.height);
             // The renderer's own copy of the scene is counted: it takes `scene` by value.
             let resident_before = super::resident_bytes();
+            let peak_from = super::reset_peak_resident().then_some(resident_before).flatten();
             let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;
             let host_renderer_bytes_per_instance = per_instance(resident_before);
+            let host_renderer_peak_bytes_per_instance = peak_from
+                .zip(super::peak_resident_bytes())
+                .map(|(before, peak)| peak.saturating_sub(before) as f64 / n.max(1) as f64);
             renderer.set_step_timing(bench.step_times);
             for _ in 0..bench.warmup {
                 renderer.render(&camera)?;
@@ -266,6 +275,7 @@ pub fn run(
                 gpu_scene_bytes_per_instance: renderer.gpu_scene().bytes() as f64 / n.max(1) as f64,
                 gpu_graph_bytes: renderer.runtime().resource_bytes().iter().map(|b| b.bytes).sum(),
                 host_renderer_bytes_per_instance,
+                host_renderer_peak_bytes_per_instance,
                 cpu_record_ms: median(&mut records),
             };
             if bench.verify {
@@ -319,18 +329,19 @@ impl CullingReport {
                 ));
             }
         }
-        s.push_str("\n| instances | graph | GPU scene bytes per instance | GPU graph MB | host bytes per instance: scene, renderer | record CPU ms |\n|---|---|---|---|---|---|\n");
+        s.push_str("\n| instances | graph | GPU scene bytes per instance | GPU graph MB | host bytes per instance: scene, renderer (its peak while made) | record CPU ms |\n|---|---|---|---|---|---|\n");
         for scene in &self.scenes {
             let host = |b: Option<f64>| b.map_or("-".to_string(), |b| format!("{b:.0}"));
             for g in &scene.graphs {
                 s.push_str(&format!(
-                    "| {} | {} | {:.1} | {:.1} | {}, {} | {:.3} |\n",
+                    "| {} | {} | {:.1} | {:.1} | {}, {} ({}) | {:.3} |\n",
                     scene.instances,
                     g.graph,
                     g.gpu_scene_bytes_per_instance,
                     g.gpu_graph_bytes as f64 / 1e6,
                     host(scene.host_scene_bytes_per_instance),
                     host(g.host_renderer_bytes_per_instance),
+                    host(g.host_renderer_peak_bytes_per_instance),
                     g.cpu_record_ms,
                 ));
             }

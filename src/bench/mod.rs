@@ -114,8 +114,25 @@ pub fn median_per_pass(frames: &[Vec<PassTiming>]) -> Vec<(String, f64)> {
 /// The process's resident memory in bytes (Linux: `VmRSS` of `/proc/self/status`; `None`
 /// elsewhere), for host memory per instance.
 pub fn resident_bytes() -> Option<u64> {
+    status_bytes("VmRSS:")
+}
+
+/// The most resident memory the process has held since [`reset_peak_resident`] (Linux:
+/// `VmHWM`; `None` elsewhere).
+pub fn peak_resident_bytes() -> Option<u64> {
+    status_bytes("VmHWM:")
+}
+
+/// Starts a new peak of [`peak_resident_bytes`] at the present resident memory (Linux: 5
+/// written to `/proc/self/clear_refs`); false where the system does not allow it.
+pub fn reset_peak_resident() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+/// The figure of `/proc/self/status` line `key`, in bytes.
+fn status_bytes(key: &str) -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
+    let line = status.lines().find(|l| l.starts_with(key))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
 }
