@@ -37,6 +37,13 @@ const SAMPLED: Access = Access {
     layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
 };
 
+/// A device-local buffer of `size` bytes that an upload copies into.
+fn upload_target(ctx: &GpuContext, name: &str, usage: vk::BufferUsageFlags, size: u64) -> GpuResult<Buffer> {
+    let desc =
+        BufferDesc { name, size, usage: usage | vk::BufferUsageFlags::TRANSFER_DST, location: MemoryLocation::GpuOnly };
+    Buffer::new(ctx, &desc)
+}
+
 impl UploadBatch {
     /// Creates a device-local buffer of `data.len()` bytes and queues its upload.
     pub fn buffer(
@@ -59,16 +66,7 @@ impl UploadBatch {
         data: &[u8],
         size: u64,
     ) -> GpuResult<Buffer> {
-        let size = size.max(data.len() as u64);
-        let dst = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name,
-                size,
-                usage: usage | vk::BufferUsageFlags::TRANSFER_DST,
-                location: MemoryLocation::GpuOnly,
-            },
-        )?;
+        let dst = upload_target(ctx, name, usage, size.max(data.len() as u64))?;
         if !data.is_empty() {
             let staging =
                 Buffer::with_data(ctx, &format!("{name} (staging)"), vk::BufferUsageFlags::TRANSFER_SRC, data)?;
@@ -81,7 +79,6 @@ impl UploadBatch {
     /// straight into the staging memory, so that no host copy of them is made first (a scene's
     /// per-instance tables are as large as the scene). `fill(first, elements)` writes elements
     /// `first..first + elements.len()`; many elements are filled on several threads.
-    #[allow(clippy::too_many_arguments)]
     pub fn buffer_filled<T: bytemuck::Pod + Send>(
         &mut self,
         ctx: &GpuContext,
@@ -92,15 +89,7 @@ impl UploadBatch {
         fill: impl Fn(usize, &mut [T]) + Sync,
     ) -> GpuResult<Buffer> {
         let bytes = (count * std::mem::size_of::<T>()) as u64;
-        let dst = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name,
-                size: size.max(bytes),
-                usage: usage | vk::BufferUsageFlags::TRANSFER_DST,
-                location: MemoryLocation::GpuOnly,
-            },
-        )?;
+        let dst = upload_target(ctx, name, usage, size.max(bytes))?;
         if bytes == 0 {
             return Ok(dst);
         }

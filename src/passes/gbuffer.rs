@@ -307,9 +307,9 @@ pub enum GeometryMode {
 /// Without an alpha test the fragment shaders have no `discard`, so the depth test runs
 /// before shading: on the H100 this takes a sixth off the textured single-sample G-buffer
 /// draw. So opaque materials always draw with those, and masked materials, from regions of
-/// their own ([`FaceCull::MASKED`]), with the alpha-tested pipelines. Without emission or occlusion the
-/// `emissive_occlusion` target is left out: a third color export costs a fifth of the frame on
-/// GPUs that export pixels slowly, for nothing.
+/// their own ([`FaceCull::MASKED`]), with the alpha-tested pipelines. Without emission or
+/// occlusion the `emissive_occlusion` target is left out: a third color export costs a fifth
+/// of the frame on GPUs that export pixels slowly, for nothing.
 struct GeometryPipelines {
     /// `[extras][masked][textured]`, created when first picked; the `extras` row only where
     /// the target is bound.
