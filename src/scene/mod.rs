@@ -33,7 +33,7 @@ pub use camera::Camera;
 pub use camera_path::CameraPath;
 pub use deform::{MeshDeform, MorphTarget};
 pub use error::SceneError;
-pub use lod::{LodLevel, MAX_LOD_LEVELS};
+pub use lod::{LodChain, LodLevel, MAX_LOD_LEVELS};
 pub use mesh::{decode_octahedral, encode_octahedral, encode_tangent, MeshData, MeshParts, Vertex};
 pub use projection::{Projection, ProjectionParts};
 pub use source::SceneSource;
@@ -84,7 +84,8 @@ pub struct Mesh {
     pub index_count: u32,
     /// Added to every index of this mesh to reach [`Scene::vertices`].
     pub vertex_offset: u32,
-    /// Number of vertices this mesh owns, starting at `vertex_offset`.
+    /// Number of vertices this mesh owns, starting at `vertex_offset`: the full mesh's, then its
+    /// levels of detail's own copies ([`lod::LodChain::vertices`]).
     pub vertex_count: u32,
     /// Local-space axis-aligned bounds.
     pub bounds: Aabb,
@@ -346,10 +347,17 @@ impl Scene {
     /// [`MeshData::no_lod`] says not to.
     pub fn add_mesh(&mut self, name: &str, data: &MeshData, place: &str) -> Result<u32, SceneError> {
         let at = MeshPlace { vertex: self.vertices.len(), index: self.indices.len(), slot: None };
-        let mesh = self.put_mesh(name, data, place, at)?;
-        if !data.no_lod {
-            self.add_lod_chain(mesh, place)?;
-        }
+        let (mut vertices, bounds, sphere, deform) = data.validate(place)?;
+        let chain = if data.no_lod || deform.is_some() {
+            LodChain::default()
+        } else {
+            lod::build_chain(&vertices, &data.indices)
+        };
+        vertices.extend_from_slice(&chain.vertices);
+        let deform = deform.map(std::sync::Arc::new);
+        let mesh = self.put_mesh_vertices(name, &vertices, &data.indices, (bounds, sphere, deform), place, at)?;
+        let start = self.indices.len();
+        self.put_lod_chain(mesh, chain.levels, start, place)?;
         self.add_clusters(mesh);
         Ok(mesh)
     }
@@ -379,25 +387,6 @@ impl Scene {
             levels.push(clusters);
         }
         self.meshes[mesh as usize].clusters = levels;
-    }
-
-    /// Builds mesh `mesh`'s levels of detail and appends their indices to the index pool.
-    fn add_lod_chain(&mut self, mesh: u32, place: &str) -> Result<(), SceneError> {
-        let chain = self.lod_chain_of(mesh);
-        let start = self.indices.len();
-        self.put_lod_chain(mesh, chain, start, place)
-    }
-
-    /// The chain of levels of detail that mesh `mesh` gets ([`lod::build_chain`]): none for a
-    /// deformed mesh.
-    pub(crate) fn lod_chain_of(&self, mesh: u32) -> Vec<(Vec<u32>, f32)> {
-        let m = &self.meshes[mesh as usize];
-        if m.deform.is_some() {
-            return Vec::new();
-        }
-        let vertices = &self.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
-        let indices = &self.indices[m.first_index as usize..(m.first_index + m.index_count) as usize];
-        lod::build_chain(vertices, indices)
     }
 
     /// Writes `chain` as mesh `mesh`'s levels of detail, their indices one after the other from
@@ -430,23 +419,10 @@ impl Scene {
         Ok(())
     }
 
-    /// Writes a mesh's vertices and indices at `at` in the pools (growing them where it runs
-    /// past their end) and its entry at `at.slot` of the mesh table (appended when `None`);
-    /// returns its index. What a live world does to reuse the pool space of removed meshes.
-    pub(crate) fn put_mesh(
-        &mut self,
-        name: &str,
-        data: &MeshData,
-        place: &str,
-        at: MeshPlace,
-    ) -> Result<u32, SceneError> {
-        let (vertices, bounds, sphere, deform) = data.validate(place)?;
-        let deform = deform.map(std::sync::Arc::new);
-        self.put_mesh_vertices(name, &vertices, &data.indices, (bounds, sphere, deform), place, at)
-    }
-
-    /// [`Scene::put_mesh`] of vertices and indices checked before (another scene's mesh), with
-    /// their bounds and deformation.
+    /// Writes a mesh's vertices and indices, checked before, at `at` in the pools (growing them
+    /// where it runs past their end) with its bounds and deformation, and its entry at `at.slot`
+    /// of the mesh table (appended when `None`); returns its index. What a live world does to
+    /// reuse the pool space of removed meshes.
     pub(crate) fn put_mesh_vertices(
         &mut self,
         name: &str,
