@@ -1,9 +1,9 @@
 //! Levels of detail chosen on the GPU (lavapipe, validation on): the cull passes draw distant
 //! props of `builtin:dense` coarser, each level through the same indirect-count draws; every
-//! culling graph places the levels alike; the image stays close to full detail and no further
-//! from a supersampled reference than full detail is; an instance
-//! whose bound holds the camera is drawn whole; the choice depends on the eye-relative position
-//! only, so a world 10^7 units from the origin looks the same.
+//! culling graph places the levels alike; the image stays close to full detail, and no further
+//! from a supersampled reference than full detail is; an instance whose bound holds the camera
+//! is drawn whole; the choice depends on the eye-relative position only, so a world 10^7 units
+//! from the origin looks the same.
 
 mod common;
 
