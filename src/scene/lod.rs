@@ -145,6 +145,22 @@ pub fn build_chain(vertices: &[Vertex], indices: &[u32]) -> LodChain {
     chain
 }
 
+/// The vertices and levels that a mesh of `vertices` (checked) and `data`'s indices takes into
+/// the pools: its vertices followed by its levels' copies, and its levels' indices and errors.
+/// A deformed mesh, or one whose data asks for none, gets no chain.
+pub(crate) fn with_chain(
+    data: &super::MeshData,
+    mut vertices: Vec<Vertex>,
+    deformed: bool,
+) -> (Vec<Vertex>, Vec<(Vec<u32>, f32)>) {
+    if data.no_lod || deformed {
+        return (vertices, Vec::new());
+    }
+    let chain = build_chain(&vertices, &data.indices);
+    vertices.extend_from_slice(&chain.vertices);
+    (vertices, chain.levels)
+}
+
 /// Each vertex's share of the surface: a third of the area of every triangle it is a corner of.
 fn vertex_areas(vertices: &[Vertex], indices: &[u32]) -> Vec<f32> {
     let mut areas = vec![0.0f32; vertices.len()];
@@ -205,18 +221,26 @@ const FILTER_REACH: f32 = 0.5;
 const SAME_SURFACE: f32 = 0.3;
 
 /// The normals a level's kept vertices (`kept`, indices into `vertices`) take: the area-weighted
-/// mean of the full mesh's normals within half the spacing of the kept vertices around each, so that
-/// shading shows what the full mesh averages to at the level's scale instead of the sub-pixel
-/// detail of the few vertices kept. Copies of a vertex at a seam, having one normal, get one.
+/// mean of the full mesh's normals within half the spacing of the kept vertices around each, so
+/// that shading shows what the full mesh averages to at the level's scale instead of the
+/// sub-pixel detail of the few vertices kept. Copies of a vertex at a seam, having one normal,
+/// get one.
 fn filtered_normals(vertices: &[Vertex], normals: &[Vec3], areas: &[f32], kept: &[u32]) -> Vec<Vec3> {
     let position = |v: usize| Vec3::from_array(vertices[v].position);
     let surface: f32 = areas.iter().sum();
-    let reach = FILTER_REACH * (surface / kept.len() as f32).sqrt();
+    let (low, high) = vertices.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(low, high), v| {
+        let p = Vec3::from_array(v.position);
+        (low.min(p), high.max(p))
+    });
+    // At most 2^20 cells along an axis, so that cell coordinates never saturate and pile the
+    // vertices of a mesh of very uneven density into one cell.
+    let reach =
+        (FILTER_REACH * (surface / kept.len() as f32).sqrt()).max((high - low).max_element() / (1 << 20) as f32);
     if !(reach > 0.0 && reach.is_finite()) {
         return kept.iter().map(|&v| normals[v as usize]).collect();
     }
     // Cells as wide as the reach: every vertex within it lies in the surrounding 27.
-    let key = |p: Vec3| (p / reach).floor().as_ivec3().to_array();
+    let key = |p: Vec3| ((p - low) / reach).floor().as_ivec3().to_array();
     let mut grid: FastMap<[i32; 3], Vec<u32>> = FastMap::with_capacity_and_hasher(kept.len(), Default::default());
     for (v, &area) in areas.iter().enumerate() {
         if area > 0.0 {

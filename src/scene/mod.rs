@@ -347,17 +347,12 @@ impl Scene {
     /// [`MeshData::no_lod`] says not to.
     pub fn add_mesh(&mut self, name: &str, data: &MeshData, place: &str) -> Result<u32, SceneError> {
         let at = MeshPlace { vertex: self.vertices.len(), index: self.indices.len(), slot: None };
-        let (mut vertices, bounds, sphere, deform) = data.validate(place)?;
-        let chain = if data.no_lod || deform.is_some() {
-            LodChain::default()
-        } else {
-            lod::build_chain(&vertices, &data.indices)
-        };
-        vertices.extend_from_slice(&chain.vertices);
+        let (vertices, bounds, sphere, deform) = data.validate(place)?;
+        let (vertices, levels) = lod::with_chain(data, vertices, deform.is_some());
         let deform = deform.map(std::sync::Arc::new);
         let mesh = self.put_mesh_vertices(name, &vertices, &data.indices, (bounds, sphere, deform), place, at)?;
         let start = self.indices.len();
-        self.put_lod_chain(mesh, chain.levels, start, place)?;
+        self.put_lod_chain(mesh, levels, start, place)?;
         self.add_clusters(mesh);
         Ok(mesh)
     }

@@ -815,14 +815,8 @@ impl World {
     /// grow, and it takes an unregistered mesh's index when there is one. It gets its chain of
     /// levels of detail and its clusters as a mesh of a loaded scene does ([`Scene::add_mesh`]).
     pub fn add_mesh(&mut self, name: &str, data: &MeshData) -> Result<u32, WorldError> {
-        let (mut vertices, bounds, sphere, deform) = data.validate(&format!("mesh '{name}'"))?;
-        let chain = if data.no_lod || deform.is_some() {
-            super::LodChain::default()
-        } else {
-            super::lod::build_chain(&vertices, &data.indices)
-        };
-        vertices.extend_from_slice(&chain.vertices);
-        let chain = chain.levels;
+        let (vertices, bounds, sphere, deform) = data.validate(&format!("mesh '{name}'"))?;
+        let (vertices, chain) = super::lod::with_chain(data, vertices, deform.is_some());
         let deform = deform.map(std::sync::Arc::new);
         let mesh = self.place_mesh(name, vertices.len(), data.indices.len(), chain, |scene, place, at| {
             scene.put_mesh_vertices(name, &vertices, &data.indices, (bounds, sphere, deform), place, at)
