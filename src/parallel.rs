@@ -91,8 +91,14 @@ pub struct Routed {
 
 impl Routed {
     /// Items that write no entry.
+    #[cfg(test)]
     pub fn unrouted(&self) -> usize {
         self.unrouted
+    }
+
+    /// The entries the routed items write (in no particular order).
+    pub fn entries(&self) -> impl Iterator<Item = u32> + '_ {
+        self.lists.iter().flatten().flatten().map(|&(entry, _)| entry)
     }
 }
 

@@ -19,7 +19,7 @@ layout(local_size_x = 64) in;
 #ifdef MOVES
 // A transform only: the rows of the linear part with the translation's hi part in w, then its
 // lo part and the slot, as four 16-byte words so that each is one vector load. The material
-// and flags stay.
+// and flags stay. The host writes these straight into the buffer this reads.
 struct Update {
     uvec4 words[4];
 };
@@ -68,6 +68,8 @@ void main() {
 #ifdef MOVES
     uvec4 w[4] = updates[i].words;
     uint slot = w[3].w;
+    // A move superseded before its frame (src/render/renderer/move_ring.rs, DROPPED).
+    if (slot == 0xFFFFFFFFu) return;
     for (uint r = 0u; r < 3u; ++r) {
         rows[r] = uintBitsToFloat(w[r]);
         set_instance_word(slot, r, w[r]);

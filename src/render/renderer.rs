@@ -24,6 +24,7 @@ mod completed;
 mod deform;
 mod graphs;
 mod lockstep;
+mod move_ring;
 mod readback;
 mod shadows;
 mod view;

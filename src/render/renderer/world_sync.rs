@@ -2,10 +2,11 @@
 //! ([`SlotLayout`]) and [`Renderer::sync`] applies the world's changes since the last sync.
 //!
 //! A change of instances rewrites only their slots. A moved instance (same instance, mesh,
-//! material and flags) queues its slot and transform, 64 bytes; any other change its slot,
-//! draw group and whole instance record, 72. The lists live in host-visible buffers, one pair
-//! per frame in flight, reused frame after frame and grown geometrically when a frame needs
-//! more. At the start of the next recorded frame a compute dispatch per list
+//! material and flags) queues its slot and transform, 64 bytes, written by the sync straight
+//! into the host-visible memory the GPU reads them from ([`super::move_ring`]); any other
+//! change its slot, draw group and whole instance record, 72, copied at record time into a
+//! host-visible buffer per frame in flight, reused frame after frame and grown geometrically
+//! when a frame needs more. At the start of the next recorded frame a compute dispatch per list
 //! (`shaders/world/scatter.comp`) writes them into the instance records and derives each
 //! slot's cull bound from its record and its group's local bounds, after every earlier frame's
 //! use of those buffers: frames in flight are not disturbed. (Copy regions, one per record,
@@ -39,6 +40,7 @@
 //! to the last sync, lays the world out anew in spatial order, with the history cleared.
 
 use super::graphs::build_runtime;
+use super::move_ring::{MoveRing, MoveUpdate, DROPPED};
 use super::Renderer;
 use crate::error::{Error, Result};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
@@ -65,17 +67,6 @@ const COPY_ALL_SHARE: usize = 4;
 /// costs next to nothing, and small worlds (the tests') take the path large ones take.
 const COPY_ALL_MIN_LISTED: usize = 1024;
 
-/// A moved instance's new transform, as `shaders/world/scatter.comp` (`MOVES`) reads it: 64
-/// bytes in four 16-byte words (the slot last, so that each word is one vector load), the cull
-/// bound being derived on the GPU.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct MoveUpdate {
-    rows: [[f32; 4]; 3],
-    translation_lo: [f32; 3],
-    slot: u32,
-}
-
 /// A slot's whole new instance record (another instance, material or flags) and its draw
 /// group: 72 bytes.
 #[repr(C)]
@@ -89,9 +80,6 @@ struct SlotUpdate {
 /// Marks an [`WorldMirror::update_of_slot`] entry as an index into the whole-record list.
 const WHOLE: u32 = 1 << 31;
 
-/// The slot of a queued move taken out of the queue before it is uploaded.
-const DROPPED: u32 = u32::MAX;
-
 /// What a renderer keeps of the world it mirrors.
 pub(super) struct WorldMirror {
     /// The id of the world it mirrors ([`World::id`]): another world is refused.
@@ -102,19 +90,19 @@ pub(super) struct WorldMirror {
     /// The handle each world instance index had when its slot was written: a new handle at an
     /// index (removed and inserted between two syncs) is a new instance and takes a new slot.
     handles: Vec<Option<InstanceHandle>>,
-    /// The slot updates waiting for the next recorded frame: moves, whole records, and per
-    /// slot where its update is (an index into `moves`, or into `whole` with [`WHOLE`] set;
-    /// `u32::MAX`: none).
-    moves: Vec<MoveUpdate>,
+    /// The slot updates waiting for the next recorded frame: moves (written where the GPU
+    /// reads them), whole records, and per slot where its update is (an index into `moves`, or
+    /// into `whole` with [`WHOLE`] set; `u32::MAX`: none).
+    moves: MoveRing,
     whole: Vec<SlotUpdate>,
     update_of_slot: Vec<u32>,
     /// The user data waiting for the next recorded frame: per entry the slot, then its
     /// [`GpuScene::user_words`] words; per slot where its entry starts (`u32::MAX`: none).
     user: Vec<u32>,
     user_of_slot: Vec<u32>,
-    /// Per frame in flight, the host-visible buffers its moves, whole records, user data and
-    /// the slots whose previous records it keeps are read from.
-    segments: Vec<[Option<Buffer>; 4]>,
+    /// Per frame in flight, the host-visible buffers its whole records, user data and the
+    /// slots whose previous records it keeps are read from.
+    segments: Vec<[Option<Buffer>; 3]>,
     /// The scatter of moves and of whole records.
     scatter: [Pipeline; 2],
     /// The scatter of user data (`None`: the world has none).
@@ -169,55 +157,48 @@ impl WorldMirror {
 
     /// Queues a move of the instance in `slot` to the transform of `instance` (its material
     /// and flags unchanged).
-    fn queue_move(&mut self, slot: u32, rows: [[f32; 4]; 3], translation_lo: [f32; 3]) {
+    fn queue_move(&mut self, slot: u32, rows: [[f32; 4]; 3], translation_lo: [f32; 3]) -> Result<()> {
         let update = MoveUpdate { rows, translation_lo, slot };
-        let next = self.moves.len() as u32;
         match *self.entry(slot) {
-            u32::MAX => {
-                self.update_of_slot[slot as usize] = next;
-                self.moves.push(update);
-            }
+            u32::MAX => self.update_of_slot[slot as usize] = self.moves.push(update)? as u32,
             i if i & WHOLE != 0 => {
                 let queued = &mut self.whole[(i & !WHOLE) as usize].instance;
                 queued.rows = rows;
                 queued.translation_lo = translation_lo;
             }
-            i => self.moves[i as usize] = update,
+            i => *self.moves.at(i as usize) = update,
         }
+        Ok(())
     }
 
     /// Queues moves of the instances `movers`, in order, with each instance's transform as
     /// `world` has it now; instances without a slot (removed) are skipped. A long list is queued
-    /// on several threads: each move is written to the queue in list order, then the threads
+    /// on several threads: each move is written to the ring in list order, then the threads
     /// that own the slots' entries of [`Self::update_of_slot`] take them (`crate::parallel`), so
     /// that a slot's last move wins; the moves it supersedes, and those folded into a whole
-    /// record queued for their slot, are then taken out of the queue.
-    fn queue_moves(&mut self, movers: &[u32], world: &World) {
+    /// record queued for their slot, are then dropped.
+    fn queue_moves(&mut self, movers: &[u32], world: &World) -> Result<()> {
         // The renderer's own copy of the slot keeps its old transform: a random write per move
         // into a table of every slot would cost more than the rest of the move (see
         // `Renderer::scene`).
         let instances = &world.scene().instances;
         let transform_words = |i: u32| GpuInstance::transform_words(&instances[i as usize].transform);
         if !crate::parallel::worth_routing(movers.len()) {
-            self.moves.reserve(movers.len());
             for &i in movers {
                 let Some(slot) = self.layout.slot_of(i) else { continue };
                 let (rows, translation_lo) = transform_words(i);
-                self.queue_move(slot, rows, translation_lo);
+                self.queue_move(slot, rows, translation_lo)?;
             }
-            return;
+            return Ok(());
         }
         let slots = self.layout.slots() as usize;
         if self.update_of_slot.len() < slots {
             self.update_of_slot.resize(slots, u32::MAX);
         }
-        let base = self.moves.len();
-        self.moves.reserve(movers.len());
         let owners = crate::parallel::Owners::new(slots, movers.len());
         let layout = &self.layout;
-        // The moves are written straight into the queue's spare room (filling it first would
-        // cost as much as writing them).
-        let room = &mut self.moves.spare_capacity_mut()[..movers.len()];
+        // The moves are written straight into the memory the GPU reads them from.
+        let (base, room) = self.moves.room(movers.len())?;
         let ahead = |k: usize| {
             let i = movers[k];
             layout.prefetch(i);
@@ -228,18 +209,16 @@ impl WorldMirror {
         let routed = crate::parallel::route(room, &owners, ahead, |k, update| {
             let i = movers[k];
             let Some(slot) = layout.slot_of(i) else {
-                update.write(MoveUpdate { rows: [[0.0; 4]; 3], translation_lo: [0.0; 3], slot: DROPPED });
+                *update = MoveUpdate { rows: [[0.0; 4]; 3], translation_lo: [0.0; 3], slot: DROPPED };
                 return Ok::<_, std::convert::Infallible>(None);
             };
             let (rows, translation_lo) = transform_words(i);
-            update.write(MoveUpdate { rows, translation_lo, slot });
+            *update = MoveUpdate { rows, translation_lo, slot };
             Ok(Some(slot as usize))
         });
         let Ok(routed) = routed;
-        // SAFETY: the room holds `movers.len()` elements, and `route` visited each of them
-        // once; every visit wrote its element.
-        unsafe { self.moves.set_len(base + movers.len()) };
-        // Per move that leaves the queue: where it is, and the whole record it folds into
+        self.moves.note_slots(routed.entries());
+        // Per move that leaves the list: where it is, and the whole record it folds into
         // (`u32::MAX`: none, a later move of its slot superseded it).
         let leaving = crate::parallel::apply_routed(&mut self.update_of_slot, &owners, &routed, |entry, k| {
             let queued = (base + k) as u32;
@@ -255,32 +234,18 @@ impl WorldMirror {
                 }
             }
         });
-        if leaving.is_empty() && routed.unrouted() == 0 {
-            return;
-        }
         // A slot's moves are in list order in `leaving`: its last folds into the record last.
+        // What folds is a move of this list, whose transform the world holds (the ring's
+        // memory is written, never read back).
         for &(at, whole) in &leaving {
-            let update = &mut self.moves[at as usize];
             if let Some(record) = self.whole.get_mut(whole as usize) {
-                record.instance.rows = update.rows;
-                record.instance.translation_lo = update.translation_lo;
+                let (rows, translation_lo) = transform_words(movers[at as usize - base]);
+                record.instance.rows = rows;
+                record.instance.translation_lo = translation_lo;
             }
-            update.slot = DROPPED;
+            self.moves.at(at as usize).slot = DROPPED;
         }
-        let mut start = leaving.iter().map(|&(at, _)| at as usize).min().unwrap_or(base);
-        if routed.unrouted() > 0 {
-            start = start.min(base);
-        }
-        let mut kept = start;
-        for at in start..self.moves.len() {
-            let update = self.moves[at];
-            if update.slot != DROPPED {
-                self.moves[kept] = update;
-                self.update_of_slot[update.slot as usize] = kept as u32;
-                kept += 1;
-            }
-        }
-        self.moves.truncate(kept);
+        Ok(())
     }
 
     /// Queues `slot`'s whole new record (replacing any update queued before).
@@ -293,13 +258,8 @@ impl WorldMirror {
                 self.whole[(i & !WHOLE) as usize] = SlotUpdate { slot, group, instance };
                 return;
             }
-            i => {
-                // The whole record supersedes the queued move.
-                self.moves.swap_remove(i as usize);
-                if let Some(moved) = self.moves.get(i as usize) {
-                    self.update_of_slot[moved.slot as usize] = i;
-                }
-            }
+            // The whole record supersedes the queued move.
+            i => self.moves.at(i as usize).slot = DROPPED,
         }
         self.update_of_slot[slot as usize] = index;
         self.whole.push(SlotUpdate { slot, group, instance });
@@ -340,14 +300,14 @@ impl WorldMirror {
         self.whole.clear();
     }
 
-    /// The slots whose records the queued updates replace.
-    fn updated_slots<'a>(moves: &'a [MoveUpdate], whole: &'a [SlotUpdate]) -> impl Iterator<Item = u32> + 'a {
-        moves.iter().map(|u| u.slot).chain(whole.iter().map(|u| u.slot))
+    /// The slots whose records the queued updates replace (a slot may be listed twice).
+    fn updated_slots<'a>(moves: &'a MoveRing, whole: &'a [SlotUpdate]) -> impl Iterator<Item = u32> + 'a {
+        moves.slots().iter().copied().filter(|&s| s != DROPPED).chain(whole.iter().map(|u| u.slot))
     }
 
     /// Bytes queued.
     fn queued_bytes(&self) -> u64 {
-        (std::mem::size_of_val(self.moves.as_slice())
+        (self.moves.len() * std::mem::size_of::<MoveUpdate>()
             + std::mem::size_of_val(self.whole.as_slice())
             + std::mem::size_of_val(self.user.as_slice())) as u64
             + self.deformer.as_ref().map_or(0, |d| d.queued_bytes())
@@ -437,7 +397,7 @@ impl WorldMirror {
             let now = Self::updated_slots(&self.moves, &self.whole);
             let slots: Vec<u32> = self.last_slots.iter().copied().chain(now).collect();
             let name = format!("previous record slots {k}");
-            let segment = fill_segment(ctx, &mut self.segments[k][3], &name, bytemuck::cast_slice(&slots))?;
+            let segment = fill_segment(ctx, &mut self.segments[k][2], &name, bytemuck::cast_slice(&slots))?;
             self.keep_previous.bind(cmd);
             let mut binds = vec![Bind::Buffer(0, segment.handle())];
             binds.extend(scene.instance_binds(1));
@@ -463,7 +423,7 @@ impl WorldMirror {
         }
         if let (Some(pipeline), Some(user_data), false) = (&self.scatter_user, &scene.user_data, self.user.is_empty()) {
             let bytes: &[u8] = bytemuck::cast_slice(&self.user);
-            let segment = fill_segment(ctx, &mut self.segments[k][2], &format!("user data updates {k}"), bytes)?;
+            let segment = fill_segment(ctx, &mut self.segments[k][1], &format!("user data updates {k}"), bytes)?;
             let count = self.user.len() as u32 / (self.user_words + 1);
             pipeline.bind(cmd);
             pipeline.push_bindings(cmd, &[Bind::Buffer(0, segment.handle()), Bind::Buffer(1, user_data.handle())]);
@@ -474,19 +434,18 @@ impl WorldMirror {
             };
         }
         // Whole records first: a move queued for the same slot was folded into its record.
-        let lists: [(&[u8], usize); 2] = [
-            (bytemuck::cast_slice(&self.whole), self.whole.len()),
-            (bytemuck::cast_slice(&self.moves), self.moves.len()),
-        ];
-        for (list, (bytes, count)) in [1usize, 0].into_iter().zip(lists) {
-            if count == 0 {
-                continue;
-            }
-            let segment = fill_segment(ctx, &mut self.segments[k][list], &format!("world updates {k}.{list}"), bytes)?;
+        let mut lists: Vec<(usize, ash::vk::Buffer, usize)> = Vec::new();
+        if !self.whole.is_empty() {
+            let bytes = bytemuck::cast_slice(&self.whole);
+            let segment = fill_segment(ctx, &mut self.segments[k][0], &format!("world records {k}"), bytes)?;
+            lists.push((1, segment.handle(), self.whole.len()));
+        }
+        lists.extend(self.moves.chunks().map(|(buffer, count)| (0, buffer.handle(), count)));
+        for (list, buffer, count) in lists {
             let pipeline = &self.scatter[list];
             pipeline.bind(cmd);
             let mut binds = vec![
-                Bind::Buffer(0, segment.handle()),
+                Bind::Buffer(0, buffer),
                 Bind::Buffer(2, scene.cull_records.handle()),
                 Bind::Buffer(3, scene.group_bounds.handle()),
             ];
@@ -502,7 +461,8 @@ impl WorldMirror {
                     (count as u32).div_ceil(64),
                 )
             };
-            // The two lists touch different slots, but the barrier keeps the tools sure of it.
+            // The lists touch different slots (a superseded move is dropped), but the barrier
+            // keeps the tools sure of it.
             cmd_barriers(device, cmd, &[memory_barrier(compute_rw, compute_rw)], &[]);
         }
         cmd_barriers(device, cmd, &[memory_barrier(compute_rw, all)], &[]);
@@ -517,6 +477,7 @@ impl WorldMirror {
         self.last_slots.extend(Self::updated_slots(&self.moves, &self.whole));
         self.refresh_previous = false;
         self.clear_updates();
+        self.moves.advance();
         if let Some(stats) = self.pending.take() {
             self.recent.push_back((frame, stats));
             // Kept while the frame's other figures can still be read back.
@@ -668,12 +629,12 @@ impl Renderer {
             version: world.version(),
             layout,
             handles: world_handles(world),
-            moves: Vec::new(),
+            moves: MoveRing::new(ctx),
             whole: Vec::new(),
             update_of_slot: Vec::new(),
             user: Vec::new(),
             user_of_slot: Vec::new(),
-            segments: (0..FRAMES_IN_FLIGHT).map(|_| [None, None, None, None]).collect(),
+            segments: (0..FRAMES_IN_FLIGHT).map(|_| [None, None, None]).collect(),
             scatter: [
                 Pipeline::compute(
                     ctx,
@@ -776,6 +737,9 @@ impl Renderer {
         if changes.is_empty() {
             return Ok(UpdateStats::default());
         }
+        // A change queues at most one move (a regrouped material's instances aside): with the
+        // room made first, queueing them cannot fail halfway.
+        mirror.moves.reserve(changes.len())?;
         // Moves take the cheap path below; anything else about an instance the general one.
         let mut instances = Vec::new();
         let mut registered = Registered::default();
@@ -889,7 +853,7 @@ impl Renderer {
                 && moved_in_place.binary_search(&slot).is_ok();
             let record = GpuInstance::new(&contents);
             if moved {
-                mirror.queue_move(slot, record.rows, record.translation_lo);
+                mirror.queue_move(slot, record.rows, record.translation_lo)?;
             } else {
                 let group = mirror.layout.group_of_slot(slot) as u32;
                 mirror.queue_whole(slot, group, record);
@@ -903,7 +867,7 @@ impl Renderer {
         // A move of an instance that was also inserted, removed or changed since the last sync
         // is applied after the general path has given it its slot (or none); the world's
         // transform is the latest either way.
-        mirror.queue_moves(&movers, world);
+        mirror.queue_moves(&movers, world)?;
         for &i in &user_changed {
             if let Some(slot) = mirror.layout.slot_of(i) {
                 mirror.queue_user_data(slot, world.user_data_at(i));
@@ -1040,7 +1004,7 @@ impl Renderer {
             let deformer = mirror.deformer.as_mut().expect("made above");
             deformer.queue(&self.ctx, &mut batch.edits, world.scene(), i, pose, group)?;
             let (rows, translation_lo) = GpuInstance::transform_words(&world.scene().instances[i as usize].transform);
-            mirror.queue_move(slot, rows, translation_lo);
+            mirror.queue_move(slot, rows, translation_lo)?;
         }
         if let Some(mut batch) = batch {
             batch.edits.stage(&self.ctx)?;
