@@ -74,6 +74,11 @@ impl FxaaPass {
 }
 
 impl PassNode for FxaaPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let input = rec.slots.required_image("input")?;
         let output = rec.slots.required_image("output")?;

@@ -480,6 +480,11 @@ const MOTION_TARGETS: &str =
     "motion vectors are written beside albedo and normal: bind both with motion (not ids, nor a depth-only pass)";
 
 impl PassNode for GbufferPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn reads_previous_instances(&self) -> bool {
         self.motion
     }

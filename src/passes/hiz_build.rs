@@ -376,6 +376,11 @@ impl HizBuildPass {
 const ABOVE_ACCESS: Access = Access::COMPUTE_WRITE;
 
 impl PassNode for HizBuildPass {
+    /// The first build fills `above`; later ones wait for the build before.
+    fn replay_state(&self) -> Option<u64> {
+        Some(u64::from(self.above_filled))
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let depth = rec.slots.required_image("depth")?;
         let hiz = rec.slots.required_image("hiz")?;

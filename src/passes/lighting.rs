@@ -156,6 +156,11 @@ impl LightingPass {
 }
 
 impl PassNode for LightingPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn samples_shadow_maps(&self) -> bool {
         true
     }

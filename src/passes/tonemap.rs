@@ -39,6 +39,11 @@ impl TonemapPass {
 }
 
 impl PassNode for TonemapPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn live_settings(&self) -> &'static [&'static str] {
         &["exposure"]
     }

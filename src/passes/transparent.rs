@@ -37,6 +37,11 @@ pub struct TransparentPass {
 }
 
 impl PassNode for TransparentPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn samples_shadow_maps(&self) -> bool {
         true
     }

@@ -92,6 +92,11 @@ pub(crate) struct TransparentSortPass {
 }
 
 impl PassNode for TransparentSortPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let inputs = SceneInputs::of(rec)?;
         let scene = &inputs.scene;

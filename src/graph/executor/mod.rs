@@ -5,6 +5,7 @@
 mod capture;
 mod imports;
 mod node;
+mod replay;
 mod resources;
 mod tracker;
 
@@ -201,6 +202,12 @@ pub struct GraphRuntime {
     /// History buffers to start from instead of cleared ones ([`Self::inherit_history`]): per
     /// history resource, a buffer of the runtime this one replaces and the bytes to take.
     inherited: Vec<(ResourceId, vk::Buffer, u64)>,
+    /// Frames recorded for replay ([`replay`]), made at the first frame that may be replayed.
+    replays: Option<replay::Replays>,
+    /// Counts the settings taken live ([`Self::update_settings`]): part of the replay key.
+    settings_taken: u64,
+    /// Frames that replayed a recording.
+    replayed: u64,
 }
 
 impl GraphRuntime {
@@ -262,6 +269,9 @@ impl GraphRuntime {
             frame: 0,
             history_reset: false,
             inherited: Vec::new(),
+            replays: None,
+            settings_taken: 0,
+            replayed: 0,
         })
     }
 
@@ -293,6 +303,7 @@ impl GraphRuntime {
                 changed.push(index);
             }
         }
+        self.settings_taken += 1;
         for index in changed {
             self.nodes[index].apply_settings(&plan.passes[index])?;
         }
@@ -328,8 +339,70 @@ impl GraphRuntime {
     ///
     /// All or nothing: on an error nothing is consumed (the frame number, what the executor
     /// knows of each resource's state), so the host may discard `cmd` and record again.
+    ///
+    /// A frame whose commands would be those of the frame recorded in its slot of frames in
+    /// flight is not recorded again: that recording is executed in `cmd` ([`replay`]).
     pub fn record(&mut self, cmd: vk::CommandBuffer, inputs: &FrameData<'_>, imports: &Imports) -> crate::Result<u64> {
         profiling::scope!("cullgraph::record_graph", self.plan.name.as_str());
+        let Some(key) = self.replay_key(inputs, imports) else { return self.record_commands(cmd, inputs, imports) };
+        let slot = (self.frame % replay::SLOTS as u64) as usize;
+        let mut replays = match self.replays.take() {
+            Some(replays) => replays,
+            None => replay::Replays::new(&self.ctx)?,
+        };
+        if let Some(after) = replays.matching(slot, &key) {
+            replays.execute(cmd, slot);
+            self.tracker = after.clone();
+            self.replays = Some(replays);
+            self.replayed += 1;
+            let frame = self.frame;
+            self.frame += 1;
+            return Ok(frame);
+        }
+        let recorded = replays.begin(slot).and_then(|secondary| {
+            let frame = self.record_commands(secondary, inputs, imports);
+            let ended = replays.end(slot, frame.is_ok().then(|| (key, self.tracker.clone())));
+            let frame = frame?;
+            ended?;
+            Ok(frame)
+        });
+        if recorded.is_ok() {
+            replays.execute(cmd, slot);
+        }
+        self.replays = Some(replays);
+        recorded
+    }
+
+    /// How many of the frames recorded so far replayed an earlier frame's recording instead
+    /// of recording their passes ([`GraphRuntime::record`]).
+    pub fn frames_replayed(&self) -> u64 {
+        self.replayed
+    }
+
+    /// What decides this frame's commands, when it may replay a recording ([`replay`]).
+    fn replay_key(&self, inputs: &FrameData<'_>, imports: &Imports) -> Option<replay::ReplayKey> {
+        let shared = inputs.replay_key?;
+        let clears = self.frame == 0 || self.history_reset || !self.inherited.is_empty();
+        if clears || imports.names().next().is_some() || self.capture.is_some() || self.reads_timings {
+            return None;
+        }
+        Some(replay::ReplayKey {
+            shared,
+            extent: (inputs.extent.width, inputs.extent.height),
+            settings: self.settings_taken,
+            step_timing: self.step_timing,
+            nodes: self.nodes.iter().map(|node| node.replay_state()).collect::<Option<_>>()?,
+            before: self.tracker.clone(),
+        })
+    }
+
+    /// Records one frame's commands into `cmd` ([`GraphRuntime::record`] without replay).
+    fn record_commands(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        inputs: &FrameData<'_>,
+        imports: &Imports,
+    ) -> crate::Result<u64> {
         let recording = self.begin_frame(cmd, imports)?;
         for index in 0..self.plan.passes.len() {
             if let Err(e) = self.record_pass(&recording, cmd, index, inputs) {

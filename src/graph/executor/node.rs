@@ -18,6 +18,11 @@ pub struct FrameData<'a> {
     /// frame's constants, for cullgraph's renderer). The graph never looks inside: each pass
     /// kind downcasts it to the type it was written for.
     pub shared: &'a dyn Any,
+    /// The host's word that `shared` is as it was in an earlier frame with the same key: the
+    /// same buffers, images and counts, so that every pass would record the same commands
+    /// (what the buffers hold may differ). Frames with equal keys may replay one recording
+    /// (`graph::executor::replay`). `None`: never replay.
+    pub replay_key: Option<u64>,
 }
 
 /// The resources bound to one pass's slots in this frame.
@@ -213,6 +218,17 @@ pub trait PassNode: Send {
     fn apply_settings(&mut self, pass: &PlannedPass) -> crate::Result<()> {
         let _ = pass;
         Ok(())
+    }
+
+    /// The node's state as far as it decides the commands [`PassNode::record`] records beyond
+    /// the plan, the node's settings and the frame's shared data
+    /// ([`FrameData::replay_key`]): equal values promise equal commands, so that a frame can
+    /// be recorded once and replayed while nothing changes. A node that records on its first
+    /// run what it skips later, say, returns whether it has run. `None` (the default): the
+    /// commands may differ from frame to frame (they hold the frame number, or data the
+    /// recording writes on the host), and frames of its graph are always recorded.
+    fn replay_state(&self) -> Option<u64> {
+        None
     }
 
     /// The node as `Any`, for [`PassNode::record_together`] to reach the other nodes' state.

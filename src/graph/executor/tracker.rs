@@ -26,7 +26,7 @@ impl Default for PhysState {
 }
 
 /// Per physical resource state.
-#[derive(Clone, Default)]
+#[derive(Clone, Default, PartialEq)]
 pub struct Tracker {
     states: Vec<PhysState>,
 }

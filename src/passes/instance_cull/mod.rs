@@ -451,6 +451,13 @@ fn step_barrier(ctx: &GpuContext, cmd: vk::CommandBuffer) {
 }
 
 impl PassNode for InstanceCullPass {
+    /// The scratch buffers its commands name (made anew when the slots or groups change), and
+    /// whether they still need their first clear.
+    fn replay_state(&self) -> Option<u64> {
+        use ash::vk::Handle;
+        Some(self.scratch.as_ref().map_or(0, |s| s.scan.handle().as_raw().wrapping_mul(2) | u64::from(s.fresh)))
+    }
+
     fn together_key(&self) -> Option<u64> {
         use std::hash::{Hash, Hasher};
         self.together.as_ref()?;

@@ -57,13 +57,15 @@ pub struct SceneInputs {
     frames: Vec<FrameSlot>,
     current: usize,
     shadow_maps: ShadowMaps,
+    /// Distinguishes these inputs from every other made in the process (a replay key part).
+    id: u64,
 }
 
 /// The shadow maps a view's lighting samples (`shadows.glsl`): the sun's cascades and the spot
 /// and point lights' faces, each a `D32_SFLOAT` 2D array view in `SHADER_READ_ONLY_OPTIMAL`, and
 /// their comparison sampler. The frame constants and lights say which layers hold what; a view
 /// without shadows reads none.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct ShadowMaps {
     /// Whether the view has shadows: its lighting then takes the variant that samples them.
     pub on: bool,
@@ -115,7 +117,20 @@ impl SceneInputs {
                 })
             })
             .collect::<crate::Result<Vec<_>>>()?;
-        Ok(Self { scene, frames, current: 0, shadow_maps: ShadowMaps::default() })
+        static MADE: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let id = MADE.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Ok(Self { scene, frames, current: 0, shadow_maps: ShadowMaps::default(), id })
+    }
+
+    /// The [`crate::graph::FrameData::replay_key`] of the frame these inputs are selected for:
+    /// which inputs (a scene made anew, or lights outgrowing their buffers, make new ones),
+    /// which frame slot of them, and which shadow maps. Everything else the passes read of
+    /// them lives in buffers that stay.
+    pub(crate) fn replay_key(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut hasher = std::collections::hash_map::DefaultHasher::new();
+        (self.id, self.current, self.shadow_maps).hash(&mut hasher);
+        hasher.finish()
     }
 
     /// The shared inputs of the frame `rec` records, or an error naming the pass when the host

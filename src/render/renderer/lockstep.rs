@@ -75,8 +75,12 @@ fn record_one(
     part: &mut FramePart<'_>,
 ) -> Result<()> {
     let View { graphs, inputs, settings, id, .. } = &mut *part.view;
-    let data =
-        FrameData { frame, extent: vk::Extent2D { width: settings.width, height: settings.height }, shared: &*inputs };
+    let data = FrameData {
+        frame,
+        extent: vk::Extent2D { width: settings.width, height: settings.height },
+        shared: &*inputs,
+        replay_key: Some(inputs.replay_key()),
+    };
     ctx.begin_label(cmd, &id.to_string());
     let recorded = graphs.runtime.record(cmd, &data, part.imports);
     ctx.end_label(cmd);
@@ -172,6 +176,7 @@ fn record_group(
             frame,
             extent: vk::Extent2D { width: settings.width, height: settings.height },
             shared: &*shared,
+            replay_key: None,
         });
         runtimes.push(&mut graphs.runtime);
         recordings.push(part.recording.as_ref().expect("begun"));

@@ -1,0 +1,121 @@
+//! Frames recorded once and replayed: when nothing that decides a frame's commands has changed
+//! since the frame in flight slot was last recorded, the runtime executes that slot's
+//! secondary command buffer again instead of recording every pass (recording costs the host
+//! microseconds per pass; replaying one call).
+//!
+//! What decides the commands, and so the [`ReplayKey`]: the host's word on its shared data
+//! ([`super::FrameData::replay_key`]: for cullgraph's renderer, which scene buffers and
+//! which frame slot of constants and lights), the output size, the settings the nodes took
+//! live, step timing, every node's own state ([`super::PassNode::replay_state`]) and what the
+//! executor knew of every resource before the frame (the barriers' sources and layouts). A
+//! frame with host imports, captures, a pass that reads timings, or history to clear is never
+//! replayed. The camera and the lights change nothing here: they live in the slot's buffers,
+//! which the host writes before every frame.
+//!
+//! A recording is kept per frame modulo [`SLOTS`]: a frame's commands name its slot of frames
+//! in flight (timestamps, counters) and which copy of each history resource is this frame's
+//! (they alternate). A slot's buffer is recorded again only once the frame that last executed
+//! it has completed (at most [`FRAMES_IN_FLIGHT`] frames execute at once), and is recorded
+//! for simultaneous use, since the engine's primary command buffers that executed it may still
+//! be pending re-execution.
+
+use super::tracker::Tracker;
+use super::FRAMES_IN_FLIGHT;
+use crate::gpu::error::VkResultExt;
+use crate::gpu::GpuContext;
+use ash::vk;
+
+/// Recordings kept: one per frame modulo frames in flight and the two copies of history.
+pub(super) const SLOTS: usize = 2 * FRAMES_IN_FLIGHT;
+
+/// Everything that decides a frame's commands beyond the plan (see the module's text).
+#[derive(Clone, PartialEq)]
+pub(super) struct ReplayKey {
+    pub shared: u64,
+    pub extent: (u32, u32),
+    pub settings: u64,
+    pub step_timing: bool,
+    pub nodes: Vec<u64>,
+    pub before: Tracker,
+}
+
+/// A slot's recording: its key, and what the executor knows of every resource after it.
+struct Recorded {
+    key: ReplayKey,
+    after: Tracker,
+}
+
+/// One secondary command buffer per slot ([`SLOTS`]), and what each holds.
+pub(super) struct Replays {
+    ctx: GpuContext,
+    pool: vk::CommandPool,
+    buffers: Vec<vk::CommandBuffer>,
+    recorded: Vec<Option<Recorded>>,
+}
+
+impl Replays {
+    pub fn new(ctx: &GpuContext) -> crate::Result<Self> {
+        let device = ctx.device();
+        let info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(ctx.queue_family())
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: plain object creation on a valid device; destroyed in Drop (or below).
+        let pool = unsafe { device.create_command_pool(&info, None) }.vk("vkCreateCommandPool")?;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::SECONDARY)
+            .command_buffer_count(SLOTS as u32);
+        // SAFETY: the pool was created above on this device.
+        match unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers") {
+            Ok(buffers) => Ok(Self { ctx: ctx.clone(), pool, buffers, recorded: (0..SLOTS).map(|_| None).collect() }),
+            Err(e) => {
+                // SAFETY: nothing was allocated from the pool.
+                unsafe { device.destroy_command_pool(pool, None) };
+                Err(e.into())
+            }
+        }
+    }
+
+    /// What the executor knows after slot `slot`'s recording, when it was recorded for `key`.
+    pub fn matching(&self, slot: usize, key: &ReplayKey) -> Option<&Tracker> {
+        self.recorded[slot].as_ref().filter(|r| r.key == *key).map(|r| &r.after)
+    }
+
+    /// Executes slot `slot`'s recording in `cmd`.
+    pub fn execute(&self, cmd: vk::CommandBuffer, slot: usize) {
+        // SAFETY: cmd is a primary command buffer recording outside a render pass; the
+        // secondary was recorded whole for simultaneous use and its resources live as long as
+        // the runtime.
+        unsafe { self.ctx.device().cmd_execute_commands(cmd, &[self.buffers[slot]]) };
+    }
+
+    /// Starts recording slot `slot` anew (forgetting what it held) and returns its buffer.
+    pub fn begin(&mut self, slot: usize) -> crate::Result<vk::CommandBuffer> {
+        self.recorded[slot] = None;
+        let inheritance = vk::CommandBufferInheritanceInfo::default();
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::SIMULTANEOUS_USE)
+            .inheritance_info(&inheritance);
+        // SAFETY: the frame that last executed this buffer (SLOTS frames ago) has completed (at
+        // most FRAMES_IN_FLIGHT frames execute at once), so it may be reset; its pool allows it.
+        unsafe { self.ctx.device().begin_command_buffer(self.buffers[slot], &begin) }.vk("vkBeginCommandBuffer")?;
+        Ok(self.buffers[slot])
+    }
+
+    /// Ends slot `slot`'s recording; `recorded`: its key and the executor's knowledge after it,
+    /// when the frame was recorded whole and may be replayed.
+    pub fn end(&mut self, slot: usize, recorded: Option<(ReplayKey, Tracker)>) -> crate::Result<()> {
+        // SAFETY: the buffer is recording (begun above).
+        unsafe { self.ctx.device().end_command_buffer(self.buffers[slot]) }.vk("vkEndCommandBuffer")?;
+        self.recorded[slot] = recorded.map(|(key, after)| Recorded { key, after });
+        Ok(())
+    }
+}
+
+impl Drop for Replays {
+    fn drop(&mut self) {
+        // SAFETY: the runtime is dropped only once the frames that executed its recordings have
+        // completed; destroying the pool frees its buffers.
+        unsafe { self.ctx.device().destroy_command_pool(self.pool, None) };
+    }
+}
