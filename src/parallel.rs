@@ -96,9 +96,28 @@ impl Routed {
         self.unrouted
     }
 
-    /// The entries the routed items write (in no particular order).
-    pub fn entries(&self) -> impl Iterator<Item = u32> + '_ {
-        self.lists.iter().flatten().flatten().map(|&(entry, _)| entry)
+    /// Appends to `out` the entries the routed items write (in no particular order), each
+    /// chunk's on a thread of its own.
+    pub fn append_entries(&self, out: &mut Vec<u32>) {
+        let counts: Vec<usize> = self.lists.iter().map(|lists| lists.iter().map(Vec::len).sum()).collect();
+        let total: usize = counts.iter().sum();
+        let base = out.len();
+        out.reserve(total);
+        let mut rest = &mut out.spare_capacity_mut()[..total];
+        let mut parts = Vec::with_capacity(counts.len());
+        for &count in &counts {
+            let (part, after) = rest.split_at_mut(count);
+            parts.push(part);
+            rest = after;
+        }
+        parts.into_par_iter().zip(self.lists.par_iter()).for_each(|(part, lists)| {
+            for (slot, &(entry, _)) in part.iter_mut().zip(lists.iter().flatten()) {
+                slot.write(entry);
+            }
+        });
+        // SAFETY: the `total` elements after `base` were each written above: every chunk's
+        // part is as long as its lists hold entries.
+        unsafe { out.set_len(base + total) };
     }
 }
 
@@ -217,6 +236,14 @@ mod tests {
             .expect("nothing refused");
             assert_eq!(out, (1..=n).collect::<Vec<_>>());
             assert_eq!(routed.unrouted(), n.div_ceil(97));
+            // Every routed item's entry once, after what the list held.
+            let mut entries = vec![u32::MAX];
+            routed.append_entries(&mut entries);
+            assert_eq!(entries[0], u32::MAX);
+            entries[1..].sort_unstable();
+            let mut expected: Vec<u32> = (0..n).filter(|i| i % 97 != 0).map(|i| entry_of(i) as u32).collect();
+            expected.sort_unstable();
+            assert_eq!(entries[1..], expected[..]);
             let mut table = vec![usize::MAX; 5003];
             let said = apply_routed(&mut table, &owners, &routed, |entry, item| {
                 let overwritten = *entry != usize::MAX;

@@ -11,6 +11,9 @@ use crate::scene::source::LoadOptions;
 use crate::scene::SceneSource;
 use serde::{Deserialize, Serialize};
 
+/// Frames (at most) whose recording is timed with every pass recorded, after the timed ones.
+const RECORDED_FRAMES: u32 = 20;
+
 /// What to measure.
 #[derive(Clone, Debug)]
 pub struct CullingBench {
@@ -85,9 +88,14 @@ pub struct GraphFigure {
     /// making it, less the memory before (`None` where the system does not say).
     #[serde(default)]
     pub host_renderer_peak_bytes_per_instance: Option<f64>,
-    /// Median CPU milliseconds of recording a frame (the scene unchanged).
+    /// Median CPU milliseconds of recording a frame (the scene unchanged), frames replaying
+    /// their slot's recording where they may (the renderer's default).
     #[serde(default)]
     pub cpu_record_ms: f64,
+    /// The same with every pass recorded every frame ([`Renderer::set_frame_replay`] off),
+    /// measured after the timed frames.
+    #[serde(default)]
+    pub cpu_record_every_pass_ms: f64,
 }
 
 /// One scene size.
@@ -232,6 +240,12 @@ pub fn run(
                 last = Some(stats);
             }
             let last = last.unwrap_or_default();
+            renderer.set_frame_replay(false);
+            let mut every_pass = Vec::new();
+            for _ in 0..bench.frames.min(RECORDED_FRAMES) {
+                every_pass.push(renderer.render(&camera)?.cpu_record_ms);
+            }
+            renderer.set_frame_replay(true);
             let kinds: Vec<(String, String)> =
                 renderer.plan().passes.iter().map(|p| (p.name.clone(), p.kind.clone())).collect();
             // Cull and Hi-Z passes only (a late phase's early draw list is reported under the draw pass).
@@ -277,6 +291,7 @@ pub fn run(
                 host_renderer_bytes_per_instance,
                 host_renderer_peak_bytes_per_instance,
                 cpu_record_ms: median(&mut records),
+                cpu_record_every_pass_ms: median(&mut every_pass),
             };
             if bench.verify {
                 renderer.enable_verification(shaders)?;
@@ -329,12 +344,12 @@ impl CullingReport {
                 ));
             }
         }
-        s.push_str("\n| instances | graph | GPU scene bytes per instance | GPU graph MB | host bytes per instance: scene, renderer (its peak while made) | record CPU ms |\n|---|---|---|---|---|---|\n");
+        s.push_str("\n| instances | graph | GPU scene bytes per instance | GPU graph MB | host bytes per instance: scene, renderer (its peak while made) | record CPU ms | every pass recorded |\n|---|---|---|---|---|---|---|\n");
         for scene in &self.scenes {
             let host = |b: Option<f64>| b.map_or("-".to_string(), |b| format!("{b:.0}"));
             for g in &scene.graphs {
                 s.push_str(&format!(
-                    "| {} | {} | {:.1} | {:.1} | {}, {} ({}) | {:.3} |\n",
+                    "| {} | {} | {:.1} | {:.1} | {}, {} ({}) | {:.4} | {:.4} |\n",
                     scene.instances,
                     g.graph,
                     g.gpu_scene_bytes_per_instance,
@@ -343,6 +358,7 @@ impl CullingReport {
                     host(g.host_renderer_bytes_per_instance),
                     host(g.host_renderer_peak_bytes_per_instance),
                     g.cpu_record_ms,
+                    g.cpu_record_every_pass_ms,
                 ));
             }
         }

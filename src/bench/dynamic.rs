@@ -60,6 +60,9 @@ pub struct DynamicRow {
     pub churn_cpu_ms: f64,
     /// Median CPU milliseconds of `Renderer::sync`.
     pub sync_cpu_ms: f64,
+    /// Median CPU milliseconds of recording the frame (its scatter of the updates included).
+    #[serde(default)]
+    pub record_cpu_ms: f64,
     /// Median bytes uploaded per frame.
     pub bytes: u64,
     /// A host-to-device copy of `bytes` (one region), GPU milliseconds.
@@ -210,6 +213,7 @@ pub fn run(
             world_cpu_ms: median(&mut world_ms[world_ms.len().saturating_sub(measured.len())..].to_vec()),
             churn_cpu_ms: median(&mut churn_ms[churn_ms.len().saturating_sub(measured.len())..].to_vec()),
             sync_cpu_ms: median(&mut sync_ms[sync_ms.len().saturating_sub(measured.len())..].to_vec()),
+            record_cpu_ms: median(&mut measured.iter().map(|s| s.cpu_record_ms).collect::<Vec<_>>()),
             bytes,
             host_copy_ms: host_copy_ms(ctx, bytes, 9)?,
             relayouts: updates.iter().filter(|u| u.relayout).count() as u32,
@@ -256,13 +260,13 @@ impl DynamicReport {
             self.device, self.instances, self.slots, self.static_frame_ms, self.static_cull_ms
         );
         s.push_str(&format!("CPU: the world's moves and the sync spread over up to {} threads.\n\n", self.threads));
-        s.push_str("| moved / frame | churn | frame ms | update GPU ms | host copy of the same bytes ms | update / copy | bytes per moved | late cull ms | cull / still | world moves CPU ms | churn CPU ms | sync CPU ms | world ns per move | sync ns per change | world + sync ns per moved | relayouts |\n");
-        s.push_str("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+        s.push_str("| moved / frame | churn | frame ms | update GPU ms | host copy of the same bytes ms | update / copy | bytes per moved | late cull ms | cull / still | world moves CPU ms | churn CPU ms | sync CPU ms | world ns per move | sync ns per change | world + sync ns per moved | record CPU ms | world + sync + record ns per moved | relayouts |\n");
+        s.push_str("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
         for r in &self.rows {
             let changes = (r.moved + 2 * r.churn).max(1) as f64;
             let moved = r.moved.max(1) as f64;
             s.push_str(&format!(
-                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.1} | {:.3} | {:.2} | {:.3} | {:.3} | {:.3} | {:.1} | {:.1} | {:.1} | {} |\n",
+                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.1} | {:.3} | {:.2} | {:.3} | {:.3} | {:.3} | {:.1} | {:.1} | {:.1} | {:.3} | {:.1} | {} |\n",
                 r.moved,
                 r.churn,
                 r.frame_ms,
@@ -278,6 +282,8 @@ impl DynamicReport {
                 r.world_cpu_ms * 1e6 / moved,
                 r.sync_cpu_ms * 1e6 / changes,
                 (r.world_cpu_ms + r.sync_cpu_ms) * 1e6 / moved,
+                r.record_cpu_ms,
+                (r.world_cpu_ms + r.sync_cpu_ms + r.record_cpu_ms) * 1e6 / moved,
                 r.relayouts
             ));
         }

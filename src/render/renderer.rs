@@ -279,6 +279,15 @@ impl Renderer {
         }
     }
 
+    /// Lets every view's frames replay an earlier frame's recording when nothing that decides
+    /// their commands changed (on, the default; see [`GraphRuntime::record`]), or has every
+    /// frame record every pass.
+    pub fn set_frame_replay(&mut self, on: bool) {
+        for view in &mut self.views {
+            view.graphs.runtime.set_replay(on);
+        }
+    }
+
     /// Attaches `observer`: from now on it looks at every frame of every view that
     /// [`Renderer::render`] and its variants wait for.
     pub fn attach(&mut self, observer: impl FrameObserver) -> Result<()> {

@@ -208,6 +208,8 @@ pub struct GraphRuntime {
     settings_taken: u64,
     /// Frames that replayed a recording.
     replayed: u64,
+    /// Whether frames may replay ([`Self::set_replay`]).
+    replay_on: bool,
 }
 
 impl GraphRuntime {
@@ -272,6 +274,7 @@ impl GraphRuntime {
             replays: None,
             settings_taken: 0,
             replayed: 0,
+            replay_on: true,
         })
     }
 
@@ -379,9 +382,20 @@ impl GraphRuntime {
         self.replayed
     }
 
+    /// Lets frames replay earlier recordings (on, the default) or has every frame record
+    /// every pass (to measure what replay saves, or to rule it out while debugging).
+    pub fn set_replay(&mut self, on: bool) {
+        self.replay_on = on;
+    }
+
+    /// Whether frames may replay ([`GraphRuntime::set_replay`]).
+    pub fn replays(&self) -> bool {
+        self.replay_on
+    }
+
     /// What decides this frame's commands, when it may replay a recording ([`replay`]).
     fn replay_key(&self, inputs: &FrameData<'_>, imports: &Imports) -> Option<replay::ReplayKey> {
-        let shared = inputs.replay_key?;
+        let shared = inputs.replay_key.filter(|_| self.replay_on)?;
         let clears = self.frame == 0 || self.history_reset || !self.inherited.is_empty();
         if clears || imports.names().next().is_some() || self.capture.is_some() || self.reads_timings {
             return None;

@@ -60,6 +60,7 @@ impl Graphs {
     /// until its frames can no longer be executing.
     pub fn install(&mut self, mut runtime: GraphRuntime, compiled: FrameInputs, frame: u64) -> Result<()> {
         runtime.set_step_timing(self.runtime.step_timing());
+        runtime.set_replay(self.runtime.replays());
         runtime.capture_draw_lists(self.runtime.captures_draw_lists())?;
         let old = std::mem::replace(&mut self.runtime, runtime);
         let frames = std::mem::take(&mut self.frames);

@@ -124,9 +124,10 @@ impl MoveRing {
         Ok((base, &mut chunk.moves()[start..start + n]))
     }
 
-    /// Records the slots of moves just written through [`MoveRing::room`].
-    pub fn note_slots(&mut self, slots: impl IntoIterator<Item = u32>) {
-        self.slots.extend(slots);
+    /// Records the slots of moves just written through [`MoveRing::room`] on several threads:
+    /// those `routed` sends to their owners.
+    pub fn note_slots(&mut self, routed: &crate::parallel::Routed) {
+        routed.append_entries(&mut self.slots);
     }
 
     /// Writes one move at the end; returns its index.

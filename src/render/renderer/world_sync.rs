@@ -217,7 +217,7 @@ impl WorldMirror {
             Ok(Some(slot as usize))
         });
         let Ok(routed) = routed;
-        self.moves.note_slots(routed.entries());
+        self.moves.note_slots(&routed);
         // Per move that leaves the list: where it is, and the whole record it folds into
         // (`u32::MAX`: none, a later move of its slot superseded it).
         let leaving = crate::parallel::apply_routed(&mut self.update_of_slot, &owners, &routed, |entry, k| {
