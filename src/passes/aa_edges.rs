@@ -41,6 +41,11 @@ impl AaEdgesPass {
 }
 
 impl PassNode for AaEdgesPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let depth = rec.slots.required_image("depth")?;
         let mask = rec.slots.required_image("mask")?;

@@ -178,6 +178,11 @@ struct ClusterCullPass {
 }
 
 impl PassNode for ClusterCullPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let inputs = SceneInputs::of(rec)?;
         let scene = &inputs.scene;

@@ -32,6 +32,11 @@ impl DepthResolvePass {
 }
 
 impl PassNode for DepthResolvePass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let depth = rec.slots.required_image("depth")?;
         let output = rec.slots.required_image("output")?;

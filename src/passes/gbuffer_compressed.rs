@@ -343,6 +343,11 @@ impl GbufferCompressedPass {
 }
 
 impl PassNode for GbufferCompressedPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
         let slots = &rec.slots;
         let depth = slots.required_image("depth")?;

@@ -56,6 +56,11 @@ impl LightingVisibilityPass {
 }
 
 impl PassNode for LightingVisibilityPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn samples_shadow_maps(&self) -> bool {
         true
     }

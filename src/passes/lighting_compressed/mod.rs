@@ -135,6 +135,11 @@ impl LightingCompressedPass {
 }
 
 impl PassNode for LightingCompressedPass {
+    /// Its commands follow from its settings, slots and the scene alone.
+    fn replay_state(&self) -> Option<u64> {
+        Some(0)
+    }
+
     fn samples_shadow_maps(&self) -> bool {
         true
     }
