@@ -106,3 +106,28 @@ fn every_replaying_graph_draws_what_it_draws_recorded() {
     }
     gpu.assert_clean();
 }
+
+/// A world with per-instance user data hands its graphs that data as an import of the
+/// renderer's own, which the renderer's replay key covers: its frames replay too.
+#[test]
+fn a_world_with_user_data_replays() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, camera) = city_view(400, SIZE);
+    let (mut world, handles) = World::with_user_data(scene, 2).unwrap();
+    world.set_user_data(&[(handles[5], &[7, 9][..])]).unwrap();
+    let spec = GraphSpec::builtin("two_phase").unwrap();
+    let settings = RenderSettings::new(SIZE.0, SIZE.1);
+    let mut replaying = Renderer::from_world(&gpu, shaders, &world, settings.clone(), &spec).unwrap();
+    let mut recording = Renderer::from_world(&gpu, shaders, &world, settings, &spec).unwrap();
+    recording.set_frame_replay(false);
+    for i in 0..12 {
+        let camera = camera_at(&camera, i);
+        let (_, a) = replaying.render_to_image(&camera).unwrap();
+        let (_, b) = recording.render_to_image(&camera).unwrap();
+        assert!(a == b, "frame {i}: the replayed image differs");
+    }
+    let replayed = replaying.runtime().frames_replayed();
+    assert!(replayed >= 3, "{replayed} of 12 frames replayed");
+    gpu.assert_clean();
+}

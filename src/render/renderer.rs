@@ -483,6 +483,7 @@ impl Renderer {
         for ((&at, fv), merged) in order.iter().zip(views).zip(&with_user_data) {
             let view = slots[at].take().expect("each view listed once");
             let mut part = lockstep::FramePart::new(view, fv.camera, merged.as_ref().unwrap_or(fv.imports));
+            part.own_imports = fv.imports.names().next().is_none();
             part.waits_for = cascades.iter().enumerate().filter(|(_, c)| c.of == fv.view).map(|(i, _)| i).collect();
             listed.push(part);
         }

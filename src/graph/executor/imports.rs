@@ -54,6 +54,11 @@ impl Imports {
         self
     }
 
+    /// Whether any import is an image (whose views are made anew every frame).
+    pub(crate) fn has_images(&self) -> bool {
+        self.entries.values().any(|i| matches!(i, Import::Image { .. }))
+    }
+
     /// The import named `name`.
     pub fn get(&self, name: &str) -> Option<&Import> {
         self.entries.get(name)

@@ -397,7 +397,9 @@ impl GraphRuntime {
     fn replay_key(&self, inputs: &FrameData<'_>, imports: &Imports) -> Option<replay::ReplayKey> {
         let shared = inputs.replay_key.filter(|_| self.replay_on)?;
         let clears = self.frame == 0 || self.history_reset || !self.inherited.is_empty();
-        if clears || imports.names().next().is_some() || self.capture.is_some() || self.reads_timings {
+        // An imported image gets views made for its frame alone, which a replay would outlive;
+        // imported buffers are the host's to vouch for in its key.
+        if clears || imports.has_images() || self.capture.is_some() || self.reads_timings {
             return None;
         }
         Some(replay::ReplayKey {

@@ -18,10 +18,11 @@ pub struct FrameData<'a> {
     /// frame's constants, for cullgraph's renderer). The graph never looks inside: each pass
     /// kind downcasts it to the type it was written for.
     pub shared: &'a dyn Any,
-    /// The host's word that `shared` is as it was in an earlier frame with the same key: the
-    /// same buffers, images and counts, so that every pass would record the same commands
-    /// (what the buffers hold may differ). Frames with equal keys may replay one recording
-    /// (`graph::executor::replay`). `None`: never replay.
+    /// The host's word that `shared`, and the buffers it imports, are as they were in an
+    /// earlier frame with the same key: the same buffers, images and counts, so that every pass
+    /// would record the same commands (what the buffers hold may differ). Frames with equal keys
+    /// may replay one recording (`graph::executor::replay`; never with imported images). `None`:
+    /// never replay.
     pub replay_key: Option<u64>,
 }
 

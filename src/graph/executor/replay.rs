@@ -8,8 +8,9 @@
 //! which frame slot of constants and lights), the output size, the settings the nodes took
 //! live, step timing, every node's own state ([`super::PassNode::replay_state`]) and what the
 //! executor knew of every resource before the frame (the barriers' sources and layouts). A
-//! frame with host imports, captures, a pass that reads timings, or history to clear is never
-//! replayed. The camera and the lights change nothing here: they live in the slot's buffers,
+//! frame with imported images (their views are made for one frame), captures, a pass that
+//! reads timings, or history to clear is never replayed; imported buffers only where the host's
+//! key vouches for them (cullgraph's renderer does for the user data it imports itself). The camera and the lights change nothing here: they live in the slot's buffers,
 //! which the host writes before every frame.
 //!
 //! A recording is kept per frame modulo [`SLOTS`]: a frame's commands name its slot of frames

@@ -23,6 +23,9 @@ pub(super) struct FramePart<'a> {
     /// The parts (indices into the frame's list) that must have ended before this view's first
     /// pass sampling the shadow maps.
     pub waits_for: Vec<usize>,
+    /// Whether `imports` are the renderer's own (the scene's user data, or none), which its
+    /// replay key covers; the host's may change between frames.
+    pub own_imports: bool,
     recording: Option<FrameRecording>,
     /// The next pass to record.
     next: usize,
@@ -32,7 +35,16 @@ pub(super) struct FramePart<'a> {
 impl<'a> FramePart<'a> {
     /// `view` seen by `camera` with `imports`, waiting for nothing.
     pub fn new(view: &'a mut View, camera: &'a Camera, imports: &'a Imports) -> Self {
-        Self { view, camera, imports, waits_for: Vec::new(), recording: None, next: 0, ended: false }
+        Self {
+            view,
+            camera,
+            imports,
+            waits_for: Vec::new(),
+            own_imports: false,
+            recording: None,
+            next: 0,
+            ended: false,
+        }
     }
 
     fn passes(&self) -> usize {
@@ -79,7 +91,7 @@ fn record_one(
         frame,
         extent: vk::Extent2D { width: settings.width, height: settings.height },
         shared: &*inputs,
-        replay_key: Some(inputs.replay_key()),
+        replay_key: part.own_imports.then(|| inputs.replay_key()),
     };
     ctx.begin_label(cmd, &id.to_string());
     let recorded = graphs.runtime.record(cmd, &data, part.imports);
