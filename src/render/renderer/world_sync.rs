@@ -737,9 +737,6 @@ impl Renderer {
         if changes.is_empty() {
             return Ok(UpdateStats::default());
         }
-        // A change queues at most one move (a regrouped material's instances aside): with the
-        // room made first, queueing them cannot fail halfway.
-        mirror.moves.reserve(changes.len())?;
         // Moves take the cheap path below; anything else about an instance the general one.
         let mut instances = Vec::new();
         let mut registered = Registered::default();
@@ -761,6 +758,9 @@ impl Renderer {
             }
         }
         registered.dedup();
+        // A moved, changed or posed instance queues at most one move (a regrouped material's
+        // instances aside): with the room made first, queueing them cannot fail halfway.
+        mirror.moves.reserve(movers.len() + instances.len() + posed.len())?;
         let textures_changed = !registered.textures.is_empty();
         // A material's sidedness and blending decide its instances' draw groups: they are
         // re-placed where those changed (a rare event, so a pass over the instances is fine). A
