@@ -103,6 +103,20 @@ impl GpuTimer {
         }
     }
 
+    /// The names of the scopes recorded since the last [`GpuTimer::reset`], in the order they
+    /// began.
+    pub fn scopes(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Takes `names` as the scopes of the frame about to execute: for commands recorded
+    /// earlier (and replayed) that reset the queries and wrote those scopes.
+    pub fn replayed(&mut self, names: &[String]) {
+        self.names.clear();
+        self.names.extend_from_slice(names);
+        self.open.clear();
+    }
+
     /// The scopes of the last frame, in the order they began. Call after the frame's work completed.
     pub fn results(&self) -> GpuResult<Vec<PassTiming>> {
         let count = (self.names.len() as u32 * 2).min(self.capacity);

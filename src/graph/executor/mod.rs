@@ -353,9 +353,11 @@ impl GraphRuntime {
             Some(replays) => replays,
             None => replay::Replays::new(&self.ctx)?,
         };
-        if let Some(after) = replays.matching(slot, &key) {
+        let timer = (self.frame % FRAMES_IN_FLIGHT as u64) as usize;
+        if let Some(recorded) = replays.matching(slot, &key) {
             replays.execute(cmd, slot);
-            self.tracker = after.clone();
+            self.tracker = recorded.after.clone();
+            self.timers[timer].borrow_mut().replayed(&recorded.scopes);
             self.replays = Some(replays);
             self.replayed += 1;
             let frame = self.frame;
@@ -364,7 +366,12 @@ impl GraphRuntime {
         }
         let recorded = replays.begin(slot).and_then(|secondary| {
             let frame = self.record_commands(secondary, inputs, imports);
-            let ended = replays.end(slot, frame.is_ok().then(|| (key, self.tracker.clone())));
+            let recorded = frame.is_ok().then(|| replay::Recorded {
+                key,
+                after: self.tracker.clone(),
+                scopes: self.timers[timer].borrow().scopes().to_vec(),
+            });
+            let ended = replays.end(slot, recorded);
             let frame = frame?;
             ended?;
             Ok(frame)

@@ -40,10 +40,12 @@ pub(super) struct ReplayKey {
     pub before: Tracker,
 }
 
-/// A slot's recording: its key, and what the executor knows of every resource after it.
-struct Recorded {
-    key: ReplayKey,
-    after: Tracker,
+/// A slot's recording: its key, what the executor knows of every resource after it, and the
+/// scopes its timestamps time (another slot may share its timer since).
+pub(super) struct Recorded {
+    pub key: ReplayKey,
+    pub after: Tracker,
+    pub scopes: Vec<String>,
 }
 
 /// One secondary command buffer per slot ([`SLOTS`]), and what each holds.
@@ -77,9 +79,9 @@ impl Replays {
         }
     }
 
-    /// What the executor knows after slot `slot`'s recording, when it was recorded for `key`.
-    pub fn matching(&self, slot: usize, key: &ReplayKey) -> Option<&Tracker> {
-        self.recorded[slot].as_ref().filter(|r| r.key == *key).map(|r| &r.after)
+    /// Slot `slot`'s recording, when it was recorded for `key`.
+    pub fn matching(&self, slot: usize, key: &ReplayKey) -> Option<&Recorded> {
+        self.recorded[slot].as_ref().filter(|r| r.key == *key)
     }
 
     /// Executes slot `slot`'s recording in `cmd`.
@@ -103,12 +105,12 @@ impl Replays {
         Ok(self.buffers[slot])
     }
 
-    /// Ends slot `slot`'s recording; `recorded`: its key and the executor's knowledge after it,
-    /// when the frame was recorded whole and may be replayed.
-    pub fn end(&mut self, slot: usize, recorded: Option<(ReplayKey, Tracker)>) -> crate::Result<()> {
+    /// Ends slot `slot`'s recording; `recorded`: what it holds, when the frame was recorded
+    /// whole and may be replayed.
+    pub fn end(&mut self, slot: usize, recorded: Option<Recorded>) -> crate::Result<()> {
         // SAFETY: the buffer is recording (begun above).
         unsafe { self.ctx.device().end_command_buffer(self.buffers[slot]) }.vk("vkEndCommandBuffer")?;
-        self.recorded[slot] = recorded.map(|(key, after)| Recorded { key, after });
+        self.recorded[slot] = recorded;
         Ok(())
     }
 }
