@@ -19,8 +19,14 @@ pub const MAX_TOGETHER: usize = 16;
 /// Addresses per view in the table (`ViewBuffers`).
 const TABLE_WORDS: usize = 14;
 
+/// Tables kept: one per frame modulo frames in flight and the two copies of history, as many
+/// as a frame's commands are kept for replay (`graph::executor::replay`), whose tables then
+/// still hold their addresses.
+const TABLE_RING: usize = 2 * FRAMES_IN_FLIGHT;
+
 /// What the test step reads of each view's constants (`ViewCull` in `instance_cull.comp`,
-/// scalar layout): handed on from the constants the host wrote, as a uniform buffer.
+/// scalar layout), as a uniform buffer: copied on the GPU out of each view's constants, so that
+/// the recorded commands hold nothing of the camera and a frame can be replayed.
 #[repr(C)]
 #[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct ViewCull {
@@ -33,15 +39,20 @@ struct ViewCull {
 }
 
 impl ViewCull {
-    fn of(c: &FrameConstants) -> Self {
-        Self {
-            cull_view: c.cull_view,
-            prev_cull_view: c.prev_cull_view,
-            eye_hi: c.eye_hi,
-            eye_lo: c.eye_lo,
-            prev_eye_hi: c.prev_eye_hi,
-            prev_eye_lo: c.prev_eye_lo,
-        }
+    /// The copies of a view's [`ViewCull`] out of its [`FrameConstants`] at byte `to`:
+    /// (source offset, destination offset, bytes), each a run both layouts hold in one order.
+    fn regions(to: u64) -> [vk::BufferCopy; 3] {
+        use std::mem::{offset_of, size_of};
+        let region = |from: usize, at: usize, bytes: usize| vk::BufferCopy {
+            src_offset: from as u64,
+            dst_offset: to + at as u64,
+            size: bytes as u64,
+        };
+        [
+            region(offset_of!(FrameConstants, cull_view), offset_of!(ViewCull, cull_view), 2 * size_of::<GpuCullView>()),
+            region(offset_of!(FrameConstants, eye_hi), offset_of!(ViewCull, eye_hi), 32),
+            region(offset_of!(FrameConstants, prev_eye_hi), offset_of!(ViewCull, prev_eye_hi), 32),
+        ]
     }
 }
 
@@ -80,14 +91,14 @@ impl Together {
         Ok(Self {
             test: Pipeline::compute(ctx, &format!("{name} (test, views)"), &test_spirv)?,
             compact: Pipeline::compute(ctx, &format!("{name} (compact, views)"), &compact_spirv)?,
-            tables: (0..FRAMES_IN_FLIGHT).map(|_| Vec::new()).collect(),
+            tables: (0..TABLE_RING).map(|_| Vec::new()).collect(),
         })
     }
 
     /// The table and the culling constants of dispatch `chunk` of frame `frame`, made on first
     /// use.
     fn table(&mut self, ctx: &GpuContext, frame: u64, chunk: usize) -> crate::Result<&mut (Buffer, Buffer)> {
-        let ring = &mut self.tables[(frame % FRAMES_IN_FLIGHT as u64) as usize];
+        let ring = &mut self.tables[(frame % TABLE_RING as u64) as usize];
         while ring.len() <= chunk {
             let host = |name, size, usage| {
                 Buffer::new(ctx, &BufferDesc { name, size, usage, location: MemoryLocation::CpuToGpu })
@@ -97,7 +108,7 @@ impl Together {
                 host(
                     "cull view constants",
                     (MAX_TOGETHER * std::mem::size_of::<ViewCull>()) as u64,
-                    vk::BufferUsageFlags::UNIFORM_BUFFER,
+                    vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
                 )?,
             ));
         }
@@ -212,14 +223,27 @@ impl InstanceCullPass {
             let n = range.len();
             let together = lead.together.as_mut().expect("checked above");
             let words: Vec<u64> = tables[range.clone()].iter().flatten().copied().collect();
-            let mut culls = [ViewCull::default(); MAX_TOGETHER];
-            for (cull, rec) in culls.iter_mut().zip(&contexts[range.clone()]) {
-                *cull = ViewCull::of(SceneInputs::of(rec)?.constants_written());
-            }
             let (table, constants) = together.table(ctx, frame, chunk)?;
+            // The addresses are the same whenever this frame's commands are (a replay runs
+            // them again): they are written once per recording, into a table of its own.
             table.write_bytes(0, bytemuck::cast_slice(&words))?;
-            constants.write_bytes(0, bytemuck::cast_slice(&culls))?;
             let (table, constants) = (table.handle(), constants.handle());
+            // The views' culling constants as the host wrote them for the frame that executes:
+            // after an earlier frame's test read the uniform buffer, before this one's.
+            let uniform_read = Access {
+                stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
+                access: vk::AccessFlags2::UNIFORM_READ,
+                layout: vk::ImageLayout::UNDEFINED,
+            };
+            cmd_barriers(device, cmd, &[memory_barrier(uniform_read, Access::TRANSFER_WRITE)], &[]);
+            for (v, rec) in contexts[range.clone()].iter().enumerate() {
+                let from = SceneInputs::of(rec)?.constants().handle();
+                let at = (v * std::mem::size_of::<ViewCull>()) as u64;
+                // SAFETY: cmd recording outside a rendering scope; the view's constants have
+                // TRANSFER_SRC usage and the table's TRANSFER_DST, and both hold the regions.
+                unsafe { device.cmd_copy_buffer(cmd, from, constants, &ViewCull::regions(at)) };
+            }
+            cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, uniform_read)], &[]);
             let mut test_binds = vec![
                 Bind::Buffer(0, scene.cull_records.handle()),
                 Bind::Buffer(2, scene.draw_groups.handle()),

@@ -99,13 +99,14 @@ impl SceneInputs {
         let light_bytes = (lights.max(1) * std::mem::size_of::<GpuPointLight>()) as u64;
         let frames = (0..FRAMES_IN_FLIGHT)
             .map(|i| -> crate::Result<FrameSlot> {
+                // The constants are also copied on the GPU (views culled together).
                 let host = |name: &str, size| {
                     Buffer::new(
                         ctx,
                         &BufferDesc {
                             name,
                             size,
-                            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
                             location: MemoryLocation::CpuToGpu,
                         },
                     )
