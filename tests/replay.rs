@@ -140,3 +140,56 @@ fn a_world_with_user_data_replays() {
     assert!(replayed >= 3, "{replayed} of 12 frames replayed");
     gpu.assert_clean();
 }
+
+/// Two views of one world culled together (split screen), each camera moving and instances
+/// moving too: the renderer keeps such a frame's commands whole and replays them, and both
+/// views draw what a renderer recording every frame draws.
+#[test]
+fn frames_of_several_views_replay_whole() {
+    use cullgraph::render::ViewId;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, camera) = city_view(1500, SIZE);
+    let (mut world, handles) = World::new(scene).unwrap();
+    let spec = GraphSpec::builtin("two_phase").unwrap();
+    let settings = RenderSettings::new(SIZE.0, SIZE.1);
+    let make = |world: &World| {
+        let mut r = Renderer::from_world(&gpu, shaders, world, settings.clone(), &spec).unwrap();
+        let second = r.add_view(shaders, RenderSettings::new(96, 64), &spec).unwrap();
+        (r, second)
+    };
+    let (mut replaying, second) = make(&world);
+    let (mut recording, other) = make(&world);
+    assert_eq!(second, other);
+    recording.set_frame_replay(false);
+    for i in 0..20 {
+        if i % 6 == 4 {
+            let moved: Vec<_> = handles
+                .iter()
+                .step_by(53)
+                .map(|&h| {
+                    let mut t = world.instance(h).unwrap().transform;
+                    t.translation += DVec3::new(0.3, 0.0, 0.0);
+                    (h, t)
+                })
+                .collect();
+            world.set_transforms(&moved).unwrap();
+            replaying.sync(shaders, &world).unwrap();
+            recording.sync(shaders, &world).unwrap();
+        }
+        let (a, b) = (camera_at(&camera, i), camera_at(&camera, i + 7));
+        let views: [(ViewId, &Camera); 2] = [(ViewId::MAIN, &a), (second, &b)];
+        let replayed = replaying.render_views_to_rgba8(&views).unwrap();
+        let recorded = recording.render_views_to_rgba8(&views).unwrap();
+        for (v, ((a_stats, a), (b_stats, b))) in replayed.iter().zip(&recorded).enumerate() {
+            assert!(a == b, "frame {i}, view {v}: the replayed image differs");
+            assert_eq!((a_stats.drawn, a_stats.triangles), (b_stats.drawn, b_stats.triangles), "frame {i}, view {v}");
+        }
+    }
+    for view in [ViewId::MAIN, second] {
+        let replayed = replaying.view_runtime(view).unwrap().frames_replayed();
+        assert!(replayed >= 5, "view {view:?}: {replayed} of 20 frames replayed");
+        assert_eq!(recording.view_runtime(view).unwrap().frames_replayed(), 0);
+    }
+    gpu.assert_clean();
+}

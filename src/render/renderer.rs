@@ -135,6 +135,8 @@ pub struct Renderer {
     world: Option<world_sync::WorldMirror>,
     /// The sun's shadows: settings, and each camera view's cascades and maps.
     shadows: shadows::ShadowState,
+    /// Frames of several views (or with shadow views) kept to replay.
+    frame_replays: Option<lockstep::FrameReplays>,
 }
 
 impl Renderer {
@@ -198,6 +200,7 @@ impl Renderer {
             observers: Vec::new(),
             world: None,
             shadows: shadows::ShadowState::new(ctx)?,
+            frame_replays: None,
         })
     }
 
@@ -487,7 +490,7 @@ impl Renderer {
             part.waits_for = cascades.iter().enumerate().filter(|(_, c)| c.of == fv.view).map(|(i, _)| i).collect();
             listed.push(part);
         }
-        lockstep::record(&self.ctx, cmd, frame, listed, self.cull_together)?;
+        lockstep::record(&self.ctx, cmd, frame, listed, self.cull_together, &mut self.frame_replays)?;
         self.shadow_frame_recorded(cascades);
 
         // Uploads and replaced state recorded FRAMES_IN_FLIGHT frames ago have executed by now.

@@ -5,7 +5,7 @@
 mod capture;
 mod imports;
 mod node;
-mod replay;
+pub(crate) mod replay;
 mod resources;
 mod tracker;
 
@@ -203,7 +203,7 @@ pub struct GraphRuntime {
     /// history resource, a buffer of the runtime this one replaces and the bytes to take.
     inherited: Vec<(ResourceId, vk::Buffer, u64)>,
     /// Frames recorded for replay ([`replay`]), made at the first frame that may be replayed.
-    replays: Option<replay::Replays>,
+    replays: Option<replay::Replays<replay::Recorded>>,
     /// Counts the settings taken live ([`Self::update_settings`]): part of the replay key.
     settings_taken: u64,
     /// Frames that replayed a recording.
@@ -348,29 +348,20 @@ impl GraphRuntime {
     pub fn record(&mut self, cmd: vk::CommandBuffer, inputs: &FrameData<'_>, imports: &Imports) -> crate::Result<u64> {
         profiling::scope!("cullgraph::record_graph", self.plan.name.as_str());
         let Some(key) = self.replay_key(inputs, imports) else { return self.record_commands(cmd, inputs, imports) };
-        let slot = (self.frame % replay::SLOTS as u64) as usize;
+        let slot = self.replay_slot();
         let mut replays = match self.replays.take() {
             Some(replays) => replays,
             None => replay::Replays::new(&self.ctx)?,
         };
-        let timer = (self.frame % FRAMES_IN_FLIGHT as u64) as usize;
-        if let Some(recorded) = replays.matching(slot, &key) {
+        if let Some(recorded) = replays.get(slot).filter(|r| r.key == key) {
             replays.execute(cmd, slot);
-            self.tracker = recorded.after.clone();
-            self.timers[timer].borrow_mut().replayed(&recorded.scopes);
+            let frame = self.replayed_frame(&recorded.frame);
             self.replays = Some(replays);
-            self.replayed += 1;
-            let frame = self.frame;
-            self.frame += 1;
             return Ok(frame);
         }
         let recorded = replays.begin(slot).and_then(|secondary| {
             let frame = self.record_commands(secondary, inputs, imports);
-            let recorded = frame.is_ok().then(|| replay::Recorded {
-                key,
-                after: self.tracker.clone(),
-                scopes: self.timers[timer].borrow().scopes().to_vec(),
-            });
+            let recorded = frame.is_ok().then(|| replay::Recorded { key, frame: self.recorded_frame() });
             let ended = replays.end(slot, recorded);
             let frame = frame?;
             ended?;
@@ -381,6 +372,30 @@ impl GraphRuntime {
         }
         self.replays = Some(replays);
         recorded
+    }
+
+    /// Which of [`replay::SLOTS`] recordings the next frame's commands would be kept as.
+    pub(crate) fn replay_slot(&self) -> usize {
+        (self.frame % replay::SLOTS as u64) as usize
+    }
+
+    /// What the frame just recorded left behind, for a host that keeps its commands to replay
+    /// them ([`GraphRuntime::replayed_frame`]).
+    pub(crate) fn recorded_frame(&self) -> replay::RecordedFrame {
+        let timer = (self.frame.wrapping_sub(1) % FRAMES_IN_FLIGHT as u64) as usize;
+        replay::RecordedFrame { after: self.tracker.clone(), scopes: self.timers[timer].borrow().scopes().to_vec() }
+    }
+
+    /// Takes the next frame as executed by replaying the commands `recorded` was left by (the
+    /// caller executes them); returns its number.
+    pub(crate) fn replayed_frame(&mut self, recorded: &replay::RecordedFrame) -> u64 {
+        let timer = (self.frame % FRAMES_IN_FLIGHT as u64) as usize;
+        self.tracker = recorded.after.clone();
+        self.timers[timer].borrow_mut().replayed(&recorded.scopes);
+        self.replayed += 1;
+        let frame = self.frame;
+        self.frame += 1;
+        frame
     }
 
     /// How many of the frames recorded so far replayed an earlier frame's recording instead
@@ -401,7 +416,7 @@ impl GraphRuntime {
     }
 
     /// What decides this frame's commands, when it may replay a recording ([`replay`]).
-    fn replay_key(&self, inputs: &FrameData<'_>, imports: &Imports) -> Option<replay::ReplayKey> {
+    pub(crate) fn replay_key(&self, inputs: &FrameData<'_>, imports: &Imports) -> Option<replay::ReplayKey> {
         let shared = inputs.replay_key.filter(|_| self.replay_on)?;
         let clears = self.frame == 0 || self.history_reset || !self.inherited.is_empty();
         // An imported image gets views made for its frame alone, which a replay would outlive;

@@ -1,7 +1,10 @@
 //! Frames recorded once and replayed: when nothing that decides a frame's commands has changed
 //! since the frame in flight slot was last recorded, the runtime executes that slot's
 //! secondary command buffer again instead of recording every pass (recording costs the host
-//! microseconds per pass; replaying one call).
+//! microseconds per pass; replaying one call). A host that interleaves several runtimes'
+//! passes in one frame (cullgraph's renderer, for several views) keeps such frames whole the
+//! same way, from each runtime's key ([`super::GraphRuntime::replay_key`]) and what each was
+//! left with ([`RecordedFrame`]).
 //!
 //! What decides the commands, and so the [`ReplayKey`]: the host's word on its shared data
 //! ([`super::FrameData::replay_key`]: for cullgraph's renderer, which scene buffers and
@@ -27,11 +30,11 @@ use crate::gpu::GpuContext;
 use ash::vk;
 
 /// Recordings kept: one per frame modulo frames in flight and the two copies of history.
-pub(super) const SLOTS: usize = 2 * FRAMES_IN_FLIGHT;
+pub(crate) const SLOTS: usize = 2 * FRAMES_IN_FLIGHT;
 
 /// Everything that decides a frame's commands beyond the plan (see the module's text).
 #[derive(Clone, PartialEq)]
-pub(super) struct ReplayKey {
+pub(crate) struct ReplayKey {
     pub shared: u64,
     pub extent: (u32, u32),
     pub settings: u64,
@@ -40,23 +43,30 @@ pub(super) struct ReplayKey {
     pub before: Tracker,
 }
 
-/// A slot's recording: its key, what the executor knows of every resource after it, and the
-/// scopes its timestamps time (another slot may share its timer since).
-pub(super) struct Recorded {
-    pub key: ReplayKey,
+/// What a runtime's frame left behind once recorded: what the executor knows of every resource
+/// after it, and the scopes its timestamps time (another slot may share its timer since).
+#[derive(Clone)]
+pub(crate) struct RecordedFrame {
     pub after: Tracker,
     pub scopes: Vec<String>,
 }
 
-/// One secondary command buffer per slot ([`SLOTS`]), and what each holds.
-pub(super) struct Replays {
+/// A slot's recording: its key, and what the frame left behind.
+pub(super) struct Recorded {
+    pub key: ReplayKey,
+    pub frame: RecordedFrame,
+}
+
+/// One secondary command buffer per slot ([`SLOTS`]), and what each holds (`R`: its key and
+/// whatever replaying it must restore).
+pub(crate) struct Replays<R> {
     ctx: GpuContext,
     pool: vk::CommandPool,
     buffers: Vec<vk::CommandBuffer>,
-    recorded: Vec<Option<Recorded>>,
+    recorded: Vec<Option<R>>,
 }
 
-impl Replays {
+impl<R> Replays<R> {
     pub fn new(ctx: &GpuContext) -> crate::Result<Self> {
         let device = ctx.device();
         let info = vk::CommandPoolCreateInfo::default()
@@ -79,9 +89,9 @@ impl Replays {
         }
     }
 
-    /// Slot `slot`'s recording, when it was recorded for `key`.
-    pub fn matching(&self, slot: usize, key: &ReplayKey) -> Option<&Recorded> {
-        self.recorded[slot].as_ref().filter(|r| r.key == *key)
+    /// What slot `slot` holds, if it holds a whole recording.
+    pub fn get(&self, slot: usize) -> Option<&R> {
+        self.recorded[slot].as_ref()
     }
 
     /// Executes slot `slot`'s recording in `cmd`.
@@ -107,7 +117,7 @@ impl Replays {
 
     /// Ends slot `slot`'s recording; `recorded`: what it holds, when the frame was recorded
     /// whole and may be replayed.
-    pub fn end(&mut self, slot: usize, recorded: Option<Recorded>) -> crate::Result<()> {
+    pub fn end(&mut self, slot: usize, recorded: Option<R>) -> crate::Result<()> {
         // SAFETY: the buffer is recording (begun above).
         unsafe { self.ctx.device().end_command_buffer(self.buffers[slot]) }.vk("vkEndCommandBuffer")?;
         self.recorded[slot] = recorded;
@@ -115,7 +125,7 @@ impl Replays {
     }
 }
 
-impl Drop for Replays {
+impl<R> Drop for Replays<R> {
     fn drop(&mut self) {
         // SAFETY: the runtime is dropped only once the frames that executed its recordings have
         // completed; destroying the pool frees its buffers.

@@ -49,7 +49,11 @@ impl ViewCull {
             size: bytes as u64,
         };
         [
-            region(offset_of!(FrameConstants, cull_view), offset_of!(ViewCull, cull_view), 2 * size_of::<GpuCullView>()),
+            region(
+                offset_of!(FrameConstants, cull_view),
+                offset_of!(ViewCull, cull_view),
+                2 * size_of::<GpuCullView>(),
+            ),
             region(offset_of!(FrameConstants, eye_hi), offset_of!(ViewCull, eye_hi), 32),
             region(offset_of!(FrameConstants, prev_eye_hi), offset_of!(ViewCull, prev_eye_hi), 32),
         ]

@@ -9,8 +9,9 @@
 //! views have recorded all their passes and ended their frames, whose release of the maps is
 //! the barrier its pass needs.
 
-use super::view::View;
+use super::view::{View, ViewId};
 use crate::error::Result;
+use crate::graph::executor::replay::{RecordedFrame, ReplayKey, Replays, SLOTS};
 use crate::graph::{FrameData, FrameRecording, GraphRuntime, Imports};
 use crate::scene::Camera;
 use ash::vk;
@@ -52,14 +53,37 @@ impl<'a> FramePart<'a> {
     }
 }
 
+/// What decides the commands of a frame of several parts: each part's view, place in the
+/// order, waits and runtime key (with the slot its runtime keeps frames in), and whether passes
+/// are recorded together.
+#[derive(Clone, PartialEq)]
+pub(super) struct FrameKey {
+    together: bool,
+    parts: Vec<(ViewId, Vec<usize>, usize, ReplayKey)>,
+}
+
+/// A kept frame of several parts: its key, and what each part's runtime was left with.
+pub(super) struct FrameRecorded {
+    key: FrameKey,
+    parts: Vec<RecordedFrame>,
+}
+
+/// The renderer's kept frames of several parts ([`crate::graph::executor::replay`]; a frame of
+/// one view is kept by its runtime).
+pub(super) type FrameReplays = Replays<FrameRecorded>;
+
 /// Records renderer frame `frame` of `parts` (each with its camera and imports, in the order
 /// given) into `cmd`. On an error every view's frame is abandoned: nothing is consumed.
+///
+/// A frame of several parts whose commands would be those kept for its slot replays them
+/// (`replays`, made at the first such frame), as a runtime does for a frame of one view.
 pub(super) fn record(
     ctx: &crate::gpu::GpuContext,
     cmd: vk::CommandBuffer,
     frame: u64,
     mut parts: Vec<FramePart<'_>>,
     together: bool,
+    replays: &mut Option<FrameReplays>,
 ) -> Result<()> {
     for part in &mut parts {
         part.view.inputs.select(frame);
@@ -69,9 +93,64 @@ pub(super) fn record(
         return record_one(ctx, cmd, frame, one);
     }
     profiling::scope!("cullgraph::record_views");
-    let recorded = record_parts(ctx, cmd, frame, &mut parts, together);
+    let Some(key) = frame_key(frame, &parts, together) else {
+        return record_parts_whole(ctx, cmd, frame, &mut parts, together);
+    };
+    let slot = (frame % SLOTS as u64) as usize;
+    let kept = match replays.take() {
+        Some(kept) => kept,
+        None => Replays::new(ctx)?,
+    };
+    let kept = replays.insert(kept);
+    if let Some(recorded) = kept.get(slot).filter(|r| r.key == key) {
+        kept.execute(cmd, slot);
+        for (part, left) in parts.iter_mut().zip(&recorded.parts) {
+            let local = part.view.graphs.runtime.replayed_frame(left);
+            part.view.graphs.recorded(frame, local);
+            part.view.previous_camera = Some(part.camera.clone());
+        }
+        return Ok(());
+    }
+    let secondary = kept.begin(slot)?;
+    let recorded = record_parts_whole(ctx, secondary, frame, &mut parts, together);
+    let left = recorded
+        .is_ok()
+        .then(|| FrameRecorded { key, parts: parts.iter().map(|p| p.view.graphs.runtime.recorded_frame()).collect() });
+    let ended = kept.end(slot, left);
+    recorded?;
+    ended?;
+    kept.execute(cmd, slot);
+    Ok(())
+}
+
+/// The key of a frame of `parts`, when every part may replay.
+fn frame_key(frame: u64, parts: &[FramePart<'_>], together: bool) -> Option<FrameKey> {
+    let mut keys = Vec::with_capacity(parts.len());
+    for part in parts {
+        let View { graphs, inputs, settings, id, .. } = &*part.view;
+        let data = FrameData {
+            frame,
+            extent: vk::Extent2D { width: settings.width, height: settings.height },
+            shared: &*inputs,
+            replay_key: part.own_imports.then(|| inputs.replay_key()),
+        };
+        let key = graphs.runtime.replay_key(&data, part.imports)?;
+        keys.push((*id, part.waits_for.clone(), graphs.runtime.replay_slot(), key));
+    }
+    Some(FrameKey { together, parts: keys })
+}
+
+/// [`record_parts`], every view's frame abandoned on an error.
+fn record_parts_whole(
+    ctx: &crate::gpu::GpuContext,
+    cmd: vk::CommandBuffer,
+    frame: u64,
+    parts: &mut [FramePart<'_>],
+    together: bool,
+) -> Result<()> {
+    let recorded = record_parts(ctx, cmd, frame, parts, together);
     if recorded.is_err() {
-        for part in &mut parts {
+        for part in parts.iter_mut() {
             if let Some(recording) = part.recording.take() {
                 part.view.graphs.runtime.abandon_frame(recording);
             }
