@@ -131,7 +131,7 @@ fn frame_key(frame: u64, parts: &[FramePart<'_>], together: bool) -> Option<Fram
         let data = FrameData {
             frame,
             extent: vk::Extent2D { width: settings.width, height: settings.height },
-            shared: &*inputs,
+            shared: inputs,
             replay_key: part.own_imports.then(|| inputs.replay_key()),
         };
         let key = graphs.runtime.replay_key(&data, part.imports)?;
