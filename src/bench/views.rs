@@ -55,6 +55,13 @@ pub struct ViewsRow {
     pub cull_compact_ms: f64,
     /// Median GPU milliseconds of the whole frame (every view), culled together.
     pub frame_ms: f64,
+    /// Median CPU milliseconds of recording a frame of every view culled together (frames
+    /// replaying their kept commands where they may).
+    #[serde(default)]
+    pub record_cpu_ms: f64,
+    /// The same with every pass recorded every frame.
+    #[serde(default)]
+    pub record_cpu_every_pass_ms: f64,
     /// Instance-cull passes per view.
     pub cull_passes: usize,
     /// Device bytes of every view's graph resources together (the scene is shared).
@@ -181,6 +188,7 @@ pub fn run(
         let cull_names: Vec<String> =
             renderer.plan().passes.iter().filter(|p| p.kind == "instance_cull").map(|p| p.name.clone()).collect();
         let (mut cull, mut separate, mut total) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut record, mut record_every_pass) = (Vec::new(), Vec::new());
         let mut drawn = Vec::new();
         for together in [true, false] {
             renderer.set_views_culled_together(together);
@@ -193,6 +201,7 @@ pub fn run(
                     .iter()
                     .map(|s| s.gpu_ms.iter().filter(|t| cull_names.contains(&t.name)).map(|t| t.ms).sum::<f64>());
                 if together {
+                    record.push(stats[0].cpu_record_ms);
                     cull.push(per_view.fold(0.0, f64::max));
                     total.push(stats.iter().map(|s| s.gpu_total_ms).fold(0.0, f64::max));
                     drawn = stats.iter().map(|s| s.drawn).collect();
@@ -201,6 +210,12 @@ pub fn run(
                 }
             }
         }
+        renderer.set_views_culled_together(true);
+        renderer.set_frame_replay(false);
+        for _ in 0..bench.frames {
+            record_every_pass.push(renderer.render_views(&frame)?[0].cpu_record_ms);
+        }
+        renderer.set_frame_replay(true);
         // The steps of the shared dispatches, timed in the lead view's scopes.
         let (mut test, mut compact) = (Vec::new(), Vec::new());
         renderer.set_views_culled_together(true);
@@ -249,6 +264,8 @@ pub fn run(
             cull_test_ms: median(&mut test),
             cull_compact_ms: median(&mut compact),
             frame_ms: median(&mut total),
+            record_cpu_ms: median(&mut record),
+            record_cpu_every_pass_ms: median(&mut record_every_pass),
             cull_passes,
             view_bytes,
             drawn,
@@ -358,15 +375,15 @@ impl ViewsReport {
     pub fn markdown(&self) -> String {
         let mut md = format!(
             "## Views\n\nCity of {} instances on {}; the scene ({:.1} MB) is shared by every view.\n\n\
-             | views | cull GPU ms, together | of which test, compact | cull GPU ms, one view at a time | ratio | frame GPU ms | view resources MB | drawn per view |\n\
-             |---|---|---|---|---|---|---|---|\n",
+             | views | cull GPU ms, together | of which test, compact | cull GPU ms, one view at a time | ratio | frame GPU ms | record CPU ms (every pass recorded) | view resources MB | drawn per view |\n\
+             |---|---|---|---|---|---|---|---|---|\n",
             self.instances,
             self.device,
             self.scene_bytes as f64 / 1e6
         );
         for r in &self.rows {
             md += &format!(
-                "| {} | {:.3} | {:.3}, {:.3} | {:.3} | {:.2} | {:.3} | {:.1} | {:?} |\n",
+                "| {} | {:.3} | {:.3}, {:.3} | {:.3} | {:.2} | {:.3} | {:.4} ({:.4}) | {:.1} | {:?} |\n",
                 r.views,
                 r.cull_ms,
                 r.cull_test_ms,
@@ -374,6 +391,8 @@ impl ViewsReport {
                 r.cull_separate_ms,
                 r.cull_separate_ms / r.cull_ms.max(1e-9),
                 r.frame_ms,
+                r.record_cpu_ms,
+                r.record_cpu_every_pass_ms,
                 r.view_bytes as f64 / 1e6,
                 r.drawn
             );

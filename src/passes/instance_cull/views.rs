@@ -25,8 +25,9 @@ const TABLE_WORDS: usize = 14;
 const TABLE_RING: usize = 2 * FRAMES_IN_FLIGHT;
 
 /// What the test step reads of each view's constants (`ViewCull` in `instance_cull.comp`,
-/// scalar layout), as a uniform buffer: copied on the GPU out of each view's constants, so that
-/// the recorded commands hold nothing of the camera and a frame can be replayed.
+/// scalar layout), as a uniform buffer: gathered on the GPU out of each view's constants
+/// (`cull_view_gather.comp`), so that the recorded commands hold nothing of the cameras and a
+/// frame can be replayed.
 #[repr(C)]
 #[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct ViewCull {
@@ -39,33 +40,40 @@ struct ViewCull {
 }
 
 impl ViewCull {
-    /// The copies of a view's [`ViewCull`] out of its [`FrameConstants`] at byte `to`:
-    /// (source offset, destination offset, bytes), each a run both layouts hold in one order.
-    fn regions(to: u64) -> [vk::BufferCopy; 3] {
+    /// The runs of a view's [`ViewCull`] in its [`FrameConstants`], in words (first word there,
+    /// first word here, words), as `cull_view_gather.comp` takes them: each a run both layouts
+    /// hold in one order.
+    fn runs() -> [[u32; 4]; 4] {
         use std::mem::{offset_of, size_of};
-        let region = |from: usize, at: usize, bytes: usize| vk::BufferCopy {
-            src_offset: from as u64,
-            dst_offset: to + at as u64,
-            size: bytes as u64,
-        };
+        let run = |from: usize, at: usize, bytes: usize| [(from / 4) as u32, (at / 4) as u32, (bytes / 4) as u32, 0];
         [
-            region(
-                offset_of!(FrameConstants, cull_view),
-                offset_of!(ViewCull, cull_view),
-                2 * size_of::<GpuCullView>(),
-            ),
-            region(offset_of!(FrameConstants, eye_hi), offset_of!(ViewCull, eye_hi), 32),
-            region(offset_of!(FrameConstants, prev_eye_hi), offset_of!(ViewCull, prev_eye_hi), 32),
+            run(offset_of!(FrameConstants, cull_view), offset_of!(ViewCull, cull_view), 2 * size_of::<GpuCullView>()),
+            run(offset_of!(FrameConstants, eye_hi), offset_of!(ViewCull, eye_hi), 32),
+            run(offset_of!(FrameConstants, prev_eye_hi), offset_of!(ViewCull, prev_eye_hi), 32),
+            [0; 4],
         ]
     }
+}
+
+/// What `cull_view_gather.comp` takes as push constants.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GatherPush {
+    views: u32,
+    table_words: u32,
+    view_words: u32,
+    runs: u32,
+    run: [[u32; 4]; 4],
 }
 
 /// The pipelines and tables of culling several views at once, made on first use.
 pub(super) struct Together {
     test: Pipeline,
     compact: Pipeline,
-    /// Per frame in flight, one table and one buffer of culling constants per dispatch of the
-    /// frame.
+    /// Gathers the views' culling constants (`cull_view_gather.comp`).
+    gather: Pipeline,
+    /// Per kept frame ([`TABLE_RING`]), one table and one buffer of culling constants per
+    /// dispatch of the frame.
     tables: Vec<Vec<(Buffer, Buffer)>>,
 }
 
@@ -92,9 +100,11 @@ impl Together {
             compact_defines.push(("VISIBLE_OUT".into(), "1".into()));
         }
         let compact_spirv = compile("cull/cull_compact.comp", compact_defines)?;
+        let gather_spirv = compile("cull/cull_view_gather.comp", Vec::new())?;
         Ok(Self {
             test: Pipeline::compute(ctx, &format!("{name} (test, views)"), &test_spirv)?,
             compact: Pipeline::compute(ctx, &format!("{name} (compact, views)"), &compact_spirv)?,
+            gather: Pipeline::compute(ctx, &format!("{name} (view constants, views)"), &gather_spirv)?,
             tables: (0..TABLE_RING).map(|_| Vec::new()).collect(),
         })
     }
@@ -112,7 +122,7 @@ impl Together {
                 host(
                     "cull view constants",
                     (MAX_TOGETHER * std::mem::size_of::<ViewCull>()) as u64,
-                    vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                    vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
                 )?,
             ));
         }
@@ -239,15 +249,22 @@ impl InstanceCullPass {
                 access: vk::AccessFlags2::UNIFORM_READ,
                 layout: vk::ImageLayout::UNDEFINED,
             };
-            cmd_barriers(device, cmd, &[memory_barrier(uniform_read, Access::TRANSFER_WRITE)], &[]);
-            for (v, rec) in contexts[range.clone()].iter().enumerate() {
-                let from = SceneInputs::of(rec)?.constants().handle();
-                let at = (v * std::mem::size_of::<ViewCull>()) as u64;
-                // SAFETY: cmd recording outside a rendering scope; the view's constants have
-                // TRANSFER_SRC usage and the table's TRANSFER_DST, and both hold the regions.
-                unsafe { device.cmd_copy_buffer(cmd, from, constants, &ViewCull::regions(at)) };
-            }
-            cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, uniform_read)], &[]);
+            cmd_barriers(device, cmd, &[memory_barrier(uniform_read, Access::COMPUTE_WRITE)], &[]);
+            let view_words = (std::mem::size_of::<ViewCull>() / 4) as u32;
+            let push = GatherPush {
+                views: n as u32,
+                table_words: TABLE_WORDS as u32,
+                view_words,
+                runs: 3,
+                run: ViewCull::runs(),
+            };
+            together.gather.bind(cmd);
+            together.gather.push_bindings(cmd, &[Bind::Buffer(0, table), Bind::Buffer(1, constants)]);
+            together.gather.push_constant_bytes(cmd, bytemuck::bytes_of(&push));
+            // SAFETY: cmd recording with the pipeline bound.
+            unsafe { device.cmd_dispatch(cmd, (n as u32 * view_words).div_ceil(64), 1, 1) };
+            let gathered = Access { access: Access::COMPUTE_WRITE.access | uniform_read.access, ..uniform_read };
+            cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, gathered)], &[]);
             let mut test_binds = vec![
                 Bind::Buffer(0, scene.cull_records.handle()),
                 Bind::Buffer(2, scene.draw_groups.handle()),

@@ -99,14 +99,13 @@ impl SceneInputs {
         let light_bytes = (lights.max(1) * std::mem::size_of::<GpuPointLight>()) as u64;
         let frames = (0..FRAMES_IN_FLIGHT)
             .map(|i| -> crate::Result<FrameSlot> {
-                // The constants are also copied on the GPU (views culled together).
                 let host = |name: &str, size| {
                     Buffer::new(
                         ctx,
                         &BufferDesc {
                             name,
                             size,
-                            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+                            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
                             location: MemoryLocation::CpuToGpu,
                         },
                     )
