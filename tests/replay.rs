@@ -193,3 +193,55 @@ fn frames_of_several_views_replay_whole() {
     }
     gpu.assert_clean();
 }
+
+/// A frame with the sun's shadow cascades (each cascade a view drawing a layer of the
+/// renderer's map array, which it imports): kept and replayed whole as the camera moves, with
+/// every map redrawn every frame (maps are not kept), and the image what a renderer recording
+/// every frame draws. Shadows switched off and on again make new maps: frames recorded for the
+/// old ones never replay against the new. Then the camera stops and the maps are kept: the
+/// camera view's frames alone, sampling the kept maps, replay too.
+#[test]
+fn frames_with_shadow_views_replay_whole() {
+    use cullgraph::render::ShadowSettings;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (scene, camera) = city_view(800, SIZE);
+    let spec = GraphSpec::builtin("two_phase").unwrap();
+    let settings = RenderSettings::new(SIZE.0, SIZE.1);
+    let shadows = ShadowSettings { resolution: 256, distance: Some(60.0), ..Default::default() };
+    let make = || {
+        let mut r = Renderer::with_graph(&gpu, shaders, scene.clone(), settings.clone(), &spec).unwrap();
+        r.set_shadows(shaders, Some(shadows.clone())).unwrap();
+        r.set_shadow_maps_kept(false);
+        r
+    };
+    let (mut replaying, mut recording) = (make(), make());
+    recording.set_frame_replay(false);
+    for i in 0..24 {
+        if i == 12 {
+            for r in [&mut replaying, &mut recording] {
+                r.set_shadows(shaders, None).unwrap();
+                r.set_shadows(shaders, Some(ShadowSettings { resolution: 128, ..shadows.clone() })).unwrap();
+            }
+        }
+        let camera = camera_at(&camera, i);
+        let (a_stats, a) = replaying.render_to_image(&camera).unwrap();
+        let (b_stats, b) = recording.render_to_image(&camera).unwrap();
+        assert!(a == b, "frame {i}: the replayed image differs");
+        assert_eq!((a_stats.drawn, a_stats.triangles), (b_stats.drawn, b_stats.triangles), "frame {i}");
+    }
+    let moving = replaying.runtime().frames_replayed();
+    assert!(moving >= 6, "{moving} of 24 frames replayed");
+    let still = camera_at(&camera, 30);
+    for i in 0..12 {
+        for r in [&mut replaying, &mut recording] {
+            r.set_shadow_maps_kept(i > 0);
+        }
+        let (_, a) = replaying.render_to_image(&still).unwrap();
+        let (_, b) = recording.render_to_image(&still).unwrap();
+        assert!(a == b, "still frame {i}: the replayed image differs");
+    }
+    let replayed = replaying.runtime().frames_replayed() - moving;
+    assert!(replayed >= 4, "{replayed} of 12 still frames replayed");
+    gpu.assert_clean();
+}

@@ -24,6 +24,9 @@ pub struct DepthArray {
     memory: Option<MemoryBlock>,
     size: u32,
     bytes: u64,
+    /// Distinguishes this array from every other made in the process (Vulkan may give a
+    /// destroyed image's handles to a new one).
+    id: u64,
 }
 
 impl DepthArray {
@@ -59,6 +62,10 @@ impl DepthArray {
             memory: None,
             size,
             bytes: 0,
+            id: {
+                static MADE: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+                MADE.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+            },
         };
         let memory = MemoryBlock::bound_to_image(ctx, name, handle)?;
         array.bytes = memory.size();
@@ -93,6 +100,12 @@ impl DepthArray {
     /// The Vulkan handle.
     pub fn handle(&self) -> vk::Image {
         self.handle
+    }
+
+    /// What distinguishes this array from every other made in the process, even one that
+    /// Vulkan gave the same handles.
+    pub fn id(&self) -> u64 {
+        self.id
     }
 
     /// Every layer as a 2D array view, for sampling.

@@ -481,7 +481,11 @@ impl Renderer {
         let mut listed = Vec::with_capacity(cascades.len() + views.len());
         for (&at, cascade) in cascade_order.iter().zip(&cascades) {
             let view = slots[at].take().expect("each cascade listed once");
-            listed.push(lockstep::FramePart::new(view, &cascade.camera, &cascade.imports));
+            let mut part = lockstep::FramePart::new(view, &cascade.camera, &cascade.imports);
+            // Its map's layer, which the shadow state's array id tells apart from earlier ones.
+            part.own_imports = true;
+            part.images_made = cascade.maps;
+            listed.push(part);
         }
         for ((&at, fv), merged) in order.iter().zip(views).zip(&with_user_data) {
             let view = slots[at].take().expect("each view listed once");

@@ -210,6 +210,13 @@ pub struct GraphRuntime {
     replayed: u64,
     /// Whether frames may replay ([`Self::set_replay`]).
     replay_on: bool,
+    /// Wrappers of imported images the host vouched for ([`FrameData::import_key`]), kept from
+    /// frame to frame while it gives the same image under the same key, so that a replayed
+    /// frame's commands name views that still exist: (physical resource, image, key, wrapper).
+    kept_imports: Vec<(usize, crate::gpu::HostImage, u64, Physical)>,
+    /// The host's key of the frame being recorded, and the images it imports (kept at its end).
+    frame_key: Option<u64>,
+    frame_images: Vec<(usize, crate::gpu::HostImage)>,
 }
 
 impl GraphRuntime {
@@ -275,6 +282,9 @@ impl GraphRuntime {
             settings_taken: 0,
             replayed: 0,
             replay_on: true,
+            kept_imports: Vec::new(),
+            frame_key: None,
+            frame_images: Vec::new(),
         })
     }
 
@@ -419,9 +429,10 @@ impl GraphRuntime {
     pub(crate) fn replay_key(&self, inputs: &FrameData<'_>, imports: &Imports) -> Option<replay::ReplayKey> {
         let shared = inputs.replay_key.filter(|_| self.replay_on)?;
         let clears = self.frame == 0 || self.history_reset || !self.inherited.is_empty();
-        // An imported image gets views made for its frame alone, which a replay would outlive;
-        // imported buffers are the host's to vouch for in its key.
-        if clears || imports.has_images() || self.capture.is_some() || self.reads_timings {
+        // Imported images only where the host vouches for them: their wrappers are then kept
+        // (`bind_imports`), and a replayed frame's commands name views that still exist.
+        let fresh_images = imports.has_images() && inputs.import_key.is_none();
+        if clears || fresh_images || self.capture.is_some() || self.reads_timings {
             return None;
         }
         Some(replay::ReplayKey {
@@ -441,7 +452,7 @@ impl GraphRuntime {
         inputs: &FrameData<'_>,
         imports: &Imports,
     ) -> crate::Result<u64> {
-        let recording = self.begin_frame(cmd, imports)?;
+        let recording = self.begin_frame_keyed(cmd, imports, inputs.import_key)?;
         for index in 0..self.plan.passes.len() {
             if let Err(e) = self.record_pass(&recording, cmd, index, inputs) {
                 self.abandon_frame(recording);
@@ -457,6 +468,19 @@ impl GraphRuntime {
     /// passes of the same kind can be recorded together ([`GraphRuntime::record_passes_together`]).
     /// [`GraphRuntime::record`] does all of it for one runtime.
     pub fn begin_frame(&mut self, cmd: vk::CommandBuffer, imports: &Imports) -> crate::Result<FrameRecording> {
+        self.begin_frame_keyed(cmd, imports, None)
+    }
+
+    /// [`GraphRuntime::begin_frame`] for a frame whose host vouches for its imported images
+    /// under `key` ([`FrameData::import_key`]): their wrappers are kept while it gives them again
+    /// under that key, so that the frame's commands can be replayed.
+    pub(crate) fn begin_frame_keyed(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        imports: &Imports,
+        key: Option<u64>,
+    ) -> crate::Result<FrameRecording> {
+        self.frame_key = key;
         self.bind_imports(imports)?;
         let before = self.tracker.clone();
         let frame = self.frame;
@@ -806,8 +830,21 @@ impl GraphRuntime {
                     }
                     // A fresh wrapper (and views of its mips and depth aspect) every frame: a
                     // host may destroy an image and get its handles back for a new one, so
-                    // views are never reused across frames.
-                    (Physical::Image(Image::from_host(&self.ctx, name, host)?), *current)
+                    // views are reused across frames only where the host vouches for the image
+                    // under the same key.
+                    let kept = self.frame_key.and_then(|key| {
+                        let at =
+                            self.kept_imports.iter().position(|(p, h, k, _)| *p == phys && h == host && *k == key)?;
+                        Some(self.kept_imports.swap_remove(at).3)
+                    });
+                    if self.frame_key.is_some() {
+                        self.frame_images.push((phys, *host));
+                    }
+                    let wrapper = match kept {
+                        Some(wrapper) => wrapper,
+                        None => Physical::Image(Image::from_host(&self.ctx, name, host)?),
+                    };
+                    (wrapper, *current)
                 }
                 (Import::Buffer { buffer, size, current, .. }, ResolvedKind::Buffer { size: needed, .. }) => {
                     if size < needed {
@@ -824,9 +861,14 @@ impl GraphRuntime {
             }
             self.tracker.set_external(phys, current);
         }
+        // A kept wrapper the host no longer gives (another image, or another key) goes, once
+        // the frames that may use it have executed.
+        let frame = self.frame;
+        for (_, _, _, wrapper) in std::mem::take(&mut self.kept_imports) {
+            self.retired_imports.push((frame, wrapper));
+        }
         // At most FRAMES_IN_FLIGHT recorded frames execute at once (`Renderer::record`): the
         // frame FRAMES_IN_FLIGHT before this one is done with its wrappers.
-        let frame = self.frame;
         self.retired_imports.retain(|(f, _)| frame < f + FRAMES_IN_FLIGHT as u64);
         Ok(())
     }
@@ -853,10 +895,14 @@ impl GraphRuntime {
         cmd_barriers(self.ctx.device(), cmd, &memory, &images);
         for &(_, phys) in self.resources.imported().to_vec().iter() {
             // The host's handles are only valid for this frame; the views made for them must
-            // last until the frame has executed.
+            // last until the frame has executed, or for as long as the host vouches for them.
             let used = self.resources.bind_import(phys, Physical::Unbound);
-            self.retired_imports.push((self.frame, used));
+            match (self.frame_key, self.frame_images.iter().find(|(p, _)| *p == phys)) {
+                (Some(key), Some(&(_, host))) => self.kept_imports.push((phys, host, key, used)),
+                _ => self.retired_imports.push((self.frame, used)),
+            }
         }
+        self.frame_images.clear();
     }
 
     /// Output `index` (see [`CompiledGraph::outputs`]) as left by the last recorded frame, with

@@ -18,12 +18,16 @@ pub struct FrameData<'a> {
     /// frame's constants, for cullgraph's renderer). The graph never looks inside: each pass
     /// kind downcasts it to the type it was written for.
     pub shared: &'a dyn Any,
-    /// The host's word that `shared`, and the buffers it imports, are as they were in an
-    /// earlier frame with the same key: the same buffers, images and counts, so that every pass
-    /// would record the same commands (what the buffers hold may differ). Frames with equal keys
-    /// may replay one recording (`graph::executor::replay`; never with imported images). `None`:
-    /// never replay.
+    /// The host's word that `shared`, and what it imports, are as they were in an earlier frame
+    /// with the same key: the same buffers, images and counts, so that every pass would record
+    /// the same commands (what the buffers hold may differ). Frames with equal keys may replay
+    /// one recording (`graph::executor::replay`). `None`: never replay.
     pub replay_key: Option<u64>,
+    /// The host's word that the images it imports under equal keys are the same images, not
+    /// new ones that Vulkan gave old handles: their wrappers (and the views made of their parts)
+    /// are then kept from frame to frame, which a replayed frame needs. `None`: a fresh wrapper
+    /// every frame, and no replay of a frame that imports an image.
+    pub import_key: Option<u64>,
 }
 
 /// The resources bound to one pass's slots in this frame.

@@ -75,6 +75,10 @@ pub struct ShadowMaps {
     pub local: vk::ImageView,
     /// A comparison sampler ([`crate::gpu::Sampler::depth_compare`]).
     pub sampler: vk::Sampler,
+    /// The ids of the sun's and the lights' map arrays ([`crate::gpu::DepthArray::id`]): new
+    /// arrays are new maps even where Vulkan gave them the old ones' handles (replayed frames
+    /// must not sample those).
+    pub arrays: [u64; 2],
 }
 
 impl ShadowMaps {

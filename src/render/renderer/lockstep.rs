@@ -24,9 +24,12 @@ pub(super) struct FramePart<'a> {
     /// The parts (indices into the frame's list) that must have ended before this view's first
     /// pass sampling the shadow maps.
     pub waits_for: Vec<usize>,
-    /// Whether `imports` are the renderer's own (the scene's user data, or none), which its
-    /// replay key covers; the host's may change between frames.
+    /// Whether `imports` are the renderer's own (the scene's user data, a shadow map's layer,
+    /// or none), which its replay key covers; the host's may change between frames.
     pub own_imports: bool,
+    /// What tells the renderer's own imported images apart from earlier ones that had their
+    /// handles ([`FrameData::import_key`]): the shadow maps' array id.
+    pub images_made: u64,
     recording: Option<FrameRecording>,
     /// The next pass to record.
     next: usize,
@@ -42,6 +45,7 @@ impl<'a> FramePart<'a> {
             imports,
             waits_for: Vec::new(),
             own_imports: false,
+            images_made: 0,
             recording: None,
             next: 0,
             ended: false,
@@ -50,6 +54,15 @@ impl<'a> FramePart<'a> {
 
     fn passes(&self) -> usize {
         self.view.plan().passes.len()
+    }
+
+    /// The renderer's word on this part's frame ([`FrameData::replay_key`] and
+    /// [`FrameData::import_key`]), where the imports are its own.
+    fn keys(&self) -> (Option<u64>, Option<u64>) {
+        match self.own_imports {
+            true => (Some(self.view.inputs.replay_key()), Some(self.images_made)),
+            false => (None, None),
+        }
     }
 }
 
@@ -127,12 +140,14 @@ pub(super) fn record(
 fn frame_key(frame: u64, parts: &[FramePart<'_>], together: bool) -> Option<FrameKey> {
     let mut keys = Vec::with_capacity(parts.len());
     for part in parts {
+        let (replay_key, import_key) = part.keys();
         let View { graphs, inputs, settings, id, .. } = &*part.view;
         let data = FrameData {
             frame,
             extent: vk::Extent2D { width: settings.width, height: settings.height },
             shared: inputs,
-            replay_key: part.own_imports.then(|| inputs.replay_key()),
+            replay_key,
+            import_key,
         };
         let key = graphs.runtime.replay_key(&data, part.imports)?;
         keys.push((*id, part.waits_for.clone(), graphs.runtime.replay_slot(), key));
@@ -165,12 +180,14 @@ fn record_one(
     frame: u64,
     part: &mut FramePart<'_>,
 ) -> Result<()> {
+    let (replay_key, import_key) = part.keys();
     let View { graphs, inputs, settings, id, .. } = &mut *part.view;
     let data = FrameData {
         frame,
         extent: vk::Extent2D { width: settings.width, height: settings.height },
         shared: &*inputs,
-        replay_key: part.own_imports.then(|| inputs.replay_key()),
+        replay_key,
+        import_key,
     };
     ctx.begin_label(cmd, &id.to_string());
     let recorded = graphs.runtime.record(cmd, &data, part.imports);
@@ -209,7 +226,9 @@ fn record_parts(
     together: bool,
 ) -> Result<()> {
     for part in parts.iter_mut() {
-        let recording = part.view.graphs.runtime.begin_frame(cmd, part.imports).map_err(|e| part.view.error(e))?;
+        let import_key = part.keys().1;
+        let runtime = &mut part.view.graphs.runtime;
+        let recording = runtime.begin_frame_keyed(cmd, part.imports, import_key).map_err(|e| part.view.error(e))?;
         part.recording = Some(recording);
     }
     let awaited: Vec<usize> = parts.iter().flat_map(|p| p.waits_for.iter().copied()).collect();
@@ -268,6 +287,7 @@ fn record_group(
             extent: vk::Extent2D { width: settings.width, height: settings.height },
             shared: &*shared,
             replay_key: None,
+            import_key: None,
         });
         runtimes.push(&mut graphs.runtime);
         recordings.push(part.recording.as_ref().expect("begun"));

@@ -34,6 +34,8 @@ pub(in crate::render::renderer) struct ShadowViewFrame {
     pub of: ViewId,
     /// What its map is drawn for.
     pub key: MapKey,
+    /// The id of the map array whose layer it draws ([`crate::gpu::DepthArray::id`]).
+    pub maps: u64,
 }
 
 impl Renderer {
@@ -117,6 +119,7 @@ impl Renderer {
                 sun: shadows.sun.maps.array_view(),
                 local: shadows.local.maps.array_view(),
                 sampler: self.shadows.sampler.handle(),
+                arrays: [shadows.sun.maps.id(), shadows.local.maps.id()],
             };
             self.views[at].inputs.set_shadow_maps(maps);
             data.push(view_data);

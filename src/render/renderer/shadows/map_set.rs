@@ -47,7 +47,14 @@ impl MapSet {
         // Every layer is in the sampled layout: since the last frame's reads, or since this
         // frame's start (`MapSet::make_ready`).
         let imports = Imports::new().image("depth", self.maps.layer(layer as u32), SAMPLED, SAMPLED);
-        Some(ShadowViewFrame { view: self.views[layer], camera: camera.clone(), imports, of, key })
+        Some(ShadowViewFrame {
+            view: self.views[layer],
+            camera: camera.clone(),
+            imports,
+            of,
+            key,
+            maps: self.maps.id(),
+        })
     }
 
     /// Notes that `frame`, one of these views, was recorded.

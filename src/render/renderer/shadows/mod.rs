@@ -123,7 +123,8 @@ impl ShadowState {
 
     fn fallback_maps(&self) -> ShadowMaps {
         let view = self.fallback.array_view();
-        ShadowMaps { on: false, sun: view, local: view, sampler: self.sampler.handle() }
+        let id = self.fallback.id();
+        ShadowMaps { on: false, sun: view, local: view, sampler: self.sampler.handle(), arrays: [id, id] }
     }
 
     /// Device memory the shadow maps take.
