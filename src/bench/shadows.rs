@@ -63,6 +63,10 @@ pub struct ShadowsRow {
     pub cascades_drawn: f64,
     /// Spot and point light faces drawn per frame, on average.
     pub faces_drawn: f64,
+    /// Median CPU milliseconds of recording the frame (frames replaying kept commands where
+    /// they may, unless the configuration says every pass is recorded).
+    #[serde(default)]
+    pub record_cpu_ms: f64,
 }
 
 /// The figures of one run.
@@ -134,27 +138,30 @@ pub fn run(
         reference: bench.reference,
         ..Default::default()
     };
-    // (name, shadows, culled together, maps kept while unchanged, camera walking)
-    let configs: [(&str, Option<ShadowSettings>, bool, bool, bool); 7] = [
-        ("off", None, true, false, false),
-        ("on, every caster drawn", Some(settings(false)), true, false, false),
-        ("on, casters culled", Some(settings(true)), true, false, false),
-        ("on, casters culled one view at a time", Some(settings(true)), false, false, false),
-        ("on, casters culled, maps kept, camera still", Some(settings(true)), true, true, false),
-        ("off, camera walking", None, true, false, true),
-        ("on, casters culled, maps kept, camera walking", Some(settings(true)), true, true, true),
+    // (name, shadows, culled together, maps kept while unchanged, camera walking, replay)
+    let configs: [(&str, Option<ShadowSettings>, bool, bool, bool, bool); 8] = [
+        ("off", None, true, false, false, true),
+        ("on, every caster drawn", Some(settings(false)), true, false, false, true),
+        ("on, casters culled", Some(settings(true)), true, false, false, true),
+        ("on, casters culled, every pass recorded", Some(settings(true)), true, false, false, false),
+        ("on, casters culled one view at a time", Some(settings(true)), false, false, false, true),
+        ("on, casters culled, maps kept, camera still", Some(settings(true)), true, true, false, true),
+        ("off, camera walking", None, true, false, true, true),
+        ("on, casters culled, maps kept, camera walking", Some(settings(true)), true, true, true, true),
     ];
     let spec = GraphSpec::default_graph();
     let mut images = Vec::new();
-    for (name, shadows, together, kept, walking) in configs {
+    for (name, shadows, together, kept, walking, replay) in configs {
         progress(&format!("shadows: {name}"));
         let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), size.clone(), &spec)?;
         renderer.set_views_culled_together(together);
+        renderer.set_frame_replay(replay);
         renderer.set_shadows(shaders, shadows.clone())?;
         renderer.set_shadow_maps_kept(kept);
         let cull_names: Vec<String> =
             renderer.plan().passes.iter().filter(|p| p.kind == "instance_cull").map(|p| p.name.clone()).collect();
         let (mut frame, mut camera_cull, mut draw, mut total) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut record = Vec::new();
         let (mut camera_timings, mut cascade_timings) = (Vec::new(), Vec::new());
         let (mut drawn, mut cascades_drawn, mut faces_drawn) = (Vec::new(), 0usize, 0usize);
         for f in 0..bench.warmup + bench.frames {
@@ -170,6 +177,7 @@ pub fn run(
                 continue;
             }
             frame.push(stats.gpu_total_ms);
+            record.push(stats.cpu_record_ms);
             camera_cull.push(stats.gpu_ms.iter().filter(|t| cull_names.contains(&t.name)).map(|t| t.ms).sum::<f64>());
             let is_cull = |name: &str| name == "cull_late";
             let mut draw_ms = 0.0;
@@ -201,6 +209,7 @@ pub fn run(
         }
         if bench.reference > 0
             && together
+            && replay
             && !kept
             && (shadows.is_none() || shadows.as_ref().is_some_and(|s| s.caster_culling))
         {
@@ -218,6 +227,7 @@ pub fn run(
             drawn,
             cascades_drawn: cascades_drawn as f64 / bench.frames.max(1) as f64,
             faces_drawn: faces_drawn as f64 / bench.frames.max(1) as f64,
+            record_cpu_ms: median(&mut record),
         });
     }
     for (shadows, image) in images {
@@ -238,8 +248,8 @@ impl ShadowsReport {
         let mut md = format!(
             "## Shadows\n\nCity of {} instances at {}x{} on {}, the street camera with {} sun cascades of {}² and \
              its {} most important lights' faces of {}² ({:.1} MB of maps).\n\n\
-             | shadows | frame GPU ms | camera cull ms | shadow draws and pyramids ms | shadow passes ms | cascades, light faces drawn per frame | drawn per cascade |\n\
-             |---|---|---|---|---|---|---|\n",
+             | shadows | frame GPU ms | camera cull ms | shadow draws and pyramids ms | shadow passes ms | cascades, light faces drawn per frame | drawn per cascade | record CPU ms |\n\
+             |---|---|---|---|---|---|---|---|\n",
             self.instances,
             self.width,
             self.height,
@@ -252,7 +262,7 @@ impl ShadowsReport {
         );
         for r in &self.rows {
             md += &format!(
-                "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1}, {:.1} | {:?} |\n",
+                "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1}, {:.1} | {:?} | {:.4} |\n",
                 r.config,
                 r.frame_ms,
                 r.camera_cull_ms,
@@ -260,7 +270,8 @@ impl ShadowsReport {
                 r.shadow_ms,
                 r.cascades_drawn,
                 r.faces_drawn,
-                r.drawn
+                r.drawn,
+                r.record_cpu_ms
             );
         }
         if self.reference > 0 {
