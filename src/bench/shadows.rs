@@ -108,6 +108,10 @@ fn street_camera(scene: &crate::scene::Scene) -> Camera {
     super::views::camera(scene, 0, 1)
 }
 
+/// One configuration of the suite: its name, the shadows, whether views are culled together,
+/// maps kept while unchanged, the camera walking, and frames replayed.
+struct Config(&'static str, Option<ShadowSettings>, bool, bool, bool, bool);
+
 /// Runs the suite.
 pub fn run(
     ctx: &GpuContext,
@@ -138,20 +142,20 @@ pub fn run(
         reference: bench.reference,
         ..Default::default()
     };
-    // (name, shadows, culled together, maps kept while unchanged, camera walking, replay)
-    let configs: [(&str, Option<ShadowSettings>, bool, bool, bool, bool); 8] = [
-        ("off", None, true, false, false, true),
-        ("on, every caster drawn", Some(settings(false)), true, false, false, true),
-        ("on, casters culled", Some(settings(true)), true, false, false, true),
-        ("on, casters culled, every pass recorded", Some(settings(true)), true, false, false, false),
-        ("on, casters culled one view at a time", Some(settings(true)), false, false, false, true),
-        ("on, casters culled, maps kept, camera still", Some(settings(true)), true, true, false, true),
-        ("off, camera walking", None, true, false, true, true),
-        ("on, casters culled, maps kept, camera walking", Some(settings(true)), true, true, true, true),
+    let on = |culling| Some(settings(culling));
+    let configs = [
+        Config("off", None, true, false, false, true),
+        Config("on, every caster drawn", on(false), true, false, false, true),
+        Config("on, casters culled", on(true), true, false, false, true),
+        Config("on, casters culled, every pass recorded", on(true), true, false, false, false),
+        Config("on, casters culled one view at a time", on(true), false, false, false, true),
+        Config("on, casters culled, maps kept, camera still", on(true), true, true, false, true),
+        Config("off, camera walking", None, true, false, true, true),
+        Config("on, casters culled, maps kept, camera walking", on(true), true, true, true, true),
     ];
     let spec = GraphSpec::default_graph();
     let mut images = Vec::new();
-    for (name, shadows, together, kept, walking, replay) in configs {
+    for Config(name, shadows, together, kept, walking, replay) in configs {
         progress(&format!("shadows: {name}"));
         let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), size.clone(), &spec)?;
         renderer.set_views_culled_together(together);
