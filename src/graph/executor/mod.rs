@@ -437,6 +437,7 @@ impl GraphRuntime {
         }
         Some(replay::ReplayKey {
             shared,
+            imports: inputs.import_key,
             extent: (inputs.extent.width, inputs.extent.height),
             settings: self.settings_taken,
             step_timing: self.step_timing,

@@ -36,6 +36,9 @@ pub(crate) const SLOTS: usize = 2 * FRAMES_IN_FLIGHT;
 #[derive(Clone, PartialEq)]
 pub(crate) struct ReplayKey {
     pub shared: u64,
+    /// The host's word on the images it imports ([`super::FrameData::import_key`]): a frame
+    /// that imports new images never replays one that named the views of older ones.
+    pub imports: Option<u64>,
     pub extent: (u32, u32),
     pub settings: u64,
     pub step_timing: bool,
