@@ -217,6 +217,10 @@ pub struct GraphRuntime {
     /// The host's key of the frame being recorded, and the images it imports (kept at its end).
     frame_key: Option<u64>,
     frame_images: Vec<(usize, crate::gpu::HostImage)>,
+    /// Distinguishes this runtime from every other made in the process: a host keeping frames
+    /// of several runtimes ([`GraphRuntime::recorded_frame`]) never replays one that named a
+    /// replaced runtime's resources.
+    id: u64,
 }
 
 impl GraphRuntime {
@@ -285,6 +289,10 @@ impl GraphRuntime {
             kept_imports: Vec::new(),
             frame_key: None,
             frame_images: Vec::new(),
+            id: {
+                static MADE: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+                MADE.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+            },
         })
     }
 
@@ -382,6 +390,11 @@ impl GraphRuntime {
         }
         self.replays = Some(replays);
         recorded
+    }
+
+    /// What distinguishes this runtime from every other made in the process.
+    pub(crate) fn id(&self) -> u64 {
+        self.id
     }
 
     /// Which of [`replay::SLOTS`] recordings the next frame's commands would be kept as.

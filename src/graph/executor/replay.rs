@@ -97,6 +97,12 @@ impl<R> Replays<R> {
         self.recorded[slot].as_ref()
     }
 
+    /// Forgets what slot `slot` holds: a frame of that slot was recorded without being kept,
+    /// and may have rewritten host data its recording reads.
+    pub fn forget(&mut self, slot: usize) {
+        self.recorded[slot] = None;
+    }
+
     /// Executes slot `slot`'s recording in `cmd`.
     pub fn execute(&self, cmd: vk::CommandBuffer, slot: usize) {
         // SAFETY: cmd is a primary command buffer recording outside a render pass; the

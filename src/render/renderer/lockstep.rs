@@ -66,13 +66,13 @@ impl<'a> FramePart<'a> {
     }
 }
 
-/// What decides the commands of a frame of several parts: each part's view, place in the
-/// order, waits and runtime key (with the slot its runtime keeps frames in), and whether passes
-/// are recorded together.
+/// What decides the commands of a frame of several parts: each part's view, runtime (a
+/// reloaded or resized view has another), place in the order, waits and runtime key (with the
+/// slot its runtime keeps frames in), and whether passes are recorded together.
 #[derive(Clone, PartialEq)]
 pub(super) struct FrameKey {
     together: bool,
-    parts: Vec<(ViewId, Vec<usize>, usize, ReplayKey)>,
+    parts: Vec<(ViewId, u64, Vec<usize>, usize, ReplayKey)>,
 }
 
 /// A kept frame of several parts: its key, and what each part's runtime was left with.
@@ -106,10 +106,15 @@ pub(super) fn record(
         return record_one(ctx, cmd, frame, one);
     }
     profiling::scope!("cullgraph::record_views");
+    let slot = (frame % SLOTS as u64) as usize;
     let Some(key) = frame_key(frame, &parts, together) else {
+        // The frame rewrites the slot's tables of views culled together, which the kept one
+        // reads.
+        if let Some(kept) = replays {
+            kept.forget(slot);
+        }
         return record_parts_whole(ctx, cmd, frame, &mut parts, together);
     };
-    let slot = (frame % SLOTS as u64) as usize;
     let kept = match replays.take() {
         Some(kept) => kept,
         None => Replays::new(ctx)?,
@@ -150,7 +155,8 @@ fn frame_key(frame: u64, parts: &[FramePart<'_>], together: bool) -> Option<Fram
             import_key,
         };
         let key = graphs.runtime.replay_key(&data, part.imports)?;
-        keys.push((*id, part.waits_for.clone(), graphs.runtime.replay_slot(), key));
+        let runtime = &graphs.runtime;
+        keys.push((*id, runtime.id(), part.waits_for.clone(), runtime.replay_slot(), key));
     }
     Some(FrameKey { together, parts: keys })
 }
