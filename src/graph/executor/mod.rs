@@ -217,6 +217,10 @@ pub struct GraphRuntime {
     /// The host's key of the frame being recorded, and the images it imports (kept at its end).
     frame_key: Option<u64>,
     frame_images: Vec<(usize, crate::gpu::HostImage)>,
+    /// Counts the kept wrappers made and retired: part of the replay key, so that no frame
+    /// replays commands that name the views of a wrapper made or retired since (a host giving
+    /// several images under one key, or a frame that failed halfway through binding them).
+    wrappers_changed: u64,
     /// Distinguishes this runtime from every other made in the process: a host keeping frames
     /// of several runtimes ([`GraphRuntime::recorded_frame`]) never replays one that named a
     /// replaced runtime's resources.
@@ -289,6 +293,7 @@ impl GraphRuntime {
             kept_imports: Vec::new(),
             frame_key: None,
             frame_images: Vec::new(),
+            wrappers_changed: 0,
             id: {
                 static MADE: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
                 MADE.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
@@ -451,6 +456,7 @@ impl GraphRuntime {
         Some(replay::ReplayKey {
             shared,
             imports: inputs.import_key,
+            wrappers: self.wrappers_changed,
             extent: (inputs.extent.width, inputs.extent.height),
             settings: self.settings_taken,
             step_timing: self.step_timing,
@@ -805,6 +811,8 @@ impl GraphRuntime {
     /// Checks the host's resources against the graph's declarations and binds them for this frame.
     fn bind_imports(&mut self, imports: &Imports) -> crate::Result<()> {
         use crate::graph::plan::ResolvedKind;
+        // What a frame abandoned before its end bound.
+        self.frame_images.clear();
         for &(id, phys) in self.resources.imported().to_vec().iter() {
             // Errors name the resource's declaration.
             let invalid = |m: String| self.plan.error_at(id, crate::Error::Invalid(m));
@@ -856,7 +864,10 @@ impl GraphRuntime {
                     }
                     let wrapper = match kept {
                         Some(wrapper) => wrapper,
-                        None => Physical::Image(Image::from_host(&self.ctx, name, host)?),
+                        None => {
+                            self.wrappers_changed += u64::from(self.frame_key.is_some());
+                            Physical::Image(Image::from_host(&self.ctx, name, host)?)
+                        }
                     };
                     (wrapper, *current)
                 }
@@ -879,6 +890,7 @@ impl GraphRuntime {
         // the frames that may use it have executed.
         let frame = self.frame;
         for (_, _, _, wrapper) in std::mem::take(&mut self.kept_imports) {
+            self.wrappers_changed += 1;
             self.retired_imports.push((frame, wrapper));
         }
         // At most FRAMES_IN_FLIGHT recorded frames execute at once (`Renderer::record`): the

@@ -25,8 +25,9 @@ pub struct FrameData<'a> {
     pub replay_key: Option<u64>,
     /// The host's word that the images it imports under equal keys are the same images, not
     /// new ones that Vulkan gave old handles: their wrappers (and the views made of their parts)
-    /// are then kept from frame to frame, which a replayed frame needs. `None`: a fresh wrapper
-    /// every frame, and no replay of a frame that imports an image.
+    /// are then kept from frame to frame, which a replayed frame needs (a host that gives other
+    /// images under one key stays correct, but its frames do not replay). `None`: a fresh
+    /// wrapper every frame, and no replay of a frame that imports an image.
     pub import_key: Option<u64>,
 }
 

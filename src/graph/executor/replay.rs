@@ -39,6 +39,8 @@ pub(crate) struct ReplayKey {
     /// The host's word on the images it imports ([`super::FrameData::import_key`]): a frame
     /// that imports new images never replays one that named the views of older ones.
     pub imports: Option<u64>,
+    /// Kept wrappers of imported images made or retired so far (`GraphRuntime::bind_imports`).
+    pub wrappers: u64,
     pub extent: (u32, u32),
     pub settings: u64,
     pub step_timing: bool,
