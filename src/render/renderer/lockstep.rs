@@ -24,12 +24,11 @@ pub(super) struct FramePart<'a> {
     /// The parts (indices into the frame's list) that must have ended before this view's first
     /// pass sampling the shadow maps.
     pub waits_for: Vec<usize>,
-    /// Whether `imports` are the renderer's own (the scene's user data, a shadow map's layer,
-    /// or none), which its replay key covers; the host's may change between frames.
-    pub own_imports: bool,
-    /// What tells the renderer's own imported images apart from earlier ones that had their
-    /// handles ([`FrameData::import_key`]): the shadow maps' array id.
-    pub images_made: u64,
+    /// Where `imports` are the renderer's own (the scene's user data, a shadow map's layer, or
+    /// none), which its replay key covers, what tells its imported images apart from earlier
+    /// ones that had their handles ([`FrameData::import_key`]: the shadow maps' array id, or
+    /// 0); `None` for the host's, which may change between frames.
+    pub own_imports: Option<u64>,
     recording: Option<FrameRecording>,
     /// The next pass to record.
     next: usize,
@@ -39,17 +38,7 @@ pub(super) struct FramePart<'a> {
 impl<'a> FramePart<'a> {
     /// `view` seen by `camera` with `imports`, waiting for nothing.
     pub fn new(view: &'a mut View, camera: &'a Camera, imports: &'a Imports) -> Self {
-        Self {
-            view,
-            camera,
-            imports,
-            waits_for: Vec::new(),
-            own_imports: false,
-            images_made: 0,
-            recording: None,
-            next: 0,
-            ended: false,
-        }
+        Self { view, camera, imports, waits_for: Vec::new(), own_imports: None, recording: None, next: 0, ended: false }
     }
 
     fn passes(&self) -> usize {
@@ -60,8 +49,8 @@ impl<'a> FramePart<'a> {
     /// [`FrameData::import_key`]), where the imports are its own.
     fn keys(&self) -> (Option<u64>, Option<u64>) {
         match self.own_imports {
-            true => (Some(self.view.inputs.replay_key()), Some(self.images_made)),
-            false => (None, None),
+            Some(images) => (Some(self.view.inputs.replay_key()), Some(images)),
+            None => (None, None),
         }
     }
 }
