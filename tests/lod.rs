@@ -425,3 +425,63 @@ fn shadow_casters_take_the_levels_of_their_camera_view() {
     assert!(fine.1 < whole.1, "{} triangles at 2 px, {} whole", fine.1, whole.1);
     gpu.assert_clean();
 }
+
+/// Views culled together choose each view's levels in its own pixels: a near view and smaller,
+/// farther ones get the images, counts, levels and triangles they get culled one at a time,
+/// frame after frame, for one-pass and two-phase culling.
+#[test]
+fn views_culled_together_choose_each_views_own_levels() {
+    use cullgraph::render::ViewId;
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let scene = dense(300);
+    let far = Camera { eye: DVec3::new(-30.0, 12.0, -40.0), target: DVec3::new(20.0, 0.0, 20.0), ..Default::default() };
+    let cameras = [near_camera(), far, Camera { eye: DVec3::new(40.0, 3.0, 5.0), ..near_camera() }];
+    let sizes = [SIZE, (64, 36), (96, 54)];
+    for name in ["frustum", "two_phase"] {
+        let spec = graph(name, 2.0);
+        let mut renderers = Vec::new();
+        for together in [true, false] {
+            let mut r =
+                Renderer::with_graph(&gpu, shaders, scene.clone(), RenderSettings::new(SIZE.0, SIZE.1), &spec).unwrap();
+            let mut ids = vec![ViewId::MAIN];
+            for size in &sizes[1..] {
+                ids.push(r.add_view(shaders, RenderSettings::new(size.0, size.1), &spec).unwrap());
+            }
+            r.set_views_culled_together(together);
+            renderers.push((r, ids));
+        }
+        // The cull passes of the views can be recorded together.
+        let runtime = renderers[0].0.view_runtime(ViewId::MAIN).unwrap();
+        let culls: Vec<usize> =
+            (0..runtime.plan().passes.len()).filter(|&i| runtime.together_key(i).is_some()).collect();
+        assert!(!culls.is_empty(), "{name}: no pass culls views together");
+        for frame in 0..3 {
+            let mut results = Vec::new();
+            for (r, ids) in &mut renderers {
+                let frames: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&cameras).collect();
+                results.push(r.render_views_to_rgba8(&frames).unwrap());
+            }
+            for (v, (together, apart)) in results[0].iter().zip(&results[1]).enumerate() {
+                assert!(together.1 == apart.1, "{name}, frame {frame}, view {v}: the image differs");
+                assert_eq!(levels(&together.0), levels(&apart.0), "{name}, frame {frame}, view {v}");
+                assert_eq!(
+                    (together.0.drawn, together.0.triangles, together.0.frustum_culled, together.0.occlusion_culled),
+                    (apart.0.drawn, apart.0.triangles, apart.0.frustum_culled, apart.0.occlusion_culled),
+                    "{name}, frame {frame}, view {v}"
+                );
+            }
+            // Each view at its own levels: the near view draws props finer than the far ones.
+            let coarse = |s: &FrameStats| levels(s)[1..].iter().sum::<u32>() as f64 / s.drawn.max(1) as f64;
+            let (near, far) = (&results[0][0].0, &results[0][1].0);
+            assert!(near.drawn > 0 && far.drawn > 0, "{name}: {} and {} drawn", near.drawn, far.drawn);
+            assert!(
+                coarse(far) > coarse(near),
+                "{name}, frame {frame}: {:?} near, {:?} far",
+                levels(near),
+                levels(far)
+            );
+        }
+    }
+    gpu.assert_clean();
+}

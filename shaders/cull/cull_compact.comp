@@ -32,6 +32,10 @@ layout(local_size_x = 256) in;
 layout(set = 0, binding = 2, scalar) readonly buffer Groups { DrawGroup groups[]; };
 layout(set = 0, binding = 3) readonly buffer SlotInstances { uint slot_instances[]; };
 layout(set = 0, binding = 14, scalar) readonly buffer ViewTable { ViewBuffers view_table[]; };
+#ifdef LOD
+// Each view's level bits are reached through the table.
+layout(set = 0, binding = 15, scalar) readonly buffer LodLevels { LodLevel lod_levels[]; };
+#endif
 #else
 layout(set = 0, binding = 0) readonly buffer DrawBits { uint draw_bits[]; };
 layout(set = 0, binding = 1) buffer Scratch { uint scratch[]; };

@@ -3,6 +3,8 @@
 // turns the superblocks' per-level counts into where each superblock's slots of each list and
 // level start in the level-major order (every slot of lower levels first), so that a placing
 // workgroup reads its own superblock's starts instead of every superblock's counts.
+// MULTI_VIEW: workgroup v does so for view v of the views culled together, whose scratch it
+// reaches through the table of their buffers (`cull_views.glsl`).
 //
 // Each invocation sums a contiguous range of superblocks per level; a scan within each subgroup and
 // one over the subgroups' totals (one barrier) give each range's start; each thread then walks
@@ -16,7 +18,12 @@
 #define THREADS 256u
 layout(local_size_x = 256) in;
 
+#ifdef MULTI_VIEW
+#include "cull_views.glsl"
+layout(set = 0, binding = 1, scalar) readonly buffer ViewTable { ViewBuffers view_table[]; };
+#else
 layout(set = 0, binding = 0) buffer Scratch { uint scratch[]; };
+#endif
 
 layout(push_constant) uniform Push {
     uint slot_count;
@@ -27,6 +34,9 @@ layout(push_constant) uniform Push {
 shared uint sh_subgroup_sums[LOD_LEVELS][THREADS];
 
 void main() {
+#ifdef MULTI_VIEW
+    select_view_buffers(view_table[gl_WorkGroupID.x], gl_WorkGroupID.x);
+#endif
     uint run = scratch[SCRATCH_PLACE_RUN];
     // Ranges follow the subgroups' order, so that the scans below see them in order however
     // invocations map to subgroups (256 invocations fill subgroups of any power-of-two size).

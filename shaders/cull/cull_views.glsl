@@ -17,7 +17,7 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer U32Ref { uin
 layout(buffer_reference, scalar, buffer_reference_align = 4) buffer CommandsRef { DrawCommand c[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) buffer StatsRef { CullStats s; };
 
-// One view's buffers (112 bytes; 0 where the view binds nothing).
+// One view's buffers (120 bytes; 0 where the view binds nothing).
 struct ViewBuffers {
     uint64_t constants;      // FrameConstants
     uint64_t group_counts;
@@ -33,6 +33,7 @@ struct ViewBuffers {
     uint64_t list_commands;
     uint64_t list_count;
     uint64_t list_stats;
+    uint64_t level_bits;     // LOD: each slot's level as bit planes
 };
 
 U32Ref g_group_counts;
@@ -48,6 +49,7 @@ U32Ref g_visible_ids;
 CommandsRef g_list_commands;
 U32Ref g_list_count;
 StatsRef g_list_stats;
+U32Ref g_level_bits;
 uint g_view;
 
 void select_view_buffers(ViewBuffers b, uint v) {
@@ -64,6 +66,7 @@ void select_view_buffers(ViewBuffers b, uint v) {
     g_list_commands = CommandsRef(b.list_commands);
     g_list_count = U32Ref(b.list_count);
     g_list_stats = StatsRef(b.list_stats);
+    g_level_bits = U32Ref(b.level_bits);
     g_view = v;
 }
 
@@ -78,6 +81,7 @@ void select_view_buffers(ViewBuffers b, uint v) {
 #define stats g_stats.s
 #define visible_ids g_visible_ids.w
 #define list_commands g_list_commands.c
+#define level_bits g_level_bits.w
 #define list_count g_list_count.w
 #define list_stats g_list_stats.s
 

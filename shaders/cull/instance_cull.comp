@@ -59,9 +59,14 @@ struct ViewCull {
     vec4 eye_lo;
     vec4 prev_eye_hi;
     vec4 prev_eye_lo;
+    CullView lod_view;
+    vec4 lod_eye_offset;
 };
 layout(set = 0, binding = 11, scalar) uniform ViewCulls { ViewCull view_culls[MAX_CULL_VIEWS]; };
 #define frame view_culls[g_view]
+#ifdef LOD
+layout(set = 0, binding = 12, scalar) readonly buffer LodLevels { LodLevel lod_levels[]; };
+#endif
 #ifdef HAS_HIZ
 layout(set = 0, binding = 9) uniform sampler2D hiz_views[MAX_CULL_VIEWS];
 // Each view's pyramid, indexed by constants (sampled-image arrays may not be indexed
@@ -127,6 +132,12 @@ shared uint mv_prev[MAX_CULL_VIEWS][CULL_WORDS_PER_BLOCK];
 // Per view and word: the set bits of drawn, visible now, evaluated, frustum-culled and
 // occlusion-culled, a byte each (the last in .y).
 shared uvec2 mv_pop[MAX_CULL_VIEWS][CULL_WORDS_PER_BLOCK];
+#ifdef LOD
+// Each slot's level for every view, four bits per view (views 8 apart share a bit position).
+shared uint mv_levels[MAX_CULL_VIEWS / 8u][CULL_BLOCK];
+// Per view, list (0: drawn, 1: visible) and level, the block's slots.
+shared uint mv_level_counts[MAX_CULL_VIEWS][2][LOD_LEVELS];
+#endif
 #endif
 shared uint sh_draw[CULL_WORDS_PER_BLOCK];
 shared uint sh_vis[CULL_WORDS_PER_BLOCK];
@@ -520,6 +531,11 @@ void cull_views(uint lane, uint block, uint slot) {
         mv_prev[v][w] = word < (pc.slot_count + 31u) / 32u ? vis_prev[word] : 0u;
     }
 #endif
+#ifdef LOD
+    if (lane < n * 2u * LOD_LEVELS) mv_level_counts[lane / (2u * LOD_LEVELS)][(lane / LOD_LEVELS) % 2u][lane % LOD_LEVELS] = 0u;
+    uint levels[MAX_CULL_VIEWS / 8u];
+    for (uint i = 0u; i < MAX_CULL_VIEWS / 8u; ++i) levels[i] = 0u;
+#endif
     bool in_range = slot < pc.slot_count;
     CullRecord r = CullRecord(vec3(0.0), 0u, 0u, 0u, 0u, 0u);
     if (in_range) r = load_record(slot);
@@ -543,7 +559,13 @@ void cull_views(uint lane, uint block, uint slot) {
         drawn_visible |= (d.draw ? 1u << v : 0u) | (d.visible_now ? 0x10000u << v : 0u);
         evaluated_frustum |= (d.evaluated ? 1u << v : 0u) | (d.frustum_culled ? 0x10000u << v : 0u);
         occlusion |= d.occlusion_culled ? 1u << v : 0u;
+#ifdef LOD
+        levels[v / 8u] |= d.level << (4u * (v % 8u));
+#endif
     }
+#ifdef LOD
+    for (uint i = 0u; i < MAX_CULL_VIEWS / 8u; ++i) mv_levels[i][lane] = levels[i];
+#endif
     mv_bits[0][lane] = drawn_visible;
     mv_bits[1][lane] = evaluated_frustum;
     mv_bits[2][lane] = occlusion;
@@ -558,6 +580,10 @@ void cull_views(uint lane, uint block, uint slot) {
         uint v = lane / CULL_WORDS_PER_BLOCK;
         uint w = lane % CULL_WORDS_PER_BLOCK;
         uint draw = 0u, visible = 0u, evaluated = 0u, frustum = 0u, occluded = 0u;
+#ifdef LOD
+        uint planes[LOD_PLANES];
+        for (uint p = 0u; p < LOD_PLANES; ++p) planes[p] = 0u;
+#endif
         for (uint i = 0u; i < 32u; ++i) {
             uint j = (i + w) & 31u;
             uint k = w * 32u + j;
@@ -567,6 +593,10 @@ void cull_views(uint lane, uint block, uint slot) {
             evaluated |= ((b >> v) & 1u) << j;
             frustum |= ((b >> (16u + v)) & 1u) << j;
             occluded |= ((c >> v) & 1u) << j;
+#ifdef LOD
+            uint level = (mv_levels[v / 8u][k] >> (4u * (v % 8u))) & 0xFu;
+            for (uint p = 0u; p < LOD_PLANES; ++p) planes[p] |= ((level >> p) & 1u) << j;
+#endif
         }
         select_view_buffers(view_table[v], v);
         draw_bits[block * CULL_WORDS_PER_BLOCK + w] = draw;
@@ -575,9 +605,33 @@ void cull_views(uint lane, uint block, uint slot) {
         uint vis_word = block * CULL_WORDS_PER_BLOCK + w;
         if (vis_word < (pc.slot_count + 31u) / 32u) vis_now[vis_word] = visible;
 #endif
+#ifdef LOD
+        uint blocks = cull_blocks(pc.slot_count);
+        for (uint p = 0u; p < LOD_PLANES; ++p) {
+            level_bits[p * blocks * CULL_WORDS_PER_BLOCK + block * CULL_WORDS_PER_BLOCK + w] = planes[p];
+        }
+        // Each level's slots of the word, counted per group and per level as the single view's
+        // test counts them.
+        for (uint level = 0u; level < LOD_LEVELS; ++level) {
+            uint mask = ~0u;
+            for (uint p = 0u; p < LOD_PLANES; ++p) mask &= ((level >> p) & 1u) != 0u ? planes[p] : ~planes[p];
+            uint drawn_at = draw & mask, visible_at = visible & mask;
+            if (drawn_at != 0u) {
+                count_word_groups(w, drawn_at, level * pc.group_count);
+                atomicAdd(mv_level_counts[v][0][level], bitCount(drawn_at));
+            }
+            if (visible_at != 0u) {
+#ifdef VISIBLE_OUT
+                count_word_groups(w, visible_at, (LOD_LEVELS + level) * pc.group_count);
+#endif
+                atomicAdd(mv_level_counts[v][1][level], bitCount(visible_at));
+            }
+        }
+#else
         if (draw != 0u) count_word_groups(w, draw, 0u);
 #ifdef VISIBLE_OUT
         if (visible != 0u) count_word_groups(w, visible, pc.group_count);
+#endif
 #endif
         mv_pop[v][w] = uvec2(bitCount(draw) | bitCount(visible) << 8u | bitCount(evaluated) << 16u
                                  | bitCount(frustum) << 24u,
@@ -611,6 +665,18 @@ void cull_views(uint lane, uint block, uint slot) {
         // Nothing reads this word in this dispatch: the compact step's copy of the run number.
         if (block == 0u) scratch[SCRATCH_PLACE_RUN] = run;
     }
+#ifdef LOD
+    // The views' per-level counts of the block, one invocation per view, list and level.
+    if (lane < n * 2u * LOD_LEVELS) {
+        uint v = lane / (2u * LOD_LEVELS);
+        uint list = (lane / LOD_LEVELS) % 2u, level = lane % LOD_LEVELS;
+        select_view_buffers(view_table[v], v);
+        uint count = mv_level_counts[v][list][level];
+        scratch[scratch_level_block(pc.superblocks, pc.slot_count, list, block, level)] = count;
+        uint at = scratch_super(pc.superblocks, scratch[SCRATCH_TEST_RUN], block / CULL_SUPERBLOCK);
+        if (count != 0u) atomicAdd(scratch[at + SUPER_LEVEL(list, level)], count);
+    }
+#endif
 }
 #endif
 

@@ -27,6 +27,8 @@ pub struct ViewsBench {
     pub height: u32,
     /// View counts, one row each.
     pub views: Vec<usize>,
+    /// Levels of detail at this threshold in pixels (0: full detail).
+    pub lod_threshold: f64,
     /// Frames before measuring.
     pub warmup: u32,
     /// Frames measured (medians are reported).
@@ -84,6 +86,9 @@ pub struct ViewsReport {
     pub device: String,
     /// City size.
     pub instances: usize,
+    /// The graphs' level-of-detail threshold in pixels (0: full detail).
+    #[serde(default)]
+    pub lod_threshold: f64,
     /// Device bytes of the scene all views share (geometry, instances, bounds, textures).
     pub scene_bytes: u64,
     /// One row per view count.
@@ -170,8 +175,17 @@ pub fn run(
         .load(&LoadOptions { instances: Some(bench.instances), ..Default::default() })?;
     let (w, h) = (bench.width, bench.height);
     let quarter = RenderSettings::new((w / 2).max(1), (h / 2).max(1));
-    let spec = GraphSpec::default_graph();
-    let mut report = ViewsReport { device: ctx.caps().name.clone(), instances: bench.instances, ..Default::default() };
+    let spec = match bench.lod_threshold > 0.0 {
+        true => GraphSpec::default_graph()
+            .with_overrides([("lod_threshold".to_string(), format!("{:?}", bench.lod_threshold))]),
+        false => GraphSpec::default_graph(),
+    };
+    let mut report = ViewsReport {
+        device: ctx.caps().name.clone(),
+        instances: bench.instances,
+        lod_threshold: bench.lod_threshold,
+        ..Default::default()
+    };
     for &n in &bench.views {
         progress(&format!("views: {n} view(s)"));
         let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), quarter.clone(), &spec)?;
@@ -374,12 +388,13 @@ impl ViewsReport {
     /// The report as Markdown.
     pub fn markdown(&self) -> String {
         let mut md = format!(
-            "## Views\n\nCity of {} instances on {}; the scene ({:.1} MB) is shared by every view.\n\n\
+            "## Views\n\nCity of {} instances on {}; the scene ({:.1} MB) is shared by every view; levels of detail at {} px.\n\n\
              | views | cull GPU ms, together | of which test, compact | cull GPU ms, one view at a time | ratio | frame GPU ms | record CPU ms (every pass recorded) | view resources MB | drawn per view |\n\
              |---|---|---|---|---|---|---|---|---|\n",
             self.instances,
             self.device,
-            self.scene_bytes as f64 / 1e6
+            self.scene_bytes as f64 / 1e6,
+            self.lod_threshold
         );
         for r in &self.rows {
             md += &format!(

@@ -187,6 +187,10 @@ pub struct BenchArgs {
     /// Views suite: the view counts, comma-separated (each from 1 to the most a renderer holds).
     #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2, 4, 8, 16, cullgraph::render::MAX_VIEWS], value_parser = parse_view_count)]
     pub view_counts: Vec<usize>,
+    /// Views suite: every view's levels of detail at this threshold in pixels (0: full detail),
+    /// chosen by the views culled together in their own pixels.
+    #[arg(long, default_value_t = 0.0, value_name = "PX", value_parser = parse_lod_threshold)]
+    pub views_lod_threshold: f64,
     /// MSAA suite: sample counts, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [2u32, 4, 8], value_parser = parse_msaa_samples)]
     pub msaa_samples: Vec<u32>,

@@ -174,6 +174,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 width,
                 height,
                 views: args.view_counts.clone(),
+                lod_threshold: args.views_lod_threshold,
                 warmup: args.warmup,
                 frames: args.frames,
                 verify: args.verify,

@@ -310,9 +310,7 @@ impl InstanceCullPass {
             false => None,
         };
         let defines: Vec<(String, String)> = defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
-        // Views culled together share one choice of level per instance, which this pass does
-        // not make: a pass choosing levels culls its view alone.
-        let together = match ctx.caps().buffer_addresses && !atomic && !settings.lod() {
+        let together = match ctx.caps().buffer_addresses && !atomic {
             true => Some(views::Together::new(ctx, shaders, &pass.name, &defines)?),
             false => None,
         };
@@ -464,7 +462,9 @@ impl PassNode for InstanceCullPass {
         let mut hasher = std::collections::hash_map::DefaultHasher::new();
         self.defines.hash(&mut hasher);
         let s = &self.settings;
-        (s.occluder_distance.to_bits(), s.occluder_size.to_bits(), s.occluder_triangles).hash(&mut hasher);
+        // Views culled together take one threshold (each chooses levels in its own pixels).
+        (s.occluder_distance.to_bits(), s.occluder_size.to_bits(), s.occluder_triangles, s.lod_threshold.to_bits())
+            .hash(&mut hasher);
         Some(hasher.finish())
     }
 

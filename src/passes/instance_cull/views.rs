@@ -1,6 +1,7 @@
 //! Several views culled together: one test dispatch reads each slot's record once and tests it
-//! against every view, and one compact dispatch places every view's survivors (a workgroup per
-//! block, for every view with survivors in it). Each view keeps its own scratch, decision bits, counts, visibility and
+//! against every view (choosing each view's level of detail in its own pixels), and one compact
+//! dispatch places every view's survivors (a workgroup per block, for every view with survivors
+//! in it). Each view keeps its own scratch, decision bits, counts, visibility and
 //! draw lists, reached through their device addresses in a table (`shaders/cull/cull_views.glsl`).
 
 use super::{blocks_of, step_barrier, InstanceCullPass, CULL_SUPERBLOCK};
@@ -17,7 +18,7 @@ use ash::vk;
 pub const MAX_TOGETHER: usize = 16;
 
 /// Addresses per view in the table (`ViewBuffers`).
-const TABLE_WORDS: usize = 14;
+const TABLE_WORDS: usize = 15;
 
 /// Tables kept: one per frame modulo frames in flight and the two copies of history, as many
 /// as a frame's commands are kept for replay (`graph::executor::replay`), whose tables then
@@ -37,6 +38,8 @@ struct ViewCull {
     eye_lo: [f32; 4],
     prev_eye_hi: [f32; 4],
     prev_eye_lo: [f32; 4],
+    lod_view: GpuCullView,
+    lod_eye_offset: [f32; 4],
 }
 
 impl ViewCull {
@@ -50,10 +53,18 @@ impl ViewCull {
             run(offset_of!(FrameConstants, cull_view), offset_of!(ViewCull, cull_view), 2 * size_of::<GpuCullView>()),
             run(offset_of!(FrameConstants, eye_hi), offset_of!(ViewCull, eye_hi), 32),
             run(offset_of!(FrameConstants, prev_eye_hi), offset_of!(ViewCull, prev_eye_hi), 32),
-            [0; 4],
+            run(offset_of!(FrameConstants, lod_view), offset_of!(ViewCull, lod_view), size_of::<GpuCullView>() + 16),
         ]
     }
 }
+
+// The last run takes the level-of-detail view and the eye offset after it as one.
+const _: () = assert!(
+    std::mem::offset_of!(FrameConstants, lod_eye_offset)
+        == std::mem::offset_of!(FrameConstants, lod_view) + std::mem::size_of::<GpuCullView>()
+        && std::mem::offset_of!(ViewCull, lod_eye_offset)
+            == std::mem::offset_of!(ViewCull, lod_view) + std::mem::size_of::<GpuCullView>()
+);
 
 /// What `cull_view_gather.comp` takes as push constants.
 #[repr(C)]
@@ -69,6 +80,8 @@ struct GatherPush {
 /// The pipelines and tables of culling several views at once, made on first use.
 pub(super) struct Together {
     test: Pipeline,
+    /// Where each view's slots of each level start (levels of detail only).
+    levels: Option<Pipeline>,
     compact: Pipeline,
     /// Gathers the views' culling constants (`cull_view_gather.comp`).
     gather: Pipeline,
@@ -94,15 +107,25 @@ impl Together {
             Ok(shaders.compile(file, &refs)?)
         };
         let test_spirv = compile("cull/instance_cull.comp", with(&[("MULTI_VIEW", "1")]))?;
-        let visible_out = defines.iter().any(|(k, _)| k == "VISIBLE_OUT");
-        let mut compact_defines = vec![("MULTI_VIEW".to_string(), "1".to_string())];
-        if visible_out {
-            compact_defines.push(("VISIBLE_OUT".into(), "1".into()));
+        let defined = |name: &str| defines.iter().any(|(k, _)| k == name);
+        let multi_view = ("MULTI_VIEW".to_string(), "1".to_string());
+        let mut compact_defines = vec![multi_view.clone()];
+        for name in ["VISIBLE_OUT", "LOD"].into_iter().filter(|n| defined(n)) {
+            compact_defines.push((name.into(), "1".into()));
         }
         let compact_spirv = compile("cull/cull_compact.comp", compact_defines)?;
+        let levels = match defined("LOD") {
+            true => Some(Pipeline::compute(
+                ctx,
+                &format!("{name} (levels, views)"),
+                &compile("cull/cull_levels.comp", vec![multi_view])?,
+            )?),
+            false => None,
+        };
         let gather_spirv = compile("cull/cull_view_gather.comp", Vec::new())?;
         Ok(Self {
             test: Pipeline::compute(ctx, &format!("{name} (test, views)"), &test_spirv)?,
+            levels,
             compact: Pipeline::compute(ctx, &format!("{name} (compact, views)"), &compact_spirv)?,
             gather: Pipeline::compute(ctx, &format!("{name} (view constants, views)"), &gather_spirv)?,
             tables: (0..TABLE_RING).map(|_| Vec::new()).collect(),
@@ -151,6 +174,10 @@ fn addresses(rec: &PassContext<'_>, node: &InstanceCullPass) -> crate::Result<Op
         optional("list_commands"),
         optional("list_count"),
         optional("list_stats"),
+        match &scratch.level_bits {
+            Some(bits) => bits.device_address(),
+            None => Some(0),
+        },
     ];
     let mut out = [0u64; TABLE_WORDS];
     for (o, w) in out.iter_mut().zip(words) {
@@ -255,7 +282,7 @@ impl InstanceCullPass {
                 views: n as u32,
                 table_words: TABLE_WORDS as u32,
                 view_words,
-                runs: 3,
+                runs: 4,
                 run: ViewCull::runs(),
             };
             together.gather.bind(cmd);
@@ -271,6 +298,10 @@ impl InstanceCullPass {
                 Bind::Buffer(10, table),
                 Bind::Buffer(11, constants),
             ];
+            let lod = together.levels.is_some();
+            if lod {
+                test_binds.push(Bind::Buffer(12, scene.lod_levels.handle()));
+            }
             // Every element of the pyramid array is bound: the views' own, then the first again.
             let hiz: Vec<_> = contexts[range.clone()].iter().filter_map(|rec| rec.slots.image("hiz")).collect();
             if hiz.len() == n {
@@ -293,8 +324,7 @@ impl InstanceCullPass {
                 settings.occluder_size.to_bits(),
                 settings.occluder_triangles,
                 n as u32,
-                // Views culled together never choose levels of detail.
-                0,
+                settings.lod_threshold.to_bits(),
             ];
             contexts[0].step("test");
             together.test.bind(cmd);
@@ -303,17 +333,28 @@ impl InstanceCullPass {
             // SAFETY: cmd recording with the pipeline bound.
             unsafe { crate::gpu::line_dispatch::cmd_dispatch_line(device, cmd, &ctx.caps().limits, blocks) };
             step_barrier(ctx, cmd);
+            if let Some(levels) = &together.levels {
+                contexts[0].step("levels");
+                levels.bind(cmd);
+                levels.push_bindings(cmd, &[Bind::Buffer(1, table)]);
+                levels.push_constants(cmd, &[slots, superblocks]);
+                // Workgroup v: view v.
+                // SAFETY: cmd recording with the pipeline bound.
+                unsafe { device.cmd_dispatch(cmd, n as u32, 1, 1) };
+                step_barrier(ctx, cmd);
+            }
             contexts[0].step("compact");
             together.compact.bind(cmd);
-            together.compact.push_bindings(
-                cmd,
-                &[
-                    Bind::Buffer(2, scene.draw_groups.handle()),
-                    Bind::Buffer(3, scene.draw_instance_ids.handle()),
-                    Bind::Buffer(14, table),
-                    Bind::Buffer(16, scene.group_order.handle()),
-                ],
-            );
+            let mut compact_binds = vec![
+                Bind::Buffer(2, scene.draw_groups.handle()),
+                Bind::Buffer(3, scene.draw_instance_ids.handle()),
+                Bind::Buffer(14, table),
+                Bind::Buffer(16, scene.group_order.handle()),
+            ];
+            if lod {
+                compact_binds.push(Bind::Buffer(15, scene.lod_levels.handle()));
+            }
+            together.compact.push_bindings(cmd, &compact_binds);
             let mut push = vec![slots, groups, superblocks];
             push.extend(scene.regions.first);
             push.extend([n as u32, scene.groups_out_of_slot_order as u32]);
