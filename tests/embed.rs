@@ -301,6 +301,90 @@ fn lights_into_a_host_image(discard_failed: bool) {
     host.shut_down_clean(allocator);
 }
 
+/// An engine lighting straight into its swapchain's images, rotating through three of them
+/// and vouching for them (`Imports::vouched`): every frame shows its own camera in the image it
+/// was given, and once each image's views are kept, frames replay their recordings instead of
+/// recording every pass. Without the word, no frame replays.
+#[test]
+fn frames_into_host_images_the_host_vouches_for_replay() {
+    let _one_at_a_time = one_host_at_a_time();
+    let (w, h) = (80, 48);
+    let cameras: Vec<_> = (0..18)
+        .map(|i| {
+            let mut camera = boxes_camera();
+            camera.eye.x += 0.05 * (i % 7) as f64;
+            camera
+        })
+        .collect();
+    let references: Vec<Vec<u8>> = {
+        let gpu = GpuTest::new();
+        let mut r = Renderer::new(&gpu, gpu.shaders(), boxes_scene(), RenderSettings::new(w, h)).unwrap();
+        cameras.iter().map(|c| r.render_to_image(c).unwrap().1.into_raw()).collect()
+    };
+    let host = Host::new();
+    let allocator = host.allocator();
+    let d = host.device.clone();
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+    let swapchain: Vec<HostOwnedImage> =
+        (0..3).map(|_| HostOwnedImage::new(&d, &allocator, vk::Format::R8G8B8A8_UNORM, (w, h, 1), usage)).collect();
+    {
+        let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
+        let readback = readback_buffer(&ctx, "host readback", (w * h * 4) as u64);
+        for vouched in [true, false] {
+            let mut renderer = example_renderer(&ctx, "host_target", w, h);
+            for (i, camera) in cameras.iter().enumerate() {
+                let target = &swapchain[i % 3];
+                // Each image was left for the copy below in the frame that last drew it.
+                let current = if i < 3 && vouched { Access::NONE } else { Access::TRANSFER_READ };
+                let mut imports = Imports::new().image("color", target.host, current, Access::TRANSFER_READ);
+                if vouched {
+                    imports = imports.vouched(7);
+                }
+                ctx.submit_and_wait(|cmd| -> cullgraph::Result<()> {
+                    renderer.record_with_imports(cmd, camera, &imports)?;
+                    let region = vk::BufferImageCopy::default()
+                        .image_subresource(
+                            vk::ImageSubresourceLayers::default()
+                                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                                .layer_count(1),
+                        )
+                        .image_extent(vk::Extent3D { width: w, height: h, depth: 1 });
+                    let to_host = vk::MemoryBarrier2::default()
+                        .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+                        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                        .dst_access_mask(vk::AccessFlags2::HOST_READ);
+                    // SAFETY: cmd is recording; the image and buffer outlive its execution.
+                    unsafe {
+                        d.cmd_copy_image_to_buffer(
+                            cmd,
+                            target.image,
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            readback.handle(),
+                            &[region],
+                        );
+                        d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[to_host]));
+                    }
+                    Ok(())
+                })
+                .unwrap();
+                assert!(readback.read_bytes().unwrap() == references[i], "vouched {vouched}, frame {i}");
+            }
+            let replayed = renderer.runtime().frames_replayed();
+            match vouched {
+                // Frames 0 to 2 make each image's views, 3 to 11 fill the six recordings with
+                // them; from frame 12 on, every frame replays.
+                true => assert!(replayed >= 6, "{replayed} frames replayed"),
+                false => assert_eq!(replayed, 0),
+            }
+        }
+    }
+    for image in swapchain {
+        image.destroy(&d, &allocator);
+    }
+    host.shut_down_clean(allocator);
+}
+
 /// The boxes through `graph/examples/NAME.ron` at `w`x`h`, on the host's context.
 fn example_renderer(ctx: &GpuContext, name: &str, w: u32, h: u32) -> Renderer {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -4,7 +4,7 @@ use super::image::Image;
 use ash::vk;
 
 /// A pipeline stage plus the accesses a use of a resource makes there.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Access {
     /// Stages that touch the resource.
     pub stage: vk::PipelineStageFlags2,

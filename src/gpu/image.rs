@@ -46,7 +46,7 @@ pub struct Image {
 }
 
 /// A host engine's image as cullgraph should see it (see [`Image::from_host`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct HostImage {
     /// The image.
     pub image: vk::Image,

@@ -483,13 +483,17 @@ impl Renderer {
             let view = slots[at].take().expect("each cascade listed once");
             let mut part = lockstep::FramePart::new(view, &cascade.camera, &cascade.imports);
             // Its map's layer, which the shadow state's array id tells apart from earlier ones.
-            part.own_imports = Some(cascade.maps);
+            part.import_key = Some(cascade.maps);
             listed.push(part);
         }
         for ((&at, fv), merged) in order.iter().zip(views).zip(&with_user_data) {
             let view = slots[at].take().expect("each view listed once");
             let mut part = lockstep::FramePart::new(view, fv.camera, merged.as_ref().unwrap_or(fv.imports));
-            part.own_imports = fv.imports.names().next().is_none().then_some(0);
+            // The renderer's own imports, or the host's where it vouches for its images.
+            part.import_key = match fv.imports.names().next() {
+                None => Some(0),
+                Some(_) => fv.imports.generation(),
+            };
             part.waits_for = cascades.iter().enumerate().filter(|(_, c)| c.of == fv.view).map(|(i, _)| i).collect();
             listed.push(part);
         }

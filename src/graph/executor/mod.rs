@@ -156,6 +156,11 @@ pub const FRAMES_IN_FLIGHT: usize = 3;
 /// Room per pass in the timestamp pool for the steps [`GraphRuntime::set_step_timing`] times.
 pub const MAX_TIMED_STEPS: u32 = 4;
 
+/// The most wrappers of one imported image resource kept for a host that vouches for its images
+/// ([`FrameData::import_key`]): as many as frames are kept for replay, so that a host rotating
+/// through that many images (a swapchain's) replays every one.
+const KEPT_IMPORTS: usize = replay::SLOTS;
+
 /// A frame of one runtime being recorded pass by pass ([`GraphRuntime::begin_frame`]).
 pub struct FrameRecording {
     /// What the executor knew of each resource before the frame, restored if it is abandoned.
@@ -211,8 +216,10 @@ pub struct GraphRuntime {
     /// Whether frames may replay ([`Self::set_replay`]).
     replay_on: bool,
     /// Wrappers of imported images the host vouched for ([`FrameData::import_key`]), kept from
-    /// frame to frame while it gives the same image under the same key, so that a replayed
-    /// frame's commands name views that still exist: (physical resource, image, key, wrapper).
+    /// frame to frame while it vouches, so that a replayed frame's commands name views that
+    /// still exist: (physical resource, image, key, wrapper), the most recently given last. A
+    /// host may rotate through several images (a swapchain's), so each resource keeps up to
+    /// [`KEPT_IMPORTS`] of them.
     kept_imports: Vec<(usize, crate::gpu::HostImage, u64, Physical)>,
     /// The host's key of the frame being recorded, and the images it imports (kept at its end).
     frame_key: Option<u64>,
@@ -857,7 +864,7 @@ impl GraphRuntime {
                     let kept = self.frame_key.and_then(|key| {
                         let at =
                             self.kept_imports.iter().position(|(p, h, k, _)| *p == phys && h == host && *k == key)?;
-                        Some(self.kept_imports.swap_remove(at).3)
+                        Some(self.kept_imports.remove(at).3)
                     });
                     if self.frame_key.is_some() {
                         self.frame_images.push((phys, *host));
@@ -882,17 +889,28 @@ impl GraphRuntime {
             // Normally unbound; a frame whose recording failed before its end left its wrapper.
             let stale = self.resources.bind_import(phys, resource);
             if !matches!(stale, Physical::Unbound) {
+                self.wrappers_changed += 1;
                 self.retired_imports.push((self.frame, stale));
             }
             self.tracker.set_external(phys, current);
         }
-        // A kept wrapper the host no longer gives (another image, or another key) goes, once
-        // the frames that may use it have executed.
+        // Kept wrappers go, once the frames that may use them have executed, when the host no
+        // longer vouches for their images (no key, or another: its images may be gone), or
+        // beyond the most kept per resource (the least recently given first).
         let frame = self.frame;
-        for (_, _, _, wrapper) in std::mem::take(&mut self.kept_imports) {
-            self.wrappers_changed += 1;
-            self.retired_imports.push((frame, wrapper));
+        let mut kept = std::mem::take(&mut self.kept_imports);
+        for at in (0..kept.len()).rev() {
+            let phys = kept[at].0;
+            let given_since = self.frame_images.iter().filter(|(p, _)| *p == phys).count();
+            let kept_since =
+                kept[at + 1..].iter().filter(|(p, .., w)| *p == phys && !matches!(w, Physical::Unbound)).count();
+            if self.frame_key != Some(kept[at].2) || given_since + kept_since >= KEPT_IMPORTS {
+                self.retired_imports.push((frame, std::mem::replace(&mut kept[at].3, Physical::Unbound)));
+                self.wrappers_changed += 1;
+            }
         }
+        kept.retain(|(.., wrapper)| !matches!(wrapper, Physical::Unbound));
+        self.kept_imports = kept;
         // At most FRAMES_IN_FLIGHT recorded frames execute at once (`Renderer::record`): the
         // frame FRAMES_IN_FLIGHT before this one is done with its wrappers.
         self.retired_imports.retain(|(f, _)| frame < f + FRAMES_IN_FLIGHT as u64);

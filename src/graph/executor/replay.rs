@@ -11,10 +11,13 @@
 //! which frame slot of constants and lights), the output size, the settings the nodes took
 //! live, step timing, every node's own state ([`super::PassNode::replay_state`]) and what the
 //! executor knew of every resource before the frame (the barriers' sources and layouts). A
-//! frame with imported images (their views are made for one frame), captures, a pass that
-//! reads timings, or history to clear is never replayed; imported buffers only where the host's
-//! key vouches for them (cullgraph's renderer does for the user data it imports itself). The camera and the lights change nothing here: they live in the slot's buffers,
-//! which the host writes before every frame.
+//! frame with captures, a pass that reads timings, or history to clear is never replayed, nor
+//! one with imports that no key vouches for ([`super::FrameData::import_key`]): the views made
+//! of an imported image are kept only for images vouched for (cullgraph's renderer vouches for
+//! its shadow maps and the user data it imports, and for the engine's images where the engine
+//! does, [`super::Imports::vouched`], its replay key then covering the resources imported).
+//! The camera and the lights change nothing here: they live in the slot's buffers, which the
+//! host writes before every frame.
 //!
 //! A recording is kept per frame modulo [`SLOTS`]: a frame's commands name its slot of frames
 //! in flight (timestamps, counters) and which copy of each history resource is this frame's

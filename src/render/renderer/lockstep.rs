@@ -24,11 +24,12 @@ pub(super) struct FramePart<'a> {
     /// The parts (indices into the frame's list) that must have ended before this view's first
     /// pass sampling the shadow maps.
     pub waits_for: Vec<usize>,
-    /// Where `imports` are the renderer's own (the scene's user data, a shadow map's layer, or
-    /// none), which its replay key covers, what tells its imported images apart from earlier
-    /// ones that had their handles ([`FrameData::import_key`]: the shadow maps' array id, or
-    /// 0); `None` for the host's, which may change between frames.
-    pub own_imports: Option<u64>,
+    /// Where someone vouches for the images `imports` holds, what tells them apart from earlier
+    /// ones that had their handles ([`FrameData::import_key`]): the shadow maps' array id for a
+    /// map's layer, 0 for the renderer's own buffers (the scene's user data) or none, the host's
+    /// generation where it vouches for its images ([`Imports::vouched`]); `None` for host
+    /// images not vouched for, which may change between frames (the frame then never replays).
+    pub import_key: Option<u64>,
     recording: Option<FrameRecording>,
     /// The next pass to record.
     next: usize,
@@ -38,20 +39,22 @@ pub(super) struct FramePart<'a> {
 impl<'a> FramePart<'a> {
     /// `view` seen by `camera` with `imports`, waiting for nothing.
     pub fn new(view: &'a mut View, camera: &'a Camera, imports: &'a Imports) -> Self {
-        Self { view, camera, imports, waits_for: Vec::new(), own_imports: None, recording: None, next: 0, ended: false }
+        Self { view, camera, imports, waits_for: Vec::new(), import_key: None, recording: None, next: 0, ended: false }
     }
 
     fn passes(&self) -> usize {
         self.view.plan().passes.len()
     }
 
-    /// The renderer's word on this part's frame ([`FrameData::replay_key`] and
-    /// [`FrameData::import_key`]), where the imports are its own.
+    /// The renderer's word on this part's frame ([`FrameData::replay_key`]: its inputs and the
+    /// resources imported, and [`FrameData::import_key`]), where someone vouches for its
+    /// imported images.
     fn keys(&self) -> (Option<u64>, Option<u64>) {
-        match self.own_imports {
-            Some(images) => (Some(self.view.inputs.replay_key()), Some(images)),
-            None => (None, None),
-        }
+        use std::hash::{Hash, Hasher};
+        let Some(images) = self.import_key else { return (None, None) };
+        let mut hasher = std::collections::hash_map::DefaultHasher::new();
+        (self.view.inputs.replay_key(), self.imports.fingerprint()).hash(&mut hasher);
+        (Some(hasher.finish()), Some(images))
     }
 }
 
