@@ -291,3 +291,69 @@ fn meshes_registered_on_a_live_world_are_culled_cluster_by_cluster() {
     step(&world, "another mesh in its place");
     gpu.assert_clean();
 }
+
+/// A UV sphere of radius 1 with texture coordinates (u around, v pole to pole), 16 384
+/// triangles: clustered, and holed where a masked material's texture is transparent.
+fn textured_sphere() -> cullgraph::scene::MeshData {
+    let (rings, segments) = (64u32, 128u32);
+    let mut mesh = sphere(rings, segments);
+    mesh.uvs = (0..=rings)
+        .flat_map(|r| (0..=segments).map(move |s| glam::Vec2::new(s as f32 / segments as f32, r as f32 / rings as f32)))
+        .collect();
+    mesh
+}
+
+/// Spheres in a row, opaque, masked and double-sided (bars of a texture whose gaps discard),
+/// and masked one-sided, before the camera.
+fn masked_spheres() -> Scene {
+    use cullgraph::scene::Material;
+    let mut scene = Scene::default();
+    let ball = scene.add_mesh("ball", &textured_sphere(), "ball").unwrap();
+    let opaque = scene.add_material(Material { name: "opaque".into(), ..Default::default() });
+    let double_sided = common::bars_material(&mut scene, 16, true);
+    let mut one_sided = scene.materials[double_sided as usize].clone();
+    one_sided.name = "bars, one-sided".into();
+    one_sided.double_sided = false;
+    let one_sided = scene.add_material(one_sided);
+    for (k, material) in [opaque, double_sided, one_sided, double_sided, one_sided, opaque].into_iter().enumerate() {
+        scene.instances.push(Instance {
+            transform: Transform {
+                linear: Mat3::from_diagonal(Vec3::splat(1.5)),
+                translation: DVec3::new(k as f64 * 3.5 - 8.75, 1.5, 0.0),
+            },
+            mesh: ball,
+            material,
+            flags: 0,
+        });
+    }
+    scene
+}
+
+#[test]
+fn masked_instances_are_culled_cluster_by_cluster_and_keep_their_holes() {
+    let gpu = GpuTest::new();
+    let scene = masked_spheres();
+    let cameras =
+        vec![Camera { eye: DVec3::new(0.0, 4.0, 11.0), target: DVec3::new(0.0, 1.5, 0.0), ..Default::default() }; 3];
+    for name in ["frustum", "two_phase", "occluder_prepass"] {
+        let (_, whole) = render(&gpu, &scene, &cameras, &graph(name, 0.0));
+        let clustered = format!("{name}_clusters");
+        let (passes, image, check) = render_checked(&gpu, &scene, &cameras, &graph(&clustered, 0.0));
+        assert!(image == whole, "{clustered} drew another image than {name}");
+        let check = check.expect("instances drawn cluster by cluster");
+        assert!(check.false_negatives == 0 && check.visible > 0, "{check:?}");
+        let (tested, drawn, backfacing, ..) = totals(&passes);
+        assert!(drawn < tested && backfacing > 0, "{clustered}: {passes:?}");
+    }
+    // Every sphere masked: drawn cluster by cluster all the same.
+    let mut masked = scene.clone();
+    for instance in &mut masked.instances {
+        instance.material = 2;
+    }
+    let (_, whole) = render(&gpu, &masked, &cameras, &graph("two_phase", 0.0));
+    let (passes, image) = render(&gpu, &masked, &cameras, &graph("two_phase_clusters", 0.0));
+    assert!(image == whole, "masked spheres drew another image cluster by cluster");
+    let (tested, drawn, backfacing, ..) = totals(&passes);
+    assert!(tested > 0 && drawn < tested && backfacing > 0, "{passes:?}");
+    assert!(passes.iter().all(|p| p.whole_commands == 0), "a masked command was drawn whole: {passes:?}");
+}

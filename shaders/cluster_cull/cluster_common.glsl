@@ -21,8 +21,9 @@ struct Cluster {
 // [chunk * CLUSTER_CHUNK, +CLUSTER_CHUNK).
 #define CLUSTER_CHUNK 64u
 
-// Regions of the cluster list: the opaque face culls (back, front, none). Masked instances are
-// drawn whole (src/passes/cluster_cull.rs).
+// Regions of a cluster list: the face culls (back, front, none), of the opaque instances' list
+// and alike of the alpha-masked instances' (src/passes/cluster_cull.rs), whose commands are
+// the face-cull regions CLUSTER_REGIONS to 2 * CLUSTER_REGIONS - 1 of the input list.
 #define CLUSTER_REGIONS 3u
 
 // One command of the input list whose level has clusters (written by the prepare step in

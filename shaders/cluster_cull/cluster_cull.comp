@@ -3,7 +3,8 @@
 // instance's chunk of CLUSTER_CHUNK clusters of its level) and tests each cluster: outside the frustum, covering no sample
 // position (SMALL_OBJECTS), facing away from the eye (its normal cone, for one-sided materials
 // under rotation and uniform scale), or behind the Hi-Z (HAS_HIZ). Each survivor is appended to
-// its face-cull region of the cluster list as one command of its index range and its instance.
+// its face-cull region of the cluster list (MASKED: a masked instance's to the masked list) as
+// one command of its index range and its instance.
 // Every test is conservative, so the triangles dropped could make no fragment.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
@@ -30,13 +31,21 @@ layout(set = 0, binding = 5) readonly buffer Scratch { uint scratch[]; };
 layout(set = 0, binding = 6, scalar) writeonly buffer ClusterCommands { DrawCommand cluster_commands[]; };
 layout(set = 0, binding = 7) buffer ClusterCount { uint cluster_count[CLUSTER_REGIONS]; };
 layout(set = 0, binding = 8) buffer Stats { uint stats[STAT_WORDS]; };
+#ifdef MASKED
+layout(set = 0, binding = 10, scalar) writeonly buffer MaskedClusterCommands { DrawCommand masked_cluster_commands[]; };
+layout(set = 0, binding = 11) buffer MaskedClusterCount { uint masked_cluster_count[CLUSTER_REGIONS]; };
+#define REGIONS (2u * CLUSTER_REGIONS)
+#else
+#define REGIONS CLUSTER_REGIONS
+#endif
 #ifdef HAS_HIZ
 layout(set = 0, binding = 9) uniform sampler2D hiz_tex;
 float hiz_load(uint level, uvec2 texel) { return texelFetch(hiz_tex, ivec2(texel), int(hiz_stored_mip(level))).r; }
 #endif
 
 layout(push_constant) uniform Push {
-    uint region_capacity;   // commands each region of the cluster list holds
+    uint region_capacity;          // commands each region of the cluster list holds
+    uint masked_region_capacity;   // MASKED: of the masked instances' list
 } pc;
 
 // Normal cones are tested with this much to spare, so a triangle seen nearly edge-on, which
@@ -92,8 +101,16 @@ uint test_cluster(Cluster cl, GpuInstance inst, bool one_sided) {
     return 0u;
 }
 
-shared uint sh_region_count[CLUSTER_REGIONS];
-shared uint sh_region_base[CLUSTER_REGIONS];
+shared uint sh_region_count[REGIONS];
+shared uint sh_region_base[REGIONS];
+
+// Reserves `n` commands in region `r` (of both lists, MASKED): the first one's place.
+uint reserve(uint r, uint n) {
+#ifdef MASKED
+    if (r >= CLUSTER_REGIONS) return atomicAdd(masked_cluster_count[r - CLUSTER_REGIONS], n);
+#endif
+    return atomicAdd(cluster_count[r], n);
+}
 shared uint sh_stats[8];
 
 void main() {
@@ -106,7 +123,7 @@ void main() {
     uvec3 dropped = uvec3(0u);  // frustum, back-facing, occluded
     uint rounds = (tasks + TASKS_PER_GROUP - 1u) / TASKS_PER_GROUP;
     for (uint round = gl_WorkGroupID.x; round < rounds; round += gl_NumWorkGroups.x) {
-        if (gl_LocalInvocationID.x < CLUSTER_REGIONS) sh_region_count[gl_LocalInvocationID.x] = 0u;
+        if (gl_LocalInvocationID.x < REGIONS) sh_region_count[gl_LocalInvocationID.x] = 0u;
         barrier();
         uint task = round * TASKS_PER_GROUP + slot_in_group;
         bool has_task = task < tasks;
@@ -128,8 +145,9 @@ void main() {
             if (index < scratch[at + 3u]) {
                 cl = clusters[scratch[at + 2u] + index];
                 GpuInstance inst = instance_record(in_ids[c.first_instance + instance]);
-                // Region 2 draws double-sided materials: both faces, so no cone test.
-                uint verdict = test_cluster(cl, inst, region != 2u);
+                // The last region of each list draws double-sided materials: both faces, so no
+                // cone test.
+                uint verdict = test_cluster(cl, inst, region % CLUSTER_REGIONS != 2u);
                 drawn = verdict == 0u;
                 uint triangles = cl.index_count / 3u;
                 counts += uvec4(1u, drawn ? 1u : 0u, triangles, drawn ? triangles : 0u);
@@ -138,17 +156,24 @@ void main() {
             }
         }
         barrier();
-        if (gl_LocalInvocationID.x < CLUSTER_REGIONS) {
+        if (gl_LocalInvocationID.x < REGIONS) {
             uint n = sh_region_count[gl_LocalInvocationID.x];
-            sh_region_base[gl_LocalInvocationID.x] = n != 0u ? atomicAdd(cluster_count[gl_LocalInvocationID.x], n) : 0u;
+            sh_region_base[gl_LocalInvocationID.x] = n != 0u ? reserve(gl_LocalInvocationID.x, n) : 0u;
         }
         barrier();
         if (drawn) {
             uint slot = sh_region_base[region] + local_slot;
             // The list holds a command per cluster of every instance; never written past.
+            DrawCommand out_c = DrawCommand(cl.index_count, 1u, cl.first_index, c.vertex_offset, c.first_instance + instance);
+#ifdef MASKED
+            if (region >= CLUSTER_REGIONS) {
+                if (slot < pc.masked_region_capacity) {
+                    masked_cluster_commands[(region - CLUSTER_REGIONS) * pc.masked_region_capacity + slot] = out_c;
+                }
+            } else
+#endif
             if (slot < pc.region_capacity) {
-                cluster_commands[region * pc.region_capacity + slot] =
-                    DrawCommand(cl.index_count, 1u, cl.first_index, c.vertex_offset, c.first_instance + instance);
+                cluster_commands[region * pc.region_capacity + slot] = out_c;
             }
         }
     }

@@ -1,10 +1,10 @@
 #version 460
 // Cluster cull, step 1 of 2, in one workgroup: walks the drawn regions of the input list in
-// command order. A command of an opaque region whose level has clusters is emptied in the
-// pass-through list (its instances are drawn cluster by cluster instead) and gets a range of
-// test tasks, one per instance and chunk of CLUSTER_CHUNK clusters; any other, masked regions'
-// included, is passed on whole. Writes the test
-// step's dispatch size and zeroes its counts.
+// command order. A command of an opaque region (MASKED: or an alpha-masked one) whose level has
+// clusters is emptied in the pass-through list (its instances are drawn cluster by cluster
+// instead) and gets a range of test tasks, one per instance and chunk of CLUSTER_CHUNK
+// clusters; any other is passed on whole. Writes the test step's dispatch size and zeroes its
+// counts.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -26,6 +26,9 @@ layout(set = 0, binding = 8) writeonly buffer PassCount { uint pass_count[FACE_C
 layout(set = 0, binding = 9) buffer Scratch { uint scratch[]; };
 layout(set = 0, binding = 10) writeonly buffer ClusterCount { uint cluster_count[CLUSTER_REGIONS]; };
 layout(set = 0, binding = 11) buffer Stats { uint stats[STAT_WORDS]; };
+#ifdef MASKED
+layout(set = 0, binding = 12) writeonly buffer MaskedClusterCount { uint masked_cluster_count[CLUSTER_REGIONS]; };
+#endif
 
 layout(push_constant) uniform Push {
     uint region_first[FACE_CULL_REGIONS];   // first command of each region
@@ -34,6 +37,7 @@ layout(push_constant) uniform Push {
     uint tasks_per_group; // tasks its workgroups take at a time
     uint clustered_capacity; // clustered commands the scratch holds
     uint clustered_meshes;   // entries of cluster_meshes
+    uint clustered_regions;  // regions drawn cluster by cluster: the opaque ones (MASKED: and the masked ones)
 } pc;
 
 #define RANGES_PER_MESH 8u
@@ -75,6 +79,9 @@ void main() {
         if (lane == 0u) {
             pass_count[r] = count;
             if (r < CLUSTER_REGIONS) cluster_count[r] = 0u;
+#ifdef MASKED
+            if (r >= CLUSTER_REGIONS && r < 2u * CLUSTER_REGIONS) masked_cluster_count[r - CLUSTER_REGIONS] = 0u;
+#endif
         }
         for (uint base = 0u; base < count; base += THREADS) {
             uint i = pc.region_first[r] + base + lane;
@@ -85,9 +92,9 @@ void main() {
                 c = in_commands[i];
                 range = clusters_of(c);
             }
-            // The cluster list has the opaque regions only (its draws take the pipelines that
-            // never discard).
-            bool split = valid && range.y != 0u && r < CLUSTER_REGIONS;
+            // The opaque regions, then (MASKED) the masked ones, whose clusters go to a list of
+            // their own (drawn with the pipelines that alpha-test).
+            bool split = valid && range.y != 0u && r < pc.clustered_regions;
             uint chunks = (range.y + CLUSTER_CHUNK - 1u) / CLUSTER_CHUNK;
             uint my_tasks = split ? c.instance_count * chunks : 0u;
             // Exclusive prefix over the workgroup of (tasks, clustered commands).

@@ -8,11 +8,13 @@
 //!   level has clusters emptied (instance count 0); the others are drawn whole as before;
 //! - `cluster_commands`/`cluster_count`: one command per surviving cluster (its index range,
 //!   one instance), in three regions of equal size for the opaque face culls (back, front,
-//!   none), each with its count. Instances of alpha-masked materials are drawn whole: their
-//!   clusters would need regions and pipelines of their own in the list.
+//!   none), each with its count;
+//! - where bound, `masked_cluster_commands`/`masked_cluster_count`: the same for the instances
+//!   of alpha-masked materials, which a geometry pass draws with its alpha-tested pipelines (a
+//!   list of their own, sized by their own clusters). Unbound, masked instances are drawn whole.
 //!
-//! A geometry pass draws both (its `cluster_commands` and `cluster_count` slots) with the
-//! input list's instance ids. A cluster is dropped when its bounding sphere is outside the
+//! A geometry pass draws them all (its `cluster_commands`, `cluster_count` and masked slots)
+//! with the input list's instance ids. A cluster is dropped when its bounding sphere is outside the
 //! frustum, covers no sample position, faces away from the eye (its normal cone, for one-sided
 //! materials on instances without shear or non-uniform scale), or lies behind the Hi-Z when one
 //! is bound. Each test is conservative: the triangles dropped could make no fragment, so the
@@ -71,8 +73,24 @@ pub const CLUSTERS: Quantity = Quantity {
     growth: Growth::Grows,
 };
 
+/// The quantity `masked_clusters`: the most clusters the instances of alpha-masked materials
+/// may draw (each instance's mesh's richest level's).
+pub const MASKED_CLUSTERS: Quantity = Quantity {
+    name: "masked_clusters",
+    doc: "clusters the instances of alpha-masked materials may draw in all (each at its mesh's level with the most clusters; 0 without clustered masked meshes)",
+    count: |s| {
+        let c = SceneCounts::downcast(s)?;
+        let scene = c.scene;
+        let masked = |i: &&crate::scene::Instance| FaceCull::of(scene, i).is_masked();
+        Some(scene.instances.iter().filter(masked).map(|i| scene.meshes.get(i.mesh as usize).map_or(0, |m| crate::passes::shared::cull_data::mesh_clusters(m) as u64)).sum())
+    },
+    growth: Growth::Grows,
+};
+
 /// Bytes of the cluster list: one command per cluster in each of the three regions.
 const CLUSTER_COMMANDS_BYTES: &str = "max(1, clusters) * 60";
+/// Bytes of the masked instances' cluster list, alike.
+const MASKED_CLUSTER_COMMANDS_BYTES: &str = "max(1, masked_clusters) * 60";
 /// Bytes of the scratch: a header, then one record of 32 bytes per input command.
 const SCRATCH_BYTES: &str = "32 + meshes * 32";
 /// Words of the scratch header (`SCRATCH_HEADER_WORDS` in `cluster_common.glsl`).
@@ -165,6 +183,17 @@ struct PreparePush {
     tasks_per_group: u32,
     clustered_capacity: u32,
     clustered_meshes: u32,
+    /// Regions whose commands are drawn cluster by cluster: 3 (the opaque ones) or 6 (the
+    /// masked ones too).
+    clustered_regions: u32,
+}
+
+/// Push constants of `cluster_cull.comp`: each list's region capacity.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TestPush {
+    region_capacity: u32,
+    masked_region_capacity: u32,
 }
 
 /// The `cluster_cull` pass.
@@ -191,6 +220,8 @@ impl PassNode for ClusterCullPass {
         let (commands, count, ids) = (need(LIST_SLOTS[0])?, need(LIST_SLOTS[1])?, need(LIST_SLOTS[2])?);
         let (pass_commands, pass_count) = (need("pass_commands")?, need("pass_count")?);
         let (cluster_commands, cluster_count) = (need("cluster_commands")?, need("cluster_count")?);
+        // Both or neither (checked at load); the kind's pipelines were made for which.
+        let masked = slots.buffer("masked_cluster_commands").zip(slots.buffer("masked_cluster_count"));
         let (scratch, stats) = (need("scratch")?, need("stats")?);
         let device = rec.ctx.device();
         let cmd = rec.cmd;
@@ -204,8 +235,9 @@ impl PassNode for ClusterCullPass {
             tasks_per_group: TASKS_PER_GROUP,
             clustered_capacity: clustered_capacity as u32,
             clustered_meshes: scene.clustered_meshes,
+            clustered_regions: if masked.is_some() { 2 * CLUSTER_REGIONS as u32 } else { CLUSTER_REGIONS as u32 },
         };
-        let binds = [
+        let mut binds = vec![
             Bind::Buffer(0, commands.handle()),
             Bind::Buffer(1, count.handle()),
             Bind::Buffer(2, scene.cluster_meshes.handle()),
@@ -217,6 +249,9 @@ impl PassNode for ClusterCullPass {
             Bind::Buffer(10, cluster_count.handle()),
             Bind::Buffer(11, stats.handle()),
         ];
+        if let Some((_, masked_count)) = masked {
+            binds.push(Bind::Buffer(12, masked_count.handle()));
+        }
         rec.step("prepare");
         self.prepare.dispatch_over(cmd, &binds, bytemuck::bytes_of(&push), vk::Extent2D { width: 1, height: 1 });
         // Without clustered meshes the prepare step passed every command on whole: no test.
@@ -241,7 +276,10 @@ impl PassNode for ClusterCullPass {
             ],
             &[],
         );
-        let capacity = region_capacity(cluster_commands);
+        let capacity = TestPush {
+            region_capacity: region_capacity(cluster_commands),
+            masked_region_capacity: masked.map_or(0, |(commands, _)| region_capacity(commands)),
+        };
         let mut binds = vec![
             Bind::Buffer(0, inputs.constants().handle()),
             Bind::Buffer(2, commands.handle()),
@@ -253,6 +291,9 @@ impl PassNode for ClusterCullPass {
             Bind::Buffer(8, stats.handle()),
         ];
         binds.extend(scene.instance_binds(1));
+        if let Some((masked_commands, masked_count)) = masked {
+            binds.extend([Bind::Buffer(10, masked_commands.handle()), Bind::Buffer(11, masked_count.handle())]);
+        }
         if let Some(hiz) = slots.image("hiz") {
             binds.push(Bind::Sampled(9, hiz.view(), self.sampler.handle(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL));
         }
@@ -298,6 +339,8 @@ impl PassKind for ClusterCullKind {
                 write("pass_count", "their number per region (the input's)").at_least(COUNT_BYTES).content(DRAW_COUNTS),
                 write("cluster_commands", "one command per surviving cluster, in three equal regions: back, front and no face culling").at_least(CLUSTER_COMMANDS_BYTES),
                 write("cluster_count", "the surviving clusters of each region").at_least("16"),
+                slot("masked_cluster_commands", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "where bound, with `masked_cluster_count`: the same for the instances of alpha-masked materials (unbound: they are drawn whole)").creates(Creates::buffer()).at_least(MASKED_CLUSTER_COMMANDS_BYTES),
+                slot("masked_cluster_count", Usage::StorageBufferWrite(Stages::Compute), false, FormatRule::Any, "the surviving masked clusters of each region (with `masked_cluster_commands`)").creates(Creates::buffer()).at_least("16"),
                 scratch("scratch", "the clustered commands and their test tasks (created when unbound)").at_least(SCRATCH_BYTES),
                 scratch("stats", "counters of this pass (created when unbound; read as `pass.stats`)").exactly("48").counters(Counters::ThisFrame),
             ],
@@ -307,36 +350,40 @@ impl PassKind for ClusterCullKind {
     }
 
     fn quantities(&self) -> Vec<Quantity> {
-        vec![CLUSTERS]
+        vec![CLUSTERS, MASKED_CLUSTERS]
     }
 
     fn validate(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
+        let mut errors = Vec::new();
         // The clusters are projected with this frame's camera: last frame's pyramid would need
         // last frame's (and could drop what became visible since).
-        match check.binding("hiz").filter(|b| b.version == Version::Previous) {
-            Some(b) => vec![(
+        if let Some(b) = check.binding("hiz").filter(|b| b.version == Version::Previous) {
+            errors.push((
                 b.pos,
                 format!(
                     "pass '{}' ({KIND}): `hiz` must be this frame's pyramid, not '{}.prev' (clusters are tested with this frame's camera)",
                     check.pass.name,
                     check.resource_name(b)
                 ),
-            )],
-            None => Vec::new(),
+            ));
         }
+        errors.extend(masked_pair_error(check, check.pass.name.as_str()));
+        errors
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {
-        let hiz = s.pass.bindings.iter().any(|b| b.slot == "hiz");
+        let bound = |slot: &str| s.pass.bindings.iter().any(|b| b.slot == slot);
         let mut defines: Vec<(&str, &str)> = Vec::new();
-        if hiz {
+        if bound("hiz") {
             defines.push(("HAS_HIZ", "1"));
         }
+        let masked: &[(&str, &str)] = if bound("masked_cluster_commands") { &[("MASKED", "1")] } else { &[] };
+        defines.extend(masked);
         // The coverage test knows the standard sample positions only.
         if crate::passes::instance_cull::standard_sample_locations(s.ctx) {
             defines.push(("SMALL_OBJECTS", "1"));
         }
-        let prepare = s.shaders.compile("cluster_cull/cluster_prepare.comp", &[])?;
+        let prepare = s.shaders.compile("cluster_cull/cluster_prepare.comp", masked)?;
         let test = s.shaders.compile("cluster_cull/cluster_cull.comp", &defines)?;
         let dispatch = Buffer::new(
             s.ctx,
@@ -367,16 +414,40 @@ pub fn region_capacity(cluster_commands: &Buffer) -> u32 {
     (cluster_commands.size() / COMMAND_BYTES / CLUSTER_REGIONS).min(u32::MAX as u64) as u32
 }
 
+/// What is wrong with a pass's masked cluster slots (`masked_cluster_commands` and
+/// `masked_cluster_count`), if anything: one bound without the other.
+pub(crate) fn masked_pair_error(check: &KindCheck<'_>, pass: &str) -> Option<(Pos, String)> {
+    let [commands, count] = MASKED_LIST_SLOTS.map(|s| check.binding(s));
+    match (commands, count) {
+        (Some(b), None) | (None, Some(b)) => Some((
+            b.pos,
+            format!("pass '{pass}': `masked_cluster_commands` and `masked_cluster_count` are bound together"),
+        )),
+        _ => None,
+    }
+}
+
+/// The slots of the masked instances' cluster list.
+pub(crate) const MASKED_LIST_SLOTS: [&str; 2] = ["masked_cluster_commands", "masked_cluster_count"];
+
 /// Records the draws of a cluster list (`commands`, `count`): one `vkCmdDrawIndexedIndirectCount`
-/// per opaque region, with its cull mode. Inside a rendering scope with a geometry pipeline
-/// bound whose cull mode is dynamic.
-pub fn record_cluster_draws(ctx: &GpuContext, cmd: vk::CommandBuffer, commands: &Buffer, count: &Buffer) {
+/// per region, with its cull mode (`regions`: [`FaceCull::OPAQUE`] for the opaque instances'
+/// list, [`FaceCull::MASKED`] for the masked ones', each list's regions in that order). Inside
+/// a rendering scope with a geometry pipeline bound whose cull mode is dynamic (one that
+/// alpha-tests for the masked list).
+pub fn record_cluster_draws(
+    ctx: &GpuContext,
+    cmd: vk::CommandBuffer,
+    commands: &Buffer,
+    count: &Buffer,
+    regions: [FaceCull; 3],
+) {
     let capacity = region_capacity(commands);
     if capacity == 0 || count.size() < 4 * CLUSTER_REGIONS {
         return;
     }
-    for face_cull in FaceCull::OPAQUE {
-        let r = face_cull as u64;
+    for (r, face_cull) in regions.into_iter().enumerate() {
+        let r = r as u64;
         // SAFETY: cmd is recording inside a rendering scope; the buffers outlive its execution.
         unsafe {
             ctx.device().cmd_set_cull_mode(cmd, face_cull.mode());
@@ -413,7 +484,7 @@ pub(crate) fn clusters_drawn(ids: &[u32], commands: &[u8], counts: &[u8]) -> Vec
 }
 
 /// The slot declarations a geometry pass adds to draw a cluster list.
-pub(crate) fn cluster_list_slots() -> [SlotDecl; 2] {
+pub(crate) fn cluster_list_slots() -> [SlotDecl; 4] {
     [
         slot(
             "cluster_commands",
@@ -424,5 +495,20 @@ pub(crate) fn cluster_list_slots() -> [SlotDecl; 2] {
         ),
         slot("cluster_count", Usage::Indirect, false, FormatRule::Any, "its counts per region (with cluster_commands)")
             .at_least("16"),
+        slot(
+            "masked_cluster_commands",
+            Usage::Indirect,
+            false,
+            FormatRule::Any,
+            "a cluster_cull pass's list of the alpha-masked instances' clusters, drawn with the alpha-tested pipelines",
+        ),
+        slot(
+            "masked_cluster_count",
+            Usage::Indirect,
+            false,
+            FormatRule::Any,
+            "its counts per region (with masked_cluster_commands)",
+        )
+        .at_least("16"),
     ]
 }

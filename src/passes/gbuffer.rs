@@ -60,6 +60,8 @@ pub struct DrawSource<'a> {
     /// A `cluster_cull` pass's cluster list (commands, counts), drawn after the list with the
     /// same instance ids.
     pub clusters: Option<(&'a Buffer, &'a Buffer)>,
+    /// Its list of the alpha-masked instances' clusters, drawn with the alpha-tested pipelines.
+    pub masked_clusters: Option<(&'a Buffer, &'a Buffer)>,
 }
 
 impl<'a> DrawSource<'a> {
@@ -70,6 +72,7 @@ impl<'a> DrawSource<'a> {
             count: &scene.draw_count,
             instance_ids: &scene.draw_instance_ids,
             clusters: None,
+            masked_clusters: None,
         }
     }
 
@@ -89,7 +92,7 @@ impl<'a> DrawSource<'a> {
                 count.size()
             )));
         }
-        Ok(Some(Self { commands, count, instance_ids, clusters: None }))
+        Ok(Some(Self { commands, count, instance_ids, clusters: None, masked_clusters: None }))
     }
 
     /// The lists a redraw pass draws: the first list (or every instance when none is bound),
@@ -277,8 +280,11 @@ pub fn record_geometry(
                 binds.extend_from_slice(extra);
                 pipeline.push_bindings(cmd, &binds);
                 scene.regions.record(device, cmd, list.commands, list.count, regions);
-                if let Some((commands, count)) = list.clusters.filter(|_| regions.contains(&FaceCull::Back)) {
-                    crate::passes::cluster_cull::record_cluster_draws(ctx, cmd, commands, count);
+                // Each cluster list with the pipeline of its materials.
+                for (clusters, kind) in [(list.clusters, FaceCull::OPAQUE), (list.masked_clusters, FaceCull::MASKED)] {
+                    if let Some((commands, count)) = clusters.filter(|_| regions.contains(&kind[0])) {
+                        crate::passes::cluster_cull::record_cluster_draws(ctx, cmd, commands, count, kind);
+                    }
                 }
             }
         }
@@ -541,6 +547,8 @@ impl PassNode for GbufferPass {
                 {
                     list.clusters = Some((commands, count));
                 }
+                let [commands, count] = crate::passes::cluster_cull::MASKED_LIST_SLOTS.map(|s| slots.buffer(s));
+                list.masked_clusters = commands.zip(count);
                 vec![list]
             }
         };
@@ -623,12 +631,13 @@ impl PassKind for GbufferKind {
         Some(DrawList {
             slots: LIST_SLOTS,
             order: DrawOrder::Regions,
-            cluster_slots: Some(["cluster_commands", "cluster_count"]),
+            cluster_slots: &[["cluster_commands", "cluster_count"], crate::passes::cluster_cull::MASKED_LIST_SLOTS],
         })
     }
 
     fn validate(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {
-        targets_error(check).into_iter().collect()
+        let masked = crate::passes::cluster_cull::masked_pair_error(check, check.pass.name.as_str());
+        targets_error(check).into_iter().chain(masked).collect()
     }
 
     fn check_compiled(&self, check: &KindCheck<'_>) -> Vec<(Pos, String)> {

@@ -478,7 +478,7 @@ impl PassKind for GbufferCompressedKind {
     }
 
     fn draw_list(&self) -> Option<DrawList> {
-        Some(DrawList { slots: super::gbuffer::LIST_SLOTS, order: DrawOrder::Regions, cluster_slots: None })
+        Some(DrawList { slots: super::gbuffer::LIST_SLOTS, order: DrawOrder::Regions, cluster_slots: &[] })
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

@@ -68,6 +68,7 @@ impl PassNode for TransparentPass {
             count: slots.required_buffer(LIST_SLOTS[1])?,
             instance_ids: slots.required_buffer(LIST_SLOTS[2])?,
             clusters: None,
+            masked_clusters: None,
         };
         let depth = slots.required_image("depth")?;
         let output = slots.required_image("output")?;
@@ -142,7 +143,7 @@ impl PassKind for TransparentKind {
     }
 
     fn draw_list(&self) -> Option<DrawList> {
-        Some(DrawList { slots: LIST_SLOTS, order: DrawOrder::Sorted, cluster_slots: None })
+        Some(DrawList { slots: LIST_SLOTS, order: DrawOrder::Sorted, cluster_slots: &[] })
     }
 
     fn create_node(&self, s: &NodeSetup<'_>) -> crate::Result<Box<dyn PassNode>> {

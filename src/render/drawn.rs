@@ -36,16 +36,16 @@ pub(crate) fn drawn(
         .collect()
 }
 
-/// The instances a draw pass's captured list (commands, counts, ids, and a cluster list's
+/// The instances a draw pass's captured list (commands, counts, ids, and each cluster list's
 /// commands and counts where bound) drew; `None`: the pass binds no list and draws the scene's
 /// unculled one. A list in regions has its opaque regions drawn; a sorted list its first
 /// `count` commands; a cluster list its regions' surviving clusters (an instance drawn by
 /// several clusters counts once).
 fn drawn_instances(scene: &GpuScene, lists: Option<Vec<Vec<u8>>>, order: DrawOrder) -> DrawnInstances {
-    let Some(mut lists) = lists.filter(|l| l.len() == 3 || l.len() == 5) else {
+    let Some(mut lists) = lists.filter(|l| l.len() >= 3 && l.len() % 2 == 1) else {
         return DrawnInstances::All;
     };
-    let clusters = (lists.len() == 5).then(|| (lists.remove(3), lists.remove(3)));
+    let cluster_lists: Vec<Vec<u8>> = lists.split_off(3);
     let Ok([commands, counts, ids]) = <[Vec<u8>; 3]>::try_from(lists) else {
         return DrawnInstances::All;
     };
@@ -63,10 +63,12 @@ fn drawn_instances(scene: &GpuScene, lists: Option<Vec<Vec<u8>>>, order: DrawOrd
         let end = (start + c.instance_count as usize).min(ids.len());
         out.extend_from_slice(&ids[start.min(end)..end]);
     }
-    if let Some((commands, counts)) = clusters {
+    if !cluster_lists.is_empty() {
         let mut seen: std::collections::HashSet<u32> = out.iter().copied().collect();
-        let drawn = crate::passes::cluster_cull::clusters_drawn(&ids, &commands, &counts);
-        out.extend(drawn.into_iter().map(|(id, _)| id).filter(|&id| seen.insert(id)));
+        for pair in cluster_lists.chunks_exact(2) {
+            let drawn = crate::passes::cluster_cull::clusters_drawn(&ids, &pair[0], &pair[1]);
+            out.extend(drawn.into_iter().map(|(id, _)| id).filter(|&id| seen.insert(id)));
+        }
     }
     DrawnInstances::Some(out)
 }
@@ -82,10 +84,10 @@ fn whole<T: bytemuck::Pod>(bytes: &[u8]) -> Vec<T> {
 pub(crate) fn drawn_clusters(captured: &[crate::graph::Captured]) -> Vec<(u32, u32)> {
     let mut out = Vec::new();
     for (_, lists) in captured {
-        if let Some([_, _, ids, commands, counts]) =
-            lists.as_ref().and_then(|l| <&[Vec<u8>; 5]>::try_from(l.as_slice()).ok())
-        {
-            out.extend(crate::passes::cluster_cull::clusters_drawn(&whole(ids), commands, counts));
+        let Some(lists) = lists.as_ref().filter(|l| l.len() >= 5 && l.len() % 2 == 1) else { continue };
+        let ids = whole(&lists[2]);
+        for pair in lists[3..].chunks_exact(2) {
+            out.extend(crate::passes::cluster_cull::clusters_drawn(&ids, &pair[0], &pair[1]));
         }
     }
     out

@@ -30,7 +30,7 @@ impl SlotCapture {
             let Some(list) = plan.kinds.get(&pass.kind).and_then(|k| k.kind.draw_list()) else { continue };
             let find = |s: &&str| pass.bindings.iter().find(|b| b.slot == *s);
             let mut slots = list.slots.to_vec();
-            if let Some(cluster) = list.cluster_slots.filter(|c| c.iter().all(|s| find(s).is_some())) {
+            for cluster in list.cluster_slots.iter().filter(|c| c.iter().all(|s| find(s).is_some())) {
                 slots.extend(cluster);
             }
             let bound: Vec<_> = slots.iter().filter_map(find).collect();

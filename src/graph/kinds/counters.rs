@@ -43,9 +43,9 @@ pub struct DrawList {
     pub slots: [&'static str; 3],
     /// Which of its commands the pass draws.
     pub order: DrawOrder,
-    /// The slots of a cluster list the pass may draw too, with the list's instance ids: its
-    /// commands and its counts (`cluster_cull`'s output; captured where bound).
-    pub cluster_slots: Option<[&'static str; 2]>,
+    /// The slots of the cluster lists the pass may draw too, with the list's instance ids:
+    /// each list's commands and its counts (`cluster_cull`'s outputs; captured where bound).
+    pub cluster_slots: &'static [[&'static str; 2]],
 }
 
 /// Which commands of a draw list a pass draws.
