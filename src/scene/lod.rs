@@ -14,7 +14,7 @@
 //! averaged over the surface around each ([`filtered_normals`]): the full mesh's normal at a
 //! kept vertex samples detail far finer than the level's triangles, which would shade as noise.
 //!
-//! The chain stops where a step no longer pays: fewer than [`LOD_MIN_TRIANGLES`] would remain,
+//! The chain stops where a step no longer pays: fewer than [`LOD_FLOOR_TRIANGLES`] would remain,
 //! a step removes less than [`LOD_MIN_REDUCTION`] of the triangles, or the level would be
 //! further from the full mesh than a quarter of its extent.
 
@@ -28,10 +28,15 @@ type FastMap<K, V> = HashMap<K, V, foldhash::fast::FixedState>;
 /// The most levels a mesh has, the full mesh included (the cull pass stores a level in 3 bits).
 pub const MAX_LOD_LEVELS: usize = 8;
 
-/// Meshes with fewer than twice this many triangles get no chain, and no level goes below it:
-/// an instance this coarse covers a few pixels, where a dozen triangles more or less cost
-/// nothing next to the instance itself.
+/// Meshes with fewer than twice this many triangles get no chain, and the steps between levels
+/// are sized to come down to it within [`MAX_LOD_LEVELS`] levels.
 pub const LOD_MIN_TRIANGLES: usize = 64;
+
+/// No level goes below this many triangles. Below [`LOD_MIN_TRIANGLES`], since the last step
+/// aimed at it may fall just short: that level still takes a hundred triangles off each
+/// distant instance a few pixels across, which add up over many instances. Coarser than this,
+/// a dozen triangles more or less cost nothing next to the instance itself.
+pub const LOD_FLOOR_TRIANGLES: usize = 24;
 
 /// A step that keeps more than this share of its input's triangles ends the chain.
 pub const LOD_MIN_REDUCTION: f32 = 0.15;
@@ -101,7 +106,7 @@ pub fn build_chain(vertices: &[Vertex], indices: &[u32]) -> LodChain {
     while chain.levels.len() + 1 < MAX_LOD_LEVELS {
         let triangles = current.len() / 3;
         let target = (triangles as f32 * step) as usize;
-        if target < LOD_MIN_TRIANGLES {
+        if target < LOD_FLOOR_TRIANGLES {
             break;
         }
         let mut step_error = 0.0f32;
@@ -312,7 +317,7 @@ pub(crate) mod tests {
         for (indices, error) in &chain.levels {
             assert_eq!(indices.len() % 3, 0);
             assert!(indices.len() <= previous.0 * 6 / 10, "{} after {}", indices.len(), previous.0);
-            assert!(indices.len() / 3 >= LOD_MIN_TRIANGLES);
+            assert!(indices.len() / 3 >= LOD_FLOOR_TRIANGLES);
             assert!(*error >= previous.1 && error.is_finite());
             // Each level draws its own copies of the vertices it keeps.
             assert!(indices.iter().all(|&i| (data.positions.len()..all).contains(&(i as usize))));
