@@ -270,24 +270,7 @@ fn lights_into_a_host_image(discard_failed: bool) {
             let imports = Imports::new().image("color", target.host, Access::NONE, Access::TRANSFER_READ);
             assert_eq!(renderer.record_with_imports(cmd, &boxes_camera(), &imports).unwrap(), 0);
             // The engine copies its image, which cullgraph left in TRANSFER_SRC_OPTIMAL.
-            let region = vk::BufferImageCopy::default()
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
-                )
-                .image_extent(vk::Extent3D { width: w, height: h, depth: 1 });
-            d.cmd_copy_image_to_buffer(
-                cmd,
-                target.image,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                readback.handle(),
-                &[region],
-            );
-            let to_host = vk::MemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
-                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-                .dst_access_mask(vk::AccessFlags2::HOST_READ);
-            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[to_host]));
+            copy_for_host(&d, cmd, target.image, (w, h), &readback);
             d.end_command_buffer(cmd).unwrap();
             let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
             d.queue_submit(host.queue, &[vk::SubmitInfo::default().command_buffers(&[cmd])], fence).unwrap();
@@ -342,29 +325,8 @@ fn frames_into_host_images_the_host_vouches_for_replay() {
                 }
                 ctx.submit_and_wait(|cmd| -> cullgraph::Result<()> {
                     renderer.record_with_imports(cmd, camera, &imports)?;
-                    let region = vk::BufferImageCopy::default()
-                        .image_subresource(
-                            vk::ImageSubresourceLayers::default()
-                                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                                .layer_count(1),
-                        )
-                        .image_extent(vk::Extent3D { width: w, height: h, depth: 1 });
-                    let to_host = vk::MemoryBarrier2::default()
-                        .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
-                        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-                        .dst_access_mask(vk::AccessFlags2::HOST_READ);
                     // SAFETY: cmd is recording; the image and buffer outlive its execution.
-                    unsafe {
-                        d.cmd_copy_image_to_buffer(
-                            cmd,
-                            target.image,
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                            readback.handle(),
-                            &[region],
-                        );
-                        d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[to_host]));
-                    }
+                    unsafe { copy_for_host(&d, cmd, target.image, (w, h), &readback) };
                     Ok(())
                 })
                 .unwrap();
@@ -383,6 +345,34 @@ fn frames_into_host_images_the_host_vouches_for_replay() {
         image.destroy(&d, &allocator);
     }
     host.shut_down_clean(allocator);
+}
+
+/// Records the engine's copy of its color image `image` (`size`, left in TRANSFER_SRC_OPTIMAL
+/// by the frame) into `readback`, and makes the copy visible to the host.
+///
+/// # Safety
+/// `cmd` is recording; the image and the buffer outlive its execution.
+unsafe fn copy_for_host(
+    d: &ash::Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    size: (u32, u32),
+    readback: &Buffer,
+) {
+    let region = vk::BufferImageCopy::default()
+        .image_subresource(
+            vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+        )
+        .image_extent(vk::Extent3D { width: size.0, height: size.1, depth: 1 });
+    let to_host = vk::MemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+        .dst_access_mask(vk::AccessFlags2::HOST_READ);
+    unsafe {
+        d.cmd_copy_image_to_buffer(cmd, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, readback.handle(), &[region]);
+        d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[to_host]));
+    }
 }
 
 /// The boxes through `graph/examples/NAME.ron` at `w`x`h`, on the host's context.

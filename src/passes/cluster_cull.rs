@@ -62,14 +62,7 @@ pub const CLUSTER_REGIONS: u64 = 3;
 pub const CLUSTERS: Quantity = Quantity {
     name: "clusters",
     doc: "clusters the opaque instances may draw in all (each at its mesh's level with the most clusters; 0 without clustered meshes)",
-    count: |s| {
-        let c = SceneCounts::downcast(s)?;
-        let scene = c.scene;
-        let per_mesh: Vec<u64> =
-            scene.meshes.iter().map(|m| crate::passes::shared::cull_data::mesh_clusters(m) as u64).collect();
-        let opaque = |i: &&crate::scene::Instance| FaceCull::OPAQUE.contains(&FaceCull::of(scene, i));
-        Some(scene.instances.iter().filter(opaque).map(|i| per_mesh.get(i.mesh as usize).copied().unwrap_or(0)).sum())
-    },
+    count: |s| clusters_in(s, &FaceCull::OPAQUE),
     growth: Growth::Grows,
 };
 
@@ -78,14 +71,19 @@ pub const CLUSTERS: Quantity = Quantity {
 pub const MASKED_CLUSTERS: Quantity = Quantity {
     name: "masked_clusters",
     doc: "clusters the instances of alpha-masked materials may draw in all (each at its mesh's level with the most clusters; 0 without clustered masked meshes)",
-    count: |s| {
-        let c = SceneCounts::downcast(s)?;
-        let scene = c.scene;
-        let masked = |i: &&crate::scene::Instance| FaceCull::of(scene, i).is_masked();
-        Some(scene.instances.iter().filter(masked).map(|i| scene.meshes.get(i.mesh as usize).map_or(0, |m| crate::passes::shared::cull_data::mesh_clusters(m) as u64)).sum())
-    },
+    count: |s| clusters_in(s, &FaceCull::MASKED),
     growth: Growth::Grows,
 };
+
+/// The clusters the instances of `regions` may draw in all (each at its mesh's level with the
+/// most clusters), in the scene `s` counts.
+fn clusters_in(s: &dyn std::any::Any, regions: &[FaceCull]) -> Option<u64> {
+    let scene = SceneCounts::downcast(s)?.scene;
+    let per_mesh: Vec<u64> =
+        scene.meshes.iter().map(|m| crate::passes::shared::cull_data::mesh_clusters(m) as u64).collect();
+    let counted = |i: &&crate::scene::Instance| regions.contains(&FaceCull::of(scene, i));
+    Some(scene.instances.iter().filter(counted).map(|i| per_mesh.get(i.mesh as usize).copied().unwrap_or(0)).sum())
+}
 
 /// Bytes of the cluster list: one command per cluster in each of the three regions.
 const CLUSTER_COMMANDS_BYTES: &str = "max(1, clusters) * 60";
