@@ -308,29 +308,36 @@ fn frames_into_host_images_the_host_vouches_for_replay() {
     let allocator = host.allocator();
     let d = host.device.clone();
     let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-    let swapchain: Vec<HostOwnedImage> =
-        (0..3).map(|_| HostOwnedImage::new(&d, &allocator, vk::Format::R8G8B8A8_UNORM, (w, h, 1), usage)).collect();
+    let new_swapchain = || -> Vec<HostOwnedImage> {
+        (0..3).map(|_| HostOwnedImage::new(&d, &allocator, vk::Format::R8G8B8A8_UNORM, (w, h, 1), usage)).collect()
+    };
+    let mut swapchain = new_swapchain();
     {
         let ctx = GpuContext::from_host(host.handles(&allocator)).unwrap();
         let readback = readback_buffer(&ctx, "host readback", (w * h * 4) as u64);
+        // One frame of `camera` into `target` (in `current` access), under `generation`: the
+        // image it left there.
+        let frame = |renderer: &mut Renderer, target: &HostOwnedImage, camera, current, generation: Option<u64>| {
+            let mut imports = Imports::new().image("color", target.host, current, Access::TRANSFER_READ);
+            if let Some(generation) = generation {
+                imports = imports.vouched(generation);
+            }
+            ctx.submit_and_wait(|cmd| -> cullgraph::Result<()> {
+                renderer.record_with_imports(cmd, camera, &imports)?;
+                // SAFETY: cmd is recording; the image and buffer outlive its execution.
+                unsafe { copy_for_host(&d, cmd, target.image, (w, h), &readback) };
+                Ok(())
+            })
+            .unwrap();
+            readback.read_bytes().unwrap()
+        };
         for vouched in [true, false] {
             let mut renderer = example_renderer(&ctx, "host_target", w, h);
             for (i, camera) in cameras.iter().enumerate() {
-                let target = &swapchain[i % 3];
-                // Each image was left for the copy below in the frame that last drew it.
+                // Each image was left for the copy in the frame that last drew it.
                 let current = if i < 3 && vouched { Access::NONE } else { Access::TRANSFER_READ };
-                let mut imports = Imports::new().image("color", target.host, current, Access::TRANSFER_READ);
-                if vouched {
-                    imports = imports.vouched(7);
-                }
-                ctx.submit_and_wait(|cmd| -> cullgraph::Result<()> {
-                    renderer.record_with_imports(cmd, camera, &imports)?;
-                    // SAFETY: cmd is recording; the image and buffer outlive its execution.
-                    unsafe { copy_for_host(&d, cmd, target.image, (w, h), &readback) };
-                    Ok(())
-                })
-                .unwrap();
-                assert!(readback.read_bytes().unwrap() == references[i], "vouched {vouched}, frame {i}");
+                let image = frame(&mut renderer, &swapchain[i % 3], camera, current, vouched.then_some(7));
+                assert!(image == references[i], "vouched {vouched}, frame {i}");
             }
             let replayed = renderer.runtime().frames_replayed();
             match vouched {
@@ -338,6 +345,19 @@ fn frames_into_host_images_the_host_vouches_for_replay() {
                 // them; from frame 12 on, every frame replays.
                 true => assert!(replayed >= 6, "{replayed} frames replayed"),
                 false => assert_eq!(replayed, 0),
+            }
+            if vouched {
+                // The swapchain made anew (Vulkan may give the new images the old handles),
+                // under a new generation: every frame shows its camera in its new image.
+                for image in std::mem::take(&mut swapchain) {
+                    image.destroy(&d, &allocator);
+                }
+                swapchain = new_swapchain();
+                for (i, camera) in cameras.iter().enumerate().take(9) {
+                    let current = if i < 3 { Access::NONE } else { Access::TRANSFER_READ };
+                    let image = frame(&mut renderer, &swapchain[i % 3], camera, current, Some(8));
+                    assert!(image == references[i], "new swapchain, frame {i}");
+                }
             }
         }
     }
