@@ -457,11 +457,7 @@ fn views_culled_together_choose_each_views_own_levels() {
             (0..runtime.plan().passes.len()).filter(|&i| runtime.together_key(i).is_some()).collect();
         assert!(!culls.is_empty(), "{name}: no pass culls views together");
         for frame in 0..3 {
-            let mut results = Vec::new();
-            for (r, ids) in &mut renderers {
-                let frames: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&cameras).collect();
-                results.push(r.render_views_to_rgba8(&frames).unwrap());
-            }
+            let results = common::render_each_views(&mut renderers, &cameras);
             for (v, (together, apart)) in results[0].iter().zip(&results[1]).enumerate() {
                 assert!(together.1 == apart.1, "{name}, frame {frame}, view {v}: the image differs");
                 assert_eq!(levels(&together.0), levels(&apart.0), "{name}, frame {frame}, view {v}");

@@ -260,11 +260,7 @@ fn views_culled_together_match_views_culled_one_at_a_time() {
         }
         let mut culled = 0;
         for frame in 0..3 {
-            let mut results = Vec::new();
-            for (r, ids) in &mut renderers {
-                let frames: Vec<(ViewId, &Camera)> = ids.iter().copied().zip(&cameras).collect();
-                results.push(r.render_views_to_rgba8(&frames).unwrap());
-            }
+            let results = common::render_each_views(&mut renderers, &cameras);
             for (v, (together, apart)) in results[0].iter().zip(&results[1]).enumerate() {
                 assert!(together.1 == apart.1, "{graph}, frame {frame}, view {v}: the image differs");
                 assert_eq!(counts(&together.0), counts(&apart.0), "{graph}, frame {frame}, view {v}");

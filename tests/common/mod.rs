@@ -240,3 +240,18 @@ pub fn triangle_data_uri() -> String {
     let bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect();
     format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin))
 }
+
+/// One frame of each renderer's views (`ids`, each with the camera at its place in `cameras`):
+/// per renderer, each view's stats and RGBA bytes.
+pub fn render_each_views(
+    renderers: &mut [(cullgraph::render::Renderer, Vec<cullgraph::render::ViewId>)],
+    cameras: &[cullgraph::scene::Camera],
+) -> Vec<Vec<(cullgraph::stats::FrameStats, Vec<u8>)>> {
+    renderers
+        .iter_mut()
+        .map(|(r, ids)| {
+            let frames: Vec<_> = ids.iter().copied().zip(cameras).collect();
+            r.render_views_to_rgba8(&frames).unwrap()
+        })
+        .collect()
+}

@@ -13,6 +13,8 @@ use super::view::{View, ViewId};
 use crate::error::Result;
 use crate::graph::executor::replay::{RecordedFrame, ReplayKey, Replays, SLOTS};
 use crate::graph::{FrameData, FrameRecording, GraphRuntime, Imports};
+use crate::passes::shared::SceneInputs;
+use crate::render::RenderSettings;
 use crate::scene::Camera;
 use ash::vk;
 
@@ -139,18 +141,29 @@ fn frame_key(frame: u64, parts: &[FramePart<'_>], together: bool) -> Option<Fram
     for part in parts {
         let (replay_key, import_key) = part.keys();
         let View { graphs, inputs, settings, id, .. } = &*part.view;
-        let data = FrameData {
-            frame,
-            extent: vk::Extent2D { width: settings.width, height: settings.height },
-            shared: inputs,
-            replay_key,
-            import_key,
-        };
+        let data = frame_data(frame, settings, inputs, (replay_key, import_key));
         let key = graphs.runtime.replay_key(&data, part.imports)?;
         let runtime = &graphs.runtime;
         keys.push((*id, runtime.id(), part.waits_for.clone(), runtime.replay_slot(), key));
     }
     Some(FrameKey { together, parts: keys })
+}
+
+/// What a view's graph takes for frame `frame`: its size, its inputs and the renderer's `keys`
+/// ([`FramePart::keys`]).
+fn frame_data<'a>(
+    frame: u64,
+    settings: &RenderSettings,
+    inputs: &'a SceneInputs,
+    (replay_key, import_key): (Option<u64>, Option<u64>),
+) -> FrameData<'a> {
+    FrameData {
+        frame,
+        extent: vk::Extent2D { width: settings.width, height: settings.height },
+        shared: inputs,
+        replay_key,
+        import_key,
+    }
 }
 
 /// [`record_parts`], every view's frame abandoned on an error.
@@ -180,13 +193,7 @@ fn record_one(
 ) -> Result<()> {
     let (replay_key, import_key) = part.keys();
     let View { graphs, inputs, settings, id, .. } = &mut *part.view;
-    let data = FrameData {
-        frame,
-        extent: vk::Extent2D { width: settings.width, height: settings.height },
-        shared: &*inputs,
-        replay_key,
-        import_key,
-    };
+    let data = frame_data(frame, settings, inputs, (replay_key, import_key));
     ctx.begin_label(cmd, &id.to_string());
     let recorded = graphs.runtime.record(cmd, &data, part.imports);
     ctx.end_label(cmd);
@@ -280,13 +287,7 @@ fn record_group(
     let mut recordings: Vec<&FrameRecording> = Vec::with_capacity(chosen.len());
     for part in chosen.iter_mut() {
         let View { graphs, inputs: shared, settings, .. } = &mut *part.view;
-        inputs.push(FrameData {
-            frame,
-            extent: vk::Extent2D { width: settings.width, height: settings.height },
-            shared: &*shared,
-            replay_key: None,
-            import_key: None,
-        });
+        inputs.push(frame_data(frame, settings, shared, (None, None)));
         runtimes.push(&mut graphs.runtime);
         recordings.push(part.recording.as_ref().expect("begun"));
     }
