@@ -536,7 +536,9 @@ fn far_from_the_origin_with_hi_lo_inputs() {
             let truth = Truth::new(view);
             let (mut c_view, mut r) = place(&view, &spec);
             // Within a few centimetres of the eye the hi/lo rounding (6e-8) exceeds the relative
-            // allowance; there the bound and its vertices share that rounding (module docs).
+            // allowance; there the bound and its vertices share that rounding (module docs), and
+            // the bound given is grown by this center's rounding (`err` below), which it then
+            // holds whole.
             let m = c_view.length() + r;
             if m < 0.05 {
                 c_view *= 0.05 / m;
@@ -553,7 +555,7 @@ fn far_from_the_origin_with_hi_lo_inputs() {
             let kind = spec.kind;
             if boxed {
                 let half = DVec3::from_array(spec.extents) * r;
-                let half32 = half.as_vec3();
+                let half32 = (half + DVec3::splat(err)).as_vec3();
                 let (min, max) = (rel - half32, rel + half32);
                 let points = box_points(rel64 - half, rel64 + half, spec.seed);
                 let d_min = points.iter().map(|&p| -truth.to_view(p).z).fold(f64::INFINITY, f64::min);
@@ -562,8 +564,8 @@ fn far_from_the_origin_with_hi_lo_inputs() {
                 check(&truth, kind, &points, proj, inside, Exact { d_min, m }, normal_camera(&cam))
             } else {
                 let points = sphere_points(&truth, rel64, r, spec.seed, 200);
-                let (proj, inside) =
-                    (cm::project_sphere(&view, rel, r as f32), cm::sphere_in_frustum(&view, rel, r as f32));
+                let grown = (r + err) as f32;
+                let (proj, inside) = (cm::project_sphere(&view, rel, grown), cm::sphere_in_frustum(&view, rel, grown));
                 let exact = Exact { d_min: -truth.to_view(rel64).z - r, m: rel64.abs().element_sum() + r };
                 check(&truth, kind, &points, proj, inside, exact, normal_camera(&cam))
             }
