@@ -56,10 +56,10 @@ fn a_moved_inserted_and_removed_box_shows_where_it_is_at_the_next_frame() {
     let moved = Transform { linear: Mat3::IDENTITY, translation: DVec3::new(-1.5, 0.5, -3.0) };
     world.set_transform(red_cube, moved).unwrap();
     let stats = r.sync(shaders, &world).unwrap();
-    assert_eq!((stats.instances_changed, stats.relayout, stats.bytes_uploaded), (1, false, 64));
+    assert_eq!((stats.instances_changed, stats.relayout, stats.bytes_uploaded), (1, false, 72));
     let (frame_stats, after) = r.render_to_image(&camera).unwrap();
     let update = frame_stats.update.expect("the frame reports the update it applied");
-    assert_eq!((update.instances_changed, update.bytes_uploaded, update.cpu_ms), (1, 64, stats.cpu_ms));
+    assert_eq!((update.instances_changed, update.bytes_uploaded, update.cpu_ms), (1, 72, stats.cpu_ms));
     assert_ne!(pixel(&after, old.0, old.1), red, "nothing red left where the cube was");
     let new = project(&camera, DVec3::new(-1.5, 0.5, -3.0));
     let p = pixel(&after, new.0, new.1);
@@ -414,7 +414,7 @@ fn moved_instances_get_bounds_that_contain_them() {
     let changes: Vec<_> = moves.iter().map(|(h, l, t)| (*h, Transform { linear: *l, translation: *t })).collect();
     world.set_transforms(&changes).unwrap();
     let update = r.sync(shaders, &world).unwrap();
-    assert_eq!(update.bytes_uploaded, 3 * 64, "moves upload 64 bytes each");
+    assert_eq!(update.bytes_uploaded, 3 * 72, "moves upload 72 bytes each");
     r.render(&boxes_camera()).unwrap();
     let bytes = cullgraph::gpu::transfer::read_buffer(&gpu, &r.gpu_scene().cull_records).unwrap();
     // The buffer has room to grow past the records.
@@ -531,10 +531,10 @@ fn a_long_bulk_move_reaches_every_slot() {
     let _ = sync(&mut live, &mut world);
     world.set_transforms_by(&boxes[20_000..60_000], |i| shifted(i + 20_000, by(4.0))).unwrap();
     world.remove(boxes[30_000]).unwrap();
-    // The moves are written where the GPU reads them, 64 bytes each (those they supersede stay
+    // The moves are written where the GPU reads them, 72 bytes each (those they supersede stay
     // there, dropped); the removed box's slot takes a whole record.
     let bytes = sync(&mut live, &mut world);
-    assert!((40_000 * 64..40_000 * 64 + 100).contains(&bytes), "{bytes} bytes");
+    assert!((40_000 * 72..40_000 * 72 + 100).contains(&bytes), "{bytes} bytes");
     let (stats, image) = live.render_to_image(&camera).unwrap();
     assert_eq!(stats.verify.expect("verified").false_negatives, 0);
     let bytes = cullgraph::gpu::transfer::read_buffer(&gpu, &live.gpu_scene().instances).unwrap();

@@ -1,9 +1,10 @@
 #version 460
 // A changing world's slot updates (src/render/renderer/world_sync.rs): each thread writes one
-// slot's new instance record, or for a move only its transform (60 bytes, keeping the material
-// and flags it reads), and derives the slot's cull bound from it and its draw group's local
-// bounds, so that a moved instance costs 64 bytes of upload. One dispatch replaces thousands of tiny copy regions, which cost the copy
-// engine far more than the bytes they move.
+// slot's new instance record and derives the slot's cull bound from it and its draw group's
+// local bounds. An update carries the whole record with the slot and its group (72 bytes), so
+// that it reads nothing of the slot's old records, a move as any other change. One dispatch
+// replaces thousands of tiny copy regions, which cost the copy engine far more than the bytes
+// they move.
 //
 // The bound is packed as src/passes/shared/cull_data.rs packs it (GpuCullRecord), from the
 // instance's own hi/lo split of its translation: center = hi + (linear * local center + lo).
@@ -16,21 +17,14 @@
 
 layout(local_size_x = 64) in;
 
-#ifdef MOVES
-// A transform only: the rows of the linear part with the translation's hi part in w, then its
-// lo part and the slot, as four 16-byte words so that each is one vector load. The material
-// and flags stay. The host writes these straight into the buffer this reads.
+// The rows of the linear part with the translation's hi part in w, then its lo part and the
+// slot; the slot's draw group, and the material and flags (the instance record's last word).
+// The host writes these straight into the buffer this reads.
 struct Update {
     uvec4 words[4];
-};
-#else
-// The slot, its draw group and the whole instance record.
-struct Update {
-    uint slot;
     uint group;
-    uint instance[16];
+    uint material_flags;
 };
-#endif
 
 layout(set = 0, binding = 0, scalar) readonly buffer Updates { Update updates[]; };
 
@@ -65,33 +59,18 @@ void main() {
     if (i >= pc.count) return;
     vec4 rows[3];
     vec3 lo_t;
-#ifdef MOVES
     uvec4 w[4] = updates[i].words;
     uint slot = w[3].w;
-    // A move superseded before its frame (src/render/renderer/move_ring.rs, DROPPED).
+    // An update superseded before its frame (src/render/renderer/update_ring.rs, DROPPED).
     if (slot == 0xFFFFFFFFu) return;
     for (uint r = 0u; r < 3u; ++r) {
         rows[r] = uintBitsToFloat(w[r]);
         set_instance_word(slot, r, w[r]);
     }
     lo_t = uintBitsToFloat(w[3].xyz);
-    uint material_flags = instance_word(slot, 3u).w;
+    uint material_flags = updates[i].material_flags;
     set_instance_word(slot, 3u, uvec4(w[3].xyz, material_flags));
-    // A move keeps the slot's draw group and flags.
-    uint group = record_vec[slot * 2u].w & 0xFFFFFFu;
-#else
-    uint slot = updates[i].slot;
-    uint words[16] = updates[i].instance;
-    for (uint r = 0u; r < 4u; ++r) {
-        set_instance_word(slot, r, uvec4(words[r * 4u], words[r * 4u + 1u], words[r * 4u + 2u], words[r * 4u + 3u]));
-    }
-    for (uint r = 0u; r < 3u; ++r) {
-        rows[r] = uintBitsToFloat(uvec4(words[r * 4u], words[r * 4u + 1u], words[r * 4u + 2u], words[r * 4u + 3u]));
-    }
-    lo_t = uintBitsToFloat(uvec3(words[12], words[13], words[14]));
-    uint material_flags = words[15];
     uint group = updates[i].group;
-#endif
     GroupBounds b = group_bounds[group];
     vec3 c = b.center_radius.xyz;
     vec3 h = b.half_extent.xyz;

@@ -58,7 +58,12 @@ impl GpuInstance {
             return Self { material_flags: crate::scene::FLAG_EMPTY_SLOT << 24, ..Self::zeroed() };
         }
         let (rows, translation_lo) = Self::transform_words(&instance.transform);
-        Self { rows, translation_lo, material_flags: (instance.material & 0xFF_FFFF) | (instance.flags << 24) }
+        Self { rows, translation_lo, material_flags: Self::material_flags_of(instance) }
+    }
+
+    /// The record's last word for `instance` (not an empty slot): its material and flags.
+    pub fn material_flags_of(instance: &Instance) -> u32 {
+        (instance.material & 0xFF_FFFF) | (instance.flags << 24)
     }
 
     /// The record's transform part: rows of the linear part with the translation's hi part in

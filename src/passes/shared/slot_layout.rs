@@ -71,6 +71,24 @@ fn capacity_for(count: usize) -> u32 {
     (count + count / 4 + 4) as u32
 }
 
+/// Where a world instance is: its slot and the slot's group ([`Placement::NONE`]: nowhere).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Placement {
+    /// The slot.
+    pub slot: u32,
+    /// The group the slot belongs to (its index in [`SlotLayout::groups`]).
+    pub group: u32,
+}
+
+impl Placement {
+    /// An instance without a slot.
+    const NONE: Placement = Placement { slot: u32::MAX, group: u32::MAX };
+
+    fn get(self) -> Option<Placement> {
+        (self.slot != u32::MAX).then_some(self)
+    }
+}
+
 /// The slot layout of one renderer's copy of a world.
 #[derive(Clone, Debug, Default)]
 pub struct SlotLayout {
@@ -84,8 +102,9 @@ pub struct SlotLayout {
     reserve: [Vec<usize>; FACE_CULL_REGIONS],
     /// The world instance index each slot holds.
     slot_instance: Vec<Option<u32>>,
-    /// The slot of each world instance index.
-    instance_slot: Vec<Option<u32>>,
+    /// The slot of each world instance index, with its group: a move's scatter takes both,
+    /// and one 8-byte entry is one memory access per move.
+    instance_slot: Vec<Placement>,
     /// Per group, its free slots ready for reuse.
     free: Vec<Vec<u32>>,
     /// Freed slots with the frame from which they may be reused.
@@ -116,7 +135,7 @@ impl SlotLayout {
             by_slot: Vec::new(),
             reserve: Default::default(),
             slot_instance: Vec::new(),
-            instance_slot: vec![None; scene.instances.len()],
+            instance_slot: vec![Placement::NONE; scene.instances.len()],
             free: Vec::new(),
             quarantine: Vec::new(),
             occupied: 0,
@@ -130,7 +149,7 @@ impl SlotLayout {
                 let g = layout.add_range(key, capacity);
                 let first_slot = layout.groups[g].first_slot;
                 for (slot, &id) in (first_slot..).zip(&ids) {
-                    layout.instance_slot[id as usize] = Some(slot);
+                    layout.instance_slot[id as usize] = Placement { slot, group: g as u32 };
                     layout.slot_instance[slot as usize] = Some(id);
                     layout.free[g].pop();
                 }
@@ -224,10 +243,15 @@ impl SlotLayout {
 
     /// The slot of world instance `instance`, if it has one.
     pub fn slot_of(&self, instance: u32) -> Option<u32> {
-        self.instance_slot.get(instance as usize).copied().flatten()
+        self.placement_of(instance).map(|p| p.slot)
     }
 
-    /// Asks for the memory [`SlotLayout::slot_of`] of `instance` reads
+    /// The slot of world instance `instance` and its group, if it has one.
+    pub fn placement_of(&self, instance: u32) -> Option<Placement> {
+        self.instance_slot.get(instance as usize).and_then(|p| p.get())
+    }
+
+    /// Asks for the memory [`SlotLayout::placement_of`] of `instance` reads
     /// ([`crate::parallel::prefetch`]).
     pub(crate) fn prefetch(&self, instance: u32) {
         if let Some(entry) = self.instance_slot.get(instance as usize) {
@@ -263,7 +287,9 @@ impl SlotLayout {
     /// Empties the slot of world instance `instance` (if it has one), reusable from frame
     /// `next_frame + 1`; returns it.
     pub fn vacate(&mut self, instance: u32, next_frame: u64) -> Option<u32> {
-        let slot = self.instance_slot.get_mut(instance as usize)?.take()?;
+        let entry = self.instance_slot.get_mut(instance as usize)?;
+        let slot = entry.get()?.slot;
+        *entry = Placement::NONE;
         self.slot_instance[slot as usize] = None;
         self.quarantine.push((next_frame + 1, slot));
         self.occupied -= 1;
@@ -275,11 +301,11 @@ impl SlotLayout {
     pub fn place(&mut self, instance: u32, key: (usize, u32)) -> Option<u32> {
         let groups = self.groups_of_key.get(&key)?;
         // The newest range first: the older ones are full more often.
-        let slot = groups.iter().rev().find_map(|&g| self.free[g].pop())?;
+        let (slot, group) = groups.iter().rev().find_map(|&g| Some((self.free[g].pop()?, g as u32)))?;
         if self.instance_slot.len() <= instance as usize {
-            self.instance_slot.resize(instance as usize + 1, None);
+            self.instance_slot.resize(instance as usize + 1, Placement::NONE);
         }
-        self.instance_slot[instance as usize] = Some(slot);
+        self.instance_slot[instance as usize] = Placement { slot, group };
         self.slot_instance[slot as usize] = Some(instance);
         self.occupied += 1;
         Some(slot)
@@ -338,5 +364,57 @@ impl SlotLayout {
             })
             .collect();
         DrawList { instance_ids: (0..self.slots()).collect(), commands, regions: DrawRegions::from_lengths(region_len) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::MeshData;
+    use glam::{DVec3, Mat3, Vec3};
+
+    /// Every placed instance's group is the group its slot lies in.
+    fn assert_placements_agree(layout: &SlotLayout, instances: u32) {
+        for i in 0..instances {
+            if let Some(p) = layout.placement_of(i) {
+                assert_eq!(p.group as usize, layout.group_of_slot(p.slot), "instance {i} in slot {}", p.slot);
+                assert_eq!(layout.instance_in(p.slot), Some(i));
+            }
+        }
+    }
+
+    #[test]
+    fn placements_name_the_group_of_their_slot_as_the_layout_grows() {
+        let mut scene = Scene::default();
+        let tri = MeshData {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: vec![],
+            indices: vec![0, 1, 2],
+            ..Default::default()
+        };
+        let meshes = [scene.add_mesh("a", &tri, "a").unwrap(), scene.add_mesh("b", &tri, "b").unwrap()];
+        scene.add_material(Default::default());
+        for i in 0..40u32 {
+            let transform = Transform { linear: Mat3::IDENTITY, translation: DVec3::new(i as f64, 0.0, 0.0) };
+            scene.instances.push(Instance { transform, mesh: meshes[(i % 3 == 0) as usize], material: 0, flags: 0 });
+        }
+        let mut layout = SlotLayout::new(&scene, |i| i % 5 != 0);
+        assert_placements_agree(&layout, 60);
+        assert_eq!(layout.placement_of(5), None);
+        // Placed until the groups of mesh b are full, then grown into a range of a reserved group.
+        let key = group_key(&scene, &scene.instances[0]);
+        let mut next = 40;
+        while layout.place(next, key).is_some() {
+            next += 1;
+        }
+        assert!(layout.grow(key));
+        let placed = layout.place(next, key).expect("room after growing");
+        let grown = layout.placement_of(next).unwrap();
+        assert_eq!(grown.slot, placed);
+        assert_ne!(grown.group as usize, layout.group_of_slot(layout.slot_of(3).unwrap()), "a new group");
+        assert_placements_agree(&layout, next + 1);
+        let slot = layout.slot_of(3).unwrap();
+        assert_eq!(layout.vacate(3, 0), Some(slot));
+        assert_eq!((layout.placement_of(3), layout.instance_in(slot)), (None, None));
     }
 }

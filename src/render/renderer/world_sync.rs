@@ -1,12 +1,11 @@
 //! A renderer that mirrors a [`World`]: [`Renderer::from_world`] lays the world out in slots
 //! ([`SlotLayout`]) and [`Renderer::sync`] applies the world's changes since the last sync.
 //!
-//! A change of instances rewrites only their slots. A moved instance (same instance, mesh,
-//! material and flags) queues its slot and transform, 64 bytes, written by the sync straight
-//! into the host-visible memory the GPU reads them from ([`super::move_ring`]); any other
-//! change its slot, draw group and whole instance record, 72, copied at record time into a
-//! host-visible buffer per frame in flight, reused frame after frame and grown geometrically
-//! when a frame needs more. At the start of the next recorded frame a compute dispatch per list
+//! A change of instances rewrites only their slots. A changed slot (an instance moved, or
+//! another instance, material or flags in it) queues its whole new record with its slot and
+//! draw group, 72 bytes, written by the sync straight into the host-visible memory the GPU
+//! reads them from ([`super::update_ring`]); a slot's last update supersedes those queued before
+//! it. At the start of the next recorded frame one compute dispatch
 //! (`shaders/world/scatter.comp`) writes them into the instance records and derives each
 //! slot's cull bound from its record and its group's local bounds, after every earlier frame's
 //! use of those buffers: frames in flight are not disturbed. (Copy regions, one per record,
@@ -40,7 +39,7 @@
 //! to the last sync, lays the world out anew in spatial order, with the history cleared.
 
 use super::graphs::build_runtime;
-use super::move_ring::{MoveRing, MoveUpdate, DROPPED};
+use super::update_ring::{SlotUpdate, UpdateRing, DROPPED};
 use super::Renderer;
 use crate::error::{Error, Result};
 use crate::gpu::barrier::{cmd_barriers, memory_barrier};
@@ -50,11 +49,11 @@ use crate::gpu::{
 use crate::graph::{FrameInputs, Growth, KindRegistry, Quantities, FRAMES_IN_FLIGHT};
 use crate::passes::shared::gpu_types::GpuInstance;
 use crate::passes::shared::instance_ranges;
-use crate::passes::shared::slot_layout::{group_key, SlotLayout};
+use crate::passes::shared::slot_layout::{group_key, Placement, SlotLayout};
 use crate::passes::shared::{GpuScene, LaidOutScene, SceneInputs};
 use crate::render::{GraphSpec, RenderSettings, ViewId};
 use crate::scene::world::{Change, InstanceHandle, World};
-use crate::scene::Scene;
+use crate::scene::{Instance, Scene};
 use crate::stats::UpdateStats;
 use std::sync::Arc;
 use std::time::Instant;
@@ -67,19 +66,6 @@ const COPY_ALL_SHARE: usize = 4;
 /// costs next to nothing, and small worlds (the tests') take the path large ones take.
 const COPY_ALL_MIN_LISTED: usize = 1024;
 
-/// A slot's whole new instance record (another instance, material or flags) and its draw
-/// group: 72 bytes.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct SlotUpdate {
-    slot: u32,
-    group: u32,
-    instance: GpuInstance,
-}
-
-/// Marks an [`WorldMirror::update_of_slot`] entry as an index into the whole-record list.
-const WHOLE: u32 = 1 << 31;
-
 /// What a renderer keeps of the world it mirrors.
 pub(super) struct WorldMirror {
     /// The id of the world it mirrors ([`World::id`]): another world is refused.
@@ -90,21 +76,19 @@ pub(super) struct WorldMirror {
     /// The handle each world instance index had when its slot was written: a new handle at an
     /// index (removed and inserted between two syncs) is a new instance and takes a new slot.
     handles: Vec<Option<InstanceHandle>>,
-    /// The slot updates waiting for the next recorded frame: moves (written where the GPU
-    /// reads them), whole records, and per slot where its update is (an index into `moves`, or
-    /// into `whole` with [`WHOLE`] set; `u32::MAX`: none).
-    moves: MoveRing,
-    whole: Vec<SlotUpdate>,
+    /// The slot updates waiting for the next recorded frame (written where the GPU reads
+    /// them), and per slot where its update is (an index into `updates`; `u32::MAX`: none).
+    updates: UpdateRing,
     update_of_slot: Vec<u32>,
     /// The user data waiting for the next recorded frame: per entry the slot, then its
     /// [`GpuScene::user_words`] words; per slot where its entry starts (`u32::MAX`: none).
     user: Vec<u32>,
     user_of_slot: Vec<u32>,
-    /// Per frame in flight, the host-visible buffers its whole records, user data and the
-    /// slots whose previous records it keeps are read from.
-    segments: Vec<[Option<Buffer>; 3]>,
-    /// The scatter of moves and of whole records.
-    scatter: [Pipeline; 2],
+    /// Per frame in flight, the host-visible buffers its user data and the slots whose
+    /// previous records it keeps are read from.
+    segments: Vec<[Option<Buffer>; 2]>,
+    /// The scatter of slot updates.
+    scatter: Pipeline,
     /// The scatter of user data (`None`: the world has none).
     scatter_user: Option<Pipeline>,
     /// What the syncs since the last recorded frame did, for that frame's figures.
@@ -124,6 +108,13 @@ pub(super) struct WorldMirror {
     user_words: u32,
     /// The posed instances' deformations (made at the first pose).
     deformer: Option<super::deform::Deformer>,
+}
+
+/// The move of `instance` in its place: its transform, material and flags, the slot's group.
+fn move_of(instance: &Instance, placed: Placement) -> SlotUpdate {
+    let (rows, translation_lo) = GpuInstance::transform_words(&instance.transform);
+    let material_flags = GpuInstance::material_flags_of(instance);
+    SlotUpdate { rows, translation_lo, slot: placed.slot, group: placed.group, material_flags }
 }
 
 impl WorldMirror {
@@ -155,18 +146,12 @@ impl WorldMirror {
         &mut self.update_of_slot[slot as usize]
     }
 
-    /// Queues a move of the instance in `slot` to the transform of `instance` (its material
-    /// and flags unchanged).
-    fn queue_move(&mut self, slot: u32, rows: [[f32; 4]; 3], translation_lo: [f32; 3]) -> Result<()> {
-        let update = MoveUpdate { rows, translation_lo, slot };
+    /// Queues `update` of its slot, in place of any queued before.
+    fn queue_update(&mut self, update: SlotUpdate) -> Result<()> {
+        let slot = update.slot;
         match *self.entry(slot) {
-            u32::MAX => self.update_of_slot[slot as usize] = self.moves.push(update)? as u32,
-            i if i & WHOLE != 0 => {
-                let queued = &mut self.whole[(i & !WHOLE) as usize].instance;
-                queued.rows = rows;
-                queued.translation_lo = translation_lo;
-            }
-            i => *self.moves.at(i as usize) = update,
+            u32::MAX => self.update_of_slot[slot as usize] = self.updates.push(update)? as u32,
+            i => *self.updates.at(i as usize) = update,
         }
         Ok(())
     }
@@ -175,19 +160,16 @@ impl WorldMirror {
     /// `world` has it now; instances without a slot (removed) are skipped. A long list is queued
     /// on several threads: each move is written to the ring in list order, then the threads
     /// that own the slots' entries of [`Self::update_of_slot`] take them (`crate::parallel`), so
-    /// that a slot's last move wins; the moves it supersedes, and those folded into a whole
-    /// record queued for their slot, are then dropped.
+    /// that a slot's last update wins; the updates it supersedes are then dropped.
     fn queue_moves(&mut self, movers: &[u32], world: &World) -> Result<()> {
         // The renderer's own copy of the slot keeps its old transform: a random write per move
         // into a table of every slot would cost more than the rest of the move (see
         // `Renderer::scene`).
         let instances = &world.scene().instances;
-        let transform_words = |i: u32| GpuInstance::transform_words(&instances[i as usize].transform);
         if !crate::parallel::worth_routing(movers.len()) {
             for &i in movers {
-                let Some(slot) = self.layout.slot_of(i) else { continue };
-                let (rows, translation_lo) = transform_words(i);
-                self.queue_move(slot, rows, translation_lo)?;
+                let Some(placed) = self.layout.placement_of(i) else { continue };
+                self.queue_update(move_of(&instances[i as usize], placed))?;
             }
             return Ok(());
         }
@@ -198,7 +180,7 @@ impl WorldMirror {
         let owners = crate::parallel::Owners::new(slots, movers.len());
         let layout = &self.layout;
         // The moves are written straight into the memory the GPU reads them from.
-        let (base, room) = self.moves.room(movers.len())?;
+        let (base, room) = self.updates.room(movers.len())?;
         let ahead = |k: usize| {
             let i = movers[k];
             layout.prefetch(i);
@@ -208,61 +190,30 @@ impl WorldMirror {
         };
         let routed = crate::parallel::route(room, &owners, ahead, |k, update| {
             let i = movers[k];
-            let Some(slot) = layout.slot_of(i) else {
-                *update = MoveUpdate { rows: [[0.0; 4]; 3], translation_lo: [0.0; 3], slot: DROPPED };
+            let Some(placed) = layout.placement_of(i) else {
+                *update = SlotUpdate::DROPPED;
                 return Ok::<_, std::convert::Infallible>(None);
             };
-            let (rows, translation_lo) = transform_words(i);
-            *update = MoveUpdate { rows, translation_lo, slot };
-            Ok(Some(slot as usize))
+            *update = move_of(&instances[i as usize], placed);
+            Ok(Some(placed.slot as usize))
         });
         let Ok(routed) = routed;
-        self.moves.note_slots(&routed);
-        // Per move that leaves the list: where it is, and the whole record it folds into
-        // (`u32::MAX`: none, a later move of its slot superseded it).
-        let leaving = crate::parallel::apply_routed(&mut self.update_of_slot, &owners, &routed, |entry, k| {
-            let queued = (base + k) as u32;
-            match *entry {
-                u32::MAX => {
-                    *entry = queued;
-                    None
-                }
-                whole if whole & WHOLE != 0 => Some((queued, whole & !WHOLE)),
-                superseded => {
-                    *entry = queued;
-                    Some((superseded, u32::MAX))
-                }
-            }
+        self.updates.note_slots(&routed);
+        // The updates the list supersedes: queued before it, or earlier in it.
+        let superseded = crate::parallel::apply_routed(&mut self.update_of_slot, &owners, &routed, |entry, k| {
+            let earlier = std::mem::replace(entry, (base + k) as u32);
+            (earlier != u32::MAX).then_some(earlier)
         });
-        // A slot's moves are in list order in `leaving`: its last folds into the record last.
-        // What folds is a move of this list, whose transform the world holds (the ring's
-        // memory is written, never read back).
-        for &(at, whole) in &leaving {
-            if let Some(record) = self.whole.get_mut(whole as usize) {
-                let (rows, translation_lo) = transform_words(movers[at as usize - base]);
-                record.instance.rows = rows;
-                record.instance.translation_lo = translation_lo;
-            }
-            self.moves.at(at as usize).slot = DROPPED;
+        for &at in &superseded {
+            self.updates.at(at as usize).slot = DROPPED;
         }
         Ok(())
     }
 
     /// Queues `slot`'s whole new record (replacing any update queued before).
-    fn queue_whole(&mut self, slot: u32, group: u32, instance: GpuInstance) {
-        let index = self.whole.len() as u32 | WHOLE;
-        let entry = *self.entry(slot);
-        match entry {
-            u32::MAX => {}
-            i if i & WHOLE != 0 => {
-                self.whole[(i & !WHOLE) as usize] = SlotUpdate { slot, group, instance };
-                return;
-            }
-            // The whole record supersedes the queued move.
-            i => self.moves.at(i as usize).slot = DROPPED,
-        }
-        self.update_of_slot[slot as usize] = index;
-        self.whole.push(SlotUpdate { slot, group, instance });
+    fn queue_whole(&mut self, slot: u32, group: u32, record: GpuInstance) -> Result<()> {
+        let GpuInstance { rows, translation_lo, material_flags } = record;
+        self.queue_update(SlotUpdate { rows, translation_lo, slot, group, material_flags })
     }
 
     /// Queues `data` as `slot`'s user data (replacing any queued before).
@@ -293,23 +244,20 @@ impl WorldMirror {
             self.user_of_slot[entry[0] as usize] = u32::MAX;
         }
         self.user.clear();
-        for slot in Self::updated_slots(&self.moves, &self.whole) {
+        for slot in Self::updated_slots(&self.updates) {
             self.update_of_slot[slot as usize] = u32::MAX;
         }
-        self.moves.clear();
-        self.whole.clear();
+        self.updates.clear();
     }
 
     /// The slots whose records the queued updates replace (a slot may be listed twice).
-    fn updated_slots<'a>(moves: &'a MoveRing, whole: &'a [SlotUpdate]) -> impl Iterator<Item = u32> + 'a {
-        moves.slots().iter().copied().filter(|&s| s != DROPPED).chain(whole.iter().map(|u| u.slot))
+    fn updated_slots(updates: &UpdateRing) -> impl Iterator<Item = u32> + '_ {
+        updates.slots().iter().copied().filter(|&s| s != DROPPED)
     }
 
     /// Bytes queued.
     fn queued_bytes(&self) -> u64 {
-        (self.moves.len() * std::mem::size_of::<MoveUpdate>()
-            + std::mem::size_of_val(self.whole.as_slice())
-            + std::mem::size_of_val(self.user.as_slice())) as u64
+        (self.updates.len() * std::mem::size_of::<SlotUpdate>() + std::mem::size_of_val(self.user.as_slice())) as u64
             + self.deformer.as_ref().map_or(0, |d| d.queued_bytes())
     }
 
@@ -334,14 +282,14 @@ impl WorldMirror {
         let (timer, timed) = &mut self.timers[k];
         timer.reset(cmd);
         *timed = Some(frame);
-        let scatters = !self.moves.is_empty() || !self.whole.is_empty();
+        let scatters = !self.updates.is_empty();
         let deforms = self.deformer.as_ref().is_some_and(|d| d.pending());
         let uploads = uploads.filter(|b| !b.is_empty());
         let previous = scene.prev_instances.as_ref();
         // A new scene copies every record; so does a frame whose listed slots are a large share
         // of the table, where one linear copy is faster than scattered ones (`COPY_ALL_SHARE`).
         // Otherwise the slots updated now and last frame are copied.
-        let listed = self.last_slots.len() + self.moves.len() + self.whole.len();
+        let listed = self.last_slots.len() + self.updates.len();
         let most_listed = (scene.instance_count as usize / COPY_ALL_SHARE).max(COPY_ALL_MIN_LISTED);
         let copies_all = previous.is_some() && (self.refresh_previous || listed > most_listed);
         let keeps_previous = previous.is_some() && !copies_all && (scatters || !self.last_slots.is_empty());
@@ -394,10 +342,10 @@ impl WorldMirror {
         cmd_barriers(device, cmd, &[memory_barrier(all, compute_rw)], &[]);
         if let Some(previous) = previous.filter(|_| keeps_previous) {
             // A slot in both lists is written twice with the same record.
-            let now = Self::updated_slots(&self.moves, &self.whole);
+            let now = Self::updated_slots(&self.updates);
             let slots: Vec<u32> = self.last_slots.iter().copied().chain(now).collect();
             let name = format!("previous record slots {k}");
-            let segment = fill_segment(ctx, &mut self.segments[k][2], &name, bytemuck::cast_slice(&slots))?;
+            let segment = fill_segment(ctx, &mut self.segments[k][1], &name, bytemuck::cast_slice(&slots))?;
             self.keep_previous.bind(cmd);
             let mut binds = vec![Bind::Buffer(0, segment.handle())];
             binds.extend(scene.instance_binds(1));
@@ -423,7 +371,7 @@ impl WorldMirror {
         }
         if let (Some(pipeline), Some(user_data), false) = (&self.scatter_user, &scene.user_data, self.user.is_empty()) {
             let bytes: &[u8] = bytemuck::cast_slice(&self.user);
-            let segment = fill_segment(ctx, &mut self.segments[k][1], &format!("user data updates {k}"), bytes)?;
+            let segment = fill_segment(ctx, &mut self.segments[k][0], &format!("user data updates {k}"), bytes)?;
             let count = self.user.len() as u32 / (self.user_words + 1);
             pipeline.bind(cmd);
             pipeline.push_bindings(cmd, &[Bind::Buffer(0, segment.handle()), Bind::Buffer(1, user_data.handle())]);
@@ -433,25 +381,22 @@ impl WorldMirror {
                 crate::gpu::line_dispatch::cmd_dispatch_line(device, cmd, &ctx.caps().limits, count.div_ceil(64))
             };
         }
-        // Whole records first: a move queued for the same slot was folded into its record.
-        let mut lists: Vec<(usize, ash::vk::Buffer, usize)> = Vec::new();
-        if !self.whole.is_empty() {
-            let bytes = bytemuck::cast_slice(&self.whole);
-            let segment = fill_segment(ctx, &mut self.segments[k][0], &format!("world records {k}"), bytes)?;
-            lists.push((1, segment.handle(), self.whole.len()));
-        }
-        lists.extend(self.moves.chunks().map(|(buffer, count)| (0, buffer.handle(), count)));
-        for (list, buffer, count) in lists {
-            let pipeline = &self.scatter[list];
-            pipeline.bind(cmd);
+        // A slot's superseded updates are dropped, so the chunks touch different slots, but a
+        // barrier between them keeps the tools sure of it (a frame has more than one chunk only
+        // when its syncs outgrew the ring).
+        for (c, (buffer, count)) in self.updates.chunks().enumerate() {
+            if c > 0 {
+                cmd_barriers(device, cmd, &[memory_barrier(compute_rw, compute_rw)], &[]);
+            }
+            self.scatter.bind(cmd);
             let mut binds = vec![
-                Bind::Buffer(0, buffer),
+                Bind::Buffer(0, buffer.handle()),
                 Bind::Buffer(2, scene.cull_records.handle()),
                 Bind::Buffer(3, scene.group_bounds.handle()),
             ];
             binds.extend(scene.instance_binds(1));
-            pipeline.push_bindings(cmd, &binds);
-            pipeline.push_constants(cmd, &[count as u32]);
+            self.scatter.push_bindings(cmd, &binds);
+            self.scatter.push_constants(cmd, &[count as u32]);
             // SAFETY: cmd recording with the scatter pipeline bound.
             unsafe {
                 crate::gpu::line_dispatch::cmd_dispatch_line(
@@ -461,9 +406,6 @@ impl WorldMirror {
                     (count as u32).div_ceil(64),
                 )
             };
-            // The lists touch different slots (a superseded move is dropped), but the barrier
-            // keeps the tools sure of it.
-            cmd_barriers(device, cmd, &[memory_barrier(compute_rw, compute_rw)], &[]);
         }
         cmd_barriers(device, cmd, &[memory_barrier(compute_rw, all)], &[]);
         timer.end(cmd);
@@ -474,10 +416,10 @@ impl WorldMirror {
     /// are its figures.
     pub(super) fn recorded(&mut self, frame: u64) {
         self.last_slots.clear();
-        self.last_slots.extend(Self::updated_slots(&self.moves, &self.whole));
+        self.last_slots.extend(Self::updated_slots(&self.updates));
         self.refresh_previous = false;
         self.clear_updates();
-        self.moves.advance();
+        self.updates.advance();
         if let Some(stats) = self.pending.take() {
             self.recent.push_back((frame, stats));
             // Kept while the frame's other figures can still be read back.
@@ -629,20 +571,12 @@ impl Renderer {
             version: world.version(),
             layout,
             handles: world_handles(world),
-            moves: MoveRing::new(ctx),
-            whole: Vec::new(),
+            updates: UpdateRing::new(ctx),
             update_of_slot: Vec::new(),
             user: Vec::new(),
             user_of_slot: Vec::new(),
-            segments: (0..FRAMES_IN_FLIGHT).map(|_| [None, None, None]).collect(),
-            scatter: [
-                Pipeline::compute(
-                    ctx,
-                    "world scatter (moves)",
-                    &shaders.compile("world/scatter.comp", &[("MOVES", "1")])?,
-                )?,
-                Pipeline::compute(ctx, "world scatter", &shaders.compile("world/scatter.comp", &[])?)?,
-            ],
+            segments: (0..FRAMES_IN_FLIGHT).map(|_| [None, None]).collect(),
+            scatter: Pipeline::compute(ctx, "world scatter", &shaders.compile("world/scatter.comp", &[])?)?,
             keep_previous: Pipeline::compute(
                 ctx,
                 "world previous records",
@@ -760,7 +694,7 @@ impl Renderer {
         registered.dedup();
         // A moved, changed or posed instance queues at most one move (a regrouped material's
         // instances aside): with the room made first, queueing them cannot fail halfway.
-        mirror.moves.reserve(movers.len() + instances.len() + posed.len())?;
+        mirror.updates.reserve(movers.len() + instances.len() + posed.len())?;
         let textures_changed = !registered.textures.is_empty();
         // A material's sidedness and blending decide its instances' draw groups: they are
         // re-placed where those changed (a rare event, so a pass over the instances is fine). A
@@ -846,21 +780,17 @@ impl Renderer {
         for &slot in &touched {
             let contents = mirror.layout.slot_contents(slot, world.scene());
             let before = &self.scene.instances[slot as usize];
-            // The same instance in the same slot with its material and flags: a move.
+            // The same instance in the same slot with its material and flags: a move, which
+            // keeps the slot's user data.
             let moved = before.mesh == contents.mesh
                 && before.material == contents.material
                 && before.flags == contents.flags
                 && moved_in_place.binary_search(&slot).is_ok();
-            let record = GpuInstance::new(&contents);
-            if moved {
-                mirror.queue_move(slot, record.rows, record.translation_lo)?;
-            } else {
-                let group = mirror.layout.group_of_slot(slot) as u32;
-                mirror.queue_whole(slot, group, record);
-                // An instance new to its slot brings its user data along.
-                if let Some(i) = mirror.layout.instance_in(slot).filter(|_| mirror.user_words > 0) {
-                    mirror.queue_user_data(slot, world.user_data_at(i));
-                }
+            let group = mirror.layout.group_of_slot(slot) as u32;
+            mirror.queue_whole(slot, group, GpuInstance::new(&contents))?;
+            // An instance new to its slot brings its user data along.
+            if let Some(i) = mirror.layout.instance_in(slot).filter(|_| !moved && mirror.user_words > 0) {
+                mirror.queue_user_data(slot, world.user_data_at(i));
             }
             self.scene.instances[slot as usize] = contents;
         }
@@ -995,16 +925,14 @@ impl Renderer {
         let mirror = self.world.as_mut().expect("a world renderer");
         let mut batch = None;
         for &i in posed {
-            let (Some(pose), Some(slot)) = (world.pose_at(i), mirror.layout.slot_of(i)) else { continue };
+            let (Some(pose), Some(placed)) = (world.pose_at(i), mirror.layout.placement_of(i)) else { continue };
             if mirror.deformer.is_none() {
                 mirror.deformer = Some(super::deform::Deformer::new(&self.ctx, shaders)?);
             }
             let batch = batch.get_or_insert_with(|| self.uploads.pending.take().unwrap_or_default());
-            let group = mirror.layout.group_of_slot(slot) as u32;
             let deformer = mirror.deformer.as_mut().expect("made above");
-            deformer.queue(&self.ctx, &mut batch.edits, world.scene(), i, pose, group)?;
-            let (rows, translation_lo) = GpuInstance::transform_words(&world.scene().instances[i as usize].transform);
-            mirror.queue_move(slot, rows, translation_lo)?;
+            deformer.queue(&self.ctx, &mut batch.edits, world.scene(), i, pose, placed.group)?;
+            mirror.queue_update(move_of(&world.scene().instances[i as usize], placed))?;
         }
         if let Some(mut batch) = batch {
             batch.edits.stage(&self.ctx)?;
@@ -1179,7 +1107,7 @@ impl Renderer {
         // The new slots' records (empty; the instances placed there are queued after).
         for slot in slots_before..slots {
             let group = mirror.layout.group_of_slot(slot) as u32;
-            mirror.queue_whole(slot, group, GpuInstance::new(&self.scene.instances[slot as usize]));
+            mirror.queue_whole(slot, group, GpuInstance::new(&self.scene.instances[slot as usize]))?;
         }
         let light_capacity =
             if lights_outgrown { with_room(self.scene.lights.len() as u64) as usize } else { self.light_capacity };
