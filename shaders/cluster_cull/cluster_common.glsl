@@ -39,10 +39,9 @@ struct ClusteredCommand {
     uint pad1;
 };
 
-// The scratch buffer's header, then the clustered commands.
+// The scratch buffer's header (words 2 to 7 unused), then the clustered commands.
 #define SCRATCH_CLUSTERED 0u   // clustered commands
 #define SCRATCH_TASKS 1u       // tasks in all
-#define SCRATCH_DISPATCH 4u    // the test step's VkDispatchIndirectCommand (x, y, z)
 #define SCRATCH_HEADER_WORDS 8u
 
 // Counters of one cluster pass (ClusterCounters in src/passes/cluster_cull.rs, 48 bytes).

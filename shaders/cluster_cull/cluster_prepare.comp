@@ -29,6 +29,9 @@ layout(set = 0, binding = 11) buffer Stats { uint stats[STAT_WORDS]; };
 #ifdef MASKED
 layout(set = 0, binding = 12) writeonly buffer MaskedClusterCount { uint masked_cluster_count[CLUSTER_REGIONS]; };
 #endif
+// The test step's VkDispatchIndirectCommand (x, y, z), in the pass's own buffer: written here,
+// so that no copy (and no barrier before and after it) stands between the two steps.
+layout(set = 0, binding = 13) writeonly buffer TestDispatch { uint test_dispatch[3]; };
 
 layout(push_constant) uniform Push {
     uint region_first[FACE_CULL_REGIONS];   // first command of each region
@@ -148,8 +151,8 @@ void main() {
         clustered = min(clustered, pc.clustered_capacity);
         scratch[SCRATCH_CLUSTERED] = clustered;
         scratch[SCRATCH_TASKS] = tasks;
-        scratch[SCRATCH_DISPATCH + 0u] = min((tasks + pc.tasks_per_group - 1u) / pc.tasks_per_group, pc.max_groups);
-        scratch[SCRATCH_DISPATCH + 1u] = 1u;
-        scratch[SCRATCH_DISPATCH + 2u] = 1u;
+        test_dispatch[0] = min((tasks + pc.tasks_per_group - 1u) / pc.tasks_per_group, pc.max_groups);
+        test_dispatch[1] = 1u;
+        test_dispatch[2] = 1u;
     }
 }

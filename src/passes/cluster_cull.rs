@@ -93,8 +93,6 @@ const MASKED_CLUSTER_COMMANDS_BYTES: &str = "max(1, masked_clusters) * 60";
 const SCRATCH_BYTES: &str = "32 + meshes * 32";
 /// Words of the scratch header (`SCRATCH_HEADER_WORDS` in `cluster_common.glsl`).
 const SCRATCH_HEADER_WORDS: u64 = 8;
-/// Byte offset of the test step's dispatch size in the scratch.
-const DISPATCH_OFFSET: u64 = 16;
 /// The test step's largest dispatch (of 4 tasks a workgroup): its workgroups loop over the
 /// tasks beyond, so the counters see one atomic per workgroup, not one per task.
 const MAX_TEST_GROUPS: u32 = 4096;
@@ -204,10 +202,23 @@ struct ClusterCullPass {
     dispatch: Buffer,
 }
 
+/// What the test step does with what the prepare step wrote: reads its dispatch size, and
+/// reads and writes storage buffers.
+const TEST_STEP: Access = Access {
+    stage: vk::PipelineStageFlags2::from_raw(Access::INDIRECT.stage.as_raw() | Access::COMPUTE_WRITE.stage.as_raw()),
+    access: vk::AccessFlags2::from_raw(Access::INDIRECT.access.as_raw() | Access::COMPUTE_WRITE.access.as_raw()),
+    layout: vk::ImageLayout::UNDEFINED,
+};
+
 impl PassNode for ClusterCullPass {
     /// Its commands follow from its settings, slots and the scene alone.
     fn replay_state(&self) -> Option<u64> {
         Some(0)
+    }
+
+    /// The prepare step overwrites the dispatch size that the last run's test step read.
+    fn own_dependency(&mut self) -> Option<(Access, Access)> {
+        Some((Access::INDIRECT, Access::COMPUTE_WRITE))
     }
 
     fn record(&mut self, rec: &PassContext<'_>) -> crate::Result<()> {
@@ -223,8 +234,6 @@ impl PassNode for ClusterCullPass {
         let (scratch, stats) = (need("scratch")?, need("stats")?);
         let device = rec.ctx.device();
         let cmd = rec.cmd;
-        // Last frame's test step read the dispatch size this frame's copy overwrites.
-        cmd_barriers(device, cmd, &[memory_barrier(Access::INDIRECT, Access::TRANSFER_WRITE)], &[]);
         let clustered_capacity = ((scratch.size() / 4).saturating_sub(SCRATCH_HEADER_WORDS) / 8).min(u32::MAX as u64);
         let push = PreparePush {
             region_first: scene.regions.first,
@@ -250,30 +259,15 @@ impl PassNode for ClusterCullPass {
         if let Some((_, masked_count)) = masked {
             binds.push(Bind::Buffer(12, masked_count.handle()));
         }
+        binds.push(Bind::Buffer(13, self.dispatch.handle()));
         rec.step("prepare");
         self.prepare.dispatch_over(cmd, &binds, bytemuck::bytes_of(&push), vk::Extent2D { width: 1, height: 1 });
         // Without clustered meshes the prepare step passed every command on whole: no test.
         if scene.clustered_meshes == 0 {
             return Ok(());
         }
-        cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ)], &[]);
-        let copy = vk::BufferCopy { src_offset: DISPATCH_OFFSET, dst_offset: 0, size: 12 };
-        // SAFETY: cmd recording; both buffers hold the 12 bytes copied.
-        unsafe { device.cmd_copy_buffer(cmd, scratch.handle(), self.dispatch.handle(), &[copy]) };
-        let after = Access {
-            stage: Access::INDIRECT.stage | Access::COMPUTE_WRITE.stage,
-            access: Access::INDIRECT.access | Access::COMPUTE_WRITE.access,
-            ..Access::INDIRECT
-        };
-        cmd_barriers(
-            device,
-            cmd,
-            &[
-                memory_barrier(Access::TRANSFER_WRITE, after),
-                memory_barrier(Access::COMPUTE_WRITE, Access::COMPUTE_WRITE),
-            ],
-            &[],
-        );
+        // The test step's dispatch size, its tasks in the scratch and its zeroed counts.
+        cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, TEST_STEP)], &[]);
         let capacity = TestPush {
             region_capacity: region_capacity(cluster_commands),
             masked_region_capacity: masked.map_or(0, |(commands, _)| region_capacity(commands)),
@@ -388,7 +382,7 @@ impl PassKind for ClusterCullKind {
             &BufferDesc {
                 name: &format!("{} dispatch", s.pass.name),
                 size: 16,
-                usage: vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                usage: vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
                 location: MemoryLocation::GpuOnly,
             },
         )?;
