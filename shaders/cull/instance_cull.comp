@@ -255,15 +255,19 @@ bool is_occluder(CullRecord r, vec3 c, float radius) {
 // The most pixels that one world unit of displacement anywhere in the bound's visible part can
 // move on screen. Perspective: a displacement e at view depth z moves the projection by at most
 // |(e.x + t.x e.z, e.y + t.y e.z)| * pixels / z, where t is the projected point's tangent
-// (x/z, y/z), whose size the frustum bounds; the matrix [1 0 t.x; 0 1 t.y] stretches by at most
-// sqrt(1 + t.x^2 + t.y^2). Depth is at least the bound's nearest depth, and at least the near
-// plane for any point that is drawn.
+// (x/z, y/z); the matrix [1 0 t.x; 0 1 t.y] stretches by at most sqrt(1 + t.x^2 + t.y^2). Depth
+// is at least the bound's nearest depth, and at least the near plane for any point that is
+// drawn. The tangent's size is bounded twice, and the smaller bound holds: by the frustum (a
+// visible point), and by the bound itself (its points are at most |center.xy| + radius off the
+// view axis, at that least depth), which is what keeps a bound near the middle of the view from
+// taking the corners' stretch.
 float lod_pixels_per_unit(CullView view, vec3 c, float radius) {
     float pixels = 0.5 * max(view.scale.x * float(view.viewport.x), view.scale.y * float(view.viewport.y));
     if (view.orthographic != 0u) return pixels;
-    float depth = -cull_to_view(view.rotation, c).z - radius;
-    vec2 t = (vec2(1.0) + abs(view.offset)) / view.scale;
-    return pixels * sqrt(1.0 + dot(t, t)) / max(depth, view.near);
+    vec3 v = cull_to_view(view.rotation, c);
+    float depth = max(-v.z - radius, view.near);
+    vec2 t = min((vec2(1.0) + abs(view.offset)) / view.scale, (abs(v.xy) + radius) / depth);
+    return pixels * sqrt(1.0 + dot(t, t)) / depth;
 }
 
 // The coarsest level of `group`'s mesh whose error, projected conservatively, stays within the
