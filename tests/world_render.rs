@@ -232,6 +232,58 @@ proptest! {
     }
 }
 
+/// Two syncs before a frame, in which slots change twice or more, in either order: a move
+/// before and after another material, before and after another mesh (a slot in another group),
+/// an insert then moved, a move then removed, and the second sync changing the first's slots
+/// again. Every slot ends as its last change left it: the renderer shows what one made afresh
+/// from the world shows, and misses nothing.
+#[test]
+fn a_slots_last_change_wins_within_a_frame() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let (mut world, mut handles, meshes) = living_boxes();
+    for i in 0..6 {
+        let op = Op::Insert { x: -3.5 + 1.3 * i as f64, z: 2.5, tall: i % 2 == 0 };
+        apply(&mut world, &mut handles, &op, meshes);
+    }
+    let camera = Camera { eye: DVec3::new(0.0, 6.0, 9.0), target: DVec3::new(0.0, 0.5, 0.0), ..Default::default() };
+    let mut live = renderer(&gpu, &world, "two_phase", true);
+    let before = live.render_to_image(&camera).unwrap().1;
+
+    let moved = |which: usize, x: f64, z: f64| Op::Move { which, x, z };
+    let mut ops = vec![
+        moved(0, 1.5, -1.0),
+        Op::Recolor(0),
+        Op::Recolor(1),
+        moved(1, -2.5, -2.0),
+        moved(2, 3.0, 0.5),
+        Op::Remesh(2),
+        Op::Remesh(3),
+        moved(3, -1.0, 1.0),
+        Op::Insert { x: 0.5, z: -3.0, tall: true },
+    ];
+    // The inserted box moved, then a box moved and removed.
+    let inserted = handles.len();
+    ops.extend([moved(inserted, 2.0, -2.5), moved(4, -3.0, 0.0), Op::Remove(4)]);
+    for op in &ops {
+        apply(&mut world, &mut handles, op, meshes);
+    }
+    live.sync(shaders, &world).unwrap();
+    let again = [moved(0, -0.5, -3.0), Op::Recolor(0), moved(1, 3.5, -0.5), Op::Recolor(2), moved(3, -3.5, -1.5)];
+    for op in &again {
+        apply(&mut world, &mut handles, op, meshes);
+    }
+    live.sync(shaders, &world).unwrap();
+    let (stats, image) = live.render_to_image(&camera).unwrap();
+    assert_eq!(stats.verify.expect("verified").false_negatives, 0);
+    let mut fresh = renderer(&gpu, &world, "two_phase", false);
+    let want = fresh.render_to_image(&camera).unwrap().1;
+    let differ = differing_pixels(&image, &want);
+    assert!(differ <= DEPTH_TIE_PIXELS, "{differ} pixels differ from a renderer made afresh");
+    assert!(differing_pixels(&image, &before) > 100, "the changes show");
+    gpu.assert_clean();
+}
+
 #[test]
 fn the_same_changes_give_the_same_images_bit_for_bit() {
     let gpu = GpuTest::new();
