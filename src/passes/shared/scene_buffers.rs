@@ -464,7 +464,7 @@ pub(crate) fn drawn_triangles(scene: &Scene) -> u64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -487,7 +487,7 @@ mod tests {
     use glam::{DVec3, Vec3};
 
     /// A scene of `meshes` one-triangle meshes and one material, no instances yet.
-    fn triangle_meshes(meshes: usize) -> (Scene, Vec<u32>) {
+    pub(crate) fn triangle_meshes(meshes: usize) -> (Scene, Vec<u32>) {
         let mut scene = Scene::default();
         let tri = MeshData {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],

@@ -370,8 +370,7 @@ impl SlotLayout {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::MeshData;
-    use glam::{DVec3, Mat3, Vec3};
+    use glam::{DVec3, Mat3};
 
     /// Every placed instance's group is the group its slot lies in.
     fn assert_placements_agree(layout: &SlotLayout, instances: u32) {
@@ -385,15 +384,7 @@ mod tests {
 
     #[test]
     fn placements_name_the_group_of_their_slot_as_the_layout_grows() {
-        let mut scene = Scene::default();
-        let tri = MeshData {
-            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
-            normals: vec![],
-            indices: vec![0, 1, 2],
-            ..Default::default()
-        };
-        let meshes = [scene.add_mesh("a", &tri, "a").unwrap(), scene.add_mesh("b", &tri, "b").unwrap()];
-        scene.add_material(Default::default());
+        let (mut scene, meshes) = crate::passes::shared::scene_buffers::tests::triangle_meshes(2);
         for i in 0..40u32 {
             let transform = Transform { linear: Mat3::IDENTITY, translation: DVec3::new(i as f64, 0.0, 0.0) };
             scene.instances.push(Instance { transform, mesh: meshes[(i % 3 == 0) as usize], material: 0, flags: 0 });
