@@ -96,8 +96,9 @@ pub struct SlotLayout {
     pub groups: Vec<GroupRange>,
     /// The groups of each key, oldest first.
     groups_of_key: HashMap<(usize, u32), Vec<usize>>,
-    /// The groups with slots, in slot order.
-    by_slot: Vec<usize>,
+    /// The group of each slot: a slot's group never changes, and a change of a slot asks for
+    /// it (a search over the groups cost more than the rest of an insert or a remove).
+    slot_group: Vec<u32>,
     /// Per face-cull region, its groups held in reserve, last to be used first.
     reserve: [Vec<usize>; FACE_CULL_REGIONS],
     /// The world instance index each slot holds.
@@ -132,7 +133,7 @@ impl SlotLayout {
         let mut layout = Self {
             groups: Vec::new(),
             groups_of_key: HashMap::new(),
-            by_slot: Vec::new(),
+            slot_group: Vec::new(),
             reserve: Default::default(),
             slot_instance: Vec::new(),
             instance_slot: vec![Placement::NONE; scene.instances.len()],
@@ -216,7 +217,7 @@ impl SlotLayout {
         // Lowest slots first.
         self.free[g] = (first_slot..first_slot + capacity).rev().collect();
         self.groups_of_key.entry(key).or_default().push(g);
-        self.by_slot.push(g);
+        self.slot_group.extend(std::iter::repeat_n(g as u32, capacity as usize));
     }
 
     /// Makes room for more instances of `key`: a new range at the end of the slots, as large as
@@ -266,8 +267,7 @@ impl SlotLayout {
 
     /// The group `slot` belongs to (its index in [`SlotLayout::groups`], the command order).
     pub fn group_of_slot(&self, slot: u32) -> usize {
-        let k = self.by_slot.partition_point(|&g| self.groups[g].first_slot + self.groups[g].capacity <= slot);
-        self.by_slot[k]
+        self.slot_group[slot as usize] as usize
     }
 
     /// Makes the slots freed before `frame` reusable.
