@@ -57,19 +57,18 @@ const float HALF_MAX = 65504.0;
 void main() {
     uint i = line_invocation();
     if (i >= pc.count) return;
-    vec4 rows[3];
-    vec3 lo_t;
     uvec4 w[4] = updates[i].words;
     uint slot = w[3].w;
     // An update superseded before its frame (src/render/renderer/update_ring.rs, DROPPED).
     if (slot == 0xFFFFFFFFu) return;
+    uint material_flags = updates[i].material_flags;
+    vec4 rows[3];
     for (uint r = 0u; r < 3u; ++r) {
         rows[r] = uintBitsToFloat(w[r]);
         set_instance_word(slot, r, w[r]);
     }
-    lo_t = uintBitsToFloat(w[3].xyz);
-    uint material_flags = updates[i].material_flags;
     set_instance_word(slot, 3u, uvec4(w[3].xyz, material_flags));
+    vec3 lo_t = uintBitsToFloat(w[3].xyz);
     uint group = updates[i].group;
     GroupBounds b = group_bounds[group];
     vec3 c = b.center_radius.xyz;
