@@ -285,6 +285,36 @@ fn a_slots_last_change_wins_within_a_frame() {
 }
 
 #[test]
+fn a_shared_scene_is_held_once_and_a_world_renderers_copy_is_its_own() {
+    let gpu = GpuTest::new();
+    let shaders = gpu.shaders();
+    let camera = boxes_camera();
+    let settings = || RenderSettings::new(SIZE.0, SIZE.1);
+    // A scene rendered as it is: the renderer keeps the caller's, and draws it as its own copy.
+    let scene = std::sync::Arc::new(boxes_scene());
+    let mut shared = Renderer::new(&gpu, shaders, scene.clone(), settings()).unwrap();
+    assert!(std::sync::Arc::ptr_eq(&shared.shared_scene(), &scene), "the renderer holds the caller's scene");
+    let mut owned = Renderer::new(&gpu, shaders, boxes_scene(), settings()).unwrap();
+    assert_eq!(shared.render_to_image(&camera).unwrap().1, owned.render_to_image(&camera).unwrap().1);
+
+    // A world renderer's slots: a caller's share keeps the slots as they were when shared.
+    let (mut world, mut handles, meshes) = living_boxes();
+    let mut live = renderer(&gpu, &world, "two_phase", false);
+    let held = live.shared_scene();
+    let slots_then = held.instances.clone();
+    for op in [Op::Recolor(0), Op::Insert { x: 1.0, z: 1.0, tall: true }] {
+        apply(&mut world, &mut handles, &op, meshes);
+    }
+    live.sync(shaders, &world).unwrap();
+    assert_eq!(held.instances, slots_then, "a shared copy does not change");
+    assert_ne!(live.scene().instances, slots_then, "the renderer's own slots took the changes");
+    let image = live.render_to_image(&camera).unwrap().1;
+    let want = renderer(&gpu, &world, "two_phase", false).render_to_image(&camera).unwrap().1;
+    assert!(differing_pixels(&image, &want) <= DEPTH_TIE_PIXELS);
+    gpu.assert_clean();
+}
+
+#[test]
 fn the_same_changes_give_the_same_images_bit_for_bit() {
     let gpu = GpuTest::new();
     let ops: Vec<Op> = (0..16)

@@ -191,8 +191,10 @@ pub fn run(
     for &n in &bench.instances {
         progress(&format!("city with {n} instances"));
         let resident_before = super::resident_bytes();
-        let scene =
-            SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(n), ..Default::default() })?;
+        // Shared with every renderer made of it, as an engine that keeps its scene would.
+        let scene = std::sync::Arc::new(
+            SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(n), ..Default::default() })?,
+        );
         let per_instance = |before: Option<u64>| {
             let grown = super::resident_bytes()?.checked_sub(before?)?;
             Some(grown as f64 / n.max(1) as f64)
@@ -216,7 +218,7 @@ pub fn run(
                 false => GraphSpec::builtin(graph)?,
             };
             let settings = RenderSettings::new(bench.width, bench.height);
-            // The renderer's own copy of the scene is counted: it takes `scene` by value.
+            // What the renderer keeps beside the scene it shares is counted.
             let resident_before = super::resident_bytes();
             let peak_from = super::reset_peak_resident().then_some(resident_before).flatten();
             let mut renderer = Renderer::with_graph(ctx, shaders, scene.clone(), settings, &spec)?;

@@ -58,8 +58,9 @@ pub fn run(
     warmup: u32,
     frames: u32,
 ) -> crate::Result<Vec<HizFigure>> {
-    let scene =
-        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(2000), ..Default::default() })?;
+    let scene = std::sync::Arc::new(
+        SceneSource::Builtin("city".into()).load(&LoadOptions { instances: Some(2000), ..Default::default() })?,
+    );
     let mut out = Vec::new();
     for &(width, height) in sizes {
         let camera = scene.default_camera(width as f32 / height as f32);

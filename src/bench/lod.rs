@@ -148,7 +148,7 @@ pub fn run(
     let mut rows = Vec::new();
     for (name, source, instances) in &bench.scenes {
         progress(&format!("{name}: loading"));
-        let scene = source.load(&LoadOptions { instances: *instances, ..Default::default() })?;
+        let scene = std::sync::Arc::new(source.load(&LoadOptions { instances: *instances, ..Default::default() })?);
         let camera = scene.default_camera(bench.width as f32 / bench.height as f32);
         let mut measured = Vec::new();
         for &threshold in &thresholds {
@@ -204,7 +204,7 @@ pub fn run(
 fn renderer_at(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
-    scene: &Scene,
+    scene: &std::sync::Arc<Scene>,
     threshold: f64,
     clusters: bool,
     (width, height): (u32, u32),
@@ -220,7 +220,7 @@ fn measure(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
     bench: &LodBench,
-    scene: &Scene,
+    scene: &std::sync::Arc<Scene>,
     camera: &Camera,
     threshold: f64,
     clusters: bool,
@@ -264,7 +264,7 @@ fn render_supersampled(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
     bench: &LodBench,
-    scene: &Scene,
+    scene: &std::sync::Arc<Scene>,
     camera: &Camera,
     threshold: f64,
     n: u32,

@@ -148,7 +148,7 @@ pub fn run(
     for (scene_name, source) in &bench.scenes {
         for &lights in &bench.lights {
             progress(&format!("{scene_name}, {lights} lights: loading"));
-            let scene = source.load(&LoadOptions { lights: Some(lights), ..Default::default() })?;
+            let scene = std::sync::Arc::new(source.load(&LoadOptions { lights: Some(lights), ..Default::default() })?);
             let mut camera = scene.default_camera(bench.width as f32 / bench.height as f32);
             if let Some((eye, target)) = bench.view {
                 camera.eye = eye;
@@ -201,7 +201,7 @@ fn measure(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
     bench: &MsaaBench,
-    scene: &Scene,
+    scene: &std::sync::Arc<Scene>,
     camera: &Camera,
     method: &str,
     samples: u32,

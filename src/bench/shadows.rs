@@ -120,8 +120,10 @@ pub fn run(
     progress: &dyn Fn(&str),
 ) -> Result<ShadowsReport> {
     progress(&format!("shadows: city of {} instances", bench.instances));
-    let scene = SceneSource::Builtin("city".into())
-        .load(&LoadOptions { instances: Some(bench.instances), ..Default::default() })?;
+    let scene = std::sync::Arc::new(
+        SceneSource::Builtin("city".into())
+            .load(&LoadOptions { instances: Some(bench.instances), ..Default::default() })?,
+    );
     let camera = street_camera(&scene);
     let size = RenderSettings::new(bench.width, bench.height);
     let settings = |caster_culling| ShadowSettings {

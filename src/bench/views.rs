@@ -171,8 +171,10 @@ pub fn run(
     progress: &dyn Fn(&str),
 ) -> Result<ViewsReport> {
     progress(&format!("views: city of {} instances", bench.instances));
-    let scene = SceneSource::Builtin("city".into())
-        .load(&LoadOptions { instances: Some(bench.instances), ..Default::default() })?;
+    let scene = std::sync::Arc::new(
+        SceneSource::Builtin("city".into())
+            .load(&LoadOptions { instances: Some(bench.instances), ..Default::default() })?,
+    );
     let (w, h) = (bench.width, bench.height);
     let quarter = RenderSettings::new((w / 2).max(1), (h / 2).max(1));
     let spec = match bench.lod_threshold > 0.0 {
@@ -329,7 +331,7 @@ pub fn run(
 fn cascades(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
-    scene: &Scene,
+    scene: &std::sync::Arc<Scene>,
     bench: &ViewsBench,
     spec: &GraphSpec,
     progress: &dyn Fn(&str),

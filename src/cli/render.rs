@@ -171,8 +171,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     note_memory(&mut stats, &renderer);
     let scene = args.reference.is_some().then(|| match &animation {
-        Some(animation) => animation.world.live_scene(),
-        None => renderer.scene().clone(),
+        Some(animation) => std::sync::Arc::new(animation.world.live_scene()),
+        None => renderer.shared_scene(),
     });
     drop(renderer);
     if let (Some(n), Some(scene), Some((camera, image))) = (args.reference, scene, &last_frame) {

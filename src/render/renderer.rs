@@ -115,7 +115,9 @@ impl Retired {
 /// ([`Renderer::record`], [`Renderer::render`], [`Renderer::plan`], ...) address.
 pub struct Renderer {
     ctx: GpuContext,
-    scene: Scene,
+    /// The scene as the GPU holds it: the caller's own, shared, for a scene rendered as it is;
+    /// the renderer's copy of a world in slot order ([`Renderer::from_world`]).
+    scene: Arc<Scene>,
     /// The scene on the GPU, shared by every view.
     gpu_scene: Arc<GpuScene>,
     /// Point lights each view's per-frame light buffers hold.
@@ -141,19 +143,30 @@ pub struct Renderer {
 
 impl Renderer {
     /// Prepares `scene` for rendering through the default graph. Uploads are recorded into the first frame.
-    pub fn new(ctx: &GpuContext, shaders: &ShaderCompiler, scene: Scene, settings: RenderSettings) -> Result<Self> {
+    ///
+    /// The scene is taken by value or shared (`Arc<Scene>`): a caller that keeps its scene (for
+    /// other renderers, a reference image, exact visibility) shares it, and the host then holds
+    /// its instances once. The renderer never changes it.
+    pub fn new(
+        ctx: &GpuContext,
+        shaders: &ShaderCompiler,
+        scene: impl Into<Arc<Scene>>,
+        settings: RenderSettings,
+    ) -> Result<Self> {
         Self::with_graph(ctx, shaders, scene, settings, &GraphSpec::default_graph())
     }
 
-    /// Prepares `scene` for rendering through the graph `spec`.
+    /// Prepares `scene` (by value or shared, as for [`Renderer::new`]) for rendering through the
+    /// graph `spec`.
     pub fn with_graph(
         ctx: &GpuContext,
         shaders: &ShaderCompiler,
-        scene: Scene,
+        scene: impl Into<Arc<Scene>>,
         settings: RenderSettings,
         spec: &GraphSpec,
     ) -> Result<Self> {
         profiling::scope!("cullgraph::Renderer::with_graph");
+        let scene = scene.into();
         settings.validate()?;
         crate::scene::validate::validate_scene(&scene)?;
         let compiled = frame_inputs(&spec.kinds, &scene, settings.width, settings.height)?;
@@ -168,7 +181,7 @@ impl Renderer {
     #[allow(clippy::too_many_arguments)]
     fn assemble(
         ctx: &GpuContext,
-        scene: Scene,
+        scene: Arc<Scene>,
         gpu_scene: Arc<GpuScene>,
         light_capacity: usize,
         uploads: UploadBatch,
@@ -319,6 +332,13 @@ impl Renderer {
     /// The world's current state is [`crate::scene::world::World::live_scene`].
     pub fn scene(&self) -> &Scene {
         &self.scene
+    }
+
+    /// [`Renderer::scene`], shared: what a caller keeps instead of a copy (for a reference
+    /// image or exact visibility after the renderer is gone). A world renderer's copy stays its
+    /// own: its next change to the slots copies it first if it is still shared then.
+    pub fn shared_scene(&self) -> Arc<Scene> {
+        self.scene.clone()
     }
 
     /// The main view's output size.

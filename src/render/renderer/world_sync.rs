@@ -128,12 +128,12 @@ impl WorldMirror {
     pub(super) fn compiled_for(
         &mut self,
         kinds: &KindRegistry,
-        scene: &mut Scene,
+        scene: &mut Arc<Scene>,
         settings: &RenderSettings,
     ) -> Result<FrameInputs> {
         let layout = std::mem::take(&mut self.layout);
-        let (counted, counted_scene, layout) = quantities(kinds, std::mem::take(scene), layout);
-        *scene = counted_scene;
+        let (counted, counted_scene, layout) = quantities(kinds, take_scene(scene), layout);
+        *scene = Arc::new(counted_scene);
         self.layout = layout;
         Ok(with_room_to_grow(kinds, &counted?, settings))
     }
@@ -499,6 +499,12 @@ fn live_lights(world: &World) -> Vec<crate::scene::PointLight> {
     (0..scene.lights.len() as u32).filter(|&i| world.is_light_live(i)).map(|i| scene.lights[i as usize]).collect()
 }
 
+/// The renderer's copy of the world, taken out of `scene` to be changed and put back with
+/// `Arc::new`: copied only if a caller still shares it ([`Renderer::shared_scene`]).
+fn take_scene(scene: &mut Arc<Scene>) -> Scene {
+    Arc::unwrap_or_clone(std::mem::take(scene))
+}
+
 /// The world laid out in slots: the layout, the scene in slot order (live lights only) and its
 /// unculled draw list.
 fn lay_out(world: &World) -> (SlotLayout, Scene) {
@@ -564,8 +570,17 @@ impl Renderer {
         gpu_scene.add_user_data(ctx, &mut uploads, world.user_words(), &slot_user_data(world, &layout))?;
         let gpu_scene = Arc::new(gpu_scene);
         let light_capacity = with_room(scene.lights.len() as u64) as usize;
-        let mut renderer =
-            Self::assemble(ctx, scene, gpu_scene, light_capacity, uploads, runtime, compiled, settings, spec)?;
+        let mut renderer = Self::assemble(
+            ctx,
+            Arc::new(scene),
+            gpu_scene,
+            light_capacity,
+            uploads,
+            runtime,
+            compiled,
+            settings,
+            spec,
+        )?;
         renderer.world = Some(WorldMirror {
             world: world.id(),
             version: world.version(),
@@ -683,7 +698,7 @@ impl Renderer {
                 Change::Instance(i) => instances.push(i),
                 Change::Transform(i) => movers.push(i),
                 Change::Light(_) => lights = true,
-                Change::Sun => self.scene.sun = world.scene().sun,
+                Change::Sun => Arc::make_mut(&mut self.scene).sun = world.scene().sun,
                 Change::Mesh(m) => registered.meshes.push(m),
                 Change::Texture(t) => registered.textures.push(t),
                 Change::Material(m) => registered.materials.push(m),
@@ -716,7 +731,7 @@ impl Renderer {
         if lights {
             let live = live_lights(world);
             registered.lights_outgrown = live.len() > self.light_capacity;
-            self.scene.lights = live;
+            Arc::make_mut(&mut self.scene).lights = live;
         }
         instances.sort_unstable();
         instances.dedup();
@@ -792,7 +807,7 @@ impl Renderer {
             if let Some(i) = mirror.layout.instance_in(slot).filter(|_| !moved && mirror.user_words > 0) {
                 mirror.queue_user_data(slot, world.user_data_at(i));
             }
-            self.scene.instances[slot as usize] = contents;
+            Arc::make_mut(&mut self.scene).instances[slot as usize] = contents;
         }
         // A move of an instance that was also inserted, removed or changed since the last sync
         // is applied after the general path has given it its slot (or none); the world's
@@ -898,7 +913,7 @@ impl Renderer {
         mirror.layout = layout;
         mirror.handles = world_handles(world);
         mirror.version = world.version();
-        self.scene = scene;
+        self.scene = Arc::new(scene);
         // The pool holds the rest shape of every posed copy again, and the batch that wrote the
         // deformation data may be gone: every pose is queued anew.
         if let Some(deformer) = &mut mirror.deformer {
@@ -1028,31 +1043,32 @@ impl Renderer {
         let mirror = self.world.as_mut().expect("a world renderer");
         // The renderer's copy of the world: the registered meshes' pool ranges, the tables,
         // and the new slots (empty until the instances placed there are written).
-        self.scene.meshes.clone_from(&source.meshes);
-        self.scene.materials.clone_from(&source.materials);
-        self.scene.textures.clone_from(&source.textures);
-        self.scene.vertices.resize(source.vertices.len(), Default::default());
-        self.scene.indices.resize(source.indices.len(), 0);
+        let copy = Arc::make_mut(&mut self.scene);
+        copy.meshes.clone_from(&source.meshes);
+        copy.materials.clone_from(&source.materials);
+        copy.textures.clone_from(&source.textures);
+        copy.vertices.resize(source.vertices.len(), Default::default());
+        copy.indices.resize(source.indices.len(), 0);
         for &m in &registered.meshes {
             let mesh = &source.meshes[m as usize];
             let vertices = mesh.vertex_offset as usize..(mesh.vertex_offset + mesh.vertex_count) as usize;
             let indices = mesh.first_index as usize..(mesh.first_index + mesh.index_span()) as usize;
-            self.scene.vertices[vertices.clone()].copy_from_slice(&source.vertices[vertices]);
-            self.scene.indices[indices.clone()].copy_from_slice(&source.indices[indices]);
+            copy.vertices[vertices.clone()].copy_from_slice(&source.vertices[vertices]);
+            copy.indices[indices.clone()].copy_from_slice(&source.indices[indices]);
         }
         let slots = mirror.layout.slots();
         for slot in slots_before..slots {
             let contents = mirror.layout.slot_contents(slot, source);
             let empty = crate::scene::Instance { flags: crate::scene::FLAG_EMPTY_SLOT, ..contents };
-            self.scene.instances.push(empty);
+            copy.instances.push(empty);
         }
         // Every view's graph before anything on the GPU changes, so that an error leaves them
         // as they were.
         let layout = std::mem::take(&mut mirror.layout);
-        let scene = std::mem::take(&mut self.scene);
+        let scene = take_scene(&mut self.scene);
         let lights_outgrown = registered.lights_outgrown;
         let (recompiled, scene, layout) = self.recompile_views(shaders, scene, layout, Layout::Kept, lights_outgrown);
-        self.scene = scene;
+        self.scene = Arc::new(scene);
         let mirror = self.world.as_mut().expect("a world renderer");
         mirror.layout = layout;
         let recompiled = recompiled?;
