@@ -336,7 +336,8 @@ impl Renderer {
 
     /// [`Renderer::scene`], shared: what a caller keeps instead of a copy (for a reference
     /// image or exact visibility after the renderer is gone). A world renderer's copy stays its
-    /// own: its next change to the slots copies it first if it is still shared then.
+    /// own: a sync that changes more than transforms, or a graph reload, copies it first while
+    /// it is shared.
     pub fn shared_scene(&self) -> Arc<Scene> {
         self.scene.clone()
     }
