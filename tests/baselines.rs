@@ -40,23 +40,25 @@ use cullgraph::render::{GraphSpec, RenderSettings, Renderer};
 use cullgraph::scene::procedural;
 use cullgraph::scene::source::LoadOptions;
 use cullgraph::scene::{Camera, Scene};
+use std::sync::Arc;
 
 const SIZE: (u32, u32) = (128, 72);
 
-fn city() -> (Scene, Camera) {
+/// The city, shared by the renderers of every graph and reference made of it.
+fn city() -> (Arc<Scene>, Camera) {
     let scene = procedural::generate("builtin:city", &LoadOptions::default()).unwrap();
     let camera = scene.default_camera(SIZE.0 as f32 / SIZE.1 as f32);
-    (scene, camera)
+    (Arc::new(scene), camera)
 }
 
-fn error(gpu: &GpuTest, scene: &Scene, camera: &Camera, graph: &str, n: u32) -> ImageError {
+fn error(gpu: &GpuTest, scene: &Arc<Scene>, camera: &Camera, graph: &str, n: u32) -> ImageError {
     error_with(gpu, scene, camera, graph, &[], n)
 }
 
 /// `error` of the graph with param overrides.
 fn error_with(
     gpu: &GpuTest,
-    scene: &Scene,
+    scene: &Arc<Scene>,
     camera: &Camera,
     graph: &str,
     params: &[(&str, &str)],
@@ -131,7 +133,7 @@ fn a_one_sample_reference_is_the_unculled_frame_itself() {
     // the same frame (scene, camera, shading) as the graph under test.
     let gpu = GpuTest::new();
     for graph in ["no_cull", "two_phase"] {
-        let e = error(&gpu, &boxes_scene(), &boxes_camera(), graph, 1);
+        let e = error(&gpu, &Arc::new(boxes_scene()), &boxes_camera(), graph, 1);
         assert_eq!((e.mean_flip, e.psnr_db), (0.0, f64::INFINITY), "{graph}");
     }
 }
@@ -169,7 +171,7 @@ fn fxaa_touches_only_edge_pixels_and_takes_its_settings() {
 fn impossible_references_are_clear_errors() {
     let gpu = GpuTest::new();
     let spec = GraphSpec::builtin("two_phase").unwrap();
-    let (scene, camera) = (boxes_scene(), boxes_camera());
+    let (scene, camera) = (Arc::new(boxes_scene()), boxes_camera());
     let max = gpu.caps().limits.max_image_dimension2_d;
     let wide = (max / 2 + 1, 4);
     let err = reference_error(&gpu, gpu.shaders(), &scene, &camera, &spec, wide, 2).unwrap_err().to_string();

@@ -12,6 +12,7 @@ use crate::gpu::{GpuContext, ShaderCompiler};
 use crate::render::output::{rgba_from_bytes, RgbaImage};
 use crate::render::{GraphSpec, RenderSettings, Renderer, ShadowSettings};
 use crate::scene::{Camera, Scene};
+use std::sync::Arc;
 
 /// Default supersampling factor per axis (`--reference` without a value): 4 x 4 = 16 samples.
 pub const DEFAULT_REFERENCE_SCALE: u32 = 4;
@@ -21,7 +22,7 @@ pub const DEFAULT_REFERENCE_SCALE: u32 = 4;
 const SHARED_PARAMS: &[&str] = &["exposure", "debug_view"];
 
 /// Renders the reference of `camera`'s view of `scene` at `width x height` with `n x n` samples
-/// per pixel. `overrides` are the tested graph's param overrides; those `no_cull` also has
+/// per pixel. The scene is shared: the renderers made here take it without a copy. `overrides` are the tested graph's param overrides; those `no_cull` also has
 /// (`exposure`, `debug_view`) apply to the reference too.
 ///
 /// Fails (without rendering) when `n` is 0 or `n·width` or `n·height` exceeds the device's
@@ -29,7 +30,7 @@ const SHARED_PARAMS: &[&str] = &["exposure", "debug_view"];
 pub fn render_reference(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
-    scene: &Scene,
+    scene: &Arc<Scene>,
     camera: &Camera,
     size: (u32, u32),
     n: u32,
@@ -45,7 +46,7 @@ pub fn render_reference(
 pub fn render_reference_shadowed(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
-    scene: &Scene,
+    scene: &Arc<Scene>,
     camera: &Camera,
     (width, height): (u32, u32),
     n: u32,
@@ -73,7 +74,7 @@ pub fn render_reference_shadowed(
 pub fn image_reference_error(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
-    scene: &Scene,
+    scene: &Arc<Scene>,
     camera: &Camera,
     image: &RgbaImage,
     n: u32,
@@ -91,7 +92,7 @@ pub fn image_reference_error(
 pub fn reference_error(
     ctx: &GpuContext,
     shaders: &ShaderCompiler,
-    scene: &Scene,
+    scene: &Arc<Scene>,
     camera: &Camera,
     spec: &GraphSpec,
     (width, height): (u32, u32),
