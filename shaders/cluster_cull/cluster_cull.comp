@@ -21,7 +21,8 @@
 #define TASKS_PER_GROUP 4u
 layout(local_size_x = CLUSTER_CHUNK * TASKS_PER_GROUP) in;
 
-layout(set = 0, binding = 0, scalar) readonly buffer Frame { FrameConstants frame; };
+// Uniform: the same constants in every invocation, read through the constant caches.
+layout(set = 0, binding = 0, scalar) uniform Frame { FrameConstants frame; };
 #define INSTANCES_BINDING 1
 #include "../common/instance_ranges.glsl"
 layout(set = 0, binding = 2, scalar) readonly buffer InCommands { DrawCommand in_commands[]; };

@@ -81,7 +81,10 @@ float hiz_load(uint level, uvec2 texel) {
 }
 #endif
 #else
-layout(set = 0, binding = 1, scalar) readonly buffer Frame { FrameConstants frame; };
+// A uniform buffer, not a storage buffer: every invocation reads the same view, which
+// implementations then serve from their constant caches instead of loading it into each
+// invocation's registers (the test step's registers bound how many workgroups run at once).
+layout(set = 0, binding = 1, scalar) uniform Frame { FrameConstants frame; };
 layout(set = 0, binding = 2, scalar) readonly buffer Groups { DrawGroup groups[]; };
 #ifdef ATOMIC_APPEND
 layout(set = 0, binding = 3) readonly buffer SlotInstances { uint slot_instances[]; };

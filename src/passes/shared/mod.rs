@@ -103,13 +103,15 @@ impl SceneInputs {
         let light_bytes = (lights.max(1) * std::mem::size_of::<GpuPointLight>()) as u64;
         let frames = (0..FRAMES_IN_FLIGHT)
             .map(|i| -> crate::Result<FrameSlot> {
+                // The constants are also a uniform buffer, for passes that read them the same in
+                // every invocation (the culling tests, the lighting).
                 let host = |name: &str, size| {
                     Buffer::new(
                         ctx,
                         &BufferDesc {
                             name,
                             size,
-                            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_BUFFER,
                             location: MemoryLocation::CpuToGpu,
                         },
                     )
