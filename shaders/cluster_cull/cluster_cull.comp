@@ -21,7 +21,6 @@
 #define TASKS_PER_GROUP 4u
 layout(local_size_x = CLUSTER_CHUNK * TASKS_PER_GROUP) in;
 
-// Uniform: the same constants in every invocation, read through the constant caches.
 layout(set = 0, binding = 0, scalar) uniform Frame { FrameConstants frame; };
 #define INSTANCES_BINDING 1
 #include "../common/instance_ranges.glsl"

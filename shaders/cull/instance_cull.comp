@@ -81,9 +81,6 @@ float hiz_load(uint level, uvec2 texel) {
 }
 #endif
 #else
-// A uniform buffer, not a storage buffer: every invocation reads the same view, which
-// implementations then serve from their constant caches instead of loading it into each
-// invocation's registers (the test step's registers bound how many workgroups run at once).
 layout(set = 0, binding = 1, scalar) uniform Frame { FrameConstants frame; };
 layout(set = 0, binding = 2, scalar) readonly buffer Groups { DrawGroup groups[]; };
 #ifdef ATOMIC_APPEND

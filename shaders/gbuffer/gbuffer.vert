@@ -18,7 +18,7 @@ layout(location = 3) in vec4 in_tangent;
 
 #define INSTANCES_BINDING 0
 layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
-layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
+layout(set = 0, binding = 2, scalar) uniform Frame { FrameConstants frame; };
 
 invariant gl_Position;  // the oracle (shaders/oracle/id.vert) and later passes must rasterize identically
 

@@ -27,7 +27,7 @@ layout(post_depth_coverage) in;
 layout(sample_interlock_ordered) in;
 #endif
 
-layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
+layout(set = 0, binding = 2, scalar) uniform Frame { FrameConstants frame; };
 layout(set = 0, binding = 3, scalar) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 4, scalar) buffer Gbuffer {
     uint header[GBUFFER_HEADER_WORDS];

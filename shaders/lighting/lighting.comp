@@ -33,7 +33,6 @@ layout(set = 0, binding = 6) uniform sampler2D emissive_occlusion_tex;
 #endif
 #define FETCH(tex, p, s) texelFetch(tex, p, 0)
 #endif
-// Uniform: the same constants in every invocation, read through the constant caches.
 layout(set = 0, binding = 3, scalar) uniform Frame { FrameConstants frame; };
 layout(set = 0, binding = 4, scalar) readonly buffer Lights { GpuPointLight lights[]; };
 // HDR_OUTPUT: linear HDR colour for a tonemap pass; without, the tone-mapped image itself.

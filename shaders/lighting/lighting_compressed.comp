@@ -37,7 +37,6 @@ layout(set = 0, binding = 1, scalar) readonly buffer Gbuffer {
     BlockPair pairs[];   // the heads
 } gb;
 layout(set = 0, binding = 7, scalar) readonly buffer GbufferPool { BlockPair pairs[]; } pool;
-// Uniform: the same constants in every invocation, read through the constant caches.
 layout(set = 0, binding = 2, scalar) uniform Frame { FrameConstants frame; };
 layout(set = 0, binding = 3, scalar) readonly buffer Lights { GpuPointLight lights[]; };
 // HDR_OUTPUT: linear HDR colour for a tonemap pass; without, the tone-mapped image itself.

@@ -27,7 +27,6 @@ layout(set = 0, binding = 0) uniform sampler2D depth_tex;
 layout(set = 0, binding = 1) uniform usampler2D id_tex;
 #define FETCH(tex, p, s) texelFetch(tex, p, 0)
 #endif
-// Uniform: the same constants in every invocation, read through the constant caches.
 layout(set = 0, binding = 2, scalar) uniform Frame { FrameConstants frame; };
 layout(set = 0, binding = 3, scalar) readonly buffer Lights { GpuPointLight lights[]; };
 // HDR_OUTPUT: linear HDR colour for a tonemap pass; without, the tone-mapped image itself.

@@ -9,7 +9,7 @@ layout(location = 2) in vec2 in_uv;
 #define INSTANCES_BINDING 0
 #include "../common/instance_ranges.glsl"
 layout(set = 0, binding = 1, scalar) readonly buffer DrawList { uint draw_instance_ids[]; };
-layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
+layout(set = 0, binding = 2, scalar) uniform Frame { FrameConstants frame; };
 
 invariant gl_Position;  // identical to shaders/gbuffer/gbuffer.vert
 

@@ -14,7 +14,7 @@
 layout(local_size_x = 256) in;
 
 layout(set = 0, binding = 0, scalar) readonly buffer Records { CullRecord records[]; };
-layout(set = 0, binding = 1, scalar) readonly buffer Frame { FrameConstants frame; };
+layout(set = 0, binding = 1, scalar) uniform Frame { FrameConstants frame; };
 layout(set = 0, binding = 2) readonly buffer Visibility { uint visible[]; };
 // Header (word 0: instances marked), then per row (width + 1) differences.
 layout(set = 0, binding = 3) buffer Coverage { uint marked; uint pad[3]; int coverage[]; };

@@ -16,7 +16,7 @@
 #include "../common/shading.glsl"
 #include "../common/emissive_occlusion.glsl"
 
-layout(set = 0, binding = 2, scalar) readonly buffer Frame { FrameConstants frame; };
+layout(set = 0, binding = 2, scalar) uniform Frame { FrameConstants frame; };
 layout(set = 0, binding = 3, scalar) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 4, scalar) readonly buffer Lights { GpuPointLight lights[]; };
 #include "../common/shadows.glsl"

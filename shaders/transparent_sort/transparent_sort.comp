@@ -13,7 +13,7 @@
 #define THREADS 256u
 layout(local_size_x = THREADS) in;
 
-layout(set = 0, binding = 0, scalar) readonly buffer Frame { FrameConstants frame; };
+layout(set = 0, binding = 0, scalar) uniform Frame { FrameConstants frame; };
 #define INSTANCES_BINDING 1
 #include "../common/instance_ranges.glsl"
 layout(set = 0, binding = 2, scalar) readonly buffer ListCommands { DrawCommand list_commands[]; };

@@ -103,8 +103,8 @@ impl SceneInputs {
         let light_bytes = (lights.max(1) * std::mem::size_of::<GpuPointLight>()) as u64;
         let frames = (0..FRAMES_IN_FLIGHT)
             .map(|i| -> crate::Result<FrameSlot> {
-                // The constants are also a uniform buffer, for passes that read them the same in
-                // every invocation (the culling tests, the lighting).
+                // The constants are read as a uniform buffer (`FrameConstants` in
+                // `common/scene.glsl` says why), the lights as a storage buffer.
                 let host = |name: &str, size| {
                     Buffer::new(
                         ctx,
