@@ -7,7 +7,7 @@
 
 #include "../common/scene.glsl"
 
-layout(set = 0, binding = 2, scalar) readonly buffer MotionFrame { FrameConstants motion_frame; };
+layout(set = 0, binding = 2, scalar) uniform MotionFrame { FrameConstants motion_frame; };
 layout(location = 7) in vec4 in_clip;
 layout(location = 8) in vec4 in_prev_clip;
 layout(location = MOTION_LOCATION) out vec2 out_motion;   // R16G16_SFLOAT
