@@ -792,9 +792,13 @@ impl Renderer {
         }
         let mirror = self.world.as_mut().expect("a world renderer");
         moved_in_place.sort_unstable();
+        // The renderer's own slots, copied first if a caller shares them: once, not per slot,
+        // and not for a sync that only moves instances.
+        let slots: &mut [Instance] =
+            if touched.is_empty() { &mut [] } else { &mut Arc::make_mut(&mut self.scene).instances };
         for &slot in &touched {
             let contents = mirror.layout.slot_contents(slot, world.scene());
-            let before = &self.scene.instances[slot as usize];
+            let before = &slots[slot as usize];
             // The same instance in the same slot with its material and flags: a move, which
             // keeps the slot's user data.
             let moved = before.mesh == contents.mesh
@@ -807,7 +811,7 @@ impl Renderer {
             if let Some(i) = mirror.layout.instance_in(slot).filter(|_| !moved && mirror.user_words > 0) {
                 mirror.queue_user_data(slot, world.user_data_at(i));
             }
-            Arc::make_mut(&mut self.scene).instances[slot as usize] = contents;
+            slots[slot as usize] = contents;
         }
         // A move of an instance that was also inserted, removed or changed since the last sync
         // is applied after the general path has given it its slot (or none); the world's
