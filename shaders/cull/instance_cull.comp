@@ -1,5 +1,6 @@
 #version 460
-// Instance cull, step 1 of 2: each workgroup decides for its block of CULL_BLOCK slots whether
+// Instance cull, step 1 of 2 (BLOCK_STEP: the step before it where the scene has block bounds,
+// decide_block below): each workgroup decides for its block of CULL_BLOCK slots whether
 // this pass draws each (frustum, then optionally the Hi-Z occlusion test), and stores the
 // decisions as bits and the block's survivor count, adds the count and the block's counters to
 // its superblock's record, and each draw group's survivors to the group's count.
@@ -108,6 +109,14 @@ layout(set = 0, binding = 12, scalar) readonly buffer LodLevels { LodLevel lod_l
 // Each slot's level of detail as LOD_PLANES bit planes of ceil(slots / 256) * 8 words each.
 layout(set = 0, binding = 13) writeonly buffer LevelBits { uint level_bits[]; };
 #endif
+#ifdef BLOCK_BOUNDS
+// One bound per block around all its slots' bounds (src/passes/shared/cull_blocks.rs), three
+// 16-byte words: (center hi, slots with an instance), (center lo, flags), (half extents, 0).
+layout(set = 0, binding = 14) readonly buffer BlockBounds { uvec4 block_words[]; };
+// The blocks the block step leaves to the test step: [0] and [1] their number in runs of even
+// and odd number (SCRATCH_TEST_RUN), then the blocks, in no particular order.
+layout(set = 0, binding = 15) buffer BlockList { uint block_list[]; };
+#endif
 
 #endif
 
@@ -120,6 +129,7 @@ layout(push_constant) uniform Push {
     uint occluder_triangles;   // meshes this cheap are candidates unflagged (0: flagged only)
     uint view_count;           // MULTI_VIEW: views in the table
     float lod_threshold;       // LOD: the largest error a level may show, in pixels
+    uint block_test;           // BLOCK_BOUNDS: 1 where the scene has block bounds
 } pc;
 
 #ifdef MULTI_VIEW
@@ -365,6 +375,157 @@ Decision decide(CullRecord r, bool evaluated, bool was_visible) {
 #endif
     return d;
 }
+
+#if defined(BLOCK_BOUNDS) && !defined(MULTI_VIEW)
+// What a block's bound decides for all its slots at once.
+#define BLOCK_TESTED 0u    // nothing: each slot is tested on its own
+#define BLOCK_OUTSIDE 1u   // every slot is outside the frustum
+#define BLOCK_OCCLUDED 2u  // every slot is inside the frustum and occluded
+// src/passes/shared/cull_blocks.rs BLOCK_TESTS_EVERY_SLOT.
+#define BLOCK_TESTS_EVERY_SLOT 1u
+// How much stricter than a slot's frustum test the block's is, relative to the size of its
+// coordinates (as CULL_REL_EPS is): far above the rounding of either test, so that a block
+// decided here has every slot decided alike by its own test. The block's box already contains
+// its slots' with room to spare; this keeps the plane tests' rounding out of it as well.
+#define BLOCK_EXTRA (1.0 / 16384.0)
+
+// Lowest n.p + w over the box (center, half).
+float block_low(vec3 n, float w, vec3 center, vec3 half_extent) {
+    precise float s = (cull_dot(n, center) - cull_dot(abs(n), half_extent)) + w;
+    return s;
+}
+
+// Where the eye-relative box lies against the frustum's planes (those of
+// cull_aabb_in_frustum): -1 wholly outside one of them, 1 wholly inside all of them, by
+// BLOCK_EXTRA more than a slot's test allows either way; 0 otherwise.
+int block_against_frustum(CullView view, vec3 center, vec3 half_extent) {
+    precise float m = (CULL_REL_EPS + BLOCK_EXTRA) * (cull_l1(center) + cull_l1(half_extent));
+    mat3 r = view.rotation;
+    vec3 row0 = vec3(r[0].x, r[1].x, r[2].x);
+    vec3 row1 = vec3(r[0].y, r[1].y, r[2].y);
+    vec3 row2 = vec3(r[0].z, r[1].z, r[2].z);
+    precise float sx = view.scale.x;
+    precise float sy = view.scale.y;
+    precise float cx = view.offset.x;
+    precise float cy = view.offset.y;
+    precise vec3 ax = row0 * sx;
+    precise vec3 ay = row1 * sy;
+    precise float wl = 1.0 - cx;
+    precise float wr = 1.0 + cx;
+    precise float wb = 1.0 - cy;
+    precise float wt = 1.0 + cy;
+    // Each plane's normal, offset and allowance: near, far, left, right, bottom, top.
+    vec3 n[6];
+    float w[6];
+    float allow[6];
+    n[0] = -row2; w[0] = -view.near; allow[0] = m;
+    n[1] = row2; w[1] = view.far; allow[1] = m;
+    if (view.orthographic == 0u) {
+        n[2] = ax - row2 * wl; n[3] = -ax - row2 * wr; n[4] = ay - row2 * wb; n[5] = -ay - row2 * wt;
+        w[2] = 0.0; w[3] = 0.0; w[4] = 0.0; w[5] = 0.0;
+        allow[2] = m * sqrt(sx * sx + wl * wl);
+        allow[3] = m * sqrt(sx * sx + wr * wr);
+        allow[4] = m * sqrt(sy * sy + wb * wb);
+        allow[5] = m * sqrt(sy * sy + wt * wt);
+    } else {
+        n[2] = ax; n[3] = -ax; n[4] = ay; n[5] = -ay;
+        w[2] = wl; w[3] = wr; w[4] = wb; w[5] = wt;
+        allow[2] = m * sx + CULL_REL_EPS * abs(cx);
+        allow[3] = allow[2];
+        allow[4] = m * sy + CULL_REL_EPS * abs(cy);
+        allow[5] = allow[4];
+    }
+    bool inside = true;
+    for (uint i = 0u; i < 6u; ++i) {
+        if (cull_reach(n[i], w[i], center, half_extent) < -allow[i]) return -1;
+        inside = inside && block_low(n[i], w[i], center, half_extent) > allow[i];
+    }
+    return inside ? 1 : 0;
+}
+
+// What block `block`'s bound decides for all its slots (BLOCK_*), in this frame's view.
+uint block_outcome(uint block) {
+    if (pc.block_test == 0u) return BLOCK_TESTED;
+    uvec4 a = block_words[3u * block];
+    uvec4 b = block_words[3u * block + 1u];
+    uvec4 e = block_words[3u * block + 2u];
+    // No instance in the block: nothing to test or count.
+    if (a.w == 0u) return BLOCK_OUTSIDE;
+    if ((b.w & BLOCK_TESTS_EVERY_SLOT) != 0u) return BLOCK_TESTED;
+    vec3 c = rel_eye(uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), frame.eye_hi.xyz, frame.eye_lo.xyz);
+    vec3 h = uintBitsToFloat(e.xyz);
+    if (!cull_finite3(c - h) || !cull_finite3(c + h)) return BLOCK_TESTED;
+    int against = block_against_frustum(frame.cull_view, c, h);
+    if (against < 0) return BLOCK_OUTSIDE;
+#if defined(HAS_HIZ) && !defined(PHASE_OCCLUDERS) && !defined(HIZ_PREV_VIEW) && !defined(SMALL_OBJECTS)
+    // Wholly inside, every slot is projected and tested against the Hi-Z on its own; its
+    // rectangle lies within the block's and its nearest depth is no nearer, so the texels it
+    // reads (at the block's level or finer) are no nearer than those the block reads.
+    if (against > 0) {
+        uvec4 rect;
+        float nearest;
+        bool covers;
+        uint status = cull_project_aabb(frame.cull_view, c - h, c + h, rect, nearest, covers);
+        if (occluded_at(status, rect, nearest, frame.cull_view)) return BLOCK_OCCLUDED;
+    }
+#endif
+    return BLOCK_TESTED;
+}
+#endif
+
+#ifdef BLOCK_STEP
+// The block step (before the test step, one invocation per block): a block whose bound decides
+// all its slots gets what the test step would have written for it (no slot drawn or visible;
+// its slots with an instance tested, and outside the frustum or occluded), and every other
+// block is listed for the test step. Call in subgroup-uniform control flow.
+void decide_block(uint block, uint run) {
+    uint blocks = cull_blocks(pc.slot_count);
+    bool listed = false;
+    if (block < blocks) {
+        uint outcome = block_outcome(block);
+        listed = outcome == BLOCK_TESTED;
+        if (!listed) {
+            uint first_word = block * CULL_WORDS_PER_BLOCK;
+            for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) draw_bits[first_word + w] = 0u;
+#ifdef WRITE_VIS
+            // The visibility buffer holds ceil(slots / 32) words; the last block may run past it.
+            for (uint w = first_word; w < min(first_word + CULL_WORDS_PER_BLOCK, (pc.slot_count + 31u) / 32u); ++w) {
+                vis_now[w] = 0u;
+            }
+#endif
+#ifdef LOD
+            for (uint p = 0u; p < LOD_PLANES; ++p) {
+                for (uint w = 0u; w < CULL_WORDS_PER_BLOCK; ++w) {
+                    level_bits[p * blocks * CULL_WORDS_PER_BLOCK + first_word + w] = 0u;
+                }
+            }
+            for (uint list = 0u; list < 2u; ++list) {
+                for (uint level = 0u; level < LOD_LEVELS; ++level) {
+                    scratch[scratch_level_block(pc.superblocks, pc.slot_count, list, block, level)] = 0u;
+                }
+            }
+#endif
+            scratch[scratch_block(pc.superblocks, block)] = 0u;
+#ifdef VISIBLE_OUT
+            scratch[scratch_visible_block(pc.superblocks, pc.slot_count, block)] = 0u;
+#endif
+            uint n = block_words[3u * block].w;
+            if (n != 0u) {
+                uint at = scratch_super(pc.superblocks, run, block / CULL_SUPERBLOCK);
+                atomicAdd(scratch[at + SUPER_TESTED], n);
+                atomicAdd(scratch[at + (outcome == BLOCK_OUTSIDE ? SUPER_FRUSTUM : SUPER_OCCLUSION)], n);
+            }
+        }
+    }
+    // One atomic per subgroup for the blocks it lists.
+    uvec4 ballot = subgroupBallot(listed);
+    uint count = subgroupBallotBitCount(ballot);
+    uint first = 0u;
+    if (subgroupElect() && count != 0u) first = atomicAdd(block_list[run & 1u], count);
+    first = subgroupBroadcastFirst(first);
+    if (listed) block_list[2u + first + subgroupBallotExclusiveBitCount(ballot)] = block;
+}
+#endif
 
 #ifndef ATOMIC_APPEND
 // Where a group's count at a level is in group_counts, for list 0 (drawn) or 1 (visible).
@@ -686,7 +847,26 @@ void cull_views(uint lane, uint block, uint slot) {
 
 void main() {
     uint lane = gl_LocalInvocationIndex;
+#ifdef BLOCK_STEP
+    uint run = scratch[SCRATCH_TEST_RUN];
+    uint block = line_workgroup() * gl_WorkGroupSize.x + lane;
+    if (block == 0u) {
+        // The next run lists its blocks from zero (nothing reads that count in this run), and
+        // the test step may not run block 0 to hand the run number on.
+        block_list[(run + 1u) & 1u] = 0u;
+        scratch[SCRATCH_PLACE_RUN] = run;
+    }
+    decide_block(block, run);
+#else
     uint block = line_workgroup();
+#if defined(BLOCK_BOUNDS) && !defined(MULTI_VIEW)
+    // Where the scene has block bounds, workgroup w tests the w-th block the block step listed.
+    if (pc.block_test != 0u) {
+        uint listed = block_list[scratch[SCRATCH_TEST_RUN] & 1u];
+        if (block >= listed) return;
+        block = block_list[2u + block];
+    }
+#endif
     // Past the last block of the line (the whole workgroup, before any barrier).
     if (block >= cull_blocks(pc.slot_count)) return;
     uint slot = block * CULL_BLOCK + lane;
@@ -694,5 +874,6 @@ void main() {
     cull_views(lane, block, slot);
 #else
     cull_block(lane, block, slot);
+#endif
 #endif
 }

@@ -59,7 +59,7 @@ pub const MAX_LOD_THRESHOLD: f64 = 1.0e6;
 pub(crate) const LIST_STATS_SLOT: &str = "list_stats";
 
 /// Slots per block of the prefix sum (`CULL_BLOCK` in `cull_common.glsl`).
-pub(crate) const CULL_BLOCK: u32 = 256;
+pub(crate) const CULL_BLOCK: u32 = crate::passes::shared::cull_blocks::CULL_BLOCK;
 
 crate::choice! {
     /// Which instances a cull pass draws (setting `phase`).
@@ -219,6 +219,9 @@ struct Scratch {
     level_bits: Option<Buffer>,
     /// Survivors of each draw group, then visible slots of each (zero between runs).
     group_counts: Buffer,
+    /// With a block step: the blocks it leaves to the test step (`BlockList` in
+    /// `instance_cull.comp`).
+    block_list: Option<Buffer>,
     /// Whether the scan buffer still needs its first clear.
     fresh: bool,
 }
@@ -228,6 +231,9 @@ pub(crate) struct InstanceCullPass {
     settings: CullSettings,
     test: Pipeline,
     compact: Option<Pipeline>,
+    /// Before the test step, where the scene has block bounds: decides the blocks of slots
+    /// that their bounds decide, and lists the others for the test step.
+    blocks: Option<Pipeline>,
     /// With levels of detail: where each superblock's slots of each level start, between the
     /// test and the compact steps.
     levels: Option<Pipeline>,
@@ -288,12 +294,23 @@ impl InstanceCullPass {
             (atomic, "ATOMIC_APPEND"),
             (visible_out, "VISIBLE_OUT"),
             (settings.lod(), "LOD"),
+            // A block of slots decided whole (its slots' records unread) where the scene has
+            // block bounds: every test whose outcome a block's bound implies for its slots.
+            (block_tests(&settings, atomic), "BLOCK_BOUNDS"),
         ];
         defines.extend(flags.iter().filter(|(on, _)| *on).map(|(_, name)| (*name, "1")));
         let name = |step: &str| format!("{} ({step})", pass.name);
         let test = Pipeline::compute(ctx, &name("test"), &shaders.compile("cull/instance_cull.comp", &defines)?)?;
         let compute = |step: &str, file: &str, defines: &[(&str, &str)]| -> crate::Result<Pipeline> {
             Ok(Pipeline::compute(ctx, &name(step), &shaders.compile(file, defines)?)?)
+        };
+        let blocks = match block_tests(&settings, atomic) {
+            true => Some(compute(
+                "blocks",
+                "cull/instance_cull.comp",
+                &[defines.as_slice(), &[("BLOCK_STEP", "1")]].concat(),
+            )?),
+            false => None,
         };
         let (compact, init) = if atomic {
             (None, Some(compute("init", "cull/cull_init.comp", &[])?))
@@ -318,6 +335,7 @@ impl InstanceCullPass {
             settings,
             test,
             compact,
+            blocks,
             levels,
             init,
             sampler: Sampler::nearest_clamp(ctx)?,
@@ -374,6 +392,10 @@ impl InstanceCullPass {
                 // Per list and level each group's count, then (groups out of slot order) its
                 // first instance.
                 group_counts: storage("cull group counts", 4 * levels * groups.max(1) as u64 * 4)?,
+                block_list: match self.blocks.is_some() {
+                    true => Some(storage("cull block list", (2 + blocks) * 4)?),
+                    false => None,
+                },
                 fresh: true,
             });
         }
@@ -428,6 +450,14 @@ pub(crate) fn standard_sample_locations(ctx: &GpuContext) -> bool {
     // SAFETY: valid handles.
     let properties = unsafe { ctx.instance().get_physical_device_properties(ctx.physical_device()) };
     properties.limits.standard_sample_locations == vk::TRUE
+}
+
+/// Whether a test step of `settings` decides blocks of slots whole where the scene has block
+/// bounds (`BLOCK_BOUNDS`): box bounds tested against the frustum, in every phase but the early
+/// one (which tests only last frame's visible slots, so a block's count would not be its
+/// slots').
+fn block_tests(settings: &CullSettings, atomic: bool) -> bool {
+    settings.frustum && settings.bound == Bound::Box && settings.phase != Phase::Early && !atomic
 }
 
 fn blocks_of(slots: u32) -> u32 {
@@ -519,6 +549,9 @@ impl PassNode for InstanceCullPass {
             unsafe {
                 device.cmd_fill_buffer(cmd, scratch.scan.handle(), 0, vk::WHOLE_SIZE, 0);
                 device.cmd_fill_buffer(cmd, scratch.group_counts.handle(), 0, vk::WHOLE_SIZE, 0);
+                if let Some(list) = &scratch.block_list {
+                    device.cmd_fill_buffer(cmd, list.handle(), 0, vk::WHOLE_SIZE, 0);
+                }
             }
             cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::COMPUTE_WRITE)], &[]);
             scratch.fresh = false;
@@ -551,6 +584,12 @@ impl PassNode for InstanceCullPass {
         if let Some(level_bits) = &scratch.level_bits {
             test_binds.extend([Bind::Buffer(12, scene.lod_levels.handle()), Bind::Buffer(13, level_bits.handle())]);
         }
+        // Without block bounds (a changing world) the pass tests every slot, and the binding
+        // only needs some buffer.
+        if let Some(list) = &scratch.block_list {
+            let block_bounds = scene.block_bounds.as_ref().unwrap_or(&scene.cull_records);
+            test_binds.extend([Bind::Buffer(14, block_bounds.handle()), Bind::Buffer(15, list.handle())]);
+        }
         #[repr(C)]
         #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
         struct TestPush {
@@ -562,6 +601,7 @@ impl PassNode for InstanceCullPass {
             occluder_triangles: u32,
             view_count: u32,
             lod_threshold: f32,
+            block_test: u32,
         }
         let push = TestPush {
             slot_count: slots,
@@ -572,6 +612,7 @@ impl PassNode for InstanceCullPass {
             occluder_triangles: self.settings.occluder_triangles,
             view_count: 1,
             lod_threshold: self.settings.lod_threshold,
+            block_test: u32::from(scene.block_bounds.is_some() && self.blocks.is_some()),
         };
 
         if let Some(init) = &self.init {
@@ -604,6 +645,17 @@ impl PassNode for InstanceCullPass {
                 Bind::Buffer(5, scratch.scan.handle()),
                 Bind::Buffer(6, scratch.draw_bits.handle()),
             ]);
+        }
+        if let (Some(blocks_step), true) = (&self.blocks, push.block_test != 0) {
+            rec.step("blocks");
+            blocks_step.bind(cmd);
+            blocks_step.push_bindings(cmd, &test_binds);
+            blocks_step.push_constants(cmd, &push);
+            // SAFETY: cmd recording with the pipeline bound; one invocation per block.
+            unsafe {
+                crate::gpu::line_dispatch::cmd_dispatch_line(device, cmd, &ctx.caps().limits, blocks.div_ceil(256))
+            };
+            step_barrier(ctx, cmd);
         }
         rec.step("test");
         self.test.bind(cmd);

@@ -316,7 +316,8 @@ impl InstanceCullPass {
                     ));
                 }
             }
-            let push: [u32; 8] = [
+            // The last word: no block decided whole (views culled together test every slot).
+            let push: [u32; 9] = [
                 slots,
                 superblocks,
                 groups,
@@ -325,6 +326,7 @@ impl InstanceCullPass {
                 settings.occluder_triangles,
                 n as u32,
                 settings.lod_threshold.to_bits(),
+                0,
             ];
             contexts[0].step("test");
             together.test.bind(cmd);

@@ -6,6 +6,7 @@
 //! [`SceneInputs::of`]. An engine's own pass kinds read it the same way, for example to draw
 //! the instances' bounds.
 
+pub mod cull_blocks;
 pub mod cull_data;
 pub mod face_cull;
 pub mod gpu_types;

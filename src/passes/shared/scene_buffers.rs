@@ -43,6 +43,9 @@ pub struct GpuScene {
     pub regions: DrawRegions,
     /// [`super::cull_data::GpuCullRecord`] per slot (draw-list order).
     pub cull_records: Arc<Buffer>,
+    /// [`super::cull_blocks::GpuBlockBound`] per block of cull slots, which the instance cull
+    /// decides whole where it can; `None` for a changing world's scene, whose slots move.
+    pub block_bounds: Option<Arc<Buffer>>,
     /// [`super::cull_data::GpuDrawGroup`] per draw group (empty for a changing world's reserved groups).
     pub draw_groups: Arc<Buffer>,
     /// The draw groups in the order of their slots ([`super::cull_data::slot_order`]): the
@@ -368,6 +371,30 @@ impl GpuScene {
                 }
             },
         )?);
+        // A scene whose slots never change: a bound per block of slots, from the same records.
+        let block_bounds = match room {
+            true => None,
+            false => {
+                let slots = draws.instance_ids.len();
+                let block = super::cull_blocks::CULL_BLOCK as usize;
+                Some(Arc::new(batch.buffer_filled(
+                    ctx,
+                    "cull block bounds",
+                    usage,
+                    slots.div_ceil(block),
+                    0,
+                    |first, out: &mut [super::cull_blocks::GpuBlockBound]| {
+                        for (b, bound) in (first..).zip(out.iter_mut()) {
+                            let range = b * block..((b + 1) * block).min(slots);
+                            let slots = draws.instance_ids[range.clone()].iter().zip(&group_of_slot[range]);
+                            *bound = super::cull_blocks::block_bound(slots.map(|(&id, &group)| {
+                                super::cull_data::cull_record(scene, &scene.instances[id as usize], group)
+                            }));
+                        }
+                    },
+                )?))
+            }
+        };
         drop(group_of_slot);
         let instance_triangles = Arc::new(batch.buffer_filled(
             ctx,
@@ -423,6 +450,7 @@ impl GpuScene {
             )?,
             draw_count: make("draw count", vk::BufferUsageFlags::INDIRECT_BUFFER, bytemuck::cast_slice(&count))?,
             cull_records,
+            block_bounds,
             draw_groups: make("draw groups", none, bytemuck::cast_slice(&cull.groups))?,
             group_order: make("draw group order", none, bytemuck::cast_slice(&group_order))?,
             groups_out_of_slot_order: out_of_order,

@@ -116,6 +116,8 @@ impl GpuScene {
                 size_of(slots, std::mem::size_of::<super::cull_data::GpuCullRecord>()),
                 none,
             )?,
+            // A growing scene is a changing world's, whose slots have no block bounds.
+            block_bounds: None,
             draw_groups: self.draw_groups.clone(),
             group_order: self.group_order.clone(),
             groups_out_of_slot_order: self.groups_out_of_slot_order,
