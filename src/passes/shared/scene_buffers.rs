@@ -238,8 +238,9 @@ impl GpuScene {
             &self.cluster_meshes,
             &self.instance_triangles,
         ];
-        let previous = self.prev_instances.as_ref().map_or(0, |b| b.size());
-        buffers.iter().map(|b| b.size()).sum::<u64>() + self.vertices.bytes() + previous + self.textures.bytes()
+        let optional = [&self.prev_instances, &self.block_bounds];
+        let optional: u64 = optional.iter().filter_map(|b| b.as_ref()).map(|b| b.size()).sum();
+        buffers.iter().map(|b| b.size()).sum::<u64>() + self.vertices.bytes() + optional + self.textures.bytes()
     }
 
     /// The instance records of the world's previous frame ([`GpuScene::prev_instances`]), or the
