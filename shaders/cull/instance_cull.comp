@@ -114,7 +114,9 @@ layout(set = 0, binding = 13) writeonly buffer LevelBits { uint level_bits[]; };
 // 16-byte words: (center hi, slots with an instance), (center lo, flags), (half extents, 0).
 layout(set = 0, binding = 14) readonly buffer BlockBounds { uvec4 block_words[]; };
 // The blocks the block step leaves to the test step: [0] and [1] their number in runs of even
-// and odd number (SCRATCH_TEST_RUN), then the blocks, in no particular order.
+// and odd number (SCRATCH_TEST_RUN), then the blocks, in no particular order. Each block step
+// zeroes the other number for the next run; a run of views culled together (which lists no
+// blocks) zeroes both (src/passes/instance_cull/views.rs).
 layout(set = 0, binding = 15) buffer BlockList { uint block_list[]; };
 #endif
 
