@@ -394,6 +394,21 @@ fn sub_pixel_and_screen_filling_objects() {
         flags: 0,
     });
     check(&gpu, &inside_huge, &wall_camera(), (48, 36), 2, CameraPath::Still);
+    // A ground wider than a cull record's half floats hold (as the city's is from about 5 x 10^7
+    // instances): its slot is kept untested, and so is its block of slots.
+    let mut huge_ground = scene.clone();
+    huge_ground.instances.push(Instance {
+        transform: Transform {
+            linear: Mat3::from_diagonal(Vec3::new(2.0e5, 0.1, 2.0e5)),
+            translation: DVec3::new(0.0, -0.06, 0.0),
+        },
+        mesh: cube,
+        material: 0,
+        flags: 0,
+    });
+    let stats = check(&gpu, &huge_ground, &wall_camera(), (48, 36), 2, CameraPath::Still);
+    let instances = huge_ground.instances.len() as u32;
+    assert!(stats.iter().all(|s| s.drawn >= 1 && s.drawn < instances), "{stats:?}");
 }
 
 #[test]

@@ -451,9 +451,10 @@ uint block_outcome(uint block) {
     uvec4 a = block_words[3u * block];
     uvec4 b = block_words[3u * block + 1u];
     uvec4 e = block_words[3u * block + 2u];
-    // No instance in the block: nothing to test or count.
-    if (a.w == 0u) return BLOCK_OUTSIDE;
+    // A block with a slot kept untested goes first: whatever else its bound says, that slot is
+    // drawn. Then a block without an instance, with nothing to test or count.
     if ((b.w & BLOCK_TESTS_EVERY_SLOT) != 0u) return BLOCK_TESTED;
+    if (a.w == 0u) return BLOCK_OUTSIDE;
     vec3 c = rel_eye(uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), frame.eye_hi.xyz, frame.eye_lo.xyz);
     vec3 h = uintBitsToFloat(e.xyz);
     if (!cull_finite3(c - h) || !cull_finite3(c + h)) return BLOCK_TESTED;

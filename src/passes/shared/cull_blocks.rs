@@ -48,27 +48,36 @@ const GROWTH_OF_COORDINATES: f64 = 1.0 / 262_144.0;
 
 /// The bound of a block whose slots have `records`.
 pub fn block_bound(records: impl IntoIterator<Item = GpuCullRecord>) -> GpuBlockBound {
-    let never = GpuBlockBound { flags: BLOCK_TESTS_EVERY_SLOT, ..Default::default() };
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     let mut slots = 0u32;
+    // A slot that the test step keeps without testing (huge or unfinite) leaves the block to
+    // be tested slot by slot; the block still counts every slot that holds an instance, since
+    // a block of none is one the step may skip.
+    let mut tests_every_slot = false;
     for record in records {
         if (record.group_flags >> 24) & FLAG_EMPTY_SLOT != 0 {
             continue;
         }
-        if record.group_flags & CULL_HUGE != 0 {
-            return never;
+        slots += 1;
+        if tests_every_slot || record.group_flags & CULL_HUGE != 0 {
+            tests_every_slot = true;
+            continue;
         }
         let (center_hi, center_lo, _, half) = record.unpack();
         if !(center_hi.is_finite() && center_lo.is_finite() && half.is_finite()) {
-            return never;
+            tests_every_slot = true;
+            continue;
         }
         let center = center_hi.as_dvec3() + center_lo.as_dvec3();
         lo = lo.min(center - half.as_dvec3());
         hi = hi.max(center + half.as_dvec3());
-        slots += 1;
     }
+    let never = GpuBlockBound { slots, flags: BLOCK_TESTS_EVERY_SLOT, ..Default::default() };
     if slots == 0 {
         return GpuBlockBound::default();
+    }
+    if tests_every_slot {
+        return never;
     }
     let center = (lo + hi) * 0.5;
     let extent = (hi - lo) * 0.5;
@@ -139,8 +148,12 @@ mod tests {
         assert!(Vec3::from_array(block.half).max_element() < 0.51);
         assert_eq!(block_bound([far_empty]), GpuBlockBound::default());
         let huge = GpuCullRecord::new(Vec3::ZERO, Vec3::ZERO, 1.0e5, Vec3::splat(1.0e5), 0, 0);
-        assert_eq!(block_bound([near, huge]).flags, BLOCK_TESTS_EVERY_SLOT);
+        // Such a block still counts its slots: one of none is skipped as empty.
+        let every_slot = |slots| GpuBlockBound { slots, flags: BLOCK_TESTS_EVERY_SLOT, ..Default::default() };
+        assert_eq!(block_bound([near, huge]), every_slot(2));
+        assert_eq!(block_bound([huge]), every_slot(1));
+        assert_eq!(block_bound([far_empty, huge, near]), every_slot(2));
         let unfinite = record(DVec3::new(f64::NAN, 0.0, 0.0), Vec3::ONE, 0);
-        assert_eq!(block_bound([unfinite, near]).flags, BLOCK_TESTS_EVERY_SLOT);
+        assert_eq!(block_bound([unfinite, near]), every_slot(2));
     }
 }
