@@ -237,9 +237,9 @@ pub struct SceneArgs {
     /// Scene: `builtin:city`, `builtin:field`, or a glTF 2.0 file (.gltf/.glb).
     #[arg(long, default_value = "builtin:city")]
     pub scene: String,
-    /// Number of instances of a built-in scene (default 10,000; at most 16,777,215, and what
-    /// the machine's and the device's memory hold: a larger scene is refused with the memory it
-    /// needs).
+    /// Number of instances of a built-in scene (default 10,000; at most what the device's
+    /// bindings address, 134,217,726 on NVIDIA and AMD, and what the machine's and the device's
+    /// memory hold: a larger scene is refused with the limit or the memory it needs).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_INSTANCES as u64).map(|n| n as usize))]
     pub instances: Option<usize>,
     /// Number of distinct mesh kinds of `builtin:field` (default 64, at most 100,000).
