@@ -232,7 +232,8 @@ fn triangles_of(scene: &cullgraph::scene::Scene, id: u32) -> u64 {
 
 /// A cull laid out in rows of workgroups (as on devices whose `maxComputeWorkGroupCount[0]` is
 /// 65535, which one workgroup per 256 instances reaches at 2^24 instances) draws the same lists,
-/// counts and image as in one row. The width is forced down so that a small city takes rows.
+/// counts and image as in one row, and so does a late test step dispatched with the number of
+/// blocks its block step listed. The width is forced down so that a small city takes rows.
 #[test]
 fn culls_laid_out_in_rows_of_workgroups_equal_one_row() {
     let gpu = GpuTest::new();
@@ -241,8 +242,11 @@ fn culls_laid_out_in_rows_of_workgroups_equal_one_row() {
         .load(&LoadOptions { instances: Some(20_003), ..Default::default() })
         .unwrap();
     let base = scene.default_camera(w as f32 / h as f32);
-    let run = |width: u32| {
+    // With `listed`, the late test step is dispatched with the number of blocks its block step
+    // listed (as it is from 16 384 blocks on) instead of a workgroup per block.
+    let run = |width: u32, listed: bool| {
         cullgraph::gpu::line_dispatch::set_width_for_tests(width);
+        cullgraph::passes::instance_cull::set_listed_dispatch_from_for_tests(listed.then_some(1));
         let spec = GraphSpec::builtin("two_phase").unwrap();
         let mut renderer =
             Renderer::with_graph(&gpu, gpu.shaders(), scene.clone(), RenderSettings::new(w, h), &spec).unwrap();
@@ -257,14 +261,18 @@ fn culls_laid_out_in_rows_of_workgroups_equal_one_row() {
             frames.push((draw_lists(&renderer), counts, image.into_raw()));
         }
         cullgraph::gpu::line_dispatch::set_width_for_tests(0);
+        cullgraph::passes::instance_cull::set_listed_dispatch_from_for_tests(None);
         frames
     };
     // 79 blocks: rows of 7 (and the compact step's 80 workgroups, rows of 7 with one left over).
-    let rows = run(7);
-    let one_row = run(0);
-    for (frame, (a, b)) in rows.iter().zip(&one_row).enumerate() {
-        assert_eq!(a.0, b.0, "frame {frame}: draw lists");
-        assert_eq!(a.1, b.1, "frame {frame}: counters");
-        assert!(a.2 == b.2, "frame {frame}: images differ");
+    let rows = run(7, false);
+    let one_row = run(0, false);
+    let listed = run(0, true);
+    for (frame, ((a, b), c)) in rows.iter().zip(&one_row).zip(&listed).enumerate() {
+        for (other, name) in [(b, "one row"), (c, "the listed number")] {
+            assert_eq!(a.0, other.0, "frame {frame}, {name}: draw lists");
+            assert_eq!(a.1, other.1, "frame {frame}, {name}: counters");
+            assert!(a.2 == other.2, "frame {frame}, {name}: images differ");
+        }
     }
 }

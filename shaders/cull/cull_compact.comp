@@ -81,6 +81,11 @@ layout(push_constant) uniform Push {
 // stays in its region: its survivors are then placed after groups that come later in group
 // order, and commands take their first instance from this order.
 layout(set = 0, binding = 16) readonly buffer GroupOrder { uint group_order[]; };
+#ifdef BLOCK_LIST
+// The test step's dispatch size, which the block step counts up (`BlockList` in
+// instance_cull.comp): zeroed here, after the test step read it, for the next run.
+layout(set = 0, binding = 17) writeonly buffer BlockList { uint block_list_count; };
+#endif
 
 // Placing a block: its draw bits [0] and visibility bits [1], and the survivors / visible slots
 // before it.
@@ -517,6 +522,9 @@ void write_commands() {
                              commands_of(0u), triangles, sh_totals[TOTAL_VISIBLE], 0u);
         // Nothing reads this word in this dispatch: the next run's test step does.
         scratch[SCRATCH_TEST_RUN] = run + 1u;
+#ifdef BLOCK_LIST
+        block_list_count = 0u;
+#endif
     }
 #ifdef VISIBLE_OUT
     // The next frame's early draw list: this frame's visible slots, per group, placed by the

@@ -113,11 +113,11 @@ layout(set = 0, binding = 13) writeonly buffer LevelBits { uint level_bits[]; };
 // One bound per block around all its slots' bounds (src/passes/shared/cull_blocks.rs), three
 // 16-byte words: (center hi, slots with an instance), (center lo, flags), (half extents, 0).
 layout(set = 0, binding = 14) readonly buffer BlockBounds { uvec4 block_words[]; };
-// The blocks the block step leaves to the test step: [0] and [1] their number in runs of even
-// and odd number (SCRATCH_TEST_RUN), then the blocks, in no particular order. Each block step
-// zeroes the other number for the next run; a run of views culled together (which lists no
-// blocks) zeroes both (src/passes/instance_cull/views.rs).
+// The blocks the block step leaves to the test step: [0..3) the test step's dispatch size (their
+// number, 1, 1; the compact step zeroes the number for the next run), [3] unused, then the
+// blocks, in no particular order, a word for every block of the scene.
 layout(set = 0, binding = 15) buffer BlockList { uint block_list[]; };
+#define BLOCK_LIST_FIRST 4u
 #endif
 
 #endif
@@ -524,9 +524,9 @@ void decide_block(uint block, uint run) {
     uvec4 ballot = subgroupBallot(listed);
     uint count = subgroupBallotBitCount(ballot);
     uint first = 0u;
-    if (subgroupElect() && count != 0u) first = atomicAdd(block_list[run & 1u], count);
+    if (subgroupElect() && count != 0u) first = atomicAdd(block_list[0], count);
     first = subgroupBroadcastFirst(first);
-    if (listed) block_list[2u + first + subgroupBallotExclusiveBitCount(ballot)] = block;
+    if (listed) block_list[BLOCK_LIST_FIRST + first + subgroupBallotExclusiveBitCount(ballot)] = block;
 }
 #endif
 
@@ -853,21 +853,20 @@ void main() {
 #ifdef BLOCK_STEP
     uint run = scratch[SCRATCH_TEST_RUN];
     uint block = line_workgroup() * gl_WorkGroupSize.x + lane;
-    if (block == 0u) {
-        // The next run lists its blocks from zero (nothing reads that count in this run), and
-        // the test step may not run block 0 to hand the run number on.
-        block_list[(run + 1u) & 1u] = 0u;
-        scratch[SCRATCH_PLACE_RUN] = run;
-    }
+    // The test step may not run block 0 to hand the run number on.
+    if (block == 0u) scratch[SCRATCH_PLACE_RUN] = run;
     decide_block(block, run);
 #else
     uint block = line_workgroup();
 #if defined(BLOCK_BOUNDS) && !defined(MULTI_VIEW)
     // Where the scene has block bounds, workgroup w tests the w-th block the block step listed.
+    // Dispatched with the listed number where there are many blocks, else with a workgroup per
+    // block (`listed_dispatch` in src/passes/instance_cull/mod.rs); the entry and the number
+    // are loaded at once.
     if (pc.block_test != 0u) {
-        uint listed = block_list[scratch[SCRATCH_TEST_RUN] & 1u];
-        if (block >= listed) return;
-        block = block_list[2u + block];
+        uint entry = block < cull_blocks(pc.slot_count) ? block_list[BLOCK_LIST_FIRST + block] : 0u;
+        if (block >= block_list[0]) return;
+        block = entry;
     }
 #endif
     // Past the last block of the line (the whole workgroup, before any barrier).

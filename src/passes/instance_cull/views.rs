@@ -226,22 +226,12 @@ impl InstanceCullPass {
                     device.cmd_fill_buffer(cmd, scratch.scan.handle(), 0, vk::WHOLE_SIZE, 0);
                     device.cmd_fill_buffer(cmd, scratch.group_counts.handle(), 0, vk::WHOLE_SIZE, 0);
                 }
+                if let Some(list) = &scratch.block_list {
+                    super::clear_block_list(device, cmd, list.handle());
+                }
                 scratch.fresh = false;
                 fresh = true;
             }
-        }
-        // A view culled alone lists its blocks in a count that the run before zeroed for it
-        // (`BlockList` in `instance_cull.comp`); a run culled together lists none, so it zeroes
-        // both counts, after the last run that read them.
-        let lists: Vec<vk::Buffer> =
-            nodes.iter().filter_map(|n| n.scratch.as_ref()?.block_list.as_ref()).map(|b| b.handle()).collect();
-        if !lists.is_empty() {
-            cmd_barriers(device, cmd, &[memory_barrier(Access::COMPUTE_WRITE, Access::TRANSFER_WRITE)], &[]);
-            for list in lists {
-                // SAFETY: cmd recording; the buffer is the pass's own, at least two words long.
-                unsafe { device.cmd_fill_buffer(cmd, list, 0, 8, 0) };
-            }
-            fresh = true;
         }
         if fresh {
             cmd_barriers(device, cmd, &[memory_barrier(Access::TRANSFER_WRITE, Access::COMPUTE_WRITE)], &[]);
