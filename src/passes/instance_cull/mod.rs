@@ -479,9 +479,9 @@ pub(crate) const CULL_SUPERBLOCK: u32 = 64;
 
 /// Compute writes before compute reads and writes of the next step.
 /// From how many blocks of slots the test step is dispatched with the number the block step
-/// listed (indirect) instead of a workgroup per block. Below it the indirect read's barrier costs
-/// more than the unlisted workgroups it saves: on an H200 the late cull took 1.7 µs longer at
-/// 3 907 blocks (10^6 instances), 0.016 ms less at 39 063 and 0.23 ms less at 390 625.
+/// listed (indirect) instead of a workgroup per block. Below it the barrier that an indirect
+/// read needs costs more than launching the unlisted workgroups (`docs/culling.md`, "Blocks
+/// decided by their bounds", has the measurements).
 const LISTED_DISPATCH_FROM_BLOCKS: u32 = 16_384;
 
 /// `LISTED_DISPATCH_FROM_BLOCKS`, or what a test set.
