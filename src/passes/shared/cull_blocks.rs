@@ -107,6 +107,7 @@ fn f32_up(x: f64) -> f32 {
 mod tests {
     use super::*;
     use glam::Vec3;
+    use proptest::prelude::*;
 
     fn record(center: DVec3, half: Vec3, flags: u32) -> GpuCullRecord {
         let (hi, lo) = super::super::gpu_types::split_hi_lo(center);
@@ -155,5 +156,50 @@ mod tests {
         assert_eq!(block_bound([far_empty, huge, near]), every_slot(2));
         let unfinite = record(DVec3::new(f64::NAN, 0.0, 0.0), Vec3::ONE, 0);
         assert_eq!(block_bound([unfinite, near]), every_slot(2));
+    }
+
+    /// A slot of a block as a property test draws it: empty, huge, unfinite or an ordinary box
+    /// anywhere up to 10^7 units from the origin.
+    fn any_slot() -> impl Strategy<Value = GpuCullRecord> {
+        let coordinate = -1.0e7f64..1.0e7;
+        let half = 0.0f32..2000.0;
+        (0u8..10, (coordinate.clone(), coordinate.clone(), coordinate), (half.clone(), half.clone(), half)).prop_map(
+            |(kind, (x, y, z), (hx, hy, hz))| {
+                let center = DVec3::new(x, y, z);
+                let half = Vec3::new(hx, hy, hz);
+                match kind {
+                    0 => record(center, half, FLAG_EMPTY_SLOT),
+                    1 => GpuCullRecord::new(Vec3::ZERO, Vec3::ZERO, 1.0e5, Vec3::splat(1.0e5), 0, 0),
+                    2 => record(DVec3::new(f64::INFINITY, y, z), half, 0),
+                    _ => record(center, half, 0),
+                }
+            },
+        )
+    }
+
+    proptest! {
+        /// Whatever its slots, a block counts each one that holds an instance; it is tested
+        /// slot by slot exactly when one of them is huge or unfinite, and otherwise its bound
+        /// holds every slot's bound as the GPU reads it.
+        #[test]
+        fn a_block_counts_its_slots_and_holds_their_bounds(slots in proptest::collection::vec(any_slot(), 1..256)) {
+            let block = block_bound(slots.iter().copied());
+            let held: Vec<_> = slots.iter().filter(|r| (r.group_flags >> 24) & FLAG_EMPTY_SLOT == 0).collect();
+            prop_assert_eq!(block.slots as usize, held.len());
+            let untested = held.iter().any(|r| {
+                let (hi, lo, _, half) = r.unpack();
+                r.group_flags & CULL_HUGE != 0 || !(hi.is_finite() && lo.is_finite() && half.is_finite())
+            });
+            prop_assert_eq!(block.flags == BLOCK_TESTS_EVERY_SLOT, untested);
+            if !untested && !held.is_empty() {
+                let center = Vec3::from_array(block.center_hi).as_dvec3() + Vec3::from_array(block.center_lo).as_dvec3();
+                let half = Vec3::from_array(block.half).as_dvec3();
+                for r in held {
+                    let (hi, lo, _, h) = r.unpack();
+                    let c = hi.as_dvec3() + lo.as_dvec3();
+                    prop_assert!((c + h.as_dvec3()).cmple(center + half).all() && (c - h.as_dvec3()).cmpge(center - half).all());
+                }
+            }
+        }
     }
 }
