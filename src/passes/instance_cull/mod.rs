@@ -13,6 +13,15 @@
 //! Nothing is cleared between runs: the compact step zeroes the group counts and the next run's
 //! half of the superblock records (see `cull_common.glsl`).
 //!
+//! Where the scene never changes it has a bound per block of 256 slots
+//! (`crate::passes::shared::cull_blocks`), and a third dispatch comes first, the block step (one
+//! invocation per block, `BLOCK_STEP` in `instance_cull.comp`): a block wholly outside the
+//! frustum, or wholly inside it and behind the Hi-Z, gets what the test step would have written
+//! for it, and the others are listed. The test step then runs only the listed blocks: dispatched
+//! with their number (`vkCmdDispatchIndirect`) from `LISTED_DISPATCH_FROM_BLOCKS` blocks on, else
+//! a workgroup per block, those past the number returning at once. The compact step zeroes the
+//! number for the next run.
+//!
 //! Both kernels combine values with subgroup operations (basic, vote, arithmetic and ballot in
 //! compute shaders, which Vulkan 1.3 devices commonly have), never assuming a subgroup size.
 //!
