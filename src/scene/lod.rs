@@ -11,7 +11,7 @@
 //! the surface moves on screen.
 //!
 //! A level draws its own copies of the vertices it keeps, whose normals are the full mesh's
-//! averaged over the surface around each ([`filtered_normals`]): the full mesh's normal at a
+//! averaged over the surface around each (`filtered_normals`): the full mesh's normal at a
 //! kept vertex samples detail far finer than the level's triangles, which would shade as noise.
 //!
 //! The chain stops where a step no longer pays: fewer than [`LOD_FLOOR_TRIANGLES`] would remain,

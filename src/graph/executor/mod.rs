@@ -374,7 +374,7 @@ impl GraphRuntime {
     /// knows of each resource's state), so the host may discard `cmd` and record again.
     ///
     /// A frame whose commands would be those of the frame recorded in its slot of frames in
-    /// flight is not recorded again: that recording is executed in `cmd` ([`replay`]).
+    /// flight is not recorded again: that recording is executed in `cmd` (`replay`).
     pub fn record(&mut self, cmd: vk::CommandBuffer, inputs: &FrameData<'_>, imports: &Imports) -> crate::Result<u64> {
         profiling::scope!("cullgraph::record_graph", self.plan.name.as_str());
         let Some(key) = self.replay_key(inputs, imports) else { return self.record_commands(cmd, inputs, imports) };

@@ -71,7 +71,7 @@ fn capacity_for(count: usize) -> u32 {
     (count + count / 4 + 4) as u32
 }
 
-/// Where a world instance is: its slot and the slot's group ([`Placement::NONE`]: nowhere).
+/// Where a world instance is: its slot and the slot's group (`Placement::NONE`: nowhere).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Placement {
     /// The slot.
