@@ -555,6 +555,52 @@ fn an_emissive_material_on_a_live_world_brings_its_target_and_glows() {
 
 /// A long bulk move (checked on several threads) reaches every moved slot's record on the GPU,
 /// with the world's last transform of each, and the culling stays exact.
+/// The cull decides blocks of 256 slots by bounds made at upload; a world's update marks its
+/// slot's block to be tested slot by slot, so a box moved out of a block that lies wholly
+/// outside the view is drawn at its new place.
+#[test]
+fn a_box_moved_out_of_a_block_outside_the_view_is_drawn() {
+    let gpu = GpuTest::new();
+    let mut scene = boxes_scene();
+    let cube = scene.instances[1].mesh;
+    let green =
+        scene.add_material(Material { name: "green".into(), albedo: Vec3::new(0.1, 0.8, 0.1), ..Default::default() });
+    // 2000 small boxes far behind the eye, in a draw group of their own: whole blocks of slots
+    // outside the frustum.
+    let small = Mat3::from_diagonal(Vec3::splat(0.3));
+    let far = |i: usize| Transform {
+        linear: small,
+        translation: DVec3::new(40.0 + (i % 50) as f64, 0.5, 60.0 + (i / 50) as f64),
+    };
+    scene.instances.extend((0..2000).map(|i| Instance { transform: far(i), mesh: cube, material: green, flags: 0 }));
+    let (mut world, handles) = World::new(scene).unwrap();
+    let mut live = renderer(&gpu, &world, "two_phase", true);
+    let camera = boxes_camera();
+    let (stats, _) = live.render_to_image(&camera).unwrap();
+    let late = CullPassStats::of(&stats).into_iter().find(|c| c.pass == "cull_late").unwrap();
+    assert!(late.frustum_culled >= 2000, "{late:?}");
+    // Five of them, from all over the group's slots, moved in front of the eye.
+    let boxes = &handles[handles.len() - 2000..];
+    let near = |k: usize| Transform { linear: small, translation: DVec3::new(0.5 + 0.6 * k as f64, 0.3, 2.5) };
+    for k in 0..5 {
+        world.set_transform(boxes[100 + 400 * k], near(k)).unwrap();
+    }
+    live.sync(gpu.shaders(), &world).unwrap();
+    for frame in 0..2 {
+        let (stats, image) = live.render_to_image(&camera).unwrap();
+        let verify = stats.verify.expect("verified");
+        assert_eq!(verify.false_negatives, 0, "frame {frame}: {verify:?}");
+        let fresh = renderer(&gpu, &world, "two_phase", false).render_to_image(&camera).unwrap().1;
+        assert!(differing_pixels(&image, &fresh) <= DEPTH_TIE_PIXELS, "frame {frame}");
+        for k in 0..5 {
+            let at = project(&camera, near(k).translation);
+            let p = pixel(&image, at.0, at.1);
+            assert!(p[1] > 2 * p[0] && p[1] > 2 * p[2], "frame {frame}: moved box {k} at {at:?}: {p:?}");
+        }
+    }
+    gpu.assert_clean();
+}
+
 #[test]
 fn a_long_bulk_move_reaches_every_slot() {
     use cullgraph::passes::shared::gpu_types::GpuInstance;

@@ -13,8 +13,8 @@
 //! Nothing is cleared between runs: the compact step zeroes the group counts and the next run's
 //! half of the superblock records (see `cull_common.glsl`).
 //!
-//! Where the scene never changes it has a bound per block of 256 slots
-//! (`crate::passes::shared::cull_blocks`), and a third dispatch comes first, the block step (one
+//! Where the scene has a bound per block of 256 slots (`crate::passes::shared::cull_blocks`),
+//! a third dispatch comes first, the block step (one
 //! invocation per block, `BLOCK_STEP` in `instance_cull.comp`): a block wholly outside the
 //! frustum, or wholly inside it and behind the Hi-Z, gets what the test step would have written
 //! for it, and the others are listed. The test step then runs only the listed blocks: dispatched
@@ -648,7 +648,7 @@ impl PassNode for InstanceCullPass {
         if let Some(level_bits) = &scratch.level_bits {
             test_binds.extend([Bind::Buffer(12, scene.lod_levels.handle()), Bind::Buffer(13, level_bits.handle())]);
         }
-        // Without block bounds (a changing world) the pass tests every slot, and the binding
+        // Without block bounds (a changing world's grown scene) the pass tests every slot, and the binding
         // only needs some buffer.
         if let Some(list) = &scratch.block_list {
             let block_bounds = scene.block_bounds.as_ref().unwrap_or(&scene.cull_records);

@@ -7,8 +7,10 @@
 //!
 //! A block's outcome must be every one of its slots' own: the bound is the union of the slots'
 //! decoded bounds, grown by far more than either test rounds, and the block's tests are stricter
-//! than a slot's by a margin of their own (`BLOCK_EXTRA`). Only a scene whose slots never change
-//! has block bounds; a changing world's renderer tests every slot.
+//! than a slot's by a margin of their own (`BLOCK_EXTRA`). A changing world's bounds are those of
+//! its slots at upload, and each slot update marks its block `BLOCK_TESTS_EVERY_SLOT`
+//! (`shaders/world/scatter.comp`), so a block that ever changed is tested slot by slot; once
+//! the world's scene grows it has none.
 
 use super::cull_data::{GpuCullRecord, CULL_HUGE};
 use crate::scene::FLAG_EMPTY_SLOT;

@@ -44,7 +44,8 @@ pub struct GpuScene {
     /// [`super::cull_data::GpuCullRecord`] per slot (draw-list order).
     pub cull_records: Arc<Buffer>,
     /// [`super::cull_blocks::GpuBlockBound`] per block of cull slots, which the instance cull
-    /// decides whole where it can; `None` for a changing world's scene, whose slots move.
+    /// decides whole where it can. A changing world's slot updates mark their blocks to be
+    /// tested slot by slot (`shaders/world/scatter.comp`); `None` once a world's scene grew.
     pub block_bounds: Option<Arc<Buffer>>,
     /// [`super::cull_data::GpuDrawGroup`] per draw group (empty for a changing world's reserved groups).
     pub draw_groups: Arc<Buffer>,
@@ -372,29 +373,34 @@ impl GpuScene {
                 }
             },
         )?);
-        // A scene whose slots never change: a bound per block of slots, from the same records.
-        let block_bounds = match room {
-            true => None,
-            false => {
-                let slots = draws.instance_ids.len();
-                let block = super::cull_blocks::CULL_BLOCK as usize;
-                Some(Arc::new(batch.buffer_filled(
-                    ctx,
-                    "cull block bounds",
-                    usage,
-                    slots.div_ceil(block),
-                    0,
-                    |first, out: &mut [super::cull_blocks::GpuBlockBound]| {
-                        for (b, bound) in (first..).zip(out.iter_mut()) {
-                            let range = b * block..((b + 1) * block).min(slots);
-                            let slots = draws.instance_ids[range.clone()].iter().zip(&group_of_slot[range]);
-                            *bound = super::cull_blocks::block_bound(slots.map(|(&id, &group)| {
-                                super::cull_data::cull_record(scene, &scene.instances[id as usize], group)
-                            }));
-                        }
-                    },
-                )?))
-            }
+        // A bound per block of slots, from the same records; a changing world's has room for a
+        // block per slot its records have room for (those blocks' slots are all written by
+        // the world's updates, which mark their blocks).
+        let block_bounds = {
+            let slots = draws.instance_ids.len();
+            let block = super::cull_blocks::CULL_BLOCK as usize;
+            let bound = std::mem::size_of::<super::cull_blocks::GpuBlockBound>();
+            let record = std::mem::size_of::<super::cull_data::GpuCullRecord>();
+            let room = match room {
+                true => (cull_records.size() as usize / record).div_ceil(block) * bound,
+                false => 0,
+            };
+            Some(Arc::new(batch.buffer_filled(
+                ctx,
+                "cull block bounds",
+                usage,
+                slots.div_ceil(block),
+                room as u64,
+                |first, out: &mut [super::cull_blocks::GpuBlockBound]| {
+                    for (b, bound) in (first..).zip(out.iter_mut()) {
+                        let range = b * block..((b + 1) * block).min(slots);
+                        let slots = draws.instance_ids[range.clone()].iter().zip(&group_of_slot[range]);
+                        *bound = super::cull_blocks::block_bound(slots.map(|(&id, &group)| {
+                            super::cull_data::cull_record(scene, &scene.instances[id as usize], group)
+                        }));
+                    }
+                },
+            )?))
         };
         drop(group_of_slot);
         let instance_triangles = Arc::new(batch.buffer_filled(

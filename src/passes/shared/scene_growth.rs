@@ -86,6 +86,8 @@ impl GpuScene {
             Some(data) => Some(fit(data, size_of(slots, 4 * self.user_words as usize), none)?),
             None => None,
         };
+        let cull_records =
+            fit(&self.cull_records, size_of(slots, std::mem::size_of::<super::cull_data::GpuCullRecord>()), none)?;
         let next = Self {
             user_data,
             user_words: self.user_words,
@@ -111,13 +113,11 @@ impl GpuScene {
             draw_commands: self.draw_commands.clone(),
             draw_count: self.draw_count.clone(),
             regions: self.regions,
-            cull_records: fit(
-                &self.cull_records,
-                size_of(slots, std::mem::size_of::<super::cull_data::GpuCullRecord>()),
-                none,
-            )?,
-            // A growing scene is a changing world's, whose slots have no block bounds.
-            block_bounds: None,
+            cull_records: cull_records.clone(),
+            // The block bounds have room for a block per slot the records have room for, and the
+            // slots added since are written by updates, which mark their blocks. Records moved
+            // to a larger buffer go without: every slot is tested.
+            block_bounds: self.block_bounds.clone().filter(|_| Arc::ptr_eq(&cull_records, &self.cull_records)),
             draw_groups: self.draw_groups.clone(),
             group_order: self.group_order.clone(),
             groups_out_of_slot_order: self.groups_out_of_slot_order,

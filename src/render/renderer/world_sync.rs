@@ -389,14 +389,17 @@ impl WorldMirror {
                 cmd_barriers(device, cmd, &[memory_barrier(compute_rw, compute_rw)], &[]);
             }
             self.scatter.bind(cmd);
+            // Without block bounds the binding only needs some buffer.
+            let blocks = scene.block_bounds.as_ref().unwrap_or(&scene.cull_records);
             let mut binds = vec![
                 Bind::Buffer(0, buffer.handle()),
                 Bind::Buffer(2, scene.cull_records.handle()),
                 Bind::Buffer(3, scene.group_bounds.handle()),
+                Bind::Buffer(4, blocks.handle()),
             ];
             binds.extend(scene.instance_binds(1));
             self.scatter.push_bindings(cmd, &binds);
-            self.scatter.push_constants(cmd, &[count as u32]);
+            self.scatter.push_constants(cmd, &[count as u32, u32::from(scene.block_bounds.is_some())]);
             // SAFETY: cmd recording with the scatter pipeline bound.
             unsafe {
                 crate::gpu::line_dispatch::cmd_dispatch_line(
