@@ -14,6 +14,11 @@
 // Threads (and slots) per block of the prefix sum; a multiple of 32 so blocks own whole words.
 #define CULL_BLOCK 256u
 #define CULL_WORDS_PER_BLOCK (CULL_BLOCK / 32u)
+// A block's bound (src/passes/shared/cull_blocks.rs GpuBlockBound): 12 words, its flags in
+// word 7; BLOCK_TESTS_EVERY_SLOT there has the cull test the block slot by slot.
+#define BLOCK_BOUND_WORDS 12u
+#define BLOCK_BOUND_FLAGS_WORD 7u
+#define BLOCK_TESTS_EVERY_SLOT 1u
 
 // Blocks of a pass over `slot_count` slots (at least one, which handles an empty scene).
 uint cull_blocks(uint slot_count) { return max(1u, slot_count / CULL_BLOCK + (slot_count % CULL_BLOCK != 0u ? 1u : 0u)); }

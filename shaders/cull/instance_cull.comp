@@ -383,8 +383,6 @@ Decision decide(CullRecord r, bool evaluated, bool was_visible) {
 #define BLOCK_TESTED 0u    // nothing: each slot is tested on its own
 #define BLOCK_OUTSIDE 1u   // every slot is outside the frustum
 #define BLOCK_OCCLUDED 2u  // every slot is inside the frustum and occluded
-// src/passes/shared/cull_blocks.rs BLOCK_TESTS_EVERY_SLOT.
-#define BLOCK_TESTS_EVERY_SLOT 1u
 // How much stricter than a slot's frustum test the block's is, relative to the size of its
 // coordinates (as CULL_REL_EPS is): far above the rounding of either test, so that a block
 // decided here has every slot decided alike by its own test. The block's box already contains

@@ -43,13 +43,10 @@ struct GroupBounds {
 layout(set = 0, binding = 2) buffer Records { uvec4 record_vec[]; };
 layout(set = 0, binding = 3, scalar) readonly buffer Bounds { GroupBounds group_bounds[]; };
 
-// The scene's bounds per block of slots (src/passes/shared/cull_blocks.rs, 12 words each), if
-// it has them (`marks_blocks`): a block whose slot changes is marked to be tested slot by slot,
-// since its bound no longer holds what its slots hold.
+// The scene's bounds per block of slots (BLOCK_BOUND_WORDS each), if it has them
+// (`marks_blocks`): a block whose slot changes is marked to be tested slot by slot, since its
+// bound no longer holds what its slots hold.
 layout(set = 0, binding = 4) buffer BlockWords { uint block_words[]; };
-#define BLOCK_WORDS 12u
-#define BLOCK_FLAGS_WORD 7u
-#define BLOCK_TESTS_EVERY_SLOT 1u
 
 layout(push_constant) uniform Push {
     uint count;
@@ -74,7 +71,7 @@ void main() {
     if (slot == 0xFFFFFFFFu) return;
     uint material_flags = updates[i].material_flags;
     // Every update's threads write the same flag, so no atomics are needed.
-    if (pc.marks_blocks != 0u) block_words[(slot / CULL_BLOCK) * BLOCK_WORDS + BLOCK_FLAGS_WORD] = BLOCK_TESTS_EVERY_SLOT;
+    if (pc.marks_blocks != 0u) block_words[(slot / CULL_BLOCK) * BLOCK_BOUND_WORDS + BLOCK_BOUND_FLAGS_WORD] = BLOCK_TESTS_EVERY_SLOT;
     vec4 rows[3];
     for (uint r = 0u; r < 3u; ++r) {
         rows[r] = uintBitsToFloat(w[r]);

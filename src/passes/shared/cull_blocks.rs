@@ -35,11 +35,17 @@ pub struct GpuBlockBound {
     pub pad: u32,
 }
 
+// `BLOCK_BOUND_WORDS` and `BLOCK_BOUND_FLAGS_WORD` in `cull_common.glsl`, which the world's
+// scatter writes the flag through.
+const _: () =
+    assert!(std::mem::size_of::<GpuBlockBound>() == 12 * 4 && std::mem::offset_of!(GpuBlockBound, flags) == 7 * 4);
+
 /// Slots per block (`CULL_BLOCK` in `cull_common.glsl`).
 pub const CULL_BLOCK: u32 = 256;
 
-/// Set on a block that the test step never decides as a whole: one of its slots has a bound
-/// that is kept without testing (huge or not finite), or its own bound does not fit.
+/// Set on a block that the test step never decides as a whole (`BLOCK_TESTS_EVERY_SLOT` in
+/// `cull_common.glsl`): one of its slots has a bound that is kept without testing (huge or not
+/// finite), its own bound does not fit, or a changing world's update changed one of its slots.
 pub const BLOCK_TESTS_EVERY_SLOT: u32 = 1;
 
 /// How much the union of the slots' boxes grows, relative to its extent and to the size of its

@@ -381,7 +381,7 @@ impl GpuScene {
             let block = super::cull_blocks::CULL_BLOCK as usize;
             let bound = std::mem::size_of::<super::cull_blocks::GpuBlockBound>();
             let record = std::mem::size_of::<super::cull_data::GpuCullRecord>();
-            let room = match room {
+            let room_bytes = match room {
                 true => (cull_records.size() as usize / record).div_ceil(block) * bound,
                 false => 0,
             };
@@ -390,7 +390,7 @@ impl GpuScene {
                 "cull block bounds",
                 usage,
                 slots.div_ceil(block),
-                room as u64,
+                room_bytes as u64,
                 |first, out: &mut [super::cull_blocks::GpuBlockBound]| {
                     for (b, bound) in (first..).zip(out.iter_mut()) {
                         let range = b * block..((b + 1) * block).min(slots);
